@@ -1,0 +1,300 @@
+#include "convert_command.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/atomic_file.hpp"
+#include "geoanchor/io/coordinate_codec.hpp"
+#include "geoanchor/io/csv.hpp"
+#include "geoanchor/io/hash.hpp"
+#include "geoanchor/io/transform_file.hpp"
+#include "option_parsing.hpp"
+#include "version.hpp"
+
+namespace geoanchor::cli {
+namespace {
+
+using geodesy::AffineMap;
+using geodesy::DecimalYear;
+using nlohmann::json;
+
+io::OutputKind parse_output_kind(const std::string& to) {
+  if (to == "geodetic") return io::OutputKind::geodetic;
+  if (to == "ecef") return io::OutputKind::ecef;
+  if (to == "enu") return io::OutputKind::enu;
+  if (to == "ned") return io::OutputKind::ned;
+  if (to == "utm") return io::OutputKind::utm;
+  if (to == "tm") return io::OutputKind::tm;
+  throw Error(ErrorKind::usage, "E_OPTION", "--to " + to + ": expected geodetic, ecef, enu, ned, utm or tm");
+}
+
+json origin_json(const geodesy::LocalOrigin& o) {
+  return json{{"lat_deg", o.point.lat.deg()},
+              {"lon_deg", o.point.lon.deg()},
+              {"h_m", o.point.h.m},
+              {"height_type", "ellipsoidal"},
+              {"ellipsoid", o.ellipsoid.name()}};
+}
+
+json tm_json(const geodesy::TransverseMercatorParams& p) {
+  return json{{"lat0_deg", p.lat0.deg()},
+              {"lon0_deg", p.lon0.deg()},
+              {"k0", p.k0},
+              {"false_easting_m", p.false_easting_m},
+              {"false_northing_m", p.false_northing_m}};
+}
+
+// The transform applied between input and output ECEF, per row when its
+// epoch comes from the rows.
+class EcefStep {
+ public:
+  EcefStep(std::optional<io::TransformFile> file, bool inverse, std::optional<DecimalYear> epoch)
+      : file_(std::move(file)), inverse_(inverse), epoch_(epoch) {
+    if (file_ && (!file_->time_dependent() || epoch_)) fixed_ = make(epoch_, "--epoch");
+  }
+
+  bool needs_row_epoch() const { return file_ && file_->time_dependent(); }
+
+  Eigen::Vector3d apply(const Eigen::Vector3d& x, std::optional<DecimalYear> row_epoch, std::string_view where) const {
+    if (!file_) return x;
+    if (row_epoch) return make(row_epoch, where).apply(x);
+    if (fixed_) return fixed_->apply(x);
+    return make(std::nullopt, where).apply(x);  // throws: no epoch at all
+  }
+
+ private:
+  AffineMap make(std::optional<DecimalYear> epoch, std::string_view where) const {
+    const AffineMap forward = file_->target_from_source(epoch, where);
+    return inverse_ ? forward.inverse() : forward;
+  }
+  std::optional<io::TransformFile> file_;
+  bool inverse_;
+  std::optional<DecimalYear> epoch_;
+  std::optional<AffineMap> fixed_;
+};
+
+void write_line(std::ostream& out, const std::vector<std::string>& fields) {
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    if (i) out << ',';
+    out << fields[i];
+  }
+  out << '\n';
+}
+
+}  // namespace
+
+CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
+  auto* cmd = app.add_subcommand("convert", "Convert coordinates in a header-named CSV between kinds and frames");
+  cmd->add_option("IN", o.input, "Input CSV, or - for standard input (default)");
+  cmd->add_option("-o,--output", o.output, "Output CSV (default: standard output); written atomically");
+  cmd->add_option("--to", o.to, "Output kind: geodetic|ecef|enu|ned|utm|tm")->required();
+  cmd->add_option("--ellipsoid", o.ellipsoid, "WGS84|GRS80|a=A,rf=RF (default WGS84; input too unless --from-ellipsoid)");
+  cmd->add_option("--from-ellipsoid", o.from_ellipsoid, "Ellipsoid of the input, when a transform links two");
+  cmd->add_option("--origin", o.origin, "Local ENU/NED origin LAT,LON,H (deg, deg, ellipsoidal m)");
+  cmd->add_option("--from-origin", o.from_origin, "Origin of ENU/NED input, when it differs from --origin");
+  cmd->add_option("--zone", o.zone, "UTM zone, e.g. 32N (output: default each point's own zone)");
+  cmd->add_option("--from-zone", o.from_zone, "UTM zone of easting/northing input");
+  cmd->add_option("--tm", o.tm, "Transverse Mercator LAT0,LON0,K0,FE,FN");
+  cmd->add_option("--from-tm", o.from_tm, "Transverse Mercator of easting/northing input");
+  cmd->add_option("--transform", o.transform, "Transform file (JSON) applied in ECEF between input and output");
+  cmd->add_flag("--inverse", o.inverse, "Apply the transform's exact inverse (target -> source)");
+  cmd->add_option("--epoch", o.epoch, "Observation epoch (decimal year) for a 14-parameter transform");
+  cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")
+      ->check(CLI::Range(0, 15));
+  cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
+  return cmd;
+}
+
+void run_convert(const ConvertOptions& o) {
+  const io::OutputKind out_kind = parse_output_kind(o.to);
+  if (o.inverse && !o.transform) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--inverse: needs --transform T.json");
+  }
+  // Ellipsoids, origins and projections: --from-X for the input, else --X for both.
+  const geodesy::Ellipsoid out_ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
+  const geodesy::Ellipsoid in_ellipsoid =
+      o.from_ellipsoid ? parse_ellipsoid(*o.from_ellipsoid, "--from-ellipsoid") : out_ellipsoid;
+
+  io::InputCoordinateFrame in_frame;
+  in_frame.ellipsoid = in_ellipsoid;
+  if (o.from_origin) {
+    in_frame.origin = parse_origin(*o.from_origin, "--from-origin", in_ellipsoid);
+  } else if (o.origin) {
+    in_frame.origin = parse_origin(*o.origin, "--origin", in_ellipsoid);
+  }
+  if (o.from_zone && o.from_tm) throw Error(ErrorKind::usage, "E_OPTION", "--from-zone and --from-tm: give one");
+  if (o.zone && o.tm) throw Error(ErrorKind::usage, "E_OPTION", "--zone and --tm: give one");
+  if (o.from_zone) {
+    in_frame.projection = geodesy::utm_projection(in_ellipsoid, parse_zone(*o.from_zone, "--from-zone"));
+  } else if (o.from_tm) {
+    in_frame.projection = geodesy::ProjectionDef{in_ellipsoid, parse_tm(*o.from_tm, "--from-tm"), std::nullopt};
+  } else if (o.zone) {
+    in_frame.projection = geodesy::utm_projection(in_ellipsoid, parse_zone(*o.zone, "--zone"));
+  } else if (o.tm) {
+    in_frame.projection = geodesy::ProjectionDef{in_ellipsoid, parse_tm(*o.tm, "--tm"), std::nullopt};
+  }
+
+  io::OutputCoordinateFrame out_frame;
+  out_frame.kind = out_kind;
+  out_frame.ellipsoid = out_ellipsoid;
+  if (o.origin) out_frame.origin = parse_origin(*o.origin, "--origin", out_ellipsoid);
+  if (o.zone) out_frame.zone = parse_zone(*o.zone, "--zone");
+  if (o.tm) out_frame.tm = parse_tm(*o.tm, "--tm");
+  if (out_kind == io::OutputKind::utm && o.tm) throw Error(ErrorKind::usage, "E_OPTION", "--to utm with --tm: use --to tm");
+  if (out_kind == io::OutputKind::tm && o.zone) throw Error(ErrorKind::usage, "E_OPTION", "--to tm with --zone: use --to utm");
+
+  std::optional<io::TransformFile> transform;
+  std::string transform_sha256;
+  if (o.transform) {
+    transform = io::read_transform_file(*o.transform);
+    transform_sha256 = io::sha256_file_hex(*o.transform);
+  }
+  std::optional<DecimalYear> flag_epoch;
+  if (o.epoch) flag_epoch = geodesy::parse_decimal_year(*o.epoch, "--epoch");
+  const EcefStep step(transform, o.inverse, flag_epoch);
+
+  // Input.
+  std::ifstream file_in;
+  std::istream* in = &std::cin;
+  const bool from_stdin = o.input == "-";
+  const std::string source_name = from_stdin ? "<stdin>" : o.input;
+  if (!from_stdin) {
+    file_in.open(o.input, std::ios::binary);
+    if (!file_in) throw Error(ErrorKind::io, "E_READ", o.input + ": cannot open input: " + std::strerror(errno));
+    in = &file_in;
+  }
+  io::CsvReader reader(*in, source_name);
+  const auto& header = reader.header();
+  const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
+  const io::CoordinateDecoder decoder(columns, header, in_frame, source_name);
+  const io::CoordinateEncoder encoder(out_frame, io::NumberFormat{o.precision});
+
+  std::vector<std::string> warnings;
+  if (decoder.heights_missing()) {
+    warnings.push_back(source_name + ": no h_m column: every height is taken as 0 m above the ellipsoid");
+  }
+  if (step.needs_row_epoch() && !columns.epoch && !flag_epoch) {
+    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
+                *o.transform + ": a 14-parameter transform needs the observation epoch: give --epoch YEAR or an "
+                               "epoch column; the reference epoch is never substituted");
+  }
+
+  // Output header: the new coordinate columns where the first input
+  // coordinate column stood, every other column in its place.
+  std::size_t first_coordinate = header.size();
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (columns.is_coordinate(i)) {
+      first_coordinate = i;
+      break;
+    }
+  }
+  std::vector<std::string> out_header;
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (i == first_coordinate) {
+      for (const auto& n : encoder.column_names()) out_header.push_back(n);
+    }
+    if (columns.is_coordinate(i)) continue;
+    for (const auto& n : encoder.column_names()) {
+      if (header[i] == n) {
+        throw Error(ErrorKind::input, "E_COLUMN",
+                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] +
+                        "' would appear twice in the output (it is an output coordinate); rename it");
+      }
+    }
+    out_header.push_back(io::csv_quote(header[i]));
+  }
+
+  // Output: a temporary file renamed at the end, or standard output.
+  std::unique_ptr<io::AtomicOutputFile> out_file;
+  const io::Overwrite overwrite = o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
+  if (!o.output.empty()) {
+    if (!from_stdin) io::refuse_same_file(o.input, o.output);
+    out_file = std::make_unique<io::AtomicOutputFile>(o.output, overwrite);
+  }
+  std::ostream& out = out_file ? out_file->stream() : std::cout;
+  for (const auto& c : reader.leading_comments()) out << c << '\n';
+  write_line(out, out_header);
+
+  io::CsvRecord record;
+  std::size_t rows = 0;
+  std::vector<std::string> fields;
+  while (reader.next(record)) {
+    if (record.is_comment) {
+      out << record.comment << '\n';
+      continue;
+    }
+    const std::string where = source_name + ":" + std::to_string(record.line);
+    std::optional<DecimalYear> row_epoch;
+    if (step.needs_row_epoch() && columns.epoch && !record.values[*columns.epoch].empty()) {
+      row_epoch = geodesy::parse_decimal_year(record.values[*columns.epoch], where + ": epoch");
+    }
+    const geodesy::EcefPosition source = decoder.decode(record);
+    const geodesy::EcefPosition target(step.apply(source.m, row_epoch, where));
+    const auto coords = encoder.encode(target, where);
+    fields.clear();
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (i == first_coordinate) fields.insert(fields.end(), coords.begin(), coords.end());
+      if (!columns.is_coordinate(i)) fields.push_back(record.raw[i]);
+    }
+    write_line(out, fields);
+    ++rows;
+  }
+
+  for (const auto& w : warnings) std::cerr << "geoanchor: warning: " << w << '\n';
+  if (!out_file) {
+    out.flush();
+    if (!out) throw Error(ErrorKind::io, "E_WRITE", "<stdout>: write failed");
+    return;
+  }
+
+  // Provenance sidecar beside the output.
+  json side;
+  side["geoanchor_version"] = GEOANCHOR_VERSION;
+  side["command"] = o.argv;
+  side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
+                   {"sha256", from_stdin ? json(nullptr) : json(io::sha256_file_hex(o.input))},
+                   {"kind", std::string(io::to_string(columns.kind))},
+                   {"ellipsoid", in_ellipsoid.name()}};
+  if (in_frame.origin && (columns.kind == io::CoordinateKind::enu || columns.kind == io::CoordinateKind::ned)) {
+    side["input"]["origin"] = origin_json(*in_frame.origin);
+  }
+  if (in_frame.projection && columns.kind == io::CoordinateKind::projected) {
+    side["input"]["projection"] = tm_json(in_frame.projection->tm);
+    if (in_frame.projection->utm) side["input"]["utm_zone"] = in_frame.projection->utm->to_string();
+  }
+  side["output"] = {{"path", o.output}, {"kind", std::string(io::to_string(out_kind))},
+                    {"ellipsoid", out_ellipsoid.name()}, {"rows", rows}, {"height_type", "ellipsoidal"}};
+  if (out_frame.origin && (out_kind == io::OutputKind::enu || out_kind == io::OutputKind::ned)) {
+    side["output"]["origin"] = origin_json(*out_frame.origin);
+  }
+  if (out_frame.zone) side["output"]["utm_zone"] = out_frame.zone->to_string();
+  if (out_frame.tm) side["output"]["projection"] = tm_json(*out_frame.tm);
+  if (transform) {
+    json t = {{"path", *o.transform},
+              {"sha256", transform_sha256},
+              {"model", std::string(io::to_string(transform->model))},
+              {"convention", std::string(transform->convention_name())},
+              {"rotation_model", std::string(geodesy::to_string(transform->rotation_model))},
+              {"direction", o.inverse ? "inverse (exact)" : "forward"}};
+    if (transform->source_frame) t["source_frame"] = transform->source_frame->to_string();
+    if (transform->target_frame) t["target_frame"] = transform->target_frame->to_string();
+    if (flag_epoch) t["observation_epoch"] = flag_epoch->year;
+    if (columns.epoch) t["observation_epoch_column"] = header[*columns.epoch];
+    side["transform"] = t;
+  }
+  side["warnings"] = warnings;
+  io::AtomicOutputFile sidecar(o.output + ".geoanchor.json", overwrite);
+  sidecar.stream() << side.dump(2) << '\n';
+  out_file->commit();
+  sidecar.commit();
+}
+
+}  // namespace geoanchor::cli

@@ -1,0 +1,39 @@
+#pragma once
+// `geoanchor convert`: coordinates in a header-named CSV from one kind
+// (geodetic, ECEF, ENU, NED, UTM, TM) to another, optionally through a
+// Helmert transform. See docs/commands/convert.md.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace geoanchor::cli {
+
+struct ConvertOptions {
+  std::string input = "-";
+  std::string output;  // empty: standard output
+  std::string to;
+  std::string ellipsoid = "WGS84";
+  std::optional<std::string> from_ellipsoid;
+  std::optional<std::string> origin, from_origin;
+  std::optional<std::string> zone, from_zone;
+  std::optional<std::string> tm, from_tm;
+  std::optional<std::string> transform;
+  bool inverse = false;
+  std::optional<std::string> epoch;
+  std::optional<int> precision;
+  bool overwrite = false;
+  std::vector<std::string> argv;  // for the provenance record
+};
+
+// Registers the subcommand on `app`; `run` is called when it is chosen.
+CLI::App* add_convert_command(CLI::App& app, ConvertOptions& options);
+
+// Runs the conversion. Throws geoanchor::Error.
+void run_convert(const ConvertOptions& options);
+
+}  // namespace geoanchor::cli

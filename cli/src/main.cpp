@@ -1,0 +1,49 @@
+// The geoanchor executable: one subcommand per capability.
+// Errors print as `geoanchor: error[CODE]: message` and exit with a code
+// per kind: 2 usage, 3 bad input, 4 rejected result, 5 I/O.
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+#include "convert_command.hpp"
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/io/atomic_file.hpp"
+#include "version.hpp"
+
+int main(int argc, char** argv) {
+  using geoanchor::Error;
+  using geoanchor::ErrorKind;
+  geoanchor::io::install_signal_cleanup();
+
+  CLI::App app{"geoanchor " GEOANCHOR_VERSION ": anchor local maps to the Earth"};
+  app.set_version_flag("--version", GEOANCHOR_VERSION);
+  app.require_subcommand(1);
+  geoanchor::cli::ConvertOptions convert;
+  convert.argv.assign(argv, argv + argc);
+  auto* convert_cmd = geoanchor::cli::add_convert_command(app, convert);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "geoanchor: error[E_USAGE]: " << e.what() << "\n(run 'geoanchor --help')\n";
+    return geoanchor::exit_code(ErrorKind::usage);
+  }
+
+  try {
+    if (convert_cmd->parsed()) geoanchor::cli::run_convert(convert);
+  } catch (const Error& e) {
+    std::cerr << "geoanchor: error[" << e.code() << "]: " << e.what() << '\n';
+    return geoanchor::exit_code(e.kind());
+  } catch (const std::exception& e) {
+    std::cerr << "geoanchor: error[E_INTERNAL]: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,99 @@
+#include "option_parsing.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::cli {
+namespace {
+
+std::vector<std::string> split_commas(std::string_view text) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (true) {
+    const auto comma = text.find(',', start);
+    out.emplace_back(text.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+[[noreturn]] void fail(std::string_view flag, std::string_view value, const std::string& expected) {
+  throw Error(ErrorKind::usage, "E_OPTION",
+              std::string(flag) + " " + std::string(value) + ": " + expected);
+}
+
+std::vector<double> numbers(std::string_view text, std::string_view flag, std::size_t count,
+                            const std::string& expected) {
+  const auto parts = split_commas(text);
+  if (parts.size() != count) fail(flag, text, "expected " + expected);
+  std::vector<double> out;
+  for (const auto& p : parts) {
+    const auto v = parse_finite_double(p);
+    if (!v) fail(flag, text, "'" + p + "' is not a finite number; expected " + expected);
+    out.push_back(*v);
+  }
+  return out;
+}
+
+void check_lat_lon(double lat, double lon, std::string_view flag, std::string_view text) {
+  if (std::fabs(lat) > 90.0) fail(flag, text, "latitude " + format_shortest(lat) + " not in [-90, 90] degrees");
+  if (std::fabs(lon) > 180.0) fail(flag, text, "longitude " + format_shortest(lon) + " not in [-180, 180] degrees");
+}
+
+}  // namespace
+
+geodesy::Ellipsoid parse_ellipsoid(std::string_view text, std::string_view flag) {
+  if (text == "WGS84" || text == "wgs84") return geodesy::Ellipsoid::wgs84();
+  if (text == "GRS80" || text == "grs80") return geodesy::Ellipsoid::grs80();
+  const auto parts = split_commas(text);
+  if (parts.size() == 2 && parts[0].rfind("a=", 0) == 0 && parts[1].rfind("rf=", 0) == 0) {
+    const auto a = parse_finite_double(std::string_view(parts[0]).substr(2));
+    const auto rf = parse_finite_double(std::string_view(parts[1]).substr(3));
+    if (a && rf) {
+      try {
+        return geodesy::Ellipsoid::custom(*a, *rf, std::string(text));
+      } catch (const Error& e) {
+        fail(flag, text, e.what());
+      }
+    }
+  }
+  fail(flag, text, "expected WGS84, GRS80 or a=A,rf=RF (semi-major axis in metres, inverse flattening)");
+}
+
+geodesy::LocalOrigin parse_origin(std::string_view text, std::string_view flag, const geodesy::Ellipsoid& e) {
+  const auto v = numbers(text, flag, 3, "LAT,LON,H (degrees, degrees, ellipsoidal height in metres)");
+  check_lat_lon(v[0], v[1], flag, text);
+  return geodesy::LocalOrigin{
+      geodesy::GeodeticPosition{geodesy::Angle::degrees(v[0]), geodesy::Angle::degrees(v[1]),
+                                geodesy::EllipsoidalHeight{v[2]}},
+      e};
+}
+
+geodesy::TransverseMercatorParams parse_tm(std::string_view text, std::string_view flag) {
+  const auto v = numbers(text, flag, 5,
+                         "LAT0,LON0,K0,FE,FN (origin latitude and central meridian in degrees, scale factor, false "
+                         "easting and northing in metres)");
+  check_lat_lon(v[0], v[1], flag, text);
+  if (!(v[2] > 0.0 && v[2] < 2.0)) fail(flag, text, "scale factor " + format_shortest(v[2]) + " not in (0, 2)");
+  geodesy::TransverseMercatorParams p;
+  p.lat0 = geodesy::Angle::degrees(v[0]);
+  p.lon0 = geodesy::Angle::degrees(v[1]);
+  p.k0 = v[2];
+  p.false_easting_m = v[3];
+  p.false_northing_m = v[4];
+  return p;
+}
+
+geodesy::UtmZone parse_zone(std::string_view text, std::string_view flag) {
+  try {
+    return geodesy::parse_utm_zone(text, flag);
+  } catch (const Error& e) {
+    throw Error(ErrorKind::usage, e.code(), e.what());
+  }
+}
+
+}  // namespace geoanchor::cli

@@ -1,0 +1,27 @@
+#pragma once
+// Parsing of the command-line values shared by geoanchor's subcommands.
+// Every function throws geoanchor::Error (usage) naming the flag, the value
+// and what was expected.
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "geoanchor/geodesy/ellipsoid.hpp"
+#include "geoanchor/geodesy/positions.hpp"
+#include "geoanchor/geodesy/projection.hpp"
+
+namespace geoanchor::cli {
+
+// "WGS84", "GRS80" or "a=6378137,rf=298.257222101".
+geodesy::Ellipsoid parse_ellipsoid(std::string_view text, std::string_view flag);
+
+// "LAT,LON,H": degrees, degrees, ellipsoidal metres.
+geodesy::LocalOrigin parse_origin(std::string_view text, std::string_view flag, const geodesy::Ellipsoid& e);
+
+// "LAT0,LON0,K0,FE,FN": degrees, degrees, scale, metres, metres.
+geodesy::TransverseMercatorParams parse_tm(std::string_view text, std::string_view flag);
+
+geodesy::UtmZone parse_zone(std::string_view text, std::string_view flag);
+
+}  // namespace geoanchor::cli

@@ -1,0 +1,105 @@
+#include "geoanchor/geodesy/frame.hpp"
+
+#include <array>
+#include <cctype>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::geodesy {
+namespace {
+
+constexpr double kEarliestEpoch = 1900.0;
+constexpr double kLatestEpoch = 2200.0;
+
+// Frame families whose realization is written as a trailing year.
+constexpr std::array<std::string_view, 5> kYearFamilies = {"ITRF", "ETRF", "IGS", "IGb", "ATRF"};
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+  return s;
+}
+
+bool all_digits(std::string_view s) {
+  if (s.empty()) return false;
+  for (char c : s) {
+    if (!std::isdigit(static_cast<unsigned char>(c))) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+DecimalYear parse_decimal_year(std::string_view text, std::string_view where) {
+  const std::string_view t = trim(text);
+  const auto v = parse_finite_double(t);
+  if (!v) {
+    throw Error(ErrorKind::input, "E_EPOCH",
+                std::string(where) + ": epoch=" + std::string(text) +
+                    ": not a decimal year; expected a number such as 2024.5");
+  }
+  if (*v < kEarliestEpoch || *v > kLatestEpoch) {
+    throw Error(ErrorKind::input, "E_EPOCH",
+                std::string(where) + ": epoch=" + std::string(text) + ": not in [1900, 2200] (decimal years)");
+  }
+  return DecimalYear{*v};
+}
+
+std::string format_decimal_year(DecimalYear y) {
+  std::string s = format_shortest(y.year);
+  if (s.find_first_of(".e") == std::string::npos) s += ".0";
+  return s;
+}
+
+Frame Frame::parse(std::string_view text, std::string_view where) {
+  Frame f;
+  std::string_view name = trim(text);
+  if (const auto at = name.find('@'); at != std::string_view::npos) {
+    f.epoch_ = parse_decimal_year(name.substr(at + 1), where);
+    name = trim(name.substr(0, at));
+  }
+  auto fail = [&](const std::string& why) {
+    return Error(ErrorKind::input, "E_FRAME",
+                 std::string(where) + ": frame=" + std::string(text) + ": " + why +
+                     "; expected NAME[@EPOCH], e.g. ITRF2014@2024.5, NAD83(2011)@2010.0, GDA2020");
+  };
+  if (name.empty()) throw fail("empty frame name");
+  for (char c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '(' && c != ')' && c != '_' && c != '-' && c != '.') {
+      throw fail(std::string("character '") + c + "' not allowed");
+    }
+  }
+  if (const auto open = name.find('('); open != std::string_view::npos) {
+    if (name.back() != ')' || open == 0 || name.find('(', open + 1) != std::string_view::npos ||
+        name.find(')') != name.size() - 1 || open + 2 > name.size() - 1) {
+      throw fail("unbalanced realization in parentheses");
+    }
+    f.datum_ = std::string(name.substr(0, open));
+    f.realization_ = std::string(name.substr(open + 1, name.size() - open - 2));
+    f.parenthesised_ = true;
+    return f;
+  }
+  if (name.find(')') != std::string_view::npos) throw fail("unbalanced realization in parentheses");
+  for (std::string_view family : kYearFamilies) {
+    if (name.size() > family.size() && name.substr(0, family.size()) == family &&
+        all_digits(name.substr(family.size()))) {
+      f.datum_ = std::string(family);
+      f.realization_ = std::string(name.substr(family.size()));
+      return f;
+    }
+  }
+  f.datum_ = std::string(name);
+  return f;
+}
+
+std::string Frame::name() const {
+  if (realization_.empty()) return datum_;
+  return parenthesised_ ? datum_ + "(" + realization_ + ")" : datum_ + realization_;
+}
+
+std::string Frame::to_string() const {
+  return epoch_ ? name() + "@" + format_decimal_year(*epoch_) : name();
+}
+
+}  // namespace geoanchor::geodesy

@@ -1,0 +1,90 @@
+#pragma once
+// CSV cells <-> ECEF for one row, given what the header and the command line
+// say about the coordinates. Used by `convert` and by CSV tiles in `apply`.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/projection.hpp"
+#include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/io/csv.hpp"
+
+namespace geoanchor::io {
+
+// The frame the input coordinates are in, beyond what the header says.
+struct InputCoordinateFrame {
+  geodesy::Ellipsoid ellipsoid = geodesy::Ellipsoid::wgs84();
+  std::optional<geodesy::LocalOrigin> origin;         // ENU/NED input
+  std::optional<geodesy::ProjectionDef> projection;   // projected input, unless a utm_zone column gives it
+};
+
+class CoordinateDecoder {
+ public:
+  // Throws geoanchor::Error (usage) when the frame lacks what `columns`
+  // needs (an origin for ENU/NED, a projection for easting/northing);
+  // `origin_flag` and `projection_flags` name the flags in the message.
+  CoordinateDecoder(const CoordinateColumns& columns, const std::vector<std::string>& header,
+                    InputCoordinateFrame frame, std::string source_name);
+
+  // ECEF of the record's coordinates. Throws geoanchor::Error (input)
+  // naming file:line, column and value for an unparsable, non-finite or
+  // out-of-range value.
+  geodesy::EcefPosition decode(const CsvRecord& record) const;
+
+  bool heights_missing() const { return columns_.kind == CoordinateKind::geodetic && !columns_.third; }
+
+ private:
+  double number(const CsvRecord& r, std::size_t column) const;
+  CoordinateColumns columns_;
+  std::vector<std::string> header_;
+  InputCoordinateFrame frame_;
+  std::string source_;
+  geodesy::GeocentricConverter geocentric_;
+  std::optional<geodesy::LocalTangentPlane> plane_;
+  std::optional<geodesy::TransverseMercator> projection_;
+};
+
+enum class OutputKind { geodetic, ecef, enu, ned, utm, tm };
+std::string_view to_string(OutputKind k);
+
+struct OutputCoordinateFrame {
+  OutputKind kind = OutputKind::ecef;
+  geodesy::Ellipsoid ellipsoid = geodesy::Ellipsoid::wgs84();
+  std::optional<geodesy::LocalOrigin> origin;        // enu, ned
+  std::optional<geodesy::UtmZone> zone;              // utm: fixed zone, else each point's own
+  std::optional<geodesy::TransverseMercatorParams> tm;
+};
+
+// Text of numbers: full precision (shortest round trip) by default; with
+// `decimals`, that many decimals for metres and five more for degrees
+// (1e-5° is about 1.1 m on the ground, so both round at the same distance).
+struct NumberFormat {
+  std::optional<int> decimals;
+  std::string metres(double v) const;
+  std::string degrees(double v) const;
+};
+
+class CoordinateEncoder {
+ public:
+  // Throws geoanchor::Error (usage) when the frame lacks what `kind` needs.
+  explicit CoordinateEncoder(OutputCoordinateFrame frame, NumberFormat format);
+
+  const std::vector<std::string>& column_names() const { return names_; }
+  // Text of each output column for a point. Throws geoanchor::Error (input)
+  // naming `where` when the point cannot be expressed (UTM outside
+  // [-80°, 84°], ...).
+  std::vector<std::string> encode(const geodesy::EcefPosition& p, std::string_view where) const;
+
+ private:
+  OutputCoordinateFrame frame_;
+  NumberFormat format_;
+  std::vector<std::string> names_;
+  geodesy::GeocentricConverter geocentric_;
+  std::optional<geodesy::LocalTangentPlane> plane_;
+  std::optional<geodesy::TransverseMercator> projection_;
+};
+
+}  // namespace geoanchor::io

@@ -1,0 +1,55 @@
+#pragma once
+// What a CSV header says about its coordinates. Axis order is never guessed:
+// every coordinate column names its quantity and unit.
+//
+//   geodetic   lat_deg, lon_deg [, h_m]          (h_m: ellipsoidal height)
+//   ecef       x_m, y_m, z_m
+//   enu        e_m, n_m, u_m
+//   ned        n_m, e_m, d_m
+//   projected  easting_m, northing_m [, h_m] [, utm_zone]
+//   optional   epoch                              (decimal year, per row)
+//
+// With a role ("src", "dst") the role goes before the unit: lat_src_deg,
+// x_dst_m. Every other column is an attribute that passes through untouched,
+// except names that look like a coordinate without a known unit (lat, x,
+// h_ft, lat_rad, ...) and orthometric heights (H_m): those are errors, since a
+// silently ignored coordinate column is a wrong result.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace geoanchor::io {
+
+enum class CoordinateKind { geodetic, ecef, enu, ned, projected };
+std::string_view to_string(CoordinateKind k);
+
+struct CoordinateColumns {
+  CoordinateKind kind = CoordinateKind::ecef;
+  // Indices into the header of the three coordinates in the kind's order
+  // (lat, lon, h / x, y, z / e, n, u / n, e, d / easting, northing, h).
+  // For geodetic and projected input, h may be absent.
+  std::size_t first = 0;
+  std::size_t second = 0;
+  std::optional<std::size_t> third;
+  std::optional<std::size_t> epoch;
+  std::optional<std::size_t> utm_zone;
+
+  // Whether header column i is one of the coordinates above (the epoch
+  // column is not: it passes through to outputs).
+  bool is_coordinate(std::size_t i) const;
+};
+
+// The names of the three coordinate columns of `kind` ("lat_deg", "lon_deg",
+// "h_m", ...), with `role` inserted before the unit when non-empty.
+std::vector<std::string> coordinate_column_names(CoordinateKind kind, std::string_view role = {});
+
+// Throws geoanchor::Error (input) naming `source`, the column number and
+// name: for a header that mixes kinds, lacks a required column, repeats one,
+// or has a coordinate-like column of unknown unit.
+CoordinateColumns classify_coordinate_header(const std::vector<std::string>& header, std::string_view source,
+                                             std::string_view role = {});
+
+}  // namespace geoanchor::io

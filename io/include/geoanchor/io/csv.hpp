@@ -1,0 +1,60 @@
+#pragma once
+// Streaming CSV: one record at a time, so memory does not grow with the file.
+//
+// RFC 4180 fields (commas, double quotes with "" escapes); CRLF or LF line
+// ends; lines whose first character is '#' are comments and are handed back
+// as such so that writers can keep them in place, as PROJ's tools do. Blank
+// lines are skipped. A record whose field count differs from the header's is
+// an error naming file and line.
+
+#include <cstddef>
+#include <istream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace geoanchor::io {
+
+struct CsvRecord {
+  std::size_t line = 0;             // 1-based line number in the file
+  bool is_comment = false;          // then `comment` holds the whole line
+  std::string comment;
+  std::vector<std::string> raw;     // fields exactly as written (quotes kept)
+  std::vector<std::string> values;  // fields unquoted
+};
+
+class CsvReader {
+ public:
+  // `source_name` is used in messages ("points.csv", "<stdin>").
+  // Reads up to and including the header line; comment lines before it are
+  // available through leading_comments(). Throws geoanchor::Error (input)
+  // for an empty input or a malformed header.
+  CsvReader(std::istream& in, std::string source_name);
+
+  const std::vector<std::string>& header() const { return header_; }
+  std::size_t header_line() const { return header_line_; }
+  const std::vector<std::string>& leading_comments() const { return leading_comments_; }
+  const std::string& source_name() const { return source_name_; }
+
+  // The next record or comment; false at end of input.
+  bool next(CsvRecord& record);
+
+ private:
+  bool read_line(std::string& line);
+  std::istream& in_;
+  std::string source_name_;
+  std::size_t line_ = 0;
+  std::size_t header_line_ = 0;
+  std::vector<std::string> header_;
+  std::vector<std::string> leading_comments_;
+};
+
+// Splits one line into raw fields and unquoted values. Throws
+// geoanchor::Error (input) for an unterminated quote, naming `where`.
+void split_csv_line(std::string_view line, std::vector<std::string>& raw, std::vector<std::string>& values,
+                    std::string_view where);
+
+// Quotes `value` if it holds a comma, quote, or leading/trailing space.
+std::string csv_quote(std::string_view value);
+
+}  // namespace geoanchor::io

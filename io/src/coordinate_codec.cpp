@@ -1,0 +1,190 @@
+#include "geoanchor/io/coordinate_codec.hpp"
+
+#include <cmath>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::io {
+
+using geodesy::Angle;
+using geodesy::EcefPosition;
+using geodesy::EllipsoidalHeight;
+using geodesy::GeodeticPosition;
+
+CoordinateDecoder::CoordinateDecoder(const CoordinateColumns& columns, const std::vector<std::string>& header,
+                                     InputCoordinateFrame frame, std::string source_name)
+    : columns_(columns), header_(header), frame_(std::move(frame)), source_(std::move(source_name)),
+      geocentric_(frame_.ellipsoid) {
+  switch (columns_.kind) {
+    case CoordinateKind::enu:
+    case CoordinateKind::ned:
+      if (!frame_.origin) {
+        throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
+                    source_ + ": " + std::string(to_string(columns_.kind)) +
+                        " input needs its origin: give --from-origin LAT,LON,H (or --origin, which then serves input "
+                        "and output)");
+      }
+      plane_.emplace(*frame_.origin);
+      break;
+    case CoordinateKind::projected:
+      if (frame_.projection) {
+        projection_.emplace(*frame_.projection);
+      } else if (!columns_.utm_zone) {
+        throw Error(ErrorKind::usage, "E_PROJECTION_MISSING",
+                    source_ + ": easting/northing input needs its projection: give --from-zone ZONE, --from-tm "
+                              "LAT0,LON0,K0,FE,FN (or --zone/--tm), or a utm_zone column");
+      }
+      break;
+    default: break;
+  }
+}
+
+double CoordinateDecoder::number(const CsvRecord& r, std::size_t column) const {
+  const std::string& text = r.values[column];
+  const auto v = parse_finite_double(text);
+  if (!v) {
+    std::string why = text.empty() ? "empty field; expected a number" : "not a finite number";
+    if (text.find(',') != std::string::npos) why += " (decimal comma? use '.')";
+    throw Error(ErrorKind::input, "E_VALUE",
+                source_ + ":" + std::to_string(r.line) + ": " + header_[column] + "='" + text + "': " + why);
+  }
+  return *v;
+}
+
+EcefPosition CoordinateDecoder::decode(const CsvRecord& r) const {
+  const double a = number(r, columns_.first);
+  const double b = number(r, columns_.second);
+  const auto where = [&](std::size_t col) { return source_ + ":" + std::to_string(r.line) + ": " + header_[col]; };
+  switch (columns_.kind) {
+    case CoordinateKind::geodetic: {
+      if (std::fabs(a) > 90.0) {
+        throw Error(ErrorKind::input, "E_LATITUDE_RANGE",
+                    where(columns_.first) + "=" + r.values[columns_.first] + ": latitude not in [-90, 90] degrees");
+      }
+      if (std::fabs(b) > 180.0) {
+        throw Error(ErrorKind::input, "E_LONGITUDE_RANGE",
+                    where(columns_.second) + "=" + r.values[columns_.second] +
+                        ": longitude not in [-180, 180] degrees");
+      }
+      const double h = columns_.third ? number(r, *columns_.third) : 0.0;
+      return geocentric_.ecef_from_geodetic(
+          GeodeticPosition{Angle::degrees(a), Angle::degrees(b), EllipsoidalHeight{h}});
+    }
+    case CoordinateKind::ecef: return EcefPosition(a, b, number(r, *columns_.third));
+    case CoordinateKind::enu:
+      return plane_->ecef_from_enu(geodesy::EnuPosition{Eigen::Vector3d(a, b, number(r, *columns_.third)), *frame_.origin});
+    case CoordinateKind::ned:
+      return plane_->ecef_from_enu(geodesy::enu_from_ned(
+          geodesy::NedPosition{Eigen::Vector3d(a, b, number(r, *columns_.third)), *frame_.origin}));
+    case CoordinateKind::projected: {
+      const double h = columns_.third ? number(r, *columns_.third) : 0.0;
+      GeodeticPosition g;
+      if (projection_) {
+        g = projection_->inverse(geodesy::ProjectedPosition{a, b, EllipsoidalHeight{h}, projection_->definition()});
+      } else {
+        const auto zone = geodesy::parse_utm_zone(r.values[*columns_.utm_zone], where(*columns_.utm_zone));
+        const geodesy::TransverseMercator tm(geodesy::utm_projection(frame_.ellipsoid, zone));
+        g = tm.inverse(geodesy::ProjectedPosition{a, b, EllipsoidalHeight{h}, tm.definition()});
+      }
+      if (!std::isfinite(g.lat.deg()) || !std::isfinite(g.lon.deg())) {
+        throw Error(ErrorKind::input, "E_PROJECTED_RANGE",
+                    source_ + ":" + std::to_string(r.line) + ": easting/northing " + r.values[columns_.first] + ", " +
+                        r.values[columns_.second] + ": outside the projection's domain");
+      }
+      return geocentric_.ecef_from_geodetic(g);
+    }
+  }
+  return EcefPosition();
+}
+
+std::string_view to_string(OutputKind k) {
+  switch (k) {
+    case OutputKind::geodetic: return "geodetic";
+    case OutputKind::ecef: return "ecef";
+    case OutputKind::enu: return "enu";
+    case OutputKind::ned: return "ned";
+    case OutputKind::utm: return "utm";
+    case OutputKind::tm: return "tm";
+  }
+  return "?";
+}
+
+std::string NumberFormat::metres(double v) const {
+  return decimals ? format_fixed(v, *decimals) : format_shortest(v);
+}
+std::string NumberFormat::degrees(double v) const {
+  return decimals ? format_fixed(v, *decimals + 5) : format_shortest(v);
+}
+
+CoordinateEncoder::CoordinateEncoder(OutputCoordinateFrame frame, NumberFormat format)
+    : frame_(std::move(frame)), format_(format), geocentric_(frame_.ellipsoid) {
+  switch (frame_.kind) {
+    case OutputKind::geodetic: names_ = coordinate_column_names(CoordinateKind::geodetic); break;
+    case OutputKind::ecef: names_ = coordinate_column_names(CoordinateKind::ecef); break;
+    case OutputKind::enu:
+    case OutputKind::ned:
+      if (!frame_.origin) {
+        throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
+                    "--to " + std::string(to_string(frame_.kind)) +
+                        " needs the local origin: give --origin LAT,LON,H (degrees, degrees, ellipsoidal metres)");
+      }
+      plane_.emplace(*frame_.origin);
+      names_ = coordinate_column_names(frame_.kind == OutputKind::enu ? CoordinateKind::enu : CoordinateKind::ned);
+      break;
+    case OutputKind::utm:
+      names_ = coordinate_column_names(CoordinateKind::projected);
+      names_.emplace_back("utm_zone");
+      if (frame_.zone) projection_.emplace(geodesy::utm_projection(frame_.ellipsoid, *frame_.zone));
+      break;
+    case OutputKind::tm:
+      if (!frame_.tm) {
+        throw Error(ErrorKind::usage, "E_PROJECTION_MISSING", "--to tm needs --tm LAT0,LON0,K0,FE,FN");
+      }
+      projection_.emplace(geodesy::ProjectionDef{frame_.ellipsoid, *frame_.tm, std::nullopt});
+      names_ = coordinate_column_names(CoordinateKind::projected);
+      break;
+  }
+}
+
+std::vector<std::string> CoordinateEncoder::encode(const EcefPosition& p, std::string_view where) const {
+  const auto& f = format_;
+  switch (frame_.kind) {
+    case OutputKind::ecef: return {f.metres(p.m.x()), f.metres(p.m.y()), f.metres(p.m.z())};
+    case OutputKind::geodetic: {
+      const auto g = geocentric_.geodetic_from_ecef(p);
+      return {f.degrees(g.lat.deg()), f.degrees(g.lon.deg()), f.metres(g.h.m)};
+    }
+    case OutputKind::enu: {
+      const auto e = plane_->enu_from_ecef(p).enu_m;
+      return {f.metres(e.x()), f.metres(e.y()), f.metres(e.z())};
+    }
+    case OutputKind::ned: {
+      const auto n = geodesy::ned_from_enu(plane_->enu_from_ecef(p)).ned_m;
+      return {f.metres(n.x()), f.metres(n.y()), f.metres(n.z())};
+    }
+    case OutputKind::utm:
+    case OutputKind::tm: {
+      const auto g = geocentric_.geodetic_from_ecef(p);
+      std::optional<geodesy::UtmZone> zone = frame_.zone;
+      geodesy::ProjectedPosition q;
+      if (projection_) {
+        q = projection_->forward(g);
+      } else {
+        zone = geodesy::standard_utm_zone(g);
+        if (!zone) {
+          throw Error(ErrorKind::input, "E_UTM_RANGE",
+                      std::string(where) + ": latitude " + format_shortest(g.lat.deg()) +
+                          ": outside UTM's [-80, 84) degrees (polar regions use UPS, which convert does not write)");
+        }
+        q = geodesy::TransverseMercator(geodesy::utm_projection(frame_.ellipsoid, *zone)).forward(g);
+      }
+      std::vector<std::string> out = {f.metres(q.easting_m), f.metres(q.northing_m), f.metres(q.h.m)};
+      if (frame_.kind == OutputKind::utm) out.push_back(zone->to_string());
+      return out;
+    }
+  }
+  return {};
+}
+
+}  // namespace geoanchor::io

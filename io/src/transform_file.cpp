@@ -1,0 +1,348 @@
+#include "geoanchor/io/transform_file.hpp"
+
+#include <array>
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+using geodesy::Angle;
+using geodesy::CoordinateFrame;
+using geodesy::PositionVector;
+using geodesy::ScaleDifference;
+using nlohmann::json;
+
+// Top-level keys. The fit issue's statistics travel in the same file; apply
+// and convert read only what they need and check that nothing is misspelt.
+const std::set<std::string> kTopLevelKeys = {
+    "model",       "convention", "rotation_model", "source_frame", "target_frame", "reference_epoch",
+    "parameters",  "sigmas",     "correlation",    "statistics",   "points",       "proj_pipeline",
+    "epsg_method", "generator",  "format_version", "description",  "alternatives"};
+
+[[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& what) {
+  throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
+}
+
+// One parameter, which may be written in either of two units.
+struct ParamSpec {
+  const char* name;     // "tx"
+  const char* unit_a;   // "m"
+  double factor_a;      // to the canonical unit
+  const char* unit_b;   // "mm"
+  double factor_b;
+};
+
+// Canonical units: metres, arc-seconds, ppm (and per year).
+constexpr std::array<ParamSpec, 7> kSeven = {{{"tx", "m", 1.0, "mm", 1e-3},
+                                              {"ty", "m", 1.0, "mm", 1e-3},
+                                              {"tz", "m", 1.0, "mm", 1e-3},
+                                              {"rx", "arcsec", 1.0, "mas", 1e-3},
+                                              {"ry", "arcsec", 1.0, "mas", 1e-3},
+                                              {"rz", "arcsec", 1.0, "mas", 1e-3},
+                                              {"ds", "ppm", 1.0, "ppb", 1e-3}}};
+
+class ParameterReader {
+ public:
+  // Misspelt keys are reported first, by name, before any missing parameter.
+  ParameterReader(const json& params, std::string_view source) : params_(params), source_(source) {
+    if (!params_.is_object()) fail(source_, "parameters", "expected an object of unit-named numbers");
+    std::set<std::string> known;
+    for (const auto& p : kSeven) {
+      for (const char* unit : {p.unit_a, p.unit_b}) {
+        known.insert(std::string(p.name) + "_" + unit);
+        known.insert(std::string("d") + p.name + "_" + unit + "_per_year");
+      }
+    }
+    for (const auto& [key, value] : params_.items()) {
+      if (!known.count(key)) {
+        fail(source_, "parameters." + key,
+             "unknown parameter; expected tx_m ty_m tz_m rx_arcsec ry_arcsec rz_arcsec ds_ppm (mm, mas, ppb also "
+             "read) and, for helmert14, their rates d..._per_year");
+      }
+    }
+  }
+
+  // The value in canonical units, or nullopt if absent.
+  std::optional<double> get(const ParamSpec& p, bool rate) {
+    const std::string suffix = rate ? "_per_year" : "";
+    const std::string prefix = rate ? std::string("d") + p.name : std::string(p.name);
+    const std::string key_a = prefix + "_" + p.unit_a + suffix;
+    const std::string key_b = prefix + "_" + p.unit_b + suffix;
+    const bool has_a = params_.contains(key_a), has_b = params_.contains(key_b);
+    if (has_a && has_b) fail(source_, "parameters." + key_a, "given twice, also as " + key_b + "; keep one");
+    if (!has_a && !has_b) return std::nullopt;
+    const std::string& key = has_a ? key_a : key_b;
+    used_.insert(key);
+    const json& v = params_.at(key);
+    if (!v.is_number()) fail(source_, "parameters." + key, "value " + v.dump() + " is not a number");
+    return v.get<double>() * (has_a ? p.factor_a : p.factor_b);
+  }
+
+  double require(const ParamSpec& p, bool rate, std::string_view model) {
+    const auto v = get(p, rate);
+    if (!v) {
+      const std::string prefix = rate ? std::string("d") + p.name : std::string(p.name);
+      const std::string suffix = rate ? "_per_year" : "";
+      fail(source_, "parameters", "missing " + prefix + "_" + p.unit_a + suffix + " (or " + prefix + "_" + p.unit_b +
+                                      suffix + ") for model " + std::string(model));
+    }
+    return *v;
+  }
+
+  // A known parameter that the model does not use (a rate in a 7-parameter
+  // set) would be silently ignored: refuse it.
+  void check_all_used(std::string_view model) const {
+    for (const auto& [key, value] : params_.items()) {
+      if (!used_.count(key)) {
+        fail(source_, "parameters." + key, "not a parameter of model " + std::string(model) +
+                                               (key.find("_per_year") != std::string::npos
+                                                    ? "; rates need model helmert14 with a reference_epoch"
+                                                    : ""));
+      }
+    }
+  }
+
+ private:
+  const json& params_;
+  std::string_view source_;
+  std::set<std::string> used_;
+};
+
+template <geodesy::RotationConvention C>
+geodesy::Helmert7<C> seven_from(const std::array<double, 7>& v) {
+  geodesy::Helmert7<C> h;
+  h.t_m = Eigen::Vector3d(v[0], v[1], v[2]);
+  h.rx = Angle::arcseconds(v[3]);
+  h.ry = Angle::arcseconds(v[4]);
+  h.rz = Angle::arcseconds(v[5]);
+  h.ds = ScaleDifference::ppm(v[6]);
+  return h;
+}
+
+template <geodesy::RotationConvention C>
+geodesy::Helmert7Rates<C> rates_from(const std::array<double, 7>& v) {
+  geodesy::Helmert7Rates<C> r;
+  r.dt_m_per_year = Eigen::Vector3d(v[0], v[1], v[2]);
+  r.drx_per_year = Angle::arcseconds(v[3]);
+  r.dry_per_year = Angle::arcseconds(v[4]);
+  r.drz_per_year = Angle::arcseconds(v[5]);
+  r.dds_per_year = ScaleDifference::ppm(v[6]);
+  return r;
+}
+
+std::string string_field(const json& doc, const char* key, std::string_view source) {
+  const json& v = doc.at(key);
+  if (!v.is_string()) fail(source, key, "value " + v.dump() + " is not a string");
+  return v.get<std::string>();
+}
+
+// Shortest round-trip number for JSON output.
+json number(double v) { return json::parse(format_shortest(v)); }
+
+}  // namespace
+
+std::string_view to_string(TransformModel m) {
+  switch (m) {
+    case TransformModel::helmert7: return "helmert7";
+    case TransformModel::helmert6: return "helmert6";
+    case TransformModel::translation3: return "translation3";
+    case TransformModel::helmert14: return "helmert14";
+  }
+  return "?";
+}
+
+std::string_view TransformFile::convention_name() const {
+  return std::visit([](const auto& h) -> std::string_view {
+    using H = std::decay_t<decltype(h)>;
+    if constexpr (std::is_same_v<H, geodesy::Helmert7<PositionVector>> ||
+                  std::is_same_v<H, geodesy::Helmert14<PositionVector>>) {
+      return PositionVector::name;
+    } else {
+      return CoordinateFrame::name;
+    }
+  }, helmert);
+}
+
+geodesy::AffineMap TransformFile::target_from_source(std::optional<geodesy::DecimalYear> observation_epoch,
+                                                     std::string_view where) const {
+  return std::visit([&](const auto& h) -> geodesy::AffineMap {
+    using H = std::decay_t<decltype(h)>;
+    if constexpr (std::is_same_v<H, geodesy::Helmert14<PositionVector>> ||
+                  std::is_same_v<H, geodesy::Helmert14<CoordinateFrame>>) {
+      if (!observation_epoch) {
+        throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                    std::string(where) +
+                        ": no observation epoch for a 14-parameter (time-dependent) transform; give --epoch YEAR or an "
+                        "epoch column (the reference epoch " +
+                        geodesy::format_decimal_year(h.reference_epoch) + " is never substituted)");
+      }
+      return geodesy::target_from_source(geodesy::evaluate_at(h, *observation_epoch), rotation_model);
+    } else {
+      return geodesy::target_from_source(h, rotation_model);
+    }
+  }, helmert);
+}
+
+TransformFile parse_transform_json(std::string_view text, std::string_view source) {
+  json doc;
+  try {
+    doc = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw Error(ErrorKind::input, "E_JSON", std::string(source) + ": not valid JSON: " + e.what());
+  }
+  if (!doc.is_object()) fail(source, "(top level)", "expected a JSON object");
+  for (const auto& [key, value] : doc.items()) {
+    if (!kTopLevelKeys.count(key)) {
+      fail(source, key, "unknown key; expected model, convention, rotation_model, source_frame, target_frame, "
+                        "reference_epoch, parameters (see docs/transform-file.md)");
+    }
+  }
+  TransformFile t;
+  if (!doc.contains("model")) fail(source, "model", "missing; expected helmert7, helmert6, translation3 or helmert14");
+  const std::string model = string_field(doc, "model", source);
+  if (model == "helmert7") {
+    t.model = TransformModel::helmert7;
+  } else if (model == "helmert6") {
+    t.model = TransformModel::helmert6;
+  } else if (model == "translation3") {
+    t.model = TransformModel::translation3;
+  } else if (model == "helmert14") {
+    t.model = TransformModel::helmert14;
+  } else {
+    fail(source, "model", "value \"" + model +
+                              "\" not read by this command; expected helmert7, helmert6, translation3 or helmert14");
+  }
+
+  bool position_vector = true;
+  if (doc.contains("convention")) {
+    const std::string c = string_field(doc, "convention", source);
+    if (c == "position_vector") {
+      position_vector = true;
+    } else if (c == "coordinate_frame") {
+      position_vector = false;
+    } else {
+      fail(source, "convention", "value \"" + c + "\" unknown; expected position_vector or coordinate_frame");
+    }
+  } else if (t.model != TransformModel::translation3) {
+    fail(source, "convention",
+         "missing; the sign of the rotations depends on it: expected position_vector (EPSG 1033/1053, IERS) or "
+         "coordinate_frame (EPSG 1032/1056); it is never assumed");
+  }
+
+  if (doc.contains("rotation_model")) {
+    const std::string r = string_field(doc, "rotation_model", source);
+    if (r == "small_angle") {
+      t.rotation_model = geodesy::RotationModel::small_angle;
+    } else if (r == "exact") {
+      t.rotation_model = geodesy::RotationModel::exact;
+    } else {
+      fail(source, "rotation_model", "value \"" + r + "\" unknown; expected small_angle or exact");
+    }
+  }
+
+  for (const char* key : {"source_frame", "target_frame"}) {
+    if (doc.contains(key)) {
+      auto f = geodesy::Frame::parse(string_field(doc, key, source), std::string(source) + ": " + key);
+      (std::string_view(key) == "source_frame" ? t.source_frame : t.target_frame) = std::move(f);
+    }
+  }
+
+  if (doc.contains("reference_epoch")) {
+    const json& v = doc.at("reference_epoch");
+    if (!v.is_number()) fail(source, "reference_epoch", "value " + v.dump() + " is not a decimal year");
+    t.reference_epoch = geodesy::parse_decimal_year(format_shortest(v.get<double>()),
+                                                    std::string(source) + ": reference_epoch");
+  } else if (t.model == TransformModel::helmert14) {
+    fail(source, "reference_epoch", "missing; a 14-parameter transform needs the epoch its parameters refer to");
+  }
+
+  if (!doc.contains("parameters")) fail(source, "parameters", "missing");
+  ParameterReader reader(doc.at("parameters"), source);
+  const std::string_view model_name = to_string(t.model);
+  std::array<double, 7> p{};
+  for (std::size_t i = 0; i < 7; ++i) {
+    const bool is_translation = i < 3, is_scale = i == 6;
+    const bool required = t.model == TransformModel::helmert7 || t.model == TransformModel::helmert14 ||
+                          (t.model == TransformModel::helmert6 && !is_scale) ||
+                          (t.model == TransformModel::translation3 && is_translation);
+    if (required) {
+      p[i] = reader.require(kSeven[i], false, model_name);
+    } else {
+      p[i] = reader.get(kSeven[i], false).value_or(0.0);  // a fixed parameter, zero unless stated
+    }
+  }
+  if (t.model == TransformModel::helmert14) {
+    std::array<double, 7> r{};
+    for (std::size_t i = 0; i < 7; ++i) r[i] = reader.require(kSeven[i], true, model_name);
+    if (position_vector) {
+      t.helmert = geodesy::Helmert14<PositionVector>{seven_from<PositionVector>(p), rates_from<PositionVector>(r),
+                                                     *t.reference_epoch};
+    } else {
+      t.helmert = geodesy::Helmert14<CoordinateFrame>{seven_from<CoordinateFrame>(p),
+                                                      rates_from<CoordinateFrame>(r), *t.reference_epoch};
+    }
+  } else if (position_vector) {
+    t.helmert = seven_from<PositionVector>(p);
+  } else {
+    t.helmert = seven_from<CoordinateFrame>(p);
+  }
+  reader.check_all_used(model_name);
+  return t;
+}
+
+TransformFile read_transform_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw Error(ErrorKind::io, "E_READ", path.string() + ": cannot open transform file: " + std::strerror(errno));
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_transform_json(text.str(), path.string());
+}
+
+std::string to_json_text(const TransformFile& t) {
+  json doc;
+  doc["model"] = std::string(to_string(t.model));
+  doc["convention"] = std::string(t.convention_name());
+  doc["rotation_model"] = std::string(geodesy::to_string(t.rotation_model));
+  if (t.source_frame) doc["source_frame"] = t.source_frame->to_string();
+  if (t.target_frame) doc["target_frame"] = t.target_frame->to_string();
+  if (t.reference_epoch) doc["reference_epoch"] = number(t.reference_epoch->year);
+  json params = json::object();
+  auto put7 = [&](const auto& h) {
+    params["tx_m"] = number(h.t_m.x());
+    params["ty_m"] = number(h.t_m.y());
+    params["tz_m"] = number(h.t_m.z());
+    params["rx_arcsec"] = number(h.rx.arcsec());
+    params["ry_arcsec"] = number(h.ry.arcsec());
+    params["rz_arcsec"] = number(h.rz.arcsec());
+    params["ds_ppm"] = number(h.ds.ppm());
+  };
+  std::visit([&](const auto& h) {
+    using H = std::decay_t<decltype(h)>;
+    if constexpr (std::is_same_v<H, geodesy::Helmert14<PositionVector>> ||
+                  std::is_same_v<H, geodesy::Helmert14<CoordinateFrame>>) {
+      put7(h.at_reference_epoch);
+      params["dtx_m_per_year"] = number(h.rates.dt_m_per_year.x());
+      params["dty_m_per_year"] = number(h.rates.dt_m_per_year.y());
+      params["dtz_m_per_year"] = number(h.rates.dt_m_per_year.z());
+      params["drx_arcsec_per_year"] = number(h.rates.drx_per_year.arcsec());
+      params["dry_arcsec_per_year"] = number(h.rates.dry_per_year.arcsec());
+      params["drz_arcsec_per_year"] = number(h.rates.drz_per_year.arcsec());
+      params["dds_ppm_per_year"] = number(h.rates.dds_per_year.ppm());
+    } else {
+      put7(h);
+    }
+  }, t.helmert);
+  doc["parameters"] = params;
+  return doc.dump(2) + "\n";
+}
+
+}  // namespace geoanchor::io

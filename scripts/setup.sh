@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages geoanchor builds, tests and benchmarks with.
+# Idempotent: packages already installed are left alone, and apt is not touched
+# at all when nothing is missing. Must run as root (or with sudo available).
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git
+  # geodesy core
+  libeigen3-dev libgeographiclib-dev geographiclib-tools
+  libproj-dev proj-bin proj-data
+  # solver
+  libceres-dev libsuitesparse-dev libboost-math-dev
+  # file formats, CLI, hashes
+  nlohmann-json3-dev libcli11-dev libssl-dev
+  # GUI shells (later issues) and fonts
+  libimgui-dev libglfw3-dev libosmesa6-dev libstb-dev fonts-dejavu-core xvfb xauth
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q '^install ok installed$'; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "setup: need root to install: ${missing[*]}" >&2; exit 1; }
+  sudo_cmd=(sudo)
+fi
+
+echo "setup: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Sets up (Debian packages), builds and runs the whole test suite through CTest.
+#   bash scripts/test.sh           Release build (build/release)
+#   bash scripts/test.sh --asan    AddressSanitizer + UBSan build (build/asan)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+preset=release
+case "${1:-}" in
+  "") ;;
+  --asan) preset=asan ;;
+  *) echo "usage: bash scripts/test.sh [--asan]" >&2; exit 2 ;;
+esac
+
+bash scripts/setup.sh
+cmake --preset "$preset" >/dev/null
+cmake --build --preset "$preset"
+ctest --preset "$preset" -j "$(nproc)"

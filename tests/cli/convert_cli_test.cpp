@@ -1,0 +1,326 @@
+// `geoanchor convert` end to end: the real executable on files, compared
+// with PROJ, and every bad-input case checked for its message, its exit code
+// and the absence of any output file.
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "geoanchor/geodesy/number_text.hpp"
+#include "proj_reference.hpp"
+#include "test_support.hpp"
+
+namespace geoanchor {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::proj_radians;
+using testing::ProjPipeline;
+
+constexpr double kRoundTripTol_m = 1e-8;  // issue acceptance: geodetic -> ECEF -> ENU -> ECEF -> geodetic
+constexpr double kVsProjEcefTol_m = 1e-8;
+constexpr double kVsProjEnuTol_m = 1e-6;
+constexpr double kPublishedTol_m = 0.0005;  // GN 7-2 time-dependent example, millimetres
+
+const std::string kOrigin = "47.464722,8.549167,480";  // LSZH aerodrome reference point, ellipsoidal height
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+class ConvertCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("geoanchor_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+
+  fs::path path(const std::string& name) const { return dir_ / name; }
+
+  fs::path write(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name), std::ios::binary) << text;
+    return path(name);
+  }
+
+  static std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+
+  RunResult run(const std::string& args, const std::string& stdin_file = "") const {
+    const fs::path out = path("stdout.txt"), err = path("stderr.txt");
+    std::string cmd = std::string(GEOANCHOR_EXE) + " " + args;
+    if (!stdin_file.empty()) cmd += " < '" + stdin_file + "'";
+    cmd += " > '" + out.string() + "' 2> '" + err.string() + "'";
+    const int status = std::system(cmd.c_str());
+    RunResult r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    fs::remove(out);
+    fs::remove(err);
+    return r;
+  }
+
+  // Every file in the test folder except the named inputs: outputs and temporaries.
+  std::vector<std::string> leftovers(const std::vector<std::string>& inputs) const {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(dir_)) {
+      const auto name = e.path().filename().string();
+      if (std::find(inputs.begin(), inputs.end(), name) == inputs.end()) out.push_back(name);
+    }
+    return out;
+  }
+
+  fs::path dir_;
+};
+
+// A parsed CSV: header and rows of fields, comments dropped.
+struct Table {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  std::size_t col(const std::string& name) const {
+    const auto it = std::find(header.begin(), header.end(), name);
+    if (it == header.end()) throw std::runtime_error("no column " + name);
+    return static_cast<std::size_t>(it - header.begin());
+  }
+  double num(std::size_t row, const std::string& name) const { return *parse_finite_double(rows[row][col(name)]); }
+};
+
+Table parse_table(const std::string& text) {
+  Table t;
+  std::istringstream in(text);
+  std::string line;
+  auto split = [](const std::string& l) {
+    std::vector<std::string> f;
+    std::stringstream ss(l);
+    std::string x;
+    while (std::getline(ss, x, ',')) f.push_back(x);
+    return f;
+  };
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (t.header.empty()) {
+      t.header = split(line);
+    } else {
+      t.rows.push_back(split(line));
+    }
+  }
+  return t;
+}
+
+const std::string kFixture = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_points.csv";
+
+TEST_F(ConvertCli, BundledExampleRoundTripsGeodeticEcefEnuEcefGeodetic) {
+  const auto ecef = path("ecef.csv"), enu = path("enu.csv"), ecef2 = path("ecef2.csv"), geo = path("geo.csv");
+  ASSERT_EQ(run("convert " + kFixture + " --to ecef -o " + ecef.string()).exit_code, 0);
+  ASSERT_EQ(run("convert " + ecef.string() + " --to enu --origin " + kOrigin + " -o " + enu.string()).exit_code, 0);
+  ASSERT_EQ(run("convert " + enu.string() + " --to ecef --origin " + kOrigin + " -o " + ecef2.string()).exit_code, 0);
+  const RunResult last = run("convert " + ecef2.string() + " --to geodetic -o " + geo.string());
+  ASSERT_EQ(last.exit_code, 0) << last.err;
+
+  const Table in = parse_table(slurp(kFixture)), t_ecef = parse_table(slurp(ecef)), t_enu = parse_table(slurp(enu)),
+              out = parse_table(slurp(geo));
+  ASSERT_EQ(in.rows.size(), 36u);
+  ASSERT_EQ(out.rows.size(), in.rows.size());
+  EXPECT_EQ(t_ecef.header, (std::vector<std::string>{"id", "x_m", "y_m", "z_m", "kind"}));
+  EXPECT_EQ(out.header, in.header);
+
+  const ProjPipeline cart("+proj=cart +ellps=WGS84");
+  char topo_def[200];
+  std::snprintf(topo_def, sizeof topo_def, "+proj=pipeline +step +proj=cart +ellps=WGS84 +step +proj=topocentric "
+                "+ellps=WGS84 +lat_0=47.464722 +lon_0=8.549167 +h_0=480");
+  const ProjPipeline topo(topo_def);
+  auto proj_ecef = [&](const Table& t, std::size_t i) {
+    return cart.forward({proj_radians(t.num(i, "lon_deg")), proj_radians(t.num(i, "lat_deg")), t.num(i, "h_m")});
+  };
+  for (std::size_t i = 0; i < in.rows.size(); ++i) {
+    EXPECT_EQ(out.rows[i][0], in.rows[i][0]);  // ids pass through in order
+    EXPECT_EQ(out.rows[i][4], in.rows[i][4]);  // so do attributes
+    const Eigen::Vector3d expected = proj_ecef(in, i);
+    const Eigen::Vector3d ours(t_ecef.num(i, "x_m"), t_ecef.num(i, "y_m"), t_ecef.num(i, "z_m"));
+    EXPECT_THAT(ours, testing::IsNearVector(expected, kVsProjEcefTol_m)) << in.rows[i][0];
+    const Eigen::Vector3d enu_ref = topo.forward({proj_radians(in.num(i, "lon_deg")), proj_radians(in.num(i, "lat_deg")), in.num(i, "h_m")});
+    EXPECT_THAT(Eigen::Vector3d(t_enu.num(i, "e_m"), t_enu.num(i, "n_m"), t_enu.num(i, "u_m")),
+                testing::IsNearVector(enu_ref, kVsProjEnuTol_m));
+    EXPECT_THAT(proj_ecef(out, i), testing::IsNearVector(expected, kRoundTripTol_m)) << in.rows[i][0];
+  }
+  // Comments pass through; every output has its provenance sidecar.
+  EXPECT_EQ(slurp(geo).rfind("# Airport survey marks", 0), 0u);
+  const std::string side = slurp(path("enu.csv.geoanchor.json"));
+  EXPECT_NE(side.find("\"lat_deg\": 47.464722"), std::string::npos) << side;
+  EXPECT_NE(side.find("\"height_type\": \"ellipsoidal\""), std::string::npos);
+}
+
+TEST_F(ConvertCli, StreamsStdinToStdoutWithPrecision) {
+  write("in.csv", "id,x_m,y_m,z_m\nA,3771793.968,140253.342,5124304.349\n");
+  const RunResult r = run("convert - --to geodetic --precision 3", path("in.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // IOGP GN 7-2 example 9602: 53°48'33.820"N = 53.80939444°, 2°07'46.380"E = 2.12955°, h 73.000 m.
+  EXPECT_EQ(r.out, "id,lat_deg,lon_deg,h_m\nA,53.80939444,2.12955000,73.000\n");
+}
+
+TEST_F(ConvertCli, UtmOutputNamesEachPointsZoneAndReadsItBack) {
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nZH,47.46,8.55,480\nSYD,-33.95,151.18,21\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --to utm -o " + path("utm.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Table t = parse_table(slurp(path("utm.csv")));
+  EXPECT_EQ(t.rows[0][t.col("utm_zone")], "32N");
+  EXPECT_EQ(t.rows[1][t.col("utm_zone")], "56S");
+  const ProjPipeline utm56s("+proj=utm +zone=56 +south +ellps=WGS84");
+  const Eigen::Vector3d ref = utm56s.forward({proj_radians(151.18), proj_radians(-33.95), 21.0});
+  EXPECT_NEAR(t.num(1, "easting_m"), ref.x(), kVsProjEnuTol_m);
+  EXPECT_NEAR(t.num(1, "northing_m"), ref.y(), kVsProjEnuTol_m);
+  const RunResult back = run("convert " + path("utm.csv").string() + " --to geodetic");
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  const Table g = parse_table(back.out);
+  EXPECT_NEAR(g.num(1, "lat_deg"), -33.95, 1e-12);
+  EXPECT_NEAR(g.num(1, "lon_deg"), 151.18, 1e-12);
+}
+
+const char* kGda94Transform = R"({"model": "helmert14", "convention": "position_vector", "rotation_model": "small_angle",
+ "source_frame": "ITRF2008", "target_frame": "GDA94", "reference_epoch": 1994.0,
+ "parameters": {"tx_m": -0.08468, "ty_m": -0.01942, "tz_m": 0.03201, "rx_arcsec": 0.0004254, "ry_arcsec": -0.0022578,
+  "rz_arcsec": -0.0024015, "ds_ppm": 0.00971, "dtx_m_per_year": 0.00142, "dty_m_per_year": 0.00134,
+  "dtz_m_per_year": 0.00090, "drx_arcsec_per_year": -0.0015461, "dry_arcsec_per_year": -0.0011820,
+  "drz_arcsec_per_year": -0.0011551, "dds_ppm_per_year": 0.000109}})";
+
+TEST_F(ConvertCli, AppliesAFourteenParameterTransformAtTheObservationEpoch) {
+  // IOGP GN 7-2, EPSG method 1053 example: ITRF2008 at 2013.90 -> GDA94.
+  write("T.json", kGda94Transform);
+  write("in.csv", "id,x_m,y_m,z_m,epoch\nALIC,-3789470.710,4841770.404,-1690893.952,2013.90\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --to ecef --transform " + path("T.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Table t = parse_table(r.out);
+  EXPECT_NEAR(t.num(0, "x_m"), -3789470.004, kPublishedTol_m);
+  EXPECT_NEAR(t.num(0, "y_m"), 4841770.686, kPublishedTol_m);
+  EXPECT_NEAR(t.num(0, "z_m"), -1690895.108, kPublishedTol_m);
+  EXPECT_EQ(t.rows[0][t.col("epoch")], "2013.90");  // the epoch column passes through
+
+  // --epoch gives the same, and --inverse takes it back exactly.
+  write("in2.csv", "id,x_m,y_m,z_m\nALIC,-3789470.710,4841770.404,-1690893.952\n");
+  const RunResult r2 = run("convert " + path("in2.csv").string() + " --to ecef --epoch 2013.9 --transform " +
+                     path("T.json").string() + " -o " + path("gda94.csv").string());
+  ASSERT_EQ(r2.exit_code, 0) << r2.err;
+  const RunResult back = run("convert " + path("gda94.csv").string() + " --to ecef --epoch 2013.9 --inverse --transform " +
+                       path("T.json").string());
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  const Table b = parse_table(back.out);
+  EXPECT_NEAR(b.num(0, "x_m"), -3789470.710, kRoundTripTol_m);
+  EXPECT_NEAR(b.num(0, "y_m"), 4841770.404, kRoundTripTol_m);
+  EXPECT_NEAR(b.num(0, "z_m"), -1690893.952, kRoundTripTol_m);
+  EXPECT_NE(slurp(path("gda94.csv.geoanchor.json")).find("\"source_frame\": \"ITRF2008\""), std::string::npos);
+}
+
+struct BadCase {
+  const char* name;
+  const char* csv;        // written to in.csv
+  const char* transform;  // written to T.json when non-empty
+  const char* args;       // after "convert in.csv -o out.csv"
+  int exit_code;
+  const char* message;    // expected substring of stderr
+};
+
+class ConvertBadInput : public ConvertCli, public ::testing::WithParamInterface<BadCase> {};
+
+TEST_P(ConvertBadInput, FailsWithAClearMessageAndLeavesNoOutput) {
+  const BadCase c = GetParam();
+  write("in.csv", c.csv);
+  std::vector<std::string> inputs = {"in.csv"};
+  if (*c.transform) {
+    write("T.json", c.transform);
+    inputs.emplace_back("T.json");
+  }
+  std::string args = std::string("convert ") + path("in.csv").string() + " -o " + path("out.csv").string() + " " + c.args;
+  if (*c.transform) args += " --transform " + path("T.json").string();
+  const RunResult r = run(args);
+  EXPECT_EQ(r.exit_code, c.exit_code) << r.err;
+  EXPECT_NE(r.err.find(c.message), std::string::npos) << "stderr: " << r.err;
+  EXPECT_EQ(r.err.rfind("geoanchor: error[", 0), 0u) << r.err;
+  EXPECT_TRUE(leftovers(inputs).empty()) << "left behind: " << ::testing::PrintToString(leftovers(inputs));
+}
+
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
+
+const char* kGood = "id,lat_deg,lon_deg,h_m\nA,47.46,8.55,480\nB,47.47,8.56,481\n";
+const char* kHelmertNoConvention = R"({"model": "helmert7", "parameters": {"tx_m": 1, "ty_m": 2, "tz_m": 3,
+ "rx_arcsec": 0.1, "ry_arcsec": 0.2, "rz_arcsec": 0.3, "ds_ppm": 0.5}})";
+const char* kHelmert14NoEpoch = R"({"model": "helmert14", "convention": "coordinate_frame", "parameters": {"tx_m": 0,
+ "ty_m": 0, "tz_m": 0, "rx_arcsec": 0, "ry_arcsec": 0, "rz_arcsec": 0, "ds_ppm": 0, "dtx_m_per_year": 0,
+ "dty_m_per_year": 0, "dtz_m_per_year": 0, "drx_arcsec_per_year": 0.0015, "dry_arcsec_per_year": 0.0012,
+ "drz_arcsec_per_year": 0.0012, "dds_ppm_per_year": 0}})";
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, ConvertBadInput,
+    ::testing::Values(
+        BadCase{"latitude_out_of_range", "id,lat_deg,lon_deg,h_m\nA,47.46,8.55,480\nB,91.2,8.55,480\n", "", "--to ecef", 3,
+                "in.csv:3: lat_deg=91.2: latitude not in [-90, 90] degrees"},
+        BadCase{"longitude_out_of_range", "id,lat_deg,lon_deg,h_m\nA,47.46,181,480\n", "", "--to ecef", 3,
+                "in.csv:2: lon_deg=181: longitude not in [-180, 180] degrees"},
+        BadCase{"nan", "id,x_m,y_m,z_m\nA,4270803.4,nan,4678617.5\n", "", "--to geodetic", 3,
+                "in.csv:2: y_m='nan': not a finite number"},
+        BadCase{"inf", "id,x_m,y_m,z_m\nA,4270803.4,640437.8,inf\n", "", "--to geodetic", 3,
+                "in.csv:2: z_m='inf': not a finite number"},
+        BadCase{"empty_field", "id,lat_deg,lon_deg,h_m\nA,47.46,8.55,\n", "", "--to ecef", 3,
+                "in.csv:2: h_m='': empty field; expected a number"},
+        BadCase{"decimal_comma", "id,lat_deg,lon_deg,h_m\nA,\"47,46\",8.55,480\n", "", "--to ecef", 3,
+                "(decimal comma? use '.')"},
+        BadCase{"missing_column", "id,lat_deg,h_m\nA,47.46,480\n", "", "--to ecef", 3,
+                "header has lat/lon columns but no lon_deg"},
+        BadCase{"unknown_column", "id,lat_rad,lon_deg,h_m\nA,0.8,8.55,480\n", "", "--to ecef", 3,
+                "header column 2 'lat_rad': unit 'rad' is not read"},
+        BadCase{"mixed_frames", "id,lat_deg,lon_deg,z_m\nA,47.46,8.55,480\n", "", "--to ecef", 3,
+                "header mixes coordinate kinds (lat/lon and x/y/z)"},
+        BadCase{"enu_without_origin", kGood, "", "--to enu", 2, "--to enu needs the local origin: give --origin"},
+        BadCase{"enu_input_without_origin", "id,e_m,n_m,u_m\nA,1,2,3\n", "", "--to ecef", 2,
+                "enu input needs its origin: give --from-origin"},
+        BadCase{"helmert_without_convention", kGood, kHelmertNoConvention, "--to ecef", 3,
+                "T.json: convention: missing"},
+        BadCase{"helmert14_without_reference_epoch", kGood, kHelmert14NoEpoch, "--to ecef --epoch 2020", 3,
+                "T.json: reference_epoch: missing"},
+        BadCase{"helmert14_without_observation_epoch", kGood, kGda94Transform, "--to ecef", 2,
+                "needs the observation epoch: give --epoch YEAR or an epoch column"},
+        BadCase{"helmert14_empty_epoch_cell", "id,lat_deg,lon_deg,h_m,epoch\nA,47.46,8.55,480,2020.5\nB,47.46,8.55,480,\n",
+                kGda94Transform, "--to ecef", 3, "in.csv:3: no observation epoch for a 14-parameter"},
+        BadCase{"malformed_epoch", "id,lat_deg,lon_deg,h_m,epoch\nA,47.46,8.55,480,yyyy\n", kGda94Transform, "--to ecef", 3,
+                "in.csv:2: epoch: epoch=yyyy: not a decimal year"},
+        BadCase{"bad_origin_flag", kGood, "", "--to enu --origin 95,8,400", 2,
+                "--origin 95,8,400: latitude 95 not in [-90, 90] degrees"},
+        BadCase{"bad_zone_flag", kGood, "", "--to utm --zone 61N", 2, "--zone: zone=61N: not a UTM zone"},
+        BadCase{"wrong_field_count", "id,lat_deg,lon_deg,h_m\nA,47.46,8.55,480,extra\n", "", "--to ecef", 3,
+                "in.csv:2: 5 fields; expected 4"},
+        BadCase{"orthometric_height", "id,lat_deg,lon_deg,H_m\nA,47.46,8.55,432\n", "", "--to ecef", 3,
+                "'H_m': orthometric height"},
+        BadCase{"unknown_to", kGood, "", "--to mercator", 2, "--to mercator: expected geodetic, ecef, enu, ned, utm or tm"}),
+    [](const ::testing::TestParamInfo<BadCase>& param_info) { return std::string(param_info.param.name); });
+
+TEST_F(ConvertCli, RefusesToOverwriteWithoutTheFlagOrToWriteOverItsInput) {
+  write("in.csv", kGood);
+  write("out.csv", "precious\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --to ecef -o " + path("out.csv").string());
+  EXPECT_EQ(r.exit_code, 5);
+  EXPECT_NE(r.err.find("output already exists; pass --overwrite"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(path("out.csv")), "precious\n");
+  const RunResult same = run("convert " + path("in.csv").string() + " --to ecef --overwrite -o " + path("in.csv").string());
+  EXPECT_EQ(same.exit_code, 2);
+  EXPECT_EQ(slurp(path("in.csv")), kGood);
+  const RunResult ok = run("convert " + path("in.csv").string() + " --to ecef --overwrite -o " + path("out.csv").string());
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_EQ(slurp(path("out.csv")).rfind("id,x_m,y_m,z_m\n", 0), 0u);
+}
+
+}  // namespace
+}  // namespace geoanchor

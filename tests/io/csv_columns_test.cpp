@@ -1,0 +1,96 @@
+// CSV splitting and what a header says about its coordinates.
+
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/io/csv.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+std::vector<std::string> split(const std::string& header) {
+  std::vector<std::string> raw, values;
+  split_csv_line(header, raw, values, "t");
+  return values;
+}
+
+std::string error_of(const std::string& header) {
+  try {
+    classify_coordinate_header(split(header), "points.csv");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Csv, SplitsQuotedFieldsAndKeepsTheRawText) {
+  std::vector<std::string> raw, values;
+  split_csv_line(R"(P1,"Runway 16, threshold","say ""hi""",,x)", raw, values, "t");
+  ASSERT_EQ(values.size(), 5u);
+  EXPECT_EQ(values[1], "Runway 16, threshold");
+  EXPECT_EQ(raw[1], "\"Runway 16, threshold\"");
+  EXPECT_EQ(values[2], "say \"hi\"");
+  EXPECT_EQ(values[3], "");
+  EXPECT_THROW(split_csv_line("a,\"open", raw, values, "t"), Error);
+  EXPECT_EQ(csv_quote("a,b"), "\"a,b\"");
+  EXPECT_EQ(csv_quote("plain"), "plain");
+}
+
+TEST(Csv, ReaderKeepsCommentsAndChecksFieldCounts) {
+  std::istringstream in("# first\r\nid,x_m\r\n\r\n# mid\r\nP1,1\r\nP2,2,3\r\n");
+  CsvReader reader(in, "f.csv");
+  EXPECT_EQ(reader.leading_comments(), std::vector<std::string>{"# first"});
+  EXPECT_EQ(reader.header(), (std::vector<std::string>{"id", "x_m"}));
+  CsvRecord r;
+  ASSERT_TRUE(reader.next(r));
+  EXPECT_TRUE(r.is_comment);
+  ASSERT_TRUE(reader.next(r));
+  EXPECT_EQ(r.values[1], "1");
+  EXPECT_EQ(r.line, 5u);
+  try {
+    reader.next(r);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "f.csv:6: 3 fields; expected 2 as in the header (line 2)");
+  }
+}
+
+TEST(CoordinateColumns, RecognisesEachKindAndPassesAttributesThrough) {
+  const auto g = classify_coordinate_header(split("id,lon_deg,lat_deg,h_m,n_returns,epoch"), "f");
+  EXPECT_EQ(g.kind, CoordinateKind::geodetic);
+  EXPECT_EQ(g.first, 2u);  // lat, whatever its position
+  EXPECT_EQ(g.second, 1u);
+  EXPECT_EQ(*g.third, 3u);
+  EXPECT_EQ(*g.epoch, 5u);
+  EXPECT_FALSE(g.is_coordinate(4));
+  EXPECT_EQ(classify_coordinate_header(split("x_m,y_m,z_m"), "f").kind, CoordinateKind::ecef);
+  EXPECT_EQ(classify_coordinate_header(split("e_m,n_m,u_m"), "f").kind, CoordinateKind::enu);
+  const auto ned = classify_coordinate_header(split("n_m,e_m,d_m"), "f");
+  EXPECT_EQ(ned.kind, CoordinateKind::ned);
+  EXPECT_EQ(ned.first, 0u);
+  EXPECT_EQ(classify_coordinate_header(split("easting_m,northing_m,utm_zone"), "f").kind, CoordinateKind::projected);
+  EXPECT_FALSE(classify_coordinate_header(split("lat_deg,lon_deg"), "f").third.has_value());
+  const auto src = classify_coordinate_header(split("id,lat_src_deg,lon_src_deg,h_src_m,x_dst_m"), "f", "src");
+  EXPECT_EQ(src.kind, CoordinateKind::geodetic);
+}
+
+TEST(CoordinateColumns, RefusesMixedMissingUnknownAndOrthometricColumns) {
+  EXPECT_EQ(error_of("lat_deg,lon_deg,x_m,y_m,z_m"),
+            "points.csv: header mixes coordinate kinds (lat/lon and x/y/z); expected the columns of exactly one kind");
+  EXPECT_EQ(error_of("id,lat_deg,h_m"),
+            "points.csv: header has lat/lon columns but no lon_deg; expected lat_deg,lon_deg,h_m");
+  EXPECT_NE(error_of("lat_rad,lon_deg").find("header column 1 'lat_rad': unit 'rad' is not read"), std::string::npos);
+  EXPECT_NE(error_of("lat,lon").find("header column 1 'lat': coordinate column without a unit"), std::string::npos);
+  EXPECT_NE(error_of("lat_deg,lon_deg,H_m").find("'H_m': orthometric height"), std::string::npos);
+  EXPECT_NE(error_of("LAT_DEG,lon_deg").find("case-sensitive; expected lat_deg"), std::string::npos);
+  EXPECT_NE(error_of("e_m,n_m,u_m,d_m").find("mixes ENU (u) and NED (d)"), std::string::npos);
+  EXPECT_NE(error_of("x_m,y_m,z_m,x_m").find("appears twice"), std::string::npos);
+  EXPECT_NE(error_of("id,name").find("header names no coordinates"), std::string::npos);
+  EXPECT_NE(error_of("x_m,y_m,z_m,h_m").find("does not belong with x/y/z coordinates"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace geoanchor::io

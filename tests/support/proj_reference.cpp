@@ -1,0 +1,41 @@
+#include "proj_reference.hpp"
+
+#include <proj.h>
+
+#include <limits>
+#include <stdexcept>
+
+namespace geoanchor::testing {
+
+ProjPipeline::ProjPipeline(const std::string& definition) : ctx_(proj_context_create()), pj_(nullptr) {
+  pj_ = proj_create(ctx_, definition.c_str());
+  if (!pj_) {
+    const std::string why = proj_context_errno_string(ctx_, proj_context_errno(ctx_));
+    proj_context_destroy(ctx_);
+    throw std::runtime_error("PROJ rejected '" + definition + "': " + why);
+  }
+}
+
+ProjPipeline::~ProjPipeline() {
+  proj_destroy(pj_);
+  proj_context_destroy(ctx_);
+}
+
+Eigen::Vector3d ProjPipeline::trans(const Eigen::Vector3d& xyz, double t, int direction) const {
+  PJ_COORD c = proj_coord(xyz.x(), xyz.y(), xyz.z(), t);
+  proj_errno_reset(pj_);
+  const PJ_COORD r = proj_trans(pj_, direction > 0 ? PJ_FWD : PJ_INV, c);
+  if (proj_errno(pj_) != 0 || r.xyzt.x == HUGE_VAL) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return Eigen::Vector3d(nan, nan, nan);
+  }
+  return Eigen::Vector3d(r.xyzt.x, r.xyzt.y, r.xyzt.z);
+}
+
+Eigen::Vector3d ProjPipeline::forward(const Eigen::Vector3d& xyz, double t) const { return trans(xyz, t, +1); }
+Eigen::Vector3d ProjPipeline::inverse(const Eigen::Vector3d& xyz, double t) const { return trans(xyz, t, -1); }
+
+double proj_radians(double degrees) { return proj_torad(degrees); }
+double proj_degrees(double radians) { return proj_todeg(radians); }
+
+}  // namespace geoanchor::testing

@@ -1,0 +1,37 @@
+#pragma once
+// PROJ as the independent reference in tests, through its C API.
+// A ProjPipeline wraps one PROJ string; coordinates are passed in the units
+// PROJ's operations use internally (radians for angles, metres otherwise).
+
+#include <Eigen/Core>
+
+#include <string>
+
+struct pj_ctx;
+struct PJconsts;
+
+namespace geoanchor::testing {
+
+class ProjPipeline {
+ public:
+  explicit ProjPipeline(const std::string& definition);
+  ~ProjPipeline();
+  ProjPipeline(const ProjPipeline&) = delete;
+  ProjPipeline& operator=(const ProjPipeline&) = delete;
+
+  // Forward and inverse of (x, y, z) at time t (decimal year; ignored by
+  // operations that are not time-dependent). NaN if PROJ reports an error.
+  Eigen::Vector3d forward(const Eigen::Vector3d& xyz, double t = 0.0) const;
+  Eigen::Vector3d inverse(const Eigen::Vector3d& xyz, double t = 0.0) const;
+
+ private:
+  Eigen::Vector3d trans(const Eigen::Vector3d& xyz, double t, int direction) const;
+  pj_ctx* ctx_;
+  PJconsts* pj_;
+};
+
+// Degrees to radians the way PROJ's own tools do (proj_torad).
+double proj_radians(double degrees);
+double proj_degrees(double radians);
+
+}  // namespace geoanchor::testing

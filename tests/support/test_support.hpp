@@ -1,0 +1,58 @@
+#pragma once
+// Shared test helpers: named tolerances live in each test; here are the
+// random point generators (with the special cases every geodesy test needs)
+// and domain matchers.
+
+#include <gmock/gmock.h>
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "geoanchor/geodesy/positions.hpp"
+
+namespace geoanchor::testing {
+
+// Worldwide points: uniform on the sphere, plus the poles, ±180°, the
+// equator and the Greenwich meridian, at heights drawn from [h_min, h_max].
+// Deterministic for a given seed.
+inline std::vector<geodesy::GeodeticPosition> worldwide_points(std::size_t n, double h_min_m, double h_max_m,
+                                                               unsigned seed = 20261123) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), lon(-180.0, 180.0), h(h_min_m, h_max_m);
+  std::vector<geodesy::GeodeticPosition> out;
+  const double specials[][2] = {{90, 0},    {-90, 0},   {90, 123.4}, {-90, -45}, {0, 180},  {0, -180},
+                                {45, 180},  {-45, -180}, {0, 0},      {0, 90},    {0, -90},  {89.999999, 180},
+                                {-89.999999, -179.999999}, {1e-12, 1e-12}};
+  for (const auto& s : specials) {
+    for (double hh : {h_min_m, 0.5 * (h_min_m + h_max_m), h_max_m}) {
+      out.push_back({geodesy::Angle::degrees(s[0]), geodesy::Angle::degrees(s[1]), geodesy::EllipsoidalHeight{hh}});
+    }
+  }
+  while (out.size() < n) {
+    const double lat = std::asin(u(rng)) * 180.0 / M_PI;
+    out.push_back({geodesy::Angle::degrees(lat), geodesy::Angle::degrees(lon(rng)), geodesy::EllipsoidalHeight{h(rng)}});
+  }
+  return out;
+}
+
+// Distance between two 3-vectors, metres.
+inline double distance_m(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return (a - b).norm(); }
+
+// Matches an Eigen::Vector3d within `tol_m` (Euclidean) of `expected`.
+MATCHER_P2(IsNearVector, expected, tol_m,
+           "is within " + ::testing::PrintToString(tol_m) + " m of " + ::testing::PrintToString(expected.transpose())) {
+  const double d = (arg - expected).norm();
+  *result_listener << "distance " << d << " m";
+  return std::isfinite(d) && d <= tol_m;
+}
+
+// Difference of two angles in degrees, wrapped to [-180, 180].
+inline double angle_difference_deg(double a, double b) {
+  double d = std::remainder(a - b, 360.0);
+  return d;
+}
+
+}  // namespace geoanchor::testing
