@@ -179,7 +179,12 @@ void run_convert(const ConvertOptions& o) {
 
   std::vector<std::string> warnings;
   if (decoder.heights_missing()) {
-    warnings.push_back(source_name + ": no h_m column: every height is taken as 0 m above the ellipsoid");
+    warnings.push_back(source_name + ": no h_m column: every height is taken as 0 m above the ellipsoid (" +
+                       std::string(io::to_string(columns.kind)) + " input)");
+  }
+  if (flag_epoch && !(transform && transform->time_dependent())) {
+    warnings.push_back("--epoch " + *o.epoch + " ignored: " +
+                       (transform ? "the transform is not time-dependent" : std::string("no --transform given")));
   }
   if (step.needs_row_epoch() && !columns.epoch && !flag_epoch) {
     throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
@@ -213,11 +218,14 @@ void run_convert(const ConvertOptions& o) {
   }
 
   // Output: a temporary file renamed at the end, or standard output.
-  std::unique_ptr<io::AtomicOutputFile> out_file;
+  // Both the output and its provenance sidecar are opened before any row is
+  // read, so an existing file is refused up front.
+  std::unique_ptr<io::AtomicOutputFile> out_file, sidecar;
   const io::Overwrite overwrite = o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
   if (!o.output.empty()) {
     if (!from_stdin) io::refuse_same_file(o.input, o.output);
     out_file = std::make_unique<io::AtomicOutputFile>(o.output, overwrite);
+    sidecar = std::make_unique<io::AtomicOutputFile>(o.output + ".geoanchor.json", overwrite);
   }
   std::ostream& out = out_file ? out_file->stream() : std::cout;
   for (const auto& c : reader.leading_comments()) out << c << '\n';
@@ -291,10 +299,9 @@ void run_convert(const ConvertOptions& o) {
     side["transform"] = t;
   }
   side["warnings"] = warnings;
-  io::AtomicOutputFile sidecar(o.output + ".geoanchor.json", overwrite);
-  sidecar.stream() << side.dump(2) << '\n';
+  sidecar->stream() << side.dump(2) << '\n';
   out_file->commit();
-  sidecar.commit();
+  sidecar->commit();
 }
 
 }  // namespace geoanchor::cli

@@ -14,12 +14,14 @@
 namespace geoanchor::io {
 namespace {
 
-// A fixed table of temporary paths that a signal handler may read. Only
-// async-signal-safe operations touch it from the handler (loads, unlink).
+// A fixed table of temporary paths that a signal handler may read. A slot is
+// claimed, its path copied, and only then published as ready; the handler
+// reads ready slots only, so it never sees a half-written path.
 constexpr int kSlots = 16;
 constexpr std::size_t kPathMax = 4096;
 struct Slot {
-  std::atomic<bool> used{false};
+  std::atomic<bool> claimed{false};
+  std::atomic<bool> ready{false};
   char path[kPathMax] = {};
 };
 std::array<Slot, kSlots> g_temp_registry;  // NOLINT: signal handlers need a global
@@ -28,22 +30,26 @@ int register_temp(const std::filesystem::path& p) {
   const std::string s = p.string();
   if (s.size() >= kPathMax) return -1;
   for (int i = 0; i < kSlots; ++i) {
-    bool expected = false;
     auto& slot = g_temp_registry[static_cast<std::size_t>(i)];
-    if (slot.used.load()) continue;
+    bool expected = false;
+    if (!slot.claimed.compare_exchange_strong(expected, true)) continue;
     std::memcpy(slot.path, s.c_str(), s.size() + 1);
-    if (slot.used.compare_exchange_strong(expected, true)) return i;
+    slot.ready.store(true);
+    return i;
   }
-  return -1;
+  return -1;  // more than kSlots outputs open at once: still removed on exceptions, not on signals
 }
 
 void unregister_temp(int i) {
-  if (i >= 0) g_temp_registry[static_cast<std::size_t>(i)].used.store(false);
+  if (i < 0) return;
+  auto& slot = g_temp_registry[static_cast<std::size_t>(i)];
+  slot.ready.store(false);
+  slot.claimed.store(false);
 }
 
 extern "C" void cleanup_and_reraise(int sig) {
   for (auto& slot : g_temp_registry) {
-    if (slot.used.load()) ::unlink(slot.path);
+    if (slot.ready.load()) ::unlink(slot.path);
   }
   std::signal(sig, SIG_DFL);
   std::raise(sig);
@@ -92,7 +98,6 @@ AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path, Overwrite o
     throw Error(ErrorKind::io, "E_OUTPUT_OPEN",
                 temp_path_.string() + ": cannot create temporary output: " + std::strerror(errno));
   }
-  out_.exceptions(std::ios::goodbit);
 }
 
 AtomicOutputFile::~AtomicOutputFile() {

@@ -84,7 +84,7 @@ EcefPosition CoordinateDecoder::decode(const CsvRecord& r) const {
         g = projection_->inverse(geodesy::ProjectedPosition{a, b, EllipsoidalHeight{h}, projection_->definition()});
       } else {
         const auto zone = geodesy::parse_utm_zone(r.values[*columns_.utm_zone], where(*columns_.utm_zone));
-        const geodesy::TransverseMercator tm(geodesy::utm_projection(frame_.ellipsoid, zone));
+        const geodesy::TransverseMercator& tm = utm(zone);
         g = tm.inverse(geodesy::ProjectedPosition{a, b, EllipsoidalHeight{h}, tm.definition()});
       }
       if (!std::isfinite(g.lat.deg()) || !std::isfinite(g.lon.deg())) {
@@ -96,6 +96,25 @@ EcefPosition CoordinateDecoder::decode(const CsvRecord& r) const {
     }
   }
   return EcefPosition();
+}
+
+namespace {
+// One TransverseMercator per zone met, so rows do not rebuild the series.
+const geodesy::TransverseMercator& cached_utm(std::map<std::string, geodesy::TransverseMercator>& cache,
+                                             const geodesy::Ellipsoid& e, const geodesy::UtmZone& zone) {
+  const std::string key = zone.to_string();
+  auto it = cache.find(key);
+  if (it == cache.end()) it = cache.emplace(key, geodesy::TransverseMercator(geodesy::utm_projection(e, zone))).first;
+  return it->second;
+}
+}  // namespace
+
+const geodesy::TransverseMercator& CoordinateDecoder::utm(const geodesy::UtmZone& zone) const {
+  return cached_utm(utm_by_zone_, frame_.ellipsoid, zone);
+}
+
+const geodesy::TransverseMercator& CoordinateEncoder::utm(const geodesy::UtmZone& zone) const {
+  return cached_utm(utm_by_zone_, frame_.ellipsoid, zone);
 }
 
 std::string_view to_string(OutputKind k) {
@@ -177,7 +196,7 @@ std::vector<std::string> CoordinateEncoder::encode(const EcefPosition& p, std::s
                       std::string(where) + ": latitude " + format_shortest(g.lat.deg()) +
                           ": outside UTM's [-80, 84) degrees (polar regions use UPS, which convert does not write)");
         }
-        q = geodesy::TransverseMercator(geodesy::utm_projection(frame_.ellipsoid, *zone)).forward(g);
+        q = utm(*zone).forward(g);
       }
       std::vector<std::string> out = {f.metres(q.easting_m), f.metres(q.northing_m), f.metres(q.h.m)};
       if (frame_.kind == OutputKind::utm) out.push_back(zone->to_string());

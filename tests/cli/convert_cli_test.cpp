@@ -2,9 +2,17 @@
 // with PROJ, and every bad-input case checked for its message, its exit code
 // and the absence of any output file.
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
+#include <csignal>
 #include <cstdlib>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -320,6 +328,38 @@ TEST_F(ConvertCli, RefusesToOverwriteWithoutTheFlagOrToWriteOverItsInput) {
   const RunResult ok = run("convert " + path("in.csv").string() + " --to ecef --overwrite -o " + path("out.csv").string());
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
   EXPECT_EQ(slurp(path("out.csv")).rfind("id,x_m,y_m,z_m\n", 0), 0u);
+}
+
+TEST_F(ConvertCli, InterruptedMidStreamLeavesNeitherOutputNorTemporary) {
+  // The input is a FIFO we keep open, so convert is provably mid-stream, with
+  // its temporary output open, when SIGINT arrives.
+  const fs::path fifo = path("in.fifo"), out = path("out.csv");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string exe = GEOANCHOR_EXE, cmd = "convert", in = fifo.string(), to = "--to", kind = "ecef", o = "-o",
+                    out_s = out.string();
+  char* argv[] = {const_cast<char*>(exe.c_str()), const_cast<char*>(cmd.c_str()), const_cast<char*>(in.c_str()),
+                  const_cast<char*>(to.c_str()),  const_cast<char*>(kind.c_str()), const_cast<char*>(o.c_str()),
+                  const_cast<char*>(out_s.c_str()), nullptr};
+  pid_t pid = 0;
+  ASSERT_EQ(::posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv, environ), 0);
+  const int fd = ::open(fifo.c_str(), O_WRONLY);  // returns once convert has opened its input
+  ASSERT_GE(fd, 0);
+  const std::string rows = "id,lat_deg,lon_deg,h_m\nA,47.46,8.55,480\nB,47.47,8.56,481\n";
+  ASSERT_EQ(::write(fd, rows.data(), rows.size()), static_cast<ssize_t>(rows.size()));
+  bool temporary_seen = false;
+  for (int i = 0; i < 500 && !temporary_seen; ++i) {  // up to 5 s
+    for (const auto& e : fs::directory_iterator(dir_)) {
+      if (e.path().filename().string().rfind(".out.csv.tmp-", 0) == 0) temporary_seen = true;
+    }
+    if (!temporary_seen) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_TRUE(temporary_seen) << "convert never opened its temporary output";
+  ASSERT_EQ(::kill(pid, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ::close(fd);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << "status " << status;
+  EXPECT_TRUE(leftovers({"in.fifo"}).empty()) << "left behind: " << ::testing::PrintToString(leftovers({"in.fifo"}));
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // CSV cells <-> ECEF for one row, given what the header and the command line
 // say about the coordinates. Used by `convert` and by CSV tiles in `apply`.
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,10 +35,14 @@ class CoordinateDecoder {
   // out-of-range value.
   geodesy::EcefPosition decode(const CsvRecord& record) const;
 
-  bool heights_missing() const { return columns_.kind == CoordinateKind::geodetic && !columns_.third; }
+  // Geodetic or projected input without an h column (heights read as 0).
+  bool heights_missing() const {
+    return (columns_.kind == CoordinateKind::geodetic || columns_.kind == CoordinateKind::projected) && !columns_.third;
+  }
 
  private:
   double number(const CsvRecord& r, std::size_t column) const;
+  const geodesy::TransverseMercator& utm(const geodesy::UtmZone& zone) const;
   CoordinateColumns columns_;
   std::vector<std::string> header_;
   InputCoordinateFrame frame_;
@@ -45,6 +50,7 @@ class CoordinateDecoder {
   geodesy::GeocentricConverter geocentric_;
   std::optional<geodesy::LocalTangentPlane> plane_;
   std::optional<geodesy::TransverseMercator> projection_;
+  mutable std::map<std::string, geodesy::TransverseMercator> utm_by_zone_;  // per-row zones, built once each
 };
 
 enum class OutputKind { geodetic, ecef, enu, ned, utm, tm };
@@ -79,12 +85,14 @@ class CoordinateEncoder {
   std::vector<std::string> encode(const geodesy::EcefPosition& p, std::string_view where) const;
 
  private:
+  const geodesy::TransverseMercator& utm(const geodesy::UtmZone& zone) const;
   OutputCoordinateFrame frame_;
   NumberFormat format_;
   std::vector<std::string> names_;
   geodesy::GeocentricConverter geocentric_;
   std::optional<geodesy::LocalTangentPlane> plane_;
   std::optional<geodesy::TransverseMercator> projection_;
+  mutable std::map<std::string, geodesy::TransverseMercator> utm_by_zone_;  // per-point zones, built once each
 };
 
 }  // namespace geoanchor::io
