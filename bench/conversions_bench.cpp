@@ -82,6 +82,22 @@ Helmert7<PositionVector> helmert() {
 
 void finish(benchmark::State& state) { state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(kPoints)); }
 
+// PROJ over the three input columns, restored from `a0, b0, c0` untimed
+// before each pass (proj_trans_generic works in place).
+void run_proj(benchmark::State& state, const char* definition, const std::vector<double>& a0,
+              const std::vector<double>& b0, const std::vector<double>& c0, PJ_DIRECTION direction) {
+  const Proj p(definition);
+  std::vector<double> a, b, c;
+  for (auto _ : state) {
+    state.PauseTiming();
+    a = a0, b = b0, c = c0;
+    state.ResumeTiming();
+    p.run(a, b, c, direction);
+    benchmark::DoNotOptimize(a.data());
+  }
+  finish(state);
+}
+
 void copy_xyz(benchmark::State& state) {
   const auto& d = data();
   std::vector<double> x(kPoints), y(kPoints), z(kPoints);
@@ -112,17 +128,7 @@ void ours_geodetic_to_ecef(benchmark::State& state) {
 }
 
 void proj_geodetic_to_ecef(benchmark::State& state) {
-  const auto& d = data();
-  const Proj p("+proj=cart +ellps=WGS84");
-  std::vector<double> a, b, c;
-  for (auto _ : state) {
-    state.PauseTiming();
-    a = d.lon_rad, b = d.lat_rad, c = d.h;
-    state.ResumeTiming();
-    p.run(a, b, c, PJ_FWD);
-    benchmark::DoNotOptimize(a.data());
-  }
-  finish(state);
+  run_proj(state, "+proj=cart +ellps=WGS84", data().lon_rad, data().lat_rad, data().h, PJ_FWD);
 }
 
 void ours_ecef_to_geodetic(benchmark::State& state) {
@@ -142,17 +148,7 @@ void ours_ecef_to_geodetic(benchmark::State& state) {
 }
 
 void proj_ecef_to_geodetic(benchmark::State& state) {
-  const auto& d = data();
-  const Proj p("+proj=cart +ellps=WGS84");
-  std::vector<double> a, b, c;
-  for (auto _ : state) {
-    state.PauseTiming();
-    a = d.x, b = d.y, c = d.z;
-    state.ResumeTiming();
-    p.run(a, b, c, PJ_INV);
-    benchmark::DoNotOptimize(a.data());
-  }
-  finish(state);
+  run_proj(state, "+proj=cart +ellps=WGS84", data().x, data().y, data().z, PJ_INV);
 }
 
 // ENU(ARP A) -> ECEF -> Helmert -> ECEF -> ENU(ARP B): fused once into one affine map.
@@ -177,7 +173,6 @@ void ours_enu_helmert_enu(benchmark::State& state) {
 }
 
 void proj_enu_helmert_enu(benchmark::State& state) {
-  const auto& d = data();
   char def[512];
   std::snprintf(def, sizeof def,
                 "+proj=pipeline +step +inv +proj=topocentric +ellps=WGS84 +lat_0=%.17g +lon_0=%.17g +h_0=%.17g "
@@ -185,16 +180,7 @@ void proj_enu_helmert_enu(benchmark::State& state) {
                 "+convention=position_vector +step +proj=topocentric +ellps=WGS84 +lat_0=%.17g +lon_0=%.17g +h_0=%.17g",
                 kArpA.point.lat.deg(), kArpA.point.lon.deg(), kArpA.point.h.m, kArpB.point.lat.deg(),
                 kArpB.point.lon.deg(), kArpB.point.h.m);
-  const Proj p(def);
-  std::vector<double> a, b, c;
-  for (auto _ : state) {
-    state.PauseTiming();
-    a = d.e, b = d.n, c = d.u;
-    state.ResumeTiming();
-    p.run(a, b, c, PJ_FWD);
-    benchmark::DoNotOptimize(a.data());
-  }
-  finish(state);
+  run_proj(state, def, data().e, data().n, data().u, PJ_FWD);
 }
 
 void ours_utm(benchmark::State& state) {
@@ -213,17 +199,7 @@ void ours_utm(benchmark::State& state) {
 }
 
 void proj_utm(benchmark::State& state) {
-  const auto& d = data();
-  const Proj p("+proj=utm +zone=32 +ellps=WGS84");
-  std::vector<double> a, b, c;
-  for (auto _ : state) {
-    state.PauseTiming();
-    a = d.lon_rad, b = d.lat_rad, c = d.h;
-    state.ResumeTiming();
-    p.run(a, b, c, PJ_FWD);
-    benchmark::DoNotOptimize(a.data());
-  }
-  finish(state);
+  run_proj(state, "+proj=utm +zone=32 +ellps=WGS84", data().lon_rad, data().lat_rad, data().h, PJ_FWD);
 }
 
 // Collects median times so the ratio table can be printed at the end.
