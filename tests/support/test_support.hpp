@@ -8,7 +8,9 @@
 #include <Eigen/Core>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "geoanchor/geodesy/positions.hpp"
@@ -36,6 +38,13 @@ inline std::vector<geodesy::GeodeticPosition> worldwide_points(std::size_t n, do
     out.push_back({geodesy::Angle::degrees(lat), geodesy::Angle::degrees(lon(rng)), geodesy::EllipsoidalHeight{h(rng)}});
   }
   return out;
+}
+
+// A worst-case figure for RecordProperty, in scientific notation.
+inline std::string scientific(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3e", v);
+  return buf;
 }
 
 // Distance between two 3-vectors, metres.
