@@ -1,0 +1,39 @@
+#pragma once
+// Control sets in CSV. Columns (header-named as in `convert`, with the role
+// before the unit):
+//
+//   id                                       required, unique per epoch
+//   source: x_src_m,y_src_m,z_src_m | lat_src_deg,lon_src_deg,h_src_m | e_src_m,n_src_m,u_src_m
+//   target: the same with _dst
+//   sigma_src_m, sigma_dst_m                 isotropic standard deviations (m), optional
+//   cov_src_xx_m2, cov_src_xy_m2, cov_src_xz_m2, cov_src_yy_m2, cov_src_yz_m2, cov_src_zz_m2
+//                                            full covariance (m²), likewise dst; axes are those
+//                                            of the coordinates (ECEF x,y,z; for geodetic and
+//                                            ENU input the local east, north, up)
+//   epoch                                    decimal year, optional (required by helmert14)
+//   use                                      1/0, true/false, yes/no; optional (default 1)
+//
+// ENU coordinates need the nominal origin (`origin`). Refusals (geoanchor::
+// Error, input): sigma <= 0, NaN/inf, empty or unparsable fields, a
+// covariance that is not positive definite, duplicate ids at the same epoch
+// (naming both lines and the coordinate difference), sigma and covariance
+// columns both given for one frame.
+
+#include <filesystem>
+#include <istream>
+#include <optional>
+#include <string>
+
+#include "geoanchor/geodesy/control_point.hpp"
+
+namespace geoanchor::io {
+
+struct ControlReadOptions {
+  geodesy::Ellipsoid ellipsoid = geodesy::Ellipsoid::wgs84();
+  std::optional<geodesy::LocalOrigin> origin;  // for e_src_m/e_dst_m columns
+};
+
+geodesy::ControlSet read_control_csv(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
+geodesy::ControlSet read_control_csv(const std::filesystem::path& path, const ControlReadOptions& o);
+
+}  // namespace geoanchor::io

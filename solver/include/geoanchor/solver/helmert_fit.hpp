@@ -1,0 +1,115 @@
+#pragma once
+// Least-squares fits of Helmert transforms to control points, with the
+// statistics geodesists use to judge them.
+//
+// Model, per point i observed at epoch t_i (all ECEF, metres):
+//   target_i = T(t_i) + (1 + ds(t_i)) · R(r(t_i)) · source_i + e_i
+// with p(t) = p + ṗ·(t − t_ref) for helmert14 and p(t) = p otherwise.
+// Errors are allowed in both frames: each point is weighted by the inverse
+// of C_target + J C_source Jᵀ (J = (1 + ds) R at the first estimate).
+//
+// The solve runs in Ceres on centroid-referenced parameters (well
+// conditioned even for a 2 km network, where geocentric translations and
+// rotations correlate above 0.9999); the geocentric parameters and their
+// covariance follow exactly from those.
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/control_point.hpp"
+#include "geoanchor/geodesy/helmert.hpp"
+
+namespace geoanchor::solver {
+
+enum class FitModel { translation3, helmert6, helmert7, helmert14 };
+std::string_view to_string(FitModel m);
+enum class Convention { position_vector, coordinate_frame };
+
+struct FitOptions {
+  FitModel model = FitModel::helmert7;
+  // Required for models with rotations; never defaulted.
+  std::optional<Convention> convention;
+  geodesy::RotationModel rotation_model = geodesy::RotationModel::small_angle;
+  // helmert14: defaults to the mean observation epoch of the used points.
+  std::optional<geodesy::DecimalYear> reference_epoch;
+  double alpha = 0.05;          // global test
+  double alpha_point = 0.001;   // w-tests and data snooping
+  double power = 0.80;          // for the minimal detectable bias
+  bool data_snooping = true;
+  // Scale the parameter covariance by σ0² (a posteriori) instead of using
+  // the a-priori σ0 = 1. Forced when the control set has no a-priori sigmas.
+  bool scale_by_sigma0 = false;
+};
+
+struct Parameter {
+  std::string name;  // tx_m, rx_arcsec, ds_ppm, dtx_m_per_year, ...
+  double value = 0.0;
+  double sigma = 0.0;
+  bool estimated = true;  // false for parameters the model holds fixed at 0
+};
+
+struct GlobalTest {
+  double statistic = 0.0;       // Σ vᵀPv = σ0²·dof
+  double critical_lower = 0.0;  // χ²(dof) at α/2
+  double critical_upper = 0.0;  // χ²(dof) at 1 − α/2
+  bool passed = false;          // statistic within [lower, upper]
+  bool applicable = true;       // false without a-priori sigmas
+};
+
+struct PointResult {
+  std::string id;
+  std::size_t line = 0;
+  bool used = true;     // entered the final fit
+  bool outlier = false; // removed by data snooping
+  std::string removed_because;
+  Eigen::Vector3d residual_enu_m = Eigen::Vector3d::Zero();  // target − transformed source, local E, N, U
+  Eigen::Vector3d w_enu = Eigen::Vector3d::Zero();           // w-test per local axis
+  Eigen::Vector3d redundancy_enu = Eigen::Vector3d::Zero();  // redundancy numbers per local axis
+  double w_max = 0.0;
+  double mdb_m = 0.0;  // largest minimal detectable bias over the three axes
+  // The point test: r̄ᵀ Q⁺ r̄ of the whitened residual, χ²(point_dof) under
+  // H0; data snooping removes the point with the smallest p-value while it is
+  // below alpha_point.
+  double point_statistic = 0.0;
+  int point_dof = 0;
+  double point_p_value = 1.0;
+};
+
+struct FitResult {
+  FitModel model = FitModel::helmert7;
+  Convention convention = Convention::position_vector;
+  geodesy::RotationModel rotation_model = geodesy::RotationModel::small_angle;
+  std::optional<geodesy::DecimalYear> reference_epoch;
+  // The fitted transform, in position-vector form (convert for reporting).
+  geodesy::Helmert14<geodesy::PositionVector> helmert;
+  // Parameters in the reported convention, units in their names, and the
+  // covariance between the estimated ones (same order, same units).
+  std::vector<Parameter> parameters;
+  Eigen::MatrixXd covariance;
+  Eigen::MatrixXd correlation;
+  std::vector<std::string> covariance_names;
+  bool covariance_scaled_by_sigma0 = false;
+  double sigma0 = 0.0;
+  int dof = 0;
+  GlobalTest global_test;
+  double w_critical = 0.0;  // |w| above this fails its w-test at alpha_point
+  std::vector<PointResult> points;  // in input order
+  std::vector<std::string> warnings;
+  int ceres_iterations = 0;
+  std::string ceres_report;  // one line
+};
+
+// Throws geoanchor::Error: `rejected` for ill-posed problems (too few
+// points, collinear or coincident points, one epoch for helmert14, Ceres
+// failure, covariance not computable), `usage` for a missing convention.
+FitResult fit_helmert(const geodesy::ControlSet& control, const FitOptions& options);
+
+// The target position of `source` under the fitted transform at `epoch`
+// (required for helmert14).
+geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPosition& source,
+                                std::optional<geodesy::DecimalYear> epoch);
+
+}  // namespace geoanchor::solver

@@ -1,0 +1,704 @@
+#include "geoanchor/solver/helmert_fit.hpp"
+
+#include <ceres/ceres.h>
+#include <ceres/jet.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <numeric>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "statistics.hpp"
+
+namespace geoanchor::solver {
+namespace {
+
+using geodesy::Angle;
+using geodesy::ControlPoint;
+using geodesy::ControlSet;
+using geodesy::DecimalYear;
+using geodesy::RotationModel;
+
+constexpr double kArcsecPerRad = 180.0 / M_PI * 3600.0;
+constexpr double kPpm = 1e6;
+constexpr int kBlockPoints = 1024;          // residual block size (NOTES: ~1000 points per block)
+constexpr double kCoincidentSpread_m = 1.0; // RELIABILITY #4
+constexpr double kCollinearRatio = 1e-6;    // second/first singular value of the source spread
+
+// Parameter layout of the estimation vector θ' (centroid-referenced):
+//   0-2 t' (m), 3-5 r (rad), 6 ds, 7-9 ṫ' (m/yr), 10-12 ṙ (rad/yr), 13 ḋs (1/yr).
+constexpr int kMaxParams = 14;
+
+// The position-vector rotation matrix for rotations r (radians), in either model.
+template <typename T>
+Eigen::Matrix<T, 3, 3> rotation_pv(const T* r, RotationModel model) {
+  Eigen::Matrix<T, 3, 3> m;
+  if (model == RotationModel::small_angle) {
+    m << T(1.0), -r[2], r[1], r[2], T(1.0), -r[0], -r[1], r[0], T(1.0);
+    return m;
+  }
+  using std::cos;
+  using std::sin;
+  const T ca = cos(r[0]), sa = sin(r[0]), cb = cos(r[1]), sb = sin(r[1]), cg = cos(r[2]), sg = sin(r[2]);
+  Eigen::Matrix<T, 3, 3> r1, r2, r3;
+  r1 << T(1), T(0), T(0), T(0), ca, sa, T(0), -sa, ca;
+  r2 << cb, T(0), -sb, T(0), T(1), T(0), sb, T(0), cb;
+  r3 << cg, sg, T(0), -sg, cg, T(0), T(0), T(0), T(1);
+  return (r3 * r2 * r1).transpose();  // position vector: transpose of the coordinate-frame matrix
+}
+
+// Ṙ: the derivative of the position-vector matrix along the rotation rate ṙ.
+template <typename T>
+Eigen::Matrix<T, 3, 3> rotation_pv_rate(const T* r, const T* rdot, RotationModel model) {
+  Eigen::Matrix<T, 3, 3> m;
+  if (model == RotationModel::small_angle) {
+    m << T(0.0), -rdot[2], rdot[1], rdot[2], T(0.0), -rdot[0], -rdot[1], rdot[0], T(0.0);
+    return m;
+  }
+  using std::cos;
+  using std::sin;
+  const T ca = cos(r[0]), sa = sin(r[0]), cb = cos(r[1]), sb = sin(r[1]), cg = cos(r[2]), sg = sin(r[2]);
+  Eigen::Matrix<T, 3, 3> r1, r2, r3, d1, d2, d3;
+  r1 << T(1), T(0), T(0), T(0), ca, sa, T(0), -sa, ca;
+  r2 << cb, T(0), -sb, T(0), T(1), T(0), sb, T(0), cb;
+  r3 << cg, sg, T(0), -sg, cg, T(0), T(0), T(0), T(1);
+  d1 << T(0), T(0), T(0), T(0), -sa, ca, T(0), -ca, -sa;
+  d2 << -sb, T(0), -cb, T(0), T(0), T(0), cb, T(0), -sb;
+  d3 << -sg, cg, T(0), -cg, -sg, T(0), T(0), T(0), T(0);
+  const Eigen::Matrix<T, 3, 3> cf = rdot[2] * d3 * r2 * r1 + rdot[1] * r3 * d2 * r1 + rdot[0] * r3 * r2 * d1;
+  return cf.transpose();
+}
+
+// R and its derivatives with respect to rx, ry, rz.
+struct RotationWithDerivatives {
+  Eigen::Matrix3d r;
+  std::array<Eigen::Matrix3d, 3> d;
+};
+
+RotationWithDerivatives rotation_and_derivatives(const double* rot, RotationModel model) {
+  using J = ceres::Jet<double, 3>;
+  const J r[3] = {J(rot[0], 0), J(rot[1], 1), J(rot[2], 2)};
+  const Eigen::Matrix<J, 3, 3> m = rotation_pv(r, model);
+  RotationWithDerivatives out;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      out.r(i, j) = m(i, j).a;
+      for (int k = 0; k < 3; ++k) out.d[static_cast<std::size_t>(k)](i, j) = m(i, j).v[k];
+    }
+  }
+  return out;
+}
+
+// One observation equation, ready for the solver: centred coordinates, the
+// whitening matrix and the epoch offset.
+struct Observation {
+  Eigen::Vector3d x;   // source − source centroid
+  Eigen::Vector3d y;   // target − target centroid
+  Eigen::Matrix3d w;   // W with Wᵀ W = C⁻¹
+  double dt = 0.0;     // years from the reference epoch
+};
+
+// Predicted centred target and its Jacobian (3 × 14) for θ'.
+void predict(const Observation& o, const double* theta, RotationModel model, bool time_dependent,
+             Eigen::Vector3d& pred, Eigen::Matrix<double, 3, kMaxParams>* jac) {
+  double r[3], s = theta[6];
+  Eigen::Vector3d t(theta[0], theta[1], theta[2]);
+  for (int k = 0; k < 3; ++k) r[k] = theta[3 + k];
+  if (time_dependent) {
+    t += o.dt * Eigen::Vector3d(theta[7], theta[8], theta[9]);
+    for (int k = 0; k < 3; ++k) r[k] += o.dt * theta[10 + k];
+    s += o.dt * theta[13];
+  }
+  const RotationWithDerivatives rot = rotation_and_derivatives(r, model);
+  const Eigen::Vector3d rx = rot.r * o.x;
+  pred = t + (1.0 + s) * rx;
+  if (!jac) return;
+  jac->setZero();
+  jac->block<3, 3>(0, 0).setIdentity();
+  for (int k = 0; k < 3; ++k) jac->col(3 + k) = (1.0 + s) * (rot.d[static_cast<std::size_t>(k)] * o.x);
+  jac->col(6) = rx;
+  if (time_dependent) {
+    jac->block<3, 7>(0, 7) = o.dt * jac->block<3, 7>(0, 0);
+  }
+}
+
+// Residuals of a block of points: W (y − pred), for the parameter blocks
+// t'(3) r(3) s(1) [ṫ'(3) ṙ(3) ḋs(1)].
+class BlockCost : public ceres::CostFunction {
+ public:
+  BlockCost(const std::vector<Observation>* obs, std::size_t begin, std::size_t end, RotationModel model, bool td,
+            const std::array<double, kMaxParams>* scale)
+      : obs_(obs), begin_(begin), end_(end), model_(model), td_(td), scale_(scale) {
+    set_num_residuals(static_cast<int>(3 * (end - begin)));
+    const std::vector<int32_t> sizes = td ? std::vector<int32_t>{3, 3, 1, 3, 3, 1} : std::vector<int32_t>{3, 3, 1};
+    *mutable_parameter_block_sizes() = sizes;
+  }
+
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    double theta[kMaxParams] = {};
+    const int sizes[6] = {3, 3, 1, 3, 3, 1};
+    const int offsets[6] = {0, 3, 6, 7, 10, 13};
+    const int blocks = td_ ? 6 : 3;
+    for (int b = 0; b < blocks; ++b) {
+      for (int k = 0; k < sizes[b]; ++k) theta[offsets[b] + k] = params[b][k] / (*scale_)[static_cast<std::size_t>(offsets[b] + k)];
+    }
+    Eigen::Matrix<double, 3, kMaxParams> jac;
+    Eigen::Vector3d pred;
+    for (std::size_t i = begin_; i < end_; ++i) {
+      const Observation& o = (*obs_)[i];
+      predict(o, theta, model_, td_, pred, jacobians ? &jac : nullptr);
+      const Eigen::Vector3d r = o.w * (o.y - pred);
+      const std::size_t row = 3 * (i - begin_);
+      for (int k = 0; k < 3; ++k) residuals[row + static_cast<std::size_t>(k)] = r(k);
+      if (!jacobians) continue;
+      Eigen::Matrix<double, 3, kMaxParams> wj = -(o.w * jac);
+      for (int k = 0; k < kMaxParams; ++k) wj.col(k) /= (*scale_)[static_cast<std::size_t>(k)];
+      for (int b = 0; b < blocks; ++b) {
+        if (!jacobians[b]) continue;
+        for (int rr = 0; rr < 3; ++rr) {
+          for (int k = 0; k < sizes[b]; ++k) {
+            jacobians[b][(row + static_cast<std::size_t>(rr)) * static_cast<std::size_t>(sizes[b]) + static_cast<std::size_t>(k)] =
+                wj(rr, offsets[b] + k);
+          }
+        }
+      }
+    }
+    return true;
+  }
+
+ private:
+  const std::vector<Observation>* obs_;
+  std::size_t begin_, end_;
+  RotationModel model_;
+  bool td_;
+  const std::array<double, kMaxParams>* scale_;
+};
+
+bool has_rotation(FitModel m) { return m != FitModel::translation3; }
+bool has_scale(FitModel m) { return m == FitModel::helmert7 || m == FitModel::helmert14; }
+int min_points(FitModel m) { return m == FitModel::translation3 ? 1 : 3; }
+
+[[noreturn]] void reject(const std::string& code, const std::string& message) {
+  throw Error(ErrorKind::rejected, code, message);
+}
+
+// Geocentric (position-vector) parameters from θ' (both in solver units:
+// metres, radians, unitless, per year), templated for autodiff of the
+// covariance propagation.
+template <typename T>
+void geocentric_from_centred(const T* tc, const Eigen::Vector3d& cx, const Eigen::Vector3d& cy, RotationModel model,
+                             T* out) {
+  for (int k = 0; k < kMaxParams; ++k) out[k] = tc[k];
+  const Eigen::Matrix<T, 3, 3> r = rotation_pv(tc + 3, model);
+  const Eigen::Matrix<T, 3, 1> cxt = cx.cast<T>();
+  const Eigen::Matrix<T, 3, 1> rc = r * cxt;
+  for (int k = 0; k < 3; ++k) out[k] = T(cy(k)) + tc[k] - (T(1.0) + tc[6]) * rc(k);
+  // Rates: the time derivative of the above at the reference epoch,
+  // d/dt [(1+s) R c] = ṡ R c + (1+s) Ṙ c with Ṙ the derivative of R along ṙ.
+  const Eigen::Matrix<T, 3, 3> rdot = rotation_pv_rate(tc + 3, tc + 10, model);
+  const Eigen::Matrix<T, 3, 1> rdc = rdot * cxt;
+  for (int k = 0; k < 3; ++k) out[7 + k] = tc[7 + k] - (tc[13] * rc(k) + (T(1.0) + tc[6]) * rdc(k));
+}
+
+struct Solution {
+  std::array<double, kMaxParams> theta{};  // centred, solver units
+  Eigen::MatrixXd cov_centred;             // over `estimated` indices, a-priori σ0 = 1
+  std::vector<int> estimated;              // indices into θ
+  int iterations = 0;
+  std::string report;
+};
+
+// Parameters are solved in scaled units so that every Jacobian column has
+// the size of a displacement in metres: rotations and scale times the
+// network's RMS radius L, rates times the RMS epoch spread D as well.
+// ceres::Covariance does no column scaling of its own, and unscaled
+// radians-per-year columns would make a sound 14-parameter problem look
+// rank-deficient.
+std::array<double, kMaxParams> parameter_scale(const std::vector<Observation>& obs) {
+  double l2 = 0.0, d2 = 0.0;
+  for (const auto& o : obs) {
+    l2 += o.x.squaredNorm();
+    d2 += o.dt * o.dt;
+  }
+  const double l = std::max(1.0, std::sqrt(l2 / static_cast<double>(obs.size())));
+  const double d = std::max(1.0, std::sqrt(d2 / static_cast<double>(obs.size())));
+  return {1, 1, 1, l, l, l, l, d, d, d, l * d, l * d, l * d, l * d};
+}
+
+Solution solve(const std::vector<Observation>& obs, const FitOptions& o, bool td) {
+  Solution sol;
+  const std::array<double, kMaxParams> scale = parameter_scale(obs);
+  std::array<double, kMaxParams> scaled{};  // what Ceres sees
+  double* t = scaled.data();
+  double* r = t + 3;
+  double* s = t + 6;
+  double* dt = t + 7;
+  double* dr = t + 10;
+  double* ds = t + 13;
+  ceres::Problem::Options po;
+  po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(po);
+  for (std::size_t b = 0; b < obs.size(); b += kBlockPoints) {
+    const std::size_t e = std::min(obs.size(), b + kBlockPoints);
+    auto* cost = new BlockCost(&obs, b, e, o.rotation_model, td, &scale);
+    if (td) {
+      problem.AddResidualBlock(cost, nullptr, {t, r, s, dt, dr, ds});
+    } else {
+      problem.AddResidualBlock(cost, nullptr, {t, r, s});
+    }
+  }
+  std::vector<const double*> blocks = {t};
+  sol.estimated = {0, 1, 2};
+  if (has_rotation(o.model)) {
+    blocks.push_back(r);
+    sol.estimated.insert(sol.estimated.end(), {3, 4, 5});
+  } else {
+    problem.SetParameterBlockConstant(r);
+  }
+  if (has_scale(o.model)) {
+    blocks.push_back(s);
+    sol.estimated.push_back(6);
+  } else {
+    problem.SetParameterBlockConstant(s);
+  }
+  if (td) {
+    blocks.insert(blocks.end(), {dt, dr, ds});
+    for (int k = 7; k < 14; ++k) sol.estimated.push_back(k);
+  }
+
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  so.max_num_iterations = 100;
+  // Ceres' default tolerances stop measurably short of the optimum on large
+  // sets (NOTES.md): iterate until the step is at float64 noise.
+  so.function_tolerance = 1e-16;
+  so.gradient_tolerance = 1e-20;
+  so.parameter_tolerance = 1e-15;
+  so.num_threads = 1;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  sol.iterations = static_cast<int>(summary.iterations.size());
+  sol.report = summary.BriefReport();
+  if (summary.termination_type != ceres::CONVERGENCE) {
+    reject("E_FIT_NO_CONVERGENCE", "the least-squares solve did not converge (Ceres: " +
+                                       std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
+                                       summary.message + "); no transform was written");
+  }
+
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.null_space_rank = 0;
+  co.num_threads = 1;
+  ceres::Covariance covariance(co);
+  if (!covariance.Compute(blocks, &problem)) {
+    reject("E_FIT_COVARIANCE", "the parameter covariance cannot be computed: the normal matrix is rank-deficient "
+                               "(a parameter is not observable from these points); no transform was written");
+  }
+  const int u = static_cast<int>(sol.estimated.size());
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> c(u, u);
+  if (!covariance.GetCovarianceMatrix(blocks, c.data())) {
+    reject("E_FIT_COVARIANCE", "the parameter covariance could not be read back from Ceres");
+  }
+  sol.cov_centred = c;
+  for (int a = 0; a < u; ++a) {
+    for (int b = 0; b < u; ++b) {
+      sol.cov_centred(a, b) /= scale[static_cast<std::size_t>(sol.estimated[static_cast<std::size_t>(a)])] *
+                               scale[static_cast<std::size_t>(sol.estimated[static_cast<std::size_t>(b)])];
+    }
+  }
+  for (int k = 0; k < kMaxParams; ++k) {
+    sol.theta[static_cast<std::size_t>(k)] = scaled[static_cast<std::size_t>(k)] / scale[static_cast<std::size_t>(k)];
+  }
+  return sol;
+}
+
+std::string fmt(double v, int precision = 3) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*g", precision, v);
+  return b;
+}
+
+}  // namespace
+
+std::string_view to_string(FitModel m) {
+  switch (m) {
+    case FitModel::translation3: return "translation3";
+    case FitModel::helmert6: return "helmert6";
+    case FitModel::helmert7: return "helmert7";
+    case FitModel::helmert14: return "helmert14";
+  }
+  return "?";
+}
+
+geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPosition& source,
+                                std::optional<DecimalYear> epoch) {
+  const DecimalYear t = fit.model == FitModel::helmert14 ? epoch.value() : fit.helmert.reference_epoch;
+  return geodesy::apply(geodesy::evaluate_at(fit.helmert, t), fit.rotation_model, source);
+}
+
+FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
+  FitOptions o = options;
+  const bool td = o.model == FitModel::helmert14;
+  if (has_rotation(o.model) && !o.convention) {
+    throw Error(ErrorKind::usage, "E_CONVENTION_MISSING",
+                "--convention: required for model " + std::string(to_string(o.model)) +
+                    ": position_vector or coordinate_frame (the sign of every rotation depends on it; never assumed)");
+  }
+  FitResult result;
+  result.model = o.model;
+  result.convention = o.convention.value_or(Convention::position_vector);
+  result.rotation_model = o.rotation_model;
+  if (!control.has_a_priori_sigmas) {
+    o.scale_by_sigma0 = true;
+    result.warnings.push_back("no a-priori sigmas in " + control.source_name +
+                              ": equal weights; parameter sigmas are scaled by the a-posteriori σ0 and the global test "
+                              "is not applicable");
+  }
+
+  std::vector<std::size_t> active;
+  for (std::size_t i = 0; i < control.points.size(); ++i) {
+    if (control.points[i].use) active.push_back(i);
+  }
+  result.points.resize(control.points.size());
+  for (std::size_t i = 0; i < control.points.size(); ++i) {
+    result.points[i].id = control.points[i].id;
+    result.points[i].line = control.points[i].line;
+    result.points[i].used = control.points[i].use;
+    if (!control.points[i].use) result.points[i].removed_because = "use = 0 in the control set";
+  }
+
+  const double z_point = normal_quantile(1.0 - o.alpha_point / 2.0);
+  result.w_critical = z_point;
+  const double lambda0 = std::pow(z_point + normal_quantile(o.power), 2.0);
+
+  while (true) {
+    const int n = static_cast<int>(active.size());
+    // --- refuse ill-posed problems -------------------------------------
+    const std::string unit = td ? "point-epochs" : "points";
+    if (n < min_points(o.model)) {
+      reject("E_FIT_TOO_FEW_POINTS", "model " + std::string(to_string(o.model)) + ": need >= " +
+                                         std::to_string(min_points(o.model)) + " non-collinear points, got " +
+                                         std::to_string(n));
+    }
+    Eigen::Vector3d cx = Eigen::Vector3d::Zero(), cy = Eigen::Vector3d::Zero();
+    for (std::size_t i : active) {
+      cx += control.points[i].source.m;
+      cy += control.points[i].target.m;
+    }
+    cx /= n;
+    cy /= n;
+    if (td) {
+      double lo = 1e300, hi = -1e300, sum = 0.0;
+      for (std::size_t i : active) {
+        const auto& p = control.points[i];
+        if (!p.epoch) {
+          throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                      control.source_name + ":" + std::to_string(p.line) + ": id=" + p.id +
+                          ": no epoch; helmert14 relates each point's coordinates at its own epoch (epoch column)");
+        }
+        lo = std::min(lo, p.epoch->year);
+        hi = std::max(hi, p.epoch->year);
+        sum += p.epoch->year;
+      }
+      if (!(hi > lo)) {
+        reject("E_FIT_ONE_EPOCH", "model helmert14: all " + std::to_string(n) + " " + unit + " are at epoch " +
+                                      format_shortest(lo) +
+                                      "; rates need observations at >= 2 epochs (use helmert7 for one epoch)");
+      }
+      if (!o.reference_epoch) o.reference_epoch = DecimalYear{sum / n};
+      if (3 * n < 14) {
+        reject("E_FIT_TOO_FEW_POINTS", "model helmert14: 14 parameters need >= 5 point-epochs, got " + std::to_string(n));
+      }
+    }
+    if (has_rotation(o.model)) {
+      Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+      for (std::size_t i : active) {
+        const Eigen::Vector3d d = control.points[i].source.m - cx;
+        scatter += d * d.transpose();
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+      const double s1 = std::sqrt(std::max(eig.eigenvalues()(2), 0.0) / n);
+      const double s2 = std::sqrt(std::max(eig.eigenvalues()(1), 0.0) / n);
+      if (s1 < kCoincidentSpread_m) {
+        reject("E_FIT_COINCIDENT", "the " + std::to_string(n) + " source points lie within " + fmt(s1) +
+                                       " m of each other (RMS spread): only a translation is observable; use --model "
+                                       "translation3 or add points at least " + fmt(kCoincidentSpread_m) + " m apart");
+      }
+      if (s2 / s1 < kCollinearRatio) {
+        const Eigen::Vector3d axis = eig.eigenvectors().col(2);
+        const geodesy::LocalTangentPlane plane(geodesy::LocalOrigin{
+            geodesy::geodetic_from_ecef(geodesy::Ellipsoid::wgs84(), geodesy::EcefPosition(cx)), geodesy::Ellipsoid::wgs84()});
+        const Eigen::Vector3d enu = plane.enu_from_ecef_rotation() * axis;
+        const double azimuth = std::fmod(std::atan2(enu.x(), enu.y()) * 180.0 / M_PI + 360.0, 180.0);
+        reject("E_FIT_COLLINEAR", "the source points are collinear (singular-value ratio " + fmt(s2 / s1) +
+                                      " < " + fmt(kCollinearRatio) +
+                                      "): the rotation about their line (azimuth " + fmt(azimuth, 4) +
+                                      "°) is not observable; add a point off the line");
+      }
+    }
+
+    // --- observations ----------------------------------------------------
+    std::vector<Observation> obs;
+    obs.reserve(active.size());
+    for (std::size_t i : active) {
+      const auto& p = control.points[i];
+      Eigen::Matrix3d c = p.target_cov_m2 + p.source_cov_m2;  // J ≈ I: error |r| + |ds| relative (≈1e-5)
+      if (!control.has_a_priori_sigmas) c = Eigen::Matrix3d::Identity();
+      const Eigen::LLT<Eigen::Matrix3d> llt(c);
+      if (llt.info() != Eigen::Success) {
+        throw Error(ErrorKind::input, "E_SIGMA",
+                    control.source_name + ":" + std::to_string(p.line) + ": id=" + p.id +
+                        ": combined covariance is not positive definite (zero sigmas in both frames?)");
+      }
+      Observation ob;
+      ob.x = p.source.m - cx;
+      ob.y = p.target.m - cy;
+      ob.w = llt.matrixL().solve(Eigen::Matrix3d::Identity());  // L⁻¹: (L⁻¹)ᵀ L⁻¹ = C⁻¹
+      ob.dt = td ? p.epoch->year - o.reference_epoch->year : 0.0;
+      obs.push_back(ob);
+    }
+
+    const Solution sol = solve(obs, o, td);
+    const int u = static_cast<int>(sol.estimated.size());
+    const int dof = 3 * n - u;
+
+    // --- geocentric parameters and covariance ----------------------------
+    std::array<double, kMaxParams> g{};
+    geocentric_from_centred(sol.theta.data(), cx, cy, o.rotation_model, g.data());
+    using JetU = ceres::Jet<double, kMaxParams>;
+    std::array<JetU, kMaxParams> tj, gj;
+    for (int k = 0; k < kMaxParams; ++k) tj[static_cast<std::size_t>(k)] = JetU(sol.theta[static_cast<std::size_t>(k)], k);
+    geocentric_from_centred(tj.data(), cx, cy, o.rotation_model, gj.data());
+    Eigen::MatrixXd jac(u, u);  // ∂g/∂θ' restricted to the estimated parameters
+    for (int a = 0; a < u; ++a) {
+      for (int b = 0; b < u; ++b) {
+        jac(a, b) = gj[static_cast<std::size_t>(sol.estimated[static_cast<std::size_t>(a)])].v[sol.estimated[static_cast<std::size_t>(b)]];
+      }
+    }
+    Eigen::MatrixXd cov = jac * sol.cov_centred * jac.transpose();
+
+    auto& h = result.helmert;
+    h.at_reference_epoch.t_m = Eigen::Vector3d(g[0], g[1], g[2]);
+    h.at_reference_epoch.rx = Angle::radians(g[3]);
+    h.at_reference_epoch.ry = Angle::radians(g[4]);
+    h.at_reference_epoch.rz = Angle::radians(g[5]);
+    h.at_reference_epoch.ds = geodesy::ScaleDifference::unitless(g[6]);
+    h.rates.dt_m_per_year = Eigen::Vector3d(g[7], g[8], g[9]);
+    h.rates.drx_per_year = Angle::radians(g[10]);
+    h.rates.dry_per_year = Angle::radians(g[11]);
+    h.rates.drz_per_year = Angle::radians(g[12]);
+    h.rates.dds_per_year = geodesy::ScaleDifference::unitless(g[13]);
+    h.reference_epoch = o.reference_epoch.value_or(DecimalYear{0.0});
+    result.reference_epoch = td ? o.reference_epoch : std::nullopt;
+
+    // --- residuals from the geocentric parameters, whitened statistics ----
+    // The reported residuals come from the very parameters that are written,
+    // so that applying the file reproduces them.
+    double omega = 0.0;
+    std::vector<Eigen::Vector3d> v(active.size()), vw(active.size());
+    for (std::size_t k = 0; k < active.size(); ++k) {
+      const auto& p = control.points[active[k]];
+      const geodesy::EcefPosition pred = apply_fit(result, p.source, td ? p.epoch : std::nullopt);
+      v[k] = p.target.m - pred.m;
+      vw[k] = obs[k].w * v[k];
+      omega += vw[k].squaredNorm();
+    }
+    result.dof = dof;
+    result.sigma0 = dof > 0 ? std::sqrt(omega / dof) : 0.0;
+    result.global_test.statistic = omega;
+    result.global_test.applicable = control.has_a_priori_sigmas && dof > 0;
+    if (dof > 0) {
+      result.global_test.critical_lower = chi_squared_quantile(dof, o.alpha / 2.0);
+      result.global_test.critical_upper = chi_squared_quantile(dof, 1.0 - o.alpha / 2.0);
+      result.global_test.passed =
+          omega >= result.global_test.critical_lower && omega <= result.global_test.critical_upper;
+    }
+    const double sigma_scale = o.scale_by_sigma0 && dof > 0 ? result.sigma0 : 1.0;
+
+    // Per point: w-tests along local E, N, U; redundancy; MDB.
+    Eigen::MatrixXd n_inv = sol.cov_centred;  // (ĀᵀĀ)⁻¹ over the estimated parameters
+    double worst_p = 1.0;
+    std::size_t worst = active.size();
+    const geodesy::GeocentricConverter geocentric(geodesy::Ellipsoid::wgs84());
+    for (std::size_t k = 0; k < active.size(); ++k) {
+      const auto& p = control.points[active[k]];
+      Eigen::Vector3d pred;
+      Eigen::Matrix<double, 3, kMaxParams> jfull;
+      predict(obs[k], sol.theta.data(), o.rotation_model, td, pred, &jfull);
+      Eigen::MatrixXd a(3, u);
+      for (int c = 0; c < u; ++c) a.col(c) = obs[k].w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
+      const Eigen::Matrix3d qv = Eigen::Matrix3d::Identity() - a * n_inv * a.transpose();  // whitened Q_vv
+      const geodesy::LocalTangentPlane plane(
+          geodesy::LocalOrigin{geocentric.geodetic_from_ecef(p.target), geodesy::Ellipsoid::wgs84()});
+      const Eigen::Matrix3d enu = plane.enu_from_ecef_rotation();
+      PointResult& pr = result.points[active[k]];
+      pr.used = true;
+      {
+        // The point test over the redundant directions of Q_v̄.
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> qe(qv);
+        double stat = 0.0;
+        int rank = 0;
+        for (int e = 0; e < 3; ++e) {
+          if (qe.eigenvalues()(e) > 1e-9) {
+            const double proj = qe.eigenvectors().col(e).dot(vw[k]);
+            stat += proj * proj / qe.eigenvalues()(e);
+            ++rank;
+          }
+        }
+        stat /= sigma_scale * sigma_scale;
+        pr.point_statistic = stat;
+        pr.point_dof = rank;
+        pr.point_p_value = rank > 0 ? chi_squared_upper_tail(rank, stat) : 1.0;
+        if (rank > 0 && pr.point_p_value < worst_p) {
+          worst_p = pr.point_p_value;
+          worst = k;
+        }
+      }
+      pr.residual_enu_m = enu * v[k];
+      pr.w_max = 0.0;
+      pr.mdb_m = 0.0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const Eigen::Vector3d b = obs[k].w * enu.row(axis).transpose();  // blunder direction, whitened
+        const double q = b.dot(qv * b);
+        if (!(q > 1e-12 * b.squaredNorm())) {  // no redundancy along this axis: the blunder is invisible
+          pr.w_enu(axis) = 0.0;
+          pr.redundancy_enu(axis) = 0.0;
+          pr.mdb_m = std::numeric_limits<double>::infinity();
+          continue;
+        }
+        const double w = b.dot(vw[k]) / std::sqrt(q) / sigma_scale;  // τ-test when σ0 is estimated
+        pr.w_enu(axis) = w;
+        pr.redundancy_enu(axis) = q / b.squaredNorm();
+        pr.mdb_m = std::max(pr.mdb_m, std::sqrt(lambda0) * sigma_scale / std::sqrt(q));
+        if (std::fabs(w) > pr.w_max) pr.w_max = std::fabs(w);
+      }
+    }
+
+    // --- data snooping ------------------------------------------------------
+    if (o.data_snooping && dof > 0 && worst < active.size() && worst_p < o.alpha_point) {
+      const std::size_t idx = active[worst];
+      PointResult& pr = result.points[idx];
+      const std::string why = "point test " + fmt(pr.point_statistic, 4) + " (χ²(" + std::to_string(pr.point_dof) +
+                              "), p = " + fmt(pr.point_p_value, 2) + " < " + fmt(o.alpha_point) + "); max |w| " +
+                              fmt(pr.w_max) + "; residual E/N/U " + fmt(pr.residual_enu_m.x()) + ", " +
+                              fmt(pr.residual_enu_m.y()) + ", " + fmt(pr.residual_enu_m.z()) + " m";
+      if (n - 1 < min_points(o.model) || 3 * (n - 1) - u <= 0) {
+        result.warnings.push_back("point " + control.points[idx].id + " fails the " + why +
+                                  ", but too few points remain to remove it");
+      } else {
+        pr.outlier = true;
+        pr.used = false;
+        pr.removed_because = "data snooping: " + why;
+        active.erase(active.begin() + static_cast<std::ptrdiff_t>(worst));
+        continue;
+      }
+    }
+
+    // --- report -------------------------------------------------------------
+    if (dof <= 5) {
+      result.warnings.push_back("low redundancy (dof = " + std::to_string(dof) +
+                                "): the global test and the w-tests have little power");
+    }
+    if (o.scale_by_sigma0 && dof > 0) cov *= result.sigma0 * result.sigma0;
+    result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && dof > 0;
+
+    // Names and unit factors, in the reported convention.
+    const bool cf = result.convention == Convention::coordinate_frame;
+    const char* names[kMaxParams] = {"tx_m", "ty_m", "tz_m", "rx_arcsec", "ry_arcsec", "rz_arcsec", "ds_ppm",
+                                     "dtx_m_per_year", "dty_m_per_year", "dtz_m_per_year", "drx_arcsec_per_year",
+                                     "dry_arcsec_per_year", "drz_arcsec_per_year", "dds_ppm_per_year"};
+    auto factor = [&](int k) {
+      const bool rotation = (k >= 3 && k <= 5) || (k >= 10 && k <= 12);
+      const bool scale = k == 6 || k == 13;
+      return rotation ? (cf ? -kArcsecPerRad : kArcsecPerRad) : scale ? kPpm : 1.0;
+    };
+    Eigen::VectorXd f(u);
+    for (int a = 0; a < u; ++a) f(a) = factor(sol.estimated[static_cast<std::size_t>(a)]);
+    result.covariance = f.asDiagonal() * cov * f.asDiagonal();
+    result.correlation = result.covariance;
+    for (int a = 0; a < u; ++a) {
+      for (int b = 0; b < u; ++b) {
+        result.correlation(a, b) = result.covariance(a, b) /
+                                   std::sqrt(result.covariance(a, a) * result.covariance(b, b));
+      }
+    }
+    result.covariance_names.clear();
+    for (int a = 0; a < u; ++a) result.covariance_names.emplace_back(names[sol.estimated[static_cast<std::size_t>(a)]]);
+    result.parameters.clear();
+    for (int k = 0; k < (td ? 14 : 7); ++k) {
+      Parameter p;
+      p.name = names[k];
+      p.value = g[static_cast<std::size_t>(k)] * factor(k);
+      const auto it = std::find(sol.estimated.begin(), sol.estimated.end(), k);
+      p.estimated = it != sol.estimated.end();
+      if (p.estimated) {
+        const auto a = it - sol.estimated.begin();
+        p.sigma = std::sqrt(result.covariance(a, a));
+      }
+      result.parameters.push_back(p);
+    }
+    // Weak geometry: how much of each geocentric translation is determined by
+    // the rotations and scale (multiple correlation), plus the largest
+    // pairwise correlation to quote.
+    std::vector<int> rs;  // positions of rotation/scale parameters in the covariance
+    for (int a = 0; a < u; ++a) {
+      const int k = sol.estimated[static_cast<std::size_t>(a)];
+      if (k >= 3 && k <= 6) rs.push_back(a);
+    }
+    if (!rs.empty()) {
+      double worst_multiple = 0.0, worst_pair = 0.0;
+      std::string translation, pair;
+      Eigen::MatrixXd s_rs(rs.size(), rs.size());
+      for (std::size_t a = 0; a < rs.size(); ++a) {
+        for (std::size_t b = 0; b < rs.size(); ++b) s_rs(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = cov(rs[a], rs[b]);
+      }
+      const Eigen::LDLT<Eigen::MatrixXd> s_rs_ldlt(s_rs);
+      for (int tix = 0; tix < 3; ++tix) {
+        Eigen::VectorXd c(rs.size());
+        for (std::size_t b = 0; b < rs.size(); ++b) {
+          c(static_cast<Eigen::Index>(b)) = cov(tix, rs[b]);
+          const double corr = std::fabs(result.correlation(tix, rs[b]));
+          if (corr > worst_pair) {
+            worst_pair = corr;
+            pair = std::string(names[tix]) + "/" + result.covariance_names[static_cast<std::size_t>(rs[b])];
+          }
+        }
+        const double multiple = std::sqrt(std::clamp(c.dot(s_rs_ldlt.solve(c)) / cov(tix, tix), 0.0, 1.0));
+        if (multiple > worst_multiple) {
+          worst_multiple = multiple;
+          translation = names[tix];
+        }
+      }
+      if (worst_multiple > 0.99) {
+        result.warnings.push_back(
+            "weak geometry: " + translation + " is " + fmt(worst_multiple, 6) +
+            " correlated (multiple correlation) with the rotations and scale; largest pairwise |corr(" + pair +
+            ")| = " + fmt(worst_pair, 4) +
+            ". The network is small compared with its distance from the Earth's centre: the transform is sound, "
+            "its geocentric parameters are not individually meaningful; consider --model molodensky-badekas");
+      }
+    }
+    if (result.global_test.applicable && !result.global_test.passed) {
+      result.warnings.push_back(
+          std::string("global test ") +
+          (omega > result.global_test.critical_upper ? "FAILED high: residuals are larger than the a-priori sigmas allow"
+                                                     : "low: residuals are smaller than the a-priori sigmas suggest "
+                                                       "(sigmas too pessimistic?)") +
+          " (σ0 = " + fmt(result.sigma0, 4) + ")");
+    }
+    result.ceres_iterations = sol.iterations;
+    result.ceres_report = sol.report;
+    result.rotation_model = o.rotation_model;
+    return result;
+  }
+}
+
+}  // namespace geoanchor::solver
