@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Sets up, builds in Release and runs the main job on the bundled example:
-# the airport marks in fixtures/ go geodetic -> ECEF -> ENU (at the LSZH
-# reference point) -> ECEF -> geodetic, and the round trip is measured.
+#  1. fit: a 7-parameter transform from the LSZH control marks known in two
+#     frames (fixtures/airport_control.csv, with a planted blunder), printing
+#     the report and writing the transform file;
+#  2. convert: the airport marks go geodetic -> ECEF -> ENU (at the LSZH
+#     reference point) -> ECEF -> geodetic, and the round trip is measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -13,6 +16,12 @@ geoanchor=build/release/cli/geoanchor
 out=build/example
 origin=47.464722,8.549167,480   # LSZH aerodrome reference point; ellipsoidal height, WGS 84
 mkdir -p "$out"
+
+echo "== fit =="
+"$geoanchor" fit fixtures/airport_control.csv --model helmert7 --convention position_vector \
+  -o "$out/lszh_helmert7.json" --overwrite
+echo
+echo "== convert =="
 
 "$geoanchor" convert fixtures/airport_points.csv --to ecef -o "$out/points_ecef.csv" --overwrite
 "$geoanchor" convert "$out/points_ecef.csv" --to enu --origin "$origin" -o "$out/points_enu.csv" --overwrite

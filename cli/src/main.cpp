@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "convert_command.hpp"
+#include "fit_command.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "version.hpp"
@@ -22,6 +23,9 @@ int main(int argc, char** argv) {
   geoanchor::cli::ConvertOptions convert;
   convert.argv.assign(argv, argv + argc);
   auto* convert_cmd = geoanchor::cli::add_convert_command(app, convert);
+  geoanchor::cli::FitCommandOptions fit;
+  fit.argv.assign(argv, argv + argc);
+  auto* fit_cmd = geoanchor::cli::add_fit_command(app, fit);
 
   try {
     app.parse(argc, argv);
@@ -38,6 +42,7 @@ int main(int argc, char** argv) {
 
   try {
     if (convert_cmd->parsed()) geoanchor::cli::run_convert(convert);
+    if (fit_cmd->parsed()) return geoanchor::cli::run_fit(fit);
   } catch (const Error& e) {
     std::cerr << "geoanchor: error[" << e.code() << "]: " << e.what() << '\n';
     return geoanchor::exit_code(e.kind());

@@ -147,6 +147,18 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
 
   ControlSet set;
   set.source_name = source_name;
+  // Frames may be declared in leading comments: "# source_frame = ITRF2014@2024.5".
+  for (std::size_t i = 0; i < reader.leading_comments().size(); ++i) {
+    const std::string& c = reader.leading_comments()[i];
+    for (const char* key : {"source_frame", "target_frame"}) {
+      const auto at = c.find(key);
+      if (at == std::string::npos) continue;
+      const auto eq = c.find('=', at);
+      if (eq == std::string::npos) continue;
+      auto frame = geodesy::Frame::parse(c.substr(eq + 1), source_name + ": comment '" + c + "'");
+      (std::string_view(key) == "source_frame" ? set.source_frame : set.target_frame) = std::move(frame);
+    }
+  }
   set.has_a_priori_sigmas = src.sigma || src.has_cov || dst.sigma || dst.has_cov;
 
   // ECEF position and covariance of one role in one row.

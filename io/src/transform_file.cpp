@@ -1,6 +1,8 @@
 #include "geoanchor/io/transform_file.hpp"
 
 #include <array>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -307,41 +309,161 @@ TransformFile read_transform_file(const std::filesystem::path& path) {
   return parse_transform_json(text.str(), path.string());
 }
 
-std::string to_json_text(const TransformFile& t) {
-  json doc;
-  doc["model"] = std::string(to_string(t.model));
-  doc["convention"] = std::string(t.convention_name());
-  doc["rotation_model"] = std::string(geodesy::to_string(t.rotation_model));
-  if (t.source_frame) doc["source_frame"] = t.source_frame->to_string();
-  if (t.target_frame) doc["target_frame"] = t.target_frame->to_string();
-  if (t.reference_epoch) doc["reference_epoch"] = number(t.reference_epoch->year);
+namespace {
+
+// The seven (or fourteen) parameters of a Helmert alternative, canonical keys.
+template <class H>
+json parameters_json(const H& h) {
   json params = json::object();
-  auto put7 = [&](const auto& h) {
-    params["tx_m"] = number(h.t_m.x());
-    params["ty_m"] = number(h.t_m.y());
-    params["tz_m"] = number(h.t_m.z());
-    params["rx_arcsec"] = number(h.rx.arcsec());
-    params["ry_arcsec"] = number(h.ry.arcsec());
-    params["rz_arcsec"] = number(h.rz.arcsec());
-    params["ds_ppm"] = number(h.ds.ppm());
+  auto put7 = [&](const auto& p) {
+    params["tx_m"] = number(p.t_m.x());
+    params["ty_m"] = number(p.t_m.y());
+    params["tz_m"] = number(p.t_m.z());
+    params["rx_arcsec"] = number(p.rx.arcsec());
+    params["ry_arcsec"] = number(p.ry.arcsec());
+    params["rz_arcsec"] = number(p.rz.arcsec());
+    params["ds_ppm"] = number(p.ds.ppm());
+  };
+  if constexpr (std::is_same_v<H, geodesy::Helmert14<PositionVector>> ||
+                std::is_same_v<H, geodesy::Helmert14<CoordinateFrame>>) {
+    put7(h.at_reference_epoch);
+    params["dtx_m_per_year"] = number(h.rates.dt_m_per_year.x());
+    params["dty_m_per_year"] = number(h.rates.dt_m_per_year.y());
+    params["dtz_m_per_year"] = number(h.rates.dt_m_per_year.z());
+    params["drx_arcsec_per_year"] = number(h.rates.drx_per_year.arcsec());
+    params["dry_arcsec_per_year"] = number(h.rates.dry_per_year.arcsec());
+    params["drz_arcsec_per_year"] = number(h.rates.drz_per_year.arcsec());
+    params["dds_ppm_per_year"] = number(h.rates.dds_per_year.ppm());
+  } else {
+    put7(h);
+  }
+  return params;
+}
+
+// The same transform in the other rotation convention.
+TransformFile swapped_convention(const TransformFile& t) {
+  TransformFile out = t;
+  out.fit.reset();
+  std::visit([&](const auto& h) {
+    using H = std::decay_t<decltype(h)>;
+    if constexpr (std::is_same_v<H, geodesy::Helmert7<PositionVector>> || std::is_same_v<H, geodesy::Helmert14<PositionVector>>) {
+      out.helmert = geodesy::to_coordinate_frame(h);
+    } else {
+      out.helmert = geodesy::to_position_vector(h);
+    }
+  }, t.helmert);
+  return out;
+}
+
+std::string g17(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+json json_number_or_null(double v) { return std::isfinite(v) ? number(v) : json(nullptr); }
+
+}  // namespace
+
+std::string epsg_method(const TransformFile& t) {
+  const bool pv = t.convention_name() == PositionVector::name;
+  if (t.time_dependent()) return pv ? "EPSG:1053" : "EPSG:1056";
+  return pv ? "EPSG:1033" : "EPSG:1032";
+}
+
+std::string proj_pipeline(const TransformFile& t) {
+  std::string out = "+proj=pipeline +step +proj=helmert";
+  auto add = [&](const char* key, double v) { out += std::string(" +") + key + "=" + g17(v); };
+  auto add7 = [&](const auto& p) {
+    add("x", p.t_m.x());
+    add("y", p.t_m.y());
+    add("z", p.t_m.z());
+    add("rx", p.rx.arcsec());
+    add("ry", p.ry.arcsec());
+    add("rz", p.rz.arcsec());
+    add("s", p.ds.ppm());
   };
   std::visit([&](const auto& h) {
     using H = std::decay_t<decltype(h)>;
     if constexpr (std::is_same_v<H, geodesy::Helmert14<PositionVector>> ||
                   std::is_same_v<H, geodesy::Helmert14<CoordinateFrame>>) {
-      put7(h.at_reference_epoch);
-      params["dtx_m_per_year"] = number(h.rates.dt_m_per_year.x());
-      params["dty_m_per_year"] = number(h.rates.dt_m_per_year.y());
-      params["dtz_m_per_year"] = number(h.rates.dt_m_per_year.z());
-      params["drx_arcsec_per_year"] = number(h.rates.drx_per_year.arcsec());
-      params["dry_arcsec_per_year"] = number(h.rates.dry_per_year.arcsec());
-      params["drz_arcsec_per_year"] = number(h.rates.drz_per_year.arcsec());
-      params["dds_ppm_per_year"] = number(h.rates.dds_per_year.ppm());
+      add7(h.at_reference_epoch);
+      add("dx", h.rates.dt_m_per_year.x());
+      add("dy", h.rates.dt_m_per_year.y());
+      add("dz", h.rates.dt_m_per_year.z());
+      add("drx", h.rates.drx_per_year.arcsec());
+      add("dry", h.rates.dry_per_year.arcsec());
+      add("drz", h.rates.drz_per_year.arcsec());
+      add("ds", h.rates.dds_per_year.ppm());
+      add("t_epoch", h.reference_epoch.year);
     } else {
-      put7(h);
+      add7(h);
     }
   }, t.helmert);
-  doc["parameters"] = params;
+  out += " +convention=" + std::string(t.convention_name());
+  if (t.rotation_model == geodesy::RotationModel::exact) out += " +exact";
+  return out;
+}
+
+std::string to_json_text(const TransformFile& t) {
+  json doc;
+  doc["format_version"] = 1;
+  doc["model"] = std::string(to_string(t.model));
+  doc["convention"] = std::string(t.convention_name());
+  doc["rotation_model"] = std::string(geodesy::to_string(t.rotation_model));
+  doc["epsg_method"] = epsg_method(t);
+  if (t.source_frame) doc["source_frame"] = t.source_frame->to_string();
+  if (t.target_frame) doc["target_frame"] = t.target_frame->to_string();
+  if (t.reference_epoch) doc["reference_epoch"] = number(t.reference_epoch->year);
+  doc["parameters"] = std::visit([](const auto& h) { return parameters_json(h); }, t.helmert);
+  doc["proj_pipeline"] = proj_pipeline(t);
+  if (t.fit) {
+    const FitRecord& f = *t.fit;
+    if (!f.generator.empty()) doc["generator"] = f.generator;
+    json sig = json::object();
+    for (const auto& [name, value] : f.sigmas) sig[name] = number(value);
+    doc["sigmas"] = sig;
+    json corr = json::array();
+    for (const auto& row : f.correlation) {
+      json r = json::array();
+      for (double v : row) r.push_back(number(v));
+      corr.push_back(r);
+    }
+    doc["correlation"] = {{"parameters", f.correlation_names}, {"matrix", corr}};
+    doc["statistics"] = {
+        {"sigma0", number(f.sigma0)},
+        {"dof", f.dof},
+        {"sigmas_scaled_by_sigma0", f.sigmas_scaled_by_sigma0},
+        {"alpha", number(f.alpha)},
+        {"alpha_point", number(f.alpha_point)},
+        {"global_test",
+         {{"statistic", number(f.global_statistic)},
+          {"critical", number(f.global_critical_upper)},
+          {"critical_lower", number(f.global_critical_lower)},
+          {"passed", f.global_applicable ? json(f.global_passed) : json(nullptr)},
+          {"applicable", f.global_applicable}}},
+        {"warnings", f.warnings}};
+    json pts = json::array();
+    for (const auto& p : f.points) {
+      json jp = {{"id", p.id},
+                 {"residual_enu_m", {number(p.residual_enu_m[0]), number(p.residual_enu_m[1]), number(p.residual_enu_m[2])}},
+                 {"w_test", number(p.w_test)},
+                 {"w_enu", {number(p.w_enu[0]), number(p.w_enu[1]), number(p.w_enu[2])}},
+                 {"redundancy_enu", {number(p.redundancy_enu[0]), number(p.redundancy_enu[1]), number(p.redundancy_enu[2])}},
+                 {"mdb_m", json_number_or_null(p.mdb_m)},
+                 {"point_test", {{"statistic", number(p.point_test)}, {"dof", p.point_test_dof}, {"p_value", number(p.point_test_p)}}},
+                 {"outlier", p.outlier},
+                 {"used", p.used}};
+      if (!p.note.empty()) jp["note"] = p.note;
+      pts.push_back(jp);
+    }
+    doc["points"] = pts;
+    const TransformFile other = swapped_convention(t);
+    doc["alternatives"] = json::array({json{{"convention", std::string(other.convention_name())},
+                                            {"epsg_method", epsg_method(other)},
+                                            {"parameters", std::visit([](const auto& h) { return parameters_json(h); }, other.helmert)},
+                                            {"proj_pipeline", proj_pipeline(other)}}});
+  }
   return doc.dump(2) + "\n";
 }
 

@@ -602,6 +602,48 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       }
     }
 
+    // --- points outside the final fit: tested against it ---------------------
+    // Their residuals come from the final parameters, and their tests are
+    // prediction tests (Q = I + A N⁻¹ Aᵀ): a removed blunder shows at full size.
+    for (std::size_t i = 0; i < control.points.size(); ++i) {
+      if (std::find(active.begin(), active.end(), i) != active.end()) continue;
+      const auto& p = control.points[i];
+      if (td && !p.epoch) continue;
+      Observation ob;
+      ob.x = p.source.m - cx;
+      ob.y = p.target.m - cy;
+      const Eigen::Matrix3d c = control.has_a_priori_sigmas ? Eigen::Matrix3d(p.target_cov_m2 + p.source_cov_m2)
+                                                            : Eigen::Matrix3d::Identity();
+      const Eigen::LLT<Eigen::Matrix3d> llt(c);
+      if (llt.info() != Eigen::Success) continue;
+      ob.w = llt.matrixL().solve(Eigen::Matrix3d::Identity());
+      ob.dt = td ? p.epoch->year - o.reference_epoch->year : 0.0;
+      const Eigen::Vector3d vi = p.target.m - apply_fit(result, p.source, td ? p.epoch : std::nullopt).m;
+      const Eigen::Vector3d vwi = ob.w * vi;
+      Eigen::Vector3d pred;
+      Eigen::Matrix<double, 3, kMaxParams> jfull;
+      predict(ob, sol.theta.data(), o.rotation_model, td, pred, &jfull);
+      Eigen::MatrixXd a(3, u);
+      for (int c2 = 0; c2 < u; ++c2) a.col(c2) = ob.w * jfull.col(sol.estimated[static_cast<std::size_t>(c2)]);
+      const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() + a * n_inv * a.transpose();
+      const geodesy::LocalTangentPlane plane(
+          geodesy::LocalOrigin{geocentric.geodetic_from_ecef(p.target), geodesy::Ellipsoid::wgs84()});
+      const Eigen::Matrix3d enu = plane.enu_from_ecef_rotation();
+      PointResult& pr = result.points[i];
+      pr.residual_enu_m = enu * vi;
+      pr.w_max = 0.0;
+      pr.redundancy_enu.setZero();
+      pr.mdb_m = std::numeric_limits<double>::quiet_NaN();  // not part of the fit: no detectability
+      for (int axis = 0; axis < 3; ++axis) {
+        const Eigen::Vector3d b = ob.w * enu.row(axis).transpose();
+        pr.w_enu(axis) = b.dot(vwi) / std::sqrt(b.dot(q * b)) / sigma_scale;
+        pr.w_max = std::max(pr.w_max, std::fabs(pr.w_enu(axis)));
+      }
+      pr.point_statistic = vwi.dot(q.ldlt().solve(vwi)) / (sigma_scale * sigma_scale);
+      pr.point_dof = 3;
+      pr.point_p_value = chi_squared_upper_tail(3, pr.point_statistic);
+    }
+
     // --- report -------------------------------------------------------------
     if (dof <= 5) {
       result.warnings.push_back("low redundancy (dof = " + std::to_string(dof) +
@@ -679,8 +721,9 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       }
       if (worst_multiple > 0.99) {
         result.warnings.push_back(
-            "weak geometry: " + translation + " is " + fmt(worst_multiple, 6) +
-            " correlated (multiple correlation) with the rotations and scale; largest pairwise |corr(" + pair +
+            "weak geometry: the multiple correlation of " + translation + " with the rotations and scale is " +
+            (worst_multiple > 0.999999 ? "1 - " + fmt(1.0 - worst_multiple, 2) : fmt(worst_multiple, 6)) +
+            "; largest pairwise |corr(" + pair +
             ")| = " + fmt(worst_pair, 4) +
             ". The network is small compared with its distance from the Earth's centre: the transform is sound, "
             "its geocentric parameters are not individually meaningful; consider --model molodensky-badekas");

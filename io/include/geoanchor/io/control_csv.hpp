@@ -13,6 +13,10 @@
 //   epoch                                    decimal year, optional (required by helmert14)
 //   use                                      1/0, true/false, yes/no; optional (default 1)
 //
+// Frames may be declared in comment lines before the header:
+//   # source_frame = ITRF2014@2024.5
+//   # target_frame = ETRF2000@2024.5
+//
 // ENU coordinates need the nominal origin (`origin`). Refusals (geoanchor::
 // Error, input): sigma <= 0, NaN/inf, empty or unparsable fields, a
 // covariance that is not positive definite, duplicate ids at the same epoch

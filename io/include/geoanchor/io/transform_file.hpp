@@ -18,7 +18,9 @@
 // convention, a helmert14 without reference_epoch, a missing parameter and
 // any unknown key are errors naming the file and the key.
 
+#include <array>
 #include <filesystem>
+#include <vector>
 #include <optional>
 #include <string>
 #include <variant>
@@ -32,6 +34,42 @@ namespace geoanchor::io {
 enum class TransformModel { helmert7, helmert6, translation3, helmert14 };
 std::string_view to_string(TransformModel m);
 
+// What `geoanchor fit` adds to a transform file: the statistics that justify
+// the parameters. Written, not read back by convert/apply.
+struct FitPointRecord {
+  std::string id;
+  std::array<double, 3> residual_enu_m{};
+  double w_test = 0.0;                 // the w-test of largest magnitude, signed
+  std::array<double, 3> w_enu{};       // w-tests along local E, N, U
+  std::array<double, 3> redundancy_enu{};
+  double mdb_m = 0.0;
+  double point_test = 0.0;
+  int point_test_dof = 0;
+  double point_test_p = 1.0;
+  bool outlier = false;
+  bool used = true;
+  std::string note;  // why it was not used
+};
+
+struct FitRecord {
+  std::vector<std::pair<std::string, double>> sigmas;  // parameter name -> σ (same units)
+  std::vector<std::string> correlation_names;
+  std::vector<std::vector<double>> correlation;
+  bool sigmas_scaled_by_sigma0 = false;
+  double sigma0 = 0.0;
+  int dof = 0;
+  double alpha = 0.05;
+  double alpha_point = 0.001;
+  double global_statistic = 0.0;
+  double global_critical_lower = 0.0;
+  double global_critical_upper = 0.0;
+  bool global_passed = false;
+  bool global_applicable = true;
+  std::vector<FitPointRecord> points;
+  std::vector<std::string> warnings;
+  std::string generator;  // "geoanchor 0.1.0 fit ..."
+};
+
 struct TransformFile {
   TransformModel model = TransformModel::helmert7;
   geodesy::RotationModel rotation_model = geodesy::RotationModel::small_angle;
@@ -43,6 +81,8 @@ struct TransformFile {
   std::optional<geodesy::Frame> source_frame;
   std::optional<geodesy::Frame> target_frame;
   std::optional<geodesy::DecimalYear> reference_epoch;  // required for helmert14
+
+  std::optional<FitRecord> fit;  // only when written by `geoanchor fit`
 
   bool time_dependent() const { return model == TransformModel::helmert14; }
   std::string_view convention_name() const;
@@ -58,7 +98,20 @@ struct TransformFile {
 TransformFile read_transform_file(const std::filesystem::path& path);
 TransformFile parse_transform_json(std::string_view text, std::string_view source_name);
 
-// The file's JSON text (parameters in m, arcsec, ppm and their rates).
+// The file's JSON text (parameters in m, arcsec, ppm and their rates). With
+// a fit record it also carries: sigmas, correlation, statistics, points,
+// proj_pipeline, epsg_method, and `alternatives` (the same transform in the
+// other rotation convention, with its EPSG method).
 std::string to_json_text(const TransformFile& t);
+
+// The transform as a PROJ pipeline string, ECEF in and ECEF out:
+// "+proj=pipeline +step +proj=helmert ... +convention=...". For helmert14
+// PROJ takes the observation epoch from each coordinate's time (cct: x y z t).
+std::string proj_pipeline(const TransformFile& t);
+
+// The EPSG method code of the transform in its own convention, e.g.
+// "EPSG:1033" (position vector), "EPSG:1032" (coordinate frame), 1053/1056
+// for time-dependent sets.
+std::string epsg_method(const TransformFile& t);
 
 }  // namespace geoanchor::io

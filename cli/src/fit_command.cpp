@@ -1,0 +1,269 @@
+#include "fit_command.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <numeric>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/atomic_file.hpp"
+#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/solver/helmert_fit.hpp"
+#include "option_parsing.hpp"
+#include "version.hpp"
+
+namespace geoanchor::cli {
+namespace {
+
+using solver::FitModel;
+
+FitModel parse_model(const std::string& m) {
+  if (m == "helmert7") return FitModel::helmert7;
+  if (m == "helmert6") return FitModel::helmert6;
+  if (m == "translation3") return FitModel::translation3;
+  if (m == "helmert14") return FitModel::helmert14;
+  if (m == "molodensky-badekas" || m == "enu-origin" || m == "site-calibration") {
+    throw Error(ErrorKind::usage, "E_MODEL_NOT_AVAILABLE",
+                "--model " + m + ": not available in this version yet; available: translation3, helmert6, helmert7, helmert14");
+  }
+  throw Error(ErrorKind::usage, "E_OPTION",
+              "--model " + m + ": expected translation3, helmert6, helmert7, helmert14 (molodensky-badekas, enu-origin and "
+                               "site-calibration are planned)");
+}
+
+std::string fixed(double v, int decimals) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*f", decimals, v);
+  return b;
+}
+
+// The printed report: parameters, statistics with verdict, residuals with
+// flagged points first.
+void print_report(std::ostream& out, const solver::FitResult& r, const geodesy::ControlSet& set,
+                  const FitCommandOptions& o) {
+  out << "geoanchor fit: model " << solver::to_string(r.model);
+  if (r.model != FitModel::translation3) {
+    out << ", " << (r.convention == solver::Convention::position_vector ? "position vector" : "coordinate frame")
+        << " convention, " << geodesy::to_string(r.rotation_model) << " rotation matrix";
+  }
+  out << "\n  control: " << set.source_name << " (" << set.points.size() << " points)";
+  if (set.source_frame || set.target_frame) {
+    out << "; " << (set.source_frame ? set.source_frame->to_string() : "?") << " -> "
+        << (set.target_frame ? set.target_frame->to_string() : "?");
+  }
+  if (r.reference_epoch) out << "; reference epoch " << geodesy::format_decimal_year(*r.reference_epoch);
+  out << "\n\nParameters (" << (r.covariance_scaled_by_sigma0 ? "σ scaled by the a-posteriori σ0" : "σ from the a-priori weights, σ0 = 1")
+      << ")\n";
+  for (const auto& p : r.parameters) {
+    const bool angle = p.name.find("arcsec") != std::string::npos, scale = p.name.find("ppm") != std::string::npos;
+    const int decimals = angle ? 6 : scale ? 5 : 4;
+    char line[160];
+    if (p.estimated) {
+      std::snprintf(line, sizeof line, "  %-22s %18s  ± %s\n", p.name.c_str(), fixed(p.value, decimals).c_str(),
+                    fixed(p.sigma, decimals).c_str());
+    } else {
+      std::snprintf(line, sizeof line, "  %-22s %18s  (fixed)\n", p.name.c_str(), fixed(p.value, decimals).c_str());
+    }
+    out << line;
+  }
+  const auto& g = r.global_test;
+  out << "\nStatistics\n  σ0 = " << fixed(r.sigma0, 3) << ", dof = " << r.dof << "\n";
+  if (g.applicable) {
+    out << "  global test (χ², α = " << o.alpha << "): " << fixed(g.statistic, 2) << " in [" << fixed(g.critical_lower, 2)
+        << ", " << fixed(g.critical_upper, 2) << "]: "
+        << (g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED (high)" : "FAILED (low)") << "\n";
+  } else {
+    out << "  global test: not applicable (no a-priori sigmas, or no redundancy)\n";
+  }
+  std::vector<std::size_t> order(r.points.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const auto rank = [&](const solver::PointResult& p) { return p.outlier ? 0 : !p.used ? 1 : 2; };
+    if (rank(r.points[a]) != rank(r.points[b])) return rank(r.points[a]) < rank(r.points[b]);
+    return r.points[a].w_max > r.points[b].w_max;
+  });
+  out << "\nResiduals (target − transformed source, local E/N/U, mm); w-tests critical |w| = " << fixed(r.w_critical, 2)
+      << "\n  id            dE       dN       dU      wE     wN     wU    MDB mm  status\n";
+  for (std::size_t i : order) {
+    const auto& p = r.points[i];
+    char line[200];
+    const std::string mdb = std::isfinite(p.mdb_m) ? fixed(1e3 * p.mdb_m, 1) : "-";
+    std::snprintf(line, sizeof line, "  %-10s %8.1f %8.1f %8.1f  %6.2f %6.2f %6.2f  %8s  %s\n", p.id.c_str(),
+                  1e3 * p.residual_enu_m.x(), 1e3 * p.residual_enu_m.y(), 1e3 * p.residual_enu_m.z(), p.w_enu.x(),
+                  p.w_enu.y(), p.w_enu.z(), mdb.c_str(), p.outlier ? "OUTLIER (removed)" : !p.used ? "not used" : "ok");
+    out << line;
+  }
+  for (const auto& p : r.points) {
+    if (p.outlier) out << "  " << p.id << ": " << p.removed_because << "\n";
+  }
+  out << "  (points not used are tested against the final fit: residuals at full size, prediction w-tests)\n";
+  if (!r.warnings.empty()) out << "\n" << r.warnings.size() << " warning(s): see standard error and the transform file\n";
+}
+
+io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy::ControlSet& set,
+                                      const FitCommandOptions& o) {
+  io::TransformFile t;
+  switch (r.model) {
+    case FitModel::translation3: t.model = io::TransformModel::translation3; break;
+    case FitModel::helmert6: t.model = io::TransformModel::helmert6; break;
+    case FitModel::helmert7: t.model = io::TransformModel::helmert7; break;
+    case FitModel::helmert14: t.model = io::TransformModel::helmert14; break;
+  }
+  t.rotation_model = r.rotation_model;
+  t.source_frame = set.source_frame;
+  t.target_frame = set.target_frame;
+  t.reference_epoch = r.reference_epoch;
+  const bool pv = r.convention == solver::Convention::position_vector;
+  if (r.model == FitModel::helmert14) {
+    if (pv) {
+      t.helmert = r.helmert;
+    } else {
+      t.helmert = geodesy::to_coordinate_frame(r.helmert);
+    }
+  } else if (pv) {
+    t.helmert = r.helmert.at_reference_epoch;
+  } else {
+    t.helmert = geodesy::to_coordinate_frame(r.helmert.at_reference_epoch);
+  }
+  io::FitRecord f;
+  for (const auto& p : r.parameters) {
+    if (p.estimated) f.sigmas.emplace_back(p.name, p.sigma);
+  }
+  f.correlation_names = r.covariance_names;
+  for (Eigen::Index i = 0; i < r.correlation.rows(); ++i) {
+    std::vector<double> row;
+    for (Eigen::Index j = 0; j < r.correlation.cols(); ++j) row.push_back(r.correlation(i, j));
+    f.correlation.push_back(row);
+  }
+  f.sigmas_scaled_by_sigma0 = r.covariance_scaled_by_sigma0;
+  f.sigma0 = r.sigma0;
+  f.dof = r.dof;
+  f.alpha = o.alpha;
+  f.alpha_point = o.alpha_point;
+  f.global_statistic = r.global_test.statistic;
+  f.global_critical_lower = r.global_test.critical_lower;
+  f.global_critical_upper = r.global_test.critical_upper;
+  f.global_passed = r.global_test.passed;
+  f.global_applicable = r.global_test.applicable;
+  for (const auto& p : r.points) {
+    io::FitPointRecord q;
+    q.id = p.id;
+    for (int k = 0; k < 3; ++k) {
+      q.residual_enu_m[static_cast<std::size_t>(k)] = p.residual_enu_m(k);
+      q.w_enu[static_cast<std::size_t>(k)] = p.w_enu(k);
+      q.redundancy_enu[static_cast<std::size_t>(k)] = p.redundancy_enu(k);
+    }
+    Eigen::Index worst = 0;
+    p.w_enu.cwiseAbs().maxCoeff(&worst);
+    q.w_test = p.w_enu(worst);
+    q.mdb_m = p.mdb_m;
+    q.point_test = p.point_statistic;
+    q.point_test_dof = p.point_dof;
+    q.point_test_p = p.point_p_value;
+    q.outlier = p.outlier;
+    q.used = p.used;
+    q.note = p.removed_because;
+    f.points.push_back(q);
+  }
+  f.warnings = r.warnings;
+  std::string cmd;
+  for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
+  f.generator = "geoanchor " GEOANCHOR_VERSION ": " + cmd;
+  t.fit = f;
+  return t;
+}
+
+}  // namespace
+
+CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
+  auto* cmd = app.add_subcommand("fit", "Fit a datum transform to control points, with statistics");
+  cmd->add_option("CONTROL", o.control, "Control set (CSV)")->required();
+  cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14")->required();
+  cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame (required with rotations)");
+  cmd->add_option("--rotation-model", o.rotation_model, "small_angle (EPSG, default) | exact");
+  cmd->add_option("--reference-epoch", o.reference_epoch, "helmert14: parameter epoch (default: mean observation epoch)");
+  cmd->add_option("--origin", o.origin, "Nominal origin LAT,LON,H of ENU control coordinates");
+  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic/ENU control coordinates (default WGS84)");
+  cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
+  cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
+  cmd->add_option("--alpha", o.alpha, "Significance of the global test (default 0.05)")->check(CLI::Range(1e-6, 0.5));
+  cmd->add_option("--alpha-point", o.alpha_point, "Significance of point tests and data snooping (default 0.001)")
+      ->check(CLI::Range(1e-9, 0.5));
+  cmd->add_flag("--no-snooping", o.no_snooping, "Report outliers but remove none");
+  cmd->add_flag("--scale-by-sigma0", o.scale_by_sigma0, "Scale parameter sigmas by the a-posteriori σ0");
+  cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test,
+                "Write the transform even if the global test fails high");
+  cmd->add_option("-o,--output", o.output, "Transform file (JSON) to write");
+  cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output");
+  return cmd;
+}
+
+int run_fit(const FitCommandOptions& o) {
+  solver::FitOptions fo;
+  fo.model = parse_model(o.model);
+  if (o.convention) {
+    if (*o.convention == "position_vector") {
+      fo.convention = solver::Convention::position_vector;
+    } else if (*o.convention == "coordinate_frame") {
+      fo.convention = solver::Convention::coordinate_frame;
+    } else {
+      throw Error(ErrorKind::usage, "E_OPTION", "--convention " + *o.convention + ": expected position_vector or coordinate_frame");
+    }
+  }
+  if (o.rotation_model == "small_angle") {
+    fo.rotation_model = geodesy::RotationModel::small_angle;
+  } else if (o.rotation_model == "exact") {
+    fo.rotation_model = geodesy::RotationModel::exact;
+  } else {
+    throw Error(ErrorKind::usage, "E_OPTION", "--rotation-model " + o.rotation_model + ": expected small_angle or exact");
+  }
+  if (o.reference_epoch) {
+    if (fo.model != FitModel::helmert14) {
+      throw Error(ErrorKind::usage, "E_OPTION", "--reference-epoch: only for --model helmert14");
+    }
+    fo.reference_epoch = geodesy::parse_decimal_year(*o.reference_epoch, "--reference-epoch");
+  }
+  fo.alpha = o.alpha;
+  fo.alpha_point = o.alpha_point;
+  fo.data_snooping = !o.no_snooping;
+  fo.scale_by_sigma0 = o.scale_by_sigma0;
+
+  // Refuse an existing output before any work.
+  std::unique_ptr<io::AtomicOutputFile> out;
+  if (!o.output.empty()) {
+    io::refuse_same_file(o.control, o.output);
+    out = std::make_unique<io::AtomicOutputFile>(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+  }
+
+  io::ControlReadOptions ro;
+  ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
+  if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
+  geodesy::ControlSet set = io::read_control_csv(o.control, ro);
+  if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
+  if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");
+
+  const solver::FitResult r = solver::fit_helmert(set, fo);
+  print_report(std::cout, r, set, o);
+  for (const auto& w : r.warnings) std::cerr << "geoanchor: warning: " << w << '\n';
+
+  const auto& g = r.global_test;
+  if (g.applicable && g.statistic > g.critical_upper && !o.accept_failed_global_test) {
+    std::cerr << "geoanchor: error[E_FIT_GLOBAL_TEST]: " << o.control << ": global test failed high (" << fixed(g.statistic, 2)
+              << " > " << fixed(g.critical_upper, 2) << ", σ0 = " << fixed(r.sigma0, 3)
+              << "): the residuals do not fit the stated sigmas; no transform was written. hint: look for blunders "
+                 "(residual table), wrong sigmas, or a wrong model; --accept-failed-global-test writes it anyway\n";
+    return exit_code(ErrorKind::rejected);
+  }
+  if (out) {
+    out->stream() << io::to_json_text(transform_file_from(r, set, o));
+    out->commit();
+    std::cout << "\nwrote " << o.output << "\n";
+  }
+  return 0;
+}
+
+}  // namespace geoanchor::cli

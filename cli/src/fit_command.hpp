@@ -1,0 +1,38 @@
+#pragma once
+// `geoanchor fit`: a datum transform from control points, with statistics.
+// See docs/commands/fit.md.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace geoanchor::cli {
+
+struct FitCommandOptions {
+  std::string control;
+  std::string model;
+  std::optional<std::string> convention;
+  std::string rotation_model = "small_angle";
+  std::optional<std::string> reference_epoch;
+  std::optional<std::string> origin;
+  std::string ellipsoid = "WGS84";
+  std::optional<std::string> source_frame, target_frame;
+  double alpha = 0.05;
+  double alpha_point = 0.001;
+  bool no_snooping = false;
+  bool scale_by_sigma0 = false;
+  bool accept_failed_global_test = false;
+  std::string output;
+  bool overwrite = false;
+  std::vector<std::string> argv;
+};
+
+CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& options);
+// Returns the exit code (0, or 4 when the fit is refused after reporting).
+int run_fit(const FitCommandOptions& options);
+
+}  // namespace geoanchor::cli

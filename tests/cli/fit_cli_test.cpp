@@ -1,0 +1,296 @@
+// `geoanchor fit` end to end: the bundled example, the PROJ pipeline it
+// writes checked with PROJ's own cct, and every refusal checked for its
+// message, exit code and the absence of any output.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "geoanchor/geodesy/number_text.hpp"
+#include "proj_reference.hpp"
+#include "test_support.hpp"
+
+namespace geoanchor {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::proj_radians;
+using testing::ProjPipeline;
+
+constexpr double kCctAgreementTol_m = 1e-4;  // issue acceptance: the pipeline reproduces our coordinates to 0.1 mm
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class FitCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("geoanchor_fit_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  fs::path path(const std::string& n) const { return dir_ / n; }
+  fs::path write(const std::string& n, const std::string& text) const {
+    std::ofstream(path(n), std::ios::binary) << text;
+    return path(n);
+  }
+  RunResult run(const std::string& args, const std::string& input = "") const {
+    const fs::path out = path("stdout.txt"), err = path("stderr.txt");
+    std::string cmd = args + " > '" + out.string() + "' 2> '" + err.string() + "'";
+    if (!input.empty()) cmd += " < '" + input + "'";
+    const int status = std::system(cmd.c_str());
+    RunResult r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+    fs::remove(out);
+    fs::remove(err);
+    return r;
+  }
+  RunResult geoanchor(const std::string& args) const { return run(std::string(GEOANCHOR_EXE) + " " + args); }
+  std::vector<std::string> files() const {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(dir_)) out.push_back(e.path().filename().string());
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+  fs::path dir_;
+};
+
+std::vector<std::vector<std::string>> csv_rows(const std::string& text, std::vector<std::string>* header) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    std::string x;
+    while (std::getline(ss, x, ',')) f.push_back(x);
+    if (header->empty()) {
+      *header = f;
+    } else {
+      rows.push_back(f);
+    }
+  }
+  return rows;
+}
+
+std::size_t col(const std::vector<std::string>& header, const std::string& name) {
+  return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+}
+
+const std::string kControl = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv";
+
+TEST_F(FitCli, BundledExampleNamesThePlantedBlunderAndPassesTheGlobalTest) {
+  const RunResult r = geoanchor("fit " + kControl + " --model helmert7 --convention position_vector -o " + path("T.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("P17 "), std::string::npos);
+  EXPECT_NE(r.out.find("OUTLIER (removed)"), std::string::npos);
+  EXPECT_NE(r.out.find("PASSED"), std::string::npos);
+  const std::string json = slurp(path("T.json"));
+  for (const char* key : {"\"model\": \"helmert7\"", "\"convention\": \"position_vector\"", "\"rotation_model\": \"small_angle\"",
+                          "\"source_frame\": \"ITRF2014@2024.5\"", "\"target_frame\": \"ETRF2000@2024.5\"", "\"sigmas\"",
+                          "\"correlation\"", "\"statistics\"", "\"global_test\"", "\"points\"", "\"proj_pipeline\"",
+                          "\"epsg_method\": \"EPSG:1033\"", "\"alternatives\"", "\"epsg_method\": \"EPSG:1032\""}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  }
+  // Exactly one outlier: P17.
+  std::size_t outliers = 0, at = 0;
+  while ((at = json.find("\"outlier\": true", at)) != std::string::npos) {
+    ++outliers;
+    ++at;
+  }
+  EXPECT_EQ(outliers, 1u);
+}
+
+// Runs `pipeline` through PROJ's cct on "x y z t" lines; returns its rows.
+std::vector<Eigen::Vector3d> cct(const std::string& pipeline, const std::vector<Eigen::Vector4d>& xyzt, const fs::path& dir) {
+  {
+    std::ofstream in(dir / "cct_in.txt");
+    in.precision(17);
+    for (const auto& p : xyzt) in << p(0) << ' ' << p(1) << ' ' << p(2) << ' ' << p(3) << '\n';
+  }
+  const std::string cmd = "cct -d 10 " + pipeline + " < '" + (dir / "cct_in.txt").string() + "' > '" +
+                          (dir / "cct_out.txt").string() + "'";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::vector<Eigen::Vector3d> out;
+  std::istringstream s(slurp(dir / "cct_out.txt"));
+  double x, y, z, t;
+  while (s >> x >> y >> z >> t) out.emplace_back(x, y, z);
+  fs::remove(dir / "cct_in.txt");
+  fs::remove(dir / "cct_out.txt");
+  return out;
+}
+
+std::string json_string_value(const std::string& json, const std::string& key) {
+  const auto at = json.find("\"" + key + "\": \"");
+  const auto start = at + key.size() + 5;
+  return json.substr(start, json.find('"', start) - start);
+}
+
+TEST_F(FitCli, ProjPipelineRunByCctReproducesOurTransformedCoordinates) {
+  for (const char* convention : {"position_vector", "coordinate_frame"}) {
+    const fs::path t = path(std::string("T_") + convention + ".json");
+    ASSERT_EQ(geoanchor("fit " + kControl + " --model helmert7 --convention " + convention + " -o " + t.string()).exit_code, 0);
+    // Our own transformed coordinates of every source point.
+    const std::string src = path("src.csv").string();
+    std::vector<std::string> header;
+    const auto rows = csv_rows(slurp(kControl), &header);
+    {
+      std::ofstream s(src);
+      s << "id,lat_deg,lon_deg,h_m\n";
+      for (const auto& r : rows) s << r[0] << ',' << r[col(header, "lat_src_deg")] << ',' << r[col(header, "lon_src_deg")] << ','
+                                   << r[col(header, "h_src_m")] << '\n';
+    }
+    const RunResult ours = geoanchor("convert " + src + " --to ecef --transform " + t.string());
+    ASSERT_EQ(ours.exit_code, 0) << ours.err;
+    std::vector<std::string> oh;
+    const auto orows = csv_rows(ours.out, &oh);
+    const ProjPipeline cart("+proj=cart +ellps=WGS84");
+    std::vector<Eigen::Vector4d> xyzt;
+    for (const auto& r : rows) {
+      const Eigen::Vector3d x = cart.forward({proj_radians(std::stod(r[col(header, "lon_src_deg")])),
+                                              proj_radians(std::stod(r[col(header, "lat_src_deg")])),
+                                              std::stod(r[col(header, "h_src_m")])});
+      xyzt.emplace_back(x(0), x(1), x(2), 2024.5);
+    }
+    const auto proj = cct(json_string_value(slurp(t), "proj_pipeline"), xyzt, dir_);
+    ASSERT_EQ(proj.size(), rows.size());
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const Eigen::Vector3d us(std::stod(orows[i][col(oh, "x_m")]), std::stod(orows[i][col(oh, "y_m")]),
+                               std::stod(orows[i][col(oh, "z_m")]));
+      EXPECT_THAT(us, testing::IsNearVector(proj[i], kCctAgreementTol_m)) << convention << " " << rows[i][0];
+    }
+    fs::remove(src);
+  }
+}
+
+TEST_F(FitCli, FourteenParameterPipelineRunByCctAtThePointsEpochs) {
+  // A control set at three epochs, generated through PROJ from a time-dependent set.
+  const ProjPipeline truth("+proj=helmert +x=0.02 +y=-0.01 +z=0.03 +rx=0.001 +ry=-0.002 +rz=0.0015 +s=0.004 "
+                           "+dx=0.001 +dy=0.0005 +dz=-0.0012 +drx=0.0001 +dry=0.00005 +drz=-0.00008 +ds=0.0002 "
+                           "+t_epoch=2015 +convention=position_vector");
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> lat(35.0, 55.0), lon(-10.0, 30.0), h(0.0, 1500.0);
+  const ProjPipeline cart("+proj=cart +ellps=GRS80");
+  std::ostringstream csv;
+  csv << "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m,epoch\n";
+  std::vector<Eigen::Vector4d> xyzt;
+  csv.precision(17);
+  for (int i = 0; i < 30; ++i) {
+    const Eigen::Vector3d x = cart.forward({proj_radians(lon(rng)), proj_radians(lat(rng)), h(rng)});
+    const double t = 2010.0 + 5.0 * (i % 3);
+    const Eigen::Vector3d y = truth.forward(x, t);
+    csv << "M" << i << ',' << x(0) << ',' << x(1) << ',' << x(2) << ',' << y(0) << ',' << y(1) << ',' << y(2)
+        << ",0.002,0.002," << t << '\n';
+    xyzt.emplace_back(x(0), x(1), x(2), t);
+  }
+  write("control.csv", csv.str());
+  const RunResult r = geoanchor("fit " + path("control.csv").string() +
+                                " --model helmert14 --convention position_vector --reference-epoch 2015 -o " +
+                                path("T.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const auto proj = cct(json_string_value(slurp(path("T.json")), "proj_pipeline"), xyzt, dir_);
+  ASSERT_EQ(proj.size(), xyzt.size());
+  for (std::size_t i = 0; i < xyzt.size(); ++i) {
+    // The fit is noise-free: PROJ's pipeline must land on the generated targets too.
+    EXPECT_THAT(proj[i], testing::IsNearVector(truth.forward(xyzt[i].head<3>(), xyzt[i](3)), kCctAgreementTol_m));
+  }
+}
+
+struct Refusal {
+  const char* name;
+  const char* csv;
+  const char* args;
+  int exit_code;
+  const char* message;
+};
+
+class FitRefusal : public FitCli, public ::testing::WithParamInterface<Refusal> {};
+void PrintTo(const Refusal& r, std::ostream* os) { *os << r.name; }
+
+TEST_P(FitRefusal, SaysWhyAndWritesNothing) {
+  const Refusal c = GetParam();
+  write("control.csv", c.csv);
+  const RunResult r = geoanchor("fit " + path("control.csv").string() + " " + c.args + " -o " + path("T.json").string());
+  EXPECT_EQ(r.exit_code, c.exit_code) << r.err;
+  EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+  EXPECT_EQ(files(), std::vector<std::string>{"control.csv"});
+}
+
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, FitRefusal,
+    ::testing::Values(
+        Refusal{"too_few_points",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,4270804,640438,4678618,0.01,0.01\n"
+                "B,4270903,640437,4678617,4270904,640438,4678618,0.01,0.01\n",
+                "--model helmert7 --convention position_vector", 4, "need >= 3 non-collinear points, got 2"},
+        Refusal{"collinear",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,4270804,640438,4678618,0.01,0.01\n"
+                "B,4270903,640487,4678617,4270904,640488,4678618,0.01,0.01\n"
+                "C,4271003,640537,4678617,4271004,640538,4678618,0.01,0.01\n"
+                "D,4271103,640587,4678617,4271104,640588,4678618,0.01,0.01\n",
+                "--model helmert7 --convention position_vector", 4, "collinear (singular-value ratio"},
+        Refusal{"coincident",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,4270804,640438,4678618,0.01,0.01\n"
+                "B,4270803.2,640437,4678617,4270804.2,640438,4678618,0.01,0.01\n"
+                "C,4270803,640437.3,4678617,4270804,640438.3,4678618,0.01,0.01\n"
+                "D,4270803,640437,4678617.1,4270804,640438,4678618.1,0.01,0.01\n",
+                "--model helmert7 --convention position_vector", 4, "only a translation is observable"},
+        Refusal{"one_epoch",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m,epoch\n"
+                "A,4270803,640437,4678617,4270804,640438,4678618,0.01,0.01,2020.0\n"
+                "B,4280803,640437,4678617,4280804,640438,4678618,0.01,0.01,2020.0\n"
+                "C,4270803,650437,4678617,4270804,650438,4678618,0.01,0.01,2020.0\n"
+                "D,4270803,640437,4688617,4270804,640438,4688618,0.01,0.01,2020.0\n"
+                "E,4275803,645437,4678617,4275804,645438,4678618,0.01,0.01,2020.0\n",
+                "--model helmert14 --convention position_vector", 4, "all 5 point-epochs are at epoch 2020"},
+        Refusal{"zero_sigma",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,4270804,640438,4678618,0.01,0\n",
+                "--model helmert7 --convention position_vector", 3, "control.csv:2: sigma_dst_m=0: must be > 0"},
+        Refusal{"duplicate_id",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,4270804,640438,4678618,0.01,0.01\n"
+                "A,4270813,640437,4678617,4270814,640438,4678618,0.01,0.01\n",
+                "--model helmert7 --convention position_vector", 3, "control.csv:3: id=A: duplicate of line 2"},
+        Refusal{"id_in_one_frame_only",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,,,,0.01,0.01\n",
+                "--model helmert7 --convention position_vector", 3, "control.csv:2: x_dst_m='': empty field"},
+        Refusal{"no_convention",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,4270804,640438,4678618,0.01,0.01\n",
+                "--model helmert7", 2, "--convention: required for model helmert7"},
+        Refusal{"global_test_fails_high",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,4270804.03,640438,4678618,0.0001,0.0001\n"
+                "B,4280803,640437,4678617,4280804,640438.02,4678618,0.0001,0.0001\n"
+                "C,4270803,650437,4678617,4270804,650438,4678618.04,0.0001,0.0001\n"
+                "D,4270803,640437,4688617,4270804.01,640438,4688618,0.0001,0.0001\n"
+                "E,4275803,645437,4678617,4275804,645438.03,4678618,0.0001,0.0001\n"
+                "F,4275803,641437,4683617,4275804,641438,4683618.02,0.0001,0.0001\n",
+                "--model helmert7 --convention position_vector --no-snooping", 4, "global test failed high"}),
+    [](const ::testing::TestParamInfo<Refusal>& param_info) { return std::string(param_info.param.name); });
+
+}  // namespace
+}  // namespace geoanchor
