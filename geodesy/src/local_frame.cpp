@@ -8,17 +8,23 @@
 
 namespace geoanchor::geodesy {
 
-LocalTangentPlane::LocalTangentPlane(const LocalOrigin& origin)
-    : origin_(origin), origin_ecef_m_(ecef_from_geodetic(origin.ellipsoid, origin.point).m) {
+Eigen::Matrix3d enu_from_ecef_rotation(Angle lat, Angle lon) {
   // sincosd reduces degrees exactly, so an origin on the equator or a
   // meridian multiple of 90° gives exact zeros and ones.
   double sphi = 0, cphi = 0, slam = 0, clam = 0;
-  GeographicLib::Math::sincosd(origin.point.lat.deg(), sphi, cphi);
-  GeographicLib::Math::sincosd(origin.point.lon.deg(), slam, clam);
-  rotation_ << -slam, clam, 0.0,                    // east
-      -sphi * clam, -sphi * slam, cphi,             // north
-      cphi * clam, cphi * slam, sphi;               // up
+  GeographicLib::Math::sincosd(lat.deg(), sphi, cphi);
+  GeographicLib::Math::sincosd(lon.deg(), slam, clam);
+  Eigen::Matrix3d r;
+  r << -slam, clam, 0.0,               // east
+      -sphi * clam, -sphi * slam, cphi,  // north
+      cphi * clam, cphi * slam, sphi;    // up
+  return r;
 }
+
+LocalTangentPlane::LocalTangentPlane(const LocalOrigin& origin)
+    : origin_(origin),
+      origin_ecef_m_(ecef_from_geodetic(origin.ellipsoid, origin.point).m),
+      rotation_(geodesy::enu_from_ecef_rotation(origin.point.lat, origin.point.lon)) {}
 
 EnuPosition LocalTangentPlane::enu_from_ecef(const EcefPosition& p) const {
   // Subtract first: for points near the origin the difference is exact.

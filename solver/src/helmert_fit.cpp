@@ -105,9 +105,11 @@ struct Observation {
   double dt = 0.0;     // years from the reference epoch
 };
 
-// Predicted centred target and its Jacobian (3 × 14) for θ'.
+// Predicted centred target and its Jacobian (3 × 14) for θ'. Without time
+// dependence R is the same for every point: pass it as `fixed_rotation`.
 void predict(const Observation& o, const double* theta, RotationModel model, bool time_dependent,
-             Eigen::Vector3d& pred, Eigen::Matrix<double, 3, kMaxParams>* jac) {
+             Eigen::Vector3d& pred, Eigen::Matrix<double, 3, kMaxParams>* jac,
+             const RotationWithDerivatives* fixed_rotation = nullptr) {
   double r[3], s = theta[6];
   Eigen::Vector3d t(theta[0], theta[1], theta[2]);
   for (int k = 0; k < 3; ++k) r[k] = theta[3 + k];
@@ -116,7 +118,8 @@ void predict(const Observation& o, const double* theta, RotationModel model, boo
     for (int k = 0; k < 3; ++k) r[k] += o.dt * theta[10 + k];
     s += o.dt * theta[13];
   }
-  const RotationWithDerivatives rot = rotation_and_derivatives(r, model);
+  const RotationWithDerivatives rot =
+      fixed_rotation && !time_dependent ? *fixed_rotation : rotation_and_derivatives(r, model);
   const Eigen::Vector3d rx = rot.r * o.x;
   pred = t + (1.0 + s) * rx;
   if (!jac) return;
@@ -128,58 +131,6 @@ void predict(const Observation& o, const double* theta, RotationModel model, boo
     jac->block<3, 7>(0, 7) = o.dt * jac->block<3, 7>(0, 0);
   }
 }
-
-// Residuals of a block of points: W (y − pred), for the parameter blocks
-// t'(3) r(3) s(1) [ṫ'(3) ṙ(3) ḋs(1)].
-class BlockCost : public ceres::CostFunction {
- public:
-  BlockCost(const std::vector<Observation>* obs, std::size_t begin, std::size_t end, RotationModel model, bool td,
-            const std::array<double, kMaxParams>* scale)
-      : obs_(obs), begin_(begin), end_(end), model_(model), td_(td), scale_(scale) {
-    set_num_residuals(static_cast<int>(3 * (end - begin)));
-    const std::vector<int32_t> sizes = td ? std::vector<int32_t>{3, 3, 1, 3, 3, 1} : std::vector<int32_t>{3, 3, 1};
-    *mutable_parameter_block_sizes() = sizes;
-  }
-
-  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
-    double theta[kMaxParams] = {};
-    const int sizes[6] = {3, 3, 1, 3, 3, 1};
-    const int offsets[6] = {0, 3, 6, 7, 10, 13};
-    const int blocks = td_ ? 6 : 3;
-    for (int b = 0; b < blocks; ++b) {
-      for (int k = 0; k < sizes[b]; ++k) theta[offsets[b] + k] = params[b][k] / (*scale_)[static_cast<std::size_t>(offsets[b] + k)];
-    }
-    Eigen::Matrix<double, 3, kMaxParams> jac;
-    Eigen::Vector3d pred;
-    for (std::size_t i = begin_; i < end_; ++i) {
-      const Observation& o = (*obs_)[i];
-      predict(o, theta, model_, td_, pred, jacobians ? &jac : nullptr);
-      const Eigen::Vector3d r = o.w * (o.y - pred);
-      const std::size_t row = 3 * (i - begin_);
-      for (int k = 0; k < 3; ++k) residuals[row + static_cast<std::size_t>(k)] = r(k);
-      if (!jacobians) continue;
-      Eigen::Matrix<double, 3, kMaxParams> wj = -(o.w * jac);
-      for (int k = 0; k < kMaxParams; ++k) wj.col(k) /= (*scale_)[static_cast<std::size_t>(k)];
-      for (int b = 0; b < blocks; ++b) {
-        if (!jacobians[b]) continue;
-        for (int rr = 0; rr < 3; ++rr) {
-          for (int k = 0; k < sizes[b]; ++k) {
-            jacobians[b][(row + static_cast<std::size_t>(rr)) * static_cast<std::size_t>(sizes[b]) + static_cast<std::size_t>(k)] =
-                wj(rr, offsets[b] + k);
-          }
-        }
-      }
-    }
-    return true;
-  }
-
- private:
-  const std::vector<Observation>* obs_;
-  std::size_t begin_, end_;
-  RotationModel model_;
-  bool td_;
-  const std::array<double, kMaxParams>* scale_;
-};
 
 bool has_rotation(FitModel m) { return m != FitModel::translation3; }
 bool has_scale(FitModel m) { return m == FitModel::helmert7 || m == FitModel::helmert14; }
@@ -221,20 +172,162 @@ struct Solution {
 // ceres::Covariance does no column scaling of its own, and unscaled
 // radians-per-year columns would make a sound 14-parameter problem look
 // rank-deficient.
-std::array<double, kMaxParams> parameter_scale(const std::vector<Observation>& obs) {
+struct Scales {
+  double l = 1.0, d = 1.0;
+  std::array<double, kMaxParams> param{};
+};
+
+Scales parameter_scale(const std::vector<Observation>& obs) {
   double l2 = 0.0, d2 = 0.0;
   for (const auto& o : obs) {
     l2 += o.x.squaredNorm();
     d2 += o.dt * o.dt;
   }
-  const double l = std::max(1.0, std::sqrt(l2 / static_cast<double>(obs.size())));
-  const double d = std::max(1.0, std::sqrt(d2 / static_cast<double>(obs.size())));
-  return {1, 1, 1, l, l, l, l, d, d, d, l * d, l * d, l * d, l * d};
+  Scales s;
+  s.l = std::max(1.0, std::sqrt(l2 / static_cast<double>(obs.size())));
+  s.d = std::max(1.0, std::sqrt(d2 / static_cast<double>(obs.size())));
+  const double l = s.l, d = s.d;
+  s.param = {1, 1, 1, l, l, l, l, d, d, d, l * d, l * d, l * d, l * d};  // NOLINT
+  return s;
 }
 
-Solution solve(const std::vector<Observation>& obs, const FitOptions& o, bool td) {
+// R̈: the second derivative of the position-vector matrix along ṙ.
+template <typename T>
+Eigen::Matrix<T, 3, 3> rotation_pv_acceleration(const T* r, const T* rdot, RotationModel model) {
+  if (model == RotationModel::small_angle) return Eigen::Matrix<T, 3, 3>::Zero();  // R is linear in r
+  using std::cos;
+  using std::sin;
+  const T ca = cos(r[0]), sa = sin(r[0]), cb = cos(r[1]), sb = sin(r[1]), cg = cos(r[2]), sg = sin(r[2]);
+  Eigen::Matrix<T, 3, 3> r1, r2, r3, d1, d2, d3, e1, e2, e3;
+  r1 << T(1), T(0), T(0), T(0), ca, sa, T(0), -sa, ca;
+  r2 << cb, T(0), -sb, T(0), T(1), T(0), sb, T(0), cb;
+  r3 << cg, sg, T(0), -sg, cg, T(0), T(0), T(0), T(1);
+  d1 << T(0), T(0), T(0), T(0), -sa, ca, T(0), -ca, -sa;
+  d2 << -sb, T(0), -cb, T(0), T(0), T(0), cb, T(0), -sb;
+  d3 << -sg, cg, T(0), -cg, -sg, T(0), T(0), T(0), T(0);
+  e1 << T(0), T(0), T(0), T(0), -ca, -sa, T(0), sa, -ca;
+  e2 << -cb, T(0), sb, T(0), T(0), T(0), -sb, T(0), -cb;
+  e3 << -cg, -sg, T(0), sg, -cg, T(0), T(0), T(0), T(0);
+  const T a = rdot[0], b = rdot[1], g = rdot[2];
+  // (R3 R2 R1)'' with Ri' = ṙi Di, Ri'' = ṙi² Ei.
+  const Eigen::Matrix<T, 3, 3> cf = g * g * e3 * r2 * r1 + b * b * r3 * e2 * r1 + a * a * r3 * r2 * e1 +
+                                    T(2.0) * (g * b * d3 * d2 * r1 + g * a * d3 * r2 * d1 + b * a * r3 * d2 * d1);
+  return cf.transpose();
+}
+
+// The normal equations reduced to sufficient statistics. Each whitened
+// residual W(y − t − M x) is linear in z = (t', ṫ', M0 − I, M1, M2), where
+// M(Δt) = (1 + ds(Δt)) R(r(Δt)) = M0 + M1 Δt + M2 Δt² (exact for the small-
+// angle model; for the exact model the omitted third-order term is
+// (ṙ Δt)³ ~ 1e-21). So Σ‖r_i‖² = ‖U (ẑ(θ) − ẑ*)‖² + const with Ĥ = UᵀU.
+// Ceres solves that 12- (or 33-) residual problem, which has the very same
+// minimiser and the very same JᵀJ as the 3n-residual one.
+template <int K>  // basis functions per point: 4 (t, x) or 11 (with epochs)
+struct Reduced {
+  static constexpr int kDim = 3 * K;
+  Eigen::Matrix<double, kDim, kDim> u;  // upper Cholesky factor of Ĥ
+  Eigen::Matrix<double, kDim, 1> z_star;
+};
+
+template <int K>
+std::array<double, static_cast<std::size_t>(K)> basis(const Observation& o, const Scales& sc) {
+  std::array<double, static_cast<std::size_t>(K)> phi{};
+  const Eigen::Vector3d x = o.x / sc.l;
+  if constexpr (K == 4) {
+    phi = {1.0, x(0), x(1), x(2)};
+  } else {
+    const double t = o.dt / sc.d;
+    phi = {1.0, t, x(0), x(1), x(2), t * x(0), t * x(1), t * x(2), t * t * x(0), t * t * x(1), t * t * x(2)};
+  }
+  return phi;
+}
+
+template <int K>
+Reduced<K> reduce(const std::vector<Observation>& obs, const Scales& sc) {
+  constexpr int kDim = 3 * K;
+  Eigen::Matrix<double, kDim, kDim> h = Eigen::Matrix<double, kDim, kDim>::Zero();
+  Eigen::Matrix<double, kDim, 1> g = Eigen::Matrix<double, kDim, 1>::Zero();
+  for (const Observation& o : obs) {
+    const Eigen::Matrix3d p = o.w.transpose() * o.w;
+    const Eigen::Vector3d py = p * (o.y - o.x);  // target of (M − I) x: the coordinate differences
+    const auto phi = basis<K>(o, sc);
+    for (int a = 0; a < K; ++a) {
+      g.template segment<3>(3 * a) += phi[static_cast<std::size_t>(a)] * py;
+      for (int b = a; b < K; ++b) {
+        h.template block<3, 3>(3 * a, 3 * b) += (phi[static_cast<std::size_t>(a)] * phi[static_cast<std::size_t>(b)]) * p;
+      }
+    }
+  }
+  for (int a = 0; a < K; ++a) {
+    for (int b = 0; b < a; ++b) h.template block<3, 3>(3 * a, 3 * b) = h.template block<3, 3>(3 * b, 3 * a).transpose();
+  }
+  Reduced<K> r;
+  const Eigen::LLT<Eigen::Matrix<double, kDim, kDim>> llt(h);
+  if (llt.info() != Eigen::Success) {
+    reject("E_FIT_COVARIANCE", "the normal equations are singular: the points do not determine the transform "
+                               "(too few, or all at one place or epoch); no transform was written");
+  }
+  r.u = llt.matrixU();
+  r.z_star = llt.solve(g);
+  return r;
+}
+
+// ẑ(θ) for the scaled parameter blocks, as Ceres sees them.
+template <int K>
+struct ReducedCost {
+  const Reduced<K>* reduced;
+  Scales scales;
+  RotationModel model;
+
+  template <typename T>
+  bool operator()(T const* const* p, T* residuals) const {
+    constexpr bool td = K == 11;
+    const auto& sp = scales.param;
+    T t[3], r[3], ds, dt[3], dr[3], dds;
+    for (int k = 0; k < 3; ++k) {
+      t[k] = p[0][k] / sp[static_cast<std::size_t>(k)];
+      r[k] = p[1][k] / sp[static_cast<std::size_t>(3 + k)];
+    }
+    ds = p[2][0] / sp[6];
+    if constexpr (td) {
+      for (int k = 0; k < 3; ++k) {
+        dt[k] = p[3][k] / sp[static_cast<std::size_t>(7 + k)];
+        dr[k] = p[4][k] / sp[static_cast<std::size_t>(10 + k)];
+      }
+      dds = p[5][0] / sp[13];
+    }
+    const Eigen::Matrix<T, 3, 3> rot = rotation_pv(r, model);
+    Eigen::Matrix<T, 3, 3> m0 = (T(1.0) + ds) * rot - Eigen::Matrix<T, 3, 3>::Identity();
+    Eigen::Matrix<T, Reduced<K>::kDim, 1> z;
+    const T l(scales.l), d(scales.d);
+    for (int k = 0; k < 3; ++k) z(k) = t[k];
+    if constexpr (!td) {
+      for (int c = 0; c < 3; ++c) z.template segment<3>(3 + 3 * c) = l * m0.col(c);
+    } else {
+      const Eigen::Matrix<T, 3, 3> rdot = rotation_pv_rate(r, dr, model);
+      const Eigen::Matrix<T, 3, 3> racc = rotation_pv_acceleration(r, dr, model);
+      const Eigen::Matrix<T, 3, 3> m1 = dds * rot + (T(1.0) + ds) * rdot;
+      const Eigen::Matrix<T, 3, 3> m2 = dds * rdot + (T(0.5) * (T(1.0) + ds)) * racc;
+      for (int k = 0; k < 3; ++k) z(3 + k) = d * dt[k];
+      for (int c = 0; c < 3; ++c) {
+        z.template segment<3>(6 + 3 * c) = l * m0.col(c);
+        z.template segment<3>(15 + 3 * c) = (l * d) * m1.col(c);
+        z.template segment<3>(24 + 3 * c) = (l * d * d) * m2.col(c);
+      }
+    }
+    const Eigen::Matrix<T, Reduced<K>::kDim, 1> diff = z - reduced->z_star.template cast<T>();
+    Eigen::Map<Eigen::Matrix<T, Reduced<K>::kDim, 1>> out(residuals);
+    out = reduced->u.template cast<T>() * diff;
+    return true;
+  }
+};
+
+template <int K>
+Solution solve_reduced(const std::vector<Observation>& obs, const FitOptions& o) {
+  constexpr bool td = K == 11;
   Solution sol;
-  const std::array<double, kMaxParams> scale = parameter_scale(obs);
+  const Scales scales = parameter_scale(obs);
+  const Reduced<K> reduced = reduce<K>(obs, scales);
   std::array<double, kMaxParams> scaled{};  // what Ceres sees
   double* t = scaled.data();
   double* r = t + 3;
@@ -242,17 +335,14 @@ Solution solve(const std::vector<Observation>& obs, const FitOptions& o, bool td
   double* dt = t + 7;
   double* dr = t + 10;
   double* ds = t + 13;
-  ceres::Problem::Options po;
-  po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-  ceres::Problem problem(po);
-  for (std::size_t b = 0; b < obs.size(); b += kBlockPoints) {
-    const std::size_t e = std::min(obs.size(), b + kBlockPoints);
-    auto* cost = new BlockCost(&obs, b, e, o.rotation_model, td, &scale);
-    if (td) {
-      problem.AddResidualBlock(cost, nullptr, {t, r, s, dt, dr, ds});
-    } else {
-      problem.AddResidualBlock(cost, nullptr, {t, r, s});
-    }
+  ceres::Problem problem;
+  auto* cost = new ceres::DynamicAutoDiffCostFunction<ReducedCost<K>, 8>(new ReducedCost<K>{&reduced, scales, o.rotation_model});
+  for (int size : td ? std::vector<int>{3, 3, 1, 3, 3, 1} : std::vector<int>{3, 3, 1}) cost->AddParameterBlock(size);
+  cost->SetNumResiduals(Reduced<K>::kDim);
+  if constexpr (td) {
+    problem.AddResidualBlock(cost, nullptr, {t, r, s, dt, dr, ds});
+  } else {
+    problem.AddResidualBlock(cost, nullptr, {t, r, s});
   }
   std::vector<const double*> blocks = {t};
   sol.estimated = {0, 1, 2};
@@ -274,8 +364,8 @@ Solution solve(const std::vector<Observation>& obs, const FitOptions& o, bool td
   }
 
   ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  so.max_num_iterations = 100;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = 200;
   // Ceres' default tolerances stop measurably short of the optimum on large
   // sets (NOTES.md): iterate until the step is at float64 noise.
   so.function_tolerance = 1e-16;
@@ -296,7 +386,6 @@ Solution solve(const std::vector<Observation>& obs, const FitOptions& o, bool td
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
   co.null_space_rank = 0;
-  co.num_threads = 1;
   ceres::Covariance covariance(co);
   if (!covariance.Compute(blocks, &problem)) {
     reject("E_FIT_COVARIANCE", "the parameter covariance cannot be computed: the normal matrix is rank-deficient "
@@ -310,14 +399,18 @@ Solution solve(const std::vector<Observation>& obs, const FitOptions& o, bool td
   sol.cov_centred = c;
   for (int a = 0; a < u; ++a) {
     for (int b = 0; b < u; ++b) {
-      sol.cov_centred(a, b) /= scale[static_cast<std::size_t>(sol.estimated[static_cast<std::size_t>(a)])] *
-                               scale[static_cast<std::size_t>(sol.estimated[static_cast<std::size_t>(b)])];
+      sol.cov_centred(a, b) /= scales.param[static_cast<std::size_t>(sol.estimated[static_cast<std::size_t>(a)])] *
+                               scales.param[static_cast<std::size_t>(sol.estimated[static_cast<std::size_t>(b)])];
     }
   }
   for (int k = 0; k < kMaxParams; ++k) {
-    sol.theta[static_cast<std::size_t>(k)] = scaled[static_cast<std::size_t>(k)] / scale[static_cast<std::size_t>(k)];
+    sol.theta[static_cast<std::size_t>(k)] = scaled[static_cast<std::size_t>(k)] / scales.param[static_cast<std::size_t>(k)];
   }
   return sol;
+}
+
+Solution solve(const std::vector<Observation>& obs, const FitOptions& o, bool td) {
+  return td ? solve_reduced<11>(obs, o) : solve_reduced<4>(obs, o);
 }
 
 std::string fmt(double v, int precision = 3) {
@@ -524,7 +617,10 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     const double sigma_scale = o.scale_by_sigma0 && dof > 0 ? result.sigma0 : 1.0;
 
     // Per point: w-tests along local E, N, U; redundancy; MDB.
-    Eigen::MatrixXd n_inv = sol.cov_centred;  // (ĀᵀĀ)⁻¹ over the estimated parameters
+    using NormalMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxParams, kMaxParams>;
+    const NormalMatrix n_inv = sol.cov_centred;  // (ĀᵀĀ)⁻¹ over the estimated parameters
+    const RotationWithDerivatives final_rotation = rotation_and_derivatives(sol.theta.data() + 3, o.rotation_model);
+    using PointJacobian = Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxParams>;
     double worst_p = 1.0;
     std::size_t worst = active.size();
     const geodesy::GeocentricConverter geocentric(geodesy::Ellipsoid::wgs84());
@@ -532,25 +628,31 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       const auto& p = control.points[active[k]];
       Eigen::Vector3d pred;
       Eigen::Matrix<double, 3, kMaxParams> jfull;
-      predict(obs[k], sol.theta.data(), o.rotation_model, td, pred, &jfull);
-      Eigen::MatrixXd a(3, u);
+      predict(obs[k], sol.theta.data(), o.rotation_model, td, pred, &jfull, &final_rotation);
+      PointJacobian a(3, u);
       for (int c = 0; c < u; ++c) a.col(c) = obs[k].w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
       const Eigen::Matrix3d qv = Eigen::Matrix3d::Identity() - a * n_inv * a.transpose();  // whitened Q_vv
-      const geodesy::LocalTangentPlane plane(
-          geodesy::LocalOrigin{geocentric.geodetic_from_ecef(p.target), geodesy::Ellipsoid::wgs84()});
-      const Eigen::Matrix3d enu = plane.enu_from_ecef_rotation();
+      const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(p.target);
+      const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
       PointResult& pr = result.points[active[k]];
       pr.used = true;
       {
-        // The point test over the redundant directions of Q_v̄.
-        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> qe(qv);
+        // The point test over the redundant directions of Q_v̄ (all three
+        // unless the point alone determines some parameter).
         double stat = 0.0;
         int rank = 0;
-        for (int e = 0; e < 3; ++e) {
-          if (qe.eigenvalues()(e) > 1e-9) {
-            const double proj = qe.eigenvectors().col(e).dot(vw[k]);
-            stat += proj * proj / qe.eigenvalues()(e);
-            ++rank;
+        const Eigen::LLT<Eigen::Matrix3d> llt(qv);
+        if (llt.info() == Eigen::Success && llt.matrixLLT().diagonal().minCoeff() > 1e-5) {
+          stat = vw[k].dot(llt.solve(vw[k]));
+          rank = 3;
+        } else {
+          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> qe(qv);
+          for (int e = 0; e < 3; ++e) {
+            if (qe.eigenvalues()(e) > 1e-9) {
+              const double proj = qe.eigenvectors().col(e).dot(vw[k]);
+              stat += proj * proj / qe.eigenvalues()(e);
+              ++rank;
+            }
           }
         }
         stat /= sigma_scale * sigma_scale;
@@ -605,8 +707,10 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     // --- points outside the final fit: tested against it ---------------------
     // Their residuals come from the final parameters, and their tests are
     // prediction tests (Q = I + A N⁻¹ Aᵀ): a removed blunder shows at full size.
+    std::vector<bool> in_fit(control.points.size(), false);
+    for (std::size_t i : active) in_fit[i] = true;
     for (std::size_t i = 0; i < control.points.size(); ++i) {
-      if (std::find(active.begin(), active.end(), i) != active.end()) continue;
+      if (in_fit[i]) continue;
       const auto& p = control.points[i];
       if (td && !p.epoch) continue;
       Observation ob;
@@ -622,13 +726,12 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       const Eigen::Vector3d vwi = ob.w * vi;
       Eigen::Vector3d pred;
       Eigen::Matrix<double, 3, kMaxParams> jfull;
-      predict(ob, sol.theta.data(), o.rotation_model, td, pred, &jfull);
-      Eigen::MatrixXd a(3, u);
+      predict(ob, sol.theta.data(), o.rotation_model, td, pred, &jfull, &final_rotation);
+      PointJacobian a(3, u);
       for (int c2 = 0; c2 < u; ++c2) a.col(c2) = ob.w * jfull.col(sol.estimated[static_cast<std::size_t>(c2)]);
       const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() + a * n_inv * a.transpose();
-      const geodesy::LocalTangentPlane plane(
-          geodesy::LocalOrigin{geocentric.geodetic_from_ecef(p.target), geodesy::Ellipsoid::wgs84()});
-      const Eigen::Matrix3d enu = plane.enu_from_ecef_rotation();
+      const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(p.target);
+      const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
       PointResult& pr = result.points[i];
       pr.residual_enu_m = enu * vi;
       pr.w_max = 0.0;

@@ -36,6 +36,9 @@ class LocalTangentPlane {
   Eigen::Matrix3d rotation_;
 };
 
+// Rows: the east, north and up unit vectors at (lat, lon), in ECEF.
+Eigen::Matrix3d enu_from_ecef_rotation(Angle lat, Angle lon);
+
 NedPosition ned_from_enu(const EnuPosition& p);
 EnuPosition enu_from_ned(const NedPosition& p);
 

@@ -11,7 +11,11 @@
 // The solve runs in Ceres on centroid-referenced parameters (well
 // conditioned even for a 2 km network, where geocentric translations and
 // rotations correlate above 0.9999); the geocentric parameters and their
-// covariance follow exactly from those.
+// covariance follow exactly from those. Ceres sees the problem reduced to
+// its sufficient statistics (12 residuals, 33 with epochs), which has the
+// same minimiser and the same JᵀJ as the one with 3n residuals: fitting 10⁶
+// points takes about a second. The parameter covariance is ceres::Covariance
+// (DENSE_SVD) of that problem.
 
 #include <Eigen/Core>
 
