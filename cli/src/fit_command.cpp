@@ -26,12 +26,14 @@ FitModel parse_model(const std::string& m) {
   if (m == "helmert6") return FitModel::helmert6;
   if (m == "translation3") return FitModel::translation3;
   if (m == "helmert14") return FitModel::helmert14;
-  if (m == "molodensky-badekas" || m == "enu-origin" || m == "site-calibration") {
+  if (m == "molodensky-badekas") return FitModel::molodensky_badekas;
+  if (m == "enu-origin" || m == "site-calibration") {
     throw Error(ErrorKind::usage, "E_MODEL_NOT_AVAILABLE",
-                "--model " + m + ": not available in this version yet; available: translation3, helmert6, helmert7, helmert14");
+                "--model " + m + ": not available in this version yet; available: translation3, helmert6, helmert7, "
+                                 "helmert14, molodensky-badekas");
   }
   throw Error(ErrorKind::usage, "E_OPTION",
-              "--model " + m + ": expected translation3, helmert6, helmert7, helmert14 (molodensky-badekas, enu-origin and "
+              "--model " + m + ": expected translation3, helmert6, helmert7, helmert14, molodensky-badekas (enu-origin and "
                                "site-calibration are planned)");
 }
 
@@ -112,7 +114,9 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
     case FitModel::helmert6: t.model = io::TransformModel::helmert6; break;
     case FitModel::helmert7: t.model = io::TransformModel::helmert7; break;
     case FitModel::helmert14: t.model = io::TransformModel::helmert14; break;
+    case FitModel::molodensky_badekas: t.model = io::TransformModel::molodensky_badekas; break;
   }
+  t.pivot_m = r.pivot_m;
   t.rotation_model = r.rotation_model;
   t.source_frame = set.source_frame;
   t.target_frame = set.target_frame;
@@ -124,10 +128,18 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
     } else {
       t.helmert = geodesy::to_coordinate_frame(r.helmert);
     }
-  } else if (pv) {
-    t.helmert = r.helmert.at_reference_epoch;
   } else {
-    t.helmert = geodesy::to_coordinate_frame(r.helmert.at_reference_epoch);
+    geodesy::Helmert7<geodesy::PositionVector> h = r.helmert.at_reference_epoch;
+    if (r.pivot_m) {
+      // The file holds the pivot form: T_p = T + (1 + ds) R p − p.
+      const geodesy::AffineMap m = geodesy::target_from_source(h, r.rotation_model);
+      h.t_m = m.translation_m() + m.linear() * *r.pivot_m - *r.pivot_m;
+    }
+    if (pv) {
+      t.helmert = h;
+    } else {
+      t.helmert = geodesy::to_coordinate_frame(h);
+    }
   }
   io::FitRecord f;
   for (const auto& p : r.parameters) {
@@ -182,7 +194,8 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
 CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   auto* cmd = app.add_subcommand("fit", "Fit a datum transform to control points, with statistics");
   cmd->add_option("CONTROL", o.control, "Control set (CSV)")->required();
-  cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14")->required();
+  cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14|molodensky-badekas")->required();
+  cmd->add_option("--pivot", o.pivot, "molodensky-badekas: pivot X,Y,Z in ECEF metres (default: the centroid)");
   cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame (required with rotations)");
   cmd->add_option("--rotation-model", o.rotation_model, "small_angle (EPSG, default) | exact");
   cmd->add_option("--reference-epoch", o.reference_epoch, "helmert14: parameter epoch (default: mean observation epoch)");
@@ -226,6 +239,13 @@ int run_fit(const FitCommandOptions& o) {
       throw Error(ErrorKind::usage, "E_OPTION", "--reference-epoch: only for --model helmert14");
     }
     fo.reference_epoch = geodesy::parse_decimal_year(*o.reference_epoch, "--reference-epoch");
+  }
+  if (o.pivot) {
+    if (fo.model != FitModel::molodensky_badekas) {
+      throw Error(ErrorKind::usage, "E_OPTION", "--pivot: only for --model molodensky-badekas");
+    }
+    const auto parts = split_numbers(*o.pivot, "--pivot", 3, "X,Y,Z (ECEF metres)");
+    fo.pivot_m = Eigen::Vector3d(parts[0], parts[1], parts[2]);
   }
   fo.alpha = o.alpha;
   fo.alpha_point = o.alpha_point;

@@ -18,6 +18,7 @@ struct FitCommandOptions {
   std::optional<std::string> convention;
   std::string rotation_model = "small_angle";
   std::optional<std::string> reference_epoch;
+  std::optional<std::string> pivot;
   std::optional<std::string> origin;
   std::string ellipsoid = "WGS84";
   std::optional<std::string> source_frame, target_frame;

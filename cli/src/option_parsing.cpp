@@ -26,8 +26,10 @@ std::vector<std::string> split_commas(std::string_view text) {
               std::string(flag) + " " + std::string(value) + ": " + expected);
 }
 
-std::vector<double> numbers(std::string_view text, std::string_view flag, std::size_t count,
-                            const std::string& expected) {
+}  // namespace
+
+std::vector<double> split_numbers(std::string_view text, std::string_view flag, std::size_t count,
+                                  const std::string& expected) {
   const auto parts = split_commas(text);
   if (parts.size() != count) fail(flag, text, "expected " + expected);
   std::vector<double> out;
@@ -38,6 +40,8 @@ std::vector<double> numbers(std::string_view text, std::string_view flag, std::s
   }
   return out;
 }
+
+namespace {
 
 void check_lat_lon(double lat, double lon, std::string_view flag, std::string_view text) {
   if (std::fabs(lat) > 90.0) fail(flag, text, "latitude " + format_shortest(lat) + " not in [-90, 90] degrees");
@@ -65,7 +69,7 @@ geodesy::Ellipsoid parse_ellipsoid(std::string_view text, std::string_view flag)
 }
 
 geodesy::LocalOrigin parse_origin(std::string_view text, std::string_view flag, const geodesy::Ellipsoid& e) {
-  const auto v = numbers(text, flag, 3, "LAT,LON,H (degrees, degrees, ellipsoidal height in metres)");
+  const auto v = split_numbers(text, flag, 3, "LAT,LON,H (degrees, degrees, ellipsoidal height in metres)");
   check_lat_lon(v[0], v[1], flag, text);
   return geodesy::LocalOrigin{
       geodesy::GeodeticPosition{geodesy::Angle::degrees(v[0]), geodesy::Angle::degrees(v[1]),
@@ -74,7 +78,7 @@ geodesy::LocalOrigin parse_origin(std::string_view text, std::string_view flag, 
 }
 
 geodesy::TransverseMercatorParams parse_tm(std::string_view text, std::string_view flag) {
-  const auto v = numbers(text, flag, 5,
+  const auto v = split_numbers(text, flag, 5,
                          "LAT0,LON0,K0,FE,FN (origin latitude and central meridian in degrees, scale factor, false "
                          "easting and northing in metres)");
   check_lat_lon(v[0], v[1], flag, text);

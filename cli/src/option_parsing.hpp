@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "geoanchor/geodesy/ellipsoid.hpp"
 #include "geoanchor/geodesy/positions.hpp"
@@ -23,5 +24,9 @@ geodesy::LocalOrigin parse_origin(std::string_view text, std::string_view flag, 
 geodesy::TransverseMercatorParams parse_tm(std::string_view text, std::string_view flag);
 
 geodesy::UtmZone parse_zone(std::string_view text, std::string_view flag);
+
+// `count` comma-separated finite numbers; `expected` describes them.
+std::vector<double> split_numbers(std::string_view text, std::string_view flag, std::size_t count,
+                                  const std::string& expected);
 
 }  // namespace geoanchor::cli

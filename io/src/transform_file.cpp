@@ -62,6 +62,7 @@ class ParameterReader {
         known.insert(std::string("d") + p.name + "_" + unit + "_per_year");
       }
     }
+    for (const char* pivot : {"px_m", "py_m", "pz_m"}) known.insert(pivot);
     for (const auto& [key, value] : params_.items()) {
       if (!known.count(key)) {
         fail(source_, "parameters." + key,
@@ -85,6 +86,15 @@ class ParameterReader {
     const json& v = params_.at(key);
     if (!v.is_number()) fail(source_, "parameters." + key, "value " + v.dump() + " is not a number");
     return v.get<double>() * (has_a ? p.factor_a : p.factor_b);
+  }
+
+  // A parameter with a single unit (the Molodensky-Badekas pivot).
+  double require_plain(const std::string& key, std::string_view model) {
+    if (!params_.contains(key)) fail(source_, "parameters", "missing " + key + " for model " + std::string(model));
+    used_.insert(key);
+    const json& v = params_.at(key);
+    if (!v.is_number()) fail(source_, "parameters." + key, "value " + v.dump() + " is not a number");
+    return v.get<double>();
   }
 
   double require(const ParamSpec& p, bool rate, std::string_view model) {
@@ -156,6 +166,7 @@ std::string_view to_string(TransformModel m) {
     case TransformModel::helmert6: return "helmert6";
     case TransformModel::translation3: return "translation3";
     case TransformModel::helmert14: return "helmert14";
+    case TransformModel::molodensky_badekas: return "molodensky-badekas";
   }
   return "?";
 }
@@ -187,7 +198,10 @@ geodesy::AffineMap TransformFile::target_from_source(std::optional<geodesy::Deci
       }
       return geodesy::target_from_source(geodesy::evaluate_at(h, *observation_epoch), rotation_model);
     } else {
-      return geodesy::target_from_source(h, rotation_model);
+      const geodesy::AffineMap m = geodesy::target_from_source(h, rotation_model);
+      if (!pivot_m) return m;
+      // p + T + L (x − p) = L x + (T + p − L p)
+      return geodesy::AffineMap(m.linear(), m.translation_m() + *pivot_m - m.linear() * *pivot_m);
     }
   }, helmert);
 }
@@ -217,9 +231,12 @@ TransformFile parse_transform_json(std::string_view text, std::string_view sourc
     t.model = TransformModel::translation3;
   } else if (model == "helmert14") {
     t.model = TransformModel::helmert14;
+  } else if (model == "molodensky-badekas") {
+    t.model = TransformModel::molodensky_badekas;
   } else {
     fail(source, "model", "value \"" + model +
-                              "\" not read by this command; expected helmert7, helmert6, translation3 or helmert14");
+                              "\" not read by this command; expected helmert7, helmert6, translation3, helmert14 or "
+                              "molodensky-badekas");
   }
 
   bool position_vector = true;
@@ -272,6 +289,7 @@ TransformFile parse_transform_json(std::string_view text, std::string_view sourc
   for (std::size_t i = 0; i < 7; ++i) {
     const bool is_translation = i < 3, is_scale = i == 6;
     const bool required = t.model == TransformModel::helmert7 || t.model == TransformModel::helmert14 ||
+                          t.model == TransformModel::molodensky_badekas ||
                           (t.model == TransformModel::helmert6 && !is_scale) ||
                           (t.model == TransformModel::translation3 && is_translation);
     if (required) {
@@ -294,6 +312,10 @@ TransformFile parse_transform_json(std::string_view text, std::string_view sourc
     t.helmert = seven_from<PositionVector>(p);
   } else {
     t.helmert = seven_from<CoordinateFrame>(p);
+  }
+  if (t.model == TransformModel::molodensky_badekas) {
+    t.pivot_m = Eigen::Vector3d(reader.require_plain("px_m", model_name), reader.require_plain("py_m", model_name),
+                                reader.require_plain("pz_m", model_name));
   }
   reader.check_all_used(model_name);
   return t;
@@ -367,12 +389,28 @@ json json_number_or_null(double v) { return std::isfinite(v) ? number(v) : json(
 
 std::string epsg_method(const TransformFile& t) {
   const bool pv = t.convention_name() == PositionVector::name;
+  if (t.model == TransformModel::molodensky_badekas) return pv ? "EPSG:1061" : "EPSG:1034";
   if (t.time_dependent()) return pv ? "EPSG:1053" : "EPSG:1056";
   return pv ? "EPSG:1033" : "EPSG:1032";
 }
 
 std::string proj_pipeline(const TransformFile& t) {
-  std::string out = "+proj=pipeline +step +proj=helmert";
+  if (t.pivot_m && t.rotation_model == geodesy::RotationModel::exact) {
+    // PROJ's molobadekas has no exact form: write the geocentric equivalent.
+    TransformFile g = t;
+    const geodesy::AffineMap m = t.target_from_source(std::nullopt, "");
+    std::visit([&](auto& h) {
+      using H = std::decay_t<decltype(h)>;
+      if constexpr (std::is_same_v<H, geodesy::Helmert7<PositionVector>> ||
+                    std::is_same_v<H, geodesy::Helmert7<CoordinateFrame>>) {
+        h.t_m = m.translation_m();
+      }
+    }, g.helmert);
+    g.pivot_m.reset();
+    g.model = TransformModel::helmert7;
+    return proj_pipeline(g);
+  }
+  std::string out = t.pivot_m ? "+proj=pipeline +step +proj=molobadekas" : "+proj=pipeline +step +proj=helmert";
   auto add = [&](const char* key, double v) { out += std::string(" +") + key + "=" + g17(v); };
   auto add7 = [&](const auto& p) {
     add("x", p.t_m.x());
@@ -400,6 +438,11 @@ std::string proj_pipeline(const TransformFile& t) {
       add7(h);
     }
   }, t.helmert);
+  if (t.pivot_m) {
+    add("px", t.pivot_m->x());
+    add("py", t.pivot_m->y());
+    add("pz", t.pivot_m->z());
+  }
   out += " +convention=" + std::string(t.convention_name());
   if (t.rotation_model == geodesy::RotationModel::exact) out += " +exact";
   return out;
@@ -415,7 +458,15 @@ std::string to_json_text(const TransformFile& t) {
   if (t.source_frame) doc["source_frame"] = t.source_frame->to_string();
   if (t.target_frame) doc["target_frame"] = t.target_frame->to_string();
   if (t.reference_epoch) doc["reference_epoch"] = number(t.reference_epoch->year);
-  doc["parameters"] = std::visit([](const auto& h) { return parameters_json(h); }, t.helmert);
+  auto with_pivot = [&](json params) {
+    if (t.pivot_m) {
+      params["px_m"] = number(t.pivot_m->x());
+      params["py_m"] = number(t.pivot_m->y());
+      params["pz_m"] = number(t.pivot_m->z());
+    }
+    return params;
+  };
+  doc["parameters"] = with_pivot(std::visit([](const auto& h) { return parameters_json(h); }, t.helmert));
   doc["proj_pipeline"] = proj_pipeline(t);
   if (t.fit) {
     const FitRecord& f = *t.fit;
@@ -461,7 +512,7 @@ std::string to_json_text(const TransformFile& t) {
     const TransformFile other = swapped_convention(t);
     doc["alternatives"] = json::array({json{{"convention", std::string(other.convention_name())},
                                             {"epsg_method", epsg_method(other)},
-                                            {"parameters", std::visit([](const auto& h) { return parameters_json(h); }, other.helmert)},
+                                            {"parameters", with_pivot(std::visit([](const auto& h) { return parameters_json(h); }, other.helmert))},
                                             {"proj_pipeline", proj_pipeline(other)}}});
   }
   return doc.dump(2) + "\n";

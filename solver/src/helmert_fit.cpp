@@ -133,7 +133,9 @@ void predict(const Observation& o, const double* theta, RotationModel model, boo
 }
 
 bool has_rotation(FitModel m) { return m != FitModel::translation3; }
-bool has_scale(FitModel m) { return m == FitModel::helmert7 || m == FitModel::helmert14; }
+bool has_scale(FitModel m) {
+  return m == FitModel::helmert7 || m == FitModel::helmert14 || m == FitModel::molodensky_badekas;
+}
 int min_points(FitModel m) { return m == FitModel::translation3 ? 1 : 3; }
 
 [[noreturn]] void reject(const std::string& code, const std::string& message) {
@@ -427,6 +429,7 @@ std::string_view to_string(FitModel m) {
     case FitModel::helmert6: return "helmert6";
     case FitModel::helmert7: return "helmert7";
     case FitModel::helmert14: return "helmert14";
+    case FitModel::molodensky_badekas: return "molodensky-badekas";
   }
   return "?";
 }
@@ -577,6 +580,31 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       }
     }
     Eigen::MatrixXd cov = jac * sol.cov_centred * jac.transpose();
+    // Molodensky-Badekas reports the translation at the pivot p:
+    // T_p = T + (1 + ds) R p − p = cy + t' + (1 + ds) R (p − cx) − p.
+    std::array<double, kMaxParams> reported = g;
+    const bool mb = o.model == FitModel::molodensky_badekas;
+    if (mb) {
+      const Eigen::Vector3d pivot = o.pivot_m.value_or(cx);
+      result.pivot_m = pivot;
+      auto to_pivot = [&](auto const* tc, auto* out) {
+        using T = std::remove_const_t<std::remove_pointer_t<decltype(tc)>>;
+        for (int k = 0; k < kMaxParams; ++k) out[k] = tc[k];
+        const Eigen::Matrix<T, 3, 3> r = rotation_pv(tc + 3, o.rotation_model);
+        const Eigen::Matrix<T, 3, 1> rp = r * (pivot - cx).cast<T>();
+        for (int k = 0; k < 3; ++k) out[k] = T(cy(k)) + tc[k] + (T(1.0) + tc[6]) * rp(k) - T(pivot(k));
+      };
+      to_pivot(sol.theta.data(), reported.data());
+      std::array<JetU, kMaxParams> pj;
+      to_pivot(tj.data(), pj.data());
+      Eigen::MatrixXd jp(u, u);
+      for (int a = 0; a < u; ++a) {
+        for (int b = 0; b < u; ++b) {
+          jp(a, b) = pj[static_cast<std::size_t>(sol.estimated[static_cast<std::size_t>(a)])].v[sol.estimated[static_cast<std::size_t>(b)]];
+        }
+      }
+      cov = jp * sol.cov_centred * jp.transpose();
+    }
 
     auto& h = result.helmert;
     h.at_reference_epoch.t_m = Eigen::Vector3d(g[0], g[1], g[2]);
@@ -781,7 +809,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     for (int k = 0; k < (td ? 14 : 7); ++k) {
       Parameter p;
       p.name = names[k];
-      p.value = g[static_cast<std::size_t>(k)] * factor(k);
+      p.value = reported[static_cast<std::size_t>(k)] * factor(k);
       const auto it = std::find(sol.estimated.begin(), sol.estimated.end(), k);
       p.estimated = it != sol.estimated.end();
       if (p.estimated) {
@@ -789,6 +817,10 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
         p.sigma = std::sqrt(result.covariance(a, a));
       }
       result.parameters.push_back(p);
+    }
+    if (mb) {
+      const char* pivot_names[3] = {"px_m", "py_m", "pz_m"};
+      for (int k = 0; k < 3; ++k) result.parameters.push_back(Parameter{pivot_names[k], (*result.pivot_m)(k), 0.0, false});
     }
     // Weak geometry: how much of each geocentric translation is determined by
     // the rotations and scale (multiple correlation), plus the largest
@@ -798,7 +830,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       const int k = sol.estimated[static_cast<std::size_t>(a)];
       if (k >= 3 && k <= 6) rs.push_back(a);
     }
-    if (!rs.empty()) {
+    if (!rs.empty() && !mb) {
       double worst_multiple = 0.0, worst_pair = 0.0;
       std::string translation, pair;
       Eigen::MatrixXd s_rs(rs.size(), rs.size());

@@ -144,9 +144,17 @@ std::string json_string_value(const std::string& json, const std::string& key) {
 }
 
 TEST_F(FitCli, ProjPipelineRunByCctReproducesOurTransformedCoordinates) {
-  for (const char* convention : {"position_vector", "coordinate_frame"}) {
-    const fs::path t = path(std::string("T_") + convention + ".json");
-    ASSERT_EQ(geoanchor("fit " + kControl + " --model helmert7 --convention " + convention + " -o " + t.string()).exit_code, 0);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"helmert7", "position_vector"}, {"helmert7", "coordinate_frame"},
+      {"molodensky-badekas", "position_vector"}, {"molodensky-badekas", "coordinate_frame"}};
+  for (const auto& [model, conv] : cases) {
+    const char* convention = conv.c_str();
+    const fs::path t = path("T_" + model + "_" + conv + ".json");
+    ASSERT_EQ(geoanchor("fit " + kControl + " --model " + model + " --convention " + convention + " -o " + t.string()).exit_code, 0);
+    if (model == "molodensky-badekas") {
+      EXPECT_NE(json_string_value(slurp(t), "proj_pipeline").find("+proj=molobadekas"), std::string::npos);
+      EXPECT_NE(slurp(t).find("\"px_m\""), std::string::npos);
+    }
     // Our own transformed coordinates of every source point.
     const std::string src = path("src.csv").string();
     std::vector<std::string> header;
@@ -174,7 +182,7 @@ TEST_F(FitCli, ProjPipelineRunByCctReproducesOurTransformedCoordinates) {
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const Eigen::Vector3d us(std::stod(orows[i][col(oh, "x_m")]), std::stod(orows[i][col(oh, "y_m")]),
                                std::stod(orows[i][col(oh, "z_m")]));
-      EXPECT_THAT(us, testing::IsNearVector(proj[i], kCctAgreementTol_m)) << convention << " " << rows[i][0];
+      EXPECT_THAT(us, testing::IsNearVector(proj[i], kCctAgreementTol_m)) << model << " " << convention << " " << rows[i][0];
     }
     fs::remove(src);
   }

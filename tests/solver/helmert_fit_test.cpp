@@ -29,6 +29,9 @@ constexpr double kRotationTol_arcsec = 1e-5; // issue acceptance
 constexpr double kScaleTol_ppm = 1e-5;       // issue acceptance
 constexpr double kResidualTol_m = 1e-6;      // issue acceptance
 constexpr double kClosedFormRelTol = 1e-9;   // issue acceptance: Ceres vs Umeyama
+constexpr double kDecorrelatedTol = 0.2;     // |corr(t, r)| about the centroid of a symmetric-ish network
+constexpr double kGeocentricCorrelatedFloor = 0.5;  // geocentric t and r of a 3 km network: strongly correlated
+constexpr double kSameFitSigma0Tol = 1e-9;   // one fit, two parametrisations
 
 // Points spread over a region: `n` marks within `radius_deg` of (lat, lon).
 std::vector<EcefPosition> region(std::size_t n, double lat, double lon, double radius_deg, unsigned seed) {
@@ -155,6 +158,60 @@ TEST(HelmertFit, RecoversANad83LikeSetWithArcSecondRotationsAndRates) {
   const std::vector<double> epochs = {1997.0, 2002.0, 2010.0};
   expect_recovered({"NAD CF", def, FitModel::helmert14, Convention::coordinate_frame, cf, 40.0, -100.0, 20.0, epochs});
   expect_recovered({"NAD PV", def, FitModel::helmert14, Convention::position_vector, pv, 40.0, -100.0, 20.0, epochs});
+}
+
+TEST(HelmertFit, MolodenskyBadekasRecoversTheIogpLaCanoaSetAboutItsPivot) {
+  // IOGP GN 7-2, EPSG method 1034 example (La Canoa -> REGVEN, coordinate
+  // frame): tx -270.933, ty 115.599, tz -360.226 m; rx -5.266, ry -1.238,
+  // rz 2.381″; ds -5.109 ppm; pivot (2464351.59, -5783466.61, 974809.81) m.
+  const char* def = "+proj=molobadekas +convention=coordinate_frame +x=-270.933 +y=115.599 +z=-360.226 +rx=-5.266 "
+                    "+ry=-1.238 +rz=2.381 +s=-5.109 +px=2464351.59 +py=-5783466.61 +pz=974809.81";
+  const ControlSet set = control_from_proj(region(30, 8.5, -66.0, 3.0, 13), def, 0.01);
+  FitOptions o;
+  o.model = FitModel::molodensky_badekas;
+  o.convention = Convention::coordinate_frame;
+  o.pivot_m = Eigen::Vector3d(2464351.59, -5783466.61, 974809.81);
+  const FitResult r = fit_helmert(set, o);
+  const std::map<std::string, double> expected = {{"tx_m", -270.933},     {"ty_m", 115.599},      {"tz_m", -360.226},
+                                                  {"rx_arcsec", -5.266},  {"ry_arcsec", -1.238},  {"rz_arcsec", 2.381},
+                                                  {"ds_ppm", -5.109},     {"px_m", 2464351.59},   {"py_m", -5783466.61},
+                                                  {"pz_m", 974809.81}};
+  for (const auto& [name, value] : expected) {
+    const double tol = name.find("_arcsec") != std::string::npos ? kRotationTol_arcsec
+                       : name.find("_ppm") != std::string::npos  ? kScaleTol_ppm
+                                                                 : kTranslationTol_m;
+    EXPECT_NEAR(param(r, name), value, tol) << name;
+  }
+  for (const auto& p : r.points) EXPECT_LT(p.residual_enu_m.norm(), kResidualTol_m) << p.id;
+}
+
+TEST(HelmertFit, MolodenskyBadekasAboutTheCentroidDecorrelatesTranslationFromRotation) {
+  std::mt19937_64 rng(31);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  ControlSet set = control_from_proj(region(25, 47.46, 8.55, 0.03, 14),
+                                     "+proj=helmert +x=0.3 +y=-0.2 +z=0.05 +rz=20 +s=1.5 +convention=position_vector", 0.003);
+  for (auto& p : set.points) p.target.m += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  FitOptions o;
+  o.model = FitModel::molodensky_badekas;
+  o.convention = Convention::position_vector;
+  const FitResult mb = fit_helmert(set, o);
+  o.model = FitModel::helmert7;
+  const FitResult h7 = fit_helmert(set, o);
+  double worst_mb = 0.0, worst_h7 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 3; b < 7; ++b) {
+      worst_mb = std::max(worst_mb, std::fabs(mb.correlation(a, b)));
+      worst_h7 = std::max(worst_h7, std::fabs(h7.correlation(a, b)));
+    }
+  }
+  EXPECT_LT(worst_mb, kDecorrelatedTol);
+  EXPECT_GT(worst_h7, kGeocentricCorrelatedFloor);
+  EXPECT_TRUE(mb.warnings.empty()) << mb.warnings.front();
+  // Same transform, two parametrisations: identical residuals and σ0.
+  EXPECT_NEAR(mb.sigma0, h7.sigma0, kSameFitSigma0Tol);
+  for (std::size_t i = 0; i < set.points.size(); ++i) {
+    EXPECT_LT((mb.points[i].residual_enu_m - h7.points[i].residual_enu_m).norm(), kResidualTol_m);
+  }
 }
 
 TEST(HelmertFit, ExactRotationModelRecoversWhatPropsExactAppliesAndMatchesUmeyama) {

@@ -10,7 +10,8 @@
 //    "parameters": {"tx_m", "ty_m", "tz_m", "rx_arcsec", "ry_arcsec",
 //                   "rz_arcsec", "ds_ppm", and for helmert14 the rates
 //                   "dtx_m_per_year", ..., "drx_arcsec_per_year", ...,
-//                   "dds_ppm_per_year"}}
+//                   "dds_ppm_per_year"; for molodensky-badekas the pivot
+//                   "px_m", "py_m", "pz_m"}}
 //
 // Every parameter key carries its unit; mm, mas and ppb spellings are read
 // too (tx_mm, rx_mas, ds_ppb, dtx_mm_per_year, drx_mas_per_year,
@@ -31,7 +32,7 @@
 
 namespace geoanchor::io {
 
-enum class TransformModel { helmert7, helmert6, translation3, helmert14 };
+enum class TransformModel { helmert7, helmert6, translation3, helmert14, molodensky_badekas };
 std::string_view to_string(TransformModel m);
 
 // What `geoanchor fit` adds to a transform file: the statistics that justify
@@ -81,6 +82,9 @@ struct TransformFile {
   std::optional<geodesy::Frame> source_frame;
   std::optional<geodesy::Frame> target_frame;
   std::optional<geodesy::DecimalYear> reference_epoch;  // required for helmert14
+  // molodensky-badekas: target = p + T + (1 + ds) R (source − p), with the
+  // seven parameters in `helmert` and the pivot p (ECEF metres) here.
+  std::optional<Eigen::Vector3d> pivot_m;
 
   std::optional<FitRecord> fit;  // only when written by `geoanchor fit`
 

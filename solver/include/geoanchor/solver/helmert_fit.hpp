@@ -28,7 +28,11 @@
 
 namespace geoanchor::solver {
 
-enum class FitModel { translation3, helmert6, helmert7, helmert14 };
+// molodensky_badekas: the seven parameters of helmert7 about a pivot p
+// (default: the centroid of the used source points),
+//   target = p + T + (1 + ds) · R · (source − p),
+// where T is nearly uncorrelated with the rotations for a local network.
+enum class FitModel { translation3, helmert6, helmert7, helmert14, molodensky_badekas };
 std::string_view to_string(FitModel m);
 enum class Convention { position_vector, coordinate_frame };
 
@@ -39,6 +43,8 @@ struct FitOptions {
   geodesy::RotationModel rotation_model = geodesy::RotationModel::small_angle;
   // helmert14: defaults to the mean observation epoch of the used points.
   std::optional<geodesy::DecimalYear> reference_epoch;
+  // molodensky_badekas: the pivot in ECEF metres (default the centroid).
+  std::optional<Eigen::Vector3d> pivot_m;
   double alpha = 0.05;          // global test
   double alpha_point = 0.001;   // w-tests and data snooping
   double power = 0.80;          // for the minimal detectable bias
@@ -87,8 +93,11 @@ struct FitResult {
   Convention convention = Convention::position_vector;
   geodesy::RotationModel rotation_model = geodesy::RotationModel::small_angle;
   std::optional<geodesy::DecimalYear> reference_epoch;
-  // The fitted transform, in position-vector form (convert for reporting).
+  // The fitted transform as a geocentric Helmert, in position-vector form
+  // (convert for reporting). For molodensky_badekas this is its geocentric
+  // equivalent; `parameters` hold the pivot form.
   geodesy::Helmert14<geodesy::PositionVector> helmert;
+  std::optional<Eigen::Vector3d> pivot_m;  // molodensky_badekas
   // Parameters in the reported convention, units in their names, and the
   // covariance between the estimated ones (same order, same units).
   std::vector<Parameter> parameters;
