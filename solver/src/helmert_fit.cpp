@@ -15,6 +15,7 @@
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "point_statistics.hpp"
 #include "statistics.hpp"
 
 namespace geoanchor::solver {
@@ -664,51 +665,10 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
       PointResult& pr = result.points[active[k]];
       pr.used = true;
-      {
-        // The point test over the redundant directions of Q_v̄ (all three
-        // unless the point alone determines some parameter).
-        double stat = 0.0;
-        int rank = 0;
-        const Eigen::LLT<Eigen::Matrix3d> llt(qv);
-        if (llt.info() == Eigen::Success && llt.matrixLLT().diagonal().minCoeff() > 1e-5) {
-          stat = vw[k].dot(llt.solve(vw[k]));
-          rank = 3;
-        } else {
-          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> qe(qv);
-          for (int e = 0; e < 3; ++e) {
-            if (qe.eigenvalues()(e) > 1e-9) {
-              const double proj = qe.eigenvectors().col(e).dot(vw[k]);
-              stat += proj * proj / qe.eigenvalues()(e);
-              ++rank;
-            }
-          }
-        }
-        stat /= sigma_scale * sigma_scale;
-        pr.point_statistic = stat;
-        pr.point_dof = rank;
-        pr.point_p_value = rank > 0 ? chi_squared_upper_tail(rank, stat) : 1.0;
-        if (rank > 0 && pr.point_p_value < worst_p) {
-          worst_p = pr.point_p_value;
-          worst = k;
-        }
-      }
-      pr.residual_enu_m = enu * v[k];
-      pr.w_max = 0.0;
-      pr.mdb_m = 0.0;
-      for (int axis = 0; axis < 3; ++axis) {
-        const Eigen::Vector3d b = obs[k].w * enu.row(axis).transpose();  // blunder direction, whitened
-        const double q = b.dot(qv * b);
-        if (!(q > 1e-12 * b.squaredNorm())) {  // no redundancy along this axis: the blunder is invisible
-          pr.w_enu(axis) = 0.0;
-          pr.redundancy_enu(axis) = 0.0;
-          pr.mdb_m = std::numeric_limits<double>::infinity();
-          continue;
-        }
-        const double w = b.dot(vw[k]) / std::sqrt(q) / sigma_scale;  // τ-test when σ0 is estimated
-        pr.w_enu(axis) = w;
-        pr.redundancy_enu(axis) = q / b.squaredNorm();
-        pr.mdb_m = std::max(pr.mdb_m, std::sqrt(lambda0) * sigma_scale / std::sqrt(q));
-        if (std::fabs(w) > pr.w_max) pr.w_max = std::fabs(w);
+      test_point(PointTestInput{v[k], obs[k].w, qv, enu, true}, sigma_scale, lambda0, pr);
+      if (pr.point_dof > 0 && pr.point_p_value < worst_p) {
+        worst_p = pr.point_p_value;
+        worst = k;
       }
     }
 
@@ -751,7 +711,6 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       ob.w = llt.matrixL().solve(Eigen::Matrix3d::Identity());
       ob.dt = td ? p.epoch->year - o.reference_epoch->year : 0.0;
       const Eigen::Vector3d vi = p.target.m - apply_fit(result, p.source, td ? p.epoch : std::nullopt).m;
-      const Eigen::Vector3d vwi = ob.w * vi;
       Eigen::Vector3d pred;
       Eigen::Matrix<double, 3, kMaxParams> jfull;
       predict(ob, sol.theta.data(), o.rotation_model, td, pred, &jfull, &final_rotation);
@@ -760,19 +719,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() + a * n_inv * a.transpose();
       const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(p.target);
       const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
-      PointResult& pr = result.points[i];
-      pr.residual_enu_m = enu * vi;
-      pr.w_max = 0.0;
-      pr.redundancy_enu.setZero();
-      pr.mdb_m = std::numeric_limits<double>::quiet_NaN();  // not part of the fit: no detectability
-      for (int axis = 0; axis < 3; ++axis) {
-        const Eigen::Vector3d b = ob.w * enu.row(axis).transpose();
-        pr.w_enu(axis) = b.dot(vwi) / std::sqrt(b.dot(q * b)) / sigma_scale;
-        pr.w_max = std::max(pr.w_max, std::fabs(pr.w_enu(axis)));
-      }
-      pr.point_statistic = vwi.dot(q.ldlt().solve(vwi)) / (sigma_scale * sigma_scale);
-      pr.point_dof = 3;
-      pr.point_p_value = chi_squared_upper_tail(3, pr.point_statistic);
+      test_point(PointTestInput{vi, ob.w, q, enu, false}, sigma_scale, lambda0, result.points[i]);
     }
 
     // --- report -------------------------------------------------------------

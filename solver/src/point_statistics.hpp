@@ -1,0 +1,23 @@
+#pragma once
+// The tests of one control point's residual, shared by every model.
+
+#include <Eigen/Core>
+
+#include "geoanchor/solver/helmert_fit.hpp"
+
+namespace geoanchor::solver {
+
+struct PointTestInput {
+  Eigen::Vector3d v_m;    // residual (target − model), ECEF metres
+  Eigen::Matrix3d w;      // whitening: Wᵀ W = C⁻¹
+  Eigen::Matrix3d q;      // cofactor of the whitened residual: I − A N⁻¹ Aᵀ in the fit, I + A N⁻¹ Aᵀ outside
+  Eigen::Matrix3d enu;    // rows: local east, north, up in ECEF
+  bool in_fit = true;
+};
+
+// Fills residual_enu_m, w_enu, w_max, redundancy_enu, mdb_m and the point
+// test of `pr`. `sigma_scale` is σ̂0 when σ0 is estimated (τ-tests), else 1;
+// `lambda0` the non-centrality for the MDB.
+void test_point(const PointTestInput& in, double sigma_scale, double lambda0, PointResult& pr);
+
+}  // namespace geoanchor::solver
