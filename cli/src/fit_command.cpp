@@ -27,14 +27,15 @@ FitModel parse_model(const std::string& m) {
   if (m == "translation3") return FitModel::translation3;
   if (m == "helmert14") return FitModel::helmert14;
   if (m == "molodensky-badekas") return FitModel::molodensky_badekas;
-  if (m == "enu-origin" || m == "site-calibration") {
+  if (m == "enu-origin") return FitModel::enu_origin;
+  if (m == "site-calibration") {
     throw Error(ErrorKind::usage, "E_MODEL_NOT_AVAILABLE",
                 "--model " + m + ": not available in this version yet; available: translation3, helmert6, helmert7, "
-                                 "helmert14, molodensky-badekas");
+                                 "helmert14, molodensky-badekas, enu-origin");
   }
   throw Error(ErrorKind::usage, "E_OPTION",
-              "--model " + m + ": expected translation3, helmert6, helmert7, helmert14, molodensky-badekas (enu-origin and "
-                               "site-calibration are planned)");
+              "--model " + m + ": expected translation3, helmert6, helmert7, helmert14, molodensky-badekas or "
+                               "enu-origin (site-calibration is planned)");
 }
 
 std::string fixed(double v, int decimals) {
@@ -48,7 +49,7 @@ std::string fixed(double v, int decimals) {
 void print_report(std::ostream& out, const solver::FitResult& r, const geodesy::ControlSet& set,
                   const FitCommandOptions& o) {
   out << "geoanchor fit: model " << solver::to_string(r.model);
-  if (r.model != FitModel::translation3) {
+  if (r.model != FitModel::translation3 && r.model != FitModel::enu_origin) {
     out << ", " << (r.convention == solver::Convention::position_vector ? "position vector" : "coordinate frame")
         << " convention, " << geodesy::to_string(r.rotation_model) << " rotation matrix";
   }
@@ -115,8 +116,21 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
     case FitModel::helmert7: t.model = io::TransformModel::helmert7; break;
     case FitModel::helmert14: t.model = io::TransformModel::helmert14; break;
     case FitModel::molodensky_badekas: t.model = io::TransformModel::molodensky_badekas; break;
+    case FitModel::enu_origin: t.model = io::TransformModel::enu_origin; break;
   }
   t.pivot_m = r.pivot_m;
+  if (r.model == FitModel::enu_origin) {
+    auto value = [&](const char* name) {
+      for (const auto& p : r.parameters) {
+        if (p.name == name) return p.value;
+      }
+      return 0.0;
+    };
+    t.enu_origin = io::EnuOriginCorrection{*r.nominal_origin,
+                                           Eigen::Vector3d(value("shift_e_m"), value("shift_n_m"), value("shift_u_m")),
+                                           geodesy::Angle::arcseconds(value("yaw_arcsec")),
+                                           geodesy::ScaleDifference::ppm(value("ds_ppm"))};
+  }
   t.rotation_model = r.rotation_model;
   t.source_frame = set.source_frame;
   t.target_frame = set.target_frame;
@@ -194,7 +208,10 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
 CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   auto* cmd = app.add_subcommand("fit", "Fit a datum transform to control points, with statistics");
   cmd->add_option("CONTROL", o.control, "Control set (CSV)")->required();
-  cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14|molodensky-badekas")->required();
+  cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin")
+      ->required();
+  cmd->add_flag("--fix-yaw", o.fix_yaw, "enu-origin: hold the yaw at 0");
+  cmd->add_flag("--with-scale", o.with_scale, "enu-origin: estimate a scale difference too");
   cmd->add_option("--pivot", o.pivot, "molodensky-badekas: pivot X,Y,Z in ECEF metres (default: the centroid)");
   cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame (required with rotations)");
   cmd->add_option("--rotation-model", o.rotation_model, "small_angle (EPSG, default) | exact");
@@ -262,6 +279,17 @@ int run_fit(const FitCommandOptions& o) {
   io::ControlReadOptions ro;
   ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
   if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
+  if (fo.model == FitModel::enu_origin) {
+    if (!ro.origin) {
+      throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
+                  "--origin: the enu-origin model needs the nominal origin LAT,LON,H of the map's ENU coordinates");
+    }
+    fo.nominal_origin = ro.origin;
+    fo.enu_yaw = !o.fix_yaw;
+    fo.enu_scale = o.with_scale;
+  } else if (o.fix_yaw || o.with_scale) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--fix-yaw/--with-scale: only for --model enu-origin");
+  }
   geodesy::ControlSet set = io::read_control_csv(o.control, ro);
   if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");

@@ -19,6 +19,8 @@ struct FitCommandOptions {
   std::string rotation_model = "small_angle";
   std::optional<std::string> reference_epoch;
   std::optional<std::string> pivot;
+  bool fix_yaw = false;
+  bool with_scale = false;
   std::optional<std::string> origin;
   std::string ellipsoid = "WGS84";
   std::optional<std::string> source_frame, target_frame;

@@ -47,6 +47,24 @@ AffineMap LocalTangentPlane::enu_from_ecef_map() const {
 
 AffineMap LocalTangentPlane::ecef_from_enu_map() const { return AffineMap(rotation_.transpose(), origin_ecef_m_); }
 
+LocalOrigin corrected_origin(const LocalOrigin& nominal, const Eigen::Vector3d& shift_enu_m) {
+  const LocalTangentPlane plane(nominal);
+  const EcefPosition moved(Eigen::Vector3d(plane.origin_ecef_m() + plane.enu_from_ecef_rotation().transpose() * shift_enu_m));
+  return LocalOrigin{geodetic_from_ecef(nominal.ellipsoid, moved), nominal.ellipsoid};
+}
+
+AffineMap enu_origin_correction(const LocalOrigin& nominal, const Eigen::Vector3d& shift_enu_m, Angle yaw,
+                                ScaleDifference ds) {
+  const LocalTangentPlane from(nominal);
+  const LocalTangentPlane to(corrected_origin(nominal, shift_enu_m));
+  double s = 0, c = 0;
+  GeographicLib::Math::sincosd(yaw.deg(), s, c);
+  Eigen::Matrix3d rz;
+  rz << c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0;
+  const AffineMap turn((1.0 + ds.unitless()) * rz, Eigen::Vector3d::Zero());
+  return compose(to.ecef_from_enu_map(), compose(turn, from.enu_from_ecef_map()));
+}
+
 NedPosition ned_from_enu(const EnuPosition& p) {
   return NedPosition{Eigen::Vector3d(p.enu_m.y(), p.enu_m.x(), -p.enu_m.z()), p.origin};
 }

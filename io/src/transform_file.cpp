@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::io {
@@ -26,7 +27,7 @@ using nlohmann::json;
 const std::set<std::string> kTopLevelKeys = {
     "model",       "convention", "rotation_model", "source_frame", "target_frame", "reference_epoch",
     "parameters",  "sigmas",     "correlation",    "statistics",   "points",       "proj_pipeline",
-    "epsg_method", "generator",  "format_version", "description",  "alternatives"};
+    "epsg_method", "generator",  "format_version", "description",  "alternatives", "nominal_origin"};
 
 [[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& what) {
   throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
@@ -167,6 +168,7 @@ std::string_view to_string(TransformModel m) {
     case TransformModel::translation3: return "translation3";
     case TransformModel::helmert14: return "helmert14";
     case TransformModel::molodensky_badekas: return "molodensky-badekas";
+    case TransformModel::enu_origin: return "enu-origin";
   }
   return "?";
 }
@@ -185,6 +187,9 @@ std::string_view TransformFile::convention_name() const {
 
 geodesy::AffineMap TransformFile::target_from_source(std::optional<geodesy::DecimalYear> observation_epoch,
                                                      std::string_view where) const {
+  if (enu_origin) {
+    return geodesy::enu_origin_correction(enu_origin->nominal, enu_origin->shift_enu_m, enu_origin->yaw, enu_origin->ds);
+  }
   return std::visit([&](const auto& h) -> geodesy::AffineMap {
     using H = std::decay_t<decltype(h)>;
     if constexpr (std::is_same_v<H, geodesy::Helmert14<PositionVector>> ||
@@ -205,6 +210,82 @@ geodesy::AffineMap TransformFile::target_from_source(std::optional<geodesy::Deci
     }
   }, helmert);
 }
+
+namespace {
+
+double number_field(const json& obj, const std::string& key, const std::string& where, std::string_view source) {
+  if (!obj.contains(key)) fail(source, where + key, "missing");
+  const json& v = obj.at(key);
+  if (!v.is_number()) fail(source, where + key, "value " + v.dump() + " is not a number");
+  return v.get<double>();
+}
+
+constexpr double kCorrectedOriginTol_m = 0.001;
+
+TransformFile parse_enu_origin(const json& doc, TransformFile t, std::string_view source) {
+  for (const char* key : {"source_frame", "target_frame"}) {
+    if (doc.contains(key)) {
+      auto f = geodesy::Frame::parse(string_field(doc, key, source), std::string(source) + ": " + key);
+      (std::string_view(key) == "source_frame" ? t.source_frame : t.target_frame) = std::move(f);
+    }
+  }
+  if (!doc.contains("nominal_origin") || !doc.at("nominal_origin").is_object()) {
+    fail(source, "nominal_origin", "missing; enu-origin needs {\"lat_deg\", \"lon_deg\", \"h_m\", \"ellipsoid\"}");
+  }
+  const json& no = doc.at("nominal_origin");
+  for (const auto& [key, value] : no.items()) {
+    if (key != "lat_deg" && key != "lon_deg" && key != "h_m" && key != "ellipsoid" && key != "height_type") {
+      fail(source, "nominal_origin." + key, "unknown key; expected lat_deg, lon_deg, h_m, ellipsoid");
+    }
+  }
+  geodesy::Ellipsoid e = geodesy::Ellipsoid::wgs84();
+  if (no.contains("ellipsoid")) {
+    const std::string name = string_field(no, "ellipsoid", source);
+    if (name == "GRS80") {
+      e = geodesy::Ellipsoid::grs80();
+    } else if (name != "WGS84") {
+      fail(source, "nominal_origin.ellipsoid", "value \"" + name + "\" unknown; expected WGS84 or GRS80");
+    }
+  }
+  const double lat = number_field(no, "lat_deg", "nominal_origin.", source);
+  const double lon = number_field(no, "lon_deg", "nominal_origin.", source);
+  if (std::fabs(lat) > 90.0) fail(source, "nominal_origin.lat_deg", "latitude " + format_shortest(lat) + " not in [-90, 90]");
+  if (std::fabs(lon) > 180.0) fail(source, "nominal_origin.lon_deg", "longitude " + format_shortest(lon) + " not in [-180, 180]");
+  EnuOriginCorrection c;
+  c.nominal = {{Angle::degrees(lat), Angle::degrees(lon), geodesy::EllipsoidalHeight{number_field(no, "h_m", "nominal_origin.", source)}}, e};
+  if (!doc.contains("parameters") || !doc.at("parameters").is_object()) fail(source, "parameters", "missing");
+  const json& p = doc.at("parameters");
+  const std::set<std::string> known = {"shift_e_m", "shift_n_m", "shift_u_m", "yaw_arcsec", "ds_ppm",
+                                       "origin_lat_deg", "origin_lon_deg", "origin_h_m"};
+  for (const auto& [key, value] : p.items()) {
+    if (!known.count(key)) {
+      fail(source, "parameters." + key, "unknown parameter for enu-origin; expected shift_e_m shift_n_m shift_u_m "
+                                        "yaw_arcsec ds_ppm origin_lat_deg origin_lon_deg origin_h_m");
+    }
+  }
+  c.shift_enu_m = Eigen::Vector3d(number_field(p, "shift_e_m", "parameters.", source),
+                                  number_field(p, "shift_n_m", "parameters.", source),
+                                  number_field(p, "shift_u_m", "parameters.", source));
+  c.yaw = Angle::arcseconds(p.contains("yaw_arcsec") ? number_field(p, "yaw_arcsec", "parameters.", source) : 0.0);
+  c.ds = ScaleDifference::ppm(p.contains("ds_ppm") ? number_field(p, "ds_ppm", "parameters.", source) : 0.0);
+  // The corrected origin is derived; if given, it must agree with the shift.
+  if (p.contains("origin_lat_deg") || p.contains("origin_lon_deg") || p.contains("origin_h_m")) {
+    const geodesy::LocalOrigin derived = geodesy::corrected_origin(c.nominal, c.shift_enu_m);
+    const geodesy::GeodeticPosition stated{Angle::degrees(number_field(p, "origin_lat_deg", "parameters.", source)),
+                                           Angle::degrees(number_field(p, "origin_lon_deg", "parameters.", source)),
+                                           geodesy::EllipsoidalHeight{number_field(p, "origin_h_m", "parameters.", source)}};
+    const double d = (geodesy::ecef_from_geodetic(e, stated).m - geodesy::ecef_from_geodetic(e, derived.point).m).norm();
+    if (d > kCorrectedOriginTol_m) {
+      fail(source, "parameters.origin_lat_deg", "the corrected origin is " + format_shortest(d) +
+                                                    " m from nominal_origin + shift; expected them to agree within 1 mm");
+    }
+  }
+  t.enu_origin = c;
+  t.rotation_model = geodesy::RotationModel::exact;
+  return t;
+}
+
+}  // namespace
 
 TransformFile parse_transform_json(std::string_view text, std::string_view source) {
   json doc;
@@ -233,10 +314,13 @@ TransformFile parse_transform_json(std::string_view text, std::string_view sourc
     t.model = TransformModel::helmert14;
   } else if (model == "molodensky-badekas") {
     t.model = TransformModel::molodensky_badekas;
+  } else if (model == "enu-origin") {
+    t.model = TransformModel::enu_origin;
+    return parse_enu_origin(doc, std::move(t), source);
   } else {
     fail(source, "model", "value \"" + model +
-                              "\" not read by this command; expected helmert7, helmert6, translation3, helmert14 or "
-                              "molodensky-badekas");
+                              "\" not read by this command; expected helmert7, helmert6, translation3, helmert14, "
+                              "molodensky-badekas or enu-origin");
   }
 
   bool position_vector = true;
@@ -388,13 +472,32 @@ json json_number_or_null(double v) { return std::isfinite(v) ? number(v) : json(
 }  // namespace
 
 std::string epsg_method(const TransformFile& t) {
+  if (t.enu_origin) return "";
   const bool pv = t.convention_name() == PositionVector::name;
   if (t.model == TransformModel::molodensky_badekas) return pv ? "EPSG:1061" : "EPSG:1034";
   if (t.time_dependent()) return pv ? "EPSG:1053" : "EPSG:1056";
   return pv ? "EPSG:1033" : "EPSG:1032";
 }
 
+namespace {
+std::string topocentric(const geodesy::LocalOrigin& o) {
+  const std::string ell = o.ellipsoid == geodesy::Ellipsoid::grs80() ? "+ellps=GRS80"
+                          : o.ellipsoid == geodesy::Ellipsoid::wgs84() ? "+ellps=WGS84"
+                                                                       : "+a=" + g17(o.ellipsoid.a_m()) + " +rf=" + g17(o.ellipsoid.rf());
+  return "+proj=topocentric " + ell + " +lat_0=" + g17(o.point.lat.deg()) + " +lon_0=" + g17(o.point.lon.deg()) +
+         " +h_0=" + g17(o.point.h.m);
+}
+}  // namespace
+
 std::string proj_pipeline(const TransformFile& t) {
+  if (t.enu_origin) {
+    // ECEF -> map ENU at the nominal origin -> turn and scale -> ECEF from the corrected origin.
+    const auto& c = *t.enu_origin;
+    const double k = 1.0 + c.ds.unitless(), cy = std::cos(c.yaw.rad()), sy = std::sin(c.yaw.rad());
+    return "+proj=pipeline +step " + topocentric(c.nominal) + " +step +proj=affine +s11=" + g17(k * cy) + " +s12=" +
+           g17(-k * sy) + " +s13=0 +s21=" + g17(k * sy) + " +s22=" + g17(k * cy) + " +s23=0 +s31=0 +s32=0 +s33=" +
+           g17(k) + " +step +inv " + topocentric(geodesy::corrected_origin(c.nominal, c.shift_enu_m));
+  }
   if (t.pivot_m && t.rotation_model == geodesy::RotationModel::exact) {
     // PROJ's molobadekas has no exact form: write the geocentric equivalent.
     TransformFile g = t;
@@ -452,9 +555,11 @@ std::string to_json_text(const TransformFile& t) {
   json doc;
   doc["format_version"] = 1;
   doc["model"] = std::string(to_string(t.model));
-  doc["convention"] = std::string(t.convention_name());
-  doc["rotation_model"] = std::string(geodesy::to_string(t.rotation_model));
-  doc["epsg_method"] = epsg_method(t);
+  if (!t.enu_origin) {
+    doc["convention"] = std::string(t.convention_name());
+    doc["rotation_model"] = std::string(geodesy::to_string(t.rotation_model));
+    doc["epsg_method"] = epsg_method(t);
+  }
   if (t.source_frame) doc["source_frame"] = t.source_frame->to_string();
   if (t.target_frame) doc["target_frame"] = t.target_frame->to_string();
   if (t.reference_epoch) doc["reference_epoch"] = number(t.reference_epoch->year);
@@ -466,7 +571,19 @@ std::string to_json_text(const TransformFile& t) {
     }
     return params;
   };
-  doc["parameters"] = with_pivot(std::visit([](const auto& h) { return parameters_json(h); }, t.helmert));
+  if (t.enu_origin) {
+    const auto& c = *t.enu_origin;
+    const geodesy::LocalOrigin corrected = geodesy::corrected_origin(c.nominal, c.shift_enu_m);
+    doc["nominal_origin"] = {{"lat_deg", number(c.nominal.point.lat.deg())}, {"lon_deg", number(c.nominal.point.lon.deg())},
+                             {"h_m", number(c.nominal.point.h.m)}, {"height_type", "ellipsoidal"},
+                             {"ellipsoid", c.nominal.ellipsoid.name()}};
+    doc["parameters"] = {{"shift_e_m", number(c.shift_enu_m.x())}, {"shift_n_m", number(c.shift_enu_m.y())},
+                         {"shift_u_m", number(c.shift_enu_m.z())}, {"yaw_arcsec", number(c.yaw.arcsec())},
+                         {"ds_ppm", number(c.ds.ppm())},           {"origin_lat_deg", number(corrected.point.lat.deg())},
+                         {"origin_lon_deg", number(corrected.point.lon.deg())}, {"origin_h_m", number(corrected.point.h.m)}};
+  } else {
+    doc["parameters"] = with_pivot(std::visit([](const auto& h) { return parameters_json(h); }, t.helmert));
+  }
   doc["proj_pipeline"] = proj_pipeline(t);
   if (t.fit) {
     const FitRecord& f = *t.fit;
@@ -509,6 +626,8 @@ std::string to_json_text(const TransformFile& t) {
       pts.push_back(jp);
     }
     doc["points"] = pts;
+  }
+  if (t.fit && !t.enu_origin) {
     const TransformFile other = swapped_convention(t);
     doc["alternatives"] = json::array({json{{"convention", std::string(other.convention_name())},
                                             {"epsg_method", epsg_method(other)},

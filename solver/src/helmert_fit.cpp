@@ -15,6 +15,7 @@
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "enu_origin_fit.hpp"
 #include "point_statistics.hpp"
 #include "statistics.hpp"
 
@@ -133,7 +134,7 @@ void predict(const Observation& o, const double* theta, RotationModel model, boo
   }
 }
 
-bool has_rotation(FitModel m) { return m != FitModel::translation3; }
+bool has_rotation(FitModel m) { return m != FitModel::translation3 && m != FitModel::enu_origin; }
 bool has_scale(FitModel m) {
   return m == FitModel::helmert7 || m == FitModel::helmert14 || m == FitModel::molodensky_badekas;
 }
@@ -431,17 +432,20 @@ std::string_view to_string(FitModel m) {
     case FitModel::helmert7: return "helmert7";
     case FitModel::helmert14: return "helmert14";
     case FitModel::molodensky_badekas: return "molodensky-badekas";
+    case FitModel::enu_origin: return "enu-origin";
   }
   return "?";
 }
 
 geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPosition& source,
                                 std::optional<DecimalYear> epoch) {
+  if (fit.ecef_map) return geodesy::EcefPosition(fit.ecef_map->apply(source.m));
   const DecimalYear t = fit.model == FitModel::helmert14 ? epoch.value() : fit.helmert.reference_epoch;
   return geodesy::apply(geodesy::evaluate_at(fit.helmert, t), fit.rotation_model, source);
 }
 
 FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
+  if (options.model == FitModel::enu_origin) return fit_enu_origin(control, options);
   FitOptions o = options;
   const bool td = o.model == FitModel::helmert14;
   if (has_rotation(o.model) && !o.convention) {

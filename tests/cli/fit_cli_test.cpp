@@ -22,6 +22,7 @@ using testing::proj_radians;
 using testing::ProjPipeline;
 
 constexpr double kCctAgreementTol_m = 1e-4;  // issue acceptance: the pipeline reproduces our coordinates to 0.1 mm
+constexpr double kEnuOriginCliTol_m = 0.001;  // issue acceptance: enu-origin corrected to 1 mm without noise
 
 struct RunResult {
   int exit_code = -1;
@@ -218,6 +219,75 @@ TEST_F(FitCli, FourteenParameterPipelineRunByCctAtThePointsEpochs) {
   for (std::size_t i = 0; i < xyzt.size(); ++i) {
     // The fit is noise-free: PROJ's pipeline must land on the generated targets too.
     EXPECT_THAT(proj[i], testing::IsNearVector(truth.forward(xyzt[i].head<3>(), xyzt[i](3)), kCctAgreementTol_m));
+  }
+}
+
+double json_number_value(const std::string& json, const std::string& key) {
+  const auto at = json.find("\"" + key + "\": ");
+  return std::stod(json.substr(at + key.size() + 4));
+}
+
+TEST_F(FitCli, EnuOriginFromMapCoordinatesAndSurveyedMarks) {
+  // The map's frame is truly at the LSZH reference point, turned by 20″; its
+  // users read it at a nominal origin 0.30 m E, −0.20 m N, 0.05 m U off.
+  char def[200];
+  std::snprintf(def, sizeof def, "+proj=topocentric +ellps=WGS84 +lat_0=47.464722 +lon_0=8.549167 +h_0=480");
+  const ProjPipeline at_true(def);
+  const ProjPipeline cart("+proj=cart +ellps=WGS84");
+  const Eigen::Vector3d g = cart.inverse(at_true.inverse(Eigen::Vector3d(0.30, -0.20, 0.05)));
+  char origin[120];
+  std::snprintf(origin, sizeof origin, "%.12f,%.12f,%.6f", testing::proj_degrees(g.y()), testing::proj_degrees(g.x()), g.z());
+  std::snprintf(def, sizeof def, "+proj=topocentric +ellps=WGS84 +lat_0=%.17g +lon_0=%.17g +h_0=%.17g",
+                testing::proj_degrees(g.y()), testing::proj_degrees(g.x()), g.z());
+  const double yaw = 20.0 / 206264.80624709636;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> d(-2500.0, 2500.0);
+  std::ostringstream csv;
+  csv.precision(15);
+  csv << "id,e_src_m,n_src_m,u_src_m,lat_dst_deg,lon_dst_deg,h_dst_m,sigma_src_m,sigma_dst_m\n";
+  for (int i = 0; i < 25; ++i) {
+    const Eigen::Vector3d map(d(rng), d(rng), 0.005 * d(rng));
+    const Eigen::Vector3d turned(std::cos(yaw) * map.x() - std::sin(yaw) * map.y(),
+                                 std::sin(yaw) * map.x() + std::cos(yaw) * map.y(), map.z());
+    const Eigen::Vector3d geo = cart.inverse(at_true.inverse(turned));
+    csv << "M" << i << ',' << map.x() << ',' << map.y() << ',' << map.z() << ',' << testing::proj_degrees(geo.y()) << ','
+        << testing::proj_degrees(geo.x()) << ',' << geo.z() << ",0.001,0.001\n";
+  }
+  write("map.csv", csv.str());
+  const RunResult r = geoanchor("fit " + path("map.csv").string() + " --model enu-origin --origin " + origin + " -o " +
+                                path("T.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const std::string json = slurp(path("T.json"));
+  EXPECT_NEAR(json_number_value(json, "shift_e_m"), -0.30, kEnuOriginCliTol_m);
+  EXPECT_NEAR(json_number_value(json, "shift_n_m"), 0.20, kEnuOriginCliTol_m);
+  EXPECT_NEAR(json_number_value(json, "shift_u_m"), -0.05, kEnuOriginCliTol_m);
+  EXPECT_NEAR(json_number_value(json, "yaw_arcsec"), 20.0, kEnuOriginCliTol_m / 2500.0 * 206264.8);
+  EXPECT_NEAR(json_number_value(json, "origin_lat_deg"), 47.464722, kEnuOriginCliTol_m / 111000.0);
+  EXPECT_NEAR(json_number_value(json, "origin_lon_deg"), 8.549167, kEnuOriginCliTol_m / 75000.0);
+  EXPECT_NEAR(json_number_value(json, "origin_h_m"), 480.0, kEnuOriginCliTol_m);
+
+  // PROJ's cct running the written pipeline agrees with convert applying the file.
+  const ProjPipeline at_nominal(def);
+  std::ostringstream pts;
+  pts.precision(17);
+  pts << "id,x_m,y_m,z_m\n";
+  std::vector<Eigen::Vector4d> xyzt;
+  for (int i = 0; i < 10; ++i) {
+    const Eigen::Vector3d x = at_nominal.inverse(Eigen::Vector3d(d(rng), d(rng), 0.01 * d(rng)));
+    pts << "Q" << i << ',' << x(0) << ',' << x(1) << ',' << x(2) << '\n';
+    xyzt.emplace_back(x(0), x(1), x(2), 2024.0);
+  }
+  write("nominal.csv", pts.str());
+  const RunResult ours = geoanchor("convert " + path("nominal.csv").string() + " --to ecef --transform " + path("T.json").string());
+  ASSERT_EQ(ours.exit_code, 0) << ours.err;
+  std::vector<std::string> header;
+  const auto rows = csv_rows(ours.out, &header);
+  const auto proj = cct(json_string_value(json, "proj_pipeline"), xyzt, dir_);
+  ASSERT_EQ(proj.size(), rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Eigen::Vector3d us(std::stod(rows[i][col(header, "x_m")]), std::stod(rows[i][col(header, "y_m")]),
+                             std::stod(rows[i][col(header, "z_m")]));
+    EXPECT_THAT(us, testing::IsNearVector(proj[i], kCctAgreementTol_m));
   }
 }
 

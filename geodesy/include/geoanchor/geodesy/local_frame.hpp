@@ -39,6 +39,17 @@ class LocalTangentPlane {
 // Rows: the east, north and up unit vectors at (lat, lon), in ECEF.
 Eigen::Matrix3d enu_from_ecef_rotation(Angle lat, Angle lon);
 
+// A map's ENU frame re-anchored: the ECEF map taking "ECEF of map point
+// read at the nominal origin" to its true ECEF position,
+//   x_true = O' + R'ᵀ · (1 + ds) · Rz(yaw) · R (x_nominal − O),
+// where O' = O + Rᵀ · shift_enu_m is the corrected origin, R and R' the ENU
+// rotations at O and O', and Rz(yaw) turns the map counter-clockwise seen
+// from above (east towards north) by `yaw`.
+AffineMap enu_origin_correction(const LocalOrigin& nominal, const Eigen::Vector3d& shift_enu_m, Angle yaw,
+                                ScaleDifference ds);
+// The corrected origin O' of the same correction, on the nominal's ellipsoid.
+LocalOrigin corrected_origin(const LocalOrigin& nominal, const Eigen::Vector3d& shift_enu_m);
+
 NedPosition ned_from_enu(const EnuPosition& p);
 EnuPosition enu_from_ned(const NedPosition& p);
 

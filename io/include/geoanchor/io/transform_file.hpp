@@ -29,10 +29,11 @@
 #include "geoanchor/geodesy/affine.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
 
 namespace geoanchor::io {
 
-enum class TransformModel { helmert7, helmert6, translation3, helmert14, molodensky_badekas };
+enum class TransformModel { helmert7, helmert6, translation3, helmert14, molodensky_badekas, enu_origin };
 std::string_view to_string(TransformModel m);
 
 // What `geoanchor fit` adds to a transform file: the statistics that justify
@@ -71,6 +72,14 @@ struct FitRecord {
   std::string generator;  // "geoanchor 0.1.0 fit ..."
 };
 
+// enu-origin: a map's ENU frame re-anchored (geodesy::enu_origin_correction).
+struct EnuOriginCorrection {
+  geodesy::LocalOrigin nominal;
+  Eigen::Vector3d shift_enu_m = Eigen::Vector3d::Zero();
+  geodesy::Angle yaw;
+  geodesy::ScaleDifference ds;
+};
+
 struct TransformFile {
   TransformModel model = TransformModel::helmert7;
   geodesy::RotationModel rotation_model = geodesy::RotationModel::small_angle;
@@ -85,6 +94,8 @@ struct TransformFile {
   // molodensky-badekas: target = p + T + (1 + ds) R (source − p), with the
   // seven parameters in `helmert` and the pivot p (ECEF metres) here.
   std::optional<Eigen::Vector3d> pivot_m;
+  // enu-origin: the correction; `helmert` is unused.
+  std::optional<EnuOriginCorrection> enu_origin;
 
   std::optional<FitRecord> fit;  // only when written by `geoanchor fit`
 

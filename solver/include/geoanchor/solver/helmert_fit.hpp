@@ -25,6 +25,7 @@
 
 #include "geoanchor/geodesy/control_point.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
+#include "geoanchor/geodesy/positions.hpp"
 
 namespace geoanchor::solver {
 
@@ -32,7 +33,13 @@ namespace geoanchor::solver {
 // (default: the centroid of the used source points),
 //   target = p + T + (1 + ds) · R · (source − p),
 // where T is nearly uncorrelated with the rotations for a local network.
-enum class FitModel { translation3, helmert6, helmert7, helmert14, molodensky_badekas };
+// enu_origin: map points in ENU at a nominal origin against surveyed
+// positions: the corrected origin (a shift in the nominal E, N, U), a yaw
+// and optionally a scale,
+//   target = O' + R'ᵀ · (1 + ds) · Rz(yaw) · enu_map,
+// with O' = O + Rᵀ · shift the corrected origin (R, R' the ENU rotations at
+// O and O') and Rz(yaw) turning the map counter-clockwise seen from above.
+enum class FitModel { translation3, helmert6, helmert7, helmert14, molodensky_badekas, enu_origin };
 std::string_view to_string(FitModel m);
 enum class Convention { position_vector, coordinate_frame };
 
@@ -45,6 +52,11 @@ struct FitOptions {
   std::optional<geodesy::DecimalYear> reference_epoch;
   // molodensky_badekas: the pivot in ECEF metres (default the centroid).
   std::optional<Eigen::Vector3d> pivot_m;
+  // enu_origin: the nominal origin of the map's ENU coordinates (required),
+  // whether yaw and scale are estimated (else held at 0).
+  std::optional<geodesy::LocalOrigin> nominal_origin;
+  bool enu_yaw = true;
+  bool enu_scale = false;
   double alpha = 0.05;          // global test
   double alpha_point = 0.001;   // w-tests and data snooping
   double power = 0.80;          // for the minimal detectable bias
@@ -98,6 +110,12 @@ struct FitResult {
   // equivalent; `parameters` hold the pivot form.
   geodesy::Helmert14<geodesy::PositionVector> helmert;
   std::optional<Eigen::Vector3d> pivot_m;  // molodensky_badekas
+  // enu_origin: the nominal and the corrected origin, and the whole
+  // correction as an ECEF map (ECEF of the map read at the nominal origin ->
+  // true ECEF).
+  std::optional<geodesy::LocalOrigin> nominal_origin;
+  std::optional<geodesy::LocalOrigin> corrected_origin;
+  std::optional<geodesy::AffineMap> ecef_map;
   // Parameters in the reported convention, units in their names, and the
   // covariance between the estimated ones (same order, same units).
   std::vector<Parameter> parameters;

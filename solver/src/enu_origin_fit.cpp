@@ -1,0 +1,335 @@
+// The enu-origin model: a map's ENU frame re-anchored on surveyed marks.
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+#include "enu_origin_fit.hpp"
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "point_statistics.hpp"
+#include "statistics.hpp"
+
+namespace geoanchor::solver {
+namespace {
+
+using geodesy::Angle;
+
+constexpr double kArcsecPerRad = 180.0 / M_PI * 3600.0;
+
+// What every residual needs of the nominal origin.
+struct Nominal {
+  double lat_rad, lon_rad;
+  double meridian_radius_m;   // M + h
+  double normal_radius_m;     // (N + h), times cos(lat) for longitudes
+  Eigen::Matrix3d enu_from_ecef;
+  double l_m;                 // RMS radius of the map points: parameter scale
+};
+
+// ENU rotation (rows E, N, U) at a latitude and longitude in radians.
+template <typename T>
+Eigen::Matrix<T, 3, 3> enu_rotation(const T& lat, const T& lon) {
+  using std::cos;
+  using std::sin;
+  const T sp = sin(lat), cp = cos(lat), sl = sin(lon), cl = cos(lon);
+  Eigen::Matrix<T, 3, 3> r;
+  r << -sl, cl, T(0.0), -sp * cl, -sp * sl, cp, cp * cl, cp * sl, sp;
+  return r;
+}
+
+// W (target − O − model) for one point; parameters: shift (m), yaw·L, ds·L.
+struct EnuOriginCost {
+  Eigen::Vector3d enu;         // map coordinates at the nominal origin
+  Eigen::Vector3d target_rel;  // target ECEF − nominal origin ECEF
+  Eigen::Matrix3d w;
+  const Nominal* nominal;
+
+  template <typename T>
+  bool operator()(const T* shift, const T* yaw_scaled, const T* ds_scaled, T* residual) const {
+    const T yaw = yaw_scaled[0] / nominal->l_m, ds = ds_scaled[0] / nominal->l_m;
+    const Eigen::Matrix<T, 3, 1> sh(shift[0], shift[1], shift[2]);
+    // The corrected origin: shifted in the nominal ENU frame; its own ENU
+    // rotation from its latitude and longitude (first order in the shift:
+    // the second-order error is (shift / R)² ≈ 1e-12 rad for metres).
+    const T lat = T(nominal->lat_rad) + shift[1] / T(nominal->meridian_radius_m);
+    const T lon = T(nominal->lon_rad) + shift[0] / (T(nominal->normal_radius_m) * T(std::cos(nominal->lat_rad)));
+    const Eigen::Matrix<T, 3, 3> corrected = enu_rotation(lat, lon);
+    using std::cos;
+    using std::sin;
+    const T c = cos(yaw), s = sin(yaw);
+    const Eigen::Matrix<T, 3, 1> map(T(enu(0)), T(enu(1)), T(enu(2)));
+    const Eigen::Matrix<T, 3, 1> turned((c * map(0) - s * map(1)) * (T(1.0) + ds),
+                                        (s * map(0) + c * map(1)) * (T(1.0) + ds), map(2) * (T(1.0) + ds));
+    const Eigen::Matrix<T, 3, 1> model = nominal->enu_from_ecef.transpose().cast<T>() * sh + corrected.transpose() * turned;
+    const Eigen::Matrix<T, 3, 1> r = w.cast<T>() * (target_rel.cast<T>() - model);
+    for (int k = 0; k < 3; ++k) residual[k] = r(k);
+    return true;
+  }
+};
+
+[[noreturn]] void reject(const std::string& code, const std::string& message) {
+  throw Error(ErrorKind::rejected, code, message);
+}
+
+std::string fmt(double v, int precision = 3) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*g", precision, v);
+  return b;
+}
+
+}  // namespace
+
+FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& options) {
+  FitOptions o = options;
+  if (!o.nominal_origin) {
+    throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
+                "--origin: the enu-origin model needs the nominal origin LAT,LON,H of the map's ENU coordinates");
+  }
+  FitResult result;
+  result.model = FitModel::enu_origin;
+  result.rotation_model = geodesy::RotationModel::exact;
+  result.nominal_origin = o.nominal_origin;
+  if (!control.has_a_priori_sigmas) {
+    o.scale_by_sigma0 = true;
+    result.warnings.push_back("no a-priori sigmas in " + control.source_name +
+                              ": equal weights; parameter sigmas are scaled by the a-posteriori σ0 and the global test "
+                              "is not applicable");
+  }
+  const geodesy::LocalTangentPlane plane(*o.nominal_origin);
+  const geodesy::Ellipsoid& e = o.nominal_origin->ellipsoid;
+  Nominal nominal;
+  nominal.lat_rad = o.nominal_origin->point.lat.rad();
+  nominal.lon_rad = o.nominal_origin->point.lon.rad();
+  const double sphi = std::sin(nominal.lat_rad);
+  const double w2 = 1.0 - e.e2() * sphi * sphi;
+  nominal.meridian_radius_m = e.a_m() * (1.0 - e.e2()) / (w2 * std::sqrt(w2)) + o.nominal_origin->point.h.m;
+  nominal.normal_radius_m = e.a_m() / std::sqrt(w2) + o.nominal_origin->point.h.m;
+  nominal.enu_from_ecef = plane.enu_from_ecef_rotation();
+
+  result.points.resize(control.points.size());
+  std::vector<std::size_t> active;
+  for (std::size_t i = 0; i < control.points.size(); ++i) {
+    result.points[i].id = control.points[i].id;
+    result.points[i].line = control.points[i].line;
+    result.points[i].used = control.points[i].use;
+    if (control.points[i].use) {
+      active.push_back(i);
+    } else {
+      result.points[i].removed_because = "use = 0 in the control set";
+    }
+  }
+  const int u = 3 + (o.enu_yaw ? 1 : 0) + (o.enu_scale ? 1 : 0);
+  const double z_point = normal_quantile(1.0 - o.alpha_point / 2.0);
+  result.w_critical = z_point;
+  const double lambda0 = std::pow(z_point + normal_quantile(o.power), 2.0);
+  const geodesy::GeocentricConverter geocentric(geodesy::Ellipsoid::wgs84());
+
+  // Per point: map ENU, target relative to the nominal origin, whitening.
+  struct Obs {
+    Eigen::Vector3d enu, target_rel;
+    Eigen::Matrix3d w;
+  };
+  std::vector<Obs> all(control.points.size());
+  for (std::size_t i = 0; i < control.points.size(); ++i) {
+    const auto& p = control.points[i];
+    Eigen::Matrix3d c = control.has_a_priori_sigmas ? Eigen::Matrix3d(p.target_cov_m2 + p.source_cov_m2)
+                                                    : Eigen::Matrix3d::Identity();
+    const Eigen::LLT<Eigen::Matrix3d> llt(c);
+    if (llt.info() != Eigen::Success) {
+      throw Error(ErrorKind::input, "E_SIGMA", control.source_name + ":" + std::to_string(p.line) + ": id=" + p.id +
+                                                   ": combined covariance is not positive definite");
+    }
+    all[i] = Obs{plane.enu_from_ecef(p.source).enu_m, p.target.m - plane.origin_ecef_m(),
+                 llt.matrixL().solve(Eigen::Matrix3d::Identity())};
+  }
+
+  while (true) {
+    const int n = static_cast<int>(active.size());
+    const int need = o.enu_yaw || o.enu_scale ? 2 : 1;
+    if (n < need) {
+      reject("E_FIT_TOO_FEW_POINTS", "model enu-origin: need >= " + std::to_string(need) + " points, got " + std::to_string(n));
+    }
+    double l2 = 0.0;
+    for (std::size_t i : active) l2 += all[i].enu.head<2>().squaredNorm();
+    nominal.l_m = std::sqrt(l2 / n);
+    if ((o.enu_yaw || o.enu_scale) && nominal.l_m < 1.0) {
+      reject("E_FIT_COINCIDENT", "the map points lie within " + fmt(nominal.l_m) +
+                                     " m of the origin horizontally: yaw and scale are not observable; use --fix-yaw");
+    }
+
+    double shift[3] = {0, 0, 0}, yaw[1] = {0}, ds[1] = {0};
+    ceres::Problem problem;
+    for (std::size_t i : active) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1>(
+                                   new EnuOriginCost{all[i].enu, all[i].target_rel, all[i].w, &nominal}),
+                               nullptr, shift, yaw, ds);
+    }
+    std::vector<const double*> blocks = {shift};
+    if (o.enu_yaw) {
+      blocks.push_back(yaw);
+    } else {
+      problem.SetParameterBlockConstant(yaw);
+    }
+    if (o.enu_scale) {
+      blocks.push_back(ds);
+    } else {
+      problem.SetParameterBlockConstant(ds);
+    }
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.max_num_iterations = 200;
+    so.function_tolerance = 1e-16;
+    so.gradient_tolerance = 1e-20;
+    so.parameter_tolerance = 1e-15;
+    so.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &problem, &summary);
+    if (summary.termination_type != ceres::CONVERGENCE) {
+      reject("E_FIT_NO_CONVERGENCE", "the least-squares solve did not converge (Ceres: " +
+                                         std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
+                                         summary.message + "); no transform was written");
+    }
+    ceres::Covariance::Options co;
+    co.algorithm_type = ceres::DENSE_SVD;
+    ceres::Covariance covariance(co);
+    if (!covariance.Compute(blocks, &problem)) {
+      reject("E_FIT_COVARIANCE", "the parameter covariance cannot be computed: the normal matrix is rank-deficient; no "
+                                 "transform was written");
+    }
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> cov_scaled(u, u);
+    if (!covariance.GetCovarianceMatrix(blocks, cov_scaled.data())) {
+      reject("E_FIT_COVARIANCE", "the parameter covariance could not be read back from Ceres");
+    }
+
+    // The correction as an ECEF map, and the corrected origin.
+    const double yaw_rad = yaw[0] / nominal.l_m, ds_unitless = ds[0] / nominal.l_m;
+    const Eigen::Vector3d shift_m(shift[0], shift[1], shift[2]);
+    result.ecef_map = geodesy::enu_origin_correction(*o.nominal_origin, shift_m, Angle::radians(yaw_rad),
+                                                     geodesy::ScaleDifference::unitless(ds_unitless));
+    result.corrected_origin = geodesy::corrected_origin(*o.nominal_origin, shift_m);
+    const geodesy::GeodeticPosition corrected = result.corrected_origin->point;
+
+    // Residuals and statistics, from the reported map.
+    double omega = 0.0;
+    std::vector<Eigen::Vector3d> v(active.size());
+    for (std::size_t k = 0; k < active.size(); ++k) {
+      const auto& p = control.points[active[k]];
+      v[k] = p.target.m - result.ecef_map->apply(p.source.m);
+      omega += (all[active[k]].w * v[k]).squaredNorm();
+    }
+    const int dof = 3 * n - u;
+    result.dof = dof;
+    result.sigma0 = dof > 0 ? std::sqrt(omega / dof) : 0.0;
+    auto& g = result.global_test;
+    g.statistic = omega;
+    g.applicable = control.has_a_priori_sigmas && dof > 0;
+    if (dof > 0) {
+      g.critical_lower = chi_squared_quantile(dof, o.alpha / 2.0);
+      g.critical_upper = chi_squared_quantile(dof, 1.0 - o.alpha / 2.0);
+      g.passed = omega >= g.critical_lower && omega <= g.critical_upper;
+    }
+    const double sigma_scale = o.scale_by_sigma0 && dof > 0 ? result.sigma0 : 1.0;
+
+    // Whitened Jacobians in the scaled parameters (A N⁻¹ Aᵀ is invariant).
+    std::vector<double*> pblocks = {shift, yaw, ds};
+    double worst_p = 1.0;
+    std::size_t worst = active.size();
+    auto tests = [&](std::size_t i, const Eigen::Vector3d& vi, bool in_fit) {
+      EnuOriginCost cost{all[i].enu, all[i].target_rel, all[i].w, &nominal};
+      ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1> f(new EnuOriginCost(cost));
+      double res[3] = {}, j0[9] = {}, j1[3] = {}, j2[3] = {};
+      double* jac[3] = {j0, j1, j2};
+      f.Evaluate(pblocks.data(), res, jac);
+      Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, 5> a(3, u);
+      int c = 0;
+      for (int k = 0; k < 3; ++k) a.col(c++) = Eigen::Vector3d(j0[k], j0[3 + k], j0[6 + k]);
+      if (o.enu_yaw) a.col(c++) = Eigen::Vector3d(j1[0], j1[1], j1[2]);
+      if (o.enu_scale) a.col(c++) = Eigen::Vector3d(j2[0], j2[1], j2[2]);
+      const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() + (in_fit ? -1.0 : 1.0) * a * cov_scaled * a.transpose();
+      const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(control.points[i].target);
+      test_point(PointTestInput{vi, all[i].w, q, geodesy::enu_from_ecef_rotation(at.lat, at.lon), in_fit}, sigma_scale,
+                 lambda0, result.points[i]);
+    };
+    for (std::size_t k = 0; k < active.size(); ++k) {
+      tests(active[k], v[k], true);
+      result.points[active[k]].used = true;
+      const auto& pr = result.points[active[k]];
+      if (pr.point_dof > 0 && pr.point_p_value < worst_p) {
+        worst_p = pr.point_p_value;
+        worst = k;
+      }
+    }
+    if (o.data_snooping && dof > 0 && worst < active.size() && worst_p < o.alpha_point && 3 * (n - 1) - u > 0) {
+      PointResult& pr = result.points[active[worst]];
+      pr.outlier = true;
+      pr.used = false;
+      pr.removed_because = "data snooping: point test " + fmt(pr.point_statistic, 4) + " (χ²(" +
+                           std::to_string(pr.point_dof) + "), p = " + fmt(pr.point_p_value, 2) + " < " +
+                           fmt(o.alpha_point) + "); max |w| " + fmt(pr.w_max);
+      active.erase(active.begin() + static_cast<std::ptrdiff_t>(worst));
+      continue;
+    }
+    std::vector<bool> in_fit(control.points.size(), false);
+    for (std::size_t i : active) in_fit[i] = true;
+    for (std::size_t i = 0; i < control.points.size(); ++i) {
+      if (!in_fit[i]) tests(i, control.points[i].target.m - result.ecef_map->apply(control.points[i].source.m), false);
+    }
+
+    // Parameters in their reporting units, covariance likewise.
+    Eigen::MatrixXd cov = cov_scaled;
+    if (o.scale_by_sigma0 && dof > 0) cov *= result.sigma0 * result.sigma0;
+    result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && dof > 0;
+    std::vector<double> factor = {1.0, 1.0, 1.0};
+    result.covariance_names = {"shift_e_m", "shift_n_m", "shift_u_m"};
+    if (o.enu_yaw) {
+      factor.push_back(kArcsecPerRad / nominal.l_m);
+      result.covariance_names.emplace_back("yaw_arcsec");
+    }
+    if (o.enu_scale) {
+      factor.push_back(1e6 / nominal.l_m);
+      result.covariance_names.emplace_back("ds_ppm");
+    }
+    const Eigen::VectorXd f = Eigen::Map<Eigen::VectorXd>(factor.data(), u);
+    result.covariance = f.asDiagonal() * cov * f.asDiagonal();
+    result.correlation = result.covariance;
+    for (int a = 0; a < u; ++a) {
+      for (int b = 0; b < u; ++b) {
+        result.correlation(a, b) /= std::sqrt(result.covariance(a, a) * result.covariance(b, b));
+      }
+    }
+    auto sigma_of = [&](const std::string& name) {
+      for (int a = 0; a < u; ++a) {
+        if (result.covariance_names[static_cast<std::size_t>(a)] == name) return std::sqrt(result.covariance(a, a));
+      }
+      return 0.0;
+    };
+    result.parameters = {
+        Parameter{"shift_e_m", shift[0], sigma_of("shift_e_m"), true},
+        Parameter{"shift_n_m", shift[1], sigma_of("shift_n_m"), true},
+        Parameter{"shift_u_m", shift[2], sigma_of("shift_u_m"), true},
+        Parameter{"yaw_arcsec", yaw_rad * kArcsecPerRad, sigma_of("yaw_arcsec"), o.enu_yaw},
+        Parameter{"ds_ppm", ds_unitless * 1e6, sigma_of("ds_ppm"), o.enu_scale},
+        // The corrected origin, with sigmas from the shift's (E, N, U -> degrees, degrees, metres).
+        Parameter{"origin_lat_deg", corrected.lat.deg(), sigma_of("shift_n_m") / nominal.meridian_radius_m * 180.0 / M_PI, false},
+        Parameter{"origin_lon_deg", corrected.lon.deg(),
+                  sigma_of("shift_e_m") / (nominal.normal_radius_m * std::cos(nominal.lat_rad)) * 180.0 / M_PI, false},
+        Parameter{"origin_h_m", corrected.h.m, sigma_of("shift_u_m"), false},
+    };
+    if (dof <= 5) {
+      result.warnings.push_back("low redundancy (dof = " + std::to_string(dof) +
+                                "): the global test and the w-tests have little power");
+    }
+    if (g.applicable && !g.passed) {
+      result.warnings.push_back(std::string("global test ") +
+                                (omega > g.critical_upper ? "FAILED high" : "low") + " (σ0 = " + fmt(result.sigma0, 4) + ")");
+    }
+    result.ceres_iterations = static_cast<int>(summary.iterations.size());
+    result.ceres_report = summary.BriefReport();
+    return result;
+  }
+}
+
+}  // namespace geoanchor::solver
