@@ -318,6 +318,30 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
                   sigma_of("shift_e_m") / (nominal.normal_radius_m * std::cos(nominal.lat_rad)) * 180.0 / M_PI, false},
         Parameter{"origin_h_m", corrected.h.m, sigma_of("shift_u_m"), false},
     };
+    {
+      auto prop = std::make_shared<detail::Propagation>();
+      prop->covariance = cov;  // scaled parameters, σ0² applied when asked
+      const Nominal nom = nominal;
+      const geodesy::LocalTangentPlane nominal_plane(*o.nominal_origin);
+      const std::array<double, 5> at = {shift[0], shift[1], shift[2], yaw[0], ds[0]};
+      const bool with_yaw = o.enu_yaw, with_scale = o.enu_scale;
+      prop->jacobian = [=](const geodesy::EcefPosition& x, std::optional<geodesy::DecimalYear>) {
+        EnuOriginCost cost{nominal_plane.enu_from_ecef(x).enu_m, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), &nom};
+        ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1> cost_function(new EnuOriginCost(cost));
+        double p0[3] = {at[0], at[1], at[2]}, p1[1] = {at[3]}, p2[1] = {at[4]};
+        const double* params[3] = {p0, p1, p2};
+        double res[3] = {}, j0[9] = {}, j1[3] = {}, j2[3] = {};
+        double* jac[3] = {j0, j1, j2};
+        cost_function.Evaluate(params, res, jac);
+        Eigen::MatrixXd out(3, 3 + (with_yaw ? 1 : 0) + (with_scale ? 1 : 0));
+        int c = 0;
+        for (int k = 0; k < 3; ++k) out.col(c++) = -Eigen::Vector3d(j0[k], j0[3 + k], j0[6 + k]);  // residual = −model
+        if (with_yaw) out.col(c++) = -Eigen::Vector3d(j1[0], j1[1], j1[2]);
+        if (with_scale) out.col(c++) = -Eigen::Vector3d(j2[0], j2[1], j2[2]);
+        return out;
+      };
+      result.propagation = prop;
+    }
     if (dof <= 5) {
       result.warnings.push_back("low redundancy (dof = " + std::to_string(dof) +
                                 "): the global test and the w-tests have little power");

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <memory>
 #include <numeric>
+#include <functional>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
@@ -437,6 +438,12 @@ std::string_view to_string(FitModel m) {
   return "?";
 }
 
+Eigen::Matrix3d transformed_covariance_m2(const FitResult& fit, const geodesy::EcefPosition& source,
+                                          std::optional<DecimalYear> epoch) {
+  const Eigen::MatrixXd j = fit.propagation->jacobian(source, epoch);
+  return j * fit.propagation->covariance * j.transpose();
+}
+
 geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPosition& source,
                                 std::optional<DecimalYear> epoch) {
   if (fit.ecef_map) return geodesy::EcefPosition(fit.ecef_map->apply(source.m));
@@ -733,6 +740,27 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     }
     if (o.scale_by_sigma0 && dof > 0) cov *= result.sigma0 * result.sigma0;
     result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && dof > 0;
+    {
+      // Propagation in the centred parameters, where the Jacobian is predict()'s.
+      auto prop = std::make_shared<detail::Propagation>();
+      prop->covariance = sol.cov_centred * (result.covariance_scaled_by_sigma0 ? result.sigma0 * result.sigma0 : 1.0);
+      const auto theta = sol.theta;
+      const auto estimated = sol.estimated;
+      const auto model = o.rotation_model;
+      const double t0 = o.reference_epoch ? o.reference_epoch->year : 0.0;
+      prop->jacobian = [=](const geodesy::EcefPosition& x, std::optional<DecimalYear> epoch) {
+        Observation ob;
+        ob.x = x.m - cx;
+        ob.dt = td ? epoch.value().year - t0 : 0.0;
+        Eigen::Vector3d pred;
+        Eigen::Matrix<double, 3, kMaxParams> j;
+        predict(ob, theta.data(), model, td, pred, &j);
+        Eigen::MatrixXd out(3, static_cast<Eigen::Index>(estimated.size()));
+        for (std::size_t c = 0; c < estimated.size(); ++c) out.col(static_cast<Eigen::Index>(c)) = j.col(estimated[c]);
+        return out;
+      };
+      result.propagation = prop;
+    }
 
     // Names and unit factors, in the reported convention.
     const bool cf = result.convention == Convention::coordinate_frame;
@@ -813,6 +841,18 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
             ")| = " + fmt(worst_pair, 4) +
             ". The network is small compared with its distance from the Earth's centre: the transform is sound, "
             "its geocentric parameters are not individually meaningful; consider --model molodensky-badekas");
+      }
+    }
+    // Implausible magnitudes for a datum transform (RELIABILITY #15).
+    for (const auto& p : result.parameters) {
+      if ((p.name == "rx_arcsec" || p.name == "ry_arcsec" || p.name == "rz_arcsec") && std::fabs(p.value) > 10.0) {
+        result.warnings.push_back(p.name + " = " + fmt(p.value, 4) + "″ is implausible for a datum transform (> 10″, " +
+                                  fmt(std::fabs(p.value) * 30.9, 3) + " m at the Earth's surface): check the convention, "
+                                  "units (mas read as arcsec?) and the points");
+      }
+      if (p.name == "ds_ppm" && std::fabs(p.value) > 100.0) {
+        result.warnings.push_back("ds_ppm = " + fmt(p.value, 4) + " is implausible for a datum transform (> 100 ppm, " +
+                                  fmt(std::fabs(p.value) * 6.4, 3) + " m at the Earth's surface): check the units");
       }
     }
     if (result.global_test.applicable && !result.global_test.passed) {

@@ -7,6 +7,15 @@
 
 namespace geoanchor::solver {
 
+namespace detail {
+// ∂target/∂θ (3 × u, θ the estimated parameters in any units) and Σθ in the
+// same units, as a function of the source point and its epoch.
+struct Propagation {
+  std::function<Eigen::MatrixXd(const geodesy::EcefPosition&, std::optional<geodesy::DecimalYear>)> jacobian;
+  Eigen::MatrixXd covariance;
+};
+}  // namespace detail
+
 struct PointTestInput {
   Eigen::Vector3d v_m;    // residual (target − model), ECEF metres
   Eigen::Matrix3d w;      // whitening: Wᵀ W = C⁻¹

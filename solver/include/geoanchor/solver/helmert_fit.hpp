@@ -19,6 +19,8 @@
 
 #include <Eigen/Core>
 
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,6 +30,10 @@
 #include "geoanchor/geodesy/positions.hpp"
 
 namespace geoanchor::solver {
+
+namespace detail {
+struct Propagation;  // what transformed_covariance_m2 needs; private
+}
 
 // molodensky_badekas: the seven parameters of helmert7 about a pivot p
 // (default: the centroid of the used source points),
@@ -131,6 +137,7 @@ struct FitResult {
   std::vector<std::string> warnings;
   int ceres_iterations = 0;
   std::string ceres_report;  // one line
+  std::shared_ptr<const detail::Propagation> propagation;
 };
 
 // Throws geoanchor::Error: `rejected` for ill-posed problems (too few
@@ -142,5 +149,12 @@ FitResult fit_helmert(const geodesy::ControlSet& control, const FitOptions& opti
 // (required for helmert14).
 geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPosition& source,
                                 std::optional<geodesy::DecimalYear> epoch);
+
+// The covariance (ECEF, m²) that the parameters' own uncertainty gives the
+// transformed position of `source`: J Σθ Jᵀ with J = ∂target/∂θ. Scaled by
+// σ0² when the fit's covariance is. It grows with the distance from the
+// control points: this is what `apply` reports for a tile.
+Eigen::Matrix3d transformed_covariance_m2(const FitResult& fit, const geodesy::EcefPosition& source,
+                                          std::optional<geodesy::DecimalYear> epoch);
 
 }  // namespace geoanchor::solver
