@@ -208,8 +208,8 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
 CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   auto* cmd = app.add_subcommand("fit", "Fit a datum transform to control points, with statistics");
   cmd->add_option("CONTROL", o.control, "Control set (CSV)")->required();
-  cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin")
-      ->required();
+  cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin");
+  cmd->add_flag("--compare", o.compare, "Fit every applicable model on the same points and compare them");
   cmd->add_flag("--fix-yaw", o.fix_yaw, "enu-origin: hold the yaw at 0");
   cmd->add_flag("--with-scale", o.with_scale, "enu-origin: estimate a scale difference too");
   cmd->add_option("--pivot", o.pivot, "molodensky-badekas: pivot X,Y,Z in ECEF metres (default: the centroid)");
@@ -232,9 +232,89 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   return cmd;
 }
 
+namespace {
+
+// Fits every model the data allow on the same points (no data snooping, so
+// that the information criterion compares like with like) and prints them.
+int run_compare(const geodesy::ControlSet& set, const solver::FitOptions& base) {
+  std::vector<FitModel> models = {FitModel::translation3};
+  if (base.convention) {
+    models.push_back(FitModel::helmert6);
+    models.push_back(FitModel::helmert7);
+    bool epochs = !set.points.empty();
+    double lo = 1e300, hi = -1e300;
+    for (const auto& p : set.points) {
+      if (!p.epoch) {
+        epochs = false;
+        break;
+      }
+      lo = std::min(lo, p.epoch->year);
+      hi = std::max(hi, p.epoch->year);
+    }
+    if (epochs && hi > lo) models.push_back(FitModel::helmert14);
+  }
+  if (base.nominal_origin) models.push_back(FitModel::enu_origin);
+  std::cout << "geoanchor fit --compare: " << set.source_name << " (" << set.points.size()
+            << " points; data snooping off so that every model sees the same points)\n";
+  if (!base.convention) std::cout << "  (give --convention to include the models with rotations)\n";
+  std::cout << "\n  model              u    dof      σ0   global test        max|w|        AIC\n";
+  struct Row {
+    std::string name;
+    double aic;
+  };
+  std::vector<Row> rows;
+  for (FitModel m : models) {
+    solver::FitOptions fo = base;
+    fo.model = m;
+    fo.data_snooping = false;
+    if (m == FitModel::helmert14) fo.reference_epoch.reset();
+    char line[200];
+    try {
+      const solver::FitResult r = solver::fit_helmert(set, fo);
+      int u = 0;
+      for (const auto& p : r.parameters) u += p.estimated ? 1 : 0;
+      double max_w = 0.0;
+      for (const auto& p : r.points) {
+        if (p.used) max_w = std::max(max_w, p.w_max);
+      }
+      const int obs = r.dof + u;
+      // AIC = −2 ln L + 2u: Ω + 2u with a-priori sigmas, else from the estimated variance.
+      const double aic = set.has_a_priori_sigmas ? r.global_test.statistic + 2.0 * u
+                                                 : obs * std::log(r.global_test.statistic / obs) + 2.0 * u;
+      const auto& g = r.global_test;
+      const std::string verdict = !g.applicable ? "n/a" : g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED high" : "FAILED low";
+      std::snprintf(line, sizeof line, "  %-16s %3d %6d %8.3f   %-12s %10.2f %10.1f\n", std::string(solver::to_string(m)).c_str(),
+                    u, r.dof, r.sigma0, verdict.c_str(), max_w, aic);
+      rows.push_back({std::string(solver::to_string(m)), aic});
+    } catch (const Error& e) {
+      std::snprintf(line, sizeof line, "  %-16s refused: ", std::string(solver::to_string(m)).c_str());
+      std::cout << line << e.what() << "\n";
+      continue;
+    }
+    std::cout << line;
+  }
+  if (!rows.empty()) {
+    const auto best = std::min_element(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.aic < b.aic; });
+    std::cout << "\n  lowest AIC: " << best->name
+              << " (AIC = Ω + 2u with a-priori sigmas; differences above ~10 are strong evidence)\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
 int run_fit(const FitCommandOptions& o) {
+  if (o.model.empty() && !o.compare) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--model: required (or --compare to fit every applicable model)");
+  }
+  if (!o.model.empty() && o.compare) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--model and --compare: give one");
+  }
+  if (o.compare && !o.output.empty()) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--compare writes no transform file: drop -o, then fit the chosen model");
+  }
   solver::FitOptions fo;
-  fo.model = parse_model(o.model);
+  fo.model = o.compare ? FitModel::helmert7 : parse_model(o.model);
   if (o.convention) {
     if (*o.convention == "position_vector") {
       fo.convention = solver::Convention::position_vector;
@@ -279,7 +359,9 @@ int run_fit(const FitCommandOptions& o) {
   io::ControlReadOptions ro;
   ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
   if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
-  if (fo.model == FitModel::enu_origin) {
+  if (o.compare) {
+    fo.nominal_origin = ro.origin;
+  } else if (fo.model == FitModel::enu_origin) {
     if (!ro.origin) {
       throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
                   "--origin: the enu-origin model needs the nominal origin LAT,LON,H of the map's ENU coordinates");
@@ -293,8 +375,21 @@ int run_fit(const FitCommandOptions& o) {
   geodesy::ControlSet set = io::read_control_csv(o.control, ro);
   if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");
+  std::vector<std::string> frame_warnings;
+  for (const auto* f : {&set.source_frame, &set.target_frame}) {
+    if (*f && (*f)->datum() == "WGS84" && (*f)->realization().empty()) {
+      frame_warnings.push_back("frame " + (*f)->to_string() +
+                               " is the WGS 84 ensemble: its realizations differ by up to about 2 m; name one, e.g. "
+                               "WGS84(G2139)");
+    }
+  }
+  if (o.compare) {
+    for (const auto& w : frame_warnings) std::cerr << "geoanchor: warning: " << w << '\n';
+    return run_compare(set, fo);
+  }
 
-  const solver::FitResult r = solver::fit_helmert(set, fo);
+  solver::FitResult r = solver::fit_helmert(set, fo);
+  r.warnings.insert(r.warnings.begin(), frame_warnings.begin(), frame_warnings.end());
   print_report(std::cout, r, set, o);
   for (const auto& w : r.warnings) std::cerr << "geoanchor: warning: " << w << '\n';
 

@@ -19,6 +19,7 @@ struct FitCommandOptions {
   std::string rotation_model = "small_angle";
   std::optional<std::string> reference_epoch;
   std::optional<std::string> pivot;
+  bool compare = false;
   bool fix_yaw = false;
   bool with_scale = false;
   std::optional<std::string> origin;

@@ -291,6 +291,25 @@ TEST_F(FitCli, EnuOriginFromMapCoordinatesAndSurveyedMarks) {
   }
 }
 
+TEST_F(FitCli, CompareFitsEveryApplicableModelOnTheSamePoints) {
+  const RunResult r = geoanchor("fit " + kControl + " --compare --convention position_vector");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* model : {"translation3", "helmert6", "helmert7"}) {
+    EXPECT_NE(r.out.find(std::string("  ") + model + " "), std::string::npos) << model;
+  }
+  EXPECT_EQ(r.out.find("helmert14"), std::string::npos);  // no epochs in this set
+  EXPECT_NE(r.out.find("lowest AIC: "), std::string::npos);
+  EXPECT_EQ(files(), std::vector<std::string>{});
+}
+
+TEST_F(FitCli, TheWgs84EnsembleIsFlaggedAndTheWarningRecorded) {
+  const RunResult r = geoanchor("fit " + kControl + " --model helmert7 --convention position_vector --target-frame WGS84 -o " +
+                                path("T.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("WGS 84 ensemble"), std::string::npos);
+  EXPECT_NE(slurp(path("T.json")).find("WGS 84 ensemble"), std::string::npos);
+}
+
 struct Refusal {
   const char* name;
   const char* csv;
