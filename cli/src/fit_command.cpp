@@ -75,6 +75,11 @@ void print_report(std::ostream& out, const solver::FitResult& r, const geodesy::
   }
   const auto& g = r.global_test;
   out << "\nStatistics\n  σ0 = " << fixed(r.sigma0, 3) << ", dof = " << r.dof << "\n";
+  if (r.variance_factors) {
+    out << "  variance factors (--vce): source " << fixed(r.variance_factors->first, 3) << ", target "
+        << fixed(r.variance_factors->second, 3) << " (σ scale " << fixed(std::sqrt(r.variance_factors->first), 3) << ", "
+        << fixed(std::sqrt(r.variance_factors->second), 3) << ")\n";
+  }
   if (g.applicable) {
     out << "  global test (χ², α = " << o.alpha << "): " << fixed(g.statistic, 2) << " in [" << fixed(g.critical_lower, 2)
         << ", " << fixed(g.critical_upper, 2) << "]: "
@@ -95,9 +100,11 @@ void print_report(std::ostream& out, const solver::FitResult& r, const geodesy::
     const auto& p = r.points[i];
     char line[200];
     const std::string mdb = std::isfinite(p.mdb_m) ? fixed(1e3 * p.mdb_m, 1) : "-";
+    const std::string status = p.outlier ? "OUTLIER (removed)" : !p.used ? "not used"
+                               : p.robust_weight < 1.0 ? "weight " + fixed(p.robust_weight, 3) : "ok";
     std::snprintf(line, sizeof line, "  %-10s %8.1f %8.1f %8.1f  %6.2f %6.2f %6.2f  %8s  %s\n", p.id.c_str(),
                   1e3 * p.residual_enu_m.x(), 1e3 * p.residual_enu_m.y(), 1e3 * p.residual_enu_m.z(), p.w_enu.x(),
-                  p.w_enu.y(), p.w_enu.z(), mdb.c_str(), p.outlier ? "OUTLIER (removed)" : !p.used ? "not used" : "ok");
+                  p.w_enu.y(), p.w_enu.z(), mdb.c_str(), status.c_str());
     out << line;
   }
   for (const auto& p : r.points) {
@@ -193,9 +200,11 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
     q.outlier = p.outlier;
     q.used = p.used;
     q.note = p.removed_because;
+    q.robust_weight = p.robust_weight;
     f.points.push_back(q);
   }
   f.warnings = r.warnings;
+  f.variance_factors = r.variance_factors;
   std::string cmd;
   for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
   f.generator = "geoanchor " GEOANCHOR_VERSION ": " + cmd;
@@ -210,6 +219,8 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   cmd->add_option("CONTROL", o.control, "Control set (CSV)")->required();
   cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin");
   cmd->add_flag("--compare", o.compare, "Fit every applicable model on the same points and compare them");
+  cmd->add_option("--robust", o.robust, "Robust loss for exploration: huber:K or cauchy:K (K in standard deviations)");
+  cmd->add_flag("--vce", o.vce, "Estimate variance factors for the source and target covariances");
   cmd->add_flag("--fix-yaw", o.fix_yaw, "enu-origin: hold the yaw at 0");
   cmd->add_flag("--with-scale", o.with_scale, "enu-origin: estimate a scale difference too");
   cmd->add_option("--pivot", o.pivot, "molodensky-badekas: pivot X,Y,Z in ECEF metres (default: the centroid)");
@@ -344,6 +355,17 @@ int run_fit(const FitCommandOptions& o) {
     const auto parts = split_numbers(*o.pivot, "--pivot", 3, "X,Y,Z (ECEF metres)");
     fo.pivot_m = Eigen::Vector3d(parts[0], parts[1], parts[2]);
   }
+  if (o.robust) {
+    const auto colon = o.robust->find(':');
+    const std::string kind = o.robust->substr(0, colon);
+    const auto k = colon == std::string::npos ? std::nullopt : parse_finite_double(o.robust->substr(colon + 1));
+    if ((kind != "huber" && kind != "cauchy") || !k || !(*k > 0.0)) {
+      throw Error(ErrorKind::usage, "E_OPTION", "--robust " + *o.robust + ": expected huber:K or cauchy:K with K > 0");
+    }
+    fo.robust = kind == "huber" ? solver::FitOptions::Robust::huber : solver::FitOptions::Robust::cauchy;
+    fo.robust_k = *k;
+  }
+  fo.vce = o.vce;
   fo.alpha = o.alpha;
   fo.alpha_point = o.alpha_point;
   fo.data_snooping = !o.no_snooping;

@@ -20,6 +20,8 @@ struct FitCommandOptions {
   std::optional<std::string> reference_epoch;
   std::optional<std::string> pivot;
   bool compare = false;
+  std::optional<std::string> robust;
+  bool vce = false;
   bool fix_yaw = false;
   bool with_scale = false;
   std::optional<std::string> origin;

@@ -611,6 +611,10 @@ std::string to_json_text(const TransformFile& t) {
           {"passed", f.global_applicable ? json(f.global_passed) : json(nullptr)},
           {"applicable", f.global_applicable}}},
         {"warnings", f.warnings}};
+    if (f.variance_factors) {
+      doc["statistics"]["variance_factors"] = {{"source", number(f.variance_factors->first)},
+                                               {"target", number(f.variance_factors->second)}};
+    }
     json pts = json::array();
     for (const auto& p : f.points) {
       json jp = {{"id", p.id},
@@ -623,6 +627,7 @@ std::string to_json_text(const TransformFile& t) {
                  {"outlier", p.outlier},
                  {"used", p.used}};
       if (!p.note.empty()) jp["note"] = p.note;
+      if (p.robust_weight < 1.0) jp["robust_weight"] = number(p.robust_weight);
       pts.push_back(jp);
     }
     doc["points"] = pts;

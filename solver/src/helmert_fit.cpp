@@ -451,8 +451,57 @@ geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPositio
   return geodesy::apply(geodesy::evaluate_at(fit.helmert, t), fit.rotation_model, source);
 }
 
+namespace {
+
+// Iteratively reweighted least squares for a robust loss.
+FitResult fit_robust(const ControlSet& control, const FitOptions& options) {
+  constexpr int kMaxIterations = 50;
+  constexpr double kWeightTolerance = 1e-6;
+  FitOptions o = options;
+  o.robust = FitOptions::Robust::none;
+  o.data_snooping = false;
+  std::vector<double> weight(control.points.size(), 1.0);
+  FitResult r;
+  for (int it = 1; it <= kMaxIterations; ++it) {
+    ControlSet weighted = control;
+    for (std::size_t i = 0; i < weighted.points.size(); ++i) {
+      weighted.points[i].source_cov_m2 /= weight[i];
+      weighted.points[i].target_cov_m2 /= weight[i];
+    }
+    if (!control.has_a_priori_sigmas) weighted.has_a_priori_sigmas = false;
+    r = fit_helmert(weighted, o);
+    double change = 0.0;
+    for (std::size_t i = 0; i < r.points.size(); ++i) {
+      const auto& p = r.points[i];
+      if (!p.used || p.point_dof == 0) continue;
+      // The point test T was computed with covariance C / w, so T = w · vᵀC⁻¹v:
+      // the standardized residual under the stated covariance is sqrt(T / (dof · w)).
+      const double e = std::sqrt(p.point_statistic / (p.point_dof * weight[i]));
+      const double k = options.robust_k;
+      const double w = options.robust == FitOptions::Robust::huber ? (e <= k ? 1.0 : k / e) : 1.0 / (1.0 + (e / k) * (e / k));
+      change = std::max(change, std::fabs(w - weight[i]));
+      weight[i] = std::max(w, 1e-6);
+    }
+    r.robust_iterations = it;
+    if (change < kWeightTolerance) break;
+  }
+  for (std::size_t i = 0; i < r.points.size(); ++i) r.points[i].robust_weight = weight[i];
+  r.warnings.push_back(std::string(options.robust == FitOptions::Robust::huber ? "Huber" : "Cauchy") + " robust loss (k = " +
+                       fmt(options.robust_k) + ", " + std::to_string(r.robust_iterations) +
+                       " reweighting passes): for exploration; sigmas and tests assume the final weights were known");
+  return r;
+}
+
+}  // namespace
+
 FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
-  if (options.model == FitModel::enu_origin) return fit_enu_origin(control, options);
+  if (options.robust != FitOptions::Robust::none) return fit_robust(control, options);
+  if (options.model == FitModel::enu_origin) {
+    if (options.vce) {
+      throw Error(ErrorKind::usage, "E_OPTION", "--vce: not available for the enu-origin model yet");
+    }
+    return fit_enu_origin(control, options);
+  }
   FitOptions o = options;
   const bool td = o.model == FitModel::helmert14;
   if (has_rotation(o.model) && !o.convention) {
@@ -486,6 +535,15 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
   const double z_point = normal_quantile(1.0 - o.alpha_point / 2.0);
   result.w_critical = z_point;
   const double lambda0 = std::pow(z_point + normal_quantile(o.power), 2.0);
+
+  // Variance factors of the source and target covariances (--vce).
+  double f_src = 1.0, f_dst = 1.0;
+  int vce_iterations = 0;
+  constexpr int kMaxVceIterations = 50;
+  constexpr double kVceTolerance = 1e-5;
+  if (o.vce && !control.has_a_priori_sigmas) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--vce: needs a-priori sigmas in both frames (sigma_src_m, sigma_dst_m or covariances)");
+  }
 
   while (true) {
     const int n = static_cast<int>(active.size());
@@ -558,7 +616,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     obs.reserve(active.size());
     for (std::size_t i : active) {
       const auto& p = control.points[i];
-      Eigen::Matrix3d c = p.target_cov_m2 + p.source_cov_m2;  // J ≈ I: error |r| + |ds| relative (≈1e-5)
+      Eigen::Matrix3d c = f_dst * p.target_cov_m2 + f_src * p.source_cov_m2;  // J ≈ I: error |r| + |ds| relative (≈1e-5)
       if (!control.has_a_priori_sigmas) c = Eigen::Matrix3d::Identity();
       const Eigen::LLT<Eigen::Matrix3d> llt(c);
       if (llt.info() != Eigen::Success) {
@@ -683,6 +741,51 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       }
     }
 
+    // --- variance components (--vce) -----------------------------------------
+    // θ_k ← θ_k · (vᵀ P Q_k P v) / tr(P Q_k P Q_vv), Q_k the group's current
+    // covariance; with one group this is θ ← θ σ̂0².
+    if (o.vce && dof > 0) {
+      double num_src = 0.0, num_dst = 0.0, den_src = 0.0, den_dst = 0.0;
+      double s11 = 0.0, s12 = 0.0, s22 = 0.0;  // the VCE normal matrix: Σ tr(B_k B_l), B_k = Q_k P Q_vv P
+      for (std::size_t k = 0; k < active.size(); ++k) {
+        const auto& p = control.points[active[k]];
+        Eigen::Vector3d pred;
+        Eigen::Matrix<double, 3, kMaxParams> jfull;
+        predict(obs[k], sol.theta.data(), o.rotation_model, td, pred, &jfull, &final_rotation);
+        PointJacobian a(3, u);
+        for (int c = 0; c < u; ++c) a.col(c) = obs[k].w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
+        const Eigen::Matrix3d pqp = obs[k].w.transpose() * (Eigen::Matrix3d::Identity() - a * n_inv * a.transpose()) * obs[k].w;
+        const Eigen::Vector3d pv = obs[k].w.transpose() * vw[k];
+        const Eigen::Matrix3d q_src = f_src * p.source_cov_m2, q_dst = f_dst * p.target_cov_m2;
+        num_src += pv.dot(q_src * pv);
+        num_dst += pv.dot(q_dst * pv);
+        den_src += (q_src * pqp).trace();
+        den_dst += (q_dst * pqp).trace();
+        const Eigen::Matrix3d b_src = q_src * pqp, b_dst = q_dst * pqp;
+        s11 += (b_src * b_src).trace();
+        s12 += (b_src * b_dst).trace();
+        s22 += (b_dst * b_dst).trace();
+      }
+      // Source and target errors enter each residual the same way; they can
+      // be told apart only where their covariances differ in pattern.
+      const double rho = s12 / std::sqrt(s11 * s22);
+      if (!(std::fabs(rho) < 0.99)) {
+        reject("E_VCE_INSEPARABLE",
+               "--vce: the source and target covariances have nearly the same pattern at every point (correlation of "
+               "the two variance estimates " + fmt(rho, 5) +
+                   "), so only their sum is estimable: σ0² = " + fmt(result.sigma0 * result.sigma0, 4) +
+                   " already estimates it. Separate components need sigmas that differ between points or axes");
+      }
+      const double new_src = den_src > 0.0 ? f_src * num_src / den_src : f_src;
+      const double new_dst = den_dst > 0.0 ? f_dst * num_dst / den_dst : f_dst;
+      const bool converged = std::fabs(new_src - f_src) <= kVceTolerance * f_src && std::fabs(new_dst - f_dst) <= kVceTolerance * f_dst;
+      f_src = new_src;
+      f_dst = new_dst;
+      result.variance_factors = std::make_pair(f_src, f_dst);
+      if (!converged && ++vce_iterations < kMaxVceIterations) continue;
+      if (!converged) result.warnings.push_back("variance components did not converge in " + std::to_string(kMaxVceIterations) + " iterations");
+    }
+
     // --- data snooping ------------------------------------------------------
     if (o.data_snooping && dof > 0 && worst < active.size() && worst_p < o.alpha_point) {
       const std::size_t idx = active[worst];
@@ -715,7 +818,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       Observation ob;
       ob.x = p.source.m - cx;
       ob.y = p.target.m - cy;
-      const Eigen::Matrix3d c = control.has_a_priori_sigmas ? Eigen::Matrix3d(p.target_cov_m2 + p.source_cov_m2)
+      const Eigen::Matrix3d c = control.has_a_priori_sigmas ? Eigen::Matrix3d(f_dst * p.target_cov_m2 + f_src * p.source_cov_m2)
                                                             : Eigen::Matrix3d::Identity();
       const Eigen::LLT<Eigen::Matrix3d> llt(c);
       if (llt.info() != Eigen::Success) continue;

@@ -386,7 +386,20 @@ INSTANTIATE_TEST_SUITE_P(
                 "D,4270803,640437,4688617,4270804.01,640438,4688618,0.0001,0.0001\n"
                 "E,4275803,645437,4678617,4275804,645438.03,4678618,0.0001,0.0001\n"
                 "F,4275803,641437,4683617,4275804,641438,4683618.02,0.0001,0.0001\n",
-                "--model helmert7 --convention position_vector --no-snooping", 4, "global test failed high"}),
+                "--model helmert7 --convention position_vector --no-snooping", 4, "global test failed high"},
+        Refusal{"vce_inseparable",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,4270804.003,640438,4678618,0.003,0.004\n"
+                "B,4280803,640437,4678617,4280804,640438.002,4678618,0.003,0.004\n"
+                "C,4270803,650437,4678617,4270804,650438,4678618.004,0.003,0.004\n"
+                "D,4270803,640437,4688617,4270804.001,640438,4688618,0.003,0.004\n"
+                "E,4275803,645437,4678617,4275804,645438.003,4678618,0.003,0.004\n"
+                "F,4275803,641437,4683617,4275804,641438,4683618.002,0.003,0.004\n",
+                "--model helmert7 --convention position_vector --vce", 4, "only their sum is estimable"},
+        Refusal{"bad_robust",
+                "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n"
+                "A,4270803,640437,4678617,4270804,640438,4678618,0.01,0.01\n",
+                "--model helmert7 --convention position_vector --robust tukey:2", 2, "--robust tukey:2: expected huber:K or cauchy:K"}),
     [](const ::testing::TestParamInfo<Refusal>& param_info) { return std::string(param_info.param.name); });
 
 }  // namespace

@@ -51,6 +51,7 @@ struct FitPointRecord {
   bool outlier = false;
   bool used = true;
   std::string note;  // why it was not used
+  double robust_weight = 1.0;  // written when < 1 (robust loss)
 };
 
 struct FitRecord {
@@ -69,6 +70,7 @@ struct FitRecord {
   bool global_applicable = true;
   std::vector<FitPointRecord> points;
   std::vector<std::string> warnings;
+  std::optional<std::pair<double, double>> variance_factors;  // source, target (--vce)
   std::string generator;  // "geoanchor 0.1.0 fit ..."
 };
 

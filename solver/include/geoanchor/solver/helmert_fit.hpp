@@ -67,6 +67,15 @@ struct FitOptions {
   double alpha_point = 0.001;   // w-tests and data snooping
   double power = 0.80;          // for the minimal detectable bias
   bool data_snooping = true;
+  // Robust loss for exploration (iteratively reweighted least squares on
+  // each point's standardized residual e: Huber w = min(1, K/e), Cauchy
+  // w = 1/(1 + (e/K)²)). Statistics are then approximate; no snooping.
+  enum class Robust { none, huber, cauchy };
+  Robust robust = Robust::none;
+  double robust_k = 1.5;
+  // Variance-component estimation for the source and target groups: their
+  // covariances are rescaled by estimated factors until consistent.
+  bool vce = false;
   // Scale the parameter covariance by σ0² (a posteriori) instead of using
   // the a-priori σ0 = 1. Forced when the control set has no a-priori sigmas.
   bool scale_by_sigma0 = false;
@@ -104,6 +113,7 @@ struct PointResult {
   double point_statistic = 0.0;
   int point_dof = 0;
   double point_p_value = 1.0;
+  double robust_weight = 1.0;  // with a robust loss: the final IRLS weight
 };
 
 struct FitResult {
@@ -135,6 +145,10 @@ struct FitResult {
   double w_critical = 0.0;  // |w| above this fails its w-test at alpha_point
   std::vector<PointResult> points;  // in input order
   std::vector<std::string> warnings;
+  // --vce: the estimated variance factors of the source and target
+  // covariances (1 = the stated sigmas were right), and the iterations used.
+  std::optional<std::pair<double, double>> variance_factors;
+  int robust_iterations = 0;
   int ceres_iterations = 0;
   std::string ceres_report;  // one line
   std::shared_ptr<const detail::Propagation> propagation;
