@@ -27,7 +27,8 @@ using nlohmann::json;
 const std::set<std::string> kTopLevelKeys = {
     "model",       "convention", "rotation_model", "source_frame", "target_frame", "reference_epoch",
     "parameters",  "sigmas",     "correlation",    "statistics",   "points",       "proj_pipeline",
-    "epsg_method", "generator",  "format_version", "description",  "alternatives", "nominal_origin"};
+    "epsg_method", "generator",  "format_version", "description",  "alternatives", "nominal_origin",
+    "wkt2",        "projjson"};
 
 [[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& what) {
   throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
@@ -474,6 +475,7 @@ json json_number_or_null(double v) { return std::isfinite(v) ? number(v) : json(
 std::string epsg_method(const TransformFile& t) {
   if (t.enu_origin) return "";
   const bool pv = t.convention_name() == PositionVector::name;
+  if (t.model == TransformModel::translation3) return "EPSG:1031";
   if (t.model == TransformModel::molodensky_badekas) return pv ? "EPSG:1061" : "EPSG:1034";
   if (t.time_dependent()) return pv ? "EPSG:1053" : "EPSG:1056";
   return pv ? "EPSG:1033" : "EPSG:1032";
@@ -586,6 +588,10 @@ std::string to_json_text(const TransformFile& t) {
   }
   doc["proj_pipeline"] = proj_pipeline(t);
   if (t.fit) {
+    if (const auto wkt = to_wkt2(t)) doc["wkt2"] = *wkt;
+    if (const auto pj = to_projjson(t)) doc["projjson"] = json::parse(*pj);
+  }
+  if (t.fit) {
     const FitRecord& f = *t.fit;
     if (!f.generator.empty()) doc["generator"] = f.generator;
     json sig = json::object();
@@ -633,11 +639,14 @@ std::string to_json_text(const TransformFile& t) {
     doc["points"] = pts;
   }
   if (t.fit && !t.enu_origin) {
-    const TransformFile other = swapped_convention(t);
+    TransformFile other = swapped_convention(t);
+    other.fit = t.fit;  // for the exports below
     doc["alternatives"] = json::array({json{{"convention", std::string(other.convention_name())},
                                             {"epsg_method", epsg_method(other)},
                                             {"parameters", with_pivot(std::visit([](const auto& h) { return parameters_json(h); }, other.helmert))},
                                             {"proj_pipeline", proj_pipeline(other)}}});
+    if (const auto wkt = to_wkt2(other)) doc["alternatives"][0]["wkt2"] = *wkt;
+    if (const auto pj = to_projjson(other)) doc["alternatives"][0]["projjson"] = json::parse(*pj);
   }
   return doc.dump(2) + "\n";
 }

@@ -126,6 +126,13 @@ std::string to_json_text(const TransformFile& t);
 // PROJ takes the observation epoch from each coordinate's time (cct: x y z t).
 std::string proj_pipeline(const TransformFile& t);
 
+// The coordinate operation as WKT2:2019 in its EPSG method (1031, 1032/1033,
+// 1053/1056, 1034/1061), and as PROJJSON (converted from that WKT by PROJ).
+// std::nullopt for the exact rotation model and enu-origin, which no EPSG
+// method describes.
+std::optional<std::string> to_wkt2(const TransformFile& t);
+std::optional<std::string> to_projjson(const TransformFile& t);
+
 // The EPSG method code of the transform in its own convention, e.g.
 // "EPSG:1033" (position vector), "EPSG:1032" (coordinate frame), 1053/1056
 // for time-dependent sets.
