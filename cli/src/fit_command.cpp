@@ -216,7 +216,7 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
 
 CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   auto* cmd = app.add_subcommand("fit", "Fit a datum transform to control points, with statistics");
-  cmd->add_option("CONTROL", o.control, "Control set (CSV)")->required();
+  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON)")->required();
   cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin");
   cmd->add_flag("--compare", o.compare, "Fit every applicable model on the same points and compare them");
   cmd->add_option("--robust", o.robust, "Robust loss for exploration: huber:K or cauchy:K (K in standard deviations)");
@@ -394,7 +394,7 @@ int run_fit(const FitCommandOptions& o) {
   } else if (o.fix_yaw || o.with_scale) {
     throw Error(ErrorKind::usage, "E_OPTION", "--fix-yaw/--with-scale: only for --model enu-origin");
   }
-  geodesy::ControlSet set = io::read_control_csv(o.control, ro);
+  geodesy::ControlSet set = io::read_control_set(o.control, ro);
   if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");
   std::vector<std::string> frame_warnings;

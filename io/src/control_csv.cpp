@@ -15,6 +15,7 @@
 #include "geoanchor/io/coordinate_codec.hpp"
 #include "geoanchor/io/coordinate_columns.hpp"
 #include "geoanchor/io/csv.hpp"
+#include "control_common.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -135,15 +136,11 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   const auto use_col = find_column(header, "use");
   const RowReader rows(header, source_name);
 
-  std::optional<geodesy::LocalTangentPlane> plane;
-  if (src.coords.kind == CoordinateKind::enu || dst.coords.kind == CoordinateKind::enu) {
-    if (!o.origin) {
-      throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
-                  source_name + ": ENU control coordinates need their nominal origin: give --origin LAT,LON,H");
-    }
-    plane.emplace(*o.origin);
+  if ((src.coords.kind == CoordinateKind::enu || dst.coords.kind == CoordinateKind::enu) && !o.origin) {
+    throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
+                source_name + ": ENU control coordinates need their nominal origin: give --origin LAT,LON,H");
   }
-  const geodesy::GeocentricConverter geocentric(o.ellipsoid);
+  const detail::RoleConverter converter(o);
 
   ControlSet set;
   set.source_name = source_name;
@@ -162,44 +159,27 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   set.has_a_priori_sigmas = src.sigma || src.has_cov || dst.sigma || dst.has_cov;
 
   // ECEF position and covariance of one role in one row.
-  auto read_role = [&](const CsvRecord& r, const RoleColumns& rc, Eigen::Matrix3d& cov) {
-    const double a = rows.number(r, rc.coords.first), b = rows.number(r, rc.coords.second),
-                 c = rows.number(r, *rc.coords.third);
-    Eigen::Matrix3d local_to_ecef = Eigen::Matrix3d::Identity();  // axes of the covariance columns -> ECEF
-    geodesy::EcefPosition p;
-    switch (rc.coords.kind) {
-      case CoordinateKind::ecef: p = geodesy::EcefPosition(a, b, c); break;
-      case CoordinateKind::geodetic: {
-        if (std::fabs(a) > 90.0) rows.fail(r, rc.coords.first, "latitude not in [-90, 90] degrees");
-        if (std::fabs(b) > 180.0) rows.fail(r, rc.coords.second, "longitude not in [-180, 180] degrees");
-        const geodesy::GeodeticPosition g{geodesy::Angle::degrees(a), geodesy::Angle::degrees(b), geodesy::EllipsoidalHeight{c}};
-        p = geocentric.ecef_from_geodetic(g);
-        local_to_ecef = geodesy::LocalTangentPlane(geodesy::LocalOrigin{g, o.ellipsoid}).enu_from_ecef_rotation().transpose();
-        break;
-      }
-      case CoordinateKind::enu:
-        p = plane->ecef_from_enu(geodesy::EnuPosition{Eigen::Vector3d(a, b, c), *o.origin});
-        local_to_ecef = plane->enu_from_ecef_rotation().transpose();
-        break;
-      default: break;
+  auto read_role = [&](const CsvRecord& r, const RoleColumns& rc, geodesy::EcefPosition& p, Eigen::Matrix3d& cov) {
+    detail::RoleValues v;
+    v.kind = rc.coords.kind;
+    v.a = rows.number(r, rc.coords.first);
+    v.b = rows.number(r, rc.coords.second);
+    v.c = rows.number(r, *rc.coords.third);
+    if (rc.sigma) v.sigma_m = rows.number(r, *rc.sigma);
+    if (rc.has_cov) {
+      std::array<double, 6> c{};
+      for (std::size_t k = 0; k < 6; ++k) c[k] = rows.number(r, *rc.cov[k]);
+      v.cov_m2 = c;
     }
-    Eigen::Matrix3d local = Eigen::Matrix3d::Identity();  // unit weight when no sigma is given
-    if (rc.sigma) {
-      const double s = rows.number(r, *rc.sigma);
-      if (!(s > 0.0)) rows.fail(r, *rc.sigma, "must be > 0 (a standard deviation in metres)");
-      local = Eigen::Matrix3d::Identity() * s * s;
-    } else if (rc.has_cov) {
-      std::array<double, 6> v{};
-      for (std::size_t k = 0; k < 6; ++k) v[k] = rows.number(r, *rc.cov[k]);
-      local << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
-      if (Eigen::LLT<Eigen::Matrix3d>(local).info() != Eigen::Success || !(local.diagonal().minCoeff() > 0.0)) {
-        rows.fail(r, *rc.cov[0], "covariance of " + rc.role + " is not positive definite");
-      }
-    } else if (set.has_a_priori_sigmas) {
-      local.setZero();  // the other frame carries the uncertainty
-    }
-    cov = local_to_ecef * local * local_to_ecef.transpose();
-    return p;
+    const auto fail = [&](detail::RoleField f, const std::string& message) {
+      const std::size_t col = f == detail::RoleField::first    ? rc.coords.first
+                              : f == detail::RoleField::second ? rc.coords.second
+                              : f == detail::RoleField::third  ? *rc.coords.third
+                              : f == detail::RoleField::sigma  ? *rc.sigma
+                                                               : *rc.cov[0];
+      rows.fail(r, col, f == detail::RoleField::covariance ? "covariance of " + rc.role + ": " + message : message);
+    };
+    converter.convert(v, set.has_a_priori_sigmas, fail, p, cov);
   };
 
   std::map<std::pair<std::string, double>, std::size_t> seen;  // (id, epoch) -> index
@@ -210,8 +190,8 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     p.id = r.values[*id_col];
     p.line = r.line;
     if (p.id.empty()) rows.fail(r, *id_col, "empty id");
-    p.source = read_role(r, src, p.source_cov_m2);
-    p.target = read_role(r, dst, p.target_cov_m2);
+    read_role(r, src, p.source, p.source_cov_m2);
+    read_role(r, dst, p.target, p.target_cov_m2);
     if (epoch_col && !r.values[*epoch_col].empty()) {
       p.epoch = geodesy::parse_decimal_year(r.values[*epoch_col], source_name + ":" + std::to_string(r.line) + ": epoch");
     }
@@ -225,17 +205,8 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
         rows.fail(r, *use_col, "expected 1/0, true/false or yes/no");
       }
     }
-    const auto key = std::make_pair(p.id, p.epoch ? p.epoch->year : -1.0);
-    if (const auto it = seen.find(key); it != seen.end()) {
-      const ControlPoint& first = set.points[it->second];
-      const double d = std::max((first.source.m - p.source.m).norm(), (first.target.m - p.target.m).norm());
-      throw Error(ErrorKind::input, "E_DUPLICATE_ID",
-                  source_name + ":" + std::to_string(r.line) + ": id=" + p.id + ": duplicate of line " +
-                      std::to_string(first.line) + (p.epoch ? " at the same epoch" : "") +
-                      " (coordinates differ by " + format_shortest(d) + " m); ids must be unique per epoch");
-    }
-    seen.emplace(key, set.points.size());
-    set.points.push_back(std::move(p));
+    detail::add_point(set, std::move(p), seen, source_name + ":" + std::to_string(r.line),
+                      [](const ControlPoint& q) { return "line " + std::to_string(q.line); });
   }
   return set;
 }

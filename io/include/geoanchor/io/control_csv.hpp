@@ -40,4 +40,17 @@ struct ControlReadOptions {
 geodesy::ControlSet read_control_csv(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
 geodesy::ControlSet read_control_csv(const std::filesystem::path& path, const ControlReadOptions& o);
 
+// The same in JSON:
+//   {"source_frame": "ITRF2014@2024.5", "target_frame": "ETRF2000@2024.5",
+//    "points": [{"id": "P01",
+//                "source": {"lat_deg": …, "lon_deg": …, "h_m": …},   (or x_m/y_m/z_m, or e_m/n_m/u_m)
+//                "target": {"x_m": …, "y_m": …, "z_m": …},
+//                "sigma_src_m": 0.003, "sigma_dst_m": 0.004,          (or "cov_src_m2": [[…],[…],[…]])
+//                "epoch": 2024.5, "use": true}, …]}
+// Messages name the JSON path (points[3].source.lat_deg).
+geodesy::ControlSet read_control_json(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
+
+// CSV or JSON, by content (a file whose first non-blank character is '{' is JSON).
+geodesy::ControlSet read_control_set(const std::filesystem::path& path, const ControlReadOptions& o);
+
 }  // namespace geoanchor::io

@@ -1,0 +1,70 @@
+#include "control_common.hpp"
+
+#include <Eigen/Cholesky>
+
+#include <cmath>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::io::detail {
+
+RoleConverter::RoleConverter(const ControlReadOptions& options) : options_(options), geocentric_(options.ellipsoid) {
+  if (options_.origin) plane_.emplace(*options_.origin);
+}
+
+void RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const RoleFail& fail,
+                            geodesy::EcefPosition& position, Eigen::Matrix3d& cov_m2) const {
+  Eigen::Matrix3d local_to_ecef = Eigen::Matrix3d::Identity();  // axes of the covariance -> ECEF
+  switch (v.kind) {
+    case CoordinateKind::ecef: position = geodesy::EcefPosition(v.a, v.b, v.c); break;
+    case CoordinateKind::geodetic: {
+      if (std::fabs(v.a) > 90.0) fail(RoleField::first, "latitude not in [-90, 90] degrees");
+      if (std::fabs(v.b) > 180.0) fail(RoleField::second, "longitude not in [-180, 180] degrees");
+      const geodesy::GeodeticPosition g{geodesy::Angle::degrees(v.a), geodesy::Angle::degrees(v.b),
+                                        geodesy::EllipsoidalHeight{v.c}};
+      position = geocentric_.ecef_from_geodetic(g);
+      local_to_ecef = geodesy::enu_from_ecef_rotation(g.lat, g.lon).transpose();
+      break;
+    }
+    case CoordinateKind::enu:
+      if (!plane_) {
+        throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
+                    "ENU control coordinates need their nominal origin: give --origin LAT,LON,H");
+      }
+      position = plane_->ecef_from_enu(geodesy::EnuPosition{Eigen::Vector3d(v.a, v.b, v.c), *options_.origin});
+      local_to_ecef = plane_->enu_from_ecef_rotation().transpose();
+      break;
+    default: fail(RoleField::first, "control sets take ECEF, geodetic or ENU coordinates");
+  }
+  Eigen::Matrix3d local = Eigen::Matrix3d::Identity();  // unit weight when the set gives no sigmas at all
+  if (v.sigma_m) {
+    if (!(*v.sigma_m > 0.0)) fail(RoleField::sigma, "must be > 0 (a standard deviation in metres)");
+    local = Eigen::Matrix3d::Identity() * *v.sigma_m * *v.sigma_m;
+  } else if (v.cov_m2) {
+    const auto& c = *v.cov_m2;
+    local << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+    if (Eigen::LLT<Eigen::Matrix3d>(local).info() != Eigen::Success || !(local.diagonal().minCoeff() > 0.0)) {
+      fail(RoleField::covariance, "covariance is not positive definite");
+    }
+  } else if (others_have_sigmas) {
+    local.setZero();  // the other frame carries the uncertainty
+  }
+  cov_m2 = local_to_ecef * local * local_to_ecef.transpose();
+}
+
+void add_point(geodesy::ControlSet& set, geodesy::ControlPoint p, std::map<std::pair<std::string, double>, std::size_t>& seen,
+               const std::string& where, const std::function<std::string(const geodesy::ControlPoint&)>& where_of) {
+  const auto key = std::make_pair(p.id, p.epoch ? p.epoch->year : -1.0);
+  if (const auto it = seen.find(key); it != seen.end()) {
+    const geodesy::ControlPoint& first = set.points[it->second];
+    const double d = std::max((first.source.m - p.source.m).norm(), (first.target.m - p.target.m).norm());
+    throw Error(ErrorKind::input, "E_DUPLICATE_ID",
+                where + ": id=" + p.id + ": duplicate of " + where_of(first) + (p.epoch ? " at the same epoch" : "") +
+                    " (coordinates differ by " + format_shortest(d) + " m); ids must be unique per epoch");
+  }
+  seen.emplace(key, set.points.size());
+  set.points.push_back(std::move(p));
+}
+
+}  // namespace geoanchor::io::detail

@@ -1,0 +1,52 @@
+#pragma once
+// What the CSV and JSON control-set readers share: turning one frame's
+// coordinates and uncertainty into ECEF, and the duplicate-id rule.
+
+#include <Eigen/Core>
+
+#include <array>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "geoanchor/geodesy/control_point.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/coordinate_columns.hpp"
+
+namespace geoanchor::io::detail {
+
+// One frame's values for one point, as read.
+struct RoleValues {
+  CoordinateKind kind = CoordinateKind::ecef;
+  double a = 0.0, b = 0.0, c = 0.0;              // x,y,z | lat,lon,h | e,n,u
+  std::optional<double> sigma_m;                 // isotropic
+  std::optional<std::array<double, 6>> cov_m2;   // xx, xy, xz, yy, yz, zz in the coordinates' axes
+};
+
+// Which value a failure is about: the three coordinates, the sigma, the covariance.
+enum class RoleField { first, second, third, sigma, covariance };
+using RoleFail = std::function<void(RoleField, const std::string& message)>;  // throws
+
+class RoleConverter {
+ public:
+  explicit RoleConverter(const ControlReadOptions& options);
+  // Position and ECEF covariance; `others_have_sigmas`: the set gives sigmas
+  // somewhere, so a frame without them carries no uncertainty.
+  void convert(const RoleValues& v, bool others_have_sigmas, const RoleFail& fail, geodesy::EcefPosition& position,
+               Eigen::Matrix3d& cov_m2) const;
+
+ private:
+  ControlReadOptions options_;
+  geodesy::GeocentricConverter geocentric_;
+  std::optional<geodesy::LocalTangentPlane> plane_;
+};
+
+// Adds `p` to `set`, refusing a duplicate id at the same epoch; `where` names
+// the new point (file:line or JSON path), `where_of` an earlier one.
+void add_point(geodesy::ControlSet& set, geodesy::ControlPoint p, std::map<std::pair<std::string, double>, std::size_t>& seen,
+               const std::string& where, const std::function<std::string(const geodesy::ControlPoint&)>& where_of);
+
+}  // namespace geoanchor::io::detail

@@ -1,0 +1,170 @@
+// Control sets in JSON (schema: docs/commands/fit.md).
+
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <cctype>
+#include <cmath>
+
+#include "control_common.hpp"
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/control_csv.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void fail(const std::string& where, const std::string& what) {
+  throw Error(ErrorKind::input, "E_VALUE", where + ": " + what);
+}
+
+double number_at(const json& obj, const std::string& key, const std::string& where) {
+  if (!obj.contains(key)) fail(where + "." + key, "missing");
+  const json& v = obj.at(key);
+  if (!v.is_number()) fail(where + "." + key, "value " + v.dump() + " is not a number");
+  const double d = v.get<double>();
+  if (!std::isfinite(d)) fail(where + "." + key, "not finite");
+  return d;
+}
+
+// One frame of one point: {"x_m","y_m","z_m"} | {"lat_deg","lon_deg","h_m"} | {"e_m","n_m","u_m"}.
+detail::RoleValues role_values(const json& point, const std::string& role, const std::string& where) {
+  const std::string frame = role == "src" ? "source" : "target";
+  if (!point.contains(frame) || !point.at(frame).is_object()) fail(where + "." + frame, "missing; expected an object of coordinates");
+  const json& c = point.at(frame);
+  const std::string at = where + "." + frame;
+  detail::RoleValues v;
+  const char* const kinds[3][3] = {{"x_m", "y_m", "z_m"}, {"lat_deg", "lon_deg", "h_m"}, {"e_m", "n_m", "u_m"}};
+  const CoordinateKind kind_of[3] = {CoordinateKind::ecef, CoordinateKind::geodetic, CoordinateKind::enu};
+  int found = -1;
+  for (int k = 0; k < 3; ++k) {
+    if (c.contains(kinds[k][0]) || c.contains(kinds[k][1])) {
+      if (found >= 0) fail(at, "mixes coordinate kinds; expected one of x_m/y_m/z_m, lat_deg/lon_deg/h_m, e_m/n_m/u_m");
+      found = k;
+    }
+  }
+  if (found < 0) fail(at, "no coordinates; expected x_m,y_m,z_m | lat_deg,lon_deg,h_m | e_m,n_m,u_m");
+  for (const auto& [key, value] : c.items()) {
+    const auto* row = kinds[found];
+    if (key != row[0] && key != row[1] && key != row[2]) fail(at + "." + key, "unknown key for these coordinates");
+  }
+  v.kind = kind_of[found];
+  v.a = number_at(c, kinds[found][0], at);
+  v.b = number_at(c, kinds[found][1], at);
+  v.c = number_at(c, kinds[found][2], at);
+  const std::string sigma_key = "sigma_" + role + "_m", cov_key = "cov_" + role + "_m2";
+  if (point.contains(sigma_key)) v.sigma_m = number_at(point, sigma_key, where);
+  if (point.contains(cov_key)) {
+    if (v.sigma_m) fail(where, "both " + sigma_key + " and " + cov_key + "; give one");
+    const json& m = point.at(cov_key);
+    if (!m.is_array() || m.size() != 3) fail(where + "." + cov_key, "expected a 3×3 array of arrays (m²)");
+    std::array<double, 9> full{};
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (!m[i].is_array() || m[i].size() != 3) fail(where + "." + cov_key, "expected a 3×3 array of arrays (m²)");
+      for (std::size_t j = 0; j < 3; ++j) {
+        if (!m[i][j].is_number()) fail(where + "." + cov_key, "entry " + m[i][j].dump() + " is not a number");
+        full[3 * i + j] = m[i][j].get<double>();
+      }
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+      for (std::size_t j = 0; j < i; ++j) {
+        if (full[3 * i + j] != full[3 * j + i]) fail(where + "." + cov_key, "not symmetric");
+      }
+    }
+    v.cov_m2 = std::array<double, 6>{full[0], full[1], full[2], full[4], full[5], full[8]};
+  }
+  return v;
+}
+
+}  // namespace
+
+geodesy::ControlSet read_control_json(std::istream& in, const std::string& source_name, const ControlReadOptions& o) {
+  json doc;
+  try {
+    doc = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw Error(ErrorKind::input, "E_JSON", source_name + ": not valid JSON: " + e.what());
+  }
+  if (!doc.is_object()) fail(source_name, "expected a JSON object with \"points\"");
+  for (const auto& [key, value] : doc.items()) {
+    if (key != "points" && key != "source_frame" && key != "target_frame" && key != "description") {
+      fail(source_name + ": " + key, "unknown key; expected points, source_frame, target_frame, description");
+    }
+  }
+  geodesy::ControlSet set;
+  set.source_name = source_name;
+  for (const char* key : {"source_frame", "target_frame"}) {
+    if (!doc.contains(key)) continue;
+    if (!doc.at(key).is_string()) fail(source_name + ": " + key, "expected a string such as ITRF2014@2024.5");
+    auto f = geodesy::Frame::parse(doc.at(key).get<std::string>(), source_name + ": " + key);
+    (std::string_view(key) == "source_frame" ? set.source_frame : set.target_frame) = std::move(f);
+  }
+  if (!doc.contains("points") || !doc.at("points").is_array()) fail(source_name + ": points", "missing; expected an array");
+  const json& points = doc.at("points");
+  set.has_a_priori_sigmas = false;
+  for (const auto& p : points) {
+    for (const char* k : {"sigma_src_m", "sigma_dst_m", "cov_src_m2", "cov_dst_m2"}) {
+      if (p.is_object() && p.contains(k)) set.has_a_priori_sigmas = true;
+    }
+  }
+  const std::set<std::string> known = {"id", "source", "target", "sigma_src_m", "sigma_dst_m", "cov_src_m2", "cov_dst_m2", "epoch", "use"};
+  const detail::RoleConverter converter(o);
+  std::map<std::pair<std::string, double>, std::size_t> seen;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::string where = source_name + ": points[" + std::to_string(i) + "]";
+    const json& jp = points[i];
+    if (!jp.is_object()) fail(where, "expected an object");
+    for (const auto& [key, value] : jp.items()) {
+      if (!known.count(key)) fail(where + "." + key, "unknown key");
+    }
+    geodesy::ControlPoint p;
+    if (!jp.contains("id") || !jp.at("id").is_string() || jp.at("id").get<std::string>().empty()) {
+      fail(where + ".id", "missing or empty; expected a string");
+    }
+    p.id = jp.at("id").get<std::string>();
+    p.line = i;
+    for (const char* role : {"src", "dst"}) {
+      const detail::RoleValues v = role_values(jp, role, where);
+      const std::string frame = std::string(role) == "src" ? "source" : "target";
+      const auto on_fail = [&](detail::RoleField f, const std::string& message) {
+        const char* field = f == detail::RoleField::sigma ? (std::string(role) == "src" ? "sigma_src_m" : "sigma_dst_m")
+                            : f == detail::RoleField::covariance ? (std::string(role) == "src" ? "cov_src_m2" : "cov_dst_m2")
+                                                                 : nullptr;
+        fail(where + "." + (field ? std::string(field) : frame), message);
+      };
+      if (std::string(role) == "src") {
+        converter.convert(v, set.has_a_priori_sigmas, on_fail, p.source, p.source_cov_m2);
+      } else {
+        converter.convert(v, set.has_a_priori_sigmas, on_fail, p.target, p.target_cov_m2);
+      }
+    }
+    if (jp.contains("epoch")) {
+      p.epoch = geodesy::parse_decimal_year(format_shortest(number_at(jp, "epoch", where)), where + ".epoch");
+    }
+    if (jp.contains("use")) {
+      if (!jp.at("use").is_boolean()) fail(where + ".use", "expected true or false");
+      p.use = jp.at("use").get<bool>();
+    }
+    detail::add_point(set, std::move(p), seen, where,
+                      [&](const geodesy::ControlPoint& q) { return "points[" + std::to_string(q.line) + "]"; });
+  }
+  return set;
+}
+
+geodesy::ControlSet read_control_set(const std::filesystem::path& path, const ControlReadOptions& o) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(ErrorKind::io, "E_READ", path.string() + ": cannot open control set: " + std::strerror(errno));
+  // JSON when the first non-blank character opens an object; CSV otherwise.
+  char c = 0;
+  while (in.get(c) && std::isspace(static_cast<unsigned char>(c))) {
+  }
+  in.clear();
+  in.seekg(0);
+  return c == '{' ? read_control_json(in, path.string(), o) : read_control_csv(in, path.string(), o);
+}
+
+}  // namespace geoanchor::io

@@ -1,0 +1,88 @@
+// Control sets in CSV and JSON: the same marks read the same way, and bad
+// input named by line or JSON path.
+
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/io/control_csv.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+constexpr double kSameValue_m = 0.0;  // both readers do the same arithmetic on the same numbers
+
+const char* kCsv =
+    "# source_frame = ITRF2014@2024.5\n"
+    "# target_frame = ETRF2000@2024.5\n"
+    "id,lat_src_deg,lon_src_deg,h_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,cov_dst_xx_m2,cov_dst_xy_m2,cov_dst_xz_m2,"
+    "cov_dst_yy_m2,cov_dst_yz_m2,cov_dst_zz_m2,epoch,use\n"
+    "P1,47.46,8.55,480.1,4271315.7,641096.4,4678048.5,0.003,1e-5,1e-6,0,2e-5,0,3e-5,2024.5,1\n"
+    "P2,47.47,8.56,481.2,4270315.7,642096.4,4678848.5,0.004,1e-5,0,0,1e-5,0,1e-5,2024.5,0\n";
+
+const char* kJson = R"J({"source_frame": "ITRF2014@2024.5", "target_frame": "ETRF2000@2024.5", "points": [
+  {"id": "P1", "source": {"lat_deg": 47.46, "lon_deg": 8.55, "h_m": 480.1},
+   "target": {"x_m": 4271315.7, "y_m": 641096.4, "z_m": 4678048.5}, "sigma_src_m": 0.003,
+   "cov_dst_m2": [[1e-5, 1e-6, 0], [1e-6, 2e-5, 0], [0, 0, 3e-5]], "epoch": 2024.5, "use": true},
+  {"id": "P2", "source": {"lat_deg": 47.47, "lon_deg": 8.56, "h_m": 481.2},
+   "target": {"x_m": 4270315.7, "y_m": 642096.4, "z_m": 4678848.5}, "sigma_src_m": 0.004,
+   "cov_dst_m2": [[1e-5, 0, 0], [0, 1e-5, 0], [0, 0, 1e-5]], "epoch": 2024.5, "use": false}]})J";
+
+std::string json_error(const std::string& text) {
+  std::istringstream in(text);
+  try {
+    read_control_json(in, "c.json", {});
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(ControlSet, CsvAndJsonReadTheSameMarksTheSameWay) {
+  std::istringstream csv(kCsv), json(kJson);
+  const auto a = read_control_csv(csv, "c.csv", {});
+  const auto b = read_control_json(json, "c.json", {});
+  ASSERT_EQ(a.points.size(), 2u);
+  ASSERT_EQ(b.points.size(), 2u);
+  EXPECT_EQ(a.source_frame->to_string(), "ITRF2014@2024.5");
+  EXPECT_EQ(b.target_frame->to_string(), "ETRF2000@2024.5");
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(a.points[i].id, b.points[i].id);
+    EXPECT_LE((a.points[i].source.m - b.points[i].source.m).norm(), kSameValue_m);
+    EXPECT_LE((a.points[i].target.m - b.points[i].target.m).norm(), kSameValue_m);
+    EXPECT_LE((a.points[i].source_cov_m2 - b.points[i].source_cov_m2).norm(), kSameValue_m);
+    EXPECT_LE((a.points[i].target_cov_m2 - b.points[i].target_cov_m2).norm(), kSameValue_m);
+    EXPECT_EQ(a.points[i].use, b.points[i].use);
+    EXPECT_EQ(a.points[i].epoch->year, b.points[i].epoch->year);
+  }
+  // A geodetic source's isotropic sigma stays isotropic in ECEF.
+  constexpr double kCovTol_m2 = 1e-18;  // float64 noise on values of 1e-5 m²
+  EXPECT_NEAR(a.points[0].source_cov_m2(0, 1), 0.0, kCovTol_m2);
+  EXPECT_NEAR(a.points[0].source_cov_m2.trace(), 3 * 0.003 * 0.003, kCovTol_m2);
+}
+
+TEST(ControlSet, JsonErrorsNameThePath) {
+  const std::string good = kJson;
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  EXPECT_NE(json_error(replaced("\"lat_deg\": 47.46", "\"lat_deg\": 91.2")).find("c.json: points[0].source: latitude not in [-90, 90]"),
+            std::string::npos);
+  EXPECT_NE(json_error(replaced("\"sigma_src_m\": 0.003", "\"sigma_src_m\": 0")).find("points[0].sigma_src_m: must be > 0"),
+            std::string::npos);
+  EXPECT_NE(json_error(replaced("\"id\": \"P2\"", "\"id\": \"P1\"")).find("points[1]: id=P1: duplicate of points[0]"),
+            std::string::npos);
+  EXPECT_NE(json_error(replaced("\"epoch\": 2024.5, \"use\": true", "\"epoch\": 2024.5, \"usage\": true"))
+                .find("points[0].usage: unknown key"),
+            std::string::npos);
+  EXPECT_NE(json_error(replaced("\"h_m\": 480.1}", "\"h_m\": 480.1, \"x_m\": 1}")).find("mixes coordinate kinds"),
+            std::string::npos);
+  EXPECT_NE(json_error(replaced("[1e-6, 2e-5, 0]", "[2e-6, 2e-5, 0]")).find("cov_dst_m2: not symmetric"), std::string::npos);
+  EXPECT_NE(json_error("{\"points\": [").find("c.json: not valid JSON"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace geoanchor::io
