@@ -58,13 +58,14 @@ class EcefStep {
  public:
   EcefStep(std::optional<io::TransformFile> file, bool inverse, std::optional<DecimalYear> epoch)
       : file_(std::move(file)), inverse_(inverse), epoch_(epoch) {
-    if (file_ && (!file_->time_dependent() || epoch_)) fixed_ = make(epoch_, "--epoch");
+    if (file_ && !file_->site_calibration && (!file_->time_dependent() || epoch_)) fixed_ = make(epoch_, "--epoch");
   }
 
   bool needs_row_epoch() const { return file_ && file_->time_dependent(); }
 
   Eigen::Vector3d apply(const Eigen::Vector3d& x, std::optional<DecimalYear> row_epoch, std::string_view where) const {
     if (!file_) return x;
+    if (file_->site_calibration) return file_->apply(geodesy::EcefPosition(x), row_epoch, inverse_, where).m;  // not affine
     if (row_epoch) return make(row_epoch, where).apply(x);
     if (fixed_) return fixed_->apply(x);
     return make(std::nullopt, where).apply(x);  // throws: no epoch at all

@@ -28,14 +28,10 @@ FitModel parse_model(const std::string& m) {
   if (m == "helmert14") return FitModel::helmert14;
   if (m == "molodensky-badekas") return FitModel::molodensky_badekas;
   if (m == "enu-origin") return FitModel::enu_origin;
-  if (m == "site-calibration") {
-    throw Error(ErrorKind::usage, "E_MODEL_NOT_AVAILABLE",
-                "--model " + m + ": not available in this version yet; available: translation3, helmert6, helmert7, "
-                                 "helmert14, molodensky-badekas, enu-origin");
-  }
+  if (m == "site-calibration") return FitModel::site_calibration;
   throw Error(ErrorKind::usage, "E_OPTION",
-              "--model " + m + ": expected translation3, helmert6, helmert7, helmert14, molodensky-badekas or "
-                               "enu-origin (site-calibration is planned)");
+              "--model " + m + ": expected translation3, helmert6, helmert7, helmert14, molodensky-badekas, enu-origin "
+                               "or site-calibration");
 }
 
 std::string fixed(double v, int decimals) {
@@ -49,7 +45,7 @@ std::string fixed(double v, int decimals) {
 void print_report(std::ostream& out, const solver::FitResult& r, const geodesy::ControlSet& set,
                   const FitCommandOptions& o) {
   out << "geoanchor fit: model " << solver::to_string(r.model);
-  if (r.model != FitModel::translation3 && r.model != FitModel::enu_origin) {
+  if (r.model != FitModel::translation3 && r.model != FitModel::enu_origin && r.model != FitModel::site_calibration) {
     out << ", " << (r.convention == solver::Convention::position_vector ? "position vector" : "coordinate frame")
         << " convention, " << geodesy::to_string(r.rotation_model) << " rotation matrix";
   }
@@ -124,8 +120,10 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
     case FitModel::helmert14: t.model = io::TransformModel::helmert14; break;
     case FitModel::molodensky_badekas: t.model = io::TransformModel::molodensky_badekas; break;
     case FitModel::enu_origin: t.model = io::TransformModel::enu_origin; break;
+    case FitModel::site_calibration: t.model = io::TransformModel::site_calibration; break;
   }
   t.pivot_m = r.pivot_m;
+  t.site_calibration = r.site_calibration;
   if (r.model == FitModel::enu_origin) {
     auto value = [&](const char* name) {
       for (const auto& p : r.parameters) {
@@ -217,11 +215,13 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
 CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   auto* cmd = app.add_subcommand("fit", "Fit a datum transform to control points, with statistics");
   cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON)")->required();
-  cmd->add_option("--model", o.model, "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin");
+  cmd->add_option("--model", o.model,
+                  "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin|site-calibration");
   cmd->add_flag("--compare", o.compare, "Fit every applicable model on the same points and compare them");
   cmd->add_option("--robust", o.robust, "Robust loss for exploration: huber:K or cauchy:K (K in standard deviations)");
   cmd->add_flag("--vce", o.vce, "Estimate variance factors for the source and target covariances");
   cmd->add_flag("--fix-yaw", o.fix_yaw, "enu-origin: hold the yaw at 0");
+  cmd->add_option("--tm", o.tm, "site-calibration: the grid LAT0,LON0,K0,FE,FN (default: TM, k0 = 1, at the targets' centroid)");
   cmd->add_flag("--with-scale", o.with_scale, "enu-origin: estimate a scale difference too");
   cmd->add_option("--pivot", o.pivot, "molodensky-badekas: pivot X,Y,Z in ECEF metres (default: the centroid)");
   cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame (required with rotations)");
@@ -264,7 +264,10 @@ int run_compare(const geodesy::ControlSet& set, const solver::FitOptions& base) 
     }
     if (epochs && hi > lo) models.push_back(FitModel::helmert14);
   }
-  if (base.nominal_origin) models.push_back(FitModel::enu_origin);
+  if (base.nominal_origin) {
+    models.push_back(FitModel::enu_origin);
+    models.push_back(FitModel::site_calibration);
+  }
   std::cout << "geoanchor fit --compare: " << set.source_name << " (" << set.points.size()
             << " points; data snooping off so that every model sees the same points)\n";
   if (!base.convention) std::cout << "  (give --convention to include the models with rotations)\n";
@@ -348,6 +351,9 @@ int run_fit(const FitCommandOptions& o) {
     }
     fo.reference_epoch = geodesy::parse_decimal_year(*o.reference_epoch, "--reference-epoch");
   }
+  if (o.tm && !o.compare && fo.model != FitModel::site_calibration) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--tm: only for --model site-calibration");
+  }
   if (o.pivot) {
     if (fo.model != FitModel::molodensky_badekas) {
       throw Error(ErrorKind::usage, "E_OPTION", "--pivot: only for --model molodensky-badekas");
@@ -383,12 +389,17 @@ int run_fit(const FitCommandOptions& o) {
   if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
   if (o.compare) {
     fo.nominal_origin = ro.origin;
-  } else if (fo.model == FitModel::enu_origin) {
+  } else if (fo.model == FitModel::enu_origin || fo.model == FitModel::site_calibration) {
     if (!ro.origin) {
       throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
-                  "--origin: the enu-origin model needs the nominal origin LAT,LON,H of the map's ENU coordinates");
+                  "--origin: the " + std::string(solver::to_string(fo.model)) +
+                      " model needs the origin LAT,LON,H of the ENU (local) source coordinates");
     }
     fo.nominal_origin = ro.origin;
+    if (o.tm) {
+      if (fo.model != FitModel::site_calibration) throw Error(ErrorKind::usage, "E_OPTION", "--tm: only for --model site-calibration");
+      fo.site_grid = geodesy::ProjectionDef{ro.ellipsoid, parse_tm(*o.tm, "--tm"), std::nullopt};
+    }
     fo.enu_yaw = !o.fix_yaw;
     fo.enu_scale = o.with_scale;
   } else if (o.fix_yaw || o.with_scale) {

@@ -20,6 +20,7 @@ struct FitCommandOptions {
   std::optional<std::string> reference_epoch;
   std::optional<std::string> pivot;
   bool compare = false;
+  std::optional<std::string> tm;  // site-calibration grid
   std::optional<std::string> robust;
   bool vce = false;
   bool fix_yaw = false;

@@ -28,7 +28,7 @@ const std::set<std::string> kTopLevelKeys = {
     "model",       "convention", "rotation_model", "source_frame", "target_frame", "reference_epoch",
     "parameters",  "sigmas",     "correlation",    "statistics",   "points",       "proj_pipeline",
     "epsg_method", "generator",  "format_version", "description",  "alternatives", "nominal_origin",
-    "wkt2",        "projjson"};
+    "wkt2",        "projjson",   "grid"};
 
 [[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& what) {
   throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
@@ -170,6 +170,7 @@ std::string_view to_string(TransformModel m) {
     case TransformModel::helmert14: return "helmert14";
     case TransformModel::molodensky_badekas: return "molodensky-badekas";
     case TransformModel::enu_origin: return "enu-origin";
+    case TransformModel::site_calibration: return "site-calibration";
   }
   return "?";
 }
@@ -186,8 +187,19 @@ std::string_view TransformFile::convention_name() const {
   }, helmert);
 }
 
+geodesy::EcefPosition TransformFile::apply(const geodesy::EcefPosition& x,
+                                           std::optional<geodesy::DecimalYear> observation_epoch, bool inverse,
+                                           std::string_view where) const {
+  if (site_calibration) return inverse ? site_calibration->source_from_target(x) : site_calibration->target_from_source(x);
+  const geodesy::AffineMap m = target_from_source(observation_epoch, where);
+  return geodesy::EcefPosition((inverse ? m.inverse() : m).apply(x.m));
+}
+
 geodesy::AffineMap TransformFile::target_from_source(std::optional<geodesy::DecimalYear> observation_epoch,
                                                      std::string_view where) const {
+  if (site_calibration) {
+    throw Error(ErrorKind::usage, "E_TRANSFORM", std::string(where) + ": a site calibration is not an affine map");
+  }
   if (enu_origin) {
     return geodesy::enu_origin_correction(enu_origin->nominal, enu_origin->shift_enu_m, enu_origin->yaw, enu_origin->ds);
   }
@@ -223,13 +235,7 @@ double number_field(const json& obj, const std::string& key, const std::string& 
 
 constexpr double kCorrectedOriginTol_m = 0.001;
 
-TransformFile parse_enu_origin(const json& doc, TransformFile t, std::string_view source) {
-  for (const char* key : {"source_frame", "target_frame"}) {
-    if (doc.contains(key)) {
-      auto f = geodesy::Frame::parse(string_field(doc, key, source), std::string(source) + ": " + key);
-      (std::string_view(key) == "source_frame" ? t.source_frame : t.target_frame) = std::move(f);
-    }
-  }
+geodesy::LocalOrigin origin_of(const json& doc, std::string_view source) {
   if (!doc.contains("nominal_origin") || !doc.at("nominal_origin").is_object()) {
     fail(source, "nominal_origin", "missing; enu-origin needs {\"lat_deg\", \"lon_deg\", \"h_m\", \"ellipsoid\"}");
   }
@@ -252,8 +258,23 @@ TransformFile parse_enu_origin(const json& doc, TransformFile t, std::string_vie
   const double lon = number_field(no, "lon_deg", "nominal_origin.", source);
   if (std::fabs(lat) > 90.0) fail(source, "nominal_origin.lat_deg", "latitude " + format_shortest(lat) + " not in [-90, 90]");
   if (std::fabs(lon) > 180.0) fail(source, "nominal_origin.lon_deg", "longitude " + format_shortest(lon) + " not in [-180, 180]");
+  return {{Angle::degrees(lat), Angle::degrees(lon), geodesy::EllipsoidalHeight{number_field(no, "h_m", "nominal_origin.", source)}}, e};
+}
+
+void frames_of(const json& doc, TransformFile& t, std::string_view source) {
+  for (const char* key : {"source_frame", "target_frame"}) {
+    if (doc.contains(key)) {
+      auto f = geodesy::Frame::parse(string_field(doc, key, source), std::string(source) + ": " + key);
+      (std::string_view(key) == "source_frame" ? t.source_frame : t.target_frame) = std::move(f);
+    }
+  }
+}
+
+TransformFile parse_enu_origin(const json& doc, TransformFile t, std::string_view source) {
+  frames_of(doc, t, source);
   EnuOriginCorrection c;
-  c.nominal = {{Angle::degrees(lat), Angle::degrees(lon), geodesy::EllipsoidalHeight{number_field(no, "h_m", "nominal_origin.", source)}}, e};
+  c.nominal = origin_of(doc, source);
+  const geodesy::Ellipsoid e = c.nominal.ellipsoid;
   if (!doc.contains("parameters") || !doc.at("parameters").is_object()) fail(source, "parameters", "missing");
   const json& p = doc.at("parameters");
   const std::set<std::string> known = {"shift_e_m", "shift_n_m", "shift_u_m", "yaw_arcsec", "ds_ppm",
@@ -283,6 +304,49 @@ TransformFile parse_enu_origin(const json& doc, TransformFile t, std::string_vie
   }
   t.enu_origin = c;
   t.rotation_model = geodesy::RotationModel::exact;
+  return t;
+}
+
+TransformFile parse_site_calibration(const json& doc, TransformFile t, std::string_view source) {
+  frames_of(doc, t, source);
+  const geodesy::LocalOrigin local = origin_of(doc, source);
+  if (!doc.contains("grid") || !doc.at("grid").is_object()) {
+    fail(source, "grid", "missing; expected {\"lat0_deg\", \"lon0_deg\", \"k0\", \"false_easting_m\", \"false_northing_m\"}");
+  }
+  const json& g = doc.at("grid");
+  for (const auto& [key, value] : g.items()) {
+    if (key != "lat0_deg" && key != "lon0_deg" && key != "k0" && key != "false_easting_m" && key != "false_northing_m" &&
+        key != "ellipsoid") {
+      fail(source, "grid." + key, "unknown key");
+    }
+  }
+  geodesy::ProjectionDef grid;
+  grid.ellipsoid = local.ellipsoid;
+  grid.tm.lat0 = Angle::degrees(number_field(g, "lat0_deg", "grid.", source));
+  grid.tm.lon0 = Angle::degrees(number_field(g, "lon0_deg", "grid.", source));
+  grid.tm.k0 = number_field(g, "k0", "grid.", source);
+  grid.tm.false_easting_m = g.contains("false_easting_m") ? number_field(g, "false_easting_m", "grid.", source) : 0.0;
+  grid.tm.false_northing_m = g.contains("false_northing_m") ? number_field(g, "false_northing_m", "grid.", source) : 0.0;
+  if (!(grid.tm.k0 > 0.0 && grid.tm.k0 < 2.0)) fail(source, "grid.k0", "not in (0, 2)");
+  if (!doc.contains("parameters") || !doc.at("parameters").is_object()) fail(source, "parameters", "missing");
+  const json& p = doc.at("parameters");
+  const std::set<std::string> known = {"shift_e_m",   "shift_n_m",   "rotation_arcsec", "scale_ppm",   "vertical_shift_m",
+                                       "slope_n_ppm", "slope_e_ppm", "centroid_e_m",    "centroid_n_m", "grid_lat0_deg",
+                                       "grid_lon0_deg"};
+  for (const auto& [key, value] : p.items()) {
+    if (!known.count(key)) fail(source, "parameters." + key, "unknown parameter for site-calibration");
+  }
+  geodesy::SiteCalibrationParams sp;
+  sp.shift_e_m = number_field(p, "shift_e_m", "parameters.", source);
+  sp.shift_n_m = number_field(p, "shift_n_m", "parameters.", source);
+  sp.rotation = Angle::arcseconds(number_field(p, "rotation_arcsec", "parameters.", source));
+  sp.scale = ScaleDifference::ppm(number_field(p, "scale_ppm", "parameters.", source));
+  sp.vertical_shift_m = number_field(p, "vertical_shift_m", "parameters.", source);
+  sp.slope_n = number_field(p, "slope_n_ppm", "parameters.", source) * 1e-6;
+  sp.slope_e = number_field(p, "slope_e_ppm", "parameters.", source) * 1e-6;
+  sp.centroid_e_m = number_field(p, "centroid_e_m", "parameters.", source);
+  sp.centroid_n_m = number_field(p, "centroid_n_m", "parameters.", source);
+  t.site_calibration.emplace(local, grid, sp);
   return t;
 }
 
@@ -318,10 +382,13 @@ TransformFile parse_transform_json(std::string_view text, std::string_view sourc
   } else if (model == "enu-origin") {
     t.model = TransformModel::enu_origin;
     return parse_enu_origin(doc, std::move(t), source);
+  } else if (model == "site-calibration") {
+    t.model = TransformModel::site_calibration;
+    return parse_site_calibration(doc, std::move(t), source);
   } else {
     fail(source, "model", "value \"" + model +
                               "\" not read by this command; expected helmert7, helmert6, translation3, helmert14, "
-                              "molodensky-badekas or enu-origin");
+                              "molodensky-badekas, enu-origin or site-calibration");
   }
 
   bool position_vector = true;
@@ -473,7 +540,7 @@ json json_number_or_null(double v) { return std::isfinite(v) ? number(v) : json(
 }  // namespace
 
 std::string epsg_method(const TransformFile& t) {
-  if (t.enu_origin) return "";
+  if (t.enu_origin || t.site_calibration) return "";
   const bool pv = t.convention_name() == PositionVector::name;
   if (t.model == TransformModel::translation3) return "EPSG:1031";
   if (t.model == TransformModel::molodensky_badekas) return pv ? "EPSG:1061" : "EPSG:1034";
@@ -492,6 +559,33 @@ std::string topocentric(const geodesy::LocalOrigin& o) {
 }  // namespace
 
 std::string proj_pipeline(const TransformFile& t) {
+  if (t.site_calibration) {
+    // ECEF -> grid E, N and h is one affine map (local ENU, then the
+    // similarity and the plane), composed once; then inverse TM and cart.
+    // (PROJ refuses topocentric's cartesian output flowing into tmerc.)
+    const auto& sc = *t.site_calibration;
+    const auto& p = sc.params();
+    const double k = 1.0 + p.scale.unitless(), a = k * std::cos(p.rotation.rad()), b = k * std::sin(p.rotation.rad());
+    Eigen::Matrix3d l;
+    l << a, -b, 0.0, b, a, 0.0, p.slope_e, p.slope_n, 1.0;
+    const geodesy::AffineMap local_to_grid(
+        l, Eigen::Vector3d(p.shift_e_m, p.shift_n_m, p.vertical_shift_m - p.slope_n * p.centroid_n_m - p.slope_e * p.centroid_e_m));
+    const geodesy::AffineMap m =
+        geodesy::compose(local_to_grid, geodesy::LocalTangentPlane(sc.local_origin()).enu_from_ecef_map());
+    const auto& g = sc.grid();
+    const std::string ell = g.ellipsoid == geodesy::Ellipsoid::grs80() ? "+ellps=GRS80"
+                            : g.ellipsoid == geodesy::Ellipsoid::wgs84() ? "+ellps=WGS84"
+                                                                         : "+a=" + g17(g.ellipsoid.a_m()) + " +rf=" + g17(g.ellipsoid.rf());
+    std::string out = "+proj=pipeline +step +proj=affine";
+    const char* off[3] = {"xoff", "yoff", "zoff"};
+    for (int r = 0; r < 3; ++r) out += std::string(" +") + off[r] + "=" + g17(m.translation_m()(r));
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) out += " +s" + std::to_string(r + 1) + std::to_string(c + 1) + "=" + g17(m.linear()(r, c));
+    }
+    return out + " +step +inv +proj=tmerc " + ell + " +lat_0=" + g17(g.tm.lat0.deg()) + " +lon_0=" + g17(g.tm.lon0.deg()) +
+           " +k=" + g17(g.tm.k0) + " +x_0=" + g17(g.tm.false_easting_m) + " +y_0=" + g17(g.tm.false_northing_m) +
+           " +step +proj=cart " + ell;
+  }
   if (t.enu_origin) {
     // ECEF -> map ENU at the nominal origin -> turn and scale -> ECEF from the corrected origin.
     const auto& c = *t.enu_origin;
@@ -557,7 +651,7 @@ std::string to_json_text(const TransformFile& t) {
   json doc;
   doc["format_version"] = 1;
   doc["model"] = std::string(to_string(t.model));
-  if (!t.enu_origin) {
+  if (!t.enu_origin && !t.site_calibration) {
     doc["convention"] = std::string(t.convention_name());
     doc["rotation_model"] = std::string(geodesy::to_string(t.rotation_model));
     doc["epsg_method"] = epsg_method(t);
@@ -573,7 +667,21 @@ std::string to_json_text(const TransformFile& t) {
     }
     return params;
   };
-  if (t.enu_origin) {
+  if (t.site_calibration) {
+    const auto& sc = *t.site_calibration;
+    const auto& o = sc.local_origin();
+    const auto& p = sc.params();
+    const auto& g = sc.grid();
+    doc["nominal_origin"] = {{"lat_deg", number(o.point.lat.deg())}, {"lon_deg", number(o.point.lon.deg())},
+                             {"h_m", number(o.point.h.m)}, {"height_type", "ellipsoidal"}, {"ellipsoid", o.ellipsoid.name()}};
+    doc["grid"] = {{"lat0_deg", number(g.tm.lat0.deg())}, {"lon0_deg", number(g.tm.lon0.deg())}, {"k0", number(g.tm.k0)},
+                   {"false_easting_m", number(g.tm.false_easting_m)}, {"false_northing_m", number(g.tm.false_northing_m)}};
+    doc["parameters"] = {{"shift_e_m", number(p.shift_e_m)},           {"shift_n_m", number(p.shift_n_m)},
+                         {"rotation_arcsec", number(p.rotation.arcsec())}, {"scale_ppm", number(p.scale.ppm())},
+                         {"vertical_shift_m", number(p.vertical_shift_m)}, {"slope_n_ppm", number(p.slope_n * 1e6)},
+                         {"slope_e_ppm", number(p.slope_e * 1e6)},     {"centroid_e_m", number(p.centroid_e_m)},
+                         {"centroid_n_m", number(p.centroid_n_m)}};
+  } else if (t.enu_origin) {
     const auto& c = *t.enu_origin;
     const geodesy::LocalOrigin corrected = geodesy::corrected_origin(c.nominal, c.shift_enu_m);
     doc["nominal_origin"] = {{"lat_deg", number(c.nominal.point.lat.deg())}, {"lon_deg", number(c.nominal.point.lon.deg())},
@@ -638,7 +746,7 @@ std::string to_json_text(const TransformFile& t) {
     }
     doc["points"] = pts;
   }
-  if (t.fit && !t.enu_origin) {
+  if (t.fit && !t.enu_origin && !t.site_calibration) {
     TransformFile other = swapped_convention(t);
     other.fit = t.fit;  // for the exports below
     doc["alternatives"] = json::array({json{{"convention", std::string(other.convention_name())},

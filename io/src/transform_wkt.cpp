@@ -46,7 +46,9 @@ std::string per_year(const char* kind, const char* name, double factor) {
 }  // namespace
 
 std::optional<std::string> to_wkt2(const TransformFile& t) {
-  if (t.enu_origin || t.rotation_model == geodesy::RotationModel::exact) return std::nullopt;  // no EPSG method
+  if (t.enu_origin || t.site_calibration || t.rotation_model == geodesy::RotationModel::exact) {
+    return std::nullopt;  // no EPSG method
+  }
   const bool pv = t.convention_name() == PositionVector::name;
   std::string method;
   int code = 0;

@@ -221,22 +221,12 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
       omega += (all[active[k]].w * v[k]).squaredNorm();
     }
     const int dof = 3 * n - u;
-    result.dof = dof;
-    result.sigma0 = dof > 0 ? std::sqrt(omega / dof) : 0.0;
-    auto& g = result.global_test;
-    g.statistic = omega;
-    g.applicable = control.has_a_priori_sigmas && dof > 0;
-    if (dof > 0) {
-      g.critical_lower = chi_squared_quantile(dof, o.alpha / 2.0);
-      g.critical_upper = chi_squared_quantile(dof, 1.0 - o.alpha / 2.0);
-      g.passed = omega >= g.critical_lower && omega <= g.critical_upper;
-    }
+    fill_global_test(result, omega, dof, o.alpha, control.has_a_priori_sigmas);
+    const auto& g = result.global_test;
     const double sigma_scale = o.scale_by_sigma0 && dof > 0 ? result.sigma0 : 1.0;
 
     // Whitened Jacobians in the scaled parameters (A N⁻¹ Aᵀ is invariant).
     std::vector<double*> pblocks = {shift, yaw, ds};
-    double worst_p = 1.0;
-    std::size_t worst = active.size();
     auto tests = [&](std::size_t i, const Eigen::Vector3d& vi, bool in_fit) {
       EnuOriginCost cost{all[i].enu, all[i].target_rel, all[i].w, &nominal};
       ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1> f(new EnuOriginCost(cost));
@@ -256,20 +246,9 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
     for (std::size_t k = 0; k < active.size(); ++k) {
       tests(active[k], v[k], true);
       result.points[active[k]].used = true;
-      const auto& pr = result.points[active[k]];
-      if (pr.point_dof > 0 && pr.point_p_value < worst_p) {
-        worst_p = pr.point_p_value;
-        worst = k;
-      }
     }
-    if (o.data_snooping && dof > 0 && worst < active.size() && worst_p < o.alpha_point && 3 * (n - 1) - u > 0) {
-      PointResult& pr = result.points[active[worst]];
-      pr.outlier = true;
-      pr.used = false;
-      pr.removed_because = "data snooping: point test " + fmt(pr.point_statistic, 4) + " (χ²(" +
-                           std::to_string(pr.point_dof) + "), p = " + fmt(pr.point_p_value, 2) + " < " +
-                           fmt(o.alpha_point) + "); max |w| " + fmt(pr.w_max);
-      active.erase(active.begin() + static_cast<std::ptrdiff_t>(worst));
+    if (const auto removed = snoop(result, active, o, u)) {
+      active.erase(active.begin() + static_cast<std::ptrdiff_t>(*removed));
       continue;
     }
     std::vector<bool> in_fit(control.points.size(), false);
@@ -294,12 +273,7 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
     }
     const Eigen::VectorXd f = Eigen::Map<Eigen::VectorXd>(factor.data(), u);
     result.covariance = f.asDiagonal() * cov * f.asDiagonal();
-    result.correlation = result.covariance;
-    for (int a = 0; a < u; ++a) {
-      for (int b = 0; b < u; ++b) {
-        result.correlation(a, b) /= std::sqrt(result.covariance(a, a) * result.covariance(b, b));
-      }
-    }
+    result.correlation = correlation_of(result.covariance);
     auto sigma_of = [&](const std::string& name) {
       for (int a = 0; a < u; ++a) {
         if (result.covariance_names[static_cast<std::size_t>(a)] == name) return std::sqrt(result.covariance(a, a));

@@ -135,7 +135,9 @@ void predict(const Observation& o, const double* theta, RotationModel model, boo
   }
 }
 
-bool has_rotation(FitModel m) { return m != FitModel::translation3 && m != FitModel::enu_origin; }
+bool has_rotation(FitModel m) {
+  return m != FitModel::translation3 && m != FitModel::enu_origin && m != FitModel::site_calibration;
+}
 bool has_scale(FitModel m) {
   return m == FitModel::helmert7 || m == FitModel::helmert14 || m == FitModel::molodensky_badekas;
 }
@@ -434,6 +436,7 @@ std::string_view to_string(FitModel m) {
     case FitModel::helmert14: return "helmert14";
     case FitModel::molodensky_badekas: return "molodensky-badekas";
     case FitModel::enu_origin: return "enu-origin";
+    case FitModel::site_calibration: return "site-calibration";
   }
   return "?";
 }
@@ -447,6 +450,7 @@ Eigen::Matrix3d transformed_covariance_m2(const FitResult& fit, const geodesy::E
 geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPosition& source,
                                 std::optional<DecimalYear> epoch) {
   if (fit.ecef_map) return geodesy::EcefPosition(fit.ecef_map->apply(source.m));
+  if (fit.site_calibration) return fit.site_calibration->target_from_source(source);
   const DecimalYear t = fit.model == FitModel::helmert14 ? epoch.value() : fit.helmert.reference_epoch;
   return geodesy::apply(geodesy::evaluate_at(fit.helmert, t), fit.rotation_model, source);
 }
@@ -496,11 +500,12 @@ FitResult fit_robust(const ControlSet& control, const FitOptions& options) {
 
 FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
   if (options.robust != FitOptions::Robust::none) return fit_robust(control, options);
-  if (options.model == FitModel::enu_origin) {
+  if (options.model == FitModel::enu_origin || options.model == FitModel::site_calibration) {
     if (options.vce) {
-      throw Error(ErrorKind::usage, "E_OPTION", "--vce: not available for the enu-origin model yet");
+      throw Error(ErrorKind::usage, "E_OPTION", "--vce: not available for the " + std::string(to_string(options.model)) +
+                                                    " model yet");
     }
-    return fit_enu_origin(control, options);
+    return options.model == FitModel::enu_origin ? fit_enu_origin(control, options) : fit_site_calibration(control, options);
   }
   FitOptions o = options;
   const bool td = o.model == FitModel::helmert14;

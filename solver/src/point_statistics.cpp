@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "statistics.hpp"
@@ -57,6 +58,50 @@ void test_point(const PointTestInput& in, double sigma_scale, double lambda0, Po
       pr.redundancy_enu(axis) = 0.0;
     }
   }
+}
+
+void fill_global_test(FitResult& r, double omega, int dof, double alpha, bool a_priori_sigmas) {
+  r.dof = dof;
+  r.sigma0 = dof > 0 ? std::sqrt(omega / dof) : 0.0;
+  auto& g = r.global_test;
+  g.statistic = omega;
+  g.applicable = a_priori_sigmas && dof > 0;
+  if (dof > 0) {
+    g.critical_lower = chi_squared_quantile(dof, alpha / 2.0);
+    g.critical_upper = chi_squared_quantile(dof, 1.0 - alpha / 2.0);
+    g.passed = omega >= g.critical_lower && omega <= g.critical_upper;
+  }
+}
+
+Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov) {
+  Eigen::MatrixXd c = cov;
+  for (Eigen::Index a = 0; a < cov.rows(); ++a) {
+    for (Eigen::Index b = 0; b < cov.cols(); ++b) c(a, b) = cov(a, b) / std::sqrt(cov(a, a) * cov(b, b));
+  }
+  return c;
+}
+
+std::optional<std::size_t> snoop(FitResult& r, const std::vector<std::size_t>& active, const FitOptions& o, int u) {
+  const int n = static_cast<int>(active.size());
+  if (!o.data_snooping || r.dof <= 0 || 3 * (n - 1) - u <= 0) return std::nullopt;
+  double worst_p = 1.0;
+  std::optional<std::size_t> worst;
+  for (std::size_t k = 0; k < active.size(); ++k) {
+    const auto& p = r.points[active[k]];
+    if (p.point_dof > 0 && p.point_p_value < worst_p) {
+      worst_p = p.point_p_value;
+      worst = k;
+    }
+  }
+  if (!worst || worst_p >= o.alpha_point) return std::nullopt;
+  PointResult& pr = r.points[active[*worst]];
+  char why[200];
+  std::snprintf(why, sizeof why, "data snooping: point test %.4g (χ²(%d), p = %.2g < %.3g); max |w| %.3g", pr.point_statistic,
+                pr.point_dof, pr.point_p_value, o.alpha_point, pr.w_max);
+  pr.outlier = true;
+  pr.used = false;
+  pr.removed_because = why;
+  return worst;
 }
 
 }  // namespace geoanchor::solver

@@ -23,6 +23,9 @@ using testing::ProjPipeline;
 
 constexpr double kCctAgreementTol_m = 1e-4;  // issue acceptance: the pipeline reproduces our coordinates to 0.1 mm
 constexpr double kEnuOriginCliTol_m = 0.001;  // issue acceptance: enu-origin corrected to 1 mm without noise
+constexpr double kSiteRotationTol_arcsec = 0.01;  // 0.07 mm over 1.5 km
+constexpr double kSiteScaleTol_ppm = 0.05;        // 0.08 mm over 1.5 km
+constexpr double kSiteInverseTol_m = 1e-8;        // the inverse is exact
 
 struct RunResult {
   int exit_code = -1;
@@ -308,6 +311,72 @@ TEST_F(FitCli, TheWgs84EnsembleIsFlaggedAndTheWarningRecorded) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("WGS 84 ensemble"), std::string::npos);
   EXPECT_NE(slurp(path("T.json")).find("WGS 84 ensemble"), std::string::npos);
+}
+
+TEST_F(FitCli, SiteCalibrationFromLocalCoordinatesAndItsPipelineRunByCct) {
+  // A site grid turned 35° with +45 ppm onto TM at the site, heights on a
+  // tilted plane; targets through PROJ's inverse tmerc and cart.
+  const double theta = 35.0 * M_PI / 180.0, k = 1.0 + 45e-6;
+  const ProjPipeline tmerc("+proj=tmerc +ellps=WGS84 +lat_0=46.5 +lon_0=7.5 +k=1 +x_0=0 +y_0=0");
+  const ProjPipeline cart("+proj=cart +ellps=WGS84");
+  std::mt19937_64 rng(81);
+  std::uniform_real_distribution<double> d(-1500.0, 1500.0), up(-30.0, 60.0);
+  std::ostringstream csv;
+  csv.precision(15);
+  csv << "id,e_src_m,n_src_m,u_src_m,lat_dst_deg,lon_dst_deg,h_dst_m,sigma_src_m,sigma_dst_m\n";
+  for (int i = 0; i < 15; ++i) {
+    const Eigen::Vector3d s(d(rng), d(rng), up(rng));
+    const double e = 500.0 + k * (std::cos(theta) * s.x() - std::sin(theta) * s.y());
+    const double n = -300.0 + k * (std::sin(theta) * s.x() + std::cos(theta) * s.y());
+    const Eigen::Vector3d g = tmerc.inverse(Eigen::Vector3d(e, n, 0.0));
+    csv << "S" << i << ',' << s.x() << ',' << s.y() << ',' << s.z() << ',' << testing::proj_degrees(g.y()) << ','
+        << testing::proj_degrees(g.x()) << ',' << s.z() + 48.2 << ",0.002,0.002\n";
+  }
+  write("site.csv", csv.str());
+  const std::string origin = "46.6,7.4,600";  // any origin: only the local numbers matter
+  const RunResult r = geoanchor("fit " + path("site.csv").string() + " --model site-calibration --origin " + origin +
+                                " --tm 46.5,7.5,1,0,0 -o " + path("T.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const std::string json = slurp(path("T.json"));
+  EXPECT_NE(json.find("\"model\": \"site-calibration\""), std::string::npos);
+  EXPECT_NEAR(json_number_value(json, "rotation_arcsec"), 35.0 * 3600.0, kSiteRotationTol_arcsec);
+  EXPECT_NEAR(json_number_value(json, "scale_ppm"), 45.0, kSiteScaleTol_ppm);
+  EXPECT_NEAR(json_number_value(json, "vertical_shift_m"), 48.2, kEnuOriginCliTol_m);
+
+  // convert applies the file; cct runs its pipeline; they agree, and --inverse returns.
+  const ProjPipeline local("+proj=topocentric +ellps=WGS84 +lat_0=46.6 +lon_0=7.4 +h_0=600");
+  std::ostringstream pts;
+  pts.precision(17);
+  pts << "id,x_m,y_m,z_m\n";
+  std::vector<Eigen::Vector4d> xyzt;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d x = local.inverse(Eigen::Vector3d(d(rng), d(rng), up(rng)));
+    pts << "Q" << i << ',' << x(0) << ',' << x(1) << ',' << x(2) << '\n';
+    xyzt.emplace_back(x(0), x(1), x(2), 2024.0);
+  }
+  write("local.csv", pts.str());
+  const RunResult ours = geoanchor("convert " + path("local.csv").string() + " --to ecef --transform " + path("T.json").string() +
+                                   " -o " + path("out.csv").string());
+  ASSERT_EQ(ours.exit_code, 0) << ours.err;
+  std::vector<std::string> header;
+  const auto rows = csv_rows(slurp(path("out.csv")), &header);
+  const auto proj = cct(json_string_value(json, "proj_pipeline"), xyzt, dir_);
+  ASSERT_EQ(proj.size(), rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Eigen::Vector3d us(std::stod(rows[i][col(header, "x_m")]), std::stod(rows[i][col(header, "y_m")]),
+                             std::stod(rows[i][col(header, "z_m")]));
+    EXPECT_THAT(us, testing::IsNearVector(proj[i], kCctAgreementTol_m));
+  }
+  const RunResult back = geoanchor("convert " + path("out.csv").string() + " --to ecef --inverse --transform " +
+                                   path("T.json").string());
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  std::vector<std::string> bh;
+  const auto brows = csv_rows(back.out, &bh);
+  for (std::size_t i = 0; i < brows.size(); ++i) {
+    const Eigen::Vector3d b(std::stod(brows[i][col(bh, "x_m")]), std::stod(brows[i][col(bh, "y_m")]),
+                            std::stod(brows[i][col(bh, "z_m")]));
+    EXPECT_THAT(b, testing::IsNearVector(xyzt[i].head<3>(), kSiteInverseTol_m));
+  }
 }
 
 struct Refusal {

@@ -665,3 +665,65 @@ TEST(RobustLoss, DownWeightsBlundersAndKeepsTheTransformOnTheTruth) {
 
 }  // namespace
 }  // namespace geoanchor::solver
+
+namespace geoanchor::solver {
+namespace {
+
+TEST(SiteCalibrationFit, RecoversASimilarityAndInclinedPlaneBuiltWithProj) {
+  // Truth: the site grid turned 35° with +45 ppm onto TM (k0 = 1) at
+  // 46.5°N 7.5°E, shifted (500, −300) m; heights h = u + 48.2 m with tilts of
+  // 20 ppm (north) and −15 ppm (east) about the centroid.
+  constexpr double kParamTol_m = 1e-6, kPpmTol = 1e-4, kInverseTol_m = 1e-8;
+  const double theta = 35.0 * M_PI / 180.0, k = 1.0 + 45e-6;
+  const ProjPipeline tmerc("+proj=tmerc +ellps=WGS84 +lat_0=46.5 +lon_0=7.5 +k=1 +x_0=0 +y_0=0");
+  const ProjPipeline cart("+proj=cart +ellps=WGS84");
+  const ProjPipeline local("+proj=topocentric +ellps=WGS84 +lat_0=46.6 +lon_0=7.4 +h_0=600");  // any origin for e, n, u
+  std::mt19937_64 rng(71);
+  std::uniform_real_distribution<double> d(-1500.0, 1500.0), up(-30.0, 60.0);
+  std::vector<Eigen::Vector3d> site;
+  for (int i = 0; i < 20; ++i) site.emplace_back(d(rng), d(rng), up(rng));
+  double e0 = 0, n0 = 0;
+  for (const auto& s : site) {
+    e0 += s.x() / 20.0;
+    n0 += s.y() / 20.0;
+  }
+  ControlSet set;
+  set.source_name = "site";
+  for (std::size_t i = 0; i < site.size(); ++i) {
+    const auto& s = site[i];
+    const double e = 500.0 + k * (std::cos(theta) * s.x() - std::sin(theta) * s.y());
+    const double n = -300.0 + k * (std::sin(theta) * s.x() + std::cos(theta) * s.y());
+    const double h = s.z() + 48.2 + 20e-6 * (s.y() - n0) - 15e-6 * (s.x() - e0);
+    const Eigen::Vector3d g = tmerc.inverse(Eigen::Vector3d(e, n, 0.0));
+    ControlPoint p;
+    p.id = "S" + std::to_string(i);
+    p.source = EcefPosition(local.inverse(s));
+    p.target = EcefPosition(cart.forward(Eigen::Vector3d(g.x(), g.y(), h)));
+    p.source_cov_m2 = p.target_cov_m2 = Eigen::Matrix3d::Identity() * 1e-6;
+    set.points.push_back(p);
+  }
+  FitOptions o;
+  o.model = FitModel::site_calibration;
+  o.nominal_origin = geodesy::LocalOrigin{{Angle::degrees(46.6), Angle::degrees(7.4), geodesy::EllipsoidalHeight{600}},
+                                          geodesy::Ellipsoid::wgs84()};
+  geodesy::ProjectionDef grid;
+  grid.tm.lat0 = Angle::degrees(46.5);
+  grid.tm.lon0 = Angle::degrees(7.5);
+  o.site_grid = grid;
+  const FitResult r = fit_helmert(set, o);
+  EXPECT_NEAR(param(r, "shift_e_m"), 500.0, kParamTol_m);
+  EXPECT_NEAR(param(r, "shift_n_m"), -300.0, kParamTol_m);
+  EXPECT_NEAR(param(r, "rotation_arcsec"), 35.0 * 3600.0, kRotationTol_arcsec);
+  EXPECT_NEAR(param(r, "scale_ppm"), 45.0, kPpmTol);
+  EXPECT_NEAR(param(r, "vertical_shift_m"), 48.2, kParamTol_m);
+  EXPECT_NEAR(param(r, "slope_n_ppm"), 20.0, kPpmTol);
+  EXPECT_NEAR(param(r, "slope_e_ppm"), -15.0, kPpmTol);
+  for (const auto& p : r.points) EXPECT_LT(p.residual_enu_m.norm(), kParamTol_m) << p.id;
+  // The calibration's exact inverse takes every target back to its source.
+  for (const auto& p : set.points) {
+    EXPECT_LT((r.site_calibration->source_from_target(p.target).m - p.source.m).norm(), kInverseTol_m);
+  }
+}
+
+}  // namespace
+}  // namespace geoanchor::solver

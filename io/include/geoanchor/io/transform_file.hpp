@@ -30,10 +30,11 @@
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/site_calibration.hpp"
 
 namespace geoanchor::io {
 
-enum class TransformModel { helmert7, helmert6, translation3, helmert14, molodensky_badekas, enu_origin };
+enum class TransformModel { helmert7, helmert6, translation3, helmert14, molodensky_badekas, enu_origin, site_calibration };
 std::string_view to_string(TransformModel m);
 
 // What `geoanchor fit` adds to a transform file: the statistics that justify
@@ -98,13 +99,21 @@ struct TransformFile {
   std::optional<Eigen::Vector3d> pivot_m;
   // enu-origin: the correction; `helmert` is unused.
   std::optional<EnuOriginCorrection> enu_origin;
+  // site-calibration: the calibration (not an affine map); `helmert` is unused.
+  std::optional<geodesy::SiteCalibration> site_calibration;
 
   std::optional<FitRecord> fit;  // only when written by `geoanchor fit`
 
   bool time_dependent() const { return model == TransformModel::helmert14; }
   std::string_view convention_name() const;
 
-  // target_from_source in ECEF at `observation_epoch`. Throws
+  // The transform (or its exact inverse) applied to one point, for every
+  // model. Throws as target_from_source.
+  geodesy::EcefPosition apply(const geodesy::EcefPosition& x, std::optional<geodesy::DecimalYear> observation_epoch,
+                              bool inverse, std::string_view where) const;
+
+  // target_from_source in ECEF at `observation_epoch` (not for
+  // site-calibration, which is not affine: use apply). Throws
   // geoanchor::Error (input) if the transform is time-dependent and no epoch
   // is given; `where` names what lacks it (a file:line, a flag).
   geodesy::AffineMap target_from_source(std::optional<geodesy::DecimalYear> observation_epoch,

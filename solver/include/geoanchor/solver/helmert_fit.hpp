@@ -28,6 +28,7 @@
 #include "geoanchor/geodesy/control_point.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
 #include "geoanchor/geodesy/positions.hpp"
+#include "geoanchor/geodesy/site_calibration.hpp"
 
 namespace geoanchor::solver {
 
@@ -45,7 +46,12 @@ struct Propagation;  // what transformed_covariance_m2 needs; private
 //   target = O' + R'ᵀ · (1 + ds) · Rz(yaw) · enu_map,
 // with O' = O + Rᵀ · shift the corrected origin (R, R' the ENU rotations at
 // O and O') and Rz(yaw) turning the map counter-clockwise seen from above.
-enum class FitModel { translation3, helmert6, helmert7, helmert14, molodensky_badekas, enu_origin };
+// site_calibration: local site coordinates (e, n, u; read as ENU at the
+// nominal origin) onto a Transverse Mercator grid at the site (k0 = 1 at the
+// targets' mean latitude and longitude, unless site_grid is given) by a
+// horizontal 4-parameter similarity, and onto ellipsoidal heights by an
+// inclined plane (shift and two tilts): geodesy::SiteCalibration.
+enum class FitModel { translation3, helmert6, helmert7, helmert14, molodensky_badekas, enu_origin, site_calibration };
 std::string_view to_string(FitModel m);
 enum class Convention { position_vector, coordinate_frame };
 
@@ -63,6 +69,8 @@ struct FitOptions {
   std::optional<geodesy::LocalOrigin> nominal_origin;
   bool enu_yaw = true;
   bool enu_scale = false;
+  // site_calibration: the grid (default: TM with k0 = 1 at the targets' centroid).
+  std::optional<geodesy::ProjectionDef> site_grid;
   double alpha = 0.05;          // global test
   double alpha_point = 0.001;   // w-tests and data snooping
   double power = 0.80;          // for the minimal detectable bias
@@ -132,6 +140,9 @@ struct FitResult {
   std::optional<geodesy::LocalOrigin> nominal_origin;
   std::optional<geodesy::LocalOrigin> corrected_origin;
   std::optional<geodesy::AffineMap> ecef_map;
+  // site_calibration: the fitted calibration (residuals are in grid E, grid N
+  // and up).
+  std::optional<geodesy::SiteCalibration> site_calibration;
   // Parameters in the reported convention, units in their names, and the
   // covariance between the estimated ones (same order, same units).
   std::vector<Parameter> parameters;
