@@ -133,6 +133,37 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   const RoleColumns src = role_columns(header, source_name, "src");
   const RoleColumns dst = role_columns(header, source_name, "dst");
   const auto epoch_col = find_column(header, "epoch");
+  // Velocities: ECEF components per frame, with a required isotropic sigma.
+  struct VelocityColumns {
+    std::array<std::optional<std::size_t>, 3> v;
+    std::optional<std::size_t> sigma;
+  };
+  auto velocity_columns = [&](const std::string& role) {
+    VelocityColumns vc;
+    const char* axes[3] = {"vx_", "vy_", "vz_"};
+    int count = 0;
+    for (int k = 0; k < 3; ++k) {
+      vc.v[static_cast<std::size_t>(k)] = find_column(header, std::string(axes[k]) + role + "_m_per_year");
+      count += vc.v[static_cast<std::size_t>(k)] ? 1 : 0;
+    }
+    vc.sigma = find_column(header, "sigma_v_" + role + "_m_per_year");
+    if (count != 0 && count != 3) {
+      throw Error(ErrorKind::input, "E_COLUMN_MISSING",
+                  source_name + ": velocity columns for " + role + " incomplete; expected vx_" + role + "_m_per_year, vy_" +
+                      role + "_m_per_year, vz_" + role + "_m_per_year (ECEF)");
+    }
+    if (count == 3 && !vc.sigma) {
+      throw Error(ErrorKind::input, "E_COLUMN_MISSING",
+                  source_name + ": velocities for " + role + " need their standard deviation: add sigma_v_" + role +
+                      "_m_per_year (no default is assumed)");
+    }
+    return vc;
+  };
+  const VelocityColumns vel_src = velocity_columns("src"), vel_dst = velocity_columns("dst");
+  if (vel_src.v[0].has_value() != vel_dst.v[0].has_value()) {
+    throw Error(ErrorKind::input, "E_COLUMN_MISSING",
+                source_name + ": velocities are given for one frame only; give vx/vy/vz for both src and dst");
+  }
   const auto use_col = find_column(header, "use");
   const RowReader rows(header, source_name);
 
@@ -194,6 +225,22 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     read_role(r, dst, p.target, p.target_cov_m2);
     if (epoch_col && !r.values[*epoch_col].empty()) {
       p.epoch = geodesy::parse_decimal_year(r.values[*epoch_col], source_name + ":" + std::to_string(r.line) + ": epoch");
+    }
+    for (const auto* vc : {&vel_src, &vel_dst}) {
+      if (!vc->v[0] || r.values[*vc->v[0]].empty()) continue;
+      const Eigen::Vector3d v(rows.number(r, *vc->v[0]), rows.number(r, *vc->v[1]), rows.number(r, *vc->v[2]));
+      const double sv = rows.number(r, *vc->sigma);
+      if (!(sv > 0.0)) rows.fail(r, *vc->sigma, "must be > 0 (a standard deviation in metres per year)");
+      if (vc == &vel_src) {
+        p.source_velocity_m_per_year = v;
+        p.source_velocity_cov = Eigen::Matrix3d::Identity() * sv * sv;
+      } else {
+        p.target_velocity_m_per_year = v;
+        p.target_velocity_cov = Eigen::Matrix3d::Identity() * sv * sv;
+      }
+    }
+    if (p.source_velocity_m_per_year.has_value() != p.target_velocity_m_per_year.has_value()) {
+      rows.fail(r, *vel_src.v[0], "velocities must be given in both frames or in neither");
     }
     if (use_col) {
       const std::string& u = r.values[*use_col];

@@ -106,6 +106,10 @@ struct Observation {
   Eigen::Vector3d y;   // target − target centroid
   Eigen::Matrix3d w;   // W with Wᵀ W = C⁻¹
   double dt = 0.0;     // years from the reference epoch
+  // Velocities (helmert14): ẏ − ẋ = ṫ' + Ṁ x + (M − I) ẋ observes the rates.
+  bool has_velocity = false;
+  Eigen::Vector3d xdot = Eigen::Vector3d::Zero(), ydot = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d wv = Eigen::Matrix3d::Identity();  // whitening of the velocity difference
 };
 
 // Predicted centred target and its Jacobian (3 × 14) for θ'. Without time
@@ -232,8 +236,12 @@ Eigen::Matrix<T, 3, 3> rotation_pv_acceleration(const T* r, const T* rdot, Rotat
 template <int K>  // basis functions per point: 4 (t, x) or 11 (with epochs)
 struct Reduced {
   static constexpr int kDim = 3 * K;
-  Eigen::Matrix<double, kDim, kDim> u;  // upper Cholesky factor of Ĥ
-  Eigen::Matrix<double, kDim, 1> z_star;
+  // A square root of Ĥ over its non-null directions: Ĥ = Uᵀ U with U of
+  // rank × kDim rows. z itself may be under-determined (one epoch with
+  // velocities, or exactly two epochs, fix only combinations of M0, M1, M2);
+  // the 14 parameters behind it need not be, and Ceres judges those.
+  Eigen::Matrix<double, Eigen::Dynamic, kDim> u;
+  Eigen::Matrix<double, kDim, 1> z_star;  // a solution of Ĥ z = ĝ
 };
 
 template <int K>
@@ -265,17 +273,49 @@ Reduced<K> reduce(const std::vector<Observation>& obs, const Scales& sc) {
       }
     }
   }
+  if constexpr (K == 11) {
+    // Velocity rows: ẏ − ẋ = ṫ' + (M1 + 2 M2 Δt) x + ((M0 − I) + M1 Δt + M2 Δt²) ẋ.
+    for (const Observation& o : obs) {
+      if (!o.has_velocity) continue;
+      const Eigen::Matrix3d p = o.wv.transpose() * o.wv;
+      const Eigen::Vector3d py = p * (o.ydot - o.xdot);
+      const double t = o.dt, l = sc.l, d = sc.d;
+      std::array<double, 11> psi{};
+      psi[1] = 1.0 / d;
+      for (int c = 0; c < 3; ++c) {
+        psi[static_cast<std::size_t>(2 + c)] = o.xdot(c) / l;
+        psi[static_cast<std::size_t>(5 + c)] = (o.x(c) + t * o.xdot(c)) / (l * d);
+        psi[static_cast<std::size_t>(8 + c)] = (2.0 * t * o.x(c) + t * t * o.xdot(c)) / (l * d * d);
+      }
+      for (int a = 0; a < K; ++a) {
+        g.template segment<3>(3 * a) += psi[static_cast<std::size_t>(a)] * py;
+        for (int b = a; b < K; ++b) {
+          h.template block<3, 3>(3 * a, 3 * b) += (psi[static_cast<std::size_t>(a)] * psi[static_cast<std::size_t>(b)]) * p;
+        }
+      }
+    }
+  }
   for (int a = 0; a < K; ++a) {
     for (int b = 0; b < a; ++b) h.template block<3, 3>(3 * a, 3 * b) = h.template block<3, 3>(3 * b, 3 * a).transpose();
   }
   Reduced<K> r;
-  const Eigen::LLT<Eigen::Matrix<double, kDim, kDim>> llt(h);
-  if (llt.info() != Eigen::Success) {
-    reject("E_FIT_COVARIANCE", "the normal equations are singular: the points do not determine the transform "
-                               "(too few, or all at one place or epoch); no transform was written");
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kDim, kDim>> eig(h);
+  const auto& ev = eig.eigenvalues();
+  const double floor = 1e-13 * ev.maxCoeff();
+  int rank = 0;
+  for (int i = 0; i < kDim; ++i) rank += ev(i) > floor ? 1 : 0;
+  if (rank == 0) {
+    reject("E_FIT_COVARIANCE", "the normal equations are empty: no observation constrains the transform");
   }
-  r.u = llt.matrixU();
-  r.z_star = llt.solve(g);
+  r.u.resize(rank, kDim);
+  r.z_star.setZero();
+  int row = 0;
+  for (int i = 0; i < kDim; ++i) {
+    if (!(ev(i) > floor)) continue;
+    const auto v = eig.eigenvectors().col(i);
+    r.u.row(row++) = std::sqrt(ev(i)) * v.transpose();
+    r.z_star += (v.dot(g) / ev(i)) * v;
+  }
   return r;
 }
 
@@ -323,7 +363,7 @@ struct ReducedCost {
       }
     }
     const Eigen::Matrix<T, Reduced<K>::kDim, 1> diff = z - reduced->z_star.template cast<T>();
-    Eigen::Map<Eigen::Matrix<T, Reduced<K>::kDim, 1>> out(residuals);
+    Eigen::Map<Eigen::Matrix<T, Eigen::Dynamic, 1>> out(residuals, reduced->u.rows());
     out = reduced->u.template cast<T>() * diff;
     return true;
   }
@@ -345,7 +385,7 @@ Solution solve_reduced(const std::vector<Observation>& obs, const FitOptions& o)
   ceres::Problem problem;
   auto* cost = new ceres::DynamicAutoDiffCostFunction<ReducedCost<K>, 8>(new ReducedCost<K>{&reduced, scales, o.rotation_model});
   for (int size : td ? std::vector<int>{3, 3, 1, 3, 3, 1} : std::vector<int>{3, 3, 1}) cost->AddParameterBlock(size);
-  cost->SetNumResiduals(Reduced<K>::kDim);
+  cost->SetNumResiduals(static_cast<int>(reduced.u.rows()));
   if constexpr (td) {
     problem.AddResidualBlock(cost, nullptr, {t, r, s, dt, dr, ds});
   } else {
@@ -579,14 +619,22 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
         hi = std::max(hi, p.epoch->year);
         sum += p.epoch->year;
       }
-      if (!(hi > lo)) {
+      const bool velocities = std::any_of(active.begin(), active.end(), [&](std::size_t i) {
+        return control.points[i].source_velocity_m_per_year && control.points[i].target_velocity_m_per_year;
+      });
+      if (!(hi > lo) && !velocities) {
         reject("E_FIT_ONE_EPOCH", "model helmert14: all " + std::to_string(n) + " " + unit + " are at epoch " +
                                       format_shortest(lo) +
-                                      "; rates need observations at >= 2 epochs (use helmert7 for one epoch)");
+                                      "; rates need observations at >= 2 epochs, or velocities in both frames (use "
+                                      "helmert7 for one epoch)");
       }
       if (!o.reference_epoch) o.reference_epoch = DecimalYear{sum / n};
-      if (3 * n < 14) {
-        reject("E_FIT_TOO_FEW_POINTS", "model helmert14: 14 parameters need >= 5 point-epochs, got " + std::to_string(n));
+      const auto with_velocity = std::count_if(active.begin(), active.end(), [&](std::size_t i) {
+        return control.points[i].source_velocity_m_per_year.has_value();
+      });
+      if (3 * (n + with_velocity) < 14) {
+        reject("E_FIT_TOO_FEW_POINTS", "model helmert14: 14 parameters need >= 14 observations (5 point-epochs), got " +
+                                           std::to_string(3 * (n + with_velocity)));
       }
     }
     if (has_rotation(o.model)) {
@@ -634,12 +682,21 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       ob.y = p.target.m - cy;
       ob.w = llt.matrixL().solve(Eigen::Matrix3d::Identity());  // L⁻¹: (L⁻¹)ᵀ L⁻¹ = C⁻¹
       ob.dt = td ? p.epoch->year - o.reference_epoch->year : 0.0;
+      if (td && p.source_velocity_m_per_year && p.target_velocity_m_per_year) {
+        const Eigen::LLT<Eigen::Matrix3d> vllt(p.source_velocity_cov + p.target_velocity_cov);
+        if (vllt.info() == Eigen::Success) {
+          ob.has_velocity = true;
+          ob.xdot = *p.source_velocity_m_per_year;
+          ob.ydot = *p.target_velocity_m_per_year;
+          ob.wv = vllt.matrixL().solve(Eigen::Matrix3d::Identity());
+        }
+      }
       obs.push_back(ob);
     }
 
     const Solution sol = solve(obs, o, td);
     const int u = static_cast<int>(sol.estimated.size());
-    const int dof = 3 * n - u;
+    int dof = 3 * n - u;  // plus the velocity observations, below
 
     // --- geocentric parameters and covariance ----------------------------
     std::array<double, kMaxParams> g{};
@@ -707,6 +764,27 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       vw[k] = obs[k].w * v[k];
       omega += vw[k].squaredNorm();
     }
+    // Velocity residuals (helmert14): from the centred parameters' M(Δt).
+    int velocity_observations = 0;
+    if (td) {
+      const double* th = sol.theta.data();
+      double r0[3] = {th[3], th[4], th[5]}, rd[3] = {th[10], th[11], th[12]};
+      const Eigen::Matrix3d rot = rotation_pv(r0, o.rotation_model);
+      const Eigen::Matrix3d rdot = rotation_pv_rate(r0, rd, o.rotation_model);
+      const Eigen::Matrix3d racc = rotation_pv_acceleration(r0, rd, o.rotation_model);
+      const Eigen::Matrix3d m0 = (1.0 + th[6]) * rot - Eigen::Matrix3d::Identity();
+      const Eigen::Matrix3d m1 = th[13] * rot + (1.0 + th[6]) * rdot;
+      const Eigen::Matrix3d m2 = th[13] * rdot + 0.5 * (1.0 + th[6]) * racc;
+      const Eigen::Vector3d tdot(th[7], th[8], th[9]);
+      for (const Observation& ob : obs) {
+        if (!ob.has_velocity) continue;
+        const double t = ob.dt;
+        const Eigen::Vector3d pred = tdot + (m1 + 2.0 * t * m2) * ob.x + (m0 + t * m1 + t * t * m2) * ob.xdot;
+        omega += (ob.wv * (ob.ydot - ob.xdot - pred)).squaredNorm();
+        ++velocity_observations;
+      }
+    }
+    dof += 3 * velocity_observations;
     result.dof = dof;
     result.sigma0 = dof > 0 ? std::sqrt(omega / dof) : 0.0;
     result.global_test.statistic = omega;

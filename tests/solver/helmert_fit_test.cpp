@@ -137,6 +137,9 @@ TEST(HelmertFit, RecoversItrf2014ToItrf2008FromProjsDataFile) {
                     80.0, epochs});
   expect_recovered({"ITRF CF", "+init=ITRF2014:ITRF2008", FitModel::helmert14, Convention::coordinate_frame, cf, 0.0,
                     0.0, 80.0, epochs});
+  // Exactly two epochs are enough ("two or more epochs").
+  expect_recovered({"ITRF PV two epochs", "+init=ITRF2014:ITRF2008", FitModel::helmert14, Convention::position_vector, pv,
+                    0.0, 0.0, 80.0, {2005.0, 2019.0}});
 }
 
 TEST(HelmertFit, RecoversANad83LikeSetWithArcSecondRotationsAndRates) {
@@ -723,6 +726,53 @@ TEST(SiteCalibrationFit, RecoversASimilarityAndInclinedPlaneBuiltWithProj) {
   for (const auto& p : set.points) {
     EXPECT_LT((r.site_calibration->source_from_target(p.target).m - p.source.m).norm(), kInverseTol_m);
   }
+}
+
+}  // namespace
+}  // namespace geoanchor::solver
+
+namespace geoanchor::solver {
+namespace {
+
+TEST(HelmertFit, FourteenParametersFromPositionsAndVelocitiesAtOneEpoch) {
+  // Every point at 2020.0 with its velocity in both frames; target positions
+  // and velocities through PROJ's time-dependent helmert (velocity = central
+  // difference of the transformed trajectory, exact for this linear model).
+  constexpr double kRateTol_m_per_year = 1e-7, kRotRateTol_arcsec_per_year = 1e-6, kScaleRateTol_ppm_per_year = 1e-6;
+  const ProjPipeline truth("+proj=helmert +x=0.9910 +y=-1.9072 +z=-0.5129 +rx=0.0258 +ry=0.0357 +rz=0.0078 +s=0.62 "
+                           "+dx=0.0001 +dy=-0.0005 +dz=0.0033 +drx=0.000258 +dry=-0.000357 +drz=-0.000078 +ds=-0.00011 "
+                           "+t_epoch=2015.0 +convention=coordinate_frame");
+  std::mt19937_64 rng(91);
+  std::normal_distribution<double> vel(0.0, 0.02);
+  ControlSet set;
+  set.source_name = "velocities";
+  const auto src = region(30, 40.0, -100.0, 20.0, 92);
+  for (std::size_t i = 0; i < src.size(); ++i) {
+    ControlPoint p;
+    p.id = "V" + std::to_string(i);
+    p.epoch = DecimalYear{2020.0};
+    p.source = src[i];
+    const Eigen::Vector3d v(vel(rng), vel(rng), vel(rng));
+    p.target = EcefPosition(truth.forward(src[i].m, 2020.0));
+    p.source_velocity_m_per_year = v;
+    p.target_velocity_m_per_year = truth.forward(src[i].m + 0.5 * v, 2020.5) - truth.forward(src[i].m - 0.5 * v, 2019.5);
+    p.source_cov_m2 = p.target_cov_m2 = Eigen::Matrix3d::Identity() * 1e-6;
+    p.source_velocity_cov = p.target_velocity_cov = Eigen::Matrix3d::Identity() * 1e-8;
+    set.points.push_back(p);
+  }
+  FitOptions o;
+  o.model = FitModel::helmert14;
+  o.convention = Convention::coordinate_frame;
+  o.reference_epoch = DecimalYear{2015.0};
+  const FitResult r = fit_helmert(set, o);
+  EXPECT_NEAR(param(r, "tx_m"), 0.9910, kTranslationTol_m);
+  EXPECT_NEAR(param(r, "rz_arcsec"), 0.0078, kRotationTol_arcsec);
+  EXPECT_NEAR(param(r, "ds_ppm"), 0.62, kScaleTol_ppm);
+  EXPECT_NEAR(param(r, "dtz_m_per_year"), 0.0033, kRateTol_m_per_year);
+  EXPECT_NEAR(param(r, "dty_m_per_year"), -0.0005, kRateTol_m_per_year);
+  EXPECT_NEAR(param(r, "dry_arcsec_per_year"), -0.000357, kRotRateTol_arcsec_per_year);
+  EXPECT_NEAR(param(r, "dds_ppm_per_year"), -0.00011, kScaleRateTol_ppm_per_year);
+  EXPECT_EQ(r.dof, 6 * 30 - 14);  // velocities count as observations
 }
 
 }  // namespace

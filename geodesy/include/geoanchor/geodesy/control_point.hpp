@@ -26,6 +26,12 @@ struct ControlPoint {
   // Epoch at which the point's two coordinates are related by the transform.
   std::optional<DecimalYear> epoch;
   bool use = true;
+  // Optional ECEF velocities (m/yr) in each frame at `epoch`, with their
+  // covariances (m²/yr²): they observe the transform's rates.
+  std::optional<Eigen::Vector3d> source_velocity_m_per_year;
+  std::optional<Eigen::Vector3d> target_velocity_m_per_year;
+  Eigen::Matrix3d source_velocity_cov = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d target_velocity_cov = Eigen::Matrix3d::Zero();
 };
 
 struct ControlSet {
