@@ -99,17 +99,7 @@ class RowReader {
  public:
   RowReader(const std::vector<std::string>& header, std::string source) : header_(header), source_(std::move(source)) {}
 
-  double number(const CsvRecord& r, std::size_t col) const {
-    const std::string& text = r.values[col];
-    const auto v = parse_finite_double(text);
-    if (!v) {
-      std::string why = text.empty() ? "empty field; expected a number" : "not a finite number";
-      if (text.find(',') != std::string::npos) why += " (decimal comma? use '.')";
-      throw Error(ErrorKind::input, "E_VALUE",
-                  source_ + ":" + std::to_string(r.line) + ": " + header_[col] + "='" + text + "': " + why);
-    }
-    return *v;
-  }
+  double number(const CsvRecord& r, std::size_t col) const { return number_cell(r, col, header_, source_); }
 
   [[noreturn]] void fail(const CsvRecord& r, std::size_t col, const std::string& what) const {
     throw Error(ErrorKind::input, "E_VALUE",

@@ -41,15 +41,7 @@ CoordinateDecoder::CoordinateDecoder(const CoordinateColumns& columns, const std
 }
 
 double CoordinateDecoder::number(const CsvRecord& r, std::size_t column) const {
-  const std::string& text = r.values[column];
-  const auto v = parse_finite_double(text);
-  if (!v) {
-    std::string why = text.empty() ? "empty field; expected a number" : "not a finite number";
-    if (text.find(',') != std::string::npos) why += " (decimal comma? use '.')";
-    throw Error(ErrorKind::input, "E_VALUE",
-                source_ + ":" + std::to_string(r.line) + ": " + header_[column] + "='" + text + "': " + why);
-  }
-  return *v;
+  return number_cell(r, column, header_, source_);
 }
 
 EcefPosition CoordinateDecoder::decode(const CsvRecord& r) const {

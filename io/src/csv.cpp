@@ -1,6 +1,7 @@
 #include "geoanchor/io/csv.hpp"
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::io {
 
@@ -46,6 +47,19 @@ void split_csv_line(std::string_view line, std::vector<std::string>& raw, std::v
     if (i >= line.size()) break;
     ++i;  // the comma
   }
+}
+
+double number_cell(const CsvRecord& r, std::size_t column, const std::vector<std::string>& header,
+                   const std::string& source) {
+  const std::string& text = r.values[column];
+  const auto v = parse_finite_double(text);
+  if (!v) {
+    std::string why = text.empty() ? "empty field; expected a number" : "not a finite number";
+    if (text.find(',') != std::string::npos) why += " (decimal comma? use '.')";
+    throw Error(ErrorKind::input, "E_VALUE",
+                source + ":" + std::to_string(r.line) + ": " + header[column] + "='" + text + "': " + why);
+  }
+  return *v;
 }
 
 std::string csv_quote(std::string_view value) {

@@ -10,6 +10,7 @@
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "fit_common.hpp"
 #include "point_statistics.hpp"
 #include "statistics.hpp"
 
@@ -70,16 +71,6 @@ struct EnuOriginCost {
   }
 };
 
-[[noreturn]] void reject(const std::string& code, const std::string& message) {
-  throw Error(ErrorKind::rejected, code, message);
-}
-
-std::string fmt(double v, int precision = 3) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*g", precision, v);
-  return b;
-}
-
 }  // namespace
 
 FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& options) {
@@ -92,12 +83,7 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
   result.model = FitModel::enu_origin;
   result.rotation_model = geodesy::RotationModel::exact;
   result.nominal_origin = o.nominal_origin;
-  if (!control.has_a_priori_sigmas) {
-    o.scale_by_sigma0 = true;
-    result.warnings.push_back("no a-priori sigmas in " + control.source_name +
-                              ": equal weights; parameter sigmas are scaled by the a-posteriori σ0 and the global test "
-                              "is not applicable");
-  }
+  note_missing_sigmas(result, o, control);
   const geodesy::LocalTangentPlane plane(*o.nominal_origin);
   const geodesy::Ellipsoid& e = o.nominal_origin->ellipsoid;
   Nominal nominal;
@@ -109,18 +95,7 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
   nominal.normal_radius_m = e.a_m() / std::sqrt(w2) + o.nominal_origin->point.h.m;
   nominal.enu_from_ecef = plane.enu_from_ecef_rotation();
 
-  result.points.resize(control.points.size());
-  std::vector<std::size_t> active;
-  for (std::size_t i = 0; i < control.points.size(); ++i) {
-    result.points[i].id = control.points[i].id;
-    result.points[i].line = control.points[i].line;
-    result.points[i].used = control.points[i].use;
-    if (control.points[i].use) {
-      active.push_back(i);
-    } else {
-      result.points[i].removed_because = "use = 0 in the control set";
-    }
-  }
+  std::vector<std::size_t> active = init_points(result, control);
   const int u = 3 + (o.enu_yaw ? 1 : 0) + (o.enu_scale ? 1 : 0);
   const double z_point = normal_quantile(1.0 - o.alpha_point / 2.0);
   result.w_critical = z_point;
@@ -178,31 +153,8 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
     } else {
       problem.SetParameterBlockConstant(ds);
     }
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_QR;
-    so.max_num_iterations = 200;
-    so.function_tolerance = 1e-16;
-    so.gradient_tolerance = 1e-20;
-    so.parameter_tolerance = 1e-15;
-    so.logging_type = ceres::SILENT;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, &problem, &summary);
-    if (summary.termination_type != ceres::CONVERGENCE) {
-      reject("E_FIT_NO_CONVERGENCE", "the least-squares solve did not converge (Ceres: " +
-                                         std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
-                                         summary.message + "); no transform was written");
-    }
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    ceres::Covariance covariance(co);
-    if (!covariance.Compute(blocks, &problem)) {
-      reject("E_FIT_COVARIANCE", "the parameter covariance cannot be computed: the normal matrix is rank-deficient; no "
-                                 "transform was written");
-    }
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> cov_scaled(u, u);
-    if (!covariance.GetCovarianceMatrix(blocks, cov_scaled.data())) {
-      reject("E_FIT_COVARIANCE", "the parameter covariance could not be read back from Ceres");
-    }
+    const ceres::Solver::Summary summary = solve_tightly(problem, ceres::DENSE_QR);
+    const Eigen::MatrixXd cov_scaled = covariance_or_reject(problem, blocks, u);
 
     // The correction as an ECEF map, and the corrected origin.
     const double yaw_rad = yaw[0] / nominal.l_m, ds_unitless = ds[0] / nominal.l_m;

@@ -17,6 +17,7 @@
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "enu_origin_fit.hpp"
+#include "fit_common.hpp"
 #include "point_statistics.hpp"
 #include "statistics.hpp"
 
@@ -39,6 +40,28 @@ constexpr double kCollinearRatio = 1e-6;    // second/first singular value of th
 //   0-2 t' (m), 3-5 r (rad), 6 ds, 7-9 ṫ' (m/yr), 10-12 ṙ (rad/yr), 13 ḋs (1/yr).
 constexpr int kMaxParams = 14;
 
+// The three elementary coordinate-frame rotations R1(rx), R2(ry), R3(rz)
+// and their first (D) and second (E) derivatives in their own angle.
+template <typename T>
+struct Elementary {
+  Eigen::Matrix<T, 3, 3> r1, r2, r3, d1, d2, d3, e1, e2, e3;
+  explicit Elementary(const T* r) {
+    using std::cos;
+    using std::sin;
+    const T ca = cos(r[0]), sa = sin(r[0]), cb = cos(r[1]), sb = sin(r[1]), cg = cos(r[2]), sg = sin(r[2]);
+    const T o(0.0), i(1.0);
+    r1 << i, o, o, o, ca, sa, o, -sa, ca;
+    r2 << cb, o, -sb, o, i, o, sb, o, cb;
+    r3 << cg, sg, o, -sg, cg, o, o, o, i;
+    d1 << o, o, o, o, -sa, ca, o, -ca, -sa;
+    d2 << -sb, o, -cb, o, o, o, cb, o, -sb;
+    d3 << -sg, cg, o, -cg, -sg, o, o, o, o;
+    e1 << o, o, o, o, -ca, -sa, o, sa, -ca;
+    e2 << -cb, o, sb, o, o, o, -sb, o, -cb;
+    e3 << -cg, -sg, o, sg, -cg, o, o, o, o;
+  }
+};
+
 // The position-vector rotation matrix for rotations r (radians), in either model.
 template <typename T>
 Eigen::Matrix<T, 3, 3> rotation_pv(const T* r, RotationModel model) {
@@ -47,14 +70,8 @@ Eigen::Matrix<T, 3, 3> rotation_pv(const T* r, RotationModel model) {
     m << T(1.0), -r[2], r[1], r[2], T(1.0), -r[0], -r[1], r[0], T(1.0);
     return m;
   }
-  using std::cos;
-  using std::sin;
-  const T ca = cos(r[0]), sa = sin(r[0]), cb = cos(r[1]), sb = sin(r[1]), cg = cos(r[2]), sg = sin(r[2]);
-  Eigen::Matrix<T, 3, 3> r1, r2, r3;
-  r1 << T(1), T(0), T(0), T(0), ca, sa, T(0), -sa, ca;
-  r2 << cb, T(0), -sb, T(0), T(1), T(0), sb, T(0), cb;
-  r3 << cg, sg, T(0), -sg, cg, T(0), T(0), T(0), T(1);
-  return (r3 * r2 * r1).transpose();  // position vector: transpose of the coordinate-frame matrix
+  const Elementary<T> x(r);
+  return (x.r3 * x.r2 * x.r1).transpose();  // position vector: transpose of the coordinate-frame matrix
 }
 
 // Ṙ: the derivative of the position-vector matrix along the rotation rate ṙ.
@@ -65,17 +82,9 @@ Eigen::Matrix<T, 3, 3> rotation_pv_rate(const T* r, const T* rdot, RotationModel
     m << T(0.0), -rdot[2], rdot[1], rdot[2], T(0.0), -rdot[0], -rdot[1], rdot[0], T(0.0);
     return m;
   }
-  using std::cos;
-  using std::sin;
-  const T ca = cos(r[0]), sa = sin(r[0]), cb = cos(r[1]), sb = sin(r[1]), cg = cos(r[2]), sg = sin(r[2]);
-  Eigen::Matrix<T, 3, 3> r1, r2, r3, d1, d2, d3;
-  r1 << T(1), T(0), T(0), T(0), ca, sa, T(0), -sa, ca;
-  r2 << cb, T(0), -sb, T(0), T(1), T(0), sb, T(0), cb;
-  r3 << cg, sg, T(0), -sg, cg, T(0), T(0), T(0), T(1);
-  d1 << T(0), T(0), T(0), T(0), -sa, ca, T(0), -ca, -sa;
-  d2 << -sb, T(0), -cb, T(0), T(0), T(0), cb, T(0), -sb;
-  d3 << -sg, cg, T(0), -cg, -sg, T(0), T(0), T(0), T(0);
-  const Eigen::Matrix<T, 3, 3> cf = rdot[2] * d3 * r2 * r1 + rdot[1] * r3 * d2 * r1 + rdot[0] * r3 * r2 * d1;
+  const Elementary<T> x(r);
+  const Eigen::Matrix<T, 3, 3> cf =
+      rdot[2] * x.d3 * x.r2 * x.r1 + rdot[1] * x.r3 * x.d2 * x.r1 + rdot[0] * x.r3 * x.r2 * x.d1;
   return cf.transpose();
 }
 
@@ -147,10 +156,6 @@ bool has_scale(FitModel m) {
 }
 int min_points(FitModel m) { return m == FitModel::translation3 ? 1 : 3; }
 
-[[noreturn]] void reject(const std::string& code, const std::string& message) {
-  throw Error(ErrorKind::rejected, code, message);
-}
-
 // Geocentric (position-vector) parameters from θ' (both in solver units:
 // metres, radians, unitless, per year), templated for autodiff of the
 // covariance propagation.
@@ -206,23 +211,11 @@ Scales parameter_scale(const std::vector<Observation>& obs) {
 template <typename T>
 Eigen::Matrix<T, 3, 3> rotation_pv_acceleration(const T* r, const T* rdot, RotationModel model) {
   if (model == RotationModel::small_angle) return Eigen::Matrix<T, 3, 3>::Zero();  // R is linear in r
-  using std::cos;
-  using std::sin;
-  const T ca = cos(r[0]), sa = sin(r[0]), cb = cos(r[1]), sb = sin(r[1]), cg = cos(r[2]), sg = sin(r[2]);
-  Eigen::Matrix<T, 3, 3> r1, r2, r3, d1, d2, d3, e1, e2, e3;
-  r1 << T(1), T(0), T(0), T(0), ca, sa, T(0), -sa, ca;
-  r2 << cb, T(0), -sb, T(0), T(1), T(0), sb, T(0), cb;
-  r3 << cg, sg, T(0), -sg, cg, T(0), T(0), T(0), T(1);
-  d1 << T(0), T(0), T(0), T(0), -sa, ca, T(0), -ca, -sa;
-  d2 << -sb, T(0), -cb, T(0), T(0), T(0), cb, T(0), -sb;
-  d3 << -sg, cg, T(0), -cg, -sg, T(0), T(0), T(0), T(0);
-  e1 << T(0), T(0), T(0), T(0), -ca, -sa, T(0), sa, -ca;
-  e2 << -cb, T(0), sb, T(0), T(0), T(0), -sb, T(0), -cb;
-  e3 << -cg, -sg, T(0), sg, -cg, T(0), T(0), T(0), T(0);
+  const Elementary<T> x(r);
   const T a = rdot[0], b = rdot[1], g = rdot[2];
   // (R3 R2 R1)'' with Ri' = ṙi Di, Ri'' = ṙi² Ei.
-  const Eigen::Matrix<T, 3, 3> cf = g * g * e3 * r2 * r1 + b * b * r3 * e2 * r1 + a * a * r3 * r2 * e1 +
-                                    T(2.0) * (g * b * d3 * d2 * r1 + g * a * d3 * r2 * d1 + b * a * r3 * d2 * d1);
+  const Eigen::Matrix<T, 3, 3> cf = g * g * x.e3 * x.r2 * x.r1 + b * b * x.r3 * x.e2 * x.r1 + a * a * x.r3 * x.r2 * x.e1 +
+                                    T(2.0) * (g * b * x.d3 * x.d2 * x.r1 + g * a * x.d3 * x.r2 * x.d1 + b * a * x.r3 * x.d2 * x.d1);
   return cf.transpose();
 }
 
@@ -410,39 +403,11 @@ Solution solve_reduced(const std::vector<Observation>& obs, const FitOptions& o)
     for (int k = 7; k < 14; ++k) sol.estimated.push_back(k);
   }
 
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = 200;
-  // Ceres' default tolerances stop measurably short of the optimum on large
-  // sets (NOTES.md): iterate until the step is at float64 noise.
-  so.function_tolerance = 1e-16;
-  so.gradient_tolerance = 1e-20;
-  so.parameter_tolerance = 1e-15;
-  so.num_threads = 1;
-  so.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  const ceres::Solver::Summary summary = solve_tightly(problem, ceres::DENSE_QR);
   sol.iterations = static_cast<int>(summary.iterations.size());
   sol.report = summary.BriefReport();
-  if (summary.termination_type != ceres::CONVERGENCE) {
-    reject("E_FIT_NO_CONVERGENCE", "the least-squares solve did not converge (Ceres: " +
-                                       std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
-                                       summary.message + "); no transform was written");
-  }
-
-  ceres::Covariance::Options co;
-  co.algorithm_type = ceres::DENSE_SVD;
-  co.null_space_rank = 0;
-  ceres::Covariance covariance(co);
-  if (!covariance.Compute(blocks, &problem)) {
-    reject("E_FIT_COVARIANCE", "the parameter covariance cannot be computed: the normal matrix is rank-deficient "
-                               "(a parameter is not observable from these points); no transform was written");
-  }
   const int u = static_cast<int>(sol.estimated.size());
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> c(u, u);
-  if (!covariance.GetCovarianceMatrix(blocks, c.data())) {
-    reject("E_FIT_COVARIANCE", "the parameter covariance could not be read back from Ceres");
-  }
+  const Eigen::MatrixXd c = covariance_or_reject(problem, blocks, u);
   sol.cov_centred = c;
   for (int a = 0; a < u; ++a) {
     for (int b = 0; b < u; ++b) {
@@ -458,12 +423,6 @@ Solution solve_reduced(const std::vector<Observation>& obs, const FitOptions& o)
 
 Solution solve(const std::vector<Observation>& obs, const FitOptions& o, bool td) {
   return td ? solve_reduced<11>(obs, o) : solve_reduced<4>(obs, o);
-}
-
-std::string fmt(double v, int precision = 3) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*g", precision, v);
-  return b;
 }
 
 }  // namespace
@@ -558,24 +517,8 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
   result.model = o.model;
   result.convention = o.convention.value_or(Convention::position_vector);
   result.rotation_model = o.rotation_model;
-  if (!control.has_a_priori_sigmas) {
-    o.scale_by_sigma0 = true;
-    result.warnings.push_back("no a-priori sigmas in " + control.source_name +
-                              ": equal weights; parameter sigmas are scaled by the a-posteriori σ0 and the global test "
-                              "is not applicable");
-  }
-
-  std::vector<std::size_t> active;
-  for (std::size_t i = 0; i < control.points.size(); ++i) {
-    if (control.points[i].use) active.push_back(i);
-  }
-  result.points.resize(control.points.size());
-  for (std::size_t i = 0; i < control.points.size(); ++i) {
-    result.points[i].id = control.points[i].id;
-    result.points[i].line = control.points[i].line;
-    result.points[i].used = control.points[i].use;
-    if (!control.points[i].use) result.points[i].removed_because = "use = 0 in the control set";
-  }
+  note_missing_sigmas(result, o, control);
+  std::vector<std::size_t> active = init_points(result, control);
 
   const double z_point = normal_quantile(1.0 - o.alpha_point / 2.0);
   result.w_critical = z_point;

@@ -8,6 +8,7 @@
 #include "enu_origin_fit.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
+#include "fit_common.hpp"
 #include "point_statistics.hpp"
 #include "statistics.hpp"
 
@@ -40,10 +41,6 @@ struct SiteCost {
   }
 };
 
-[[noreturn]] void reject(const std::string& code, const std::string& message) {
-  throw Error(ErrorKind::rejected, code, message);
-}
-
 }  // namespace
 
 FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOptions& options) {
@@ -56,28 +53,12 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
   FitResult result;
   result.model = FitModel::site_calibration;
   result.nominal_origin = o.nominal_origin;
-  if (!control.has_a_priori_sigmas) {
-    o.scale_by_sigma0 = true;
-    result.warnings.push_back("no a-priori sigmas in " + control.source_name +
-                              ": equal weights; parameter sigmas are scaled by the a-posteriori σ0 and the global test "
-                              "is not applicable");
-  }
+  note_missing_sigmas(result, o, control);
   const geodesy::Ellipsoid& e = o.nominal_origin->ellipsoid;
   const geodesy::LocalTangentPlane plane(*o.nominal_origin);
   const geodesy::GeocentricConverter geocentric(e);
 
-  std::vector<std::size_t> active;
-  result.points.resize(control.points.size());
-  for (std::size_t i = 0; i < control.points.size(); ++i) {
-    result.points[i].id = control.points[i].id;
-    result.points[i].line = control.points[i].line;
-    result.points[i].used = control.points[i].use;
-    if (control.points[i].use) {
-      active.push_back(i);
-    } else {
-      result.points[i].removed_because = "use = 0 in the control set";
-    }
-  }
+  std::vector<std::size_t> active = init_points(result, control);
   if (active.size() < 3) {
     reject("E_FIT_TOO_FEW_POINTS", "model site-calibration: need >= 3 non-collinear points, got " + std::to_string(active.size()));
   }
@@ -169,31 +150,13 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
         problem->AddResidualBlock(new ceres::AutoDiffCostFunction<SiteCost, 3, kParams>(new SiteCost{ob, e0, n0}), nullptr,
                                   params.data());
       }
-      ceres::Solver::Options so;
-      so.linear_solver_type = ceres::DENSE_QR;
-      so.max_num_iterations = 100;
-      so.function_tolerance = 1e-16;
-      so.gradient_tolerance = 1e-20;
-      so.parameter_tolerance = 1e-15;
-      so.logging_type = ceres::SILENT;
-      ceres::Solver::Summary summary;
-      ceres::Solve(so, problem.get(), &summary);
-      if (summary.termination_type != ceres::CONVERGENCE) {
-        reject("E_FIT_NO_CONVERGENCE", "the least-squares solve did not converge (Ceres: " + summary.message +
-                                           "); no transform was written");
-      }
+      const ceres::Solver::Summary summary = solve_tightly(*problem, ceres::DENSE_QR);
       result.ceres_iterations = static_cast<int>(summary.iterations.size());
       result.ceres_report = summary.BriefReport();
       similarity << params[2], -params[3], params[3], params[2];
     }
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    ceres::Covariance covariance(co);
-    if (!covariance.Compute(std::vector<const double*>{params.data()}, problem.get())) {
-      reject("E_FIT_COVARIANCE", "the parameter covariance cannot be computed: the normal matrix is rank-deficient");
-    }
-    Eigen::Matrix<double, kParams, kParams, Eigen::RowMajor> cov7;
-    covariance.GetCovarianceBlock(params.data(), params.data(), cov7.data());
+    const Eigen::Matrix<double, kParams, kParams> cov7 =
+        covariance_or_reject(*problem, std::vector<const double*>{params.data()}, kParams);
 
     geodesy::SiteCalibrationParams sp;
     sp.shift_e_m = params[0];

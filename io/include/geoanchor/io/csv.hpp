@@ -54,6 +54,12 @@ class CsvReader {
 void split_csv_line(std::string_view line, std::vector<std::string>& raw, std::vector<std::string>& values,
                     std::string_view where);
 
+// The number in field `column` of `record`. Throws geoanchor::Error (input)
+// naming source:line, the column's name and the text: empty, not a finite
+// number, or written with a decimal comma.
+double number_cell(const CsvRecord& record, std::size_t column, const std::vector<std::string>& header,
+                   const std::string& source);
+
 // Quotes `value` if it holds a comma, quote, or leading/trailing space.
 std::string csv_quote(std::string_view value);
 

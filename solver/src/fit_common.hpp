@@ -1,0 +1,33 @@
+#pragma once
+// What every fit shares: the point list, the Ceres solve with its checks,
+// the covariance or a refusal, and message helpers.
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "geoanchor/solver/helmert_fit.hpp"
+
+namespace geoanchor::solver {
+
+[[noreturn]] void reject(const std::string& code, const std::string& message);
+std::string fmt(double v, int precision = 3);
+
+// Fills result.points from the control set; returns the indices in use.
+std::vector<std::size_t> init_points(FitResult& result, const geodesy::ControlSet& control);
+
+// Without a-priori sigmas: weights are equal, σ0 scales the sigmas, and the
+// result says so.
+void note_missing_sigmas(FitResult& result, FitOptions& options, const geodesy::ControlSet& control);
+
+// Solves with tolerances at float64 noise (Ceres' defaults stop measurably
+// short of the optimum); refuses anything but CONVERGENCE.
+ceres::Solver::Summary solve_tightly(ceres::Problem& problem, ceres::LinearSolverType solver);
+
+// (JᵀJ)⁻¹ over `blocks` (u parameters in all) by ceres::Covariance
+// (DENSE_SVD); refuses a rank-deficient problem.
+Eigen::MatrixXd covariance_or_reject(ceres::Problem& problem, const std::vector<const double*>& blocks, int u);
+
+}  // namespace geoanchor::solver
