@@ -19,6 +19,7 @@
 #include "geoanchor/geodesy/helmert.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/projection.hpp"
+#include "median_reporter.hpp"
 
 namespace {
 
@@ -202,31 +203,17 @@ void proj_utm(benchmark::State& state) {
   run_proj(state, "+proj=utm +zone=32 +ellps=WGS84", data().lon_rad, data().lat_rad, data().h, PJ_FWD);
 }
 
-// Collects median times so the ratio table can be printed at the end.
-class MedianReporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const auto& r : runs) {
-      // Adjusted times are in the run's display unit; keep nanoseconds per iteration.
-      if (r.aggregate_name == "median") {
-        medians_[r.run_name.function_name] = r.GetAdjustedRealTime() * 1e9 / benchmark::GetTimeUnitMultiplier(r.time_unit);
-      }
-    }
-    ConsoleReporter::ReportRuns(runs);
+// Median ns/point and PROJ/ours ratios, after Google Benchmark's own output.
+void print_table(const geoanchor::bench::MedianReporter& r) {
+  auto ns_per_point = [&](const std::string& name) { return r.median_s(name) * 1e9 / static_cast<double>(kPoints); };
+  std::printf("\n%-22s %14s %14s %10s\n", "median ns/point", "geoanchor", "PROJ", "PROJ/ours");
+  for (const char* what : {"geodetic_to_ecef", "ecef_to_geodetic", "enu_helmert_enu", "utm"}) {
+    const double ours = ns_per_point(std::string("ours_") + what), proj = ns_per_point(std::string("proj_") + what);
+    if (ours < 0 || proj < 0) continue;  // filtered out
+    std::printf("%-22s %14.2f %14.2f %10.2f\n", what, ours, proj, proj / ours);
   }
-  void table() const {
-    auto ns_per_point = [&](const std::string& name) { return medians_.at(name) / static_cast<double>(kPoints); };
-    std::printf("\n%-22s %14s %14s %10s\n", "median ns/point", "geoanchor", "PROJ", "PROJ/ours");
-    for (const char* what : {"geodetic_to_ecef", "ecef_to_geodetic", "enu_helmert_enu", "utm"}) {
-      const double ours = ns_per_point(std::string("ours_") + what), proj = ns_per_point(std::string("proj_") + what);
-      std::printf("%-22s %14.2f %14.2f %10.2f\n", what, ours, proj, proj / ours);
-    }
-    std::printf("%-22s %14.2f   (plain copy of the same xyz bytes: memory floor)\n", "copy_xyz", ns_per_point("copy_xyz"));
-  }
-
- private:
-  std::map<std::string, double> medians_;
-};
+  std::printf("%-22s %14.2f   (plain copy of the same xyz bytes: memory floor)\n", "copy_xyz", ns_per_point("copy_xyz"));
+}
 
 }  // namespace
 
@@ -243,9 +230,9 @@ GEOANCHOR_BENCH(proj_utm);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
-  MedianReporter reporter;
+  geoanchor::bench::MedianReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
-  reporter.table();
+  print_table(reporter);
   benchmark::Shutdown();
   return 0;
 }

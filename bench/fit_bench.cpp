@@ -15,6 +15,7 @@
 
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
+#include "median_reporter.hpp"
 
 namespace {
 
@@ -111,32 +112,17 @@ void fit14(benchmark::State& s) { fit(s, true); }
 void closed7(benchmark::State& s) { closed_form(s, false); }
 void closed14(benchmark::State& s) { closed_form(s, true); }
 
-class MedianReporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const auto& r : runs) {
-      if (r.aggregate_name == "median") {
-        medians_[r.run_name.function_name + "/" + r.run_name.args] =
-            r.GetAdjustedRealTime() / benchmark::GetTimeUnitMultiplier(r.time_unit);
-      }
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
-  void table() const {
-    std::printf("\n%-9s %-6s %14s %16s %8s\n", "points", "model", "fit median s", "closed-form s", "ratio");
-    for (const char* m : {"7", "14"}) {
-      for (int n = 100; n <= 1000000; n *= 10) {
-        const auto f = medians_.find(std::string("fit") + m + "/" + std::to_string(n));
-        const auto c = medians_.find(std::string("closed") + m + "/" + std::to_string(n));
-        if (f == medians_.end() || c == medians_.end()) continue;
-        std::printf("%-9d %-6s %14.4f %16.4f %8.1f\n", n, m, f->second, c->second, f->second / c->second);
-      }
+void print_table(const geoanchor::bench::MedianReporter& r) {
+  std::printf("\n%-9s %-6s %14s %16s %8s\n", "points", "model", "fit median s", "closed-form s", "ratio");
+  for (const char* m : {"7", "14"}) {
+    for (int n = 100; n <= 1000000; n *= 10) {
+      const double f = r.median_s(std::string("fit") + m + "/" + std::to_string(n));
+      const double c = r.median_s(std::string("closed") + m + "/" + std::to_string(n));
+      if (f < 0 || c < 0) continue;
+      std::printf("%-9d %-6s %14.4f %16.4f %8.1f\n", n, m, f, c, f / c);
     }
   }
-
- private:
-  std::map<std::string, double> medians_;
-};
+}
 
 }  // namespace
 
@@ -149,9 +135,9 @@ FIT_BENCH(closed14);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
-  MedianReporter reporter;
+  geoanchor::bench::MedianReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
-  reporter.table();
+  print_table(reporter);
   benchmark::Shutdown();
   return 0;
 }

@@ -745,17 +745,23 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     const NormalMatrix n_inv = sol.cov_centred;  // (ĀᵀĀ)⁻¹ over the estimated parameters
     const RotationWithDerivatives final_rotation = rotation_and_derivatives(sol.theta.data() + 3, o.rotation_model);
     using PointJacobian = Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxParams>;
+    // The whitened residual's cofactor I ∓ A N⁻¹ Aᵀ: − in the fit, + for a
+    // point tested against it (a prediction).
+    auto cofactor = [&](const Observation& ob, double sign) {
+      Eigen::Vector3d pred;
+      Eigen::Matrix<double, 3, kMaxParams> jfull;
+      predict(ob, sol.theta.data(), o.rotation_model, td, pred, &jfull, &final_rotation);
+      PointJacobian a(3, u);
+      for (int c = 0; c < u; ++c) a.col(c) = ob.w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
+      return Eigen::Matrix3d(Eigen::Matrix3d::Identity() + sign * (a * n_inv * a.transpose()));
+    };
     double worst_p = 1.0;
     std::size_t worst = active.size();
     const geodesy::GeocentricConverter geocentric(geodesy::Ellipsoid::wgs84());
+    std::vector<Eigen::Matrix3d> qvs(active.size());  // whitened Q_vv per point, kept for --vce
     for (std::size_t k = 0; k < active.size(); ++k) {
       const auto& p = control.points[active[k]];
-      Eigen::Vector3d pred;
-      Eigen::Matrix<double, 3, kMaxParams> jfull;
-      predict(obs[k], sol.theta.data(), o.rotation_model, td, pred, &jfull, &final_rotation);
-      PointJacobian a(3, u);
-      for (int c = 0; c < u; ++c) a.col(c) = obs[k].w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
-      const Eigen::Matrix3d qv = Eigen::Matrix3d::Identity() - a * n_inv * a.transpose();  // whitened Q_vv
+      const Eigen::Matrix3d& qv = qvs[k] = cofactor(obs[k], -1.0);
       const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(p.target);
       const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
       PointResult& pr = result.points[active[k]];
@@ -775,12 +781,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       double s11 = 0.0, s12 = 0.0, s22 = 0.0;  // the VCE normal matrix: Σ tr(B_k B_l), B_k = Q_k P Q_vv P
       for (std::size_t k = 0; k < active.size(); ++k) {
         const auto& p = control.points[active[k]];
-        Eigen::Vector3d pred;
-        Eigen::Matrix<double, 3, kMaxParams> jfull;
-        predict(obs[k], sol.theta.data(), o.rotation_model, td, pred, &jfull, &final_rotation);
-        PointJacobian a(3, u);
-        for (int c = 0; c < u; ++c) a.col(c) = obs[k].w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
-        const Eigen::Matrix3d pqp = obs[k].w.transpose() * (Eigen::Matrix3d::Identity() - a * n_inv * a.transpose()) * obs[k].w;
+        const Eigen::Matrix3d pqp = obs[k].w.transpose() * qvs[k] * obs[k].w;
         const Eigen::Vector3d pv = obs[k].w.transpose() * vw[k];
         const Eigen::Matrix3d q_src = f_src * p.source_cov_m2, q_dst = f_dst * p.target_cov_m2;
         num_src += pv.dot(q_src * pv);
@@ -851,12 +852,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       ob.w = llt.matrixL().solve(Eigen::Matrix3d::Identity());
       ob.dt = td ? p.epoch->year - o.reference_epoch->year : 0.0;
       const Eigen::Vector3d vi = p.target.m - apply_fit(result, p.source, td ? p.epoch : std::nullopt).m;
-      Eigen::Vector3d pred;
-      Eigen::Matrix<double, 3, kMaxParams> jfull;
-      predict(ob, sol.theta.data(), o.rotation_model, td, pred, &jfull, &final_rotation);
-      PointJacobian a(3, u);
-      for (int c2 = 0; c2 < u; ++c2) a.col(c2) = ob.w * jfull.col(sol.estimated[static_cast<std::size_t>(c2)]);
-      const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() + a * n_inv * a.transpose();
+      const Eigen::Matrix3d q = cofactor(ob, +1.0);
       const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(p.target);
       const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
       test_point(PointTestInput{vi, ob.w, q, enu, false}, sigma_scale, lambda0, result.points[i]);

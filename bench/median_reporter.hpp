@@ -1,0 +1,35 @@
+#pragma once
+// A console reporter that also keeps each benchmark's median (in seconds),
+// so that a benchmark can print its own table of medians and ratios.
+
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace geoanchor::bench {
+
+class MedianReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const auto& r : runs) {
+      if (r.aggregate_name == "median") {
+        // Adjusted times are in the run's display unit.
+        medians_s_[r.run_name.function_name + (r.run_name.args.empty() ? "" : "/" + r.run_name.args)] =
+            r.GetAdjustedRealTime() / benchmark::GetTimeUnitMultiplier(r.time_unit);
+      }
+    }
+    ConsoleReporter::ReportRuns(runs);
+  }
+  // Median seconds per iteration of `name` ("fit7/1000"), or -1 if it did not run.
+  double median_s(const std::string& name) const {
+    const auto it = medians_s_.find(name);
+    return it == medians_s_.end() ? -1.0 : it->second;
+  }
+
+ private:
+  std::map<std::string, double> medians_s_;
+};
+
+}  // namespace geoanchor::bench
