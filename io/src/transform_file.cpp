@@ -28,7 +28,7 @@ const std::set<std::string> kTopLevelKeys = {
     "model",       "convention", "rotation_model", "source_frame", "target_frame", "reference_epoch",
     "parameters",  "sigmas",     "correlation",    "statistics",   "points",       "proj_pipeline",
     "epsg_method", "generator",  "format_version", "description",  "alternatives", "nominal_origin",
-    "wkt2",        "projjson",   "grid"};
+    "wkt2",        "projjson",   "grid",          "correlation_parameters"};
 
 [[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& what) {
   throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
@@ -711,7 +711,8 @@ std::string to_json_text(const TransformFile& t) {
       for (double v : row) r.push_back(number(v));
       corr.push_back(r);
     }
-    doc["correlation"] = {{"parameters", f.correlation_names}, {"matrix", corr}};
+    doc["correlation"] = corr;  // rows and columns in the order of correlation_parameters
+    doc["correlation_parameters"] = f.correlation_names;
     doc["statistics"] = {
         {"sigma0", number(f.sigma0)},
         {"dof", f.dof},

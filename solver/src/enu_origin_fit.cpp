@@ -224,7 +224,7 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
       result.covariance_names.emplace_back("ds_ppm");
     }
     const Eigen::VectorXd f = Eigen::Map<Eigen::VectorXd>(factor.data(), u);
-    result.covariance = f.asDiagonal() * cov * f.asDiagonal();
+    result.covariance = symmetric(f.asDiagonal() * cov * f.asDiagonal());
     result.correlation = correlation_of(result.covariance);
     auto sigma_of = [&](const std::string& name) {
       for (int a = 0; a < u; ++a) {

@@ -14,6 +14,8 @@ std::string fmt(double v, int precision) {
   return b;
 }
 
+Eigen::MatrixXd symmetric(const Eigen::MatrixXd& c) { return 0.5 * (c + c.transpose()); }
+
 std::vector<std::size_t> init_points(FitResult& result, const geodesy::ControlSet& control) {
   std::vector<std::size_t> active;
   result.points.resize(control.points.size());

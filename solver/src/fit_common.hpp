@@ -15,6 +15,10 @@ namespace geoanchor::solver {
 [[noreturn]] void reject(const std::string& code, const std::string& message);
 std::string fmt(double v, int precision = 3);
 
+// (C + Cᵀ) / 2: a propagated covariance J Σ Jᵀ is symmetric only up to
+// rounding; the reported one is exactly.
+Eigen::MatrixXd symmetric(const Eigen::MatrixXd& c);
+
 // Fills result.points from the control set; returns the indices in use.
 std::vector<std::size_t> init_points(FitResult& result, const geodesy::ControlSet& control);
 

@@ -899,7 +899,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     };
     Eigen::VectorXd f(u);
     for (int a = 0; a < u; ++a) f(a) = factor(sol.estimated[static_cast<std::size_t>(a)]);
-    result.covariance = f.asDiagonal() * cov * f.asDiagonal();
+    result.covariance = symmetric(f.asDiagonal() * cov * f.asDiagonal());
     result.correlation = result.covariance;
     for (int a = 0; a < u; ++a) {
       for (int b = 0; b < u; ++b) {

@@ -217,7 +217,7 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
     Eigen::MatrixXd cov = jr * cov7 * jr.transpose();
     if (o.scale_by_sigma0 && dof > 0) cov *= result.sigma0 * result.sigma0;
     result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && dof > 0;
-    result.covariance = cov;
+    result.covariance = symmetric(cov);
     result.correlation = correlation_of(cov);
     result.covariance_names = {"shift_e_m", "shift_n_m", "rotation_arcsec", "scale_ppm", "vertical_shift_m", "slope_n_ppm",
                                "slope_e_ppm"};

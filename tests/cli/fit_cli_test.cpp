@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -22,6 +24,7 @@ using testing::proj_radians;
 using testing::ProjPipeline;
 
 constexpr double kCctAgreementTol_m = 1e-4;  // issue acceptance: the pipeline reproduces our coordinates to 0.1 mm
+constexpr double kUnitDiagonalTol = 1e-12;    // a correlation with itself, after rounding
 constexpr double kEnuOriginCliTol_m = 0.001;  // issue acceptance: enu-origin corrected to 1 mm without noise
 constexpr double kSiteRotationTol_arcsec = 0.01;  // 0.07 mm over 1.5 km
 constexpr double kSiteScaleTol_ppm = 0.05;        // 0.08 mm over 1.5 km
@@ -113,13 +116,34 @@ TEST_F(FitCli, BundledExampleNamesThePlantedBlunderAndPassesTheGlobalTest) {
                           "\"epsg_method\": \"EPSG:1033\"", "\"alternatives\"", "\"epsg_method\": \"EPSG:1032\""}) {
     EXPECT_NE(json.find(key), std::string::npos) << key;
   }
-  // Exactly one outlier: P17.
-  std::size_t outliers = 0, at = 0;
-  while ((at = json.find("\"outlier\": true", at)) != std::string::npos) {
-    ++outliers;
-    ++at;
+  // The structure the issue names, read as JSON.
+  const auto doc = nlohmann::json::parse(json);
+  const auto& corr = doc.at("correlation");
+  const auto& names = doc.at("correlation_parameters");
+  ASSERT_EQ(corr.size(), names.size());
+  ASSERT_EQ(corr.size(), doc.at("sigmas").size());
+  for (std::size_t i = 0; i < corr.size(); ++i) {
+    ASSERT_EQ(corr[i].size(), names.size());
+    EXPECT_NEAR(corr[i][i].get<double>(), 1.0, kUnitDiagonalTol);
+    for (std::size_t j = 0; j < i; ++j) EXPECT_DOUBLE_EQ(corr[i][j].get<double>(), corr[j][i].get<double>());
+    EXPECT_TRUE(doc.at("sigmas").contains(names[i].get<std::string>()));
   }
-  EXPECT_EQ(outliers, 1u);
+  const auto& stats = doc.at("statistics");
+  EXPECT_TRUE(stats.at("global_test").at("passed").get<bool>());
+  EXPECT_GT(stats.at("global_test").at("critical").get<double>(), stats.at("global_test").at("statistic").get<double>());
+  EXPECT_EQ(stats.at("dof").get<int>(), 3 * 35 - 7);  // 36 marks, one removed
+  // Exactly one outlier: P17, with its residual and tests.
+  int outliers = 0;
+  for (const auto& p : doc.at("points")) {
+    ASSERT_EQ(p.at("residual_enu_m").size(), 3u);
+    EXPECT_TRUE(p.contains("w_test") && p.contains("mdb_m") && p.contains("used"));
+    if (p.at("outlier").get<bool>()) {
+      ++outliers;
+      EXPECT_EQ(p.at("id").get<std::string>(), "P17");
+      EXPECT_FALSE(p.at("used").get<bool>());
+    }
+  }
+  EXPECT_EQ(outliers, 1);
 }
 
 // Runs `pipeline` through PROJ's cct on "x y z t" lines; returns its rows.
