@@ -32,7 +32,6 @@ using geodesy::RotationModel;
 
 constexpr double kArcsecPerRad = 180.0 / M_PI * 3600.0;
 constexpr double kPpm = 1e6;
-constexpr int kBlockPoints = 1024;          // residual block size (NOTES: ~1000 points per block)
 constexpr double kCoincidentSpread_m = 1.0; // RELIABILITY #4
 constexpr double kCollinearRatio = 1e-6;    // second/first singular value of the source spread
 
