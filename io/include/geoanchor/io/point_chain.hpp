@@ -1,0 +1,58 @@
+#pragma once
+// A coordinate pipeline for many points: input frame -> ECEF -> optional
+// transform -> ECEF -> output frame (the chain `apply` runs on tiles).
+//
+// When every step is affine — ECEF, ENU and NED at fixed origins, a Helmert
+// or enu-origin transform at a fixed epoch — the chain is composed once, in
+// long double, into one float64 affine map and applied with a plain loop.
+// Geodetic and projected steps, site calibrations and per-point epochs run
+// point by point through the same code `convert` uses.
+
+#include <optional>
+#include <span>
+
+#include "geoanchor/geodesy/affine.hpp"
+#include "geoanchor/io/coordinate_codec.hpp"
+#include "geoanchor/io/transform_file.hpp"
+
+namespace geoanchor::io {
+
+// The frame of a coordinate array (no utm_zone columns here: a tile has one
+// projection).
+struct ArrayFrame {
+  CoordinateKind kind = CoordinateKind::ecef;
+  geodesy::Ellipsoid ellipsoid = geodesy::Ellipsoid::wgs84();
+  std::optional<geodesy::LocalOrigin> origin;        // enu, ned
+  std::optional<geodesy::ProjectionDef> projection;  // projected
+};
+
+class PointChain {
+ public:
+  // Throws geoanchor::Error (usage) when a frame lacks its origin or
+  // projection, or a time-dependent transform has no epoch.
+  PointChain(const ArrayFrame& from, const std::optional<TransformFile>& transform, bool inverse,
+             std::optional<geodesy::DecimalYear> epoch, const ArrayFrame& to);
+
+  // The fused map when the whole chain is affine.
+  const std::optional<geodesy::AffineMap>& fused() const { return fused_; }
+
+  // Transforms the points (a[i], b[i], c[i]) in place: x,y,z | lat,lon,h
+  // (degrees) | e,n,u | n,e,d | easting,northing,h.
+  void apply(std::span<double> a, std::span<double> b, std::span<double> c) const;
+
+ private:
+  geodesy::EcefPosition to_ecef(double a, double b, double c) const;
+  void from_ecef(const geodesy::EcefPosition& x, double& a, double& b, double& c) const;
+  static std::optional<geodesy::AffineMap> affine_ecef_from(const ArrayFrame& f);  // frame -> ECEF, if affine
+
+  ArrayFrame from_, to_;
+  std::optional<TransformFile> transform_;
+  bool inverse_ = false;
+  std::optional<geodesy::DecimalYear> epoch_;
+  std::optional<geodesy::AffineMap> fused_;
+  geodesy::GeocentricConverter from_geocentric_, to_geocentric_;
+  std::optional<geodesy::LocalTangentPlane> from_plane_, to_plane_;
+  std::optional<geodesy::TransverseMercator> from_tm_, to_tm_;
+};
+
+}  // namespace geoanchor::io
