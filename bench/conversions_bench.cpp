@@ -226,11 +226,4 @@ GEOANCHOR_BENCH(proj_enu_helmert_enu);
 GEOANCHOR_BENCH(ours_utm);
 GEOANCHOR_BENCH(proj_utm);
 
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  geoanchor::bench::MedianReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  print_table(reporter);
-  benchmark::Shutdown();
-  return 0;
-}
+int main(int argc, char** argv) { return geoanchor::bench::run_and_tabulate(argc, argv, print_table); }

@@ -133,11 +133,4 @@ FIT_BENCH(closed7);
 FIT_BENCH(fit14);
 FIT_BENCH(closed14);
 
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  geoanchor::bench::MedianReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  print_table(reporter);
-  benchmark::Shutdown();
-  return 0;
-}
+int main(int argc, char** argv) { return geoanchor::bench::run_and_tabulate(argc, argv, print_table); }

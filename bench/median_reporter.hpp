@@ -32,4 +32,15 @@ class MedianReporter : public benchmark::ConsoleReporter {
   std::map<std::string, double> medians_s_;
 };
 
+// A benchmark's main: Google Benchmark's own report, then `print_table`.
+template <class PrintTable>
+int run_and_tabulate(int argc, char** argv, PrintTable print_table) {
+  benchmark::Initialize(&argc, argv);
+  MedianReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  print_table(reporter);
+  benchmark::Shutdown();
+  return 0;
+}
+
 }  // namespace geoanchor::bench

@@ -101,6 +101,16 @@ std::size_t col(const std::vector<std::string>& header, const std::string& name)
   return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
 }
 
+// The x_m, y_m, z_m of every row of a CSV text (convert's ECEF output).
+std::vector<Eigen::Vector3d> ecef_rows(const std::string& text) {
+  std::vector<std::string> header;
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& r : csv_rows(text, &header)) {
+    out.emplace_back(std::stod(r[col(header, "x_m")]), std::stod(r[col(header, "y_m")]), std::stod(r[col(header, "z_m")]));
+  }
+  return out;
+}
+
 const std::string kControl = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv";
 
 TEST_F(FitCli, BundledExampleNamesThePlantedBlunderAndPassesTheGlobalTest) {
@@ -195,8 +205,7 @@ TEST_F(FitCli, ProjPipelineRunByCctReproducesOurTransformedCoordinates) {
     }
     const RunResult ours = geoanchor("convert " + src + " --to ecef --transform " + t.string());
     ASSERT_EQ(ours.exit_code, 0) << ours.err;
-    std::vector<std::string> oh;
-    const auto orows = csv_rows(ours.out, &oh);
+    const auto ours_ecef = ecef_rows(ours.out);
     const ProjPipeline cart("+proj=cart +ellps=WGS84");
     std::vector<Eigen::Vector4d> xyzt;
     for (const auto& r : rows) {
@@ -207,10 +216,9 @@ TEST_F(FitCli, ProjPipelineRunByCctReproducesOurTransformedCoordinates) {
     }
     const auto proj = cct(json_string_value(slurp(t), "proj_pipeline"), xyzt, dir_);
     ASSERT_EQ(proj.size(), rows.size());
+    ASSERT_EQ(ours_ecef.size(), rows.size());
     for (std::size_t i = 0; i < rows.size(); ++i) {
-      const Eigen::Vector3d us(std::stod(orows[i][col(oh, "x_m")]), std::stod(orows[i][col(oh, "y_m")]),
-                               std::stod(orows[i][col(oh, "z_m")]));
-      EXPECT_THAT(us, testing::IsNearVector(proj[i], kCctAgreementTol_m)) << model << " " << convention << " " << rows[i][0];
+      EXPECT_THAT(ours_ecef[i], testing::IsNearVector(proj[i], kCctAgreementTol_m)) << model << " " << convention << " " << rows[i][0];
     }
     fs::remove(src);
   }
@@ -250,14 +258,11 @@ TEST_F(FitCli, FourteenParameterPipelineRunByCctAtThePointsEpochs) {
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const RunResult ours = geoanchor("convert " + path("points.csv").string() + " --to ecef --transform " + path("T.json").string());
   ASSERT_EQ(ours.exit_code, 0) << ours.err;
-  std::vector<std::string> header;
-  const auto rows = csv_rows(ours.out, &header);
+  const auto ours_ecef = ecef_rows(ours.out);
   const auto proj = cct(json_string_value(slurp(path("T.json")), "proj_pipeline"), xyzt, dir_);
-  ASSERT_EQ(proj.size(), rows.size());
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const Eigen::Vector3d us(std::stod(rows[i][col(header, "x_m")]), std::stod(rows[i][col(header, "y_m")]),
-                             std::stod(rows[i][col(header, "z_m")]));
-    EXPECT_THAT(us, testing::IsNearVector(proj[i], kCctAgreementTol_m)) << rows[i][0];
+  ASSERT_EQ(proj.size(), ours_ecef.size());
+  for (std::size_t i = 0; i < ours_ecef.size(); ++i) {
+    EXPECT_THAT(ours_ecef[i], testing::IsNearVector(proj[i], kCctAgreementTol_m)) << "point " << i;
   }
 }
 
@@ -320,14 +325,11 @@ TEST_F(FitCli, EnuOriginFromMapCoordinatesAndSurveyedMarks) {
   write("nominal.csv", pts.str());
   const RunResult ours = geoanchor("convert " + path("nominal.csv").string() + " --to ecef --transform " + path("T.json").string());
   ASSERT_EQ(ours.exit_code, 0) << ours.err;
-  std::vector<std::string> header;
-  const auto rows = csv_rows(ours.out, &header);
+  const auto ours_ecef = ecef_rows(ours.out);
   const auto proj = cct(json_string_value(json, "proj_pipeline"), xyzt, dir_);
-  ASSERT_EQ(proj.size(), rows.size());
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const Eigen::Vector3d us(std::stod(rows[i][col(header, "x_m")]), std::stod(rows[i][col(header, "y_m")]),
-                             std::stod(rows[i][col(header, "z_m")]));
-    EXPECT_THAT(us, testing::IsNearVector(proj[i], kCctAgreementTol_m));
+  ASSERT_EQ(proj.size(), ours_ecef.size());
+  for (std::size_t i = 0; i < ours_ecef.size(); ++i) {
+    EXPECT_THAT(ours_ecef[i], testing::IsNearVector(proj[i], kCctAgreementTol_m));
   }
 }
 
@@ -395,24 +397,19 @@ TEST_F(FitCli, SiteCalibrationFromLocalCoordinatesAndItsPipelineRunByCct) {
   const RunResult ours = geoanchor("convert " + path("local.csv").string() + " --to ecef --transform " + path("T.json").string() +
                                    " -o " + path("out.csv").string());
   ASSERT_EQ(ours.exit_code, 0) << ours.err;
-  std::vector<std::string> header;
-  const auto rows = csv_rows(slurp(path("out.csv")), &header);
+  const auto ours_ecef = ecef_rows(slurp(path("out.csv")));
   const auto proj = cct(json_string_value(json, "proj_pipeline"), xyzt, dir_);
-  ASSERT_EQ(proj.size(), rows.size());
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const Eigen::Vector3d us(std::stod(rows[i][col(header, "x_m")]), std::stod(rows[i][col(header, "y_m")]),
-                             std::stod(rows[i][col(header, "z_m")]));
-    EXPECT_THAT(us, testing::IsNearVector(proj[i], kCctAgreementTol_m));
+  ASSERT_EQ(proj.size(), ours_ecef.size());
+  for (std::size_t i = 0; i < ours_ecef.size(); ++i) {
+    EXPECT_THAT(ours_ecef[i], testing::IsNearVector(proj[i], kCctAgreementTol_m));
   }
   const RunResult back = geoanchor("convert " + path("out.csv").string() + " --to ecef --inverse --transform " +
                                    path("T.json").string());
   ASSERT_EQ(back.exit_code, 0) << back.err;
-  std::vector<std::string> bh;
-  const auto brows = csv_rows(back.out, &bh);
-  for (std::size_t i = 0; i < brows.size(); ++i) {
-    const Eigen::Vector3d b(std::stod(brows[i][col(bh, "x_m")]), std::stod(brows[i][col(bh, "y_m")]),
-                            std::stod(brows[i][col(bh, "z_m")]));
-    EXPECT_THAT(b, testing::IsNearVector(xyzt[i].head<3>(), kSiteInverseTol_m));
+  const auto back_ecef = ecef_rows(back.out);
+  ASSERT_EQ(back_ecef.size(), xyzt.size());
+  for (std::size_t i = 0; i < back_ecef.size(); ++i) {
+    EXPECT_THAT(back_ecef[i], testing::IsNearVector(xyzt[i].head<3>(), kSiteInverseTol_m));
   }
 }
 
