@@ -203,6 +203,18 @@ io::TransformFile transform_file_from(const solver::FitResult& r, const geodesy:
   }
   f.warnings = r.warnings;
   f.variance_factors = r.variance_factors;
+  // The network's extent (source frame): the marks the fit used.
+  std::vector<geodesy::EcefPosition> used_marks;
+  for (const auto& p : r.points) {
+    if (!p.used) continue;
+    for (const auto& c : set.points) {
+      if (c.id == p.id) {
+        used_marks.push_back(c.source);
+        break;
+      }
+    }
+  }
+  if (!used_marks.empty()) f.extent = io::ControlExtent::of(used_marks);
   std::string cmd;
   for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
   f.generator = "geoanchor " GEOANCHOR_VERSION ": " + cmd;

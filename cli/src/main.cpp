@@ -6,6 +6,7 @@
 
 #include <iostream>
 
+#include "apply_command.hpp"
 #include "convert_command.hpp"
 #include "fit_command.hpp"
 #include "geoanchor/geodesy/error.hpp"
@@ -26,6 +27,9 @@ int main(int argc, char** argv) {
   geoanchor::cli::FitCommandOptions fit;
   fit.argv.assign(argv, argv + argc);
   auto* fit_cmd = geoanchor::cli::add_fit_command(app, fit);
+  geoanchor::cli::ApplyOptions apply;
+  apply.argv.assign(argv, argv + argc);
+  auto* apply_cmd = geoanchor::cli::add_apply_command(app, apply);
 
   try {
     app.parse(argc, argv);
@@ -43,6 +47,7 @@ int main(int argc, char** argv) {
   try {
     if (convert_cmd->parsed()) geoanchor::cli::run_convert(convert);
     if (fit_cmd->parsed()) return geoanchor::cli::run_fit(fit);
+    if (apply_cmd->parsed()) return geoanchor::cli::run_apply(apply);
   } catch (const Error& e) {
     std::cerr << "geoanchor: error[" << e.code() << "]: " << e.what() << '\n';
     return geoanchor::exit_code(e.kind());

@@ -28,7 +28,7 @@ const std::set<std::string> kTopLevelKeys = {
     "model",       "convention", "rotation_model", "source_frame", "target_frame", "reference_epoch",
     "parameters",  "sigmas",     "correlation",    "statistics",   "points",       "proj_pipeline",
     "epsg_method", "generator",  "format_version", "description",  "alternatives", "nominal_origin",
-    "wkt2",        "projjson",   "grid",          "correlation_parameters"};
+    "wkt2",        "projjson",   "grid",          "correlation_parameters", "control_extent"};
 
 [[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& what) {
   throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
@@ -350,10 +350,7 @@ TransformFile parse_site_calibration(const json& doc, TransformFile t, std::stri
   return t;
 }
 
-}  // namespace
-
-TransformFile parse_transform_json(std::string_view text, std::string_view source) {
-  json doc;
+TransformFile parse_transform_core(std::string_view text, std::string_view source, json& doc) {
   try {
     doc = json::parse(text);
   } catch (const json::parse_error& e) {
@@ -470,6 +467,79 @@ TransformFile parse_transform_json(std::string_view text, std::string_view sourc
                                 reader.require_plain("pz_m", model_name));
   }
   reader.check_all_used(model_name);
+  return t;
+}
+
+// What convert and apply use of a fit record: the uncertainty and extent.
+std::optional<FitRecord> parse_fit_uncertainty(const json& doc, std::string_view source) {
+  if (!doc.contains("sigmas")) return std::nullopt;
+  FitRecord f;
+  const json& sig = doc.at("sigmas");
+  if (!sig.is_object()) fail(source, "sigmas", "expected an object of parameter -> sigma");
+  for (const auto& [key, value] : sig.items()) {
+    if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() < 0.0) {
+      fail(source, "sigmas." + key, "value " + value.dump() + " is not a sigma (a finite number >= 0)");
+    }
+    f.sigmas.emplace_back(key, value.get<double>());
+  }
+  if (doc.contains("correlation_parameters")) {
+    const json& names = doc.at("correlation_parameters");
+    const json& corr = doc.contains("correlation") ? doc.at("correlation") : json();
+    if (!names.is_array() || !corr.is_array() || corr.size() != names.size()) {
+      fail(source, "correlation", "expected a square matrix with one row per correlation_parameters entry");
+    }
+    for (const auto& n : names) f.correlation_names.push_back(n.get<std::string>());
+    for (std::size_t i = 0; i < corr.size(); ++i) {
+      if (!corr[i].is_array() || corr[i].size() != names.size()) {
+        fail(source, "correlation[" + std::to_string(i) + "]", "expected " + std::to_string(names.size()) + " values");
+      }
+      std::vector<double> row;
+      for (const auto& v : corr[i]) {
+        if (!v.is_number() || !(std::abs(v.get<double>()) <= 1.0 + 1e-9)) {
+          fail(source, "correlation[" + std::to_string(i) + "]", "value " + v.dump() + " is not a correlation in [-1, 1]");
+        }
+        row.push_back(v.get<double>());
+      }
+      f.correlation.push_back(row);
+    }
+  }
+  if (doc.contains("statistics") && doc.at("statistics").is_object()) {
+    const json& st = doc.at("statistics");
+    if (st.contains("sigma0") && st.at("sigma0").is_number()) f.sigma0 = st.at("sigma0").get<double>();
+    if (st.contains("dof") && st.at("dof").is_number_integer()) f.dof = st.at("dof").get<int>();
+    if (st.contains("sigmas_scaled_by_sigma0") && st.at("sigmas_scaled_by_sigma0").is_boolean()) {
+      f.sigmas_scaled_by_sigma0 = st.at("sigmas_scaled_by_sigma0").get<bool>();
+    }
+  }
+  if (doc.contains("control_extent")) {
+    const json& e = doc.at("control_extent");
+    const std::string where = "control_extent";
+    if (!e.is_object() || !e.contains("centroid") || !e.contains("hull_en_m") || !e.at("hull_en_m").is_array()) {
+      fail(source, where, "expected {\"centroid\": {lat_deg, lon_deg, h_m}, \"hull_en_m\": [[e, n], ...]}");
+    }
+    const json& c = e.at("centroid");
+    ControlExtent x;
+    x.centroid.point = geodesy::GeodeticPosition{Angle::degrees(number_field(c, "lat_deg", where + ".centroid.", source)),
+                                                 Angle::degrees(number_field(c, "lon_deg", where + ".centroid.", source)),
+                                                 geodesy::EllipsoidalHeight{number_field(c, "h_m", where + ".centroid.", source)}};
+    for (const auto& v : e.at("hull_en_m")) {
+      if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number()) {
+        fail(source, where + ".hull_en_m", "value " + v.dump() + " is not [e, n] in metres");
+      }
+      x.hull_en_m.push_back({v[0].get<double>(), v[1].get<double>()});
+    }
+    if (x.hull_en_m.empty()) fail(source, where + ".hull_en_m", "empty");
+    f.extent = x;
+  }
+  return f;
+}
+
+}  // namespace
+
+TransformFile parse_transform_json(std::string_view text, std::string_view source) {
+  json doc;
+  TransformFile t = parse_transform_core(text, source, doc);
+  t.fit = parse_fit_uncertainty(doc, source);
   return t;
 }
 
@@ -713,6 +783,16 @@ std::string to_json_text(const TransformFile& t) {
     }
     doc["correlation"] = corr;  // rows and columns in the order of correlation_parameters
     doc["correlation_parameters"] = f.correlation_names;
+    if (f.extent) {
+      json hull = json::array();
+      for (const auto& v : f.extent->hull_en_m) hull.push_back({number(v[0]), number(v[1])});
+      doc["control_extent"] = {{"centroid",
+                                {{"lat_deg", number(f.extent->centroid.point.lat.deg())},
+                                 {"lon_deg", number(f.extent->centroid.point.lon.deg())},
+                                 {"h_m", number(f.extent->centroid.point.h.m)},
+                                 {"ellipsoid", "WGS84"}}},
+                               {"hull_en_m", hull}};
+    }
     doc["statistics"] = {
         {"sigma0", number(f.sigma0)},
         {"dof", f.dof},

@@ -55,6 +55,22 @@ struct FitPointRecord {
   double robust_weight = 1.0;  // written when < 1 (robust loss)
 };
 
+// The control network's horizontal extent in the source frame: the convex
+// hull of the used marks in ENU (metres) at their centroid. `apply` measures
+// how far a tile lies outside it.
+struct ControlExtent {
+  geodesy::LocalOrigin centroid;            // on WGS84, ellipsoidal height
+  std::vector<std::array<double, 2>> hull_en_m;  // counter-clockwise
+
+  // The hull of `marks` (ECEF); one or two marks give a point or a segment.
+  static ControlExtent of(const std::vector<geodesy::EcefPosition>& marks);
+  // Horizontal distance in metres from `x` to the hull; 0 inside.
+  double distance_m(const geodesy::EcefPosition& x) const;
+};
+
+// Read back by convert/apply from a fitted file: sigmas, correlation,
+// correlation_parameters, statistics.sigma0/dof/sigmas_scaled_by_sigma0 and
+// control_extent; the per-point records are not.
 struct FitRecord {
   std::vector<std::pair<std::string, double>> sigmas;  // parameter name -> σ (same units)
   std::vector<std::string> correlation_names;
@@ -73,6 +89,7 @@ struct FitRecord {
   std::vector<std::string> warnings;
   std::optional<std::pair<double, double>> variance_factors;  // source, target (--vce)
   std::string generator;  // "geoanchor 0.1.0 fit ..."
+  std::optional<ControlExtent> extent;
 };
 
 // enu-origin: a map's ENU frame re-anchored (geodesy::enu_origin_correction).
@@ -119,6 +136,13 @@ struct TransformFile {
   geodesy::AffineMap target_from_source(std::optional<geodesy::DecimalYear> observation_epoch,
                                         std::string_view where) const;
 };
+
+// The covariance (ECEF, m²) that the fitted parameters' uncertainty gives
+// the transformed position of `x` (J Σθ Jᵀ, J by central differences of
+// width σ on each parameter, Σθ from the file's sigmas and correlation).
+// std::nullopt when the file carries no sigmas.
+std::optional<Eigen::Matrix3d> propagated_covariance_m2(const TransformFile& t, const geodesy::EcefPosition& x,
+                                                        std::optional<geodesy::DecimalYear> epoch, bool inverse);
 
 // Throws geoanchor::Error (io for an unreadable file, input for the rest).
 TransformFile read_transform_file(const std::filesystem::path& path);

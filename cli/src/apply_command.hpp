@@ -1,0 +1,41 @@
+#pragma once
+// `geoanchor apply`: map tiles (LAS, CSV, PLY) from their frame into
+// another, optionally through a transform file, with a provenance sidecar
+// beside every output. See docs/commands/apply.md.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace geoanchor::cli {
+
+struct ApplyOptions {
+  std::vector<std::string> inputs;  // files, folders, manifests
+  std::string out_dir;
+  std::optional<std::string> transform;
+  bool inverse = false;
+  // Output frame (as in convert); unset: the tile's own.
+  std::optional<std::string> to, origin, zone, tm, ellipsoid;
+  // Input frame, when no sidecar or LAS WKT states it.
+  std::optional<std::string> from_frame, from_origin, from_zone, from_tm;
+  std::optional<double> resolution_m;
+  double max_extrapolation_m = 10000.0;
+  unsigned jobs = 1;
+  std::optional<std::string> shard;
+  bool overwrite = false;
+  bool quiet = false;
+  bool json = false;
+  std::vector<std::string> argv;
+};
+
+CLI::App* add_apply_command(CLI::App& app, ApplyOptions& options);
+
+// Runs the batch; returns the exit code (0, or the first failed tile's).
+// Throws geoanchor::Error for problems with the command line itself.
+int run_apply(const ApplyOptions& options);
+
+}  // namespace geoanchor::cli

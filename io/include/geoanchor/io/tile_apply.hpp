@@ -1,0 +1,60 @@
+#pragma once
+// One tile through a PointChain, streamed in bounded chunks: LAS, CSV or
+// PLY in, the same format out. Everything but the coordinates passes through
+// unchanged. The caller owns the output (an AtomicOutputFile) so that the
+// tile and its sidecar are committed together.
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "geoanchor/io/point_chain.hpp"
+
+namespace geoanchor::io {
+
+enum class TileFormat { las, csv, ply };
+std::string_view to_string(TileFormat f);
+// By extension (.las, .csv, .txt, .ply, case-insensitive); std::nullopt
+// for anything else.
+std::optional<TileFormat> tile_format_of(const std::filesystem::path& p);
+
+struct TileApplyOptions {
+  ArrayFrame from;  // the tile's coordinates
+  ArrayFrame to;    // the output's
+  // LAS: the output's quantization step in metres for every axis (degrees
+  // get the power of ten at or below it); default: the input's.
+  std::optional<double> resolution_m;
+  std::string output_wkt;  // LAS: the CRS written into the 2112 VLR
+  std::size_t chunk_points = 1 << 16;
+  // Called after each chunk with the points done so far in this tile.
+  std::function<void(std::uint64_t)> progress;
+};
+
+struct TileApplyResult {
+  std::uint64_t points = 0;
+  // Output bounds in the file's axes (LAS: X, Y, Z; CSV/PLY: the three
+  // coordinate columns in the order written).
+  std::array<double, 3> min{}, max{};
+  // Input bounds in the chain's order (lat, lon, h for geodetic input).
+  std::array<double, 3> in_min{}, in_max{};
+  std::array<double, 3> scale{}, offset{};  // LAS
+  std::string storage;                      // float64 | float32 | int32_scaled
+  std::vector<std::string> warnings;
+};
+
+// Each throws geoanchor::Error naming the file and the byte offset (LAS,
+// binary PLY) or line (CSV, ASCII PLY) of bad input, or the point whose
+// output cannot be stored. `out` must be a binary, seekable stream.
+TileApplyResult apply_las_tile(const std::filesystem::path& in, std::ostream& out, const std::string& out_name,
+                               const PointChain& chain, const TileApplyOptions& o);
+TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& out, const std::string& out_name,
+                               const PointChain& chain, const TileApplyOptions& o);
+TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& out, const std::string& out_name,
+                               const PointChain& chain, const TileApplyOptions& o);
+
+}  // namespace geoanchor::io

@@ -1,0 +1,408 @@
+#include "geoanchor/io/las.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+#include "geoanchor/geodesy/error.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "LAS is little-endian; this code reads it with memcpy");
+
+constexpr std::size_t kVlrHeaderSize = 54;
+constexpr std::size_t kEvlrHeaderSize = 60;
+constexpr std::uint16_t kHeaderSize12 = 227;
+constexpr std::uint16_t kHeaderSize13 = 235;
+constexpr std::uint16_t kHeaderSize14 = 375;
+
+template <class T>
+T get(const std::uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+template <class T>
+void put(std::vector<std::uint8_t>& b, std::size_t at, T v) {
+  std::memcpy(b.data() + at, &v, sizeof v);
+}
+
+std::string fixed_text(const std::uint8_t* p, std::size_t n) {
+  std::size_t len = 0;
+  while (len < n && p[len] != 0) ++len;
+  return std::string(reinterpret_cast<const char*>(p), len);
+}
+
+void put_text(std::vector<std::uint8_t>& b, std::size_t at, const std::string& s, std::size_t n) {
+  std::memset(b.data() + at, 0, n);
+  std::memcpy(b.data() + at, s.data(), std::min(n, s.size()));
+}
+
+Error malformed(const std::filesystem::path& p, std::uint64_t offset, const std::string& what) {
+  return Error(ErrorKind::input, "E_LAS", p.string() + ": byte " + std::to_string(offset) + ": " + what);
+}
+
+// Reads exactly n bytes at `offset`; false at end of file.
+bool read_at(int fd, std::uint64_t offset, std::uint8_t* out, std::size_t n) {
+  std::size_t done = 0;
+  while (done < n) {
+    const ssize_t r = ::pread(fd, out + done, n - done, static_cast<off_t>(offset + done));
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return false;
+    done += static_cast<std::size_t>(r);
+  }
+  return true;
+}
+
+}  // namespace
+
+bool is_geotiff_crs_vlr(const LasVlr& v) {
+  return v.user_id == "LASF_Projection" && (v.record_id == 34735 || v.record_id == 34736 || v.record_id == 34737);
+}
+
+bool is_wkt_crs_vlr(const LasVlr& v) {
+  return v.user_id == "LASF_Projection" && (v.record_id == kLasWktRecordId || v.record_id == 2111);
+}
+
+std::size_t las_min_record_length(std::uint8_t point_format) {
+  switch (point_format) {
+    case 0: return 20;
+    case 1: return 28;
+    case 2: return 26;
+    case 3: return 34;
+    case 6: return 30;
+    case 7: return 36;
+    case 8: return 38;
+    default: return 0;  // 4, 5, 9, 10 carry waveform packets; > 10 is not LAS
+  }
+}
+
+LasReader::LasReader(const std::filesystem::path& path) : path_(path) {
+  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) throw Error(ErrorKind::io, "E_READ", path.string() + ": cannot open: " + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) {
+    ::close(fd_);
+    throw Error(ErrorKind::io, "E_READ", path.string() + ": cannot stat: " + std::strerror(errno));
+  }
+  try {
+    const auto file_size = static_cast<std::uint64_t>(st.st_size);
+    std::vector<std::uint8_t> b(kHeaderSize14, 0);
+    const std::size_t first = static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kHeaderSize14));
+    if (file_size < kHeaderSize12 || !read_at(fd_, 0, b.data(), first)) {
+      throw malformed(path, file_size, "truncated LAS header: the file has " + std::to_string(file_size) +
+                                           " bytes, a LAS header at least " + std::to_string(kHeaderSize12));
+    }
+    if (std::memcmp(b.data(), "LASF", 4) != 0) throw malformed(path, 0, "not a LAS file (signature is not 'LASF')");
+    LasHeader& h = header_;
+    h.file_source_id = get<std::uint16_t>(&b[4]);
+    h.global_encoding = get<std::uint16_t>(&b[6]);
+    std::memcpy(h.project_guid.data(), &b[8], 16);
+    h.version_major = b[24];
+    h.version_minor = b[25];
+    std::memcpy(h.system_identifier.data(), &b[26], 32);
+    std::memcpy(h.generating_software.data(), &b[58], 32);
+    h.creation_day = get<std::uint16_t>(&b[90]);
+    h.creation_year = get<std::uint16_t>(&b[92]);
+    h.header_size = get<std::uint16_t>(&b[94]);
+    h.offset_to_points = get<std::uint32_t>(&b[96]);
+    h.vlr_count = get<std::uint32_t>(&b[100]);
+    const std::uint8_t raw_format = b[104];
+    h.record_length = get<std::uint16_t>(&b[105]);
+    const std::uint32_t legacy_count = get<std::uint32_t>(&b[107]);
+    for (std::size_t i = 0; i < 5; ++i) h.points_by_return[i] = get<std::uint32_t>(&b[111 + 4 * i]);
+    for (std::size_t a = 0; a < 3; ++a) {
+      h.scale[a] = get<double>(&b[131 + 8 * a]);
+      h.offset[a] = get<double>(&b[155 + 8 * a]);
+      h.max[a] = get<double>(&b[179 + 16 * a]);
+      h.min[a] = get<double>(&b[187 + 16 * a]);
+    }
+
+    if (h.version_major != 1 || h.version_minor < 2 || h.version_minor > 4) {
+      throw malformed(path, 24, "LAS version " + std::to_string(h.version_major) + "." +
+                                    std::to_string(h.version_minor) + " is not supported; expected 1.2, 1.3 or 1.4");
+    }
+    const std::uint16_t min_header =
+        h.version_minor == 2 ? kHeaderSize12 : (h.version_minor == 3 ? kHeaderSize13 : kHeaderSize14);
+    if (h.header_size < min_header) {
+      throw malformed(path, 94, "header size " + std::to_string(h.header_size) + " is too small for LAS 1." +
+                                    std::to_string(h.version_minor) + " (expected at least " +
+                                    std::to_string(min_header) + ")");
+    }
+    if (file_size < h.header_size) {
+      throw malformed(path, file_size, "truncated LAS header: header size is " + std::to_string(h.header_size) +
+                                           " bytes, the file has " + std::to_string(file_size));
+    }
+    if ((raw_format & 0xC0) != 0) {
+      throw malformed(path, 104, "point data record format byte " + std::to_string(raw_format) +
+                                     " marks compressed (LAZ) points; decompress the tile first (laszip)");
+    }
+    h.point_format = raw_format;
+    const std::size_t min_len = las_min_record_length(raw_format);
+    if (min_len == 0) {
+      throw malformed(path, 104, "point data record format " + std::to_string(raw_format) +
+                                     (raw_format <= 10 ? " (waveform) is not supported" : " is unknown") +
+                                     "; expected 0, 1, 2, 3, 6, 7 or 8");
+    }
+    if (raw_format >= 6 && h.version_minor < 4) {
+      throw malformed(path, 104, "point data record format " + std::to_string(raw_format) + " needs LAS 1.4, the file says 1." +
+                                     std::to_string(h.version_minor));
+    }
+    if (h.record_length < min_len) {
+      throw malformed(path, 105, "point data record length " + std::to_string(h.record_length) +
+                                     " is shorter than format " + std::to_string(raw_format) + "'s " +
+                                     std::to_string(min_len) + " bytes");
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (!(std::isfinite(h.scale[a]) && h.scale[a] > 0.0) || !std::isfinite(h.offset[a])) {
+        throw malformed(path, 131 + 8 * a, std::string("scale/offset of ") + "XYZ"[a] +
+                                               " must be finite with a positive scale");
+      }
+    }
+    h.point_count = legacy_count;
+    if (h.version_minor == 4) {
+      h.evlr_start = get<std::uint64_t>(&b[235]);
+      h.evlr_count = get<std::uint32_t>(&b[243]);
+      const std::uint64_t count64 = get<std::uint64_t>(&b[247]);
+      for (std::size_t i = 0; i < 15; ++i) h.points_by_return[i] = get<std::uint64_t>(&b[255 + 8 * i]);
+      if (legacy_count != 0 && count64 != legacy_count) {
+        throw malformed(path, 107, "legacy point count " + std::to_string(legacy_count) +
+                                       " disagrees with the 64-bit point count " + std::to_string(count64));
+      }
+      if (raw_format >= 6 && legacy_count != 0) {
+        throw malformed(path, 107, "legacy point count must be 0 for point format " + std::to_string(raw_format));
+      }
+      h.point_count = count64;
+    }
+
+    // VLRs: between the header and the point data.
+    std::uint64_t at = h.header_size;
+    if (h.offset_to_points < h.header_size || h.offset_to_points > file_size) {
+      throw malformed(path, 96, "offset to point data " + std::to_string(h.offset_to_points) +
+                                    " is outside [header size " + std::to_string(h.header_size) + ", file size " +
+                                    std::to_string(file_size) + "]");
+    }
+    for (std::uint32_t i = 0; i < h.vlr_count; ++i) {
+      std::uint8_t vh[kVlrHeaderSize];
+      if (at + kVlrHeaderSize > h.offset_to_points || !read_at(fd_, at, vh, kVlrHeaderSize)) {
+        throw malformed(path, at, "VLR " + std::to_string(i + 1) + " of " + std::to_string(h.vlr_count) +
+                                      " runs past the start of the point data at byte " +
+                                      std::to_string(h.offset_to_points));
+      }
+      LasVlr v;
+      v.file_offset = at;
+      v.user_id = fixed_text(vh + 2, 16);
+      v.record_id = get<std::uint16_t>(vh + 18);
+      const std::uint16_t len = get<std::uint16_t>(vh + 20);
+      v.description = fixed_text(vh + 22, 32);
+      if (at + kVlrHeaderSize + len > h.offset_to_points) {
+        throw malformed(path, at, "VLR " + std::to_string(i + 1) + " ('" + v.user_id + "' " +
+                                      std::to_string(v.record_id) + ", " + std::to_string(len) +
+                                      " bytes) runs past the start of the point data at byte " +
+                                      std::to_string(h.offset_to_points));
+      }
+      v.data.resize(len);
+      if (len && !read_at(fd_, at + kVlrHeaderSize, v.data.data(), len)) throw malformed(path, at, "cannot read VLR");
+      at += kVlrHeaderSize + len;
+      vlrs_.push_back(std::move(v));
+    }
+
+    // Point data against the file size (and the EVLRs that follow it).
+    const std::uint64_t points_bytes = h.point_count * h.record_length;
+    if (h.record_length != 0 && points_bytes / h.record_length != h.point_count) {
+      throw malformed(path, 247, "point count " + std::to_string(h.point_count) + " overflows the file size");
+    }
+    const std::uint64_t points_end = h.offset_to_points + points_bytes;
+    const std::uint64_t data_end = h.evlr_count > 0 ? h.evlr_start : file_size;
+    if (points_end > file_size) {
+      throw malformed(path, file_size, "truncated point data: " + std::to_string(h.point_count) + " points of " +
+                                           std::to_string(h.record_length) + " bytes need " +
+                                           std::to_string(points_end) + " bytes, the file has " +
+                                           std::to_string(file_size));
+    }
+    if (points_end != data_end) {
+      throw malformed(path, points_end, "point count " + std::to_string(h.point_count) + " disagrees with the " +
+                                            (h.evlr_count > 0 ? "start of the EVLRs at byte " : "file size ") +
+                                            std::to_string(data_end) + ": the points end at byte " +
+                                            std::to_string(points_end));
+    }
+    at = h.evlr_start;
+    for (std::uint32_t i = 0; i < h.evlr_count; ++i) {
+      std::uint8_t eh[kEvlrHeaderSize];
+      if (at + kEvlrHeaderSize > file_size || !read_at(fd_, at, eh, kEvlrHeaderSize)) {
+        throw malformed(path, at, "EVLR " + std::to_string(i + 1) + " of " + std::to_string(h.evlr_count) +
+                                      " runs past the end of the file (" + std::to_string(file_size) + " bytes)");
+      }
+      LasVlr v;
+      v.extended = true;
+      v.file_offset = at;
+      v.user_id = fixed_text(eh + 2, 16);
+      v.record_id = get<std::uint16_t>(eh + 18);
+      const std::uint64_t len = get<std::uint64_t>(eh + 20);
+      v.description = fixed_text(eh + 28, 32);
+      if (len > file_size || at + kEvlrHeaderSize + len > file_size) {
+        throw malformed(path, at, "EVLR " + std::to_string(i + 1) + " ('" + v.user_id + "' " +
+                                      std::to_string(v.record_id) + ", " + std::to_string(len) +
+                                      " bytes) runs past the end of the file (" + std::to_string(file_size) +
+                                      " bytes)");
+      }
+      v.data.resize(static_cast<std::size_t>(len));
+      if (len && !read_at(fd_, at + kEvlrHeaderSize, v.data.data(), v.data.size())) {
+        throw malformed(path, at, "cannot read EVLR");
+      }
+      at += kEvlrHeaderSize + len;
+      vlrs_.push_back(std::move(v));
+    }
+  } catch (...) {
+    ::close(fd_);
+    fd_ = -1;
+    throw;
+  }
+}
+
+LasReader::~LasReader() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+std::optional<std::string> LasReader::wkt() const {
+  for (const auto& v : vlrs_) {
+    if (v.user_id == "LASF_Projection" && v.record_id == kLasWktRecordId) {
+      std::string s(v.data.begin(), v.data.end());
+      while (!s.empty() && s.back() == '\0') s.pop_back();
+      return s;
+    }
+  }
+  return std::nullopt;
+}
+
+std::size_t LasReader::read_records(std::vector<std::uint8_t>& buffer, std::size_t max_points) {
+  const std::uint64_t left = header_.point_count - next_point_;
+  const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(left, max_points));
+  buffer.resize(n * header_.record_length);
+  if (n == 0) return 0;
+  const std::uint64_t offset = header_.offset_to_points + next_point_ * header_.record_length;
+  if (!read_at(fd_, offset, buffer.data(), buffer.size())) {
+    throw Error(ErrorKind::io, "E_READ", path_.string() + ": byte " + std::to_string(offset) +
+                                             ": cannot read point records (the file shrank or a read failed)");
+  }
+  next_point_ += n;
+  return n;
+}
+
+void LasReader::rewind() { next_point_ = 0; }
+
+std::vector<std::uint8_t> encode_las14_header(const LasHeader& h) {
+  std::vector<std::uint8_t> b(kHeaderSize14, 0);
+  std::memcpy(b.data(), "LASF", 4);
+  put(b, 4, h.file_source_id);
+  put(b, 6, h.global_encoding);
+  std::memcpy(&b[8], h.project_guid.data(), 16);
+  b[24] = 1;
+  b[25] = 4;
+  std::memcpy(&b[26], h.system_identifier.data(), 32);
+  std::memcpy(&b[58], h.generating_software.data(), 32);
+  put(b, 90, h.creation_day);
+  put(b, 92, h.creation_year);
+  put(b, 94, kHeaderSize14);
+  put(b, 96, h.offset_to_points);
+  put(b, 100, h.vlr_count);
+  b[104] = h.point_format;
+  put(b, 105, h.record_length);
+  // Legacy counts: only for formats 0–5 and counts that fit 32 bits.
+  const bool legacy = h.point_format < 6 && h.point_count <= UINT32_MAX;
+  put(b, 107, static_cast<std::uint32_t>(legacy ? h.point_count : 0));
+  for (std::size_t i = 0; i < 5; ++i) {
+    const bool fits = legacy && h.points_by_return[i] <= UINT32_MAX;
+    put(b, 111 + 4 * i, static_cast<std::uint32_t>(fits ? h.points_by_return[i] : 0));
+  }
+  for (std::size_t a = 0; a < 3; ++a) {
+    put(b, 131 + 8 * a, h.scale[a]);
+    put(b, 155 + 8 * a, h.offset[a]);
+    put(b, 179 + 16 * a, h.max[a]);
+    put(b, 187 + 16 * a, h.min[a]);
+  }
+  put(b, 227, std::uint64_t{0});  // no waveform data packets
+  put(b, 235, h.evlr_start);
+  put(b, 243, h.evlr_count);
+  put(b, 247, h.point_count);
+  for (std::size_t i = 0; i < 15; ++i) put(b, 255 + 8 * i, h.points_by_return[i]);
+  return b;
+}
+
+LasWriter::LasWriter(std::ostream& out, const LasHeader& header, std::vector<LasVlr> vlrs, std::vector<LasVlr> evlrs,
+                     std::string name)
+    : out_(out), header_(header), evlrs_(std::move(evlrs)), name_(std::move(name)) {
+  header_.version_major = 1;
+  header_.version_minor = 4;
+  header_.header_size = kHeaderSize14;
+  header_.global_encoding = static_cast<std::uint16_t>(header_.global_encoding & ~0x6u);  // no waveform packets
+  header_.vlr_count = static_cast<std::uint32_t>(vlrs.size());
+  header_.point_count = 0;
+  header_.evlr_start = 0;
+  header_.evlr_count = static_cast<std::uint32_t>(evlrs_.size());
+  std::uint64_t offset = kHeaderSize14;
+  for (const auto& v : vlrs) {
+    if (v.data.size() > UINT16_MAX) {
+      throw Error(ErrorKind::input, "E_LAS", name_ + ": VLR '" + v.user_id + "' " + std::to_string(v.record_id) +
+                                                 " holds " + std::to_string(v.data.size()) +
+                                                 " bytes, more than a VLR can (65535)");
+    }
+    offset += kVlrHeaderSize + v.data.size();
+  }
+  if (offset > UINT32_MAX) throw Error(ErrorKind::input, "E_LAS", name_ + ": VLRs exceed 4 GiB");
+  header_.offset_to_points = static_cast<std::uint32_t>(offset);
+  const auto h = encode_las14_header(header_);
+  out_.write(reinterpret_cast<const char*>(h.data()), static_cast<std::streamsize>(h.size()));
+  for (const auto& v : vlrs) {
+    std::vector<std::uint8_t> vh(kVlrHeaderSize, 0);
+    put_text(vh, 2, v.user_id, 16);
+    put(vh, 18, v.record_id);
+    put(vh, 20, static_cast<std::uint16_t>(v.data.size()));
+    put_text(vh, 22, v.description, 32);
+    out_.write(reinterpret_cast<const char*>(vh.data()), static_cast<std::streamsize>(vh.size()));
+    out_.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size()));
+  }
+}
+
+void LasWriter::write_records(const std::uint8_t* data, std::size_t n) {
+  out_.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(n * header_.record_length));
+  written_ += n;
+}
+
+void LasWriter::restart(const std::array<double, 3>& offset) {
+  header_.offset = offset;
+  written_ = 0;
+  out_.seekp(static_cast<std::streamoff>(header_.offset_to_points));
+}
+
+void LasWriter::finish(const std::array<std::uint64_t, 15>& points_by_return, const std::array<double, 3>& min,
+                       const std::array<double, 3>& max) {
+  header_.point_count = written_;
+  header_.points_by_return = points_by_return;
+  header_.min = min;
+  header_.max = max;
+  header_.evlr_start = evlrs_.empty() ? 0 : header_.offset_to_points + written_ * header_.record_length;
+  for (const auto& v : evlrs_) {
+    std::vector<std::uint8_t> eh(kEvlrHeaderSize, 0);
+    put_text(eh, 2, v.user_id, 16);
+    put(eh, 18, v.record_id);
+    put(eh, 20, static_cast<std::uint64_t>(v.data.size()));
+    put_text(eh, 28, v.description, 32);
+    out_.write(reinterpret_cast<const char*>(eh.data()), static_cast<std::streamsize>(eh.size()));
+    out_.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size()));
+  }
+  const auto h = encode_las14_header(header_);
+  out_.seekp(0);
+  out_.write(reinterpret_cast<const char*>(h.data()), static_cast<std::streamsize>(h.size()));
+  out_.seekp(0, std::ios::end);
+  if (!out_) throw Error(ErrorKind::io, "E_WRITE", name_ + ": writing the LAS file failed (disk full or I/O error)");
+}
+
+}  // namespace geoanchor::io

@@ -1,0 +1,44 @@
+#pragma once
+// What the LAS, CSV and PLY tile paths share.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <span>
+
+#include "geoanchor/io/tile_apply.hpp"
+
+namespace geoanchor::io::detail {
+
+// Running bounds of three coordinate arrays.
+struct Bounds {
+  std::array<double, 3> min{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                            std::numeric_limits<double>::infinity()};
+  std::array<double, 3> max{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                            -std::numeric_limits<double>::infinity()};
+  void add(std::span<const double> a, std::span<const double> b, std::span<const double> c) {
+    const std::span<const double> axes[3] = {a, b, c};
+    for (std::size_t k = 0; k < 3; ++k) {
+      for (double v : axes[k]) {
+        min[k] = std::min(min[k], v);
+        max[k] = std::max(max[k], v);
+      }
+    }
+  }
+  bool empty() const { return !(min[0] <= max[0]); }
+};
+
+// The index of the first non-finite value in the three arrays, or n.
+inline std::size_t first_non_finite(std::span<const double> a, std::span<const double> b, std::span<const double> c) {
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!std::isfinite(a[i]) || !std::isfinite(b[i]) || !std::isfinite(c[i])) return i;
+  }
+  return a.size();
+}
+
+// Geodetic coordinates are (lat, lon, h) in a PointChain but (lon, lat, h)
+// as X, Y, Z in LAS and PLY, as GIS tools store them.
+inline bool lon_first_in_files(const ArrayFrame& f) { return f.kind == CoordinateKind::geodetic; }
+
+}  // namespace geoanchor::io::detail

@@ -1,0 +1,363 @@
+// A tile's coordinate system as WKT2:2019, and back through PROJ.
+
+#include <proj.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <regex>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/tile_metadata.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+constexpr char kRemarkPrefix[] = "geoanchor frame ";
+constexpr double kDegree_rad = 0.0174532925199433;
+// Parameters read back from WKT are compared with UTM's after unit
+// conversion: 1e-9 degrees and 1e-6 m are far below anything written.
+constexpr double kUtmMatchDeg = 1e-9;
+constexpr double kUtmMatchM = 1e-6;
+
+// Shortest text that reads back to the same double.
+std::string g17(double v) { return format_shortest(v); }
+
+std::string quoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    out += c;
+    if (c == '"') out += '"';  // WKT doubles a quote inside a quoted text
+  }
+  return out + "\"";
+}
+
+// EPSG's datum names for the frames geoanchor spells NAME; the frame's own
+// name for the rest.
+std::string datum_name(const geodesy::Frame& f) {
+  const std::string& d = f.datum();
+  const std::string& r = f.realization();
+  auto year4 = [&](const std::string& y) { return y.size() == 2 ? (y[0] >= '8' ? "19" + y : "20" + y) : y; };
+  if (d == "ITRF" && !r.empty()) return "International Terrestrial Reference Frame " + year4(r);
+  if (d == "ETRF" && !r.empty()) return "European Terrestrial Reference Frame " + year4(r);
+  if (d == "ETRS" && r == "89") return "European Terrestrial Reference System 1989 ensemble";
+  if (d == "WGS84" && r.empty()) return "World Geodetic System 1984 ensemble";
+  if (d == "WGS84") return "World Geodetic System 1984 (" + r + ")";
+  if (d == "NAD83" && r == "2011") return "NAD83 (National Spatial Reference System 2011)";
+  if (d == "NAD83" && r == "CSRS") return "NAD83 Canadian Spatial Reference System";
+  if (d == "NAD83" && r.empty()) return "North American Datum 1983";
+  if (f.name() == "GDA94") return "Geocentric Datum of Australia 1994";
+  if (f.name() == "GDA2020") return "Geocentric Datum of Australia 2020";
+  return f.name();
+}
+
+// The inverse of datum_name: a frame name geoanchor can parse, or "".
+std::string frame_name_of_datum(const std::string& datum) {
+  std::smatch m;
+  auto short_year = [](const std::string& y) { return y < "2000" ? y.substr(2) : y; };
+  if (std::regex_match(datum, m, std::regex(R"(International Terrestrial Reference Frame (\d{4}))"))) {
+    return "ITRF" + short_year(m[1]);
+  }
+  if (std::regex_match(datum, m, std::regex(R"(European Terrestrial Reference Frame (\d{4}))"))) {
+    return "ETRF" + short_year(m[1]);
+  }
+  if (std::regex_match(datum, m, std::regex(R"(World Geodetic System 1984 \((\w+)\))"))) return "WGS84(" + m[1].str() + ")";
+  if (datum == "World Geodetic System 1984 ensemble" || datum == "World Geodetic System 1984") return "WGS84";
+  if (datum == "European Terrestrial Reference System 1989 ensemble") return "ETRS89";
+  if (datum == "NAD83 (National Spatial Reference System 2011)") return "NAD83(2011)";
+  if (datum == "NAD83 Canadian Spatial Reference System") return "NAD83(CSRS)";
+  if (datum == "North American Datum 1983") return "NAD83";
+  if (datum == "Geocentric Datum of Australia 1994") return "GDA94";
+  if (datum == "Geocentric Datum of Australia 2020") return "GDA2020";
+  return "";
+}
+
+std::string ellipsoid_wkt(const geodesy::Ellipsoid& e) {
+  const std::string name = e == geodesy::Ellipsoid::wgs84()   ? "WGS 84"
+                           : e == geodesy::Ellipsoid::grs80() ? "GRS 1980"
+                                                              : e.name();
+  return "ELLIPSOID[" + quoted(name) + "," + g17(e.a_m()) + "," + g17(e.rf()) + ",LENGTHUNIT[\"metre\",1]]";
+}
+
+const std::string kDegree = "ANGLEUNIT[\"degree\",0.0174532925199433]";
+const std::string kMetre = "LENGTHUNIT[\"metre\",1]";
+
+std::string parameter(const char* name, double value, const std::string& unit, int epsg) {
+  return ",PARAMETER[\"" + std::string(name) + "\"," + g17(value) + "," + unit + ",ID[\"EPSG\"," +
+         std::to_string(epsg) + "]]";
+}
+
+struct PjDeleter {
+  void operator()(PJ* p) const { proj_destroy(p); }
+};
+using Pj = std::unique_ptr<PJ, PjDeleter>;
+struct CtxDeleter {
+  void operator()(PJ_CONTEXT* c) const { proj_context_destroy(c); }
+};
+
+[[noreturn]] void fail(std::string_view source, const std::string& problem) {
+  throw Error(ErrorKind::input, "E_TILE_CRS", std::string(source) + ": LAS WKT: " + problem);
+}
+
+// A conversion parameter in degrees (angles), metres (lengths) or unity,
+// taken as written when it is already in that unit so that values round-trip.
+double param(PJ_CONTEXT* ctx, PJ* op, int epsg_code, std::string_view source) {
+  const int n = proj_coordoperation_get_param_count(ctx, op);
+  for (int i = 0; i < n; ++i) {
+    const char* name = nullptr;
+    const char* auth = nullptr;
+    const char* code = nullptr;
+    const char* unit = nullptr;
+    const char* category = nullptr;
+    double value = 0.0, conv = 1.0;
+    if (!proj_coordoperation_get_param(ctx, op, i, &name, &auth, &code, &value, nullptr, &conv, &unit, nullptr,
+                                       nullptr, &category)) {
+      continue;
+    }
+    if (!code || std::to_string(epsg_code) != code) continue;
+    const std::string u = unit ? unit : "";
+    const std::string cat = category ? category : "";
+    if (cat == "angular") return u == "degree" ? value : value * conv / kDegree_rad;
+    return conv == 0.0 || conv == 1.0 ? value : value * conv;
+  }
+  fail(source, "the projection lacks parameter EPSG:" + std::to_string(epsg_code));
+}
+
+}  // namespace
+
+std::string tile_crs_wkt(const TileMetadata& m) {
+  if (!m.frame) throw Error(ErrorKind::usage, "E_FRAME_MISSING", "a tile CRS needs the frame (NAME@EPOCH)");
+  const ArrayFrame& c = m.coordinates;
+  const std::string frame = m.frame->to_string();
+  const std::string datum = "DATUM[" + quoted(datum_name(*m.frame)) + "," + ellipsoid_wkt(c.ellipsoid) + "]," +
+                            "PRIMEM[\"Greenwich\",0," + kDegree + "]";
+  const std::string remark = ",REMARK[" + quoted(kRemarkPrefix + frame + "; coordinate epoch " +
+                                                 (m.frame->epoch() ? geodesy::format_decimal_year(*m.frame->epoch())
+                                                                   : std::string("not stated"))) +
+                             "]";
+  const std::string base = "BASEGEOGCRS[" + quoted(m.frame->name()) + "," + datum + "]";
+  const std::string height_axis = "AXIS[\"ellipsoidal height (h)\",up,ORDER[3]," + kMetre + "]";
+  switch (c.kind) {
+    case CoordinateKind::ecef:
+      return "GEODCRS[" + quoted(frame + " geocentric") + "," + datum +
+             ",CS[Cartesian,3],AXIS[\"(X)\",geocentricX,ORDER[1]," + kMetre + "],AXIS[\"(Y)\",geocentricY,ORDER[2]," +
+             kMetre + "],AXIS[\"(Z)\",geocentricZ,ORDER[3]," + kMetre + "]" + remark + "]";
+    case CoordinateKind::geodetic:
+      return "GEOGCRS[" + quoted(frame + " geographic 3D") + "," + datum +
+             ",CS[ellipsoidal,3],AXIS[\"geodetic latitude (Lat)\",north,ORDER[1]," + kDegree +
+             "],AXIS[\"geodetic longitude (Lon)\",east,ORDER[2]," + kDegree + "]," + height_axis + remark + "]";
+    case CoordinateKind::enu: {
+      const auto& o = *c.origin;
+      return "PROJCRS[" + quoted(frame + " ENU") + "," + base +
+             ",CONVERSION[\"ENU origin\",METHOD[\"Geographic/topocentric conversions\",ID[\"EPSG\",9837]]" +
+             parameter("Latitude of topocentric origin", o.point.lat.deg(), kDegree, 8834) +
+             parameter("Longitude of topocentric origin", o.point.lon.deg(), kDegree, 8835) +
+             parameter("Ellipsoidal height of topocentric origin", o.point.h.m, kMetre, 8836) +
+             "],CS[Cartesian,3],AXIS[\"topocentric East (U)\",east,ORDER[1]," + kMetre +
+             "],AXIS[\"topocentric North (V)\",north,ORDER[2]," + kMetre + "],AXIS[\"topocentric height (W)\",up,ORDER[3]," +
+             kMetre + "]" + remark + "]";
+    }
+    case CoordinateKind::projected: {
+      const auto& p = *c.projection;
+      const std::string conversion_name = p.utm ? "UTM zone " + p.utm->to_string() : "Transverse Mercator";
+      return "PROJCRS[" + quoted(frame + " " + conversion_name) + "," + base + ",CONVERSION[" +
+             quoted(conversion_name) + ",METHOD[\"Transverse Mercator\",ID[\"EPSG\",9807]]" +
+             parameter("Latitude of natural origin", p.tm.lat0.deg(), kDegree, 8801) +
+             parameter("Longitude of natural origin", p.tm.lon0.deg(), kDegree, 8802) +
+             parameter("Scale factor at natural origin", p.tm.k0, "SCALEUNIT[\"unity\",1]", 8805) +
+             parameter("False easting", p.tm.false_easting_m, kMetre, 8806) +
+             parameter("False northing", p.tm.false_northing_m, kMetre, 8807) +
+             "],CS[Cartesian,3],AXIS[\"(E)\",east,ORDER[1]," + kMetre + "],AXIS[\"(N)\",north,ORDER[2]," + kMetre +
+             "]," + height_axis + remark + "]";
+    }
+    case CoordinateKind::ned: break;
+  }
+  throw Error(ErrorKind::usage, "E_TILE_CRS", "NED tiles have no WKT here; write them as ENU");
+}
+
+TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view source) {
+  std::unique_ptr<PJ_CONTEXT, CtxDeleter> ctx(proj_context_create());
+  proj_log_level(ctx.get(), PJ_LOG_NONE);
+  const std::string text(wkt);
+  const char* options[] = {"STRICT=NO", nullptr};
+  PROJ_STRING_LIST warnings = nullptr;
+  PROJ_STRING_LIST errors = nullptr;
+  Pj crs(proj_create_from_wkt(ctx.get(), text.c_str(), options, &warnings, &errors));
+  std::string first_error = errors && errors[0] ? errors[0] : "";
+  proj_string_list_destroy(warnings);
+  proj_string_list_destroy(errors);
+  if (!crs) {
+    fail(source, "PROJ cannot parse it" + (first_error.empty() ? std::string() : ": " + first_error) + "; WKT begins '" +
+                     text.substr(0, 60) + "'");
+  }
+  TileMetadata m;
+  m.storage = "int32_scaled";
+  PJ_TYPE type = proj_get_type(crs.get());
+  Pj horizontal;
+  PJ* h = crs.get();
+  if (type == PJ_TYPE_COMPOUND_CRS) {
+    horizontal.reset(proj_crs_get_sub_crs(ctx.get(), crs.get(), 0));
+    Pj vertical(proj_crs_get_sub_crs(ctx.get(), crs.get(), 1));
+    if (!horizontal || !vertical) fail(source, "a compound CRS without its two parts");
+    h = horizontal.get();
+    type = proj_get_type(h);
+    m.height_type = "orthometric";
+    const char* vname = proj_get_name(vertical.get());
+    m.vertical_datum = vname ? vname : "";
+    m.geoid_model = m.vertical_datum;
+  }
+  m.horizontal_crs = proj_get_name(h) ? proj_get_name(h) : "";
+
+  Pj cs(proj_crs_get_coordinate_system(ctx.get(), h));
+  const int axes = cs ? proj_cs_get_axis_count(ctx.get(), cs.get()) : 0;
+  switch (type) {
+    case PJ_TYPE_GEOCENTRIC_CRS: m.coordinates.kind = CoordinateKind::ecef; break;
+    case PJ_TYPE_GEOGRAPHIC_3D_CRS:
+      m.coordinates.kind = CoordinateKind::geodetic;
+      m.height_type = "ellipsoidal";
+      m.vertical_datum = "ellipsoid";
+      break;
+    case PJ_TYPE_GEOGRAPHIC_2D_CRS:
+      if (m.height_type.empty()) {
+        fail(source, "'" + m.horizontal_crs + "' is a 2D geographic CRS: the heights (Z) are unlabelled; give a "
+                     "sidecar <tile>.geoanchor.json with vertical.height_type");
+      }
+      m.coordinates.kind = CoordinateKind::geodetic;
+      break;
+    case PJ_TYPE_PROJECTED_CRS: {
+      Pj op(proj_crs_get_coordoperation(ctx.get(), h));
+      const char* method = nullptr;
+      const char* auth = nullptr;
+      const char* code = nullptr;
+      if (!op || !proj_coordoperation_get_method_info(ctx.get(), op.get(), &method, &auth, &code)) {
+        fail(source, "'" + m.horizontal_crs + "': cannot read its conversion");
+      }
+      const std::string c = code ? code : "";
+      if (c == "9837") {
+        m.coordinates.kind = CoordinateKind::enu;
+        geodesy::LocalOrigin o;
+        o.point.lat = geodesy::Angle::degrees(param(ctx.get(), op.get(), 8834, source));
+        o.point.lon = geodesy::Angle::degrees(param(ctx.get(), op.get(), 8835, source));
+        o.point.h = geodesy::EllipsoidalHeight{param(ctx.get(), op.get(), 8836, source)};
+        m.coordinates.origin = o;
+        m.origin_source = "LAS WKT";
+      } else if (c == "9807") {
+        m.coordinates.kind = CoordinateKind::projected;
+        geodesy::TransverseMercatorParams p;
+        p.lat0 = geodesy::Angle::degrees(param(ctx.get(), op.get(), 8801, source));
+        p.lon0 = geodesy::Angle::degrees(param(ctx.get(), op.get(), 8802, source));
+        p.k0 = param(ctx.get(), op.get(), 8805, source);
+        p.false_easting_m = param(ctx.get(), op.get(), 8806, source);
+        p.false_northing_m = param(ctx.get(), op.get(), 8807, source);
+        m.coordinates.projection = geodesy::ProjectionDef{geodesy::Ellipsoid::wgs84(), p, std::nullopt};
+      } else {
+        fail(source, "'" + m.horizontal_crs + "' uses projection method '" + (method ? method : "?") + "' (" +
+                         (auth ? auth : "?") + ":" + c +
+                         "); geoanchor reads Transverse Mercator (EPSG:9807) and topocentric (EPSG:9837) tiles");
+      }
+      if (axes < 3 && m.height_type.empty()) {
+        fail(source, "'" + m.horizontal_crs + "' is a 2D projected CRS: the heights (Z) are unlabelled; give a "
+                     "sidecar <tile>.geoanchor.json with vertical.height_type");
+      }
+      if (m.coordinates.kind == CoordinateKind::projected && m.height_type.empty()) {
+        m.height_type = "ellipsoidal";
+        m.vertical_datum = "ellipsoid";
+      }
+      break;
+    }
+    default:
+      fail(source, "'" + m.horizontal_crs + "' is not a geocentric, geographic 3D, projected or compound CRS");
+  }
+
+  // Datum and ellipsoid.
+  Pj datum(proj_crs_get_datum(ctx.get(), h));
+  if (!datum) datum.reset(proj_crs_get_datum_ensemble(ctx.get(), h));
+  const std::string datum_text = datum && proj_get_name(datum.get()) ? proj_get_name(datum.get()) : "";
+  Pj ell(proj_get_ellipsoid(ctx.get(), h));
+  double a = 0.0, b = 0.0, rf = 0.0;
+  int computed = 0;
+  if (!ell || !proj_ellipsoid_get_parameters(ctx.get(), ell.get(), &a, &b, &computed, &rf)) {
+    fail(source, "'" + m.horizontal_crs + "': no ellipsoid");
+  }
+  const auto wgs84 = geodesy::Ellipsoid::wgs84();
+  const auto grs80 = geodesy::Ellipsoid::grs80();
+  constexpr double kEllipsoidMatch = 1e-9;  // relative, in a and 1/f
+  auto same = [&](const geodesy::Ellipsoid& e) {
+    return std::abs(a - e.a_m()) < kEllipsoidMatch * e.a_m() && std::abs(rf - e.rf()) < kEllipsoidMatch * e.rf();
+  };
+  m.coordinates.ellipsoid = same(wgs84) ? wgs84 : same(grs80) ? grs80 : geodesy::Ellipsoid::custom(a, rf, "custom");
+  if (m.coordinates.origin) m.coordinates.origin->ellipsoid = m.coordinates.ellipsoid;
+  if (m.coordinates.projection) {
+    auto& p = *m.coordinates.projection;
+    p.ellipsoid = m.coordinates.ellipsoid;
+    // A TM with UTM's parameters is that UTM zone.
+    const double zone_f = (p.tm.lon0.deg() + 183.0) / 6.0;
+    const int zone = static_cast<int>(std::lround(zone_f));
+    const bool north = std::abs(p.tm.false_northing_m) < kUtmMatchM;
+    const bool south = std::abs(p.tm.false_northing_m - 10000000.0) < kUtmMatchM;
+    if (std::abs(p.tm.lat0.deg()) < kUtmMatchDeg && std::abs(p.tm.k0 - 0.9996) < 1e-12 &&
+        std::abs(p.tm.false_easting_m - 500000.0) < kUtmMatchM && (north || south) && zone >= 1 && zone <= 60 &&
+        std::abs(zone_f - zone) * 6.0 < kUtmMatchDeg) {
+      p = geodesy::utm_projection(p.ellipsoid, geodesy::UtmZone{zone, north ? geodesy::Hemisphere::north
+                                                                            : geodesy::Hemisphere::south});
+    }
+  }
+
+  // The frame: geoanchor's remark (with the coordinate epoch), else the datum.
+  const char* remarks = proj_get_remarks(crs.get());
+  const std::string remark = remarks ? remarks : "";
+  const auto at = remark.find(kRemarkPrefix);
+  const std::string from_datum = frame_name_of_datum(datum_text);
+  if (at != std::string::npos) {
+    const auto start = at + sizeof kRemarkPrefix - 1;
+    const auto end = remark.find(';', start);
+    m.frame = geodesy::Frame::parse(remark.substr(start, end == std::string::npos ? std::string::npos : end - start),
+                                    std::string(source) + ": LAS WKT remark");
+    if (!from_datum.empty() && from_datum != m.frame->name()) {
+      fail(source, "the remark names frame " + m.frame->to_string() + " but the datum is '" + datum_text + "'");
+    }
+  } else if (!from_datum.empty()) {
+    m.frame = geodesy::Frame::parse(from_datum, std::string(source) + ": LAS WKT datum");
+  } else {
+    try {
+      m.frame = geodesy::Frame::parse(datum_text, std::string(source) + ": LAS WKT datum");
+    } catch (const Error&) {
+      fail(source, "datum '" + datum_text + "' is not a frame geoanchor can name; give --from-frame NAME@EPOCH");
+    }
+  }
+  return m;
+}
+
+std::string describe_mismatch(const TileMetadata& a, std::string_view an, const TileMetadata& b, std::string_view bn) {
+  auto both = [&](const std::string& what, const std::string& x, const std::string& y) {
+    return what + " " + x + " (" + std::string(an) + ") vs " + y + " (" + std::string(bn) + ")";
+  };
+  if (a.frame && b.frame && !(*a.frame == *b.frame)) return both("frame", a.frame->to_string(), b.frame->to_string());
+  if (kind_name(a.coordinates) != kind_name(b.coordinates)) {
+    return both("coordinates", kind_name(a.coordinates), kind_name(b.coordinates));
+  }
+  if (a.coordinates.kind != CoordinateKind::ecef && !(a.coordinates.ellipsoid == b.coordinates.ellipsoid)) {
+    return both("ellipsoid", a.coordinates.ellipsoid.name(), b.coordinates.ellipsoid.name());
+  }
+  auto origin_text = [](const std::optional<geodesy::LocalOrigin>& o) {
+    return o ? g17(o->point.lat.deg()) + "," + g17(o->point.lon.deg()) + "," + g17(o->point.h.m) : std::string("none");
+  };
+  if (a.coordinates.origin.has_value() != b.coordinates.origin.has_value() ||
+      (a.coordinates.origin && !(a.coordinates.origin->point.lat == b.coordinates.origin->point.lat &&
+                                 a.coordinates.origin->point.lon == b.coordinates.origin->point.lon &&
+                                 a.coordinates.origin->point.h == b.coordinates.origin->point.h))) {
+    return both("ENU origin", origin_text(a.coordinates.origin), origin_text(b.coordinates.origin));
+  }
+  if (a.coordinates.projection.has_value() != b.coordinates.projection.has_value() ||
+      (a.coordinates.projection && !(*a.coordinates.projection == *b.coordinates.projection))) {
+    return both("projection", a.horizontal_crs.empty() ? "?" : a.horizontal_crs,
+                b.horizontal_crs.empty() ? "?" : b.horizontal_crs);
+  }
+  if (!a.height_type.empty() && !b.height_type.empty() && a.height_type != b.height_type) {
+    return both("height type", a.height_type, b.height_type);
+  }
+  return "";
+}
+
+}  // namespace geoanchor::io

@@ -1,0 +1,146 @@
+// CSV tiles through a PointChain: header-named coordinate columns as in
+// `convert`, every other column and every comment line in place.
+
+#include <fstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/io/csv.hpp"
+#include "tile_common.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+void write_fields(std::ostream& out, const std::vector<std::string>& fields) {
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    if (i) out << ',';
+    out << fields[i];
+  }
+  out << '\n';
+}
+
+}  // namespace
+
+TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& out, const std::string& out_name,
+                               const PointChain& chain, const TileApplyOptions& o) {
+  std::ifstream file(in, std::ios::binary);
+  if (!file) throw Error(ErrorKind::io, "E_READ", in.string() + ": cannot open");
+  const std::string source = in.string();
+  CsvReader reader(file, source);
+  const auto& header = reader.header();
+  const CoordinateColumns columns = classify_coordinate_header(header, source);
+  if (columns.kind != o.from.kind) {
+    throw Error(ErrorKind::input, "E_TILE_KIND",
+                source + ": the header's coordinates are " + std::string(to_string(columns.kind)) +
+                    " but the tile's frame says " + std::string(to_string(o.from.kind)));
+  }
+  if (!columns.third) {
+    throw Error(ErrorKind::input, "E_COLUMN", source + ": no h_m column; a tile's heights must be stated");
+  }
+  if (columns.utm_zone) {
+    throw Error(ErrorKind::input, "E_COLUMN",
+                source + ": a utm_zone column; a tile has one projection, stated in its sidecar or --from-zone");
+  }
+  if (columns.epoch) {
+    throw Error(ErrorKind::input, "E_COLUMN",
+                source + ": an epoch column; a tile has one epoch (its frame's); use `geoanchor convert` for "
+                         "per-row epochs");
+  }
+  const auto out_names = coordinate_column_names(o.to.kind);
+
+  std::size_t first_coordinate = header.size();
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (columns.is_coordinate(i)) {
+      first_coordinate = i;
+      break;
+    }
+  }
+  std::vector<std::string> out_header;
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (i == first_coordinate) out_header.insert(out_header.end(), out_names.begin(), out_names.end());
+    if (columns.is_coordinate(i)) continue;
+    for (const auto& n : out_names) {
+      if (header[i] == n) {
+        throw Error(ErrorKind::input, "E_COLUMN",
+                    source + ": header column " + std::to_string(i + 1) + " '" + header[i] +
+                        "' would appear twice in " + out_name + " (it is an output coordinate); rename it");
+      }
+    }
+    out_header.push_back(csv_quote(header[i]));
+  }
+  for (const auto& c : reader.leading_comments()) out << c << '\n';
+  write_fields(out, out_header);
+
+  TileApplyResult r;
+  r.storage = "float64";
+  detail::Bounds in_bounds, out_bounds;
+  const std::size_t chunk = std::max<std::size_t>(o.chunk_points, 1);
+  std::vector<CsvRecord> records(chunk);
+  std::vector<double> a(chunk), b(chunk), c(chunk);
+  std::vector<std::size_t> rows;  // indices of data records in `records`
+  std::vector<std::string> fields;
+  const std::size_t cols[3] = {columns.first, columns.second, *columns.third};
+  const bool geodetic = o.from.kind == CoordinateKind::geodetic;
+  for (bool more = true; more;) {
+    std::size_t filled = 0;
+    rows.clear();
+    while (filled < chunk && (more = reader.next(records[filled]))) {
+      const CsvRecord& rec = records[filled];
+      if (!rec.is_comment) {
+        const std::size_t k = rows.size();
+        a[k] = number_cell(rec, cols[0], header, source);
+        b[k] = number_cell(rec, cols[1], header, source);
+        c[k] = number_cell(rec, cols[2], header, source);
+        if (geodetic && !(std::abs(a[k]) <= 90.0 && std::abs(b[k]) <= 180.0)) {
+          throw Error(ErrorKind::input, "E_RANGE",
+                      source + ":" + std::to_string(rec.line) + ": " + header[std::abs(a[k]) > 90.0 ? cols[0] : cols[1]] +
+                          "=" + rec.values[std::abs(a[k]) > 90.0 ? cols[0] : cols[1]] +
+                          ": not in [-90, 90] (latitude) / [-180, 180] (longitude) degrees");
+        }
+        rows.push_back(filled);
+      }
+      ++filled;
+    }
+    const std::size_t n = rows.size();
+    std::span<double> as(a.data(), n), bs(b.data(), n), cs(c.data(), n);
+    in_bounds.add(as, bs, cs);
+    chain.apply(as, bs, cs);
+    if (const std::size_t bad = detail::first_non_finite(as, bs, cs); bad < n) {
+      throw Error(ErrorKind::input, "E_TRANSFORM",
+                  source + ":" + std::to_string(records[rows[bad]].line) + ": the point has no finite position in the output frame");
+    }
+    out_bounds.add(as, bs, cs);
+    std::size_t k = 0;
+    for (std::size_t j = 0; j < filled; ++j) {
+      const CsvRecord& rec = records[j];
+      if (rec.is_comment) {
+        out << rec.comment << '\n';
+        continue;
+      }
+      fields.clear();
+      for (std::size_t i = 0; i < header.size(); ++i) {
+        if (i == first_coordinate) {
+          fields.push_back(format_shortest(a[k]));
+          fields.push_back(format_shortest(b[k]));
+          fields.push_back(format_shortest(c[k]));
+        }
+        if (!columns.is_coordinate(i)) fields.push_back(rec.raw[i]);
+      }
+      write_fields(out, fields);
+      ++k;
+    }
+    r.points += n;
+    if (o.progress) o.progress(r.points);
+  }
+  if (!out) throw Error(ErrorKind::io, "E_WRITE", out_name + ": write failed");
+  if (r.points) {
+    r.min = out_bounds.min;
+    r.max = out_bounds.max;
+    r.in_min = in_bounds.min;
+    r.in_max = in_bounds.max;
+  }
+  return r;
+}
+
+}  // namespace geoanchor::io

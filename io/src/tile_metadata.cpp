@@ -1,0 +1,272 @@
+// The tile metadata sidecar, read and written as JSON.
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/tile_metadata.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& problem) {
+  throw Error(ErrorKind::input, "E_TILE_METADATA", std::string(source) + ": " + key + ": " + problem);
+}
+
+void only_keys(const json& j, std::string_view source, const std::string& where, const std::set<std::string>& known) {
+  if (!j.is_object()) fail(source, where, "expected a JSON object");
+  for (const auto& [key, value] : j.items()) {
+    if (!known.count(key)) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      fail(source, where.empty() ? key : where + "." + key, "unknown key; expected one of " + list);
+    }
+  }
+}
+
+const json* member(const json& j, const char* key) {
+  const auto it = j.find(key);
+  return it == j.end() || it->is_null() ? nullptr : &*it;
+}
+
+std::string text(const json& j, std::string_view source, const std::string& key) {
+  if (!j.is_string()) fail(source, key, "expected a string, got " + j.dump());
+  return j.get<std::string>();
+}
+
+double number(const json& j, std::string_view source, const std::string& key, double lo, double hi,
+              const std::string& range) {
+  if (!j.is_number()) fail(source, key, "expected a number, got " + j.dump());
+  const double v = j.get<double>();
+  if (!std::isfinite(v) || v < lo || v > hi) fail(source, key, "value " + format_shortest(v) + " not in " + range);
+  return v;
+}
+
+geodesy::Ellipsoid ellipsoid(const json& j, std::string_view source) {
+  if (j.is_string()) {
+    const auto name = j.get<std::string>();
+    if (name == "WGS84") return geodesy::Ellipsoid::wgs84();
+    if (name == "GRS80") return geodesy::Ellipsoid::grs80();
+    fail(source, "coordinates.ellipsoid", "value \"" + name + "\" unknown; expected WGS84, GRS80 or {\"a_m\", \"rf\"}");
+  }
+  only_keys(j, source, "coordinates.ellipsoid", {"a_m", "rf", "name"});
+  const json* a = member(j, "a_m");
+  const json* rf = member(j, "rf");
+  if (!a || !rf) fail(source, "coordinates.ellipsoid", "a custom ellipsoid needs a_m and rf");
+  const double a_m = number(*a, source, "coordinates.ellipsoid.a_m", 6.0e6, 7.0e6, "[6000000, 7000000] m");
+  const double inv_f = number(*rf, source, "coordinates.ellipsoid.rf", 250.0, 350.0, "[250, 350]");
+  const json* n = member(j, "name");
+  return geodesy::Ellipsoid::custom(a_m, inv_f, n ? text(*n, source, "coordinates.ellipsoid.name") : "custom");
+}
+
+json ellipsoid_json(const geodesy::Ellipsoid& e) {
+  if (e == geodesy::Ellipsoid::wgs84()) return "WGS84";
+  if (e == geodesy::Ellipsoid::grs80()) return "GRS80";
+  return json{{"name", e.name()}, {"a_m", e.a_m()}, {"rf", e.rf()}};
+}
+
+}  // namespace
+
+std::string kind_name(const ArrayFrame& f) {
+  switch (f.kind) {
+    case CoordinateKind::ecef: return "ecef";
+    case CoordinateKind::geodetic: return "geodetic";
+    case CoordinateKind::enu: return "enu";
+    case CoordinateKind::ned: return "ned";
+    case CoordinateKind::projected: return f.projection && f.projection->utm ? "utm" : "tm";
+  }
+  return "?";
+}
+
+std::filesystem::path sidecar_path(const std::filesystem::path& tile) {
+  return std::filesystem::path(tile.string() + ".geoanchor.json");
+}
+
+TileMetadata read_tile_metadata(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(ErrorKind::io, "E_READ", path.string() + ": cannot open tile metadata");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return parse_tile_metadata(s.str(), path.string());
+}
+
+TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view source) {
+  json j;
+  try {
+    j = json::parse(text_in);
+  } catch (const json::parse_error& e) {
+    throw Error(ErrorKind::input, "E_JSON", std::string(source) + ": not valid JSON: " + e.what());
+  }
+  only_keys(j, source, "", {"schema", "frame", "coordinates", "enu_origin", "projection", "horizontal_crs",
+                            "vertical", "survey", "provenance"});
+  TileMetadata m;
+  const json* schema = member(j, "schema");
+  if (!schema || text(*schema, source, "schema") != kTileSchema) {
+    fail(source, "schema", std::string("expected \"") + std::string(kTileSchema) + "\"" +
+                               (schema ? ", got " + schema->dump() : std::string(", the key is missing")));
+  }
+  const json* frame = member(j, "frame");
+  if (!frame) fail(source, "frame", "missing: the tile's datum, realization and epoch, e.g. \"ITRF2014@2024.5\"");
+  m.frame = geodesy::Frame::parse(text(*frame, source, "frame"), std::string(source) + ": frame");
+
+  const json* coords = member(j, "coordinates");
+  if (!coords) fail(source, "coordinates", "missing: {\"kind\", \"ellipsoid\", \"storage\"}");
+  only_keys(*coords, source, "coordinates", {"kind", "ellipsoid", "storage"});
+  const json* kind = member(*coords, "kind");
+  if (!kind) fail(source, "coordinates.kind", "missing; expected enu, ned, ecef, geodetic, utm or tm");
+  const std::string k = text(*kind, source, "coordinates.kind");
+  if (const json* e = member(*coords, "ellipsoid")) {
+    m.coordinates.ellipsoid = ellipsoid(*e, source);
+  } else if (k != "ecef") {
+    fail(source, "coordinates.ellipsoid", "missing for " + k + " coordinates; expected WGS84, GRS80 or {\"a_m\", \"rf\"}");
+  }
+  if (const json* st = member(*coords, "storage")) {
+    m.storage = text(*st, source, "coordinates.storage");
+    if (m.storage != "float64" && m.storage != "float32" && m.storage != "int32_scaled") {
+      fail(source, "coordinates.storage", "value \"" + m.storage + "\" unknown; expected float64, float32 or int32_scaled");
+    }
+  }
+
+  const json* origin = member(j, "enu_origin");
+  const json* projection = member(j, "projection");
+  if (k == "enu" || k == "ned") {
+    m.coordinates.kind = k == "enu" ? CoordinateKind::enu : CoordinateKind::ned;
+    if (!origin) fail(source, "enu_origin", "missing for " + k + " coordinates: {\"lat_deg\", \"lon_deg\", \"h_m\", \"height_type\", \"source\"}");
+    only_keys(*origin, source, "enu_origin", {"lat_deg", "lon_deg", "h_m", "height_type", "source"});
+    const json* lat = member(*origin, "lat_deg");
+    const json* lon = member(*origin, "lon_deg");
+    const json* h = member(*origin, "h_m");
+    const json* ht = member(*origin, "height_type");
+    if (!lat || !lon || !h) fail(source, "enu_origin", "needs lat_deg, lon_deg and h_m");
+    if (!ht || text(*ht, source, "enu_origin.height_type") != "ellipsoidal") {
+      fail(source, "enu_origin.height_type",
+           std::string(ht ? "value " + ht->dump() : "missing") + "; an ENU origin's height must be \"ellipsoidal\"");
+    }
+    geodesy::LocalOrigin o;
+    o.ellipsoid = m.coordinates.ellipsoid;
+    o.point.lat = geodesy::Angle::degrees(number(*lat, source, "enu_origin.lat_deg", -90, 90, "[-90, 90]"));
+    o.point.lon = geodesy::Angle::degrees(number(*lon, source, "enu_origin.lon_deg", -180, 180, "[-180, 180]"));
+    o.point.h = geodesy::EllipsoidalHeight{number(*h, source, "enu_origin.h_m", -1.0e4, 1.0e5, "[-10000, 100000] m")};
+    m.coordinates.origin = o;
+    if (const json* src = member(*origin, "source")) m.origin_source = text(*src, source, "enu_origin.source");
+  } else if (k == "ecef") {
+    m.coordinates.kind = CoordinateKind::ecef;
+  } else if (k == "geodetic") {
+    m.coordinates.kind = CoordinateKind::geodetic;
+  } else if (k == "utm" || k == "tm") {
+    m.coordinates.kind = CoordinateKind::projected;
+    if (!projection) fail(source, "projection", "missing for " + k + " coordinates");
+    only_keys(*projection, source, "projection", {"utm_zone", "tm"});
+    if (k == "utm") {
+      const json* z = member(*projection, "utm_zone");
+      if (!z) fail(source, "projection.utm_zone", "missing for utm coordinates (e.g. \"32N\")");
+      m.coordinates.projection = geodesy::utm_projection(
+          m.coordinates.ellipsoid,
+          geodesy::parse_utm_zone(text(*z, source, "projection.utm_zone"), std::string(source) + ": projection.utm_zone"));
+    } else {
+      const json* t = member(*projection, "tm");
+      if (!t) fail(source, "projection.tm", "missing for tm coordinates");
+      only_keys(*t, source, "projection.tm", {"lat0_deg", "lon0_deg", "k0", "false_easting_m", "false_northing_m"});
+      for (const char* key : {"lat0_deg", "lon0_deg", "k0", "false_easting_m", "false_northing_m"}) {
+        if (!member(*t, key)) fail(source, std::string("projection.tm.") + key, "missing");
+      }
+      geodesy::TransverseMercatorParams p;
+      p.lat0 = geodesy::Angle::degrees(number((*t)["lat0_deg"], source, "projection.tm.lat0_deg", -90, 90, "[-90, 90]"));
+      p.lon0 = geodesy::Angle::degrees(number((*t)["lon0_deg"], source, "projection.tm.lon0_deg", -180, 180, "[-180, 180]"));
+      p.k0 = number((*t)["k0"], source, "projection.tm.k0", 0.5, 1.5, "[0.5, 1.5]");
+      p.false_easting_m = number((*t)["false_easting_m"], source, "projection.tm.false_easting_m", -1e8, 1e8, "[-1e8, 1e8] m");
+      p.false_northing_m = number((*t)["false_northing_m"], source, "projection.tm.false_northing_m", -1e8, 1e8, "[-1e8, 1e8] m");
+      m.coordinates.projection = geodesy::ProjectionDef{m.coordinates.ellipsoid, p, std::nullopt};
+    }
+  } else {
+    fail(source, "coordinates.kind", "value \"" + k + "\" unknown; expected enu, ned, ecef, geodetic, utm or tm");
+  }
+  if (origin && !m.coordinates.origin) fail(source, "enu_origin", "given for " + k + " coordinates, which have none");
+  if (projection && !m.coordinates.projection) fail(source, "projection", "given for " + k + " coordinates, which have none");
+
+  if (const json* hc = member(j, "horizontal_crs")) m.horizontal_crs = text(*hc, source, "horizontal_crs");
+  if (const json* v = member(j, "vertical")) {
+    only_keys(*v, source, "vertical", {"datum", "height_type", "geoid_model"});
+    if (const json* d = member(*v, "datum")) m.vertical_datum = text(*d, source, "vertical.datum");
+    if (const json* ht = member(*v, "height_type")) {
+      m.height_type = text(*ht, source, "vertical.height_type");
+      if (m.height_type != "ellipsoidal" && m.height_type != "orthometric") {
+        fail(source, "vertical.height_type", "value \"" + m.height_type + "\" unknown; expected ellipsoidal or orthometric");
+      }
+    }
+    if (const json* g = member(*v, "geoid_model")) m.geoid_model = text(*g, source, "vertical.geoid_model");
+  }
+  const bool has_heights = m.coordinates.kind == CoordinateKind::geodetic || m.coordinates.kind == CoordinateKind::projected;
+  if (has_heights && m.height_type.empty()) {
+    fail(source, "vertical.height_type",
+         "missing for " + k + " coordinates: heights must be labelled \"ellipsoidal\" or \"orthometric\"");
+  }
+  if (m.height_type == "orthometric" && !m.geoid_model) {
+    fail(source, "vertical.geoid_model", "missing: orthometric heights need the geoid model that relates them");
+  }
+  if (const json* s = member(j, "survey")) {
+    only_keys(*s, source, "survey", {"method", "rtk_fixed_percent"});
+    if (const json* me = member(*s, "method")) m.survey_method = text(*me, source, "survey.method");
+    if (const json* r = member(*s, "rtk_fixed_percent")) {
+      m.rtk_fixed_percent = number(*r, source, "survey.rtk_fixed_percent", 0, 100, "[0, 100] %");
+    }
+  }
+  if (const json* p = member(j, "provenance")) {
+    if (!p->is_object()) fail(source, "provenance", "expected a JSON object");
+    m.provenance_json = p->dump();
+  }
+  return m;
+}
+
+std::string to_json_text(const TileMetadata& m) {
+  json j;
+  j["schema"] = kTileSchema;
+  if (m.frame) j["frame"] = m.frame->to_string();
+  j["coordinates"] = {{"kind", kind_name(m.coordinates)},
+                      {"ellipsoid", ellipsoid_json(m.coordinates.ellipsoid)},
+                      {"storage", m.storage}};
+  if (m.coordinates.origin) {
+    const auto& o = *m.coordinates.origin;
+    j["enu_origin"] = {{"lat_deg", o.point.lat.deg()},
+                       {"lon_deg", o.point.lon.deg()},
+                       {"h_m", o.point.h.m},
+                       {"height_type", "ellipsoidal"},
+                       {"source", m.origin_source}};
+  }
+  if (m.coordinates.projection) {
+    const auto& p = *m.coordinates.projection;
+    if (p.utm) {
+      j["projection"] = {{"utm_zone", p.utm->to_string()}};
+    } else {
+      j["projection"] = {{"tm",
+                          {{"lat0_deg", p.tm.lat0.deg()},
+                           {"lon0_deg", p.tm.lon0.deg()},
+                           {"k0", p.tm.k0},
+                           {"false_easting_m", p.tm.false_easting_m},
+                           {"false_northing_m", p.tm.false_northing_m}}}};
+    }
+  }
+  if (!m.horizontal_crs.empty()) j["horizontal_crs"] = m.horizontal_crs;
+  json v = json::object();
+  if (!m.vertical_datum.empty()) v["datum"] = m.vertical_datum;
+  if (!m.height_type.empty()) v["height_type"] = m.height_type;
+  v["geoid_model"] = m.geoid_model ? json(*m.geoid_model) : json(nullptr);
+  j["vertical"] = v;
+  if (!m.survey_method.empty() || m.rtk_fixed_percent) {
+    json s = json::object();
+    if (!m.survey_method.empty()) s["method"] = m.survey_method;
+    if (m.rtk_fixed_percent) s["rtk_fixed_percent"] = *m.rtk_fixed_percent;
+    j["survey"] = s;
+  }
+  if (!m.provenance_json.empty()) j["provenance"] = json::parse(m.provenance_json);
+  return j.dump(2) + "\n";
+}
+
+}  // namespace geoanchor::io
