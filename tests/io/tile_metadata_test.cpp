@@ -1,0 +1,350 @@
+// Tile metadata: the sidecar schema, the WKT2 of each kind of tile read by
+// PROJ (and its meaning checked through PROJ's own crs-to-crs), CSV and PLY
+// tiles against PROJ, the propagated uncertainty and the control extent.
+
+#include <proj.h>
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/tile_apply.hpp"
+#include "geoanchor/io/tile_metadata.hpp"
+#include "proj_reference.hpp"
+#include "test_support.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+namespace fs = std::filesystem;
+using geodesy::Angle;
+using testing::ProjPipeline;
+
+constexpr double kVsProjTol_m = 1e-6;     // issue acceptance for float64 tiles
+constexpr double kCrossAirportTol_m = 1e-9;  // ENU(A) -> ENU(B) -> ENU(A), issue acceptance
+constexpr double kDegreeTol = 1e-11;      // ≈ 1 µm of latitude
+
+const char* kSidecar = R"J({
+  "schema": "geoanchor.tile/1",
+  "frame": "ITRF2014@2024.5",
+  "coordinates": {"kind": "enu", "ellipsoid": "GRS80", "storage": "int32_scaled"},
+  "enu_origin": {"lat_deg": 47.464722, "lon_deg": 8.549167, "h_m": 480.0, "height_type": "ellipsoidal",
+                 "source": "AIP"},
+  "vertical": {"height_type": "ellipsoidal"},
+  "survey": {"method": "mobile LiDAR", "rtk_fixed_percent": 98.5}
+})J";
+
+geodesy::LocalOrigin origin(double lat, double lon, double h) {
+  return {{Angle::degrees(lat), Angle::degrees(lon), geodesy::EllipsoidalHeight{h}}, geodesy::Ellipsoid::grs80()};
+}
+
+TEST(TileMetadata, SidecarReadsBackWhatItWrites) {
+  const TileMetadata m = parse_tile_metadata(kSidecar, "t.json");
+  ASSERT_TRUE(m.frame);
+  EXPECT_EQ(m.frame->to_string(), "ITRF2014@2024.5");
+  EXPECT_EQ(m.coordinates.kind, CoordinateKind::enu);
+  EXPECT_EQ(m.coordinates.origin->point.lat.deg(), 47.464722);
+  EXPECT_EQ(m.origin_source, "AIP");
+  EXPECT_EQ(*m.rtk_fixed_percent, 98.5);
+  const TileMetadata again = parse_tile_metadata(to_json_text(m), "again.json");
+  EXPECT_EQ(describe_mismatch(m, "a", again, "b"), "");
+  EXPECT_EQ(again.survey_method, "mobile LiDAR");
+}
+
+TEST(TileMetadata, SidecarErrorsNameTheKey) {
+  auto error_of = [](std::string text) {
+    try {
+      parse_tile_metadata(text, "t.json");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  auto replaced = [](const std::string& from, const std::string& to) {
+    std::string s = kSidecar;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  EXPECT_NE(error_of(replaced("\"frame\"", "\"frmae\"")).find("t.json: frmae: unknown key"), std::string::npos);
+  EXPECT_NE(error_of(replaced("\"schema\": \"geoanchor.tile/1\",", "")).find("t.json: schema:"), std::string::npos);
+  EXPECT_NE(error_of(replaced("\"kind\": \"enu\"", "\"kind\": \"geodetic\"")).find("enu_origin: given for geodetic"),
+            std::string::npos);
+  EXPECT_NE(error_of(replaced("\"h_m\": 480.0, ", "")).find("needs lat_deg, lon_deg and h_m"), std::string::npos);
+  EXPECT_NE(error_of(replaced("\"rtk_fixed_percent\": 98.5", "\"rtk_fixed_percent\": 101")).find("not in [0, 100]"),
+            std::string::npos);
+  const std::string geodetic = R"({"schema": "geoanchor.tile/1", "frame": "GDA2020",
+      "coordinates": {"kind": "geodetic", "ellipsoid": "GRS80"}})";
+  EXPECT_NE(error_of(geodetic).find("vertical.height_type: missing"), std::string::npos);
+  const std::string orthometric = R"({"schema": "geoanchor.tile/1", "frame": "GDA2020",
+      "coordinates": {"kind": "geodetic", "ellipsoid": "GRS80"}, "vertical": {"height_type": "orthometric"}})";
+  EXPECT_NE(error_of(orthometric).find("geoid_model: missing"), std::string::npos);
+}
+
+// PROJ's own crs-to-crs from a tile WKT to the same datum's geocentric WKT.
+Eigen::Vector3d proj_to_ecef(const std::string& tile_wkt, const std::string& ecef_wkt, const Eigen::Vector3d& p) {
+  PJ_CONTEXT* ctx = proj_context_create();
+  PJ* op = proj_create_crs_to_crs(ctx, tile_wkt.c_str(), ecef_wkt.c_str(), nullptr);
+  EXPECT_NE(op, nullptr) << proj_context_errno_string(ctx, proj_context_errno(ctx));
+  Eigen::Vector3d out = Eigen::Vector3d::Constant(std::nan(""));
+  if (op) {
+    const PJ_COORD c = proj_trans(op, PJ_FWD, proj_coord(p.x(), p.y(), p.z(), 0));
+    out = Eigen::Vector3d(c.xyz.x, c.xyz.y, c.xyz.z);
+    proj_destroy(op);
+  }
+  proj_context_destroy(ctx);
+  return out;
+}
+
+TEST(TileMetadata, WktOfEachKindParsesBackAndMeansWhatProjMakesOfIt) {
+  TileMetadata base = parse_tile_metadata(kSidecar, "t.json");
+  base.height_type = "ellipsoidal";
+  TileMetadata ecef = base;
+  ecef.coordinates = ArrayFrame{CoordinateKind::ecef, geodesy::Ellipsoid::grs80(), std::nullopt, std::nullopt};
+  const std::string ecef_wkt = tile_crs_wkt(ecef);
+  TileMetadata geodetic = base;
+  geodetic.coordinates = ArrayFrame{CoordinateKind::geodetic, geodesy::Ellipsoid::grs80(), std::nullopt, std::nullopt};
+  TileMetadata utm = base;
+  utm.coordinates = ArrayFrame{CoordinateKind::projected, geodesy::Ellipsoid::grs80(), std::nullopt,
+                               geodesy::utm_projection(geodesy::Ellipsoid::grs80(), geodesy::UtmZone{32, geodesy::Hemisphere::north})};
+  TileMetadata tm = base;
+  tm.coordinates = ArrayFrame{CoordinateKind::projected, geodesy::Ellipsoid::grs80(), std::nullopt,
+                              geodesy::ProjectionDef{geodesy::Ellipsoid::grs80(),
+                                                     {Angle::degrees(47.4), Angle::degrees(8.55), 0.99995, 2600000, 1200000},
+                                                     std::nullopt}};
+  struct Case {
+    const char* name;
+    TileMetadata m;
+    Eigen::Vector3d p;  // in the WKT's axis order
+  };
+  const std::vector<Case> cases = {{"ENU", base, {123.4, -456.7, 8.9}},
+                                   {"ECEF", ecef, {4277686.0, 639405.5, 4672438.6}},
+                                   {"geodetic", geodetic, {47.47, 8.56, 455.0}},
+                                   {"UTM", utm, {465000.0, 5257000.0, 455.0}},
+                                   {"TM", tm, {2683000.0, 1252000.0, 455.0}}};
+  ArrayFrame to_ecef{CoordinateKind::ecef, geodesy::Ellipsoid::grs80(), std::nullopt, std::nullopt};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string wkt = tile_crs_wkt(c.m);
+    EXPECT_NE(wkt.find("ITRF2014@2024.5"), std::string::npos);
+    EXPECT_NE(wkt.find("International Terrestrial Reference Frame 2014"), std::string::npos);
+    const TileMetadata back = tile_metadata_from_wkt(wkt, "tile.las");
+    EXPECT_EQ(describe_mismatch(c.m, "written", back, "read"), "");
+    // What PROJ makes of the WKT equals what geoanchor means by it.
+    std::vector<double> a{c.p.x()}, b{c.p.y()}, z{c.p.z()};
+    PointChain(c.m.coordinates, std::nullopt, false, std::nullopt, to_ecef).apply(a, b, z);
+    const Eigen::Vector3d proj = proj_to_ecef(wkt, ecef_wkt, c.p);
+    EXPECT_LT((proj - Eigen::Vector3d(a[0], b[0], z[0])).norm(), kVsProjTol_m) << wkt;
+  }
+  // Datum names from other tools map to frames; the coordinate epoch is ours.
+  EXPECT_EQ(tile_metadata_from_wkt(
+                "GEOGCRS[\"x\",DATUM[\"Geocentric Datum of Australia 2020\",ELLIPSOID[\"GRS 1980\",6378137,298.257222101]],"
+                "CS[ellipsoidal,3],AXIS[\"lat\",north,ANGLEUNIT[\"degree\",0.0174532925199433]],AXIS[\"lon\",east,"
+                "ANGLEUNIT[\"degree\",0.0174532925199433]],AXIS[\"h\",up,LENGTHUNIT[\"metre\",1]]]",
+                "t.las")
+                .frame->to_string(),
+            "GDA2020");
+  try {
+    tile_metadata_from_wkt("PROJCRS[\"broken\",", "t.las");
+    ADD_FAILURE() << "a broken WKT was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("t.las: LAS WKT: PROJ cannot parse it"), std::string::npos) << e.what();
+  }
+  try {
+    tile_metadata_from_wkt(
+        "GEOGCRS[\"WGS 84\",DATUM[\"World Geodetic System 1984\",ELLIPSOID[\"WGS 84\",6378137,298.257223563]],"
+        "CS[ellipsoidal,2],AXIS[\"lat\",north,ANGLEUNIT[\"degree\",0.0174532925199433]],AXIS[\"lon\",east,"
+        "ANGLEUNIT[\"degree\",0.0174532925199433]]]",
+        "t.las");
+    ADD_FAILURE() << "a 2D CRS was accepted for a tile with heights";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("heights (Z) are unlabelled"), std::string::npos) << e.what();
+  }
+}
+
+const char* kHelmert = R"J({"model": "helmert7", "convention": "coordinate_frame",
+  "parameters": {"tx_m": 0.0547, "ty_m": 0.0522, "tz_m": -0.0741, "rx_arcsec": 0.00228, "ry_arcsec": 0.01404,
+                 "rz_arcsec": -0.02168, "ds_ppm": 0.00212}})J";
+
+std::string topocentric(const geodesy::LocalOrigin& o) {
+  return "+proj=topocentric +ellps=GRS80 +lat_0=" + format_shortest(o.point.lat.deg()) +
+         " +lon_0=" + format_shortest(o.point.lon.deg()) + " +h_0=" + format_shortest(o.point.h.m);
+}
+
+// The float32 value of v. Out of line on purpose: GCC 12.2's SLP vectorizer
+// (-O2 and above) was seen to drop the float truncation of
+// `double{float_array[k]}` inside a loop here, keeping the double.
+[[gnu::noinline]] double as_float32(double v) { return static_cast<float>(v); }
+
+TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
+  const auto a = origin(47.464722, 8.549167, 480.0), b = origin(47.2597, 11.3439, 581.0);
+  const ArrayFrame fa{CoordinateKind::enu, geodesy::Ellipsoid::grs80(), a, std::nullopt};
+  const ArrayFrame geo{CoordinateKind::geodetic, geodesy::Ellipsoid::grs80(), std::nullopt, std::nullopt};
+  const TransformFile t = parse_transform_json(kHelmert, "T.json");
+  const std::size_t n = 100000;
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> h(-3000.0, 3000.0), v(-20.0, 60.0);
+  std::vector<Eigen::Vector3d> pts(n);
+  for (auto& p : pts) p = Eigen::Vector3d(h(rng), h(rng), v(rng));
+  const ProjPipeline to_geo("+proj=pipeline +step +inv " + topocentric(a) +
+                            " +step +proj=helmert +x=0.0547 +y=0.0522 +z=-0.0741 +rx=0.00228 +ry=0.01404 +rz=-0.02168 "
+                            "+s=0.00212 +convention=coordinate_frame +step +inv +proj=cart +ellps=GRS80");
+  const fs::path dir = fs::path(::testing::TempDir());
+
+  // CSV: ENU(A) -> Helmert -> geodetic, an id and a class column kept.
+  {
+    std::ostringstream csv;
+    csv << "# a comment\nid,e_m,n_m,u_m,class\n";
+    for (std::size_t i = 0; i < n; ++i) {
+      csv << "P" << i << "," << format_shortest(pts[i].x()) << "," << format_shortest(pts[i].y()) << ","
+          << format_shortest(pts[i].z()) << "," << (i % 7) << "\n";
+    }
+    const fs::path in = dir / "tile.csv";
+    std::ofstream(in) << csv.str();
+    std::stringstream out;
+    const PointChain chain(fa, t, false, std::nullopt, geo);
+    const auto r = apply_csv_tile(in, out, "out.csv", chain, TileApplyOptions{fa, geo, std::nullopt, "", 4096, {}});
+    EXPECT_EQ(r.points, n);
+    std::string line;
+    std::getline(out, line);
+    EXPECT_EQ(line, "# a comment");
+    std::getline(out, line);
+    EXPECT_EQ(line, "id,lat_deg,lon_deg,h_m,class");
+    double worst_deg = 0, worst_h = 0;
+    for (std::size_t i = 0; i < n && std::getline(out, line); ++i) {
+      std::stringstream s(line);
+      std::string id, lat, lon, hh, cls;
+      std::getline(s, id, ',');
+      std::getline(s, lat, ',');
+      std::getline(s, lon, ',');
+      std::getline(s, hh, ',');
+      std::getline(s, cls, ',');
+      ASSERT_EQ(id, "P" + std::to_string(i));
+      ASSERT_EQ(cls, std::to_string(i % 7));
+      const Eigen::Vector3d e = to_geo.forward(pts[i]);
+      worst_deg = std::max({worst_deg, std::abs(std::stod(lat) - testing::proj_degrees(e.y())),
+                            std::abs(std::stod(lon) - testing::proj_degrees(e.x()))});
+      worst_h = std::max(worst_h, std::abs(std::stod(hh) - e.z()));
+    }
+    EXPECT_LT(worst_deg, kDegreeTol);
+    EXPECT_LT(worst_h, kVsProjTol_m);
+  }
+
+  // PLY, binary and ASCII: ENU(A) as float32 offsets and as doubles ->
+  // Helmert -> ENU(B); a colour property and a face element kept.
+  const ArrayFrame fb{CoordinateKind::enu, geodesy::Ellipsoid::grs80(), b, std::nullopt};
+  const ProjPipeline to_b("+proj=pipeline +step +inv " + topocentric(a) +
+                          " +step +proj=helmert +x=0.0547 +y=0.0522 +z=-0.0741 +rx=0.00228 +ry=0.01404 +rz=-0.02168 "
+                          "+s=0.00212 +convention=coordinate_frame +step " + topocentric(b));
+  for (const bool binary : {true, false}) {
+    for (const bool as_float : {true, false}) {
+      SCOPED_TRACE(std::string(binary ? "binary" : "ascii") + (as_float ? " float" : " double"));
+      const std::size_t m = binary ? n : 2000;
+      const char* type = as_float ? "float" : "double";
+      std::ostringstream ply;
+      ply << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\ncomment test\nelement vertex " << m
+          << "\nproperty " << type << " x\nproperty " << type << " y\nproperty " << type << " z\nproperty uchar red\n"
+          << "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+      std::vector<Eigen::Vector3d> used(m);
+      for (std::size_t i = 0; i < m; ++i) {
+        const Eigen::Vector3d p =
+            as_float ? Eigen::Vector3d(as_float32(pts[i].x()), as_float32(pts[i].y()), as_float32(pts[i].z())) : pts[i];
+        const float f[3] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())};
+        used[i] = p;
+        if (binary) {
+          if (as_float) {
+            ply.write(reinterpret_cast<const char*>(f), sizeof f);
+          } else {
+            ply.write(reinterpret_cast<const char*>(p.data()), 24);
+          }
+          const auto red = static_cast<char>(i % 251);
+          ply.write(&red, 1);
+        } else {
+          ply << format_shortest(p.x()) << " " << format_shortest(p.y()) << " " << format_shortest(p.z()) << " "
+              << (i % 251) << "\n";
+        }
+      }
+      const std::string face = binary ? std::string("\x03\x00\x00\x00\x00\x01\x00\x00\x00\x02\x00\x00\x00", 13) : "3 0 1 2\n";
+      ply << face;
+      const fs::path in = dir / "tile.ply";
+      std::ofstream(in, std::ios::binary) << ply.str();
+      std::stringstream out;
+      const PointChain chain(fa, t, false, std::nullopt, fb);
+      const auto r = apply_ply_tile(in, out, "out.ply", chain, TileApplyOptions{fa, fb, std::nullopt, "", 4096, {}});
+      EXPECT_EQ(r.points, m);
+      const std::string text = out.str();
+      const auto body = text.find("end_header\n") + 11;
+      EXPECT_NE(text.find("property double x\nproperty double y\nproperty double z\nproperty uchar red\n"), std::string::npos);
+      EXPECT_EQ(text.substr(text.size() - face.size()), face);
+      std::istringstream s(text.substr(body));
+      double worst = 0;
+      for (std::size_t i = 0; i < m; ++i) {
+        Eigen::Vector3d got;
+        int red = 0;
+        if (binary) {
+          s.read(reinterpret_cast<char*>(got.data()), 24);
+          char c = 0;
+          s.read(&c, 1);
+          red = static_cast<unsigned char>(c);
+        } else {
+          s >> got.x() >> got.y() >> got.z() >> red;
+        }
+        ASSERT_EQ(red, static_cast<int>(i % 251));
+        worst = std::max(worst, (got - to_b.forward(used[i])).norm());
+      }
+      EXPECT_LT(worst, kVsProjTol_m);
+    }
+  }
+  // float32 is refused where it cannot hold the coordinates.
+  std::ofstream(dir / "ecef.ply") << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                     "property float z\nend_header\n4277686 639405 4672438\n";
+  const ArrayFrame ecef{CoordinateKind::ecef, geodesy::Ellipsoid::grs80(), std::nullopt, std::nullopt};
+  std::stringstream out;
+  try {
+    apply_ply_tile(dir / "ecef.ply", out, "o.ply", PointChain(ecef, std::nullopt, false, std::nullopt, ecef),
+                   TileApplyOptions{ecef, ecef, std::nullopt, "", 16, {}});
+    ADD_FAILURE() << "float32 ECEF accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("float32 is accepted only for map-local ENU/NED"), std::string::npos) << e.what();
+  }
+}
+
+TEST(TileFormats, CrossAirportRoundTripClosesToANanometre) {
+  const auto a = origin(47.464722, 8.549167, 480.0), b = origin(47.2597, 11.3439, 581.0);
+  const ArrayFrame fa{CoordinateKind::enu, geodesy::Ellipsoid::grs80(), a, std::nullopt};
+  const ArrayFrame fb{CoordinateKind::enu, geodesy::Ellipsoid::grs80(), b, std::nullopt};
+  const TransformFile t = parse_transform_json(kHelmert, "T.json");
+  const PointChain there(fa, t, false, std::nullopt, fb), back(fb, t, true, std::nullopt, fa);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> h(-5000.0, 5000.0);
+  std::vector<double> x(10000), y(10000), z(10000);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = h(rng), y[i] = h(rng), z[i] = h(rng) / 50;
+  auto x0 = x, y0 = y, z0 = z;
+  there.apply(x, y, z);
+  back.apply(x, y, z);
+  double worst = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    worst = std::max(worst, (Eigen::Vector3d(x[i], y[i], z[i]) - Eigen::Vector3d(x0[i], y0[i], z0[i])).norm());
+  }
+  EXPECT_LT(worst, kCrossAirportTol_m);
+}
+
+TEST(ControlExtentTest, DistanceIsZeroInsideAndGrowsOutside) {
+  const geodesy::LocalOrigin o = origin(47.464722, 8.549167, 480.0);
+  const geodesy::LocalTangentPlane plane(o);
+  std::vector<geodesy::EcefPosition> marks;
+  for (const auto& en : std::vector<std::array<double, 2>>{{-1000, -1000}, {1000, -1000}, {1000, 1000}, {-1000, 1000}, {0, 0}}) {
+    marks.push_back(plane.ecef_from_enu({Eigen::Vector3d(en[0], en[1], 0), o}));
+  }
+  const ControlExtent e = ControlExtent::of(marks);
+  EXPECT_EQ(e.hull_en_m.size(), 4u);  // the centre mark is inside
+  EXPECT_EQ(e.distance_m(plane.ecef_from_enu({Eigen::Vector3d(500, 500, 30), o})), 0.0);
+  EXPECT_NEAR(e.distance_m(plane.ecef_from_enu({Eigen::Vector3d(4000, 0, 0), o})), 3000.0, 2.0);  // tangent plane vs centroid plane
+  EXPECT_NEAR(e.distance_m(plane.ecef_from_enu({Eigen::Vector3d(4000, 5000, 0), o})), 5000.0, 3.0);
+}
+
+}  // namespace
+}  // namespace geoanchor::io
