@@ -3,7 +3,11 @@
 #  1. fit: a 7-parameter transform from the LSZH control marks known in two
 #     frames (fixtures/airport_control.csv, with a planted blunder), printing
 #     the report and writing the transform file;
-#  2. convert: the airport marks go geodetic -> ECEF -> ENU (at the LSZH
+#  2. apply: the fitted transform moves the bundled LiDAR tile
+#     (fixtures/airport_tile.las, ENU at the LSZH reference point in
+#     ITRF2014@2024.5, frame stated by its sidecar) into ETRF2000@2024.5,
+#     writing the new tile, its provenance sidecar and the run summary;
+#  3. convert: the airport marks go geodetic -> ECEF -> ENU (at the LSZH
 #     reference point) -> ECEF -> geodetic, and the round trip is measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,6 +24,14 @@ mkdir -p "$out"
 echo "== fit =="
 "$geoanchor" fit fixtures/airport_control.csv --model helmert7 --convention position_vector \
   -o "$out/lszh_helmert7.json" --overwrite
+echo
+echo "== apply =="
+mkdir -p "$out/tiles"
+"$geoanchor" apply fixtures/airport_tile.las --transform "$out/lszh_helmert7.json" --out-dir "$out/tiles" --overwrite
+echo "the new tile's frame, origin and provenance ($out/tiles/airport_tile.las.geoanchor.json):"
+grep -E '"(frame|transform_sha256|transform_sigma0|sigma_[enu]_m|distance_outside_control_m|points)"' \
+  "$out/tiles/airport_tile.las.geoanchor.json" | sed 's/^ */  /'
+
 echo
 echo "== convert =="
 

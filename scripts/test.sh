@@ -13,6 +13,11 @@ case "${1:-}" in
 esac
 
 bash scripts/setup.sh
+# The independent LAS reader the apply tests compare with (test-only, npm;
+# versions pinned by the committed package-lock.json).
+if [ ! -d tests/las-verify/node_modules/copc ] || [ tests/las-verify/package-lock.json -nt tests/las-verify/node_modules ]; then
+  npm ci --prefix tests/las-verify --no-audit --no-fund --loglevel=error
+fi
 cmake --preset "$preset" >/dev/null
 cmake --build --preset "$preset"
 ctest --preset "$preset" -j "$(nproc)"

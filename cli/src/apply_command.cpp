@@ -417,9 +417,9 @@ TilePlan Planner::plan(const fs::path& input) const {
       (out.coordinates.kind == CoordinateKind::ned || in.coordinates.kind == CoordinateKind::ned)) {
     throw Error(ErrorKind::usage, "E_TILE_KIND", tile + ": LAS tiles are ENU, not NED");
   }
-  out.height_type = out.coordinates.kind == CoordinateKind::geodetic || out.coordinates.kind == CoordinateKind::projected
-                        ? "ellipsoidal"
-                        : "";
+  // ENU/NED heights are along the ellipsoid normal at an origin given by
+  // its ellipsoidal height; only ECEF has no height at all.
+  out.height_type = out.coordinates.kind == CoordinateKind::ecef ? "" : "ellipsoidal";
   out.vertical_datum = out.height_type.empty() ? "" : "ellipsoid " + out.coordinates.ellipsoid.name();
   out.survey_method = in.survey_method;
   out.rtk_fixed_percent = in.rtk_fixed_percent;
@@ -670,7 +670,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   // Flush the tile to learn its size, then the sidecar, then commit both.
   out.stream().flush();
   const auto output_size = static_cast<std::uint64_t>(out.stream().tellp());
-  json prov;
+  nlohmann::ordered_json prov;
   prov["tool"] = "geoanchor " GEOANCHOR_VERSION;
   std::string cmd;
   for (const auto& a : o_.argv) cmd += (cmd.empty() ? "" : " ") + a;
@@ -708,10 +708,8 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   prov["output_size_bytes"] = output_size;
   prov["warnings"] = warnings;
   TileMetadata meta = p.out;
-  meta.horizontal_crs = p.format == io::TileFormat::las ? "the LAS WKT (LASF_Projection 2112)" : "";
-  if (meta.horizontal_crs.empty()) {
-    meta.horizontal_crs = meta.frame->to_string() + " " + io::kind_name(meta.coordinates);
-  }
+  meta.horizontal_crs = meta.frame->to_string() + " " + io::kind_name(meta.coordinates) +
+                        (p.format == io::TileFormat::las ? " (WKT2 in the LAS file's LASF_Projection 2112 record)" : "");
   meta.provenance_json = prov.dump();
   side.stream() << io::to_json_text(meta);
   out.commit();

@@ -66,10 +66,10 @@ geodesy::Ellipsoid ellipsoid(const json& j, std::string_view source) {
   return geodesy::Ellipsoid::custom(a_m, inv_f, n ? text(*n, source, "coordinates.ellipsoid.name") : "custom");
 }
 
-json ellipsoid_json(const geodesy::Ellipsoid& e) {
+nlohmann::ordered_json ellipsoid_json(const geodesy::Ellipsoid& e) {
   if (e == geodesy::Ellipsoid::wgs84()) return "WGS84";
   if (e == geodesy::Ellipsoid::grs80()) return "GRS80";
-  return json{{"name", e.name()}, {"a_m", e.a_m()}, {"rf", e.rf()}};
+  return nlohmann::ordered_json{{"name", e.name()}, {"a_m", e.a_m()}, {"rf", e.rf()}};
 }
 
 }  // namespace
@@ -226,7 +226,7 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
 }
 
 std::string to_json_text(const TileMetadata& m) {
-  json j;
+  nlohmann::ordered_json j;
   j["schema"] = kTileSchema;
   if (m.frame) j["frame"] = m.frame->to_string();
   j["coordinates"] = {{"kind", kind_name(m.coordinates)},
@@ -254,18 +254,18 @@ std::string to_json_text(const TileMetadata& m) {
     }
   }
   if (!m.horizontal_crs.empty()) j["horizontal_crs"] = m.horizontal_crs;
-  json v = json::object();
+  nlohmann::ordered_json v = nlohmann::ordered_json::object();
   if (!m.vertical_datum.empty()) v["datum"] = m.vertical_datum;
   if (!m.height_type.empty()) v["height_type"] = m.height_type;
-  v["geoid_model"] = m.geoid_model ? json(*m.geoid_model) : json(nullptr);
+  v["geoid_model"] = m.geoid_model ? nlohmann::ordered_json(*m.geoid_model) : nlohmann::ordered_json(nullptr);
   j["vertical"] = v;
   if (!m.survey_method.empty() || m.rtk_fixed_percent) {
-    json s = json::object();
+    nlohmann::ordered_json s = nlohmann::ordered_json::object();
     if (!m.survey_method.empty()) s["method"] = m.survey_method;
     if (m.rtk_fixed_percent) s["rtk_fixed_percent"] = *m.rtk_fixed_percent;
     j["survey"] = s;
   }
-  if (!m.provenance_json.empty()) j["provenance"] = json::parse(m.provenance_json);
+  if (!m.provenance_json.empty()) j["provenance"] = nlohmann::ordered_json::parse(m.provenance_json);
   return j.dump(2) + "\n";
 }
 

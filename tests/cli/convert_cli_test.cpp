@@ -20,6 +20,7 @@
 
 #include "geoanchor/geodesy/number_text.hpp"
 #include "proj_reference.hpp"
+#include "cli_support.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor {
@@ -36,65 +37,11 @@ constexpr double kPublishedTol_m = 0.0005;  // GN 7-2 time-dependent example, mi
 
 const std::string kOrigin = "47.464722,8.549167,480";  // LSZH aerodrome reference point, ellipsoidal height
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
+using testing::CliTest;
+using testing::RunResult;
+using testing::slurp;
 
-class ConvertCli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("geoanchor_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
-  }
-
-  fs::path path(const std::string& name) const { return dir_ / name; }
-
-  fs::path write(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name), std::ios::binary) << text;
-    return path(name);
-  }
-
-  static std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-
-  RunResult run(const std::string& args, const std::string& stdin_file = "") const {
-    const fs::path out = path("stdout.txt"), err = path("stderr.txt");
-    std::string cmd = std::string(GEOANCHOR_EXE) + " " + args;
-    if (!stdin_file.empty()) cmd += " < '" + stdin_file + "'";
-    cmd += " > '" + out.string() + "' 2> '" + err.string() + "'";
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    fs::remove(out);
-    fs::remove(err);
-    return r;
-  }
-
-  // Every file in the test folder except the named inputs: outputs and temporaries.
-  std::vector<std::string> leftovers(const std::vector<std::string>& inputs) const {
-    std::vector<std::string> out;
-    for (const auto& e : fs::directory_iterator(dir_)) {
-      const auto name = e.path().filename().string();
-      if (std::find(inputs.begin(), inputs.end(), name) == inputs.end()) out.push_back(name);
-    }
-    return out;
-  }
-
-  fs::path dir_;
-};
+class ConvertCli : public CliTest {};
 
 // A parsed CSV: header and rows of fields, comments dropped.
 struct Table {

@@ -14,6 +14,7 @@
 
 #include "geoanchor/geodesy/number_text.hpp"
 #include "proj_reference.hpp"
+#include "cli_support.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor {
@@ -30,53 +31,11 @@ constexpr double kSiteRotationTol_arcsec = 0.01;  // 0.07 mm over 1.5 km
 constexpr double kSiteScaleTol_ppm = 0.05;        // 0.08 mm over 1.5 km
 constexpr double kSiteInverseTol_m = 1e-8;        // the inverse is exact
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out, err;
-};
+using testing::CliTest;
+using testing::RunResult;
+using testing::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-class FitCli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("geoanchor_fit_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
-  }
-  fs::path path(const std::string& n) const { return dir_ / n; }
-  fs::path write(const std::string& n, const std::string& text) const {
-    std::ofstream(path(n), std::ios::binary) << text;
-    return path(n);
-  }
-  RunResult run(const std::string& args, const std::string& input = "") const {
-    const fs::path out = path("stdout.txt"), err = path("stderr.txt");
-    std::string cmd = args + " > '" + out.string() + "' 2> '" + err.string() + "'";
-    if (!input.empty()) cmd += " < '" + input + "'";
-    const int status = std::system(cmd.c_str());
-    RunResult r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-    fs::remove(out);
-    fs::remove(err);
-    return r;
-  }
-  RunResult geoanchor(const std::string& args) const { return run(std::string(GEOANCHOR_EXE) + " " + args); }
-  std::vector<std::string> files() const {
-    std::vector<std::string> out;
-    for (const auto& e : fs::directory_iterator(dir_)) out.push_back(e.path().filename().string());
-    std::sort(out.begin(), out.end());
-    return out;
-  }
-  fs::path dir_;
-};
+class FitCli : public CliTest {};
 
 std::vector<std::vector<std::string>> csv_rows(const std::string& text, std::vector<std::string>* header) {
   std::vector<std::vector<std::string>> rows;
@@ -114,7 +73,7 @@ std::vector<Eigen::Vector3d> ecef_rows(const std::string& text) {
 const std::string kControl = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv";
 
 TEST_F(FitCli, BundledExampleNamesThePlantedBlunderAndPassesTheGlobalTest) {
-  const RunResult r = geoanchor("fit " + kControl + " --model helmert7 --convention position_vector -o " + path("T.json").string());
+  const RunResult r = run("fit " + kControl + " --model helmert7 --convention position_vector -o " + path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("P17 "), std::string::npos);
   EXPECT_NE(r.out.find("OUTLIER (removed)"), std::string::npos);
@@ -188,7 +147,7 @@ TEST_F(FitCli, ProjPipelineRunByCctReproducesOurTransformedCoordinates) {
   for (const auto& [model, conv] : cases) {
     const char* convention = conv.c_str();
     const fs::path t = path("T_" + model + "_" + conv + ".json");
-    ASSERT_EQ(geoanchor("fit " + kControl + " --model " + model + " --convention " + convention + " -o " + t.string()).exit_code, 0);
+    ASSERT_EQ(run("fit " + kControl + " --model " + model + " --convention " + convention + " -o " + t.string()).exit_code, 0);
     if (model == "molodensky-badekas") {
       EXPECT_NE(json_string_value(slurp(t), "proj_pipeline").find("+proj=molobadekas"), std::string::npos);
       EXPECT_NE(slurp(t).find("\"px_m\""), std::string::npos);
@@ -203,7 +162,7 @@ TEST_F(FitCli, ProjPipelineRunByCctReproducesOurTransformedCoordinates) {
       for (const auto& r : rows) s << r[0] << ',' << r[col(header, "lat_src_deg")] << ',' << r[col(header, "lon_src_deg")] << ','
                                    << r[col(header, "h_src_m")] << '\n';
     }
-    const RunResult ours = geoanchor("convert " + src + " --to ecef --transform " + t.string());
+    const RunResult ours = run("convert " + src + " --to ecef --transform " + t.string());
     ASSERT_EQ(ours.exit_code, 0) << ours.err;
     const auto ours_ecef = ecef_rows(ours.out);
     const ProjPipeline cart("+proj=cart +ellps=WGS84");
@@ -252,11 +211,11 @@ TEST_F(FitCli, FourteenParameterPipelineRunByCctAtThePointsEpochs) {
   }
   write("control.csv", csv.str());
   write("points.csv", pts.str());
-  const RunResult r = geoanchor("fit " + path("control.csv").string() +
+  const RunResult r = run("fit " + path("control.csv").string() +
                                 " --model helmert14 --convention position_vector --reference-epoch 2015 -o " +
                                 path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
-  const RunResult ours = geoanchor("convert " + path("points.csv").string() + " --to ecef --transform " + path("T.json").string());
+  const RunResult ours = run("convert " + path("points.csv").string() + " --to ecef --transform " + path("T.json").string());
   ASSERT_EQ(ours.exit_code, 0) << ours.err;
   const auto ours_ecef = ecef_rows(ours.out);
   const auto proj = cct(json_string_value(slurp(path("T.json")), "proj_pipeline"), xyzt, dir_);
@@ -299,7 +258,7 @@ TEST_F(FitCli, EnuOriginFromMapCoordinatesAndSurveyedMarks) {
         << testing::proj_degrees(geo.x()) << ',' << geo.z() << ",0.001,0.001\n";
   }
   write("map.csv", csv.str());
-  const RunResult r = geoanchor("fit " + path("map.csv").string() + " --model enu-origin --origin " + origin + " -o " +
+  const RunResult r = run("fit " + path("map.csv").string() + " --model enu-origin --origin " + origin + " -o " +
                                 path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const std::string json = slurp(path("T.json"));
@@ -323,7 +282,7 @@ TEST_F(FitCli, EnuOriginFromMapCoordinatesAndSurveyedMarks) {
     xyzt.emplace_back(x(0), x(1), x(2), 2024.0);
   }
   write("nominal.csv", pts.str());
-  const RunResult ours = geoanchor("convert " + path("nominal.csv").string() + " --to ecef --transform " + path("T.json").string());
+  const RunResult ours = run("convert " + path("nominal.csv").string() + " --to ecef --transform " + path("T.json").string());
   ASSERT_EQ(ours.exit_code, 0) << ours.err;
   const auto ours_ecef = ecef_rows(ours.out);
   const auto proj = cct(json_string_value(json, "proj_pipeline"), xyzt, dir_);
@@ -334,7 +293,7 @@ TEST_F(FitCli, EnuOriginFromMapCoordinatesAndSurveyedMarks) {
 }
 
 TEST_F(FitCli, CompareFitsEveryApplicableModelOnTheSamePoints) {
-  const RunResult r = geoanchor("fit " + kControl + " --compare --convention position_vector");
+  const RunResult r = run("fit " + kControl + " --compare --convention position_vector");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const char* model : {"translation3", "helmert6", "helmert7"}) {
     EXPECT_NE(r.out.find(std::string("  ") + model + " "), std::string::npos) << model;
@@ -345,7 +304,7 @@ TEST_F(FitCli, CompareFitsEveryApplicableModelOnTheSamePoints) {
 }
 
 TEST_F(FitCli, TheWgs84EnsembleIsFlaggedAndTheWarningRecorded) {
-  const RunResult r = geoanchor("fit " + kControl + " --model helmert7 --convention position_vector --target-frame WGS84 -o " +
+  const RunResult r = run("fit " + kControl + " --model helmert7 --convention position_vector --target-frame WGS84 -o " +
                                 path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("WGS 84 ensemble"), std::string::npos);
@@ -373,7 +332,7 @@ TEST_F(FitCli, SiteCalibrationFromLocalCoordinatesAndItsPipelineRunByCct) {
   }
   write("site.csv", csv.str());
   const std::string origin = "46.6,7.4,600";  // any origin: only the local numbers matter
-  const RunResult r = geoanchor("fit " + path("site.csv").string() + " --model site-calibration --origin " + origin +
+  const RunResult r = run("fit " + path("site.csv").string() + " --model site-calibration --origin " + origin +
                                 " --tm 46.5,7.5,1,0,0 -o " + path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const std::string json = slurp(path("T.json"));
@@ -394,7 +353,7 @@ TEST_F(FitCli, SiteCalibrationFromLocalCoordinatesAndItsPipelineRunByCct) {
     xyzt.emplace_back(x(0), x(1), x(2), 2024.0);
   }
   write("local.csv", pts.str());
-  const RunResult ours = geoanchor("convert " + path("local.csv").string() + " --to ecef --transform " + path("T.json").string() +
+  const RunResult ours = run("convert " + path("local.csv").string() + " --to ecef --transform " + path("T.json").string() +
                                    " -o " + path("out.csv").string());
   ASSERT_EQ(ours.exit_code, 0) << ours.err;
   const auto ours_ecef = ecef_rows(slurp(path("out.csv")));
@@ -403,7 +362,7 @@ TEST_F(FitCli, SiteCalibrationFromLocalCoordinatesAndItsPipelineRunByCct) {
   for (std::size_t i = 0; i < ours_ecef.size(); ++i) {
     EXPECT_THAT(ours_ecef[i], testing::IsNearVector(proj[i], kCctAgreementTol_m));
   }
-  const RunResult back = geoanchor("convert " + path("out.csv").string() + " --to ecef --inverse --transform " +
+  const RunResult back = run("convert " + path("out.csv").string() + " --to ecef --inverse --transform " +
                                    path("T.json").string());
   ASSERT_EQ(back.exit_code, 0) << back.err;
   const auto back_ecef = ecef_rows(back.out);
@@ -427,7 +386,7 @@ void PrintTo(const Refusal& r, std::ostream* os) { *os << r.name; }
 TEST_P(FitRefusal, SaysWhyAndWritesNothing) {
   const Refusal c = GetParam();
   write("control.csv", c.csv);
-  const RunResult r = geoanchor("fit " + path("control.csv").string() + " " + c.args + " -o " + path("T.json").string());
+  const RunResult r = run("fit " + path("control.csv").string() + " " + c.args + " -o " + path("T.json").string());
   EXPECT_EQ(r.exit_code, c.exit_code) << r.err;
   EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
   EXPECT_EQ(files(), std::vector<std::string>{"control.csv"});

@@ -35,6 +35,15 @@ Eigen::Vector3d ProjPipeline::trans(const Eigen::Vector3d& xyz, double t, int di
 Eigen::Vector3d ProjPipeline::forward(const Eigen::Vector3d& xyz, double t) const { return trans(xyz, t, +1); }
 Eigen::Vector3d ProjPipeline::inverse(const Eigen::Vector3d& xyz, double t) const { return trans(xyz, t, -1); }
 
+bool proj_parses_crs(const std::string& text) {
+  PJ_CONTEXT* ctx = proj_context_create();
+  PJ* crs = proj_create(ctx, text.c_str());
+  const bool ok = crs != nullptr && proj_is_crs(crs) != 0;
+  proj_destroy(crs);
+  proj_context_destroy(ctx);
+  return ok;
+}
+
 double proj_radians(double degrees) { return proj_torad(degrees); }
 double proj_degrees(double radians) { return proj_todeg(radians); }
 

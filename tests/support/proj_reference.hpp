@@ -30,6 +30,9 @@ class ProjPipeline {
   PJconsts* pj_;
 };
 
+// Whether PROJ parses `text` (WKT, PROJJSON, ...) as a coordinate reference system.
+bool proj_parses_crs(const std::string& text);
+
 // Degrees to radians the way PROJ's own tools do (proj_torad).
 double proj_radians(double degrees);
 double proj_degrees(double radians);

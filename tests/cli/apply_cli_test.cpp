@@ -1,0 +1,371 @@
+// `geoanchor apply` end to end: the bundled tile fitted and moved, read back
+// by an independent LAS reader (npm `copc`, tests/las-verify) and compared
+// with PROJ; frame checks, resumable and sharded batches, extrapolation, and
+// every bad-input case checked for its message and for the absence of output.
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <csignal>
+#include <functional>
+#include <set>
+#include <thread>
+
+#include "cli_support.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "las_builder.hpp"
+#include "proj_reference.hpp"
+
+namespace geoanchor {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::CliTest;
+using testing::ProjPipeline;
+using testing::RunResult;
+using testing::slurp;
+
+constexpr double kVsProjTol_m = 1e-6;  // beyond half the LAS quantization step (issue acceptance)
+
+const std::string kFixtures = GEOANCHOR_FIXTURES_DIR;
+const std::string kTile = kFixtures + "/airport_tile.las";
+const std::string kControl = kFixtures + "/airport_control.csv";
+const std::string kLasVerify = std::string(GEOANCHOR_SOURCE_DIR) + "/tests/las-verify";
+
+class ApplyCli : public CliTest {
+ protected:
+  // The bundled control set fitted with a 7-parameter Helmert: T.json.
+  fs::path fit() {
+    const RunResult r = run("fit " + kControl + " --model helmert7 --convention position_vector -o " + path("T.json").string());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return path("T.json");
+  }
+  // A copy of the bundled tile and its sidecar under `name`, the sidecar's
+  // text edited by `edit`.
+  fs::path tile(const std::string& name, const std::function<void(std::string&)>& edit = {}) {
+    fs::create_directories(path(name).parent_path());
+    fs::copy_file(kTile, path(name), fs::copy_options::overwrite_existing);
+    std::string side = slurp(kTile + ".geoanchor.json");
+    if (edit) edit(side);
+    write(name + ".geoanchor.json", side);
+    return path(name);
+  }
+  // What the independent reader sees in a LAS file.
+  json las_verify(const fs::path& las) {
+    if (!fs::exists(kLasVerify + "/node_modules/copc")) {
+      ADD_FAILURE() << "the independent LAS reader is not installed: run npm ci --prefix " << kLasVerify
+                    << " (scripts/test.sh does)";
+      return json();
+    }
+    const RunResult r = shell("node " + kLasVerify + "/verify.mjs '" + las.string() + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return json::parse(r.out);
+  }
+  fs::path out_dir(const std::string& name = "out") {
+    fs::create_directories(path(name));
+    return path(name);
+  }
+  static void replace(std::string& s, const std::string& from, const std::string& to) {
+    const auto at = s.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    s.replace(at, from.size(), to);
+  }
+};
+
+std::string g17(double v) { return format_shortest(v); }
+
+TEST_F(ApplyCli, BundledTileIsMovedAsProjWouldAndReadsBackIndependently) {
+  const fs::path t = fit();
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + kTile + " --transform " + t.string() + " --out-dir " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fs::path las = out / "airport_tile.las";
+
+  // The sidecar names the new frame, the transform's hash and its σ0.
+  const json side = json::parse(slurp(out / "airport_tile.las.geoanchor.json"));
+  const json tf = json::parse(slurp(t));
+  EXPECT_EQ(side["frame"], "ETRF2000@2024.5");
+  EXPECT_EQ(side["coordinates"]["kind"], "enu");
+  EXPECT_EQ(side["enu_origin"]["lat_deg"], 47.464722);
+  const RunResult sha = shell("sha256sum '" + t.string() + "'");
+  EXPECT_EQ(side["provenance"]["transform_sha256"], sha.out.substr(0, 64));
+  EXPECT_EQ(side["provenance"]["transform_sigma0"], tf["statistics"]["sigma0"]);
+  const RunResult in_sha = shell("sha256sum '" + kTile + "'");
+  EXPECT_EQ(side["provenance"]["input_sha256"], in_sha.out.substr(0, 64));
+  EXPECT_GT(side["provenance"]["propagated_uncertainty"]["sigma_e_m"].get<double>(), 0.0);
+  EXPECT_EQ(side["provenance"]["extrapolation"]["distance_outside_control_m"], 0.0);
+
+  // The independent reader: same count and attributes, the WKT names datum and epoch.
+  const json in = las_verify(kTile), got = las_verify(las);
+  ASSERT_FALSE(got.is_null());
+  EXPECT_EQ(got["header"]["pointCount"], 2000);
+  EXPECT_EQ(got["header"]["pointDataRecordFormat"], 6);
+  EXPECT_EQ(got["header"]["globalEncoding"].get<int>() & 16, 16);
+  EXPECT_EQ(got["dimensions"], in["dimensions"]);
+  const std::string wkt = got["wkt"];
+  EXPECT_NE(wkt.find("ETRF2000@2024.5"), std::string::npos);
+  EXPECT_NE(wkt.find("European Terrestrial Reference Frame 2000"), std::string::npos);
+  EXPECT_TRUE(testing::proj_parses_crs(wkt)) << wkt;
+
+  // Coordinates against PROJ, built here from the file's parameters.
+  const json& p = tf["parameters"];
+  const std::string topo = "+proj=topocentric +ellps=GRS80 +lat_0=47.464722 +lon_0=8.549167 +h_0=480";
+  const ProjPipeline proj("+proj=pipeline +step +inv " + topo + " +step +proj=helmert +x=" + g17(p["tx_m"]) +
+                          " +y=" + g17(p["ty_m"]) + " +z=" + g17(p["tz_m"]) + " +rx=" + g17(p["rx_arcsec"]) +
+                          " +ry=" + g17(p["ry_arcsec"]) + " +rz=" + g17(p["rz_arcsec"]) + " +s=" + g17(p["ds_ppm"]) +
+                          " +convention=position_vector +step " + topo);
+  const double half_step = 0.5 * got["header"]["scale"][0].get<double>();
+  double worst = 0;
+  ASSERT_EQ(got["points"].size(), in["points"].size());
+  for (std::size_t i = 0; i < in["points"].size(); ++i) {
+    const auto& a = in["points"][i];
+    const auto& b = got["points"][i];
+    const Eigen::Vector3d e = proj.forward(Eigen::Vector3d(a[0], a[1], a[2]));
+    for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(b[static_cast<std::size_t>(k)].get<double>() - e(k)));
+    for (std::size_t k = 3; k < a.size(); ++k) ASSERT_EQ(a[k], b[k]) << "point " << i << " " << in["dimensions"][k];
+  }
+  EXPECT_LE(worst, half_step + kVsProjTol_m);
+}
+
+TEST_F(ApplyCli, RefusesATileInAnotherFrameThanTheTransformsSourceAndNamesBoth) {
+  const fs::path t = fit();
+  const fs::path in = tile("in/tile.las", [](std::string& s) { replace(s, "ITRF2014@2024.5", "ITRF2008@2024.5"); });
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + in.string() + " --transform " + t.string() + " --out-dir " + out.string());
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_NE(r.err.find("error[E_FRAME_MISMATCH]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("ITRF2008@2024.5"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("ITRF2014@2024.5"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "tile.las"));
+  EXPECT_FALSE(fs::exists(out / "tile.las.geoanchor.json"));
+  // Another epoch of the same realization is another frame for a static transform.
+  const fs::path in2 = tile("in2/tile.las", [](std::string& s) { replace(s, "ITRF2014@2024.5", "ITRF2014@2020.0"); });
+  const RunResult r2 = run("apply " + in2.string() + " --transform " + t.string() + " --out-dir " + out.string());
+  EXPECT_EQ(r2.exit_code, 3);
+  EXPECT_NE(r2.err.find("coordinate epochs differ"), std::string::npos) << r2.err;
+}
+
+TEST_F(ApplyCli, AnUnknownFrameOrAFlagThatContradictsTheSidecarIsAnError) {
+  const fs::path out = out_dir();
+  fs::create_directories(path("bare"));
+  fs::copy_file(kTile, path("bare/tile.las"));
+  const RunResult r = run("apply " + path("bare/tile.las").string() + " --out-dir " + out.string());
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_NE(r.err.find("the tile's frame is unknown"), std::string::npos) << r.err;
+  const fs::path in = tile("in/tile.las");
+  const RunResult f = run("apply " + in.string() + " --from-frame ITRF2020@2024.5 --out-dir " + out.string());
+  EXPECT_EQ(f.exit_code, 2);
+  EXPECT_NE(f.err.find("--from-frame ITRF2020@2024.5 contradicts the sidecar"), std::string::npos) << f.err;
+  const RunResult o = run("apply " + in.string() + " --from-origin 47.46,8.55,480 --out-dir " + out.string());
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("--from-origin 47.46,8.55,480 contradicts"), std::string::npos) << o.err;
+  // The same values are no contradiction; flags alone describe a bare tile.
+  const RunResult same = run("apply " + in.string() + " --from-frame ITRF2014@2024.5 --to ecef --out-dir " + out.string());
+  EXPECT_EQ(same.exit_code, 0) << same.err;
+  const RunResult flags = run("apply " + path("bare/tile.las").string() +
+                              " --from-frame ITRF2014@2024.5 --from-origin 47.464722,8.549167,480 --ellipsoid GRS80 --to ecef "
+                              "--overwrite --out-dir " + out.string());
+  EXPECT_EQ(flags.exit_code, 0) << flags.err;
+  EXPECT_EQ(json::parse(slurp(out / "tile.las.geoanchor.json"))["provenance"]["input_frame_from"], "command line");
+}
+
+TEST_F(ApplyCli, ARerunSkipsUpToDateOutputsButNeverOverwritesOthersWithoutTheFlag) {
+  const fs::path t = fit();
+  const fs::path out = out_dir();
+  const std::string cmd = "apply " + kTile + " --transform " + t.string() + " --out-dir " + out.string();
+  ASSERT_EQ(run(cmd).exit_code, 0);
+  const std::string first = slurp(out / "airport_tile.las");
+  const RunResult again = run(cmd + " --json");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  const json summary = json::parse(again.out);
+  EXPECT_EQ(summary["schema"], "geoanchor.apply-summary/1");
+  EXPECT_EQ(summary["tiles_skipped"], 1);
+  EXPECT_EQ(summary["tiles"][0]["status"], "skipped");
+  // Another request over the same output: refused, the output untouched.
+  const RunResult other = run(cmd + " --resolution 0.01");
+  EXPECT_EQ(other.exit_code, 5);
+  EXPECT_NE(other.err.find("output already exists; pass --overwrite"), std::string::npos) << other.err;
+  EXPECT_EQ(slurp(out / "airport_tile.las"), first);
+  const RunResult forced = run(cmd + " --resolution 0.01 --overwrite");
+  EXPECT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_EQ(json::parse(slurp(out / "airport_tile.las.geoanchor.json"))["provenance"]["las"]["scale"][0], 0.01);
+}
+
+TEST_F(ApplyCli, ShardsPartitionTheManifestAndParallelJobsWriteTheSameBytes) {
+  const fs::path t = fit();
+  std::string manifest = "# five tiles\n";
+  for (int i = 0; i < 5; ++i) {
+    tile("tiles/t" + std::to_string(i) + ".las");
+    manifest += "tiles/t" + std::to_string(i) + ".las\n";
+  }
+  write("tiles.txt", manifest);
+  std::set<std::string> seen;
+  for (int shard = 0; shard < 2; ++shard) {
+    const fs::path out = out_dir("shard" + std::to_string(shard));
+    const RunResult r = run("apply " + path("tiles.txt").string() + " --transform " + t.string() + " --shard " +
+                            std::to_string(shard) + "/2 --quiet --out-dir " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    for (const auto& f : files(out)) {
+      if (f.ends_with(".las")) {
+        EXPECT_TRUE(seen.insert(f).second) << f << " in two shards";
+      }
+    }
+    EXPECT_TRUE(fs::exists(out / ("geoanchor-apply-summary.shard-" + std::to_string(shard) + "-of-2.json")));
+  }
+  EXPECT_EQ(seen.size(), 5u);
+  const fs::path all = out_dir("all");
+  const RunResult j = run("apply " + path("tiles").string() + " --transform " + t.string() + " --jobs 3 --quiet --out-dir " +
+                          all.string());
+  ASSERT_EQ(j.exit_code, 0) << j.err;
+  for (const auto& name : seen) {
+    const fs::path a = fs::exists(path("shard0") / name) ? path("shard0") / name : path("shard1") / name;
+    EXPECT_EQ(slurp(a), slurp(all / name)) << name;
+  }
+  const RunResult bad = run("apply " + path("tiles.txt").string() + " --shard 2/2 --out-dir " + all.string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("0-based"), std::string::npos) << bad.err;
+}
+
+TEST_F(ApplyCli, ATileFarOutsideTheControlNetworkIsRefusedAndANearOneWarned) {
+  fit();
+  // A small ENU tile 60 km east of the reference point.
+  testing::LasBuild b;
+  b.xyz = {{60000000, 0, 0}, {60100000, 100000, 5000}};
+  fs::create_directories(path("far"));
+  testing::write_bytes(path("far/tile.las"), testing::build_las(b));
+  write("far/tile.las.geoanchor.json", slurp(kTile + ".geoanchor.json"));
+  const fs::path out = out_dir();
+  const std::string cmd = "apply " + path("far/tile.las").string() + " --transform " + path("T.json").string() + " --out-dir " + out.string();
+  const RunResult r = run(cmd);
+  EXPECT_EQ(r.exit_code, 4);
+  EXPECT_NE(r.err.find("error[E_EXTRAPOLATION]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("limit --max-extrapolation 10000 m"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "tile.las"));
+  const RunResult allowed = run(cmd + " --max-extrapolation 100000");
+  EXPECT_EQ(allowed.exit_code, 0) << allowed.err;
+  EXPECT_NE(allowed.err.find("outside the control network: the transform is extrapolated"), std::string::npos) << allowed.err;
+  const json side = json::parse(slurp(out / "tile.las.geoanchor.json"));
+  const double d = side["provenance"]["extrapolation"]["distance_outside_control_m"];
+  EXPECT_GT(d, 50000.0);
+  EXPECT_LT(d, 62000.0);
+  EXPECT_EQ(side["provenance"]["warnings"].size(), 1u);
+}
+
+struct BadTile {
+  const char* name;
+  const char* file;  // tile name in the test folder
+  std::function<void(const fs::path&)> make;
+  const char* message;
+};
+
+class ApplyBadInput : public ApplyCli, public ::testing::WithParamInterface<BadTile> {};
+
+std::vector<std::uint8_t> fixture_bytes() {
+  const std::string s = slurp(kTile);
+  return std::vector<std::uint8_t>(s.begin(), s.end());
+}
+
+void with_sidecar(const fs::path& p) {
+  std::ofstream(p.string() + ".geoanchor.json") << slurp(kTile + ".geoanchor.json");
+}
+
+TEST_P(ApplyBadInput, NamesTheFileAndWhereAndLeavesNoOutput) {
+  const BadTile& c = GetParam();
+  fs::create_directories(path("in"));
+  const fs::path in = path(std::string("in/") + c.file);
+  c.make(in);
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + in.string() + " --to ecef --out-dir " + out.string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find(in.string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+  for (const auto& f : files(out)) EXPECT_EQ(f.rfind("geoanchor-apply-summary", 0), 0u) << "left behind: " << f;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, ApplyBadInput,
+    ::testing::Values(
+        BadTile{"truncated", "t.las", [](const fs::path& p) {
+                  auto v = fixture_bytes();
+                  v.resize(v.size() - 45);
+                  testing::write_bytes(p, v);
+                  with_sidecar(p);
+                }, "byte 60330: truncated point data"},
+        BadTile{"count_vs_size", "t.las", [](const fs::path& p) {
+                  auto v = fixture_bytes();
+                  v.insert(v.end(), 30, 0);
+                  testing::write_bytes(p, v);
+                  with_sidecar(p);
+                }, "disagrees with the file size"},
+        BadTile{"unknown_format", "t.las", [](const fs::path& p) {
+                  auto v = fixture_bytes();
+                  v[104] = 11;
+                  testing::write_bytes(p, v);
+                  with_sidecar(p);
+                }, "byte 104: point data record format 11 is unknown"},
+        BadTile{"vlr_past_header", "t.las", [](const fs::path& p) {
+                  auto v = fixture_bytes();
+                  v[100] = 1;  // one VLR announced, none there
+                  testing::write_bytes(p, v);
+                  with_sidecar(p);
+                }, "byte 375: VLR 1 of 1 runs past the start of the point data"},
+        BadTile{"wkt_proj_cannot_parse", "t.las", [](const fs::path& p) {
+                  testing::LasBuild b;
+                  b.xyz = {{0, 0, 0}};
+                  const std::string w = "PROJCRS[\"broken\",BASEGEOGCRS[";
+                  b.vlrs.push_back({"LASF_Projection", 2112, "", std::vector<std::uint8_t>(w.begin(), w.end())});
+                  testing::write_bytes(p, testing::build_las(b));
+                }, "LAS WKT: PROJ cannot parse it"},
+        BadTile{"csv_nan", "t.csv", [](const fs::path& p) {
+                  std::ofstream(p) << "id,e_m,n_m,u_m\nA,1,2,3\nB,nan,2,3\n";
+                  with_sidecar(p);
+                }, ":3: "},
+        BadTile{"csv_text", "t.csv", [](const fs::path& p) {
+                  std::ofstream(p) << "id,e_m,n_m,u_m\nA,1,2,3\nB,1,two,3\n";
+                  with_sidecar(p);
+                }, ":3: "},
+        BadTile{"ply_truncated", "t.ply", [](const fs::path& p) {
+                  std::ofstream(p) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                                      "property double z\nend_header\n1 2 3\n4 5 6\n";
+                  with_sidecar(p);
+                }, ":10: truncated: 3 vertices expected, 2 found"}),
+    [](const ::testing::TestParamInfo<BadTile>& p) { return std::string(p.param.name); });
+
+TEST_F(ApplyCli, InterruptedMidTileLeavesNoPartialFileAtTheOutputPath) {
+  // A CSV tile big enough that apply is still writing it when SIGINT comes.
+  {
+    std::ofstream big(path("big.csv"));
+    big << "id,e_m,n_m,u_m\n";
+    for (int i = 0; i < 1500000; ++i) big << i << "," << (i % 1000) * 0.37 << "," << (i / 1000) * 0.41 << ",1.5\n";
+  }
+  write("big.csv.geoanchor.json", slurp(kTile + ".geoanchor.json"));
+  const fs::path out = out_dir();
+  const std::string exe = GEOANCHOR_EXE;
+  std::vector<std::string> args = {exe, "apply", path("big.csv").string(), "--to", "geodetic", "--quiet", "--out-dir", out.string()};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  ASSERT_EQ(::posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv.data(), environ), 0);
+  bool temporary_seen = false;
+  for (int i = 0; i < 1000 && !temporary_seen; ++i) {  // up to 10 s
+    for (const auto& f : files(out)) temporary_seen |= f.rfind(".big.csv.tmp-", 0) == 0;
+    if (!temporary_seen) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_TRUE(temporary_seen) << "apply never opened its temporary output";
+  ASSERT_EQ(::kill(pid, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << "status " << status;
+  EXPECT_EQ(files(out), std::vector<std::string>{}) << "left behind";
+}
+
+}  // namespace
+}  // namespace geoanchor

@@ -1,0 +1,92 @@
+#pragma once
+// Running the real geoanchor executable in tests: a fresh folder per test
+// (kept when the test fails, for a look), commands with their exit code,
+// standard output and standard error, and what files a run left behind.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace geoanchor::testing {
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::path(::testing::TempDir()) /
+           ("geoanchor_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_suite()->name()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) std::filesystem::remove_all(dir_);
+  }
+
+  std::filesystem::path path(const std::string& name) const { return dir_ / name; }
+
+  std::filesystem::path write(const std::string& name, const std::string& text) const {
+    std::filesystem::create_directories(path(name).parent_path());
+    std::ofstream(path(name), std::ios::binary) << text;
+    return path(name);
+  }
+
+  // A shell command line; `stdin_file` is redirected to its input.
+  RunResult shell(const std::string& command, const std::string& stdin_file = "") const {
+    const auto out = path("stdout.txt"), err = path("stderr.txt");
+    std::string cmd = command;
+    if (!stdin_file.empty()) cmd += " < '" + stdin_file + "'";
+    cmd += " > '" + out.string() + "' 2> '" + err.string() + "'";
+    const int status = std::system(cmd.c_str());
+    RunResult r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+    std::filesystem::remove(out);
+    std::filesystem::remove(err);
+    return r;
+  }
+
+  // geoanchor with `args`.
+  RunResult run(const std::string& args, const std::string& stdin_file = "") const {
+    return shell(std::string(GEOANCHOR_EXE) + " " + args, stdin_file);
+  }
+
+  // The names in `folder` (default: the test's folder), sorted.
+  std::vector<std::string> files(const std::filesystem::path& folder = {}) const {
+    std::vector<std::string> out;
+    for (const auto& e : std::filesystem::directory_iterator(folder.empty() ? dir_ : folder)) {
+      out.push_back(e.path().filename().string());
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+
+  // Every file in the test folder except the named inputs: outputs and temporaries.
+  std::vector<std::string> leftovers(const std::vector<std::string>& inputs) const {
+    std::vector<std::string> out;
+    for (const auto& name : files()) {
+      if (std::find(inputs.begin(), inputs.end(), name) == inputs.end()) out.push_back(name);
+    }
+    return out;
+  }
+
+  std::filesystem::path dir_;
+};
+
+}  // namespace geoanchor::testing
