@@ -1,6 +1,7 @@
 #include "geoanchor/io/point_chain.hpp"
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geocentric_batch.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -55,13 +56,17 @@ PointChain::PointChain(const ArrayFrame& from, const std::optional<TransformFile
   // Fuse when every step is affine.
   const auto in = affine_ecef_from(from_);
   const auto out = affine_ecef_from(to_);
-  if (!in || !out || (transform_ && transform_->site_calibration)) return;
+  if (!in || (transform_ && transform_->site_calibration)) return;
   AffineMap middle = AffineMap::identity();
   if (transform_) {
     const AffineMap forward = transform_->target_from_source(epoch_, "transform");
     middle = inverse_ ? forward.inverse() : forward;
   }
-  fused_ = geodesy::compose(out->inverse(), geodesy::compose(middle, *in));
+  if (out) {
+    fused_ = geodesy::compose(out->inverse(), geodesy::compose(middle, *in));
+  } else {
+    to_output_ecef_ = geodesy::compose(middle, *in);
+  }
 }
 
 geodesy::EcefPosition PointChain::to_ecef(double a, double b, double c) const {
@@ -106,18 +111,39 @@ void PointChain::from_ecef(const geodesy::EcefPosition& x, double& a, double& b,
   }
 }
 
+namespace {
+
+// One affine map over arrays, in place: a plain loop (Eigen's Affine ×
+// Matrix3Xd goes through GEMM and a temporary, about 10× slower).
+void apply_affine(const geodesy::AffineMap& m, std::span<double> a, std::span<double> b, std::span<double> c) {
+  const std::size_t n = std::min({a.size(), b.size(), c.size()});
+  const Eigen::Matrix3d& l = m.linear();
+  const Eigen::Vector3d& t = m.translation_m();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = a[i], y = b[i], z = c[i];
+    a[i] = l(0, 0) * x + l(0, 1) * y + l(0, 2) * z + t(0);
+    b[i] = l(1, 0) * x + l(1, 1) * y + l(1, 2) * z + t(1);
+    c[i] = l(2, 0) * x + l(2, 1) * y + l(2, 2) * z + t(2);
+  }
+}
+
+}  // namespace
+
 void PointChain::apply(std::span<double> a, std::span<double> b, std::span<double> c) const {
   const std::size_t n = std::min({a.size(), b.size(), c.size()});
   if (fused_) {
-    // One affine map: a plain loop over the coordinates (Eigen's Affine ×
-    // Matrix3Xd goes through GEMM and a temporary, about 10× slower).
-    const Eigen::Matrix3d& l = fused_->linear();
-    const Eigen::Vector3d& t = fused_->translation_m();
-    for (std::size_t i = 0; i < n; ++i) {
-      const double x = a[i], y = b[i], z = c[i];
-      a[i] = l(0, 0) * x + l(0, 1) * y + l(0, 2) * z + t(0);
-      b[i] = l(1, 0) * x + l(1, 1) * y + l(1, 2) * z + t(1);
-      c[i] = l(2, 0) * x + l(2, 1) * y + l(2, 2) * z + t(2);
+    apply_affine(*fused_, a.first(n), b.first(n), c.first(n));
+    return;
+  }
+  if (to_output_ecef_) {
+    apply_affine(*to_output_ecef_, a.first(n), b.first(n), c.first(n));
+    geodesy::geodetic_from_ecef_batch(to_.ellipsoid, a.first(n), b.first(n), c.first(n));
+    if (to_.kind == CoordinateKind::projected) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto q = to_tm_->forward({geodesy::Angle::degrees(a[i]), geodesy::Angle::degrees(b[i]),
+                                        geodesy::EllipsoidalHeight{c[i]}});
+        a[i] = q.easting_m, b[i] = q.northing_m, c[i] = q.h.m;
+      }
     }
     return;
   }

@@ -5,8 +5,10 @@
 // When every step is affine — ECEF, ENU and NED at fixed origins, a Helmert
 // or enu-origin transform at a fixed epoch — the chain is composed once, in
 // long double, into one float64 affine map and applied with a plain loop.
-// Geodetic and projected steps, site calibrations and per-point epochs run
-// point by point through the same code `convert` uses.
+// When only the output is geodetic or projected, the affine part is fused
+// and ECEF -> geodetic runs over whole arrays (geodesy/geocentric_batch.hpp).
+// Other geodetic and projected steps and site calibrations run point by
+// point through the same code `convert` uses.
 
 #include <optional>
 #include <span>
@@ -50,6 +52,9 @@ class PointChain {
   bool inverse_ = false;
   std::optional<geodesy::DecimalYear> epoch_;
   std::optional<geodesy::AffineMap> fused_;
+  // When only the output step is not affine (geodetic, projected): the
+  // affine part up to the output ECEF, then the array ECEF -> geodetic.
+  std::optional<geodesy::AffineMap> to_output_ecef_;
   geodesy::GeocentricConverter from_geocentric_, to_geocentric_;
   std::optional<geodesy::LocalTangentPlane> from_plane_, to_plane_;
   std::optional<geodesy::TransverseMercator> from_tm_, to_tm_;
