@@ -30,9 +30,16 @@ void geodetic_from_ecef_batch(const Ellipsoid& e, std::span<double> x, std::span
     double* xs = x.data() + start;
     double* ys = y.data() + start;
     double* zs = z.data() + start;
-    // Points the kernel must not see (fast-math assumes finite input).
-    std::size_t k = 0;
+    // Points the kernel must not see (fast-math assumes finite input): a
+    // branch-free check of the whole block first, the point by point search
+    // only when it fails.
+    int all_inside = 1;
     for (std::size_t i = 0; i < m; ++i) {
+      const double r2 = xs[i] * xs[i] + ys[i] * ys[i] + zs[i] * zs[i];
+      all_inside &= static_cast<int>(r2 >= r2_min) & static_cast<int>(r2 <= r2_max);  // false for NaN
+    }
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < m && !all_inside; ++i) {
       const double r2 = xs[i] * xs[i] + ys[i] * ys[i] + zs[i] * zs[i];
       if (!(r2 >= r2_min && r2 <= r2_max)) {  // also false for NaN
         outside[k] = i;

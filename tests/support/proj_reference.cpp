@@ -2,12 +2,16 @@
 
 #include <proj.h>
 
+#include <gtest/gtest.h>
+
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
 namespace geoanchor::testing {
 
-ProjPipeline::ProjPipeline(const std::string& definition) : ctx_(proj_context_create()), pj_(nullptr) {
+ProjPipeline::ProjPipeline(const std::string& definition)
+    : definition_(definition), ctx_(proj_context_create()), pj_(nullptr) {
   pj_ = proj_create(ctx_, definition.c_str());
   if (!pj_) {
     const std::string why = proj_context_errno_string(ctx_, proj_context_errno(ctx_));
@@ -28,6 +32,13 @@ Eigen::Vector3d ProjPipeline::trans(const Eigen::Vector3d& xyz, double t, int di
   if (proj_errno(pj_) != 0 || r.xyzt.x == HUGE_VAL) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     return Eigen::Vector3d(nan, nan, nan);
+  }
+  if (xyz.allFinite() && !(std::isfinite(r.xyzt.x) && std::isfinite(r.xyzt.y) && std::isfinite(r.xyzt.z))) {
+    // A reference that silently returns NaN would let a comparison such as
+    // std::max(worst, |ours - NaN|) pass; PROJ 9.1.1 was seen to do so for
+    // a whole PJ now and then (valgrind: uninitialised reads in proj_trans).
+    ADD_FAILURE() << "PROJ returned NaN without an error for finite input (" << xyz.transpose() << ") through '"
+                  << definition_ << "'";
   }
   return Eigen::Vector3d(r.xyzt.x, r.xyzt.y, r.xyzt.z);
 }

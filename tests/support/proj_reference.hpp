@@ -20,12 +20,14 @@ class ProjPipeline {
   ProjPipeline& operator=(const ProjPipeline&) = delete;
 
   // Forward and inverse of (x, y, z) at time t (decimal year; ignored by
-  // operations that are not time-dependent). NaN if PROJ reports an error.
+  // operations that are not time-dependent). NaN if PROJ reports an error;
+  // a NaN that PROJ does not report as an error fails the current test.
   Eigen::Vector3d forward(const Eigen::Vector3d& xyz, double t = 0.0) const;
   Eigen::Vector3d inverse(const Eigen::Vector3d& xyz, double t = 0.0) const;
 
  private:
   Eigen::Vector3d trans(const Eigen::Vector3d& xyz, double t, int direction) const;
+  std::string definition_;
   pj_ctx* ctx_;
   PJconsts* pj_;
 };
