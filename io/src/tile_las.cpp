@@ -86,7 +86,8 @@ class LasTile {
   const TileApplyOptions& o_;
   std::vector<std::uint8_t> buffer_;
   std::vector<double> x_, y_, z_;
-  Bounds in_bounds_;
+  std::vector<std::int32_t> q_;
+  std::array<std::int32_t, 3> in_qmin_{INT32_MAX, INT32_MAX, INT32_MAX}, in_qmax_{INT32_MIN, INT32_MIN, INT32_MIN};
 };
 
 template <class Sink>
@@ -102,18 +103,29 @@ void LasTile::pass(Sink&& sink) {
   z_.resize(o_.chunk_points);
   while (const std::size_t n = reader_.read_records(buffer_, o_.chunk_points)) {
     const std::uint8_t* p = buffer_.data();
+    double* xs_in = x_.data();
+    double* ys_in = y_.data();
+    double* zs_in = z_.data();
+    const double sx = h.scale[0], sy = h.scale[1], sz = h.scale[2];
+    const double ox = h.offset[0], oy = h.offset[1], oz = h.offset[2];
+    std::int32_t lo0 = in_qmin_[0], lo1 = in_qmin_[1], lo2 = in_qmin_[2];
+    std::int32_t hi0 = in_qmax_[0], hi1 = in_qmax_[1], hi2 = in_qmax_[2];
     for (std::size_t i = 0; i < n; ++i, p += len) {
       std::int32_t q[3];
       std::memcpy(q, p, sizeof q);
-      x_[i] = q[0] * h.scale[0] + h.offset[0];
-      y_[i] = q[1] * h.scale[1] + h.offset[1];
-      z_[i] = q[2] * h.scale[2] + h.offset[2];
+      lo0 = std::min(lo0, q[0]), hi0 = std::max(hi0, q[0]);
+      lo1 = std::min(lo1, q[1]), hi1 = std::max(hi1, q[1]);
+      lo2 = std::min(lo2, q[2]), hi2 = std::max(hi2, q[2]);
+      xs_in[i] = q[0] * sx + ox;
+      ys_in[i] = q[1] * sy + oy;
+      zs_in[i] = q[2] * sz + oz;
     }
+    in_qmin_ = {lo0, lo1, lo2};
+    in_qmax_ = {hi0, hi1, hi2};
     // Chain order: (lat, lon, h) for geodetic, (X, Y, Z) otherwise.
     std::span<double> a(geo_in ? y_.data() : x_.data(), n);
     std::span<double> b(geo_in ? x_.data() : y_.data(), n);
     std::span<double> c(z_.data(), n);
-    in_bounds_.add(a, b, c);
     chain_.apply(a, b, c);
     // The chain wrote the output in its order into the same arrays.
     std::span<double> xs = geo_out ? b : a;
@@ -130,41 +142,63 @@ void LasTile::pass(Sink&& sink) {
   }
 }
 
+// Round-to-nearest by the float64 magic number (exact for |t| < 2^51): a
+// branch-free rounding that vectorises, where lround is an out-of-line call.
+constexpr double kRoundMagic = 6755399441055744.0;  // 1.5 * 2^52
+
+// q[i] = round((v[i] - off) * inv) as int32, widening [lo, hi]; false when
+// a value does not fit int32 (that q[i] is then meaningless). Cloned for
+// AVX2, where signed 32-bit min/max vectorise (baseline SSE2 has no pminsd).
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+bool quantize(const double* v, std::int32_t* q, std::size_t n, double off, double inv, std::int32_t& lo_io,
+              std::int32_t& hi_io) {
+  std::int32_t lo = lo_io, hi = hi_io;
+  int ok = 1;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = (v[i] - off) * inv;
+    const int inside = static_cast<int>(t > kInt32Min - 0.5) & static_cast<int>(t < kInt32Max + 0.5);
+    ok &= inside;
+    // Replaced only so that the conversion is defined; a value out of range
+    // has cleared `ok` and is never written. (A select, unlike std::min/max
+    // on doubles, lets GCC vectorise the loop.)
+    const double tc = inside ? t : 0.0;
+    const auto qi = static_cast<std::int32_t>((tc + kRoundMagic) - kRoundMagic);
+    q[i] = qi;
+    lo = std::min(lo, qi);
+    hi = std::max(hi, qi);
+  }
+  lo_io = lo;
+  hi_io = hi;
+  return ok != 0;
+}
+
 void LasTile::write_pass(LasWriter& writer, const std::array<double, 3>& scale, const std::array<double, 3>& offset,
                          TileApplyResult& r) {
   const std::size_t len = reader_.header().record_length;
-  const double inv[3] = {1.0 / scale[0], 1.0 / scale[1], 1.0 / scale[2]};
-  std::array<std::int64_t, 3> qmin{INT64_MAX, INT64_MAX, INT64_MAX}, qmax{INT64_MIN, INT64_MIN, INT64_MIN};
+  std::array<std::int32_t, 3> qmin{INT32_MAX, INT32_MAX, INT32_MAX}, qmax{INT32_MIN, INT32_MIN, INT32_MIN};
+  q_.resize(3 * o_.chunk_points);
   pass([&](std::span<double> xs, std::span<double> ys, std::span<double> zs, std::size_t n, std::uint64_t done) {
-    std::uint8_t* p = buffer_.data();
     const std::span<double> axes[3] = {xs, ys, zs};
-    for (int k = 0; k < 3; ++k) {
-      const auto ku = static_cast<std::size_t>(k);
+    for (std::size_t k = 0; k < 3; ++k) {
       const double* v = axes[k].data();
-      std::int64_t lo = qmin[ku], hi = qmax[ku];
-      bool bad = false;
-      for (std::size_t i = 0; i < n; ++i) {
-        const double t = (v[i] - offset[ku]) * inv[ku];
-        bad |= !(t > kInt32Min - 0.5 && t < kInt32Max + 0.5);
-        // Round half away from zero with a plain conversion (lround is an
-        // out-of-line call, about 2x slower here).
-        // Clamped first only so that the conversion is defined; a value out
-        // of range has set `bad` and is never written.
-        const double tc = std::clamp(t, 2.0 * kInt32Min, 2.0 * kInt32Max);
-        const auto q = static_cast<std::int64_t>(tc + (tc >= 0.0 ? 0.5 : -0.5));
-        lo = std::min(lo, q);
-        hi = std::max(hi, q);
-        const auto q32 = static_cast<std::int32_t>(q);
-        std::memcpy(p + i * len + 4 * ku, &q32, 4);
-      }
-      if (bad) {
+      std::int32_t* q = q_.data() + k * o_.chunk_points;
+      const double off = offset[k], inv = 1.0 / scale[k];
+      const bool ok = quantize(v, q, n, off, inv, qmin[k], qmax[k]);
+      if (!ok) {
         for (std::size_t i = 0; i < n; ++i) {
-          const double t = (v[i] - offset[ku]) * inv[ku];
-          if (!(t > kInt32Min - 0.5 && t < kInt32Max + 0.5)) throw Overflow{done + i + 1, k, v[i]};
+          const double t = (v[i] - off) * inv;
+          if (!(t > kInt32Min - 0.5 && t < kInt32Max + 0.5)) throw Overflow{done + i + 1, static_cast<int>(k), v[i]};
         }
       }
-      qmin[ku] = lo;
-      qmax[ku] = hi;
+    }
+    // Scatter X, Y, Z into the records; every other byte stays.
+    const std::int32_t* qx = q_.data();
+    const std::int32_t* qy = qx + o_.chunk_points;
+    const std::int32_t* qz = qy + o_.chunk_points;
+    std::uint8_t* p = buffer_.data();
+    for (std::size_t i = 0; i < n; ++i, p += len) {
+      const std::int32_t xyz[3] = {qx[i], qy[i], qz[i]};
+      std::memcpy(p, xyz, sizeof xyz);
     }
     writer.write_records(buffer_.data(), n);
   });
@@ -269,8 +303,13 @@ TileApplyResult LasTile::run() {
     }
   }
   writer.finish(h.points_by_return, r.min, r.max);
-  r.in_min = in_bounds_.min;
-  r.in_max = in_bounds_.max;
+  // Input bounds in the chain's order (lat, lon, h for geodetic input).
+  const bool geo_in = detail::lon_first_in_files(o_.from);
+  for (std::size_t k = 0; k < 3 && r.points; ++k) {
+    const std::size_t file_axis = geo_in && k < 2 ? 1 - k : k;
+    r.in_min[k] = in_qmin_[file_axis] * h.scale[file_axis] + h.offset[file_axis];
+    r.in_max[k] = in_qmax_[file_axis] * h.scale[file_axis] + h.offset[file_axis];
+  }
   return r;
 }
 
