@@ -1,5 +1,6 @@
 # geoanchor_target_defaults(<target>): C++20 and the project's warning set.
-# -ffast-math is never used: the geodesy depends on IEEE semantics.
+# -ffast-math is used in one translation unit only (geodesy/src/geocentric_kernel.cpp,
+# see geodesy/CMakeLists.txt): the rest of the geodesy depends on IEEE semantics.
 function(geoanchor_target_defaults target)
   target_compile_features(${target} PUBLIC cxx_std_20)
   target_compile_options(${target} PRIVATE

@@ -16,8 +16,8 @@ packages=(
   nlohmann-json3-dev libcli11-dev libssl-dev
   # GUI shells (later issues) and fonts
   libimgui-dev libglfw3-dev libosmesa6-dev libstb-dev fonts-dejavu-core xvfb xauth
-  # tests and benchmarks
-  libgtest-dev libgmock-dev libbenchmark-dev
+  # tests, benchmarks and fuzzing (clang brings libFuzzer)
+  libgtest-dev libgmock-dev libbenchmark-dev clang
 )
 
 missing=()

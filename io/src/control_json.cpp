@@ -86,7 +86,7 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
   json doc;
   try {
     doc = json::parse(in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
     throw Error(ErrorKind::input, "E_JSON", source_name + ": not valid JSON: " + e.what());
   }
   if (!doc.is_object()) fail(source_name, "expected a JSON object with \"points\"");

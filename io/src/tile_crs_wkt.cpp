@@ -128,6 +128,11 @@ double param(PJ_CONTEXT* ctx, PJ* op, int epsg_code, std::string_view source) {
 
 std::string tile_crs_wkt(const TileMetadata& m) {
   if (!m.frame) throw Error(ErrorKind::usage, "E_FRAME_MISSING", "a tile CRS needs the frame (NAME@EPOCH)");
+  if (m.height_type == "orthometric") {
+    throw Error(ErrorKind::usage, "E_TILE_CRS",
+                "orthometric heights need a compound CRS naming the geoid model; geoanchor writes tiles with "
+                "ellipsoidal heights only");
+  }
   const ArrayFrame& c = m.coordinates;
   const std::string frame = m.frame->to_string();
   const std::string datum = "DATUM[" + quoted(datum_name(*m.frame)) + "," + ellipsoid_wkt(c.ellipsoid) + "]," +

@@ -101,7 +101,7 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
   json j;
   try {
     j = json::parse(text_in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
     throw Error(ErrorKind::input, "E_JSON", std::string(source) + ": not valid JSON: " + e.what());
   }
   only_keys(j, source, "", {"schema", "frame", "coordinates", "enu_origin", "projection", "horizontal_crs",

@@ -353,7 +353,7 @@ TransformFile parse_site_calibration(const json& doc, TransformFile t, std::stri
 TransformFile parse_transform_core(std::string_view text, std::string_view source, json& doc) {
   try {
     doc = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
     throw Error(ErrorKind::input, "E_JSON", std::string(source) + ": not valid JSON: " + e.what());
   }
   if (!doc.is_object()) fail(source, "(top level)", "expected a JSON object");

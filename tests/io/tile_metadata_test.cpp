@@ -82,6 +82,9 @@ TEST(TileMetadata, SidecarErrorsNameTheKey) {
   const std::string orthometric = R"({"schema": "geoanchor.tile/1", "frame": "GDA2020",
       "coordinates": {"kind": "geodetic", "ellipsoid": "GRS80"}, "vertical": {"height_type": "orthometric"}})";
   EXPECT_NE(error_of(orthometric).find("geoid_model: missing"), std::string::npos);
+  // Found by fuzz_sidecar: a number beyond double's range was an uncaught
+  // nlohmann out_of_range, not a clear error.
+  EXPECT_NE(error_of(replaced("\"h_m\": 480.0", "\"h_m\": 4e999")).find("t.json: not valid JSON"), std::string::npos);
 }
 
 // PROJ's own crs-to-crs from a tile WKT to the same datum's geocentric WKT.

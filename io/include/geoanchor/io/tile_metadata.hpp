@@ -65,7 +65,8 @@ std::string to_json_text(const TileMetadata& m);
 // projected CRS (Transverse Mercator, or EPSG method 9837 geographic/
 // topocentric for ENU) on the frame's datum, whose name, remark and usage
 // carry the frame as NAME@EPOCH. PROJ parses it. Throws geoanchor::Error
-// (usage) for NED (no WKT axis set is written for it) or a missing frame.
+// (usage) for NED (no WKT axis set is written for it), orthometric heights
+// or a missing frame.
 std::string tile_crs_wkt(const TileMetadata& m);
 
 // The frame and coordinates a WKT describes, read through PROJ. Throws
