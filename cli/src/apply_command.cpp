@@ -633,8 +633,10 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
       c.push_back(centre ? 0.5 * (res.in_min[2] + res.in_max[2]) : (k & 4 ? res.in_max[2] : res.in_min[2]));
     }
     to_ecef.apply(a, b, c);
-    const bool from_target = o_.inverse;  // the extent and covariance are the source frame's
-    if (t_->fit && t_->fit->extent && !from_target) {
+    // The extent is the source frame's; with --inverse the tile is in the
+    // target frame, metres at most from it, which does not matter at the
+    // scale of the extrapolation limit.
+    if (t_->fit && t_->fit->extent) {
       double worst = 0.0;
       for (std::size_t k = 0; k < 9; ++k) worst = std::max(worst, t_->fit->extent->distance_m(geodesy::EcefPosition(a[k], b[k], c[k])));
       extrapolation = {{"distance_outside_control_m", worst}, {"limit_m", o_.max_extrapolation_m}};
@@ -649,11 +651,11 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
                            " m outside the control network: the transform is extrapolated there");
       }
     }
-    if (!from_target) {
+    {
       // The worst corner's propagated uncertainty, in ENU at the tile's centre.
       std::optional<Eigen::Matrix3d> worst;
       for (std::size_t k = 0; k < 9; ++k) {
-        const auto cov = io::propagated_covariance_m2(*t_, geodesy::EcefPosition(a[k], b[k], c[k]), p.epoch, false);
+        const auto cov = io::propagated_covariance_m2(*t_, geodesy::EcefPosition(a[k], b[k], c[k]), p.epoch, o_.inverse);
         if (cov && (!worst || cov->trace() > worst->trace())) worst = cov;
       }
       if (worst) {

@@ -15,6 +15,7 @@
 #include <csignal>
 #include <functional>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "cli_support.hpp"
@@ -231,6 +232,57 @@ TEST_F(ApplyCli, ShardsPartitionTheManifestAndParallelJobsWriteTheSameBytes) {
   const RunResult bad = run("apply " + path("tiles.txt").string() + " --shard 2/2 --out-dir " + all.string());
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("0-based"), std::string::npos) << bad.err;
+}
+
+TEST_F(ApplyCli, AFourteenParameterTransformIsEvaluatedAtTheTilesEpochAsProjDoes) {
+  // Rates large enough that evaluating at the wrong epoch would show.
+  write("T14.json", R"J({"model": "helmert14", "convention": "position_vector",
+    "source_frame": "ITRF2014", "target_frame": "GDA2020", "reference_epoch": 2020.0,
+    "parameters": {"tx_m": 0.1, "ty_m": -0.2, "tz_m": 0.3, "rx_arcsec": 0.01, "ry_arcsec": -0.02, "rz_arcsec": 0.03,
+                   "ds_ppm": 0.5, "dtx_m_per_year": 0.01, "dty_m_per_year": -0.02, "dtz_m_per_year": 0.03,
+                   "drx_arcsec_per_year": 0.001, "dry_arcsec_per_year": 0.002, "drz_arcsec_per_year": -0.003,
+                   "dds_ppm_per_year": 0.1}})J");
+  const std::vector<Eigen::Vector3d> pts = {{-4052052.0, 4212836.0, -2545105.0}, {-4050000.5, 4213000.25, -2546000.75}};
+  std::string csv = "id,x_m,y_m,z_m\n";
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    csv += "P" + std::to_string(i) + "," + g17(pts[i].x()) + "," + g17(pts[i].y()) + "," + g17(pts[i].z()) + "\n";
+  }
+  write("in/tile.csv", csv);
+  write("in/tile.csv.geoanchor.json", R"({"schema": "geoanchor.tile/1", "frame": "ITRF2014@2022.5",
+      "coordinates": {"kind": "ecef", "storage": "float64"}})");
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + path("in/tile.csv").string() + " --transform " + path("T14.json").string() +
+                          " --out-dir " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json side = json::parse(slurp(out / "tile.csv.geoanchor.json"));
+  EXPECT_EQ(side["frame"], "GDA2020@2022.5");
+  EXPECT_EQ(side["provenance"]["observation_epoch"], 2022.5);
+  const ProjPipeline proj("+proj=helmert +x=0.1 +y=-0.2 +z=0.3 +rx=0.01 +ry=-0.02 +rz=0.03 +s=0.5 +dx=0.01 +dy=-0.02 "
+                          "+dz=0.03 +drx=0.001 +dry=0.002 +drz=-0.003 +ds=0.1 +t_epoch=2020.0 +convention=position_vector");
+  std::istringstream lines(slurp(out / "tile.csv"));
+  std::string line;
+  std::getline(lines, line);
+  EXPECT_EQ(line, "id,x_m,y_m,z_m");
+  for (const auto& p : pts) {
+    ASSERT_TRUE(std::getline(lines, line));
+    std::stringstream f(line);
+    std::string id, x, y, z;
+    std::getline(f, id, ',');
+    std::getline(f, x, ',');
+    std::getline(f, y, ',');
+    std::getline(f, z, ',');
+    const Eigen::Vector3d e = proj.forward(p, 2022.5);
+    EXPECT_LT((Eigen::Vector3d(std::stod(x), std::stod(y), std::stod(z)) - e).norm(), kVsProjTol_m) << line;
+  }
+  // Without the tile's epoch the transform cannot be evaluated.
+  write("noepoch/tile.csv", csv);
+  write("noepoch/tile.csv.geoanchor.json", R"({"schema": "geoanchor.tile/1", "frame": "ITRF2014",
+      "coordinates": {"kind": "ecef"}})");
+  const RunResult none = run("apply " + path("noepoch/tile.csv").string() + " --transform " + path("T14.json").string() +
+                             " --overwrite --out-dir " + out.string());
+  EXPECT_EQ(none.exit_code, 3);
+  EXPECT_NE(none.err.find("error[E_EPOCH_MISSING]"), std::string::npos) << none.err;
+  EXPECT_NE(none.err.find("the reference epoch is never substituted"), std::string::npos) << none.err;
 }
 
 TEST_F(ApplyCli, ATileFarOutsideTheControlNetworkIsRefusedAndANearOneWarned) {

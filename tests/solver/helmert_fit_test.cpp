@@ -10,6 +10,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 #include "proj_reference.hpp"
 #include "test_support.hpp"
@@ -579,6 +580,42 @@ TEST(TransformedCovariance, MatchesTheMonteCarloSpreadAndGrowsAwayFromTheNetwork
   }
   const Eigen::Matrix3d sample = (sum2 - sum * sum.transpose() / kTrials) / (kTrials - 1);
   EXPECT_NEAR(std::sqrt(sample.trace()), std::sqrt(c_far.trace()), kSpreadRelTol * std::sqrt(c_far.trace()));
+}
+
+// What apply reports from a transform file (sigmas and correlation as
+// written, Jacobian by central differences) against the solver's analytic
+// J Σθ Jᵀ from the same fit.
+TEST(TransformedCovariance, TheTransformFileGivesTheSolversCovariance) {
+  constexpr double kRelativeTol = 1e-6;
+  const auto src = region(20, 47.46, 8.55, 0.03, 44);
+  const ControlSet set = control_from_proj(
+      src, "+proj=helmert +x=0.5 +y=-0.3 +z=0.8 +rx=0.12 +ry=-0.05 +rz=0.2 +s=1.2 +convention=position_vector", 0.005);
+  FitOptions o;
+  o.model = FitModel::helmert7;
+  o.convention = Convention::position_vector;
+  const FitResult r = fit_helmert(set, o);
+  io::TransformFile t;
+  t.model = io::TransformModel::helmert7;
+  t.helmert = r.helmert.at_reference_epoch;
+  io::FitRecord f;
+  for (const auto& p : r.parameters) {
+    if (p.estimated) f.sigmas.emplace_back(p.name, p.sigma);
+  }
+  f.correlation_names = r.covariance_names;
+  for (Eigen::Index i = 0; i < r.correlation.rows(); ++i) {
+    std::vector<double> row;
+    for (Eigen::Index j = 0; j < r.correlation.cols(); ++j) row.push_back(r.correlation(i, j));
+    f.correlation.push_back(row);
+  }
+  t.fit = f;
+  const geodesy::GeocentricConverter conv(geodesy::Ellipsoid::grs80());
+  for (const auto& at : {std::pair{47.46, 8.55}, std::pair{47.9, 9.3}}) {
+    const EcefPosition x = conv.ecef_from_geodetic({Angle::degrees(at.first), Angle::degrees(at.second), geodesy::EllipsoidalHeight{500}});
+    const Eigen::Matrix3d analytic = transformed_covariance_m2(r, x, std::nullopt);
+    const auto numeric = io::propagated_covariance_m2(t, x, std::nullopt, false);
+    ASSERT_TRUE(numeric.has_value());
+    EXPECT_LT((*numeric - analytic).norm(), kRelativeTol * analytic.norm()) << at.first << " " << at.second;
+  }
 }
 
 }  // namespace
