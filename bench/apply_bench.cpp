@@ -94,16 +94,23 @@ const io::PointChain& chain_to_geodetic() {
   return c;
 }
 
+// See tests/support/proj_reference.cpp: PROJ 9.1.1's topocentric step
+// leaves the time coordinate uninitialised for the next step; zeroing the
+// stack first keeps its garbage from turning a static Helmert into NaN.
+[[gnu::noinline]] void scrub_stack() {
+  volatile unsigned char buf[16384];
+  for (std::size_t i = 0; i < sizeof buf; ++i) buf[i] = 0;
+}
+
 struct Proj {
   PJ_CONTEXT* ctx = proj_context_create();
   PJ* pj = nullptr;
-  // PROJ 9.1.1 was seen, now and then, to build a pipeline with a
-  // topocentric step that returns NaN for every point without reporting an
-  // error (valgrind shows uninitialised reads in proj_trans). Probe the
-  // ENU origin, and build it again when that happens, saying so.
+  // Probe the ENU origin, and build the pipeline again should PROJ return
+  // NaN for it without an error, saying so.
   explicit Proj(const std::string& def) {
     for (int attempt = 0; attempt < 10; ++attempt) {
       pj = proj_create(ctx, def.c_str());
+      scrub_stack();
       PJ_COORD c = proj_trans(pj, PJ_FWD, proj_coord(0, 0, 0, 0));
       if (std::isfinite(c.xyz.x)) return;
       std::fprintf(stderr, "note: PROJ returned NaN for a valid point; pipeline rebuilt (attempt %d)\n", attempt + 1);
@@ -118,6 +125,7 @@ struct Proj {
   // With an explicit time of 0 for every point.
   void run(std::vector<double>& x, std::vector<double>& y, std::vector<double>& z) const {
     double t = 0.0;
+    scrub_stack();
     proj_trans_generic(pj, PJ_FWD, x.data(), sizeof(double), x.size(), y.data(), sizeof(double), y.size(), z.data(),
                        sizeof(double), z.size(), &t, 0, 1);
   }

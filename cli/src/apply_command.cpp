@@ -363,7 +363,13 @@ TilePlan Planner::plan(const fs::path& input) const {
                     tile + ": the tile is in " + in.frame->to_string() + " (" + p.in_frame_source + ") but the transform's " +
                         src_key + " is " + src->to_string() + " (" + *o_.transform + ")");
       }
-      if (t_->time_dependent()) {
+      if (t_->time_dependent() && o_.epoch_from_gps_time) {
+        if (p.format != io::TileFormat::las) {
+          throw Error(ErrorKind::usage, "E_OPTION",
+                      tile + ": --epoch-from-gps-time reads LAS GPS times; for per-row epochs in a CSV use "
+                             "`geoanchor convert` with an epoch column");
+        }
+      } else if (t_->time_dependent()) {
         if (!in.frame->epoch()) {
           throw Error(ErrorKind::input, "E_EPOCH_MISSING",
                       tile + ": the tile's frame " + in.frame->to_string() + " has no coordinate epoch, and the " +
@@ -378,7 +384,8 @@ TilePlan Planner::plan(const fs::path& input) const {
                         "bring the tile to epoch " + geodesy::format_decimal_year(*src->epoch()) + " first");
       }
       out_frame = dst;
-      if (!dst->epoch() && in.frame->epoch()) out_frame = with_epoch(*dst, *in.frame->epoch());
+      const bool per_point = t_->time_dependent() && o_.epoch_from_gps_time;
+      if (!dst->epoch() && in.frame->epoch() && !per_point) out_frame = with_epoch(*dst, *in.frame->epoch());
     }
   }
 
@@ -500,7 +507,8 @@ json request_json(const ApplyOptions& o) {
               {"from_zone", opt(o.from_zone)},
               {"from_tm", opt(o.from_tm)},
               {"inverse", o.inverse},
-              {"resolution_m", o.resolution_m ? json(*o.resolution_m) : json(nullptr)}};
+              {"resolution_m", o.resolution_m ? json(*o.resolution_m) : json(nullptr)},
+              {"epoch_from_gps_time", o.epoch_from_gps_time}};
 }
 
 json enu_sigma_json(const Eigen::Matrix3d& cov_ecef, const geodesy::LocalOrigin& at) {
@@ -593,6 +601,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   ao.from = p.in.coordinates;
   ao.to = p.out.coordinates;
   ao.resolution_m = o_.resolution_m;
+  ao.epochs_from_gps_time = o_.epoch_from_gps_time && t_ && t_->time_dependent();
   if (p.format == io::TileFormat::las) ao.output_wkt = io::tile_crs_wkt(p.out);
   // Progress in bytes of input, where the point count is known up front.
   const std::uint64_t expected = p.format == io::TileFormat::las ? io::LasReader(p.input).header().point_count : 0;
@@ -653,9 +662,12 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
     }
     {
       // The worst corner's propagated uncertainty, in ENU at the tile's centre.
+      // With per-point epochs: at the middle of their range.
+      std::optional<DecimalYear> at = p.epoch;
+      if (!at && res.epoch_range) at = DecimalYear{0.5 * ((*res.epoch_range)[0] + (*res.epoch_range)[1])};
       std::optional<Eigen::Matrix3d> worst;
       for (std::size_t k = 0; k < 9; ++k) {
-        const auto cov = io::propagated_covariance_m2(*t_, geodesy::EcefPosition(a[k], b[k], c[k]), p.epoch, o_.inverse);
+        const auto cov = io::propagated_covariance_m2(*t_, geodesy::EcefPosition(a[k], b[k], c[k]), at, o_.inverse);
         if (cov && (!worst || cov->trace() > worst->trace())) worst = cov;
       }
       if (worst) {
@@ -699,6 +711,10 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
     prov["transform_sigma0"] = t_->fit ? json(t_->fit->sigma0) : json(nullptr);
     prov["transform_dof"] = t_->fit ? json(t_->fit->dof) : json(nullptr);
     if (p.epoch) prov["observation_epoch"] = p.epoch->year;
+    if (res.epoch_range) {
+      prov["observation_epoch"] = "per point, from its GPS time";
+      prov["observation_epoch_range"] = {(*res.epoch_range)[0], (*res.epoch_range)[1]};
+    }
     prov["propagated_uncertainty"] = uncertainty;
     prov["extrapolation"] = extrapolation;
   } else {
@@ -740,6 +756,8 @@ CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
   cmd->add_option("--from-tm", o.from_tm, "Input Transverse Mercator, when no sidecar or WKT states it");
   cmd->add_option("--resolution", o.resolution_m, "LAS quantization step in metres (default: the input's)")
       ->check(CLI::Range(1e-6, 10.0));
+  cmd->add_flag("--epoch-from-gps-time", o.epoch_from_gps_time,
+                "LAS: evaluate a 14-parameter transform at each point's GPS time (adjusted standard GPS time)");
   cmd->add_option("--max-extrapolation", o.max_extrapolation_m,
                   "Refuse tiles farther than this (m) outside the control network (default 10000)")
       ->check(CLI::Range(0.0, 1e7));

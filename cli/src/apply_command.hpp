@@ -23,6 +23,7 @@ struct ApplyOptions {
   // Input frame, when no sidecar or LAS WKT states it.
   std::optional<std::string> from_frame, from_origin, from_zone, from_tm;
   std::optional<double> resolution_m;
+  bool epoch_from_gps_time = false;  // LAS: a 14-parameter transform at each point's GPS time
   double max_extrapolation_m = 10000.0;
   unsigned jobs = 1;
   std::optional<std::string> shard;

@@ -1,5 +1,7 @@
 #include "geoanchor/geodesy/frame.hpp"
 
+#include <cmath>
+
 #include <array>
 #include <cctype>
 
@@ -44,6 +46,34 @@ DecimalYear parse_decimal_year(std::string_view text, std::string_view where) {
                 std::string(where) + ": epoch=" + std::string(text) + ": not in [1900, 2200] (decimal years)");
   }
   return DecimalYear{*v};
+}
+
+namespace {
+
+// Days from 1970-01-01 to y-m-d on the proleptic Gregorian calendar (the
+// well-known era-based algorithm: 400-year eras of 146097 days).
+long long days_from_civil(long long y, unsigned m, unsigned d) {
+  y -= m <= 2;
+  const long long era = (y >= 0 ? y : y - 399) / 400;
+  const auto yoe = static_cast<unsigned>(y - era * 400);
+  const unsigned doy = (153 * (m > 2 ? m - 3 : m + 9) + 2) / 5 + d - 1;
+  const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return era * 146097 + static_cast<long long>(doe) - 719468;
+}
+
+}  // namespace
+
+DecimalYear decimal_year_from_gps_seconds(double gps_seconds) {
+  constexpr double kGpsEpochUnix_s = 315964800.0;  // 1980-01-06T00:00:00 as Unix time
+  constexpr double kDay_s = 86400.0;
+  const double unix_s = gps_seconds + kGpsEpochUnix_s;
+  // The year: from an estimate, corrected by the actual year starts.
+  auto year = static_cast<long long>(std::floor(1970.0 + unix_s / (365.2425 * kDay_s)));
+  while (static_cast<double>(days_from_civil(year, 1, 1)) * kDay_s > unix_s) --year;
+  while (static_cast<double>(days_from_civil(year + 1, 1, 1)) * kDay_s <= unix_s) ++year;
+  const double start = static_cast<double>(days_from_civil(year, 1, 1)) * kDay_s;
+  const double end = static_cast<double>(days_from_civil(year + 1, 1, 1)) * kDay_s;
+  return DecimalYear{static_cast<double>(year) + (unix_s - start) / (end - start)};
 }
 
 std::string format_decimal_year(DecimalYear y) {

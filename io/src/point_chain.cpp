@@ -1,5 +1,8 @@
 #include "geoanchor/io/point_chain.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric_batch.hpp"
 
@@ -48,14 +51,14 @@ PointChain::PointChain(const ArrayFrame& from, const std::optional<TransformFile
   if (is_local(to_.kind)) to_plane_.emplace(*to_.origin);
   if (from_.kind == CoordinateKind::projected) from_tm_.emplace(*from_.projection);
   if (to_.kind == CoordinateKind::projected) to_tm_.emplace(*to_.projection);
-  if (transform_ && transform_->time_dependent() && !epoch_) {
-    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
-                "a 14-parameter transform needs the observation epoch of the points; the reference epoch is never "
-                "substituted");
-  }
+  // A 14-parameter transform without an epoch can only run point by point
+  // at the points' own epochs (apply_at_epochs); apply() refuses it.
   // Fuse when every step is affine.
   const auto in = affine_ecef_from(from_);
   const auto out = affine_ecef_from(to_);
+  ecef_in_ = in;
+  ecef_out_ = out;
+  if (transform_ && transform_->time_dependent() && !epoch_) return;  // per-point epochs only
   if (!in || (transform_ && transform_->site_calibration)) return;
   AffineMap middle = AffineMap::identity();
   if (transform_) {
@@ -129,22 +132,77 @@ void apply_affine(const geodesy::AffineMap& m, std::span<double> a, std::span<do
 
 }  // namespace
 
+void PointChain::finish_from_output_ecef(std::span<double> a, std::span<double> b, std::span<double> c) const {
+  const std::size_t n = std::min({a.size(), b.size(), c.size()});
+  if (ecef_out_) {
+    apply_affine(ecef_out_->inverse(), a, b, c);
+    return;
+  }
+  geodesy::geodetic_from_ecef_batch(to_.ellipsoid, a.first(n), b.first(n), c.first(n));
+  if (to_.kind == CoordinateKind::projected) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto q = to_tm_->forward({geodesy::Angle::degrees(a[i]), geodesy::Angle::degrees(b[i]),
+                                      geodesy::EllipsoidalHeight{c[i]}});
+      a[i] = q.easting_m, b[i] = q.northing_m, c[i] = q.h.m;
+    }
+  }
+}
+
+void PointChain::apply_at_epochs(std::span<double> a, std::span<double> b, std::span<double> c,
+                                 std::span<const double> epochs) const {
+  const std::size_t n = std::min({a.size(), b.size(), c.size(), epochs.size()});
+  if (!transform_ || !transform_->time_dependent()) {
+    apply(a.first(n), b.first(n), c.first(n));
+    return;
+  }
+  if (n == 0) return;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(epochs[i])) {
+      throw Error(ErrorKind::input, "E_EPOCH", "point " + std::to_string(i + 1) + " of a chunk has no finite epoch");
+    }
+  }
+  const auto [lo_it, hi_it] = std::minmax_element(epochs.begin(), epochs.begin() + static_cast<std::ptrdiff_t>(n));
+  const double lo = *lo_it, hi = *hi_it;
+  auto middle_at = [&](double year) {
+    const AffineMap forward = transform_->target_from_source(geodesy::DecimalYear{year}, "transform");
+    return inverse_ ? forward.inverse() : forward;
+  };
+  if (ecef_in_) {
+    // Input -> output ECEF at both ends, interpolated per point.
+    const AffineMap m0 = geodesy::compose(middle_at(lo), *ecef_in_);
+    const AffineMap m1 = geodesy::compose(middle_at(hi), *ecef_in_);
+    const double span = hi - lo;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d x(a[i], b[i], c[i]);
+      const Eigen::Vector3d p0 = m0.apply(x);
+      const double w = span > 0.0 ? (epochs[i] - lo) / span : 0.0;
+      const Eigen::Vector3d p = p0 + w * (m1.apply(x) - p0);
+      a[i] = p.x(), b[i] = p.y(), c[i] = p.z();
+    }
+    finish_from_output_ecef(a.first(n), b.first(n), c.first(n));
+    return;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    geodesy::EcefPosition x = to_ecef(a[i], b[i], c[i]);
+    x = transform_->apply(x, geodesy::DecimalYear{epochs[i]}, inverse_, "transform");
+    from_ecef(x, a[i], b[i], c[i]);
+  }
+}
+
 void PointChain::apply(std::span<double> a, std::span<double> b, std::span<double> c) const {
   const std::size_t n = std::min({a.size(), b.size(), c.size()});
+  if (transform_ && transform_->time_dependent() && !epoch_) {
+    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
+                "a 14-parameter transform needs the observation epoch of the points; the reference epoch is never "
+                "substituted");
+  }
   if (fused_) {
     apply_affine(*fused_, a.first(n), b.first(n), c.first(n));
     return;
   }
   if (to_output_ecef_) {
     apply_affine(*to_output_ecef_, a.first(n), b.first(n), c.first(n));
-    geodesy::geodetic_from_ecef_batch(to_.ellipsoid, a.first(n), b.first(n), c.first(n));
-    if (to_.kind == CoordinateKind::projected) {
-      for (std::size_t i = 0; i < n; ++i) {
-        const auto q = to_tm_->forward({geodesy::Angle::degrees(a[i]), geodesy::Angle::degrees(b[i]),
-                                        geodesy::EllipsoidalHeight{c[i]}});
-        a[i] = q.easting_m, b[i] = q.northing_m, c[i] = q.h.m;
-      }
-    }
+    finish_from_output_ecef(a.first(n), b.first(n), c.first(n));
     return;
   }
   for (std::size_t i = 0; i < n; ++i) {

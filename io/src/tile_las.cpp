@@ -5,8 +5,10 @@
 #include <chrono>
 #include <cstring>
 #include <ctime>
+#include <limits>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/las.hpp"
 #include "tile_common.hpp"
@@ -87,6 +89,9 @@ class LasTile {
   std::vector<std::uint8_t> buffer_;
   std::vector<double> x_, y_, z_;
   std::vector<std::int32_t> q_;
+  std::vector<double> epochs_;
+  std::size_t gps_time_offset_ = 0;
+  double epoch_lo_ = std::numeric_limits<double>::infinity(), epoch_hi_ = -std::numeric_limits<double>::infinity();
   std::array<std::int32_t, 3> in_qmin_{INT32_MAX, INT32_MAX, INT32_MAX}, in_qmax_{INT32_MIN, INT32_MIN, INT32_MIN};
 };
 
@@ -126,7 +131,26 @@ void LasTile::pass(Sink&& sink) {
     std::span<double> a(geo_in ? y_.data() : x_.data(), n);
     std::span<double> b(geo_in ? x_.data() : y_.data(), n);
     std::span<double> c(z_.data(), n);
-    chain_.apply(a, b, c);
+    if (o_.epochs_from_gps_time) {
+      // Adjusted standard GPS time: GPS seconds minus 1e9.
+      epochs_.resize(n);
+      const std::uint8_t* g = buffer_.data() + gps_time_offset_;
+      for (std::size_t i = 0; i < n; ++i, g += len) {
+        double adjusted = 0.0;
+        std::memcpy(&adjusted, g, sizeof adjusted);
+        if (!std::isfinite(adjusted)) {
+          throw Error(ErrorKind::input, "E_GPS_TIME",
+                      reader_.path().string() + ": point " + std::to_string(done + i + 1) + " (byte " +
+                          std::to_string(h.offset_to_points + (done + i) * len) + ") has a non-finite GPS time");
+        }
+        epochs_[i] = geodesy::decimal_year_from_gps_seconds(adjusted + 1.0e9).year;
+        epoch_lo_ = std::min(epoch_lo_, epochs_[i]);
+        epoch_hi_ = std::max(epoch_hi_, epochs_[i]);
+      }
+      chain_.apply_at_epochs(a, b, c, epochs_);
+    } else {
+      chain_.apply(a, b, c);
+    }
     // The chain wrote the output in its order into the same arrays.
     std::span<double> xs = geo_out ? b : a;
     std::span<double> ys = geo_out ? a : b;
@@ -218,6 +242,20 @@ TileApplyResult LasTile::run() {
   TileApplyResult r;
   r.points = h.point_count;
   r.storage = "int32_scaled";
+  if (o_.epochs_from_gps_time) {
+    if (h.point_format == 0 || h.point_format == 2) {
+      throw Error(ErrorKind::input, "E_GPS_TIME",
+                  reader_.path().string() + ": byte 104: point format " + std::to_string(h.point_format) +
+                      " has no GPS time, so the points' epochs are unknown");
+    }
+    if ((h.global_encoding & 1u) == 0) {
+      throw Error(ErrorKind::input, "E_GPS_TIME",
+                  reader_.path().string() + ": byte 6: the GPS times are GPS week seconds (global encoding bit 0 "
+                                            "clear), which do not say the week; per-point epochs need adjusted "
+                                            "standard GPS time");
+    }
+    gps_time_offset_ = h.point_format >= 6 ? 22 : 20;
+  }
 
   // Scale: the input's resolution (or --resolution), in the output's units.
   std::array<double, 2> res = input_resolution_m(h, o_.from);
@@ -236,7 +274,14 @@ TileApplyResult LasTile::run() {
     cb.push_back(geo_in ? x : y);
     cc.push_back(z);
   }
-  chain_.apply(ca, cb, cc);
+  if (o_.epochs_from_gps_time) {
+    // Only an estimate for the offset: any epoch moves the corners by
+    // centimetres at most, far inside the int32 range.
+    constexpr double kAnyEpoch = 2000.0;
+    chain_.apply_at_epochs(ca, cb, cc, std::vector<double>(ca.size(), kAnyEpoch));
+  } else {
+    chain_.apply(ca, cb, cc);
+  }
   const bool geo_out = detail::lon_first_in_files(o_.to);
   Bounds est;
   est.add(geo_out ? cb : ca, geo_out ? ca : cb, cc);
@@ -303,6 +348,7 @@ TileApplyResult LasTile::run() {
     }
   }
   writer.finish(h.points_by_return, r.min, r.max);
+  if (o_.epochs_from_gps_time && r.points) r.epoch_range = std::array<double, 2>{epoch_lo_, epoch_hi_};
   // Input bounds in the chain's order (lat, lon, h for geodetic input).
   const bool geo_in = detail::lon_first_in_files(o_.from);
   for (std::size_t k = 0; k < 3 && r.points; ++k) {

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <cstring>
 #include <csignal>
 #include <functional>
 #include <set>
@@ -283,6 +284,64 @@ TEST_F(ApplyCli, AFourteenParameterTransformIsEvaluatedAtTheTilesEpochAsProjDoes
   EXPECT_EQ(none.exit_code, 3);
   EXPECT_NE(none.err.find("error[E_EPOCH_MISSING]"), std::string::npos) << none.err;
   EXPECT_NE(none.err.find("the reference epoch is never substituted"), std::string::npos) << none.err;
+}
+
+TEST_F(ApplyCli, PerPointEpochsFromLasGpsTimeAgreeWithProjAtEachPointsTime) {
+  write("T14.json", R"J({"model": "helmert14", "convention": "position_vector",
+    "source_frame": "ITRF2014", "target_frame": "GDA2020", "reference_epoch": 2020.0,
+    "parameters": {"tx_m": 0.1, "ty_m": -0.2, "tz_m": 0.3, "rx_arcsec": 0.01, "ry_arcsec": -0.02, "rz_arcsec": 0.03,
+                   "ds_ppm": 0.5, "dtx_m_per_year": 0.01, "dty_m_per_year": -0.02, "dtz_m_per_year": 0.03,
+                   "drx_arcsec_per_year": 0.001, "dry_arcsec_per_year": 0.002, "drz_arcsec_per_year": -0.003,
+                   "dds_ppm_per_year": 0.1}})J");
+  // An ECEF tile (1 mm) whose points were taken over six years.
+  testing::LasBuild b;
+  b.offset = {-4052000.0, 4212800.0, -2545100.0};
+  std::vector<double> gps;  // adjusted standard GPS time (GPS seconds - 1e9)
+  for (int i = 0; i < 200; ++i) {
+    b.xyz.push_back({i * 997 - 100000, i * 331 + 5000, -i * 713});
+    gps.push_back(2.0e8 + i * 9.5e5);  // 2016 .. 2022
+  }
+  std::vector<std::uint8_t> bytes = testing::build_las(b);
+  const std::size_t points_at = bytes.size() - b.xyz.size() * 30;
+  for (std::size_t i = 0; i < gps.size(); ++i) std::memcpy(&bytes[points_at + i * 30 + 22], &gps[i], 8);
+  fs::create_directories(path("in"));
+  testing::write_bytes(path("in/tile.las"), bytes);
+  write("in/tile.las.geoanchor.json", R"({"schema": "geoanchor.tile/1", "frame": "ITRF2014",
+      "coordinates": {"kind": "ecef", "storage": "int32_scaled"}})");
+  const fs::path out = out_dir();
+  const std::string cmd = "apply " + path("in/tile.las").string() + " --transform " + path("T14.json").string() +
+                          " --out-dir " + out.string();
+  const RunResult refused = run(cmd);  // the frame has no epoch: refused without per-point epochs
+  EXPECT_EQ(refused.exit_code, 3);
+  EXPECT_NE(refused.err.find("E_EPOCH_MISSING"), std::string::npos) << refused.err;
+  const RunResult r = run(cmd + " --epoch-from-gps-time");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json side = json::parse(slurp(out / "tile.las.geoanchor.json"));
+  EXPECT_EQ(side["frame"], "GDA2020");
+  EXPECT_EQ(side["provenance"]["observation_epoch"], "per point, from its GPS time");
+
+  const json got = las_verify(out / "tile.las");
+  ASSERT_FALSE(got.is_null());
+  const ProjPipeline proj("+proj=helmert +x=0.1 +y=-0.2 +z=0.3 +rx=0.01 +ry=-0.02 +rz=0.03 +s=0.5 +dx=0.01 +dy=-0.02 "
+                          "+dz=0.03 +drx=0.001 +dry=0.002 +drz=-0.003 +ds=0.1 +t_epoch=2020.0 +convention=position_vector");
+  using namespace std::chrono;
+  const sys_seconds gps_epoch = sys_days{year{1980} / January / 6};
+  const double half_step = 0.0005;
+  double worst = 0;
+  for (std::size_t i = 0; i < gps.size(); ++i) {
+    // The point's decimal year by the C++20 calendar (no leap seconds, as documented).
+    const double s = gps[i] + 1e9;
+    const auto t = gps_epoch + seconds(static_cast<long long>(s));
+    const year_month_day ymd{floor<days>(t)};
+    const sys_seconds start = sys_days{ymd.year() / January / 1}, end = sys_days{(ymd.year() + years{1}) / January / 1};
+    const double when = static_cast<int>(ymd.year()) + static_cast<double>((t - start).count()) / static_cast<double>((end - start).count());
+    const Eigen::Vector3d x(b.xyz[i][0] * 0.001 + b.offset[0], b.xyz[i][1] * 0.001 + b.offset[1], b.xyz[i][2] * 0.001 + b.offset[2]);
+    const Eigen::Vector3d e = proj.forward(x, when);
+    const auto& p = got["points"][i];
+    for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(p[static_cast<std::size_t>(k)].get<double>() - e(k)));
+    EXPECT_EQ(p[17].get<double>(), gps[i]);  // GpsTime passes through
+  }
+  EXPECT_LE(worst, half_step + kVsProjTol_m);
 }
 
 TEST_F(ApplyCli, ATileFarOutsideTheControlNetworkIsRefusedAndANearOneWarned) {

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <cmath>
+
 #include "geoanchor/geodesy/ellipsoid.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
@@ -79,3 +82,30 @@ TEST(Ellipsoid, NamedAndCustomEllipsoids) {
 
 }  // namespace
 }  // namespace geoanchor::geodesy
+
+namespace geoanchor::geodesy {
+namespace {
+
+// GPS time -> decimal year against the C++20 calendar (std::chrono), with the
+// GPS epoch 1980-01-06 and no leap seconds, as documented.
+TEST(GpsTime, DecimalYearAgreesWithTheCalendar) {
+  using namespace std::chrono;
+  constexpr double kYearTol = 1e-12;  // 3e-5 s
+  const sys_seconds gps_epoch = sys_days{year{1980} / January / 6};
+  for (const double gps_s : {0.0, 1.0e9, 1.4e9, 1.7e9 + 12345.678, 2.0e9}) {
+    const auto t = gps_epoch + duration_cast<seconds>(duration<double>(gps_s));
+    const double fraction = gps_s - std::floor(gps_s);
+    const year_month_day ymd{floor<days>(t)};
+    const sys_seconds start = sys_days{ymd.year() / January / 1}, end = sys_days{(ymd.year() + years{1}) / January / 1};
+    const double expected = static_cast<int>(ymd.year()) +
+                            (static_cast<double>((t - start).count()) + fraction) / static_cast<double>((end - start).count());
+    EXPECT_NEAR(decimal_year_from_gps_seconds(gps_s).year, expected, kYearTol) << gps_s;
+  }
+  // 2024 is a leap year: its middle is 2024-07-02T00:00:00.
+  const double mid2024 = static_cast<double>((sys_days{year{2024} / July / 2} - gps_epoch).count());
+  EXPECT_NEAR(decimal_year_from_gps_seconds(mid2024).year, 2024.5, kYearTol);
+}
+
+}  // namespace
+}  // namespace geoanchor::geodesy
+

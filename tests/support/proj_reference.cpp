@@ -25,9 +25,26 @@ ProjPipeline::~ProjPipeline() {
   proj_context_destroy(ctx_);
 }
 
+namespace {
+
+// PROJ 9.1.1's topocentric step does not carry the time coordinate to the
+// next step of a pipeline: that step reads an uninitialised stack value
+// (valgrind: "created by a stack allocation" in libproj; cct prints t = 0
+// after a topocentric step). Depending on the garbage, even a static Helmert
+// returns NaN for every point (0 × NaN in its time term). Zeroing the stack
+// it is about to use makes that time 0 every call, which static steps
+// ignore; time-dependent steps after topocentric need a pipeline of their own.
+[[gnu::noinline]] void scrub_stack() {
+  volatile unsigned char buf[16384];
+  for (std::size_t i = 0; i < sizeof buf; ++i) buf[i] = 0;
+}
+
+}  // namespace
+
 Eigen::Vector3d ProjPipeline::trans(const Eigen::Vector3d& xyz, double t, int direction) const {
   PJ_COORD c = proj_coord(xyz.x(), xyz.y(), xyz.z(), t);
   proj_errno_reset(pj_);
+  scrub_stack();
   const PJ_COORD r = proj_trans(pj_, direction > 0 ? PJ_FWD : PJ_INV, c);
   if (proj_errno(pj_) != 0 || r.xyzt.x == HUGE_VAL) {
     const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -42,6 +42,12 @@ class Frame {
 // naming `where` for anything else or a year outside [1900, 2200].
 DecimalYear parse_decimal_year(std::string_view text, std::string_view where);
 
+// The decimal year of a GPS time in seconds since the GPS epoch
+// (1980-01-06T00:00:00), on the Gregorian calendar. Leap seconds are not
+// applied: GPS time runs 18 s ahead of UTC since 2017, 5.7e-7 years, which
+// moves a point by 3e-8 m at a plate velocity of 5 cm/yr.
+DecimalYear decimal_year_from_gps_seconds(double gps_seconds);
+
 // Shortest text that reads back to the same double, with at least one
 // decimal ("2010.0", "2024.5").
 std::string format_decimal_year(DecimalYear y);

@@ -42,10 +42,22 @@ class PointChain {
   // (degrees) | e,n,u | n,e,d | easting,northing,h.
   void apply(std::span<double> a, std::span<double> b, std::span<double> c) const;
 
+  // The same with a time-dependent transform evaluated at each point's own
+  // epoch (decimal years, e.g. from LAS GPS time). Affine chains are built
+  // at the earliest and latest epoch of the call and interpolated per
+  // point: a 14-parameter Helmert is linear in time, up to the product of
+  // scale and rotation rates (below 1e-12 m per year² at Earth radius).
+  // Other transforms ignore `epochs`.
+  void apply_at_epochs(std::span<double> a, std::span<double> b, std::span<double> c,
+                       std::span<const double> epochs) const;
+
  private:
   geodesy::EcefPosition to_ecef(double a, double b, double c) const;
   void from_ecef(const geodesy::EcefPosition& x, double& a, double& b, double& c) const;
   static std::optional<geodesy::AffineMap> affine_ecef_from(const ArrayFrame& f);  // frame -> ECEF, if affine
+  void finish_from_output_ecef(std::span<double> a, std::span<double> b, std::span<double> c) const;
+  std::optional<geodesy::AffineMap> ecef_in_;   // input -> ECEF, when affine
+  std::optional<geodesy::AffineMap> ecef_out_;  // output -> ECEF, when affine
 
   ArrayFrame from_, to_;
   std::optional<TransformFile> transform_;

@@ -33,6 +33,9 @@ struct TileApplyOptions {
   std::size_t chunk_points = 1 << 16;
   // Called after each chunk with the points done so far in this tile.
   std::function<void(std::uint64_t)> progress;
+  // LAS: evaluate a time-dependent transform at each point's own epoch,
+  // from its GPS time (adjusted standard GPS time, global encoding bit 0).
+  bool epochs_from_gps_time = false;
 };
 
 struct TileApplyResult {
@@ -44,6 +47,7 @@ struct TileApplyResult {
   std::array<double, 3> in_min{}, in_max{};
   std::array<double, 3> scale{}, offset{};  // LAS
   std::string storage;                      // float64 | float32 | int32_scaled
+  std::optional<std::array<double, 2>> epoch_range;  // per-point epochs: earliest, latest
   std::vector<std::string> warnings;
 };
 
