@@ -73,7 +73,8 @@ void refuse_same_file(const std::filesystem::path& input, const std::filesystem:
   std::error_code ec;
   if (std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec)) {
     throw Error(ErrorKind::usage, "E_OUTPUT_IS_INPUT",
-                "-o " + output.string() + ": is the input file; the input is never modified, choose another output");
+                output.string() + ": the output would be the input file; the input is never modified, choose another "
+                                  "output");
   }
 }
 

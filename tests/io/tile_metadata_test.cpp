@@ -234,6 +234,8 @@ TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
     }
     EXPECT_LT(worst_deg, kDegreeTol);
     EXPECT_LT(worst_h, kVsProjTol_m);
+    ::testing::Test::RecordProperty("csv_worst_deg", testing::scientific(worst_deg));
+    ::testing::Test::RecordProperty("csv_worst_h_m", testing::scientific(worst_h));
   }
 
   // PLY, binary and ASCII: ENU(A) as float32 offsets and as doubles ->
@@ -299,6 +301,8 @@ TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
         worst = std::max(worst, (got - to_b.forward(used[i])).norm());
       }
       EXPECT_LT(worst, kVsProjTol_m);
+      ::testing::Test::RecordProperty(std::string("ply_worst_m_") + (binary ? "binary" : "ascii") + (as_float ? "_float" : "_double"),
+                                      testing::scientific(worst));
     }
   }
   // float32 is refused where it cannot hold the coordinates.
@@ -333,6 +337,7 @@ TEST(TileFormats, CrossAirportRoundTripClosesToANanometre) {
     worst = std::max(worst, (Eigen::Vector3d(x[i], y[i], z[i]) - Eigen::Vector3d(x0[i], y0[i], z0[i])).norm());
   }
   EXPECT_LT(worst, kCrossAirportTol_m);
+  ::testing::Test::RecordProperty("round_trip_worst_m", testing::scientific(worst));
 }
 
 TEST(ControlExtentTest, DistanceIsZeroInsideAndGrowsOutside) {
