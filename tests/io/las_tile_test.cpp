@@ -231,6 +231,74 @@ TEST_F(LasTileTest, EveryOutputKindAgreesWithProjToHalfTheQuantizationStep) {
   }
 }
 
+TEST_F(LasTileTest, EveryInputKindAgreesWithProjToHalfTheQuantizationStep) {
+  // The same 10^5 points as ECEF, geodetic, UTM and TM tiles (made by PROJ
+  // from ENU at A), each through the Helmert into ENU at B.
+  const std::size_t n = 100000;
+  const auto enu_points = decode(write("enu.las", random_enu_tile(n, 6, 2000.0, 3)));
+  const TransformFile t = parse_transform_json(kHelmert, "T.json");
+  const std::string cart = "+step +proj=cart +ellps=GRS80";
+  struct InCase {
+    const char* name;
+    ArrayFrame from;
+    std::string to_kind;    // PROJ steps from ECEF to this kind
+    std::string from_kind;  // PROJ steps from this kind to ECEF
+    bool geodetic = false;
+    std::array<double, 3> scale{0.001, 0.001, 0.001};
+  };
+  geodesy::TransverseMercatorParams tmp{Angle::degrees(47.0), Angle::degrees(8.5), 1.0, 600000.0, 200000.0};
+  const std::string tm = "+proj=tmerc +lat_0=47 +lon_0=8.5 +k_0=1 +x_0=600000 +y_0=200000 +ellps=GRS80";
+  const std::vector<InCase> cases = {
+      {"ECEF", {CoordinateKind::ecef, geodesy::Ellipsoid::grs80(), std::nullopt, std::nullopt}, "", ""},
+      {"geodetic", {CoordinateKind::geodetic, geodesy::Ellipsoid::grs80(), std::nullopt, std::nullopt},
+       "+step +inv +proj=cart +ellps=GRS80", cart, true, {1e-9, 1e-9, 0.001}},
+      {"UTM 32N",
+       {CoordinateKind::projected, geodesy::Ellipsoid::grs80(), std::nullopt,
+        geodesy::utm_projection(geodesy::Ellipsoid::grs80(), geodesy::UtmZone{32, geodesy::Hemisphere::north})},
+       "+step +inv +proj=cart +ellps=GRS80 +step +proj=utm +zone=32 +ellps=GRS80",
+       "+step +inv +proj=utm +zone=32 +ellps=GRS80 " + cart},
+      {"TM",
+       {CoordinateKind::projected, geodesy::Ellipsoid::grs80(), std::nullopt,
+        geodesy::ProjectionDef{geodesy::Ellipsoid::grs80(), tmp, std::nullopt}},
+       "+step +inv +proj=cart +ellps=GRS80 +step +proj=" + tm.substr(6), "+step +inv +proj=" + tm.substr(6) + " " + cart},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    // The tile, quantized at its own resolution around its middle.
+    const ProjPipeline make("+proj=pipeline +step +inv " + topocentric(kArpA) + " " + c.to_kind);
+    std::vector<std::array<double, 3>> v(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      Eigen::Vector3d q = make.forward(Eigen::Vector3d(enu_points[i][0], enu_points[i][1], enu_points[i][2]));
+      if (c.geodetic) q = Eigen::Vector3d(testing::proj_degrees(q.x()), testing::proj_degrees(q.y()), q.z());  // lon, lat
+      v[i] = {q.x(), q.y(), q.z()};
+    }
+    LasBuild b;
+    b.scale = c.scale;
+    for (std::size_t k = 0; k < 3; ++k) b.offset[k] = std::round(v[n / 2][k]);
+    for (const auto& p : v) {
+      b.xyz.push_back({static_cast<std::int32_t>(std::lround((p[0] - b.offset[0]) / b.scale[0])),
+                       static_cast<std::int32_t>(std::lround((p[1] - b.offset[1]) / b.scale[1])),
+                       static_cast<std::int32_t>(std::lround((p[2] - b.offset[2]) / b.scale[2]))});
+    }
+    const auto in = write("in.las", b);
+    const PointChain chain(c.from, t, false, std::nullopt, enu_frame(kArpB));
+    const auto r = apply(in, "out.las", chain, TileApplyOptions{c.from, enu_frame(kArpB), std::nullopt, "WKT", 1 << 14, {}});
+    const auto xin = decode(in), xout = decode(dir_ / "out.las");
+    ASSERT_EQ(xout.size(), n);
+    const ProjPipeline proj("+proj=pipeline " + c.from_kind + " +step " + kProjHelmert + " +step " + topocentric(kArpB));
+    double worst = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      Eigen::Vector3d x(xin[i][0], xin[i][1], xin[i][2]);
+      if (c.geodetic) x = Eigen::Vector3d(testing::proj_radians(x.x()), testing::proj_radians(x.y()), x.z());
+      const Eigen::Vector3d e = proj.forward(x);
+      for (std::size_t k = 0; k < 3; ++k) {
+        worst = std::max(worst, std::abs(xout[i][k] - e(static_cast<Eigen::Index>(k))) / (0.5 * r.scale[k] + kVsProjTol_m));
+      }
+    }
+    EXPECT_LE(worst, 1.0) << "(1 = half a step + 1 µm)";
+  }
+}
+
 TEST_F(LasTileTest, WrongHeaderBoundsAreRecoveredAndATrueOverflowIsAnErrorNotAClamp) {
   // Points 3000 km apart along east: at 1 mm the output spans more than
   // int32 unless the offset sits in the middle, which the (wrong) header

@@ -35,7 +35,7 @@ namespace {
 // it is about to use makes that time 0 every call, which static steps
 // ignore; time-dependent steps after topocentric need a pipeline of their own.
 [[gnu::noinline]] void scrub_stack() {
-  volatile unsigned char buf[16384];
+  volatile unsigned char buf[4096];
   for (std::size_t i = 0; i < sizeof buf; ++i) buf[i] = 0;
 }
 
