@@ -135,74 +135,47 @@ void set_points(benchmark::State& state, std::size_t n) {
   state.SetItemsProcessed(state.iterations() * static_cast<benchmark::IterationCount>(n));
 }
 
-void fused_enu_to_enu(benchmark::State& state) {
+// Times `transform` on the three arrays, reloaded (untimed) before each run.
+template <class Transform>
+void time_in_place(benchmark::State& state, Transform&& transform) {
   Work& w = work();
   for (auto _ : state) {
     state.PauseTiming();
     w.load();
     state.ResumeTiming();
-    chain_to_b().apply(w.a, w.b, w.c);
+    transform(w.a, w.b, w.c);
     benchmark::ClobberMemory();
   }
   set_points(state, kPoints);
+}
+
+void fused_enu_to_enu(benchmark::State& state) {
+  time_in_place(state, [](auto& a, auto& b, auto& c) { chain_to_b().apply(a, b, c); });
 }
 
 void proj_enu_to_enu(benchmark::State& state) {
   static const Proj proj(std::string(kProjChain) + kProjToB);
-  Work& w = work();
-  for (auto _ : state) {
-    state.PauseTiming();
-    w.load();
-    state.ResumeTiming();
-    proj.run(w.a, w.b, w.c);
-    benchmark::ClobberMemory();
-  }
-  set_points(state, kPoints);
+  time_in_place(state, [](auto& a, auto& b, auto& c) { proj.run(a, b, c); });
 }
 
 void fused_enu_to_geodetic(benchmark::State& state) {
-  Work& w = work();
-  for (auto _ : state) {
-    state.PauseTiming();
-    w.load();
-    state.ResumeTiming();
-    chain_to_geodetic().apply(w.a, w.b, w.c);
-    benchmark::ClobberMemory();
-  }
-  set_points(state, kPoints);
+  time_in_place(state, [](auto& a, auto& b, auto& c) { chain_to_geodetic().apply(a, b, c); });
 }
 
 void proj_enu_to_geodetic(benchmark::State& state) {
   static const Proj proj(std::string(kProjChain) + kProjToGeodetic);
-  Work& w = work();
-  for (auto _ : state) {
-    state.PauseTiming();
-    w.load();
-    state.ResumeTiming();
-    proj.run(w.a, w.b, w.c);
-    benchmark::ClobberMemory();
-  }
-  set_points(state, kPoints);
+  time_in_place(state, [](auto& a, auto& b, auto& c) { proj.run(a, b, c); });
 }
 
 // The ceiling for an in-place pass: the same three arrays read and written.
 void stream_in_place(benchmark::State& state) {
-  Work& w = work();
-  for (auto _ : state) {
-    state.PauseTiming();
-    w.load();
-    state.ResumeTiming();
-    double* a = w.a.data();
-    double* b = w.b.data();
-    double* c = w.c.data();
+  time_in_place(state, [](std::vector<double>& a, std::vector<double>& b, std::vector<double>& c) {
     for (std::size_t i = 0; i < kPoints; ++i) {
       a[i] = a[i] * 1.0000001 + 0.5;
       b[i] = b[i] * 1.0000001 + 0.5;
       c[i] = c[i] * 1.0000001 + 0.5;
     }
-    benchmark::ClobberMemory();
-  }
-  set_points(state, kPoints);
+  });
 }
 
 // A plain copy of the same bytes into other (already touched) buffers.

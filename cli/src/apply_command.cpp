@@ -772,7 +772,12 @@ CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
 int run_apply(const ApplyOptions& o) {
   std::error_code ec;
   if (!fs::is_directory(o.out_dir, ec)) {
-    throw Error(ErrorKind::io, "E_OUTPUT_DIR", "--out-dir " + o.out_dir + ": not a folder (create it first)");
+    // Created when missing (as mkdir -p); never a file in its place.
+    if (fs::exists(o.out_dir, ec) || !fs::create_directories(o.out_dir, ec) || ec) {
+      throw Error(ErrorKind::io, "E_OUTPUT_DIR",
+                  "--out-dir " + o.out_dir + ": not a folder and cannot be created" +
+                      (ec ? ": " + ec.message() : std::string()));
+    }
   }
   std::optional<io::TransformFile> transform;
   std::string transform_sha;

@@ -82,14 +82,6 @@ class EcefStep {
   std::optional<AffineMap> fixed_;
 };
 
-void write_line(std::ostream& out, const std::vector<std::string>& fields) {
-  for (std::size_t i = 0; i < fields.size(); ++i) {
-    if (i) out << ',';
-    out << fields[i];
-  }
-  out << '\n';
-}
-
 }  // namespace
 
 CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
@@ -195,28 +187,8 @@ void run_convert(const ConvertOptions& o) {
 
   // Output header: the new coordinate columns where the first input
   // coordinate column stood, every other column in its place.
-  std::size_t first_coordinate = header.size();
-  for (std::size_t i = 0; i < header.size(); ++i) {
-    if (columns.is_coordinate(i)) {
-      first_coordinate = i;
-      break;
-    }
-  }
-  std::vector<std::string> out_header;
-  for (std::size_t i = 0; i < header.size(); ++i) {
-    if (i == first_coordinate) {
-      for (const auto& n : encoder.column_names()) out_header.push_back(n);
-    }
-    if (columns.is_coordinate(i)) continue;
-    for (const auto& n : encoder.column_names()) {
-      if (header[i] == n) {
-        throw Error(ErrorKind::input, "E_COLUMN",
-                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] +
-                        "' would appear twice in the output (it is an output coordinate); rename it");
-      }
-    }
-    out_header.push_back(io::csv_quote(header[i]));
-  }
+  std::size_t first_coordinate = 0;
+  const auto out_header = io::output_header(header, columns, encoder.column_names(), source_name, first_coordinate);
 
   // Output: a temporary file renamed at the end, or standard output.
   // Both the output and its provenance sidecar are opened before any row is
@@ -230,7 +202,7 @@ void run_convert(const ConvertOptions& o) {
   }
   std::ostream& out = out_file ? out_file->stream() : std::cout;
   for (const auto& c : reader.leading_comments()) out << c << '\n';
-  write_line(out, out_header);
+  io::write_csv_line(out, out_header);
 
   io::CsvRecord record;
   std::size_t rows = 0;
@@ -253,7 +225,7 @@ void run_convert(const ConvertOptions& o) {
       if (i == first_coordinate) fields.insert(fields.end(), coords.begin(), coords.end());
       if (!columns.is_coordinate(i)) fields.push_back(record.raw[i]);
     }
-    write_line(out, fields);
+    io::write_csv_line(out, fields);
     ++rows;
   }
 

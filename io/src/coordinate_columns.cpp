@@ -1,4 +1,5 @@
 #include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/io/csv.hpp"
 
 #include <algorithm>
 #include <array>
@@ -239,6 +240,32 @@ CoordinateColumns classify_coordinate_header(const std::vector<std::string>& hea
     fail(source, *utm_zone, header[*utm_zone], "a UTM zone column needs easting/northing coordinates");
   }
   return c;
+}
+
+std::vector<std::string> output_header(const std::vector<std::string>& header, const CoordinateColumns& columns,
+                                       const std::vector<std::string>& out_names, std::string_view source,
+                                       std::size_t& first_coordinate) {
+  first_coordinate = header.size();
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (columns.is_coordinate(i)) {
+      first_coordinate = i;
+      break;
+    }
+  }
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (i == first_coordinate) out.insert(out.end(), out_names.begin(), out_names.end());
+    if (columns.is_coordinate(i)) continue;
+    for (const auto& n : out_names) {
+      if (header[i] == n) {
+        throw Error(ErrorKind::input, "E_COLUMN",
+                    std::string(source) + ": header column " + std::to_string(i + 1) + " '" + header[i] +
+                        "' would appear twice in the output (it is an output coordinate); rename it");
+      }
+    }
+    out.push_back(csv_quote(header[i]));
+  }
+  return out;
 }
 
 }  // namespace geoanchor::io

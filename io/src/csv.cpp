@@ -133,4 +133,12 @@ bool CsvReader::next(CsvRecord& record) {
   return false;
 }
 
+void write_csv_line(std::ostream& out, const std::vector<std::string>& fields) {
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    if (i) out << ',';
+    out << fields[i];
+  }
+  out << '\n';
+}
+
 }  // namespace geoanchor::io

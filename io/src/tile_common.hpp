@@ -29,6 +29,15 @@ struct Bounds {
   bool empty() const { return !(min[0] <= max[0]); }
 };
 
+// The bounds of a finished tile into its result (none for an empty tile).
+inline void set_bounds(TileApplyResult& r, const Bounds& in, const Bounds& out) {
+  if (r.points == 0) return;
+  r.min = out.min;
+  r.max = out.max;
+  r.in_min = in.min;
+  r.in_max = in.max;
+}
+
 // The index of the first non-finite value in the three arrays, or n.
 inline std::size_t first_non_finite(std::span<const double> a, std::span<const double> b, std::span<const double> c) {
   for (std::size_t i = 0; i < a.size(); ++i) {

@@ -10,17 +10,6 @@
 #include "tile_common.hpp"
 
 namespace geoanchor::io {
-namespace {
-
-void write_fields(std::ostream& out, const std::vector<std::string>& fields) {
-  for (std::size_t i = 0; i < fields.size(); ++i) {
-    if (i) out << ',';
-    out << fields[i];
-  }
-  out << '\n';
-}
-
-}  // namespace
 
 TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& out, const std::string& out_name,
                                const PointChain& chain, const TileApplyOptions& o) {
@@ -49,28 +38,10 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
   }
   const auto out_names = coordinate_column_names(o.to.kind);
 
-  std::size_t first_coordinate = header.size();
-  for (std::size_t i = 0; i < header.size(); ++i) {
-    if (columns.is_coordinate(i)) {
-      first_coordinate = i;
-      break;
-    }
-  }
-  std::vector<std::string> out_header;
-  for (std::size_t i = 0; i < header.size(); ++i) {
-    if (i == first_coordinate) out_header.insert(out_header.end(), out_names.begin(), out_names.end());
-    if (columns.is_coordinate(i)) continue;
-    for (const auto& n : out_names) {
-      if (header[i] == n) {
-        throw Error(ErrorKind::input, "E_COLUMN",
-                    source + ": header column " + std::to_string(i + 1) + " '" + header[i] +
-                        "' would appear twice in " + out_name + " (it is an output coordinate); rename it");
-      }
-    }
-    out_header.push_back(csv_quote(header[i]));
-  }
+  std::size_t first_coordinate = 0;
+  const auto out_header = output_header(header, columns, out_names, source, first_coordinate);
   for (const auto& c : reader.leading_comments()) out << c << '\n';
-  write_fields(out, out_header);
+  io::write_csv_line(out, out_header);
 
   TileApplyResult r;
   r.storage = "float64";
@@ -127,19 +98,14 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
         }
         if (!columns.is_coordinate(i)) fields.push_back(rec.raw[i]);
       }
-      write_fields(out, fields);
+      io::write_csv_line(out, fields);
       ++k;
     }
     r.points += n;
     if (o.progress) o.progress(r.points);
   }
   if (!out) throw Error(ErrorKind::io, "E_WRITE", out_name + ": write failed");
-  if (r.points) {
-    r.min = out_bounds.min;
-    r.max = out_bounds.max;
-    r.in_min = in_bounds.min;
-    r.in_max = in_bounds.max;
-  }
+  detail::set_bounds(r, in_bounds, out_bounds);
   return r;
 }
 

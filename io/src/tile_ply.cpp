@@ -305,12 +305,7 @@ TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& ou
   // (operator<< of an empty streambuf sets failbit, hence the peek.)
   if (file.peek() != std::char_traits<char>::eof()) out << file.rdbuf();
   if (!out) throw Error(ErrorKind::io, "E_WRITE", out_name + ": write failed");
-  if (r.points) {
-    r.min = out_bounds.min;
-    r.max = out_bounds.max;
-    r.in_min = in_bounds.min;
-    r.in_max = in_bounds.max;
-  }
+  detail::set_bounds(r, in_bounds, out_bounds);
   return r;
 }
 

@@ -83,6 +83,19 @@ class ApplyCli : public CliTest {
 
 std::string g17(double v) { return format_shortest(v); }
 
+// A 14-parameter set ITRF2014 -> GDA2020 (not the published one) with rates
+// large enough that evaluating it at a wrong epoch would show, and the same
+// for PROJ.
+const char* kHelmert14 = R"J({"model": "helmert14", "convention": "position_vector",
+    "source_frame": "ITRF2014", "target_frame": "GDA2020", "reference_epoch": 2020.0,
+    "parameters": {"tx_m": 0.1, "ty_m": -0.2, "tz_m": 0.3, "rx_arcsec": 0.01, "ry_arcsec": -0.02, "rz_arcsec": 0.03,
+                   "ds_ppm": 0.5, "dtx_m_per_year": 0.01, "dty_m_per_year": -0.02, "dtz_m_per_year": 0.03,
+                   "drx_arcsec_per_year": 0.001, "dry_arcsec_per_year": 0.002, "drz_arcsec_per_year": -0.003,
+                   "dds_ppm_per_year": 0.1}})J";
+const char* kProjHelmert14 =
+    "+proj=helmert +x=0.1 +y=-0.2 +z=0.3 +rx=0.01 +ry=-0.02 +rz=0.03 +s=0.5 +dx=0.01 +dy=-0.02 +dz=0.03 +drx=0.001 "
+    "+dry=0.002 +drz=-0.003 +ds=0.1 +t_epoch=2020.0 +convention=position_vector";
+
 TEST_F(ApplyCli, BundledTileIsMovedAsProjWouldAndReadsBackIndependently) {
   const fs::path t = fit();
   const fs::path out = out_dir();
@@ -236,13 +249,7 @@ TEST_F(ApplyCli, ShardsPartitionTheManifestAndParallelJobsWriteTheSameBytes) {
 }
 
 TEST_F(ApplyCli, AFourteenParameterTransformIsEvaluatedAtTheTilesEpochAsProjDoes) {
-  // Rates large enough that evaluating at the wrong epoch would show.
-  write("T14.json", R"J({"model": "helmert14", "convention": "position_vector",
-    "source_frame": "ITRF2014", "target_frame": "GDA2020", "reference_epoch": 2020.0,
-    "parameters": {"tx_m": 0.1, "ty_m": -0.2, "tz_m": 0.3, "rx_arcsec": 0.01, "ry_arcsec": -0.02, "rz_arcsec": 0.03,
-                   "ds_ppm": 0.5, "dtx_m_per_year": 0.01, "dty_m_per_year": -0.02, "dtz_m_per_year": 0.03,
-                   "drx_arcsec_per_year": 0.001, "dry_arcsec_per_year": 0.002, "drz_arcsec_per_year": -0.003,
-                   "dds_ppm_per_year": 0.1}})J");
+  write("T14.json", kHelmert14);
   const std::vector<Eigen::Vector3d> pts = {{-4052052.0, 4212836.0, -2545105.0}, {-4050000.5, 4213000.25, -2546000.75}};
   std::string csv = "id,x_m,y_m,z_m\n";
   for (std::size_t i = 0; i < pts.size(); ++i) {
@@ -258,8 +265,7 @@ TEST_F(ApplyCli, AFourteenParameterTransformIsEvaluatedAtTheTilesEpochAsProjDoes
   const json side = json::parse(slurp(out / "tile.csv.geoanchor.json"));
   EXPECT_EQ(side["frame"], "GDA2020@2022.5");
   EXPECT_EQ(side["provenance"]["observation_epoch"], 2022.5);
-  const ProjPipeline proj("+proj=helmert +x=0.1 +y=-0.2 +z=0.3 +rx=0.01 +ry=-0.02 +rz=0.03 +s=0.5 +dx=0.01 +dy=-0.02 "
-                          "+dz=0.03 +drx=0.001 +dry=0.002 +drz=-0.003 +ds=0.1 +t_epoch=2020.0 +convention=position_vector");
+  const ProjPipeline proj(kProjHelmert14);
   std::istringstream lines(slurp(out / "tile.csv"));
   std::string line;
   std::getline(lines, line);
@@ -287,12 +293,7 @@ TEST_F(ApplyCli, AFourteenParameterTransformIsEvaluatedAtTheTilesEpochAsProjDoes
 }
 
 TEST_F(ApplyCli, PerPointEpochsFromLasGpsTimeAgreeWithProjAtEachPointsTime) {
-  write("T14.json", R"J({"model": "helmert14", "convention": "position_vector",
-    "source_frame": "ITRF2014", "target_frame": "GDA2020", "reference_epoch": 2020.0,
-    "parameters": {"tx_m": 0.1, "ty_m": -0.2, "tz_m": 0.3, "rx_arcsec": 0.01, "ry_arcsec": -0.02, "rz_arcsec": 0.03,
-                   "ds_ppm": 0.5, "dtx_m_per_year": 0.01, "dty_m_per_year": -0.02, "dtz_m_per_year": 0.03,
-                   "drx_arcsec_per_year": 0.001, "dry_arcsec_per_year": 0.002, "drz_arcsec_per_year": -0.003,
-                   "dds_ppm_per_year": 0.1}})J");
+  write("T14.json", kHelmert14);
   // An ECEF tile (1 mm) whose points were taken over six years.
   testing::LasBuild b;
   b.offset = {-4052000.0, 4212800.0, -2545100.0};
@@ -322,8 +323,7 @@ TEST_F(ApplyCli, PerPointEpochsFromLasGpsTimeAgreeWithProjAtEachPointsTime) {
 
   const json got = las_verify(out / "tile.las");
   ASSERT_FALSE(got.is_null());
-  const ProjPipeline proj("+proj=helmert +x=0.1 +y=-0.2 +z=0.3 +rx=0.01 +ry=-0.02 +rz=0.03 +s=0.5 +dx=0.01 +dy=-0.02 "
-                          "+dz=0.03 +drx=0.001 +dry=0.002 +drz=-0.003 +ds=0.1 +t_epoch=2020.0 +convention=position_vector");
+  const ProjPipeline proj(kProjHelmert14);
   using namespace std::chrono;
   const sys_seconds gps_epoch = sys_days{year{1980} / January / 6};
   const double half_step = 0.0005;

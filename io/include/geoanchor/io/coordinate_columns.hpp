@@ -46,6 +46,15 @@ struct CoordinateColumns {
 // "h_m", ...), with `role` inserted before the unit when non-empty.
 std::vector<std::string> coordinate_column_names(CoordinateKind kind, std::string_view role = {});
 
+// The header of an output whose coordinates are `out_names`: they take the
+// place of the first input coordinate column, every other column stays in
+// its place (quoted as needed). `first_coordinate` receives that place.
+// Throws geoanchor::Error (input) naming `source` when a kept column has an
+// output coordinate's name.
+std::vector<std::string> output_header(const std::vector<std::string>& header, const CoordinateColumns& columns,
+                                       const std::vector<std::string>& out_names, std::string_view source,
+                                       std::size_t& first_coordinate);
+
 // Throws geoanchor::Error (input) naming `source`, the column number and
 // name: for a header that mixes kinds, lacks a required column, repeats one,
 // or has a coordinate-like column of unknown unit.

@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <istream>
+#include <ostream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -62,5 +63,8 @@ double number_cell(const CsvRecord& record, std::size_t column, const std::vecto
 
 // Quotes `value` if it holds a comma, quote, or leading/trailing space.
 std::string csv_quote(std::string_view value);
+
+// Writes `fields` (already quoted as needed) as one line.
+void write_csv_line(std::ostream& out, const std::vector<std::string>& fields);
 
 }  // namespace geoanchor::io
