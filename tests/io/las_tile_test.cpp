@@ -28,6 +28,7 @@ using testing::write_bytes;
 constexpr double kVsProjTol_m = 1e-6;           // issue acceptance, beyond half the quantization step
 constexpr double kMetresPerDegree = 111319.49;  // only to express kVsProjTol_m in degrees
 constexpr double kRoundTripTol_m = 1e-9;        // identity chain: decoded values re-quantized on the same grid
+constexpr double kDecodeTol_m = 1e-12;          // integer × scale + offset, as the reader decodes it
 
 const char* kHelmert = R"J({"model": "helmert7", "convention": "position_vector",
   "source_frame": "ITRF2014@2024.5", "target_frame": "ETRF2000@2024.5",
@@ -130,7 +131,7 @@ TEST_F(LasTileTest, ReaderReadsEveryVersionAndPointFormat) {
       const auto bytes = build_las(b);
       const std::size_t start = bytes.size() - records.size();
       EXPECT_TRUE(std::equal(records.begin(), records.end(), bytes.begin() + static_cast<std::ptrdiff_t>(start)));
-      EXPECT_NEAR(xyz[3][0], b.xyz[3][0] * 0.001, 1e-12);
+      EXPECT_NEAR(xyz[3][0], b.xyz[3][0] * 0.001, kDecodeTol_m);
     }
   }
 }
@@ -318,7 +319,7 @@ TEST_F(LasTileTest, WrongHeaderBoundsAreRecoveredAndATrueOverflowIsAnErrorNotACl
   EXPECT_GT(std::abs(r.offset[1] - arp.y()), 1.0e6) << "the header's bounds were used";
   for (std::size_t i = 0; i < 3; ++i) {
     const Eigen::Vector3d e = plane.ecef_from_enu({Eigen::Vector3d(b.xyz[i][0] * 0.001 + 1500000.0, 0, 0), kArpA}).m;
-    for (std::size_t k = 0; k < 3; ++k) EXPECT_NEAR(xout[i][k], e(static_cast<Eigen::Index>(k)), 0.5 * r.scale[k] + 1e-9);
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_NEAR(xout[i][k], e(static_cast<Eigen::Index>(k)), 0.5 * r.scale[k] + kRoundTripTol_m);
   }
   // 5000 km at 1 mm cannot be stored.
   LasBuild wide;
