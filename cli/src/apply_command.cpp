@@ -217,9 +217,14 @@ TileMetadata Planner::input_metadata(TilePlan& p) const {
   const fs::path side_path = io::sidecar_path(p.input);
   std::error_code ec;
   if (fs::exists(side_path, ec)) side = io::read_tile_metadata(side_path);
+  bool geotiff_only = false;
   if (p.format == io::TileFormat::las) {
     io::LasReader reader(p.input);
-    if (const auto w = reader.wkt()) wkt = io::tile_metadata_from_wkt(*w, tile);
+    if (const auto w = reader.wkt()) {
+      wkt = io::tile_metadata_from_wkt(*w, tile);
+    } else {
+      for (const auto& v : reader.vlrs()) geotiff_only |= io::is_geotiff_crs_vlr(v);
+    }
   }
   if (side && wkt) {
     // A WKT written by another tool may name the realization without the
@@ -238,6 +243,18 @@ TileMetadata Planner::input_metadata(TilePlan& p) const {
     check_flags_against(*side, p.in_frame_source, tile);
     return *side;
   }
+  if (wkt && !wkt->frame) {
+    // A datum geoanchor cannot name: --from-frame names it, and is recorded.
+    if (!from_frame_) {
+      throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
+                  tile + ": the LAS WKT's datum '" + wkt->wkt_datum +
+                      "' is not a frame geoanchor can name; give --from-frame NAME@EPOCH or a sidecar");
+    }
+    wkt->frame = from_frame_;
+    p.in_frame_source = "LAS WKT (datum '" + wkt->wkt_datum + "' named by --from-frame)";
+    check_flags_against(*wkt, p.in_frame_source, tile);
+    return *wkt;
+  }
   if (wkt) {
     p.in_frame_source = "LAS WKT";
     check_flags_against(*wkt, p.in_frame_source, tile);
@@ -250,6 +267,9 @@ TileMetadata Planner::input_metadata(TilePlan& p) const {
     throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
                 tile + ": the tile's frame is unknown: no sidecar " + side_path.filename().string() +
                     (p.format == io::TileFormat::las ? ", no WKT in the LAS file" : "") +
+                    (geotiff_only ? " (its GeoTIFF CRS keys are not read: they cannot state a realization and "
+                                    "epoch)"
+                                  : "") +
                     " and no --from-frame NAME@EPOCH");
   }
   m.frame = from_frame_;

@@ -328,9 +328,10 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
     try {
       m.frame = geodesy::Frame::parse(datum_text, std::string(source) + ": LAS WKT datum");
     } catch (const Error&) {
-      fail(source, "datum '" + datum_text + "' is not a frame geoanchor can name; give --from-frame NAME@EPOCH");
+      m.frame.reset();  // a datum geoanchor cannot name: the caller asks for --from-frame
     }
   }
+  m.wkt_datum = datum_text;
   return m;
 }
 

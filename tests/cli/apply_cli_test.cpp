@@ -191,6 +191,37 @@ TEST_F(ApplyCli, AnUnknownFrameOrAFlagThatContradictsTheSidecarIsAnError) {
   EXPECT_EQ(json::parse(slurp(out / "tile.las.geoanchor.json"))["provenance"]["input_frame_from"], "command line");
 }
 
+TEST_F(ApplyCli, AWktDatumWithoutAFrameNameNeedsFromFrameAndGeoTiffKeysAreNotGuessed) {
+  const std::string wkt =
+      "GEODCRS[\"site\",DATUM[\"Airport local datum 1998\",ELLIPSOID[\"GRS 1980\",6378137,298.257222101]],"
+      "CS[Cartesian,3],AXIS[\"(X)\",geocentricX,LENGTHUNIT[\"metre\",1]],AXIS[\"(Y)\",geocentricY,"
+      "LENGTHUNIT[\"metre\",1]],AXIS[\"(Z)\",geocentricZ,LENGTHUNIT[\"metre\",1]]]";
+  testing::LasBuild b;
+  b.offset = {4277000.0, 639000.0, 4672000.0};
+  b.xyz = {{686016, 405550, 438669}, {687016, 406550, 439669}};
+  b.vlrs.push_back({"LASF_Projection", 2112, "", std::vector<std::uint8_t>(wkt.begin(), wkt.end())});
+  fs::create_directories(path("in"));
+  testing::write_bytes(path("in/site.las"), testing::build_las(b));
+  const fs::path out = out_dir();
+  const RunResult unnamed = run("apply " + path("in/site.las").string() + " --to geodetic --out-dir " + out.string());
+  EXPECT_EQ(unnamed.exit_code, 3);
+  EXPECT_NE(unnamed.err.find("datum 'Airport local datum 1998' is not a frame geoanchor can name"), std::string::npos)
+      << unnamed.err;
+  const RunResult named = run("apply " + path("in/site.las").string() +
+                              " --to geodetic --from-frame ITRF2014@2024.5 --out-dir " + out.string());
+  ASSERT_EQ(named.exit_code, 0) << named.err;
+  const json side = json::parse(slurp(out / "site.las.geoanchor.json"));
+  EXPECT_EQ(side["frame"], "ITRF2014@2024.5");
+  EXPECT_EQ(side["provenance"]["input_frame_from"], "LAS WKT (datum 'Airport local datum 1998' named by --from-frame)");
+
+  testing::LasBuild g = b;
+  g.vlrs = {{"LASF_Projection", 34735, "GeoKeyDirectoryTag", std::vector<std::uint8_t>(16, 1)}};
+  testing::write_bytes(path("in/geotiff.las"), testing::build_las(g));
+  const RunResult geotiff = run("apply " + path("in/geotiff.las").string() + " --out-dir " + out.string());
+  EXPECT_EQ(geotiff.exit_code, 3);
+  EXPECT_NE(geotiff.err.find("its GeoTIFF CRS keys are not read"), std::string::npos) << geotiff.err;
+}
+
 TEST_F(ApplyCli, ARerunSkipsUpToDateOutputsButNeverOverwritesOthersWithoutTheFlag) {
   const fs::path t = fit();
   const fs::path out = out_dir();

@@ -45,6 +45,7 @@ struct TileMetadata {
   std::string survey_method;
   std::optional<double> rtk_fixed_percent;
   std::string provenance_json;  // an object, as JSON text ("" when absent)
+  std::string wkt_datum;        // read from a WKT: the datum's name as written there
 };
 
 // "enu", "ned", "ecef", "geodetic", "utm" or "tm".
@@ -69,10 +70,11 @@ std::string to_json_text(const TileMetadata& m);
 // or a missing frame.
 std::string tile_crs_wkt(const TileMetadata& m);
 
-// The frame and coordinates a WKT describes, read through PROJ. Throws
-// geoanchor::Error (input) naming `source` when PROJ cannot parse the WKT or
-// it describes something a tile cannot be (a 2D CRS, an unknown projection
-// method, a datum whose frame cannot be named).
+// The frame and coordinates a WKT describes, read through PROJ; `frame` is
+// empty when the datum is not one geoanchor can name (its name is then in
+// `wkt_datum`). Throws geoanchor::Error (input) naming `source` when PROJ
+// cannot parse the WKT or it describes something a tile cannot be (a 2D
+// CRS, an unknown projection method).
 TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view source);
 
 // "" when the two describe the same frame and coordinates; otherwise what
