@@ -1,0 +1,73 @@
+#pragma once
+// What the residual workbench shows and changes, without any window: the
+// control set, the user's choices (model, convention, points left out) and
+// the fit that follows from them. Both GUI shells (GLFW window, OSMesa
+// snapshot) draw from this; tests drive it directly.
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "geoanchor/geodesy/control_point.hpp"
+#include "geoanchor/geodesy/positions.hpp"
+#include "geoanchor/solver/helmert_fit.hpp"
+
+namespace geoanchor::gui {
+
+// One row of the point table.
+struct PointRow {
+  std::string id;
+  Eigen::Vector2d plan_en_m = Eigen::Vector2d::Zero();         // source position, ENU at the network's centroid
+  Eigen::Vector3d residual_enu_mm = Eigen::Vector3d::Zero();  // target − transformed source
+  double w_test = 0.0;                                         // of largest magnitude, signed
+  double mdb_mm = 0.0;
+  bool used = true;           // entered the final fit
+  bool outlier = false;       // removed by data snooping
+  bool left_out = false;      // the user left it out
+  std::string note;           // why it was not used
+};
+
+// One parameter with its unit and σ, as the solver reports it.
+struct ParameterRow {
+  std::string name;  // tx_m, rx_arcsec, ds_ppm, ...
+  double value = 0.0;
+  double sigma = 0.0;
+};
+
+class WorkbenchModel {
+ public:
+  // Fits at once; a refused fit leaves fit() empty and error() saying why.
+  WorkbenchModel(geodesy::ControlSet control, solver::FitOptions options);
+
+  // The user's choices; each refits.
+  void set_left_out(std::string_view id, bool left_out);  // no-op for an unknown id
+  void set_model(solver::FitModel model);
+  void set_convention(solver::Convention convention);
+
+  const solver::FitOptions& options() const { return options_; }
+  const geodesy::ControlSet& control() const { return control_; }
+  const std::optional<solver::FitResult>& fit() const { return fit_; }
+  const std::string& error() const { return error_; }
+  // Increments with every refit, so that views can tell a new result.
+  unsigned generation() const { return generation_; }
+
+  std::vector<PointRow> rows() const;
+  std::vector<ParameterRow> parameters() const;
+  // The network's centroid, origin of the plan view.
+  const geodesy::LocalOrigin& plan_origin() const { return plan_origin_; }
+
+ private:
+  void refit();
+  geodesy::ControlSet control_;
+  solver::FitOptions options_;
+  std::optional<solver::FitResult> fit_;
+  std::string error_;
+  unsigned generation_ = 0;
+  geodesy::LocalOrigin plan_origin_;
+  std::vector<Eigen::Vector2d> plan_en_m_;
+};
+
+}  // namespace geoanchor::gui

@@ -1,0 +1,90 @@
+#include "geoanchor/gui/workbench_model.hpp"
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
+
+namespace geoanchor::gui {
+
+WorkbenchModel::WorkbenchModel(geodesy::ControlSet control, solver::FitOptions options)
+    : control_(std::move(control)), options_(std::move(options)) {
+  // The plan: source positions in ENU at their centroid (WGS 84 normal; the
+  // plan is a picture, metres to a part in 10⁶).
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : control_.points) mean += p.source.m;
+  if (!control_.points.empty()) mean /= static_cast<double>(control_.points.size());
+  const geodesy::GeocentricConverter wgs84(geodesy::Ellipsoid::wgs84());
+  plan_origin_.point = wgs84.geodetic_from_ecef(geodesy::EcefPosition(mean));
+  plan_origin_.ellipsoid = geodesy::Ellipsoid::wgs84();
+  const geodesy::LocalTangentPlane plane(plan_origin_);
+  for (const auto& p : control_.points) plan_en_m_.push_back(plane.enu_from_ecef(p.source).enu_m.head<2>());
+  refit();
+}
+
+void WorkbenchModel::set_left_out(std::string_view id, bool left_out) {
+  bool changed = false;
+  for (auto& p : control_.points) {
+    if (p.id == id && p.use == left_out) {
+      p.use = !left_out;
+      changed = true;
+    }
+  }
+  if (changed) refit();
+}
+
+void WorkbenchModel::set_model(solver::FitModel model) {
+  options_.model = model;
+  refit();
+}
+
+void WorkbenchModel::set_convention(solver::Convention convention) {
+  options_.convention = convention;
+  refit();
+}
+
+void WorkbenchModel::refit() {
+  ++generation_;
+  try {
+    fit_ = solver::fit_helmert(control_, options_);
+    error_.clear();
+  } catch (const Error& e) {
+    fit_.reset();
+    error_ = e.what();
+  }
+}
+
+std::vector<PointRow> WorkbenchModel::rows() const {
+  std::vector<PointRow> out;
+  for (std::size_t i = 0; i < control_.points.size(); ++i) {
+    PointRow r;
+    r.id = control_.points[i].id;
+    r.plan_en_m = plan_en_m_[i];
+    r.left_out = !control_.points[i].use;
+    if (fit_ && i < fit_->points.size()) {
+      const auto& p = fit_->points[i];
+      r.residual_enu_mm = 1000.0 * p.residual_enu_m;
+      Eigen::Index worst = 0;
+      p.w_enu.cwiseAbs().maxCoeff(&worst);
+      r.w_test = p.w_enu(worst);
+      r.mdb_mm = 1000.0 * p.mdb_m;
+      r.used = p.used;
+      r.outlier = p.outlier;
+      r.note = p.removed_because;
+    } else {
+      r.used = false;
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+std::vector<ParameterRow> WorkbenchModel::parameters() const {
+  std::vector<ParameterRow> out;
+  if (!fit_) return out;
+  for (const auto& p : fit_->parameters) {
+    if (p.estimated) out.push_back({p.name, p.value, p.sigma});
+  }
+  return out;
+}
+
+}  // namespace geoanchor::gui

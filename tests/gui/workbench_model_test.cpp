@@ -1,0 +1,88 @@
+// The workbench model driven without a window: leaving a point out refits,
+// and the table and the parameters are what the solver says for that set.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "geoanchor/gui/workbench_model.hpp"
+#include "geoanchor/io/control_csv.hpp"
+
+namespace geoanchor::gui {
+namespace {
+
+const std::string kControl = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv";
+
+solver::FitOptions helmert7_pv() {
+  solver::FitOptions o;
+  o.model = solver::FitModel::helmert7;
+  o.convention = solver::Convention::position_vector;
+  return o;
+}
+
+const PointRow& row(const std::vector<PointRow>& rows, const std::string& id) {
+  const auto it = std::find_if(rows.begin(), rows.end(), [&](const PointRow& r) { return r.id == id; });
+  if (it == rows.end()) throw std::runtime_error("no row " + id);
+  return *it;
+}
+
+TEST(WorkbenchModel, LeavingAPointOutRefitsAsTheSolverWouldAndPuttingItBackRestoresTheFit) {
+  const geodesy::ControlSet set = io::read_control_set(kControl, io::ControlReadOptions{});
+  WorkbenchModel model(set, helmert7_pv());
+  ASSERT_TRUE(model.fit().has_value()) << model.error();
+  const auto before = model.parameters();
+  ASSERT_EQ(before.size(), 7u);
+  // The fixture's planted blunder is found by data snooping and shown so.
+  EXPECT_TRUE(row(model.rows(), "P17").outlier);
+  EXPECT_FALSE(row(model.rows(), "P17").used);
+
+  const unsigned generation = model.generation();
+  model.set_left_out("P03", true);
+  EXPECT_EQ(model.generation(), generation + 1);
+  geodesy::ControlSet without = set;
+  for (auto& p : without.points) p.use = p.id != "P03";
+  const solver::FitResult expected = solver::fit_helmert(without, helmert7_pv());
+  const auto after = model.parameters();
+  ASSERT_EQ(after.size(), 7u);
+  std::size_t k = 0;
+  for (const auto& p : expected.parameters) {
+    if (!p.estimated) continue;
+    EXPECT_EQ(after[k].name, p.name);
+    EXPECT_EQ(after[k].value, p.value) << p.name;
+    EXPECT_EQ(after[k].sigma, p.sigma) << p.name;
+    EXPECT_NE(after[k].value, before[k].value) << p.name << " did not change";
+    ++k;
+  }
+  const auto rows = model.rows();
+  const PointRow& p03 = row(rows, "P03");
+  EXPECT_TRUE(p03.left_out);
+  EXPECT_FALSE(p03.used);
+  EXPECT_EQ(p03.note, "use = 0 in the control set");
+  EXPECT_EQ(model.fit()->sigma0, expected.sigma0);
+
+  model.set_left_out("P03", false);
+  const auto restored = model.parameters();
+  for (std::size_t i = 0; i < restored.size(); ++i) EXPECT_EQ(restored[i].value, before[i].value) << restored[i].name;
+  model.set_left_out("NO-SUCH-ID", true);  // nothing to do, no refit
+  EXPECT_EQ(model.generation(), generation + 2);
+}
+
+TEST(WorkbenchModel, ChangingModelOrConventionRefits) {
+  WorkbenchModel model(io::read_control_set(kControl, io::ControlReadOptions{}), helmert7_pv());
+  const auto pv = model.parameters();
+  model.set_convention(solver::Convention::coordinate_frame);
+  const auto cf = model.parameters();
+  ASSERT_EQ(cf.size(), pv.size());
+  // Switching the convention negates the rotations only (RELIABILITY.md, invariant 3).
+  for (std::size_t i = 0; i < pv.size(); ++i) {
+    const bool rotation = pv[i].name.rfind("r", 0) == 0;
+    EXPECT_DOUBLE_EQ(cf[i].value, rotation ? -pv[i].value : pv[i].value) << pv[i].name;
+  }
+  model.set_model(solver::FitModel::translation3);
+  std::vector<std::string> names;
+  for (const auto& p : model.parameters()) names.push_back(p.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"tx_m", "ty_m", "tz_m"}));
+}
+
+}  // namespace
+}  // namespace geoanchor::gui
