@@ -1,13 +1,15 @@
 #include "geoanchor/gui/workbench_model.hpp"
 
+#include <chrono>
+
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 
 namespace geoanchor::gui {
 
-WorkbenchModel::WorkbenchModel(geodesy::ControlSet control, solver::FitOptions options)
-    : control_(std::move(control)), options_(std::move(options)) {
+WorkbenchModel::WorkbenchModel(geodesy::ControlSet control, solver::FitOptions options, std::size_t async_from_points)
+    : control_(std::move(control)), options_(std::move(options)), async_from_points_(async_from_points) {
   // The plan: source positions in ENU at their centroid (WGS 84 normal; the
   // plan is a picture, metres to a part in 10⁶).
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -19,6 +21,10 @@ WorkbenchModel::WorkbenchModel(geodesy::ControlSet control, solver::FitOptions o
   const geodesy::LocalTangentPlane plane(plan_origin_);
   for (const auto& p : control_.points) plan_en_m_.push_back(plane.enu_from_ecef(p.source).enu_m.head<2>());
   refit();
+}
+
+WorkbenchModel::~WorkbenchModel() {
+  if (pending_.valid()) pending_.wait();  // the worker holds copies only, but finish it
 }
 
 void WorkbenchModel::set_left_out(std::string_view id, bool left_out) {
@@ -42,14 +48,44 @@ void WorkbenchModel::set_convention(solver::Convention convention) {
   refit();
 }
 
-void WorkbenchModel::refit() {
-  ++generation_;
+WorkbenchModel::Outcome WorkbenchModel::run_fit(const geodesy::ControlSet& control, const solver::FitOptions& options) {
   try {
-    fit_ = solver::fit_helmert(control_, options_);
-    error_.clear();
+    return {solver::fit_helmert(control, options), ""};
   } catch (const Error& e) {
-    fit_.reset();
-    error_ = e.what();
+    return {std::nullopt, e.what()};
+  }
+}
+
+void WorkbenchModel::take(Outcome outcome) {
+  fit_ = std::move(outcome.fit);
+  error_ = std::move(outcome.error);
+  ++generation_;
+}
+
+void WorkbenchModel::refit() {
+  if (control_.points.size() < async_from_points_) {
+    take(run_fit(control_, options_));
+    return;
+  }
+  if (pending_.valid()) {  // one at a time: the latest choices run next
+    dirty_ = true;
+    return;
+  }
+  dirty_ = false;
+  pending_ = std::async(std::launch::async, [control = control_, options = options_] { return run_fit(control, options); });
+}
+
+bool WorkbenchModel::poll() {
+  if (!pending_.valid() || pending_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
+  take(pending_.get());
+  if (dirty_) refit();
+  return true;
+}
+
+void WorkbenchModel::wait() {
+  while (busy()) {
+    if (pending_.valid()) pending_.wait();
+    poll();
   }
 }
 

@@ -84,5 +84,26 @@ TEST(WorkbenchModel, ChangingModelOrConventionRefits) {
   EXPECT_EQ(names, (std::vector<std::string>{"tx_m", "ty_m", "tz_m"}));
 }
 
+TEST(WorkbenchModel, OnTheWorkerThreadTheLatestChoicesWinAndTheShownFitIsTheirs) {
+  const geodesy::ControlSet set = io::read_control_set(kControl, io::ControlReadOptions{});
+  WorkbenchModel model(set, helmert7_pv(), /*async_from_points=*/0);  // every refit on the worker
+  model.wait();
+  ASSERT_TRUE(model.fit().has_value()) << model.error();
+  const auto before = model.parameters();
+  // Two choices in a row: the second one queues behind the first and wins.
+  model.set_left_out("P03", true);
+  model.set_left_out("P04", true);
+  EXPECT_TRUE(model.busy());
+  EXPECT_EQ(model.parameters()[0].value, before[0].value);  // still the last shown fit
+  model.wait();
+  EXPECT_FALSE(model.busy());
+  geodesy::ControlSet without = set;
+  for (auto& p : without.points) p.use = p.id != "P03" && p.id != "P04";
+  const solver::FitResult expected = solver::fit_helmert(without, helmert7_pv());
+  EXPECT_EQ(model.fit()->sigma0, expected.sigma0);
+  EXPECT_EQ(model.parameters()[0].value, expected.parameters[0].value);
+  EXPECT_TRUE(row(model.rows(), "P04").left_out);
+}
+
 }  // namespace
 }  // namespace geoanchor::gui

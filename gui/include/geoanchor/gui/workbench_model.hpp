@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <future>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -39,10 +40,19 @@ struct ParameterRow {
 
 class WorkbenchModel {
  public:
-  // Fits at once; a refused fit leaves fit() empty and error() saying why.
-  WorkbenchModel(geodesy::ControlSet control, solver::FitOptions options);
+  // Sets with at least this many points refit on a worker thread, so that
+  // a window keeps drawing the last fit meanwhile.
+  static constexpr std::size_t kDefaultAsyncFrom = 2000;
 
-  // The user's choices; each refits.
+  // Fits at once; a refused fit leaves fit() empty and error() saying why.
+  WorkbenchModel(geodesy::ControlSet control, solver::FitOptions options,
+                 std::size_t async_from_points = kDefaultAsyncFrom);
+  ~WorkbenchModel();
+  WorkbenchModel(const WorkbenchModel&) = delete;
+  WorkbenchModel& operator=(const WorkbenchModel&) = delete;
+
+  // The user's choices; each refits (on the worker thread for large sets:
+  // the shown fit changes when poll() takes the result).
   void set_left_out(std::string_view id, bool left_out);  // no-op for an unknown id
   void set_model(solver::FitModel model);
   void set_convention(solver::Convention convention);
@@ -59,8 +69,22 @@ class WorkbenchModel {
   // The network's centroid, origin of the plan view.
   const geodesy::LocalOrigin& plan_origin() const { return plan_origin_; }
 
+  // A refit is running or waiting to run.
+  bool busy() const { return pending_.valid() || dirty_; }
+  // Takes a finished refit, if any, and starts the next one if the choices
+  // changed meanwhile; true when the shown fit changed. Call once a frame.
+  bool poll();
+  // Until the fit shown is the one for the current choices.
+  void wait();
+
  private:
+  struct Outcome {
+    std::optional<solver::FitResult> fit;
+    std::string error;
+  };
+  static Outcome run_fit(const geodesy::ControlSet& control, const solver::FitOptions& options);
   void refit();
+  void take(Outcome outcome);
   geodesy::ControlSet control_;
   solver::FitOptions options_;
   std::optional<solver::FitResult> fit_;
@@ -68,6 +92,9 @@ class WorkbenchModel {
   unsigned generation_ = 0;
   geodesy::LocalOrigin plan_origin_;
   std::vector<Eigen::Vector2d> plan_en_m_;
+  std::size_t async_from_points_;
+  std::future<Outcome> pending_;
+  bool dirty_ = false;  // the choices changed while a refit was running
 };
 
 }  // namespace geoanchor::gui
