@@ -13,6 +13,7 @@
 #include "geoanchor/io/control_csv.hpp"
 #include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
+#include "geoanchor/solver/model_comparison.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
 
@@ -260,68 +261,29 @@ namespace {
 // Fits every model the data allow on the same points (no data snooping, so
 // that the information criterion compares like with like) and prints them.
 int run_compare(const geodesy::ControlSet& set, const solver::FitOptions& base) {
-  std::vector<FitModel> models = {FitModel::translation3};
-  if (base.convention) {
-    models.push_back(FitModel::helmert6);
-    models.push_back(FitModel::helmert7);
-    bool epochs = !set.points.empty();
-    double lo = 1e300, hi = -1e300;
-    for (const auto& p : set.points) {
-      if (!p.epoch) {
-        epochs = false;
-        break;
-      }
-      lo = std::min(lo, p.epoch->year);
-      hi = std::max(hi, p.epoch->year);
-    }
-    if (epochs && hi > lo) models.push_back(FitModel::helmert14);
-  }
-  if (base.nominal_origin) {
-    models.push_back(FitModel::enu_origin);
-    models.push_back(FitModel::site_calibration);
-  }
   std::cout << "geoanchor fit --compare: " << set.source_name << " (" << set.points.size()
             << " points; data snooping off so that every model sees the same points)\n";
   if (!base.convention) std::cout << "  (give --convention to include the models with rotations)\n";
   std::cout << "\n  model              u    dof      σ0   global test        max|w|        AIC\n";
-  struct Row {
-    std::string name;
-    double aic;
-  };
-  std::vector<Row> rows;
-  for (FitModel m : models) {
-    solver::FitOptions fo = base;
-    fo.model = m;
-    fo.data_snooping = false;
-    if (m == FitModel::helmert14) fo.reference_epoch.reset();
+  const auto rows = solver::compare_models(set, base);
+  const solver::ModelComparison* best = nullptr;
+  for (const auto& c : rows) {
     char line[200];
-    try {
-      const solver::FitResult r = solver::fit_helmert(set, fo);
-      int u = 0;
-      for (const auto& p : r.parameters) u += p.estimated ? 1 : 0;
-      double max_w = 0.0;
-      for (const auto& p : r.points) {
-        if (p.used) max_w = std::max(max_w, p.w_max);
-      }
-      const int obs = r.dof + u;
-      // AIC = −2 ln L + 2u: Ω + 2u with a-priori sigmas, else from the estimated variance.
-      const double aic = set.has_a_priori_sigmas ? r.global_test.statistic + 2.0 * u
-                                                 : obs * std::log(r.global_test.statistic / obs) + 2.0 * u;
-      const auto& g = r.global_test;
-      const std::string verdict = !g.applicable ? "n/a" : g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED high" : "FAILED low";
-      std::snprintf(line, sizeof line, "  %-16s %3d %6d %8.3f   %-12s %10.2f %10.1f\n", std::string(solver::to_string(m)).c_str(),
-                    u, r.dof, r.sigma0, verdict.c_str(), max_w, aic);
-      rows.push_back({std::string(solver::to_string(m)), aic});
-    } catch (const Error& e) {
-      std::snprintf(line, sizeof line, "  %-16s refused: ", std::string(solver::to_string(m)).c_str());
-      std::cout << line << e.what() << "\n";
+    const std::string name(solver::to_string(c.model));
+    if (!c.fit) {
+      std::snprintf(line, sizeof line, "  %-16s refused: ", name.c_str());
+      std::cout << line << c.refused << "\n";
       continue;
     }
+    const auto& g = c.fit->global_test;
+    const std::string verdict = !g.applicable ? "n/a" : g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED high" : "FAILED low";
+    std::snprintf(line, sizeof line, "  %-16s %3d %6d %8.3f   %-12s %10.2f %10.1f\n", name.c_str(), c.parameters, c.fit->dof,
+                  c.fit->sigma0, verdict.c_str(), c.max_w, c.aic);
     std::cout << line;
+    if (!best || c.aic < best->aic) best = &c;
   }
-  if (!rows.empty()) {
-    const auto best = std::min_element(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.aic < b.aic; });
-    std::cout << "\n  lowest AIC: " << best->name
+  if (best) {
+    std::cout << "\n  lowest AIC: " << solver::to_string(best->model)
               << " (AIC = Ω + 2u with a-priori sigmas; differences above ~10 are strong evidence)\n";
   }
   return 0;

@@ -84,6 +84,31 @@ TEST(WorkbenchModel, ChangingModelOrConventionRefits) {
   EXPECT_EQ(names, (std::vector<std::string>{"tx_m", "ty_m", "tz_m"}));
 }
 
+TEST(WorkbenchModel, TheComparisonPanelFitsEveryModelOnThePointsInUse) {
+  WorkbenchModel model(io::read_control_set(kControl, io::ControlReadOptions{}), helmert7_pv());
+  model.set_left_out("P17", true);  // the planted blunder
+  const auto rows = model.comparison();
+  std::vector<std::string> names;
+  for (const auto& c : rows) names.push_back(std::string(solver::to_string(c.model)));
+  EXPECT_EQ(names, (std::vector<std::string>{"translation3", "helmert6", "helmert7"}));
+  // Each row is the solver's fit of the same points without data snooping.
+  solver::FitOptions o = helmert7_pv();
+  o.data_snooping = false;
+  geodesy::ControlSet set = model.control();
+  const solver::FitResult direct = solver::fit_helmert(set, o);
+  ASSERT_TRUE(rows[2].fit.has_value()) << rows[2].refused;
+  EXPECT_EQ(rows[2].fit->sigma0, direct.sigma0);
+  EXPECT_EQ(rows[2].parameters, 7);
+  EXPECT_EQ(rows[0].parameters, 3);
+  // With a-priori sigmas the AIC is Ω + 2u (Ω = σ0²·dof). (Without the
+  // blunder, the fixture's millimetre-level rotations and scale do not pay
+  // for their 4 parameters: translation3 has the lowest AIC.)
+  for (const auto& c : rows) {
+    ASSERT_TRUE(c.fit.has_value()) << c.refused;
+    EXPECT_DOUBLE_EQ(c.aic, c.fit->global_test.statistic + 2.0 * c.parameters) << solver::to_string(c.model);
+  }
+}
+
 TEST(WorkbenchModel, OnTheWorkerThreadTheLatestChoicesWinAndTheShownFitIsTheirs) {
   const geodesy::ControlSet set = io::read_control_set(kControl, io::ControlReadOptions{});
   WorkbenchModel model(set, helmert7_pv(), /*async_from_points=*/0);  // every refit on the worker

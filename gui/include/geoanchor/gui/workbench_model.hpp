@@ -15,6 +15,7 @@
 #include "geoanchor/geodesy/control_point.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
+#include "geoanchor/solver/model_comparison.hpp"
 
 namespace geoanchor::gui {
 
@@ -66,6 +67,9 @@ class WorkbenchModel {
 
   std::vector<PointRow> rows() const;
   std::vector<ParameterRow> parameters() const;
+  // The same points (those not left out) under every applicable model, for
+  // the comparison panel: what `geoanchor fit --compare` prints.
+  std::vector<solver::ModelComparison> comparison() const { return solver::compare_models(control_, options_); }
   // The network's centroid, origin of the plan view.
   const geodesy::LocalOrigin& plan_origin() const { return plan_origin_; }
 
