@@ -145,6 +145,7 @@ struct TilePlan {
   std::string in_frame_source;  // "sidecar", "LAS WKT", "flags"
   TileMetadata out;
   std::optional<DecimalYear> epoch;  // for a time-dependent transform
+  std::uint64_t las_points = 0;      // LAS: the header's count, for progress
   std::vector<std::string> warnings;
 };
 
@@ -220,6 +221,7 @@ TileMetadata Planner::input_metadata(TilePlan& p) const {
   bool geotiff_only = false;
   if (p.format == io::TileFormat::las) {
     io::LasReader reader(p.input);
+    p.las_points = reader.header().point_count;
     if (const auto w = reader.wkt()) {
       wkt = io::tile_metadata_from_wkt(*w, tile);
     } else {
@@ -624,7 +626,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   ao.epochs_from_gps_time = o_.epoch_from_gps_time && t_ && t_->time_dependent();
   if (p.format == io::TileFormat::las) ao.output_wkt = io::tile_crs_wkt(p.out);
   // Progress in bytes of input, where the point count is known up front.
-  const std::uint64_t expected = p.format == io::TileFormat::las ? io::LasReader(p.input).header().point_count : 0;
+  const std::uint64_t expected = p.las_points;
   const std::uint64_t tile_bytes = fs::file_size(p.input, ec);
   std::uint64_t reported = 0;
   ao.progress = [&](std::uint64_t done) {

@@ -10,6 +10,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
+#include "wkt_text.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -20,9 +21,6 @@ constexpr double kDegree_rad = 0.0174532925199433;
 // conversion: 1e-9 degrees and 1e-6 m are far below anything written.
 constexpr double kUtmMatchDeg = 1e-9;
 constexpr double kUtmMatchM = 1e-6;
-
-// Shortest text that reads back to the same double.
-std::string g17(double v) { return format_shortest(v); }
 
 std::string quoted(const std::string& s) {
   std::string out = "\"";
@@ -77,16 +75,12 @@ std::string ellipsoid_wkt(const geodesy::Ellipsoid& e) {
   const std::string name = e == geodesy::Ellipsoid::wgs84()   ? "WGS 84"
                            : e == geodesy::Ellipsoid::grs80() ? "GRS 1980"
                                                               : e.name();
-  return "ELLIPSOID[" + quoted(name) + "," + g17(e.a_m()) + "," + g17(e.rf()) + ",LENGTHUNIT[\"metre\",1]]";
+  return "ELLIPSOID[" + quoted(name) + "," + format_shortest(e.a_m()) + "," + format_shortest(e.rf()) + ",LENGTHUNIT[\"metre\",1]]";
 }
 
 const std::string kDegree = "ANGLEUNIT[\"degree\",0.0174532925199433]";
-const std::string kMetre = "LENGTHUNIT[\"metre\",1]";
-
-std::string parameter(const char* name, double value, const std::string& unit, int epsg) {
-  return ",PARAMETER[\"" + std::string(name) + "\"," + g17(value) + "," + unit + ",ID[\"EPSG\"," +
-         std::to_string(epsg) + "]]";
-}
+const std::string& kMetre = detail::kWktMetre;
+using detail::wkt_parameter;
 
 struct PjDeleter {
   void operator()(PJ* p) const { proj_destroy(p); }
@@ -156,9 +150,9 @@ std::string tile_crs_wkt(const TileMetadata& m) {
       const auto& o = *c.origin;
       return "PROJCRS[" + quoted(frame + " ENU") + "," + base +
              ",CONVERSION[\"ENU origin\",METHOD[\"Geographic/topocentric conversions\",ID[\"EPSG\",9837]]" +
-             parameter("Latitude of topocentric origin", o.point.lat.deg(), kDegree, 8834) +
-             parameter("Longitude of topocentric origin", o.point.lon.deg(), kDegree, 8835) +
-             parameter("Ellipsoidal height of topocentric origin", o.point.h.m, kMetre, 8836) +
+             wkt_parameter("Latitude of topocentric origin", o.point.lat.deg(), kDegree, 8834) +
+             wkt_parameter("Longitude of topocentric origin", o.point.lon.deg(), kDegree, 8835) +
+             wkt_parameter("Ellipsoidal height of topocentric origin", o.point.h.m, kMetre, 8836) +
              "],CS[Cartesian,3],AXIS[\"topocentric East (U)\",east,ORDER[1]," + kMetre +
              "],AXIS[\"topocentric North (V)\",north,ORDER[2]," + kMetre + "],AXIS[\"topocentric height (W)\",up,ORDER[3]," +
              kMetre + "]" + remark + "]";
@@ -168,11 +162,11 @@ std::string tile_crs_wkt(const TileMetadata& m) {
       const std::string conversion_name = p.utm ? "UTM zone " + p.utm->to_string() : "Transverse Mercator";
       return "PROJCRS[" + quoted(frame + " " + conversion_name) + "," + base + ",CONVERSION[" +
              quoted(conversion_name) + ",METHOD[\"Transverse Mercator\",ID[\"EPSG\",9807]]" +
-             parameter("Latitude of natural origin", p.tm.lat0.deg(), kDegree, 8801) +
-             parameter("Longitude of natural origin", p.tm.lon0.deg(), kDegree, 8802) +
-             parameter("Scale factor at natural origin", p.tm.k0, "SCALEUNIT[\"unity\",1]", 8805) +
-             parameter("False easting", p.tm.false_easting_m, kMetre, 8806) +
-             parameter("False northing", p.tm.false_northing_m, kMetre, 8807) +
+             wkt_parameter("Latitude of natural origin", p.tm.lat0.deg(), kDegree, 8801) +
+             wkt_parameter("Longitude of natural origin", p.tm.lon0.deg(), kDegree, 8802) +
+             wkt_parameter("Scale factor at natural origin", p.tm.k0, "SCALEUNIT[\"unity\",1]", 8805) +
+             wkt_parameter("False easting", p.tm.false_easting_m, kMetre, 8806) +
+             wkt_parameter("False northing", p.tm.false_northing_m, kMetre, 8807) +
              "],CS[Cartesian,3],AXIS[\"(E)\",east,ORDER[1]," + kMetre + "],AXIS[\"(N)\",north,ORDER[2]," + kMetre +
              "]," + height_axis + remark + "]";
     }
@@ -347,7 +341,7 @@ std::string describe_mismatch(const TileMetadata& a, std::string_view an, const 
     return both("ellipsoid", a.coordinates.ellipsoid.name(), b.coordinates.ellipsoid.name());
   }
   auto origin_text = [](const std::optional<geodesy::LocalOrigin>& o) {
-    return o ? g17(o->point.lat.deg()) + "," + g17(o->point.lon.deg()) + "," + g17(o->point.h.m) : std::string("none");
+    return o ? format_shortest(o->point.lat.deg()) + "," + format_shortest(o->point.lon.deg()) + "," + format_shortest(o->point.h.m) : std::string("none");
   };
   if (a.coordinates.origin.has_value() != b.coordinates.origin.has_value() ||
       (a.coordinates.origin && !(a.coordinates.origin->point.lat == b.coordinates.origin->point.lat &&

@@ -599,12 +599,6 @@ TransformFile swapped_convention(const TransformFile& t) {
   return out;
 }
 
-std::string g17(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
-
 json json_number_or_null(double v) { return std::isfinite(v) ? number(v) : json(nullptr); }
 
 }  // namespace
@@ -622,9 +616,9 @@ namespace {
 std::string topocentric(const geodesy::LocalOrigin& o) {
   const std::string ell = o.ellipsoid == geodesy::Ellipsoid::grs80() ? "+ellps=GRS80"
                           : o.ellipsoid == geodesy::Ellipsoid::wgs84() ? "+ellps=WGS84"
-                                                                       : "+a=" + g17(o.ellipsoid.a_m()) + " +rf=" + g17(o.ellipsoid.rf());
-  return "+proj=topocentric " + ell + " +lat_0=" + g17(o.point.lat.deg()) + " +lon_0=" + g17(o.point.lon.deg()) +
-         " +h_0=" + g17(o.point.h.m);
+                                                                       : "+a=" + format_shortest(o.ellipsoid.a_m()) + " +rf=" + format_shortest(o.ellipsoid.rf());
+  return "+proj=topocentric " + ell + " +lat_0=" + format_shortest(o.point.lat.deg()) + " +lon_0=" + format_shortest(o.point.lon.deg()) +
+         " +h_0=" + format_shortest(o.point.h.m);
 }
 }  // namespace
 
@@ -645,24 +639,24 @@ std::string proj_pipeline(const TransformFile& t) {
     const auto& g = sc.grid();
     const std::string ell = g.ellipsoid == geodesy::Ellipsoid::grs80() ? "+ellps=GRS80"
                             : g.ellipsoid == geodesy::Ellipsoid::wgs84() ? "+ellps=WGS84"
-                                                                         : "+a=" + g17(g.ellipsoid.a_m()) + " +rf=" + g17(g.ellipsoid.rf());
+                                                                         : "+a=" + format_shortest(g.ellipsoid.a_m()) + " +rf=" + format_shortest(g.ellipsoid.rf());
     std::string out = "+proj=pipeline +step +proj=affine";
     const char* off[3] = {"xoff", "yoff", "zoff"};
-    for (int r = 0; r < 3; ++r) out += std::string(" +") + off[r] + "=" + g17(m.translation_m()(r));
+    for (int r = 0; r < 3; ++r) out += std::string(" +") + off[r] + "=" + format_shortest(m.translation_m()(r));
     for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) out += " +s" + std::to_string(r + 1) + std::to_string(c + 1) + "=" + g17(m.linear()(r, c));
+      for (int c = 0; c < 3; ++c) out += " +s" + std::to_string(r + 1) + std::to_string(c + 1) + "=" + format_shortest(m.linear()(r, c));
     }
-    return out + " +step +inv +proj=tmerc " + ell + " +lat_0=" + g17(g.tm.lat0.deg()) + " +lon_0=" + g17(g.tm.lon0.deg()) +
-           " +k=" + g17(g.tm.k0) + " +x_0=" + g17(g.tm.false_easting_m) + " +y_0=" + g17(g.tm.false_northing_m) +
+    return out + " +step +inv +proj=tmerc " + ell + " +lat_0=" + format_shortest(g.tm.lat0.deg()) + " +lon_0=" + format_shortest(g.tm.lon0.deg()) +
+           " +k=" + format_shortest(g.tm.k0) + " +x_0=" + format_shortest(g.tm.false_easting_m) + " +y_0=" + format_shortest(g.tm.false_northing_m) +
            " +step +proj=cart " + ell;
   }
   if (t.enu_origin) {
     // ECEF -> map ENU at the nominal origin -> turn and scale -> ECEF from the corrected origin.
     const auto& c = *t.enu_origin;
     const double k = 1.0 + c.ds.unitless(), cy = std::cos(c.yaw.rad()), sy = std::sin(c.yaw.rad());
-    return "+proj=pipeline +step " + topocentric(c.nominal) + " +step +proj=affine +s11=" + g17(k * cy) + " +s12=" +
-           g17(-k * sy) + " +s13=0 +s21=" + g17(k * sy) + " +s22=" + g17(k * cy) + " +s23=0 +s31=0 +s32=0 +s33=" +
-           g17(k) + " +step +inv " + topocentric(geodesy::corrected_origin(c.nominal, c.shift_enu_m));
+    return "+proj=pipeline +step " + topocentric(c.nominal) + " +step +proj=affine +s11=" + format_shortest(k * cy) + " +s12=" +
+           format_shortest(-k * sy) + " +s13=0 +s21=" + format_shortest(k * sy) + " +s22=" + format_shortest(k * cy) + " +s23=0 +s31=0 +s32=0 +s33=" +
+           format_shortest(k) + " +step +inv " + topocentric(geodesy::corrected_origin(c.nominal, c.shift_enu_m));
   }
   if (t.pivot_m && t.rotation_model == geodesy::RotationModel::exact) {
     // PROJ's molobadekas has no exact form: write the geocentric equivalent.
@@ -680,7 +674,7 @@ std::string proj_pipeline(const TransformFile& t) {
     return proj_pipeline(g);
   }
   std::string out = t.pivot_m ? "+proj=pipeline +step +proj=molobadekas" : "+proj=pipeline +step +proj=helmert";
-  auto add = [&](const char* key, double v) { out += std::string(" +") + key + "=" + g17(v); };
+  auto add = [&](const char* key, double v) { out += std::string(" +") + key + "=" + format_shortest(v); };
   auto add7 = [&](const auto& p) {
     add("x", p.t_m.x());
     add("y", p.t_m.y());

@@ -6,7 +6,9 @@
 #include <cstdio>
 #include <memory>
 
+#include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/transform_file.hpp"
+#include "wkt_text.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -17,12 +19,6 @@ using geodesy::PositionVector;
 constexpr double kSecondsPerYear = 31556925.445;  // the "year" of EPSG's rate units
 constexpr double kArcsecond_rad = 4.84813681109536e-06;
 
-std::string g17(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
-
 std::string geocentric_crs(const std::optional<geodesy::Frame>& frame, const char* fallback) {
   const std::string name = frame ? frame->name() : fallback;
   return "GEODCRS[\"" + name + "\",DATUM[\"" + name +
@@ -32,15 +28,13 @@ std::string geocentric_crs(const std::optional<geodesy::Frame>& frame, const cha
          "AXIS[\"(Z)\",geocentricZ,ORDER[3],LENGTHUNIT[\"metre\",1]]]";
 }
 
-std::string parameter(const char* name, double value, const std::string& unit, int epsg) {
-  return ",PARAMETER[\"" + std::string(name) + "\"," + g17(value) + "," + unit + ",ID[\"EPSG\"," + std::to_string(epsg) + "]]";
-}
-
-const std::string kMetre = "LENGTHUNIT[\"metre\",1]";
+using detail::kWktMetre;
+using detail::wkt_parameter;
+const std::string& kMetre = kWktMetre;
 const std::string kArcsec = "ANGLEUNIT[\"arc-second\",4.84813681109536E-06]";
 const std::string kPpm = "SCALEUNIT[\"parts per million\",1E-06]";
 std::string per_year(const char* kind, const char* name, double factor) {
-  return std::string(kind) + "[\"" + name + "\"," + g17(factor / kSecondsPerYear) + "]";
+  return std::string(kind) + "[\"" + name + "\"," + format_shortest(factor / kSecondsPerYear) + "]";
 }
 
 }  // namespace
@@ -67,14 +61,14 @@ std::optional<std::string> to_wkt2(const TransformFile& t) {
   }
   std::string params;
   auto seven = [&](const auto& h) {
-    params += parameter("X-axis translation", h.t_m.x(), kMetre, 8605);
-    params += parameter("Y-axis translation", h.t_m.y(), kMetre, 8606);
-    params += parameter("Z-axis translation", h.t_m.z(), kMetre, 8607);
+    params += wkt_parameter("X-axis translation", h.t_m.x(), kMetre, 8605);
+    params += wkt_parameter("Y-axis translation", h.t_m.y(), kMetre, 8606);
+    params += wkt_parameter("Z-axis translation", h.t_m.z(), kMetre, 8607);
     if (t.model == TransformModel::translation3) return;
-    params += parameter("X-axis rotation", h.rx.arcsec(), kArcsec, 8608);
-    params += parameter("Y-axis rotation", h.ry.arcsec(), kArcsec, 8609);
-    params += parameter("Z-axis rotation", h.rz.arcsec(), kArcsec, 8610);
-    params += parameter("Scale difference", h.ds.ppm(), kPpm, 8611);
+    params += wkt_parameter("X-axis rotation", h.rx.arcsec(), kArcsec, 8608);
+    params += wkt_parameter("Y-axis rotation", h.ry.arcsec(), kArcsec, 8609);
+    params += wkt_parameter("Z-axis rotation", h.rz.arcsec(), kArcsec, 8610);
+    params += wkt_parameter("Scale difference", h.ds.ppm(), kPpm, 8611);
   };
   std::visit([&](const auto& h) {
     using H = std::decay_t<decltype(h)>;
@@ -84,22 +78,22 @@ std::optional<std::string> to_wkt2(const TransformFile& t) {
       const std::string m = per_year("LENGTHUNIT", "metres per year", 1.0);
       const std::string a = per_year("ANGLEUNIT", "arc-seconds per year", kArcsecond_rad);
       const std::string s = per_year("SCALEUNIT", "parts per million per year", 1e-6);
-      params += parameter("Rate of change of X-axis translation", r.dt_m_per_year.x(), m, 1040);
-      params += parameter("Rate of change of Y-axis translation", r.dt_m_per_year.y(), m, 1041);
-      params += parameter("Rate of change of Z-axis translation", r.dt_m_per_year.z(), m, 1042);
-      params += parameter("Rate of change of X-axis rotation", r.drx_per_year.arcsec(), a, 1043);
-      params += parameter("Rate of change of Y-axis rotation", r.dry_per_year.arcsec(), a, 1044);
-      params += parameter("Rate of change of Z-axis rotation", r.drz_per_year.arcsec(), a, 1045);
-      params += parameter("Rate of change of Scale difference", r.dds_per_year.ppm(), s, 1046);
-      params += parameter("Parameter reference epoch", h.reference_epoch.year, "TIMEUNIT[\"year\",31556925.445]", 1047);
+      params += wkt_parameter("Rate of change of X-axis translation", r.dt_m_per_year.x(), m, 1040);
+      params += wkt_parameter("Rate of change of Y-axis translation", r.dt_m_per_year.y(), m, 1041);
+      params += wkt_parameter("Rate of change of Z-axis translation", r.dt_m_per_year.z(), m, 1042);
+      params += wkt_parameter("Rate of change of X-axis rotation", r.drx_per_year.arcsec(), a, 1043);
+      params += wkt_parameter("Rate of change of Y-axis rotation", r.dry_per_year.arcsec(), a, 1044);
+      params += wkt_parameter("Rate of change of Z-axis rotation", r.drz_per_year.arcsec(), a, 1045);
+      params += wkt_parameter("Rate of change of Scale difference", r.dds_per_year.ppm(), s, 1046);
+      params += wkt_parameter("Parameter reference epoch", h.reference_epoch.year, "TIMEUNIT[\"year\",31556925.445]", 1047);
     } else {
       seven(h);
     }
   }, t.helmert);
   if (t.pivot_m) {
-    params += parameter("Ordinate 1 of evaluation point", t.pivot_m->x(), kMetre, 8617);
-    params += parameter("Ordinate 2 of evaluation point", t.pivot_m->y(), kMetre, 8618);
-    params += parameter("Ordinate 3 of evaluation point", t.pivot_m->z(), kMetre, 8667);
+    params += wkt_parameter("Ordinate 1 of evaluation point", t.pivot_m->x(), kMetre, 8617);
+    params += wkt_parameter("Ordinate 2 of evaluation point", t.pivot_m->y(), kMetre, 8618);
+    params += wkt_parameter("Ordinate 3 of evaluation point", t.pivot_m->z(), kMetre, 8667);
   }
   const std::string name = (t.source_frame ? t.source_frame->to_string() : std::string("source")) + " to " +
                            (t.target_frame ? t.target_frame->to_string() : std::string("target")) + " (geoanchor fit)";

@@ -430,11 +430,6 @@ TEST(HelmertFit, ResidualsAreReproducedByTheReportedParameters) {
                           [](const std::string& w) { return w.find("weak geometry") != std::string::npos; }));
 }
 
-}  // namespace
-}  // namespace geoanchor::solver
-
-namespace geoanchor::solver {
-namespace {
 
 // The enu-origin acceptance case, built with PROJ: a map whose frame is truly
 // anchored at the LSZH reference point and turned by 20″, read by its users at
@@ -538,11 +533,6 @@ TEST(EnuOriginFit, WithOneCentimetreNoiseTheTruthIsWithinTwoSigma) {
   EXPECT_EQ(within.size(), 4u);
 }
 
-}  // namespace
-}  // namespace geoanchor::solver
-
-namespace geoanchor::solver {
-namespace {
 
 // The propagated uncertainty of a transformed point is what Monte Carlo
 // shows: the spread of transformed positions over noisy fits.
@@ -618,11 +608,6 @@ TEST(TransformedCovariance, TheTransformFileGivesTheSolversCovariance) {
   }
 }
 
-}  // namespace
-}  // namespace geoanchor::solver
-
-namespace geoanchor::solver {
-namespace {
 
 TEST(VarianceComponents, RecoverASourceNoiseStatedTwiceTooSmall) {
   // Source noise is really twice what is stated (stated 1 mm at half the
@@ -703,11 +688,6 @@ TEST(RobustLoss, DownWeightsBlundersAndKeepsTheTransformOnTheTruth) {
   EXPECT_GT((apply_fit(fit_helmert(set, o), centre, std::nullopt).m - truth).norm(), kAgreement_m);  // plain LS is pulled off
 }
 
-}  // namespace
-}  // namespace geoanchor::solver
-
-namespace geoanchor::solver {
-namespace {
 
 TEST(SiteCalibrationFit, RecoversASimilarityAndInclinedPlaneBuiltWithProj) {
   // Truth: the site grid turned 35° with +45 ppm onto TM (k0 = 1) at
@@ -765,11 +745,6 @@ TEST(SiteCalibrationFit, RecoversASimilarityAndInclinedPlaneBuiltWithProj) {
   }
 }
 
-}  // namespace
-}  // namespace geoanchor::solver
-
-namespace geoanchor::solver {
-namespace {
 
 TEST(HelmertFit, FourteenParametersFromPositionsAndVelocitiesAtOneEpoch) {
   // Every point at 2020.0 with its velocity in both frames; target positions
