@@ -5,10 +5,12 @@
 #include <CLI/CLI.hpp>
 
 #include <iostream>
+#include <string_view>
 
 #include "apply_command.hpp"
 #include "convert_command.hpp"
 #include "fit_command.hpp"
+#include "snapshot_command.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "version.hpp"
@@ -17,6 +19,8 @@ int main(int argc, char** argv) {
   using geoanchor::Error;
   using geoanchor::ErrorKind;
   geoanchor::io::install_signal_cleanup();
+  // The window is its own executable (libGL and libOSMesa cannot share one).
+  if (argc > 1 && std::string_view(argv[1]) == "gui") return geoanchor::cli::exec_gui_window(argc, argv);
 
   CLI::App app{"geoanchor " GEOANCHOR_VERSION ": anchor local maps to the Earth"};
   app.set_version_flag("--version", GEOANCHOR_VERSION);
@@ -30,6 +34,14 @@ int main(int argc, char** argv) {
   geoanchor::cli::ApplyOptions apply;
   apply.argv.assign(argv, argv + argc);
   auto* apply_cmd = geoanchor::cli::add_apply_command(app, apply);
+  geoanchor::cli::SnapshotOptions snapshot;
+  snapshot.workbench.argv.assign(argv, argv + argc);
+  auto* snapshot_cmd = geoanchor::cli::add_snapshot_command(app, snapshot);
+  geoanchor::cli::ReportOptions report;
+  report.workbench.argv.assign(argv, argv + argc);
+  auto* report_cmd = geoanchor::cli::add_report_command(app, report);
+  // Listed for --help; `geoanchor gui ...` is handed to geoanchor-gui above.
+  app.add_subcommand("gui", "Open the residual workbench window (geoanchor-gui; same options as snapshot, no -o)");
 
   try {
     app.parse(argc, argv);
@@ -48,6 +60,8 @@ int main(int argc, char** argv) {
     if (convert_cmd->parsed()) geoanchor::cli::run_convert(convert);
     if (fit_cmd->parsed()) return geoanchor::cli::run_fit(fit);
     if (apply_cmd->parsed()) return geoanchor::cli::run_apply(apply);
+    if (snapshot_cmd->parsed()) return geoanchor::cli::run_snapshot(snapshot);
+    if (report_cmd->parsed()) return geoanchor::cli::run_report(report);
   } catch (const Error& e) {
     std::cerr << "geoanchor: error[" << e.code() << "]: " << e.what() << '\n';
     return geoanchor::exit_code(e.kind());

@@ -100,4 +100,24 @@ geodesy::UtmZone parse_zone(std::string_view text, std::string_view flag) {
   }
 }
 
+solver::FitModel parse_model(std::string_view m, std::string_view flag) {
+  using solver::FitModel;
+  if (m == "helmert7") return FitModel::helmert7;
+  if (m == "helmert6") return FitModel::helmert6;
+  if (m == "translation3") return FitModel::translation3;
+  if (m == "helmert14") return FitModel::helmert14;
+  if (m == "molodensky-badekas") return FitModel::molodensky_badekas;
+  if (m == "enu-origin") return FitModel::enu_origin;
+  if (m == "site-calibration") return FitModel::site_calibration;
+  throw Error(ErrorKind::usage, "E_OPTION",
+              std::string(flag) + " " + std::string(m) + ": expected translation3, helmert6, helmert7, helmert14, molodensky-badekas, enu-origin "
+                               "or site-calibration");
+}
+
+solver::Convention parse_convention(std::string_view text, std::string_view flag) {
+  if (text == "position_vector") return solver::Convention::position_vector;
+  if (text == "coordinate_frame") return solver::Convention::coordinate_frame;
+  throw Error(ErrorKind::usage, "E_OPTION", std::string(flag) + " " + std::string(text) + ": expected position_vector or coordinate_frame");
+}
+
 }  // namespace geoanchor::cli

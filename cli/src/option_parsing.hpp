@@ -11,6 +11,7 @@
 #include "geoanchor/geodesy/ellipsoid.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/geodesy/projection.hpp"
+#include "geoanchor/solver/helmert_fit.hpp"
 
 namespace geoanchor::cli {
 
@@ -28,5 +29,11 @@ geodesy::UtmZone parse_zone(std::string_view text, std::string_view flag);
 // `count` comma-separated finite numbers; `expected` describes them.
 std::vector<double> split_numbers(std::string_view text, std::string_view flag, std::size_t count,
                                   const std::string& expected);
+
+// translation3, helmert6, helmert7, helmert14, molodensky-badekas,
+// enu-origin or site-calibration.
+solver::FitModel parse_model(std::string_view text, std::string_view flag);
+// position_vector or coordinate_frame.
+solver::Convention parse_convention(std::string_view text, std::string_view flag);
 
 }  // namespace geoanchor::cli

@@ -5,10 +5,14 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/gui/fit_export.hpp"
+#include "geoanchor/io/atomic_file.hpp"
+#include "geoanchor/io/transform_file.hpp"
 
 namespace geoanchor::gui {
 
-WorkbenchModel::WorkbenchModel(geodesy::ControlSet control, solver::FitOptions options, std::size_t async_from_points)
+WorkbenchModel::WorkbenchModel(geodesy::ControlSet control, solver::FitOptions options, std::size_t async_from_points,
+                               const std::vector<std::string>& left_out)
     : control_(std::move(control)), options_(std::move(options)), async_from_points_(async_from_points) {
   // The plan: source positions in ENU at their centroid (WGS 84 normal; the
   // plan is a picture, metres to a part in 10⁶).
@@ -19,7 +23,15 @@ WorkbenchModel::WorkbenchModel(geodesy::ControlSet control, solver::FitOptions o
   plan_origin_.point = wgs84.geodetic_from_ecef(geodesy::EcefPosition(mean));
   plan_origin_.ellipsoid = geodesy::Ellipsoid::wgs84();
   const geodesy::LocalTangentPlane plane(plan_origin_);
-  for (const auto& p : control_.points) plan_en_m_.push_back(plane.enu_from_ecef(p.source).enu_m.head<2>());
+  for (const auto& p : control_.points) {
+    plan_en_m_.push_back(plane.enu_from_ecef(p.source).enu_m.head<2>());
+    use_in_file_.push_back(p.use);
+  }
+  for (const auto& id : left_out) {
+    for (auto& p : control_.points) {
+      if (p.id == id) p.use = false;
+    }
+  }
   refit();
 }
 
@@ -29,8 +41,9 @@ WorkbenchModel::~WorkbenchModel() {
 
 void WorkbenchModel::set_left_out(std::string_view id, bool left_out) {
   bool changed = false;
-  for (auto& p : control_.points) {
-    if (p.id == id && p.use == left_out) {
+  for (std::size_t i = 0; i < control_.points.size(); ++i) {
+    auto& p = control_.points[i];
+    if (p.id == id && use_in_file_[i] && p.use == left_out) {
       p.use = !left_out;
       changed = true;
     }
@@ -49,16 +62,24 @@ void WorkbenchModel::set_convention(solver::Convention convention) {
 }
 
 WorkbenchModel::Outcome WorkbenchModel::run_fit(const geodesy::ControlSet& control, const solver::FitOptions& options) {
+  Outcome out;
   try {
-    return {solver::fit_helmert(control, options), ""};
+    out.fit = solver::fit_helmert(control, options);
   } catch (const Error& e) {
-    return {std::nullopt, e.what()};
+    out.error = e.what();
   }
+  try {
+    out.comparison = solver::compare_models(control, options);
+  } catch (const Error&) {
+    // Each model's refusal is in its row; a set too small for any is shown by the fit's error.
+  }
+  return out;
 }
 
 void WorkbenchModel::take(Outcome outcome) {
   fit_ = std::move(outcome.fit);
   error_ = std::move(outcome.error);
+  comparison_ = std::move(outcome.comparison);
   ++generation_;
 }
 
@@ -87,6 +108,23 @@ void WorkbenchModel::wait() {
     if (pending_.valid()) pending_.wait();
     poll();
   }
+}
+
+std::vector<std::string> WorkbenchModel::left_out() const {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < control_.points.size(); ++i) {
+    if (use_in_file_[i] && !control_.points[i].use) out.push_back(control_.points[i].id);
+  }
+  return out;
+}
+
+void WorkbenchModel::save_transform(const std::string& path, bool overwrite, const std::string& generator) const {
+  if (!fit_) {
+    throw Error(ErrorKind::rejected, "E_FIT_NONE", path + ": no transform to save: " + (error_.empty() ? "no fit" : error_));
+  }
+  io::AtomicOutputFile out(path, overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+  out.stream() << io::to_json_text(transform_file_from_fit(*fit_, control_, options_, left_out(), generator));
+  out.commit();
 }
 
 std::vector<PointRow> WorkbenchModel::rows() const {

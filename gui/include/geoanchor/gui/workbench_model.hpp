@@ -45,9 +45,11 @@ class WorkbenchModel {
   // a window keeps drawing the last fit meanwhile.
   static constexpr std::size_t kDefaultAsyncFrom = 2000;
 
-  // Fits at once; a refused fit leaves fit() empty and error() saying why.
+  // Fits at once (on the worker for large sets); a refused fit leaves fit()
+  // empty and error() saying why. `left_out`: ids the user left out before
+  // (e.g. recorded in a transform file); unknown ids are ignored.
   WorkbenchModel(geodesy::ControlSet control, solver::FitOptions options,
-                 std::size_t async_from_points = kDefaultAsyncFrom);
+                 std::size_t async_from_points = kDefaultAsyncFrom, const std::vector<std::string>& left_out = {});
   ~WorkbenchModel();
   WorkbenchModel(const WorkbenchModel&) = delete;
   WorkbenchModel& operator=(const WorkbenchModel&) = delete;
@@ -68,8 +70,16 @@ class WorkbenchModel {
   std::vector<PointRow> rows() const;
   std::vector<ParameterRow> parameters() const;
   // The same points (those not left out) under every applicable model, for
-  // the comparison panel: what `geoanchor fit --compare` prints.
-  std::vector<solver::ModelComparison> comparison() const { return solver::compare_models(control_, options_); }
+  // the comparison panel: what `geoanchor fit --compare` prints. Computed
+  // with each refit (on the worker thread for large sets).
+  const std::vector<solver::ModelComparison>& comparison() const { return comparison_; }
+  // The ids the user left out (control points with use = 0 in the file are
+  // not among them).
+  std::vector<std::string> left_out() const;
+  // The shown fit as the transform file `geoanchor fit -o` writes, the left-out
+  // points noted as such. Throws geoanchor::Error (rejected) without a fit,
+  // (io) when the file cannot be written or exists and overwrite is false.
+  void save_transform(const std::string& path, bool overwrite, const std::string& generator) const;
   // The network's centroid, origin of the plan view.
   const geodesy::LocalOrigin& plan_origin() const { return plan_origin_; }
 
@@ -85,13 +95,16 @@ class WorkbenchModel {
   struct Outcome {
     std::optional<solver::FitResult> fit;
     std::string error;
+    std::vector<solver::ModelComparison> comparison;
   };
   static Outcome run_fit(const geodesy::ControlSet& control, const solver::FitOptions& options);
   void refit();
   void take(Outcome outcome);
   geodesy::ControlSet control_;
   solver::FitOptions options_;
+  std::vector<bool> use_in_file_;  // the control set's own use flags
   std::optional<solver::FitResult> fit_;
+  std::vector<solver::ModelComparison> comparison_;
   std::string error_;
   unsigned generation_ = 0;
   geodesy::LocalOrigin plan_origin_;

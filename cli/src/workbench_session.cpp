@@ -1,0 +1,102 @@
+#include "workbench_session.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/gui/fit_export.hpp"
+#include "geoanchor/io/control_csv.hpp"
+#include "option_parsing.hpp"
+#include "version.hpp"
+
+namespace geoanchor::cli {
+
+void add_workbench_options(CLI::App* cmd, WorkbenchOptions& o) {
+  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON)")->required();
+  cmd->add_option("--transform", o.transform,
+                  "Transform file: its model, convention and recorded choices (and the points left out) start the fit");
+  cmd->add_option("--model", o.model, "Model to fit (overrides the transform file's; default helmert7)");
+  cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame (default: the file's, else position_vector)");
+  cmd->add_option("--origin", o.origin, "Nominal origin LAT,LON,H of ENU control coordinates");
+  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic/ENU control coordinates (default WGS84)");
+}
+
+namespace {
+
+// The largest distance, over the control marks' source positions, between
+// the file's transform and the refit (metres); NaN if either cannot be applied.
+double largest_difference_m(const io::TransformFile& file, const io::TransformFile& refit, const geodesy::ControlSet& set) {
+  double worst = 0.0;
+  for (const auto& p : set.points) {
+    try {
+      const auto a = file.apply(p.source, p.epoch, false, set.source_name);
+      const auto b = refit.apply(p.source, p.epoch, false, set.source_name);
+      worst = std::max(worst, (a.m - b.m).norm());
+    } catch (const Error&) {
+      return std::nan("");
+    }
+  }
+  return worst;
+}
+
+}  // namespace
+
+WorkbenchSession open_workbench(const WorkbenchOptions& o) {
+  WorkbenchSession s;
+  gui::FitChoices choices;
+  choices.options.model = solver::FitModel::helmert7;
+  if (!o.transform.empty()) {
+    s.transform = io::read_transform_file(o.transform);
+    choices = gui::fit_choices_from_transform(*s.transform);
+    s.notes.push_back("model, convention and fit settings from " + o.transform +
+                      (s.transform->fit ? "" : " (published parameters, no fit record: the workbench fits that model to the control)"));
+  }
+  solver::FitOptions& fo = choices.options;
+  if (o.model) fo.model = parse_model(*o.model, "--model");
+  if (o.convention) {
+    fo.convention = parse_convention(*o.convention, "--convention");
+  } else if (!fo.convention) {
+    fo.convention = solver::Convention::position_vector;
+    s.notes.push_back("convention: position_vector (no --convention and none in a transform file; switch in the workbench)");
+  }
+  io::ControlReadOptions ro;
+  ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
+  if (o.origin) {
+    ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
+    fo.nominal_origin = ro.origin;
+  } else if (fo.nominal_origin) {
+    ro.origin = fo.nominal_origin;  // the transform file's nominal origin reads ENU control
+  }
+  if ((fo.model == solver::FitModel::enu_origin || fo.model == solver::FitModel::site_calibration) && !fo.nominal_origin) {
+    throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
+                "--origin: the " + std::string(solver::to_string(fo.model)) +
+                    " model needs the origin LAT,LON,H of the ENU (local) source coordinates");
+  }
+  geodesy::ControlSet set = io::read_control_set(o.control, ro);
+  std::string cmd;
+  for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
+  s.generator = "geoanchor " GEOANCHOR_VERSION ": " + cmd;
+  const std::filesystem::path control_path(o.control);
+  s.save_path = (control_path.parent_path() / (control_path.stem().string() + ".transform.json")).string();
+  // Small sets fit on this thread; large ones on the worker, awaited here.
+  // The points the file says were left out in the workbench are left out again.
+  s.model = std::make_unique<gui::WorkbenchModel>(set, fo, gui::WorkbenchModel::kDefaultAsyncFrom, choices.left_out);
+  s.model->wait();
+  if (s.transform && s.model->fit()) {
+    const io::TransformFile refit =
+        gui::transform_file_from_fit(*s.model->fit(), s.model->control(), fo, s.model->left_out(), s.generator);
+    const double d = largest_difference_m(*s.transform, refit, s.model->control());
+    char line[256];
+    std::snprintf(line, sizeof line, "%s and the refit of %s differ by at most %.3f mm at the control marks%s", o.transform.c_str(),
+                  o.control.c_str(), 1e3 * d,
+                  std::isfinite(d) && d > 1e-4 ? (s.transform->fit ? " (the control set or the choices changed since the fit)" : "")
+                                               : "");
+    s.notes.push_back(line);
+  }
+  return s;
+}
+
+}  // namespace geoanchor::cli

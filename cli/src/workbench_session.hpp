@@ -1,0 +1,47 @@
+#pragma once
+// What the workbench commands (`gui`, `snapshot`, `report`) share: their
+// common options and the opening of a control set, with a transform file's
+// recorded fit choices, into a WorkbenchModel.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/gui/workbench_model.hpp"
+#include "geoanchor/io/transform_file.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace geoanchor::cli {
+
+struct WorkbenchOptions {
+  std::string control;
+  std::string transform;  // empty: none
+  std::optional<std::string> model, convention, origin;
+  std::string ellipsoid = "WGS84";
+  std::vector<std::string> argv;
+};
+
+// CONTROL, --transform, --model, --convention, --origin, --ellipsoid.
+void add_workbench_options(CLI::App* cmd, WorkbenchOptions& o);
+
+struct WorkbenchSession {
+  std::optional<io::TransformFile> transform;
+  std::unique_ptr<gui::WorkbenchModel> model;
+  // Notes for the report and standard error: where the choices came from,
+  // and how far the transform file's parameters are from the refit.
+  std::vector<std::string> notes;
+  std::string save_path;  // proposed by Save transform…
+  std::string generator;
+};
+
+// Choices: --model/--convention, else the transform file's, else helmert7 in
+// the position-vector convention (the workbench shows it and lets the user
+// switch). The fit runs at once (waits for large sets). Throws
+// geoanchor::Error naming the file or flag.
+WorkbenchSession open_workbench(const WorkbenchOptions& o);
+
+}  // namespace geoanchor::cli

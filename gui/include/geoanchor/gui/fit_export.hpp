@@ -1,0 +1,45 @@
+#pragma once
+// A fit as the files and text a geodesist keeps: the transform file that
+// `geoanchor fit -o` writes and the workbench's "Save transform…" writes
+// (the same function, so the two cannot drift), the printed fit report
+// (`fit` and `report`), and the reverse: the fit choices a transform file
+// records, so that the workbench can reopen a saved fit.
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/control_point.hpp"
+#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/solver/helmert_fit.hpp"
+
+namespace geoanchor::gui {
+
+// What a point left out by the user is noted as in the transform file's
+// per-point records; fit_choices_from_transform() reads it back.
+inline constexpr const char* kLeftOutInWorkbench = "left out in the workbench";
+
+// The transform file for `fit` of `control` under `options` (alpha,
+// alpha_point recorded). `left_out` names points the user left out: their
+// records say so. `generator` is recorded as is ("geoanchor 0.1.0: ...").
+io::TransformFile transform_file_from_fit(const solver::FitResult& fit, const geodesy::ControlSet& control,
+                                          const solver::FitOptions& options, const std::vector<std::string>& left_out,
+                                          const std::string& generator);
+
+// The report `geoanchor fit` prints: parameters with σ, σ0, the global test
+// with its verdict, and the residual table, flagged points first.
+void write_fit_report(std::ostream& out, const solver::FitResult& fit, const geodesy::ControlSet& control,
+                      const solver::FitOptions& options);
+
+// The choices a transform file records: model, convention, rotation model,
+// reference epoch, pivot, nominal origin (enu-origin, site-calibration),
+// site grid, alpha, alpha_point, scaling by σ0, and the points left out in
+// the workbench. A file without a fit record (published parameters) gives
+// its model and convention with the default statistics settings.
+struct FitChoices {
+  solver::FitOptions options;
+  std::vector<std::string> left_out;
+};
+FitChoices fit_choices_from_transform(const io::TransformFile& t);
+
+}  // namespace geoanchor::gui

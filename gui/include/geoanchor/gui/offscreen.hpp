@@ -1,0 +1,39 @@
+#pragma once
+// The off-screen shell: Mesa's OSMesa (llvmpipe, no display, no GPU) gives
+// an OpenGL 3.3 core context in memory, Dear ImGui's OpenGL 3 backend draws
+// the workbench's frames into it, and the pixels come back as an RGB image.
+// The same frames the GLFW window shows; used by `geoanchor snapshot`,
+// `geoanchor report` and the pixel tests. One renderer per thread.
+
+#include <memory>
+
+#include "geoanchor/gui/image.hpp"
+#include "geoanchor/gui/workbench_ui.hpp"
+
+namespace geoanchor::gui {
+
+class OffscreenRenderer {
+ public:
+  // Throws geoanchor::Error (io) when OSMesa cannot give a 3.3 core context
+  // or the fonts are missing. width and height in pixels, 64 … 8192.
+  OffscreenRenderer(int width, int height);
+  ~OffscreenRenderer();
+  OffscreenRenderer(const OffscreenRenderer&) = delete;
+  OffscreenRenderer& operator=(const OffscreenRenderer&) = delete;
+
+  // Renders `view` until the layout has settled (auto-sized windows take a
+  // frame) and returns the last frame. The mouse is outside the window.
+  RgbImage render(WorkbenchUi& ui, View view);
+  // One more frame, without reading it back (for benchmarks).
+  void render_frame(WorkbenchUi& ui, View view);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  struct Context;
+  int width_, height_;
+  std::unique_ptr<Context> context_;
+};
+
+}  // namespace geoanchor::gui

@@ -1,0 +1,256 @@
+#include "geoanchor/gui/fit_export.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <ostream>
+
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::gui {
+namespace {
+
+using solver::FitModel;
+
+std::string fixed(double v, int decimals) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*f", decimals, v);
+  return b;
+}
+
+// The printed report: parameters, statistics with verdict, residuals with
+// flagged points first.
+}  // namespace
+
+void write_fit_report(std::ostream& out, const solver::FitResult& r, const geodesy::ControlSet& set,
+                      const solver::FitOptions& o) {
+  out << "geoanchor fit: model " << solver::to_string(r.model);
+  if (r.model != FitModel::translation3 && r.model != FitModel::enu_origin && r.model != FitModel::site_calibration) {
+    out << ", " << (r.convention == solver::Convention::position_vector ? "position vector" : "coordinate frame")
+        << " convention, " << geodesy::to_string(r.rotation_model) << " rotation matrix";
+  }
+  out << "\n  control: " << set.source_name << " (" << set.points.size() << " points)";
+  if (set.source_frame || set.target_frame) {
+    out << "; " << (set.source_frame ? set.source_frame->to_string() : "?") << " -> "
+        << (set.target_frame ? set.target_frame->to_string() : "?");
+  }
+  if (r.reference_epoch) out << "; reference epoch " << geodesy::format_decimal_year(*r.reference_epoch);
+  out << "\n\nParameters (" << (r.covariance_scaled_by_sigma0 ? "σ scaled by the a-posteriori σ0" : "σ from the a-priori weights, σ0 = 1")
+      << ")\n";
+  for (const auto& p : r.parameters) {
+    const bool angle = p.name.find("arcsec") != std::string::npos, scale = p.name.find("ppm") != std::string::npos;
+    const int decimals = angle ? 6 : scale ? 5 : 4;
+    char line[160];
+    if (p.estimated) {
+      std::snprintf(line, sizeof line, "  %-22s %18s  ± %s\n", p.name.c_str(), fixed(p.value, decimals).c_str(),
+                    fixed(p.sigma, decimals).c_str());
+    } else {
+      std::snprintf(line, sizeof line, "  %-22s %18s  (fixed)\n", p.name.c_str(), fixed(p.value, decimals).c_str());
+    }
+    out << line;
+  }
+  const auto& g = r.global_test;
+  out << "\nStatistics\n  σ0 = " << fixed(r.sigma0, 3) << ", dof = " << r.dof << "\n";
+  if (r.variance_factors) {
+    out << "  variance factors (--vce): source " << fixed(r.variance_factors->first, 3) << ", target "
+        << fixed(r.variance_factors->second, 3) << " (σ scale " << fixed(std::sqrt(r.variance_factors->first), 3) << ", "
+        << fixed(std::sqrt(r.variance_factors->second), 3) << ")\n";
+  }
+  if (g.applicable) {
+    out << "  global test (χ², α = " << o.alpha << "): " << fixed(g.statistic, 2) << " in [" << fixed(g.critical_lower, 2)
+        << ", " << fixed(g.critical_upper, 2) << "]: "
+        << (g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED (high)" : "FAILED (low)") << "\n";
+  } else {
+    out << "  global test: not applicable (no a-priori sigmas, or no redundancy)\n";
+  }
+  std::vector<std::size_t> order(r.points.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const auto rank = [&](const solver::PointResult& p) { return p.outlier ? 0 : !p.used ? 1 : 2; };
+    if (rank(r.points[a]) != rank(r.points[b])) return rank(r.points[a]) < rank(r.points[b]);
+    return r.points[a].w_max > r.points[b].w_max;
+  });
+  out << "\nResiduals (target − transformed source, local E/N/U, mm); w-tests critical |w| = " << fixed(r.w_critical, 2)
+      << "\n  id            dE       dN       dU      wE     wN     wU    MDB mm  status\n";
+  for (std::size_t i : order) {
+    const auto& p = r.points[i];
+    char line[200];
+    const std::string mdb = std::isfinite(p.mdb_m) ? fixed(1e3 * p.mdb_m, 1) : "-";
+    const std::string status = p.outlier ? "OUTLIER (removed)" : !p.used ? "not used"
+                               : p.robust_weight < 1.0 ? "weight " + fixed(p.robust_weight, 3) : "ok";
+    std::snprintf(line, sizeof line, "  %-10s %8.1f %8.1f %8.1f  %6.2f %6.2f %6.2f  %8s  %s\n", p.id.c_str(),
+                  1e3 * p.residual_enu_m.x(), 1e3 * p.residual_enu_m.y(), 1e3 * p.residual_enu_m.z(), p.w_enu.x(),
+                  p.w_enu.y(), p.w_enu.z(), mdb.c_str(), status.c_str());
+    out << line;
+  }
+  for (const auto& p : r.points) {
+    if (p.outlier) out << "  " << p.id << ": " << p.removed_because << "\n";
+  }
+  out << "  (points not used are tested against the final fit: residuals at full size, prediction w-tests)\n";
+  if (!r.warnings.empty()) out << "\n" << r.warnings.size() << " warning(s): see standard error and the transform file\n";
+}
+
+io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geodesy::ControlSet& set,
+                                          const solver::FitOptions& o, const std::vector<std::string>& left_out,
+                                          const std::string& generator) {
+  io::TransformFile t;
+  switch (r.model) {
+    case FitModel::translation3: t.model = io::TransformModel::translation3; break;
+    case FitModel::helmert6: t.model = io::TransformModel::helmert6; break;
+    case FitModel::helmert7: t.model = io::TransformModel::helmert7; break;
+    case FitModel::helmert14: t.model = io::TransformModel::helmert14; break;
+    case FitModel::molodensky_badekas: t.model = io::TransformModel::molodensky_badekas; break;
+    case FitModel::enu_origin: t.model = io::TransformModel::enu_origin; break;
+    case FitModel::site_calibration: t.model = io::TransformModel::site_calibration; break;
+  }
+  t.pivot_m = r.pivot_m;
+  t.site_calibration = r.site_calibration;
+  if (r.model == FitModel::enu_origin) {
+    auto value = [&](const char* name) {
+      for (const auto& p : r.parameters) {
+        if (p.name == name) return p.value;
+      }
+      return 0.0;
+    };
+    t.enu_origin = io::EnuOriginCorrection{*r.nominal_origin,
+                                           Eigen::Vector3d(value("shift_e_m"), value("shift_n_m"), value("shift_u_m")),
+                                           geodesy::Angle::arcseconds(value("yaw_arcsec")),
+                                           geodesy::ScaleDifference::ppm(value("ds_ppm"))};
+  }
+  t.rotation_model = r.rotation_model;
+  t.source_frame = set.source_frame;
+  t.target_frame = set.target_frame;
+  t.reference_epoch = r.reference_epoch;
+  const bool pv = r.convention == solver::Convention::position_vector;
+  if (r.model == FitModel::helmert14) {
+    if (pv) {
+      t.helmert = r.helmert;
+    } else {
+      t.helmert = geodesy::to_coordinate_frame(r.helmert);
+    }
+  } else {
+    geodesy::Helmert7<geodesy::PositionVector> h = r.helmert.at_reference_epoch;
+    if (r.pivot_m) {
+      // The file holds the pivot form: T_p = T + (1 + ds) R p − p.
+      const geodesy::AffineMap m = geodesy::target_from_source(h, r.rotation_model);
+      h.t_m = m.translation_m() + m.linear() * *r.pivot_m - *r.pivot_m;
+    }
+    if (pv) {
+      t.helmert = h;
+    } else {
+      t.helmert = geodesy::to_coordinate_frame(h);
+    }
+  }
+  io::FitRecord f;
+  for (const auto& p : r.parameters) {
+    if (p.estimated) f.sigmas.emplace_back(p.name, p.sigma);
+  }
+  f.correlation_names = r.covariance_names;
+  for (Eigen::Index i = 0; i < r.correlation.rows(); ++i) {
+    std::vector<double> row;
+    for (Eigen::Index j = 0; j < r.correlation.cols(); ++j) row.push_back(r.correlation(i, j));
+    f.correlation.push_back(row);
+  }
+  f.sigmas_scaled_by_sigma0 = r.covariance_scaled_by_sigma0;
+  f.sigma0 = r.sigma0;
+  f.dof = r.dof;
+  f.alpha = o.alpha;
+  f.alpha_point = o.alpha_point;
+  f.global_statistic = r.global_test.statistic;
+  f.global_critical_lower = r.global_test.critical_lower;
+  f.global_critical_upper = r.global_test.critical_upper;
+  f.global_passed = r.global_test.passed;
+  f.global_applicable = r.global_test.applicable;
+  for (const auto& p : r.points) {
+    io::FitPointRecord q;
+    q.id = p.id;
+    for (int k = 0; k < 3; ++k) {
+      q.residual_enu_m[static_cast<std::size_t>(k)] = p.residual_enu_m(k);
+      q.w_enu[static_cast<std::size_t>(k)] = p.w_enu(k);
+      q.redundancy_enu[static_cast<std::size_t>(k)] = p.redundancy_enu(k);
+    }
+    Eigen::Index worst = 0;
+    p.w_enu.cwiseAbs().maxCoeff(&worst);
+    q.w_test = p.w_enu(worst);
+    q.mdb_m = p.mdb_m;
+    q.point_test = p.point_statistic;
+    q.point_test_dof = p.point_dof;
+    q.point_test_p = p.point_p_value;
+    q.outlier = p.outlier;
+    q.used = p.used;
+    q.note = p.removed_because;
+    if (std::find(left_out.begin(), left_out.end(), p.id) != left_out.end()) q.note = kLeftOutInWorkbench;
+    q.robust_weight = p.robust_weight;
+    f.points.push_back(q);
+  }
+  f.warnings = r.warnings;
+  f.variance_factors = r.variance_factors;
+  // The network's extent (source frame): the marks the fit used.
+  std::vector<geodesy::EcefPosition> used_marks;
+  for (const auto& p : r.points) {
+    if (!p.used) continue;
+    for (const auto& c : set.points) {
+      if (c.id == p.id) {
+        used_marks.push_back(c.source);
+        break;
+      }
+    }
+  }
+  if (!used_marks.empty()) f.extent = io::ControlExtent::of(used_marks);
+  f.generator = generator;
+  t.fit = f;
+  return t;
+}
+
+
+FitChoices fit_choices_from_transform(const io::TransformFile& t) {
+  FitChoices c;
+  solver::FitOptions& o = c.options;
+  switch (t.model) {
+    case io::TransformModel::translation3: o.model = FitModel::translation3; break;
+    case io::TransformModel::helmert6: o.model = FitModel::helmert6; break;
+    case io::TransformModel::helmert7: o.model = FitModel::helmert7; break;
+    case io::TransformModel::helmert14: o.model = FitModel::helmert14; break;
+    case io::TransformModel::molodensky_badekas: o.model = FitModel::molodensky_badekas; break;
+    case io::TransformModel::enu_origin: o.model = FitModel::enu_origin; break;
+    case io::TransformModel::site_calibration: o.model = FitModel::site_calibration; break;
+  }
+  const std::string_view convention = t.convention_name();
+  if (convention == "position_vector") {
+    o.convention = solver::Convention::position_vector;
+  } else if (convention == "coordinate_frame") {
+    o.convention = solver::Convention::coordinate_frame;
+  }
+  o.rotation_model = t.rotation_model;
+  o.reference_epoch = t.reference_epoch;
+  o.pivot_m = t.pivot_m;
+  if (t.enu_origin) {
+    o.nominal_origin = t.enu_origin->nominal;
+    // Held parameters are exactly 0 and have no σ in the fit record.
+    o.enu_yaw = t.enu_origin->yaw.rad() != 0.0;
+    o.enu_scale = t.enu_origin->ds.ppm() != 0.0;
+    if (t.fit) {
+      const auto has_sigma = [&](std::string_view name) {
+        return std::any_of(t.fit->sigmas.begin(), t.fit->sigmas.end(), [&](const auto& s) { return s.first == name; });
+      };
+      o.enu_yaw = has_sigma("yaw_arcsec");
+      o.enu_scale = has_sigma("ds_ppm");
+    }
+  }
+  if (t.site_calibration) {
+    o.nominal_origin = t.site_calibration->local_origin();
+    o.site_grid = t.site_calibration->grid();
+  }
+  if (t.fit) {
+    o.alpha = t.fit->alpha;
+    o.alpha_point = t.fit->alpha_point;
+    o.scale_by_sigma0 = t.fit->sigmas_scaled_by_sigma0;
+    for (const auto& p : t.fit->points) {
+      if (p.note == kLeftOutInWorkbench) c.left_out.push_back(p.id);
+    }
+  }
+  return c;
+}
+
+}  // namespace geoanchor::gui

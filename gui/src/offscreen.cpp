@@ -1,0 +1,88 @@
+#include "geoanchor/gui/offscreen.hpp"
+
+#include <GL/osmesa.h>
+#include <imgui.h>
+#include <imgui_impl_opengl3.h>
+
+#include <cfloat>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/gui/palette.hpp"
+
+namespace geoanchor::gui {
+
+struct OffscreenRenderer::Context {
+  OSMesaContext gl = nullptr;
+  std::vector<std::uint8_t> buffer;  // RGBA, bottom row first
+  ImGuiContext* imgui = nullptr;
+  bool backend = false;
+};
+
+OffscreenRenderer::OffscreenRenderer(int width, int height)
+    : width_(width), height_(height), context_(std::make_unique<Context>()) {
+  if (width < 64 || height < 64 || width > 8192 || height > 8192) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "size " + std::to_string(width) + "x" + std::to_string(height) + ": expected 64 … 8192 pixels each way");
+  }
+  const int attributes[] = {OSMESA_FORMAT,  OSMESA_RGBA,         OSMESA_DEPTH_BITS,            0,
+                            OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
+                            OSMESA_CONTEXT_MINOR_VERSION, 3,     0};
+  context_->gl = OSMesaCreateContextAttribs(attributes, nullptr);
+  if (!context_->gl) throw Error(ErrorKind::io, "E_GL", "OSMesa: no OpenGL 3.3 core context (libosmesa6 with llvmpipe is needed)");
+  context_->buffer.assign(4 * static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
+  if (!OSMesaMakeCurrent(context_->gl, context_->buffer.data(), GL_UNSIGNED_BYTE, width, height)) {
+    OSMesaDestroyContext(context_->gl);
+    throw Error(ErrorKind::io, "E_GL", "OSMesa: cannot make the off-screen context current");
+  }
+  context_->imgui = ImGui::CreateContext();
+  ImGui::SetCurrentContext(context_->imgui);
+  try {
+    WorkbenchUi::configure_context(static_cast<float>(height));
+  } catch (...) {
+    ImGui::DestroyContext(context_->imgui);
+    OSMesaDestroyContext(context_->gl);
+    throw;
+  }
+  ImGuiIO& io = ImGui::GetIO();
+  io.DisplaySize = ImVec2(static_cast<float>(width), static_cast<float>(height));
+  io.DeltaTime = 1.0f / 60.0f;
+  io.MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
+  context_->backend = ImGui_ImplOpenGL3_Init("#version 330 core");
+  if (!context_->backend) {
+    ImGui::DestroyContext(context_->imgui);
+    OSMesaDestroyContext(context_->gl);
+    throw Error(ErrorKind::io, "E_GL", "OSMesa: the ImGui OpenGL 3 backend did not start");
+  }
+}
+
+OffscreenRenderer::~OffscreenRenderer() {
+  ImGui::SetCurrentContext(context_->imgui);
+  if (context_->backend) ImGui_ImplOpenGL3_Shutdown();
+  ImGui::DestroyContext(context_->imgui);
+  OSMesaDestroyContext(context_->gl);
+}
+
+void OffscreenRenderer::render_frame(WorkbenchUi& ui, View view) {
+  OSMesaMakeCurrent(context_->gl, context_->buffer.data(), GL_UNSIGNED_BYTE, width_, height_);
+  ImGui::SetCurrentContext(context_->imgui);
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui::NewFrame();
+  ui.draw(view, static_cast<float>(width_), static_cast<float>(height_));
+  ImGui::Render();
+  glViewport(0, 0, width_, height_);
+  const Rgb bg = palette::kBackground;
+  glClearColor(bg.r / 255.0f, bg.g / 255.0f, bg.b / 255.0f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT);
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  glFinish();
+}
+
+RgbImage OffscreenRenderer::render(WorkbenchUi& ui, View view) {
+  // Auto-sized windows and tables measure in their first frame.
+  for (int i = 0; i < 3; ++i) render_frame(ui, view);
+  return RgbImage::from_gl_rgba(width_, height_, context_->buffer);
+}
+
+}  // namespace geoanchor::gui

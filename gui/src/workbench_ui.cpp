@@ -1,0 +1,243 @@
+#include "geoanchor/gui/workbench_ui.hpp"
+
+#include <imgui.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "ui_common.hpp"
+
+namespace geoanchor::gui {
+
+using detail::col4;
+
+std::string_view to_string(View v) {
+  switch (v) {
+    case View::workbench: return "workbench";
+    case View::plan: return "plan";
+    case View::histogram: return "histogram";
+    case View::table: return "table";
+    case View::parameters: return "parameters";
+    case View::comparison: return "comparison";
+  }
+  return "?";
+}
+
+std::optional<View> view_from_string(std::string_view name) {
+  for (View v : kAllViews) {
+    if (to_string(v) == name) return v;
+  }
+  return std::nullopt;
+}
+
+Eigen::Vector2d PlanGeometry::pixel_of(const Eigen::Vector2d& en_m) const {
+  const Eigen::Vector2d c(0.5 * (left + right), 0.5 * (top + bottom));
+  return c + px_per_m * Eigen::Vector2d(en_m.x() - center_en_m.x(), -(en_m.y() - center_en_m.y()));
+}
+
+float HistogramGeometry::x_of(double w) const {
+  const double span = kHistogramBinWidth * static_cast<double>(counts.size());
+  return left + static_cast<float>((w - w_low) / span) * (right - left);
+}
+
+WorkbenchUi::WorkbenchUi(WorkbenchModel& model, UiOptions options) : model_(model), options_(std::move(options)) {
+  const std::size_t n = std::min(options_.save_path.size(), save_path_.size() - 1);
+  std::memcpy(save_path_.data(), options_.save_path.data(), n);
+}
+
+void WorkbenchUi::configure_context(float display_height_px) {
+  namespace fs = std::filesystem;
+  static const char* kRegular = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+  static const char* kBold = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
+  for (const char* f : {kRegular, kBold}) {
+    // Debian's ImGui keeps IM_ASSERT: a missing font would abort, so check first.
+    if (!fs::is_regular_file(f)) {
+      throw Error(ErrorKind::io, "E_FONT", std::string(f) + ": font missing (Debian package fonts-dejavu-core; run scripts/setup.sh)");
+    }
+  }
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;  // no saved window state: every frame from the same inputs is the same
+  io.LogFilename = nullptr;
+  // Latin-1, Greek (σ, χ, Δ), punctuation (–, …, ′, ″), super- and
+  // subscripts, arrows, mathematical operators (±, ≤, ≈) and shapes (■, ▲).
+  static const ImWchar kRanges[] = {0x0020, 0x00FF, 0x0370, 0x03FF, 0x2000, 0x206F, 0x2070, 0x209F, 0x2190,
+                                    0x21FF, 0x2200, 0x22FF, 0x25A0, 0x25FF, 0};
+  const float px = std::clamp(std::round(display_height_px / 55.0f), 13.0f, 24.0f);
+  io.Fonts->Clear();
+  io.Fonts->AddFontFromFileTTF(kRegular, px, nullptr, kRanges);
+  io.Fonts->AddFontFromFileTTF(kBold, px, nullptr, kRanges);
+
+  ImGui::StyleColorsLight();
+  ImGuiStyle& s = ImGui::GetStyle();
+  s.WindowRounding = 0.0f;
+  s.FrameRounding = 2.0f;
+  s.WindowBorderSize = 1.0f;
+  s.WindowPadding = ImVec2(px * 0.5f, px * 0.4f);
+  s.CellPadding = ImVec2(px * 0.3f, px * 0.1f);
+  s.Colors[ImGuiCol_WindowBg] = col4(palette::kBackground);
+  s.Colors[ImGuiCol_PopupBg] = col4(palette::kBackground);
+  s.Colors[ImGuiCol_Text] = col4(palette::kInk);
+  s.Colors[ImGuiCol_TitleBg] = col4(palette::kPanel);
+  s.Colors[ImGuiCol_TitleBgActive] = col4(palette::kPanel);
+  s.Colors[ImGuiCol_TitleBgCollapsed] = col4(palette::kPanel);
+}
+
+void WorkbenchUi::refresh() {
+  model_.poll();
+  if (model_.generation() == shown_generation_) return;
+  shown_generation_ = model_.generation();
+  rows_ = model_.rows();
+  resort_ = true;
+}
+
+namespace {
+
+constexpr ImGuiWindowFlags kPanelFlags = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
+                                         ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoBringToFrontOnFocus;
+
+template <class Fn>
+void panel(const char* title, float x, float y, float w, float h, Fn&& body) {
+  ImGui::SetNextWindowPos(ImVec2(x, y), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(w, h), ImGuiCond_Always);
+  if (ImGui::Begin(title, nullptr, kPanelFlags)) body();
+  ImGui::End();
+}
+
+const char* panel_title(View v) {
+  switch (v) {
+    case View::plan: return "Plan (ENU at the network centroid)";
+    case View::histogram: return "Standardized residuals (w-tests)";
+    case View::table: return "Points";
+    case View::parameters: return "Parameters";
+    case View::comparison: return "Model comparison";
+    case View::workbench: return "geoanchor workbench";
+  }
+  return "";
+}
+
+}  // namespace
+
+void WorkbenchUi::draw(View view, float width, float height) {
+  refresh();
+  plan_.drawn = false;
+  histogram_.drawn = false;
+  const auto body = [this](View v) {
+    return [this, v] {
+      // A refused fit leaves every view with the reason only.
+      if (!model_.fit() && v != View::table && v != View::comparison) {
+        detail::text_coloured(palette::kOutlier, "No fit: " + model_.error());
+        return;
+      }
+      switch (v) {
+        case View::plan: draw_plan(); break;
+        case View::histogram: draw_histogram(); break;
+        case View::table: draw_table(); break;
+        case View::parameters: draw_parameters(); break;
+        case View::comparison: draw_comparison(); break;
+        case View::workbench: break;
+      }
+    };
+  };
+  if (view != View::workbench) {
+    panel(panel_title(view), 0, 0, width, height, body(view));
+    return;
+  }
+  const float font = ImGui::GetFontSize();
+  const float bar_h = std::round(font * 4.2f);
+  panel("geoanchor workbench", 0, 0, width, bar_h, [this] { draw_bar(); });
+  const float upper = std::round((height - bar_h) * 0.6f);
+  const float x1 = std::round(width * 0.42f), x2 = std::round(width * 0.69f);
+  const float half = std::round(upper * 0.5f);
+  panel(panel_title(View::plan), 0, bar_h, x1, upper, body(View::plan));
+  panel(panel_title(View::histogram), x1, bar_h, x2 - x1, half, body(View::histogram));
+  panel(panel_title(View::comparison), x1, bar_h + half, x2 - x1, upper - half, body(View::comparison));
+  panel(panel_title(View::parameters), x2, bar_h, width - x2, upper, body(View::parameters));
+  panel(panel_title(View::table), 0, bar_h + upper, width, height - bar_h - upper, body(View::table));
+}
+
+void WorkbenchUi::draw_bar() {
+  const auto& control = model_.control();
+  const auto& o = model_.options();
+  std::string title = control.source_name + " — " + std::to_string(control.points.size()) + " points";
+  if (control.source_frame || control.target_frame) {
+    title += ", " + (control.source_frame ? control.source_frame->to_string() : std::string("?")) + " → " +
+             (control.target_frame ? control.target_frame->to_string() : std::string("?"));
+  }
+  ImGui::PushFont(ImGui::GetIO().Fonts->Fonts[1]);
+  ImGui::TextUnformatted(title.c_str());
+  ImGui::PopFont();
+
+  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 11.0f);
+  const std::string current(solver::to_string(o.model));
+  if (ImGui::BeginCombo("model", current.c_str())) {
+    for (auto m : {solver::FitModel::translation3, solver::FitModel::helmert6, solver::FitModel::helmert7,
+                   solver::FitModel::helmert14, solver::FitModel::molodensky_badekas, solver::FitModel::enu_origin,
+                   solver::FitModel::site_calibration}) {
+      const bool needs_origin = m == solver::FitModel::enu_origin || m == solver::FitModel::site_calibration;
+      const std::string name(solver::to_string(m));
+      const int flags = needs_origin && !o.nominal_origin ? ImGuiSelectableFlags_Disabled : 0;
+      if (ImGui::Selectable(name.c_str(), m == o.model, flags) && m != o.model) model_.set_model(m);
+    }
+    ImGui::EndCombo();
+  }
+  ImGui::SameLine(0, ImGui::GetFontSize() * 1.5f);
+  ImGui::TextUnformatted("convention");
+  ImGui::SameLine();
+  const bool pv = o.convention == solver::Convention::position_vector;
+  if (ImGui::RadioButton("position vector", o.convention && pv) && !(o.convention && pv)) {
+    model_.set_convention(solver::Convention::position_vector);
+  }
+  ImGui::SameLine();
+  if (ImGui::RadioButton("coordinate frame", o.convention && !pv) && !(o.convention && !pv)) {
+    model_.set_convention(solver::Convention::coordinate_frame);
+  }
+  ImGui::SameLine(0, ImGui::GetFontSize() * 1.5f);
+  if (ImGui::Button("Save transform…")) ImGui::OpenPopup("Save transform");
+  draw_save_popup();
+  ImGui::SameLine(0, ImGui::GetFontSize() * 1.5f);
+  if (model_.busy()) {
+    ImGui::TextUnformatted("refitting…");
+  } else if (!model_.fit()) {
+    detail::text_coloured(palette::kOutlier, "fit refused");
+  } else {
+    const auto& f = *model_.fit();
+    const auto& g = f.global_test;
+    std::string s = "σ0 = " + detail::fmt("%.3f", f.sigma0) + ", dof " + std::to_string(f.dof);
+    if (!g.applicable) {
+      ImGui::TextUnformatted((s + ", global test n/a").c_str());
+    } else {
+      ImGui::TextUnformatted(s.c_str());
+      ImGui::SameLine();
+      detail::text_coloured(g.passed ? palette::kPass : palette::kOutlier,
+                            g.passed ? "global test passed" : "global test FAILED");
+    }
+  }
+  if (!status_.empty()) {
+    ImGui::SameLine(0, ImGui::GetFontSize() * 1.5f);
+    ImGui::TextUnformatted(status_.c_str());
+  }
+}
+
+void WorkbenchUi::draw_save_popup() {
+  if (!ImGui::BeginPopupModal("Save transform", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) return;
+  ImGui::TextUnformatted("The transform file, as `geoanchor fit -o` writes it:");
+  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 30.0f);
+  ImGui::InputText("path", save_path_.data(), save_path_.size());
+  ImGui::Checkbox("overwrite an existing file", &save_overwrite_);
+  if (ImGui::Button("Save")) {
+    try {
+      model_.save_transform(save_path_.data(), save_overwrite_, options_.generator);
+      status_ = std::string("wrote ") + save_path_.data();
+    } catch (const Error& e) {
+      status_ = e.what();
+    }
+    ImGui::CloseCurrentPopup();
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
+  ImGui::EndPopup();
+}
+
+}  // namespace geoanchor::gui
