@@ -36,7 +36,11 @@ std::pair<int, int> parse_size(const std::string& text) {
 
 void print_notes(const WorkbenchSession& s) {
   for (const auto& n : s.notes) std::cerr << "geoanchor: note: " << n << '\n';
-  if (!s.model->fit()) std::cerr << "geoanchor: warning: no fit: " << s.model->error() << " (the pictures show why)\n";
+  if (!s.model->fit()) {
+    std::cerr << "geoanchor: warning: no fit: " << s.model->error() << " (the pictures show why)\n";
+    return;
+  }
+  for (const auto& w : s.model->fit()->warnings) std::cerr << "geoanchor: warning: " << w << '\n';
 }
 
 }  // namespace
@@ -114,6 +118,8 @@ int run_report(const ReportOptions& o) {
   text << "\n";
   if (s.model->fit()) {
     gui::write_fit_report(text, *s.model->fit(), s.model->control(), s.model->options());
+    if (!s.model->fit()->warnings.empty()) text << "\nWarnings\n";
+    for (const auto& warning : s.model->fit()->warnings) text << "  " << warning << "\n";
   } else {
     text << "No fit: " << s.model->error() << "\n";
   }
@@ -136,11 +142,12 @@ int run_report(const ReportOptions& o) {
   std::vector<std::pair<std::string, gui::RgbImage>> images;
   for (gui::View v : gui::kAllViews) {
     images.emplace_back(std::string(gui::to_string(v)) + ".png", renderer.render(ui, v));
-    text << "  " << images.back().first << "\n";
-  }
-  if (ui.plan().drawn) {
-    text << "  (plan: residual arrows × " << ui.plan().arrow_exaggeration << ", scale bar " << ui.plan().scale_bar_m
-         << " m, vertical residual colour ±" << ui.plan().du_limit_mm << " mm)\n";
+    text << "  " << images.back().first;
+    if (v == gui::View::plan && ui.plan().drawn) {
+      text << ": residual arrows × " << ui.plan().arrow_exaggeration << ", scale bar " << ui.plan().scale_bar_m
+           << " m, vertical residual colour ±" << ui.plan().du_limit_mm << " mm";
+    }
+    text << "\n";
   }
 
   const bool created = !fs::exists(dir);

@@ -510,6 +510,29 @@ std::optional<FitRecord> parse_fit_uncertainty(const json& doc, std::string_view
     if (st.contains("sigmas_scaled_by_sigma0") && st.at("sigmas_scaled_by_sigma0").is_boolean()) {
       f.sigmas_scaled_by_sigma0 = st.at("sigmas_scaled_by_sigma0").get<bool>();
     }
+    // The significance levels the fit used (the workbench reopens with them).
+    for (const auto& [key, target] : {std::pair<const char*, double*>{"alpha", &f.alpha}, {"alpha_point", &f.alpha_point}}) {
+      if (!st.contains(key)) continue;
+      const json& v = st.at(key);
+      if (!v.is_number() || !(v.get<double>() > 0.0 && v.get<double>() < 1.0)) {
+        fail(source, std::string("statistics.") + key, "value " + v.dump() + " is not a significance level in (0, 1)");
+      }
+      *target = v.get<double>();
+    }
+  }
+  // Per point: which were used, removed or left out, and why.
+  if (doc.contains("points") && doc.at("points").is_array()) {
+    std::size_t i = 0;
+    for (const auto& jp : doc.at("points")) {
+      const std::string where = "points[" + std::to_string(i++) + "]";
+      if (!jp.is_object() || !jp.contains("id") || !jp.at("id").is_string()) fail(source, where, "expected an object with a string id");
+      FitPointRecord q;
+      q.id = jp.at("id").get<std::string>();
+      if (jp.contains("used") && jp.at("used").is_boolean()) q.used = jp.at("used").get<bool>();
+      if (jp.contains("outlier") && jp.at("outlier").is_boolean()) q.outlier = jp.at("outlier").get<bool>();
+      if (jp.contains("note") && jp.at("note").is_string()) q.note = jp.at("note").get<std::string>();
+      f.points.push_back(q);
+    }
   }
   if (doc.contains("control_extent")) {
     const json& e = doc.at("control_extent");

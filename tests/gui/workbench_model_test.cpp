@@ -3,8 +3,15 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/gui/fit_export.hpp"
 #include "geoanchor/gui/workbench_model.hpp"
 #include "geoanchor/io/control_csv.hpp"
 
@@ -128,6 +135,57 @@ TEST(WorkbenchModel, OnTheWorkerThreadTheLatestChoicesWinAndTheShownFitIsTheirs)
   EXPECT_EQ(model.fit()->sigma0, expected.sigma0);
   EXPECT_EQ(model.parameters()[0].value, expected.parameters[0].value);
   EXPECT_TRUE(row(model.rows(), "P04").left_out);
+}
+
+nlohmann::json read_json(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+TEST(WorkbenchModel, SaveTransformWritesWhatGeoanchorFitWrites) {
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "geoanchor_workbench_save";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto by_fit = dir / "fit.json", by_gui = dir / "gui.json";
+  const std::string cmd = std::string(GEOANCHOR_EXE) + " fit " + kControl + " --model helmert7 --convention position_vector -o " +
+                          by_fit.string() + " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  WorkbenchModel model(io::read_control_set(kControl, io::ControlReadOptions{}), helmert7_pv());
+  model.save_transform(by_gui.string(), false, "geoanchor test");
+  nlohmann::json a = read_json(by_fit), b = read_json(by_gui);
+  // Everything but the command line that made it.
+  a.erase("generator");
+  b.erase("generator");
+  EXPECT_EQ(a, b) << a.dump(1) << "\n---\n" << b.dump(1);
+  // An existing file is refused unless overwrite is asked for.
+  EXPECT_THROW(model.save_transform(by_gui.string(), false, "geoanchor test"), Error);
+  EXPECT_NO_THROW(model.save_transform(by_gui.string(), true, "geoanchor test"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(WorkbenchModel, ASavedTransformReopensWithItsModelConventionAndLeftOutPoints) {
+  const geodesy::ControlSet set = io::read_control_set(kControl, io::ControlReadOptions{});
+  solver::FitOptions o = helmert7_pv();
+  o.convention = solver::Convention::coordinate_frame;
+  o.model = solver::FitModel::molodensky_badekas;
+  o.alpha_point = 0.01;
+  WorkbenchModel model(set, o);
+  model.set_left_out("P05", true);
+  ASSERT_TRUE(model.fit().has_value()) << model.error();
+  const auto path = std::filesystem::path(::testing::TempDir()) / "geoanchor_workbench_reopen.json";
+  model.save_transform(path.string(), true, "geoanchor test");
+  const FitChoices c = fit_choices_from_transform(io::read_transform_file(path));
+  EXPECT_EQ(c.options.model, solver::FitModel::molodensky_badekas);
+  EXPECT_EQ(c.options.convention, solver::Convention::coordinate_frame);
+  EXPECT_EQ(c.options.alpha_point, 0.01);
+  EXPECT_EQ(c.left_out, (std::vector<std::string>{"P05"}));
+  WorkbenchModel reopened(set, c.options, WorkbenchModel::kDefaultAsyncFrom, c.left_out);
+  EXPECT_TRUE(row(reopened.rows(), "P05").left_out);
+  ASSERT_EQ(reopened.parameters().size(), model.parameters().size());
+  for (std::size_t i = 0; i < model.parameters().size(); ++i) {
+    EXPECT_EQ(reopened.parameters()[i].value, model.parameters()[i].value) << model.parameters()[i].name;
+  }
+  std::filesystem::remove(path);
 }
 
 }  // namespace

@@ -68,9 +68,10 @@ struct ControlExtent {
   double distance_m(const geodesy::EcefPosition& x) const;
 };
 
-// Read back by convert/apply from a fitted file: sigmas, correlation,
-// correlation_parameters, statistics.sigma0/dof/sigmas_scaled_by_sigma0 and
-// control_extent; the per-point records are not.
+// Read back from a fitted file: sigmas, correlation, correlation_parameters,
+// statistics.sigma0/dof/sigmas_scaled_by_sigma0/alpha/alpha_point,
+// control_extent, and of each point record its id, used, outlier and note
+// (the workbench reopens a saved fit with them); the rest is written only.
 struct FitRecord {
   std::vector<std::pair<std::string, double>> sigmas;  // parameter name -> σ (same units)
   std::vector<std::string> correlation_names;
