@@ -7,7 +7,8 @@
 #     (fixtures/airport_tile.las, ENU at the LSZH reference point in
 #     ITRF2014@2024.5, frame stated by its sidecar) into ETRF2000@2024.5,
 #     writing the new tile, its provenance sidecar and the run summary;
-#  3. convert: the airport marks go geodetic -> ECEF -> ENU (at the LSZH
+#  3. report: the fit's report and PNGs of the workbench's views (off-screen);
+#  4. convert: the airport marks go geodetic -> ECEF -> ENU (at the LSZH
 #     reference point) -> ECEF -> geodetic, and the round trip is measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -31,6 +32,13 @@ mkdir -p "$out/tiles"
 echo "the new tile's frame, origin and provenance ($out/tiles/airport_tile.las.geoanchor.json):"
 grep -E '"(frame|transform_sha256|transform_sigma0|sigma_[enu]_m|distance_outside_control_m|points)"' \
   "$out/tiles/airport_tile.las.geoanchor.json" | sed 's/^ */  /'
+
+echo
+echo "== report =="
+# The fit's text report and a PNG of each workbench view, rendered off-screen
+# (no display needed); `geoanchor gui` shows the same views in a window.
+"$geoanchor" report fixtures/airport_control.csv --transform "$out/lszh_helmert7.json" -o "$out/report" --overwrite
+grep -E "differ by|σ0 =|global test|OUTLIER" "$out/report/report.txt" | sed 's/^ */  /'
 
 echo
 echo "== convert =="

@@ -56,7 +56,7 @@ void WorkbenchUi::draw_histogram() {
   h.drawn = true;
   const double n = static_cast<double>(w.size());
   const double peak_normal = n * kHistogramBinWidth / std::sqrt(2.0 * std::numbers::pi);
-  const double y_max = 1.1 * std::max<double>(peak_normal, *std::max_element(h.counts.begin(), h.counts.end()));
+  const double y_max = 1.1 * std::max({1.0, peak_normal, static_cast<double>(*std::max_element(h.counts.begin(), h.counts.end()))});
   const auto y_of = [&](double count) { return h.bottom - static_cast<float>(count / y_max) * (h.bottom - h.top); };
 
   // Critical values under the bars, the normal curve over them.

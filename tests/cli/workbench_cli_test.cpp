@@ -133,9 +133,16 @@ TEST_F(WorkbenchCli, ReportOnAPublishedParameterSetSaysHowFarTheRefitIs) {
 }
 
 #ifdef GEOANCHOR_GUI_EXE
+// Under the asan preset the window process keeps AddressSanitizer but not
+// LeakSanitizer: Mesa's GL driver (swrast_dri.so, opened and closed again by
+// libglvnd) leaves allocations in frames LeakSanitizer cannot name, so no
+// suppression can single them out. The same UI code runs with leak checking
+// in the off-screen shell. (No effect on a build without sanitizers.)
+const std::string kWindow = "ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 xvfb-run -a -s '-screen 0 1920x1080x24' ";
+
 TEST_F(WorkbenchCli, TheWindowRendersUnderXvfbTheSameFramesAsTheOffScreenShell) {
   const auto window_png = path("window.png"), snapshot_png = path("snapshot.png");
-  const auto w = shell("xvfb-run -a -s '-screen 0 1920x1080x24' " + std::string(GEOANCHOR_GUI_EXE) + " " + kControl +
+  const auto w = shell(kWindow + std::string(GEOANCHOR_GUI_EXE) + " " + kControl +
                        " --size 1600x1000 --frames 4 --screenshot " + window_png.string());
   ASSERT_EQ(w.exit_code, 0) << w.err;
   const auto s = shell(kNoDisplay + GEOANCHOR_EXE + " snapshot " + kControl + " --size 1600x1000 -o " + snapshot_png.string());
@@ -154,7 +161,7 @@ TEST_F(WorkbenchCli, TheWindowRendersUnderXvfbTheSameFramesAsTheOffScreenShell) 
   }
   EXPECT_LE(static_cast<double>(different), kWindowDifferentPixelsMax * a.width * a.height) << different << " pixels differ";
   // `geoanchor gui` starts the same window.
-  const auto g = shell("xvfb-run -a -s '-screen 0 1920x1080x24' " + std::string(GEOANCHOR_EXE) + " gui " + kControl + " --frames 2");
+  const auto g = shell(kWindow + std::string(GEOANCHOR_EXE) + " gui " + kControl + " --frames 2");
   EXPECT_EQ(g.exit_code, 0) << g.err;
 }
 
