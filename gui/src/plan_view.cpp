@@ -78,10 +78,23 @@ void WorkbenchUi::draw_plan() {
   const auto residual_px = [&](const PointRow& r) {
     return Eigen::Vector2d(k * 1e-3 * r.residual_enu_mm.x(), -k * 1e-3 * r.residual_enu_mm.y());
   };
-  // Left-out and unused points under the rest, then used points, outliers on top.
+  // Left-out and unused points under the rest, then used points, outliers on
+  // top. A dense plan (more than kDensePlanMarks marks) draws its marks as
+  // small squares and its arrows without antialiasing, labels only the
+  // outliers: a tenth of the geometry, and at that density the marks
+  // overlap anyway.
+  const bool dense = rows_.size() > kDensePlanMarks;
+  const ImDrawListFlags aa = dl->Flags;
+  if (dense) dl->Flags &= ~(ImDrawListFlags_AntiAliasedLines | ImDrawListFlags_AntiAliasedFill);
+  const float rd = std::max(2.0f, std::round(r_px * 0.6f));
   for (const auto& r : rows_) {
     if (r.used || r.outlier) continue;
     const Eigen::Vector2d p = g.pixel_of(r.plan_en_m);
+    if (dense) {
+      dl->AddRect(ImVec2(static_cast<float>(p.x()) - rd, static_cast<float>(p.y()) - rd),
+                  ImVec2(static_cast<float>(p.x()) + rd, static_cast<float>(p.y()) + rd), col(palette::kLeftOut));
+      continue;
+    }
     dl->AddCircle(iv(p), r_px, col(palette::kLeftOut), 12, 1.5f);
     dl->AddText(ImVec2(static_cast<float>(p.x()) + r_px + 2, static_cast<float>(p.y()) - font * 0.5f), col(palette::kLeftOut),
                 r.id.c_str());
@@ -89,11 +102,18 @@ void WorkbenchUi::draw_plan() {
   for (const auto& r : rows_) {
     if (!r.used) continue;
     const Eigen::Vector2d p = g.pixel_of(r.plan_en_m);
-    arrow(dl, p, p + residual_px(r), col(palette::kInk), 1.5f, font * 0.55f);
     const Rgb fill = palette::diverging(r.residual_enu_mm.z() / g.du_limit_mm);
+    if (dense) {
+      arrow(dl, p, p + residual_px(r), col(palette::kInk), 1.0f, font * 0.4f);
+      dl->AddRectFilled(ImVec2(static_cast<float>(p.x()) - rd, static_cast<float>(p.y()) - rd),
+                        ImVec2(static_cast<float>(p.x()) + rd, static_cast<float>(p.y()) + rd), col(fill));
+      continue;
+    }
+    arrow(dl, p, p + residual_px(r), col(palette::kInk), 1.5f, font * 0.55f);
     dl->AddCircleFilled(iv(p), r_px, col(fill), 12);
     dl->AddCircle(iv(p), r_px, col(palette::kInk), 12, 1.0f);
   }
+  dl->Flags = aa;
   ImGui::PushFont(ImGui::GetIO().Fonts->Fonts[1]);
   for (const auto& r : rows_) {
     if (!r.outlier) continue;

@@ -43,6 +43,9 @@ std::optional<View> view_from_string(std::string_view name);
 // the centre of the points' bounding box and px_per_m the largest scale at
 // which the box fits (spans below 1 m count as 1 m).
 inline constexpr float kPlanMarginPx = 48.0f;
+// Above this many marks the plan is dense: marks are small squares, arrows
+// are drawn without antialiasing, and only outliers are labelled.
+inline constexpr std::size_t kDensePlanMarks = 1500;
 // The histogram's bins are this wide (in units of σ of the w-test).
 inline constexpr double kHistogramBinWidth = 0.5;
 
