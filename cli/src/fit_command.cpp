@@ -19,17 +19,7 @@
 #include "version.hpp"
 
 namespace geoanchor::cli {
-namespace {
-
 using solver::FitModel;
-
-std::string fixed(double v, int decimals) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*f", decimals, v);
-  return b;
-}
-
-}  // namespace
 
 CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   auto* cmd = app.add_subcommand("fit", "Fit a datum transform to control points, with statistics");
@@ -202,8 +192,8 @@ int run_fit(const FitCommandOptions& o) {
 
   const auto& g = r.global_test;
   if (g.applicable && g.statistic > g.critical_upper && !o.accept_failed_global_test) {
-    std::cerr << "geoanchor: error[E_FIT_GLOBAL_TEST]: " << o.control << ": global test failed high (" << fixed(g.statistic, 2)
-              << " > " << fixed(g.critical_upper, 2) << ", σ0 = " << fixed(r.sigma0, 3)
+    std::cerr << "geoanchor: error[E_FIT_GLOBAL_TEST]: " << o.control << ": global test failed high (" << format_fixed(g.statistic, 2)
+              << " > " << format_fixed(g.critical_upper, 2) << ", σ0 = " << format_fixed(r.sigma0, 3)
               << "): the residuals do not fit the stated sigmas; no transform was written. hint: look for blunders "
                  "(residual table), wrong sigmas, or a wrong model; --accept-failed-global-test writes it anyway\n";
     return exit_code(ErrorKind::rejected);

@@ -9,20 +9,10 @@
 #include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::gui {
-namespace {
-
 using solver::FitModel;
-
-std::string fixed(double v, int decimals) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*f", decimals, v);
-  return b;
-}
 
 // The printed report: parameters, statistics with verdict, residuals with
 // flagged points first.
-}  // namespace
-
 void write_fit_report(std::ostream& out, const solver::FitResult& r, const geodesy::ControlSet& set,
                       const solver::FitOptions& o) {
   out << "geoanchor fit: model " << solver::to_string(r.model);
@@ -43,23 +33,23 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
     const int decimals = angle ? 6 : scale ? 5 : 4;
     char line[160];
     if (p.estimated) {
-      std::snprintf(line, sizeof line, "  %-22s %18s  ± %s\n", p.name.c_str(), fixed(p.value, decimals).c_str(),
-                    fixed(p.sigma, decimals).c_str());
+      std::snprintf(line, sizeof line, "  %-22s %18s  ± %s\n", p.name.c_str(), format_fixed(p.value, decimals).c_str(),
+                    format_fixed(p.sigma, decimals).c_str());
     } else {
-      std::snprintf(line, sizeof line, "  %-22s %18s  (fixed)\n", p.name.c_str(), fixed(p.value, decimals).c_str());
+      std::snprintf(line, sizeof line, "  %-22s %18s  (fixed)\n", p.name.c_str(), format_fixed(p.value, decimals).c_str());
     }
     out << line;
   }
   const auto& g = r.global_test;
-  out << "\nStatistics\n  σ0 = " << fixed(r.sigma0, 3) << ", dof = " << r.dof << "\n";
+  out << "\nStatistics\n  σ0 = " << format_fixed(r.sigma0, 3) << ", dof = " << r.dof << "\n";
   if (r.variance_factors) {
-    out << "  variance factors (--vce): source " << fixed(r.variance_factors->first, 3) << ", target "
-        << fixed(r.variance_factors->second, 3) << " (σ scale " << fixed(std::sqrt(r.variance_factors->first), 3) << ", "
-        << fixed(std::sqrt(r.variance_factors->second), 3) << ")\n";
+    out << "  variance factors (--vce): source " << format_fixed(r.variance_factors->first, 3) << ", target "
+        << format_fixed(r.variance_factors->second, 3) << " (σ scale " << format_fixed(std::sqrt(r.variance_factors->first), 3) << ", "
+        << format_fixed(std::sqrt(r.variance_factors->second), 3) << ")\n";
   }
   if (g.applicable) {
-    out << "  global test (χ², α = " << o.alpha << "): " << fixed(g.statistic, 2) << " in [" << fixed(g.critical_lower, 2)
-        << ", " << fixed(g.critical_upper, 2) << "]: "
+    out << "  global test (χ², α = " << o.alpha << "): " << format_fixed(g.statistic, 2) << " in [" << format_fixed(g.critical_lower, 2)
+        << ", " << format_fixed(g.critical_upper, 2) << "]: "
         << (g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED (high)" : "FAILED (low)") << "\n";
   } else {
     out << "  global test: not applicable (no a-priori sigmas, or no redundancy)\n";
@@ -71,14 +61,14 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
     if (rank(r.points[a]) != rank(r.points[b])) return rank(r.points[a]) < rank(r.points[b]);
     return r.points[a].w_max > r.points[b].w_max;
   });
-  out << "\nResiduals (target − transformed source, local E/N/U, mm); w-tests critical |w| = " << fixed(r.w_critical, 2)
+  out << "\nResiduals (target − transformed source, local E/N/U, mm); w-tests critical |w| = " << format_fixed(r.w_critical, 2)
       << "\n  id            dE       dN       dU      wE     wN     wU    MDB mm  status\n";
   for (std::size_t i : order) {
     const auto& p = r.points[i];
     char line[200];
-    const std::string mdb = std::isfinite(p.mdb_m) ? fixed(1e3 * p.mdb_m, 1) : "-";
+    const std::string mdb = std::isfinite(p.mdb_m) ? format_fixed(1e3 * p.mdb_m, 1) : "-";
     const std::string status = p.outlier ? "OUTLIER (removed)" : !p.used ? "not used"
-                               : p.robust_weight < 1.0 ? "weight " + fixed(p.robust_weight, 3) : "ok";
+                               : p.robust_weight < 1.0 ? "weight " + format_fixed(p.robust_weight, 3) : "ok";
     std::snprintf(line, sizeof line, "  %-10s %8.1f %8.1f %8.1f  %6.2f %6.2f %6.2f  %8s  %s\n", p.id.c_str(),
                   1e3 * p.residual_enu_m.x(), 1e3 * p.residual_enu_m.y(), 1e3 * p.residual_enu_m.z(), p.w_enu.x(),
                   p.w_enu.y(), p.w_enu.z(), mdb.c_str(), status.c_str());

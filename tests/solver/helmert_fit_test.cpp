@@ -10,6 +10,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/gui/fit_export.hpp"
 #include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 #include "proj_reference.hpp"
@@ -573,7 +574,7 @@ TEST(TransformedCovariance, MatchesTheMonteCarloSpreadAndGrowsAwayFromTheNetwork
 }
 
 // What apply reports from a transform file (sigmas and correlation as
-// written, Jacobian by central differences) against the solver's analytic
+// written by fit and read back, Jacobian by central differences) against the solver's analytic
 // J Σθ Jᵀ from the same fit.
 TEST(TransformedCovariance, TheTransformFileGivesTheSolversCovariance) {
   constexpr double kRelativeTol = 1e-6;
@@ -584,20 +585,9 @@ TEST(TransformedCovariance, TheTransformFileGivesTheSolversCovariance) {
   o.model = FitModel::helmert7;
   o.convention = Convention::position_vector;
   const FitResult r = fit_helmert(set, o);
-  io::TransformFile t;
-  t.model = io::TransformModel::helmert7;
-  t.helmert = r.helmert.at_reference_epoch;
-  io::FitRecord f;
-  for (const auto& p : r.parameters) {
-    if (p.estimated) f.sigmas.emplace_back(p.name, p.sigma);
-  }
-  f.correlation_names = r.covariance_names;
-  for (Eigen::Index i = 0; i < r.correlation.rows(); ++i) {
-    std::vector<double> row;
-    for (Eigen::Index j = 0; j < r.correlation.cols(); ++j) row.push_back(r.correlation(i, j));
-    f.correlation.push_back(row);
-  }
-  t.fit = f;
+  // The file as `fit -o` writes it and `apply` reads it back.
+  const io::TransformFile t =
+      io::parse_transform_json(io::to_json_text(gui::transform_file_from_fit(r, set, o, {}, "test")), "fit.json");
   const geodesy::GeocentricConverter conv(geodesy::Ellipsoid::grs80());
   for (const auto& at : {std::pair{47.46, 8.55}, std::pair{47.9, 9.3}}) {
     const EcefPosition x = conv.ecef_from_geodetic({Angle::degrees(at.first), Angle::degrees(at.second), geodesy::EllipsoidalHeight{500}});
