@@ -3,10 +3,10 @@
 #include <CLI/CLI.hpp>
 
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/gui/fit_export.hpp"
 #include "geoanchor/io/control_csv.hpp"
 #include "option_parsing.hpp"
@@ -89,12 +89,14 @@ WorkbenchSession open_workbench(const WorkbenchOptions& o) {
     const io::TransformFile refit =
         gui::transform_file_from_fit(*s.model->fit(), s.model->control(), fo, s.model->left_out(), s.generator);
     const double d = largest_difference_m(*s.transform, refit, s.model->control());
-    char line[256];
-    std::snprintf(line, sizeof line, "%s and the refit of %s differ by at most %.3f mm at the control marks%s", o.transform.c_str(),
-                  o.control.c_str(), 1e3 * d,
-                  std::isfinite(d) && d > 1e-4 ? (s.transform->fit ? " (the control set or the choices changed since the fit)" : "")
-                                               : "");
-    s.notes.push_back(line);
+    if (!std::isfinite(d)) {
+      s.notes.push_back(o.transform + " could not be compared with the refit at the control marks (a time-dependent "
+                        "transform needs each mark's epoch)");
+    } else {
+      s.notes.push_back(o.transform + " and the refit of " + o.control + " differ by at most " + format_fixed(1e3 * d, 3) +
+                        " mm at the control marks" +
+                        (d > 1e-4 && s.transform->fit ? " (the control set or the choices changed since the fit)" : ""));
+    }
   }
   return s;
 }
