@@ -1,0 +1,89 @@
+#pragma once
+// Published transformations between terrestrial reference frames, each with
+// its source, convention, reference epoch and stated accuracy, and the plate
+// motion models that carry coordinates from one epoch to another.
+//
+// Every parameter set is stored as its source publishes it, turned into
+// this library's form: a 14-parameter Helmert in the position-vector
+// convention (rotations and rates as the IERS tables give them) with
+// `to = T(from)` at the observation epoch t, the parameters evaluated at t
+// (p(t) = p + ṗ (t − t_ref)). The reverse of an edge is its exact inverse
+// at t. Units on entry: millimetres, milliarc-seconds, parts per billion
+// and their rates per year, as the IERS tables print them.
+//
+// In place (issue 6, part 1): the ITRF family — the IERS sets from
+// ITRF2020, ITRF2014 and ITRF2008 to every earlier realization back to
+// ITRF88 — and the ITRF2014 plate motion model. To come: ETRF89…ETRF2020,
+// the WGS 84 realizations, NAD83(2011)/(CSRS), GDA94/GDA2020 and the
+// ITRF2020 plate motion model.
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "geoanchor/geodesy/helmert.hpp"
+#include "geoanchor/geodesy/positions.hpp"
+#include "geoanchor/geodesy/units.hpp"
+
+namespace geoanchor::geodesy {
+
+struct CatalogTransformation {
+  std::string from, to;               // frame names as Frame::name() prints them: "ITRF2020", "ITRF2014"
+  Helmert14<PositionVector> params;   // to = params(from), evaluated at the observation epoch
+  double accuracy_m = 0.0;            // as the source (or EPSG, for the same operation) states it
+  std::string source;                 // the publication, table and, where it exists, the EPSG code
+};
+
+// A plate's rotation pole in a frame: v = ω × x (ECEF, m/yr for x in m).
+struct PlateMotionModel {
+  std::string frame;  // "ITRF2014"
+  std::string plate;  // "EURA", "NOAM", "AUST", ...
+  Eigen::Vector3d omega_mas_per_year = Eigen::Vector3d::Zero();
+  std::string source;
+
+  // The plate's velocity at x, in m/yr.
+  Eigen::Vector3d velocity_m_per_year(const EcefPosition& x) const;
+};
+
+// Every parameter set in the catalog (each listed once, in its published
+// direction).
+const std::vector<CatalogTransformation>& catalog_transformations();
+const std::vector<PlateMotionModel>& plate_motion_models();
+
+// The model for `plate` in `frame`, or nullopt.
+std::optional<PlateMotionModel> find_plate_motion_model(std::string_view frame, std::string_view plate);
+
+// One step of a path: an edge of the catalog, forward or reversed.
+struct FramePathStep {
+  const CatalogTransformation* edge = nullptr;
+  bool reverse = false;
+  std::string_view from() const { return reverse ? edge->to : edge->from; }
+  std::string_view to() const { return reverse ? edge->from : edge->to; }
+  // to-frame ECEF of from-frame ECEF x at observation epoch t.
+  EcefPosition apply(const EcefPosition& x, DecimalYear t) const;
+};
+
+struct FramePath {
+  std::string from, to;
+  std::vector<FramePathStep> steps;  // empty when from == to
+  // The stated accuracies of the steps combined as independent errors (root
+  // sum of squares), metres.
+  double accuracy_m() const;
+  EcefPosition apply(const EcefPosition& x, DecimalYear t) const;
+  // One line per step: "ITRF2014 → ITRF2020 (reverse of ITRF2020 → ITRF2014), ±0.001 m: IERS …".
+  std::string describe() const;
+};
+
+// The path with the fewest steps between two frames named as
+// Frame::name() prints them (ties: the smaller combined accuracy). Throws
+// geoanchor::Error (input) naming `where` for a frame the catalog does not
+// know (listing those it does) or two frames it cannot connect.
+FramePath find_frame_path(std::string_view from, std::string_view to, std::string_view where);
+
+// The frame names the catalog knows, sorted.
+std::vector<std::string> catalog_frame_names();
+
+}  // namespace geoanchor::geodesy

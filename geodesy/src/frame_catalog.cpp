@@ -1,0 +1,253 @@
+#include "geoanchor/geodesy/frame_catalog.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <map>
+#include <set>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::geodesy {
+namespace {
+
+// One row of an IERS table: translations (mm), scale (ppb), rotations (mas)
+// at the epoch, and their rates per year.
+struct IersRow {
+  const char* to;
+  double tx, ty, tz, d, rx, ry, rz;
+  double dtx, dty, dtz, dd, drx, dry, drz;
+  double accuracy_m;
+  const char* epsg;  // the EPSG operation in the opposite direction
+};
+
+CatalogTransformation from_iers(const char* from, double epoch, const IersRow& r, const std::string& table) {
+  CatalogTransformation c;
+  c.from = from;
+  c.to = r.to;
+  auto& p = c.params.at_reference_epoch;
+  p.t_m = 1e-3 * Eigen::Vector3d(r.tx, r.ty, r.tz);
+  p.rx = Angle::milliarcseconds(r.rx);
+  p.ry = Angle::milliarcseconds(r.ry);
+  p.rz = Angle::milliarcseconds(r.rz);
+  p.ds = ScaleDifference::ppb(r.d);
+  auto& v = c.params.rates;
+  v.dt_m_per_year = 1e-3 * Eigen::Vector3d(r.dtx, r.dty, r.dtz);
+  v.drx_per_year = Angle::milliarcseconds(r.drx);
+  v.dry_per_year = Angle::milliarcseconds(r.dry);
+  v.drz_per_year = Angle::milliarcseconds(r.drz);
+  v.dds_per_year = ScaleDifference::ppb(r.dd);
+  c.params.reference_epoch = DecimalYear{epoch};
+  c.accuracy_m = r.accuracy_m;
+  c.source = table + (r.epsg[0] ? std::string("; ") + r.epsg + " is the same operation reversed" : std::string());
+  return c;
+}
+
+// The rates shared by the rows for ITRF97 and the realizations before it.
+#define ITRF2020_OLD_RATES 0.1, -0.6, -3.1, 0.12, 0.00, 0.00, 0.02
+#define ITRF2014_OLD_RATES 0.1, -0.5, -3.3, 0.12, 0.00, 0.00, 0.02
+#define ITRF2008_OLD_RATES 0.1, -0.5, -3.2, 0.09, 0.00, 0.00, 0.02
+
+std::vector<CatalogTransformation> build_catalog() {
+  std::vector<CatalogTransformation> out;
+  // IERS (Altamimi et al.), "Transformation parameters from ITRF2020 to past
+  // ITRFs", itrf.ign.fr/docs/solutions/itrf2020/Transfo-ITRF2020_TRFs.txt
+  // (2022); epoch 2015.0; XS = X + T + D·X + R·X (position vector).
+  const std::string t2020 = "IERS, Transfo-ITRF2020_TRFs.txt (ITRF2020 to past ITRFs, epoch 2015.0)";
+  static constexpr IersRow kFrom2020[] = {
+      {"ITRF2014", -1.4, -0.9, 1.4, -0.42, 0.00, 0.00, 0.00, 0.0, -0.1, 0.2, 0.00, 0.00, 0.00, 0.00, 0.001, "EPSG:9991"},
+      {"ITRF2008", 0.2, 1.0, 3.3, -0.29, 0.00, 0.00, 0.00, 0.0, -0.1, 0.1, 0.03, 0.00, 0.00, 0.00, 0.01, "EPSG:9992"},
+      {"ITRF2005", 2.7, 0.1, -1.4, 0.65, 0.00, 0.00, 0.00, 0.3, -0.1, 0.1, 0.03, 0.00, 0.00, 0.00, 0.01, "EPSG:9993"},
+      {"ITRF2000", -0.2, 0.8, -34.2, 2.25, 0.00, 0.00, 0.00, 0.1, 0.0, -1.7, 0.11, 0.00, 0.00, 0.00, 0.01, "EPSG:9994"},
+      {"ITRF97", 6.5, -3.9, -77.9, 3.98, 0.00, 0.00, 0.36, ITRF2020_OLD_RATES, 0.01, "EPSG:9995"},
+      {"ITRF96", 6.5, -3.9, -77.9, 3.98, 0.00, 0.00, 0.36, ITRF2020_OLD_RATES, 0.01, "EPSG:9996"},
+      {"ITRF94", 6.5, -3.9, -77.9, 3.98, 0.00, 0.00, 0.36, ITRF2020_OLD_RATES, 0.01, "EPSG:9997"},
+      {"ITRF93", -65.8, 1.9, -71.3, 4.47, -3.36, -4.33, 0.75, -2.8, -0.2, -2.3, 0.12, -0.11, -0.19, 0.07, 0.01, "EPSG:9998"},
+      {"ITRF92", 14.5, -1.9, -85.9, 3.27, 0.00, 0.00, 0.36, ITRF2020_OLD_RATES, 0.01, "EPSG:9999"},
+      {"ITRF91", 26.5, 12.1, -91.9, 4.67, 0.00, 0.00, 0.36, ITRF2020_OLD_RATES, 0.01, "EPSG:10100"},
+      {"ITRF90", 24.5, 8.1, -107.9, 4.97, 0.00, 0.00, 0.36, ITRF2020_OLD_RATES, 0.01, "EPSG:10103"},
+      {"ITRF89", 29.5, 32.1, -145.9, 8.37, 0.00, 0.00, 0.36, ITRF2020_OLD_RATES, 0.01, "EPSG:10104"},
+      {"ITRF88", 24.5, -3.9, -169.9, 11.47, 0.10, 0.00, 0.36, ITRF2020_OLD_RATES, 0.01, "EPSG:10105"},
+  };
+  for (const auto& r : kFrom2020) out.push_back(from_iers("ITRF2020", 2015.0, r, t2020));
+
+  // IERS, "Transformation parameters from ITRF2014 to past ITRFs",
+  // itrf.ign.fr/doc_ITRF/Transfo-ITRF2014_ITRFs.txt (2016); epoch 2010.0.
+  const std::string t2014 = "IERS, Transfo-ITRF2014_ITRFs.txt (ITRF2014 to past ITRFs, epoch 2010.0)";
+  static constexpr IersRow kFrom2014[] = {
+      {"ITRF2008", 1.6, 1.9, 2.4, -0.02, 0.00, 0.00, 0.00, 0.0, 0.0, -0.1, 0.03, 0.00, 0.00, 0.00, 0.01, "EPSG:7790"},
+      {"ITRF2005", 2.6, 1.0, -2.3, 0.92, 0.00, 0.00, 0.00, 0.3, 0.0, -0.1, 0.03, 0.00, 0.00, 0.00, 0.01, "EPSG:8079"},
+      {"ITRF2000", 0.7, 1.2, -26.1, 2.12, 0.00, 0.00, 0.00, 0.1, 0.1, -1.9, 0.11, 0.00, 0.00, 0.00, 0.01, "EPSG:8078"},
+      {"ITRF97", 7.4, -0.5, -62.8, 3.80, 0.00, 0.00, 0.26, ITRF2014_OLD_RATES, 0.01, "EPSG:8077"},
+      {"ITRF96", 7.4, -0.5, -62.8, 3.80, 0.00, 0.00, 0.26, ITRF2014_OLD_RATES, 0.01, "EPSG:8076"},
+      {"ITRF94", 7.4, -0.5, -62.8, 3.80, 0.00, 0.00, 0.26, ITRF2014_OLD_RATES, 0.01, "EPSG:8075"},
+      {"ITRF93", -50.4, 3.3, -60.2, 4.29, -2.81, -3.38, 0.40, -2.8, -0.1, -2.5, 0.12, -0.11, -0.19, 0.07, 0.01, "EPSG:8074"},
+      {"ITRF92", 15.4, 1.5, -70.8, 3.09, 0.00, 0.00, 0.26, ITRF2014_OLD_RATES, 0.01, "EPSG:8073"},
+      {"ITRF91", 27.4, 15.5, -76.8, 4.49, 0.00, 0.00, 0.26, ITRF2014_OLD_RATES, 0.01, "EPSG:8072"},
+      {"ITRF90", 25.4, 11.5, -92.8, 4.79, 0.00, 0.00, 0.26, ITRF2014_OLD_RATES, 0.01, "EPSG:8071"},
+      {"ITRF89", 30.4, 35.5, -130.8, 8.19, 0.00, 0.00, 0.26, ITRF2014_OLD_RATES, 0.01, "EPSG:8070"},
+      {"ITRF88", 25.4, -0.5, -154.8, 11.29, 0.10, 0.00, 0.26, ITRF2014_OLD_RATES, 0.01, "EPSG:8069"},
+  };
+  for (const auto& r : kFrom2014) out.push_back(from_iers("ITRF2014", 2010.0, r, t2014));
+
+  // IERS, "Transformation parameters from ITRF2008 to past ITRFs",
+  // itrf.ign.fr/doc_ITRF/Transfo-ITRF2008_ITRFs.txt; epoch 2000.0.
+  const std::string t2008 = "IERS, Transfo-ITRF2008_ITRFs.txt (ITRF2008 to past ITRFs, epoch 2000.0)";
+  static constexpr IersRow kFrom2008[] = {
+      {"ITRF2005", -2.0, -0.9, -4.7, 0.94, 0.00, 0.00, 0.00, 0.3, 0.0, 0.0, 0.00, 0.00, 0.00, 0.00, 0.01, "EPSG:6389"},
+      {"ITRF2000", -1.9, -1.7, -10.5, 1.34, 0.00, 0.00, 0.00, 0.1, 0.1, -1.8, 0.08, 0.00, 0.00, 0.00, 0.01, "EPSG:6300"},
+      {"ITRF97", 4.8, 2.6, -33.2, 2.92, 0.00, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6299"},
+      {"ITRF96", 4.8, 2.6, -33.2, 2.92, 0.00, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6298"},
+      {"ITRF94", 4.8, 2.6, -33.2, 2.92, 0.00, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6297"},
+      {"ITRF93", -24.0, 2.4, -38.6, 3.41, -1.71, -1.48, -0.30, -2.8, -0.1, -2.4, 0.09, -0.11, -0.19, 0.07, 0.01, "EPSG:6296"},
+      {"ITRF92", 12.8, 4.6, -41.2, 2.21, 0.00, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6295"},
+      {"ITRF91", 24.8, 18.6, -47.2, 3.61, 0.00, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6294"},
+      {"ITRF90", 22.8, 14.6, -63.2, 3.91, 0.00, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6293"},
+      {"ITRF89", 27.8, 38.6, -101.2, 7.31, 0.00, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6292"},
+      {"ITRF88", 22.8, 2.6, -125.2, 10.41, 0.10, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6291"},
+  };
+  for (const auto& r : kFrom2008) out.push_back(from_iers("ITRF2008", 2000.0, r, t2008));
+  return out;
+}
+
+#undef ITRF2020_OLD_RATES
+#undef ITRF2014_OLD_RATES
+#undef ITRF2008_OLD_RATES
+
+std::vector<PlateMotionModel> build_plate_models() {
+  // Altamimi, Métivier, Rebischung, Rouby, Collilieux (2017), "ITRF2014 plate
+  // motion model", Geophys. J. Int. 209(3), 1906–1912, doi:10.1093/gji/ggx136,
+  // Table 1 (ω in mas/yr, ITRF2014).
+  const std::string src = "Altamimi et al. (2017), ITRF2014 plate motion model, GJI 209, doi:10.1093/gji/ggx136, Table 1";
+  const struct {
+    const char* plate;
+    double wx, wy, wz;
+  } kItrf2014[] = {
+      {"ANTA", -0.248, -0.324, 0.675}, {"ARAB", 1.154, -0.136, 1.444},  {"AUST", 1.510, 1.182, 1.215},
+      {"EURA", -0.085, -0.531, 0.770}, {"INDI", 1.154, -0.005, 1.454},  {"NAZC", -0.333, -1.544, 1.623},
+      {"NOAM", 0.024, -0.694, -0.063}, {"NUBI", 0.099, -0.614, 0.733},  {"PCFC", -0.409, 1.047, -2.169},
+      {"SOAM", -0.270, -0.301, -0.140}, {"SOMA", -0.121, -0.794, 0.884},
+  };
+  std::vector<PlateMotionModel> out;
+  for (const auto& p : kItrf2014) out.push_back({"ITRF2014", p.plate, Eigen::Vector3d(p.wx, p.wy, p.wz), src});
+  return out;
+}
+
+}  // namespace
+
+Eigen::Vector3d PlateMotionModel::velocity_m_per_year(const EcefPosition& x) const {
+  const Eigen::Vector3d w_rad = omega_mas_per_year * (Angle::milliarcseconds(1.0).rad());
+  return w_rad.cross(x.m);
+}
+
+const std::vector<CatalogTransformation>& catalog_transformations() {
+  static const std::vector<CatalogTransformation> kCatalog = build_catalog();
+  return kCatalog;
+}
+
+const std::vector<PlateMotionModel>& plate_motion_models() {
+  static const std::vector<PlateMotionModel> kModels = build_plate_models();
+  return kModels;
+}
+
+std::optional<PlateMotionModel> find_plate_motion_model(std::string_view frame, std::string_view plate) {
+  for (const auto& m : plate_motion_models()) {
+    if (m.frame == frame && m.plate == plate) return m;
+  }
+  return std::nullopt;
+}
+
+EcefPosition FramePathStep::apply(const EcefPosition& x, DecimalYear t) const {
+  const AffineMap m = target_from_source(evaluate_at(edge->params, t), RotationModel::small_angle);
+  return EcefPosition(reverse ? m.inverse().apply(x.m) : m.apply(x.m));
+}
+
+double FramePath::accuracy_m() const {
+  double s = 0.0;
+  for (const auto& st : steps) s += st.edge->accuracy_m * st.edge->accuracy_m;
+  return std::sqrt(s);
+}
+
+EcefPosition FramePath::apply(const EcefPosition& x, DecimalYear t) const {
+  EcefPosition y = x;
+  for (const auto& st : steps) y = st.apply(y, t);
+  return y;
+}
+
+std::string FramePath::describe() const {
+  std::string out;
+  for (const auto& st : steps) {
+    out += std::string(st.from()) + " → " + std::string(st.to());
+    if (st.reverse) out += " (reverse of " + st.edge->from + " → " + st.edge->to + ")";
+    out += ", ±" + format_shortest(st.edge->accuracy_m) + " m: " + st.edge->source + "\n";
+  }
+  if (steps.empty()) out = from + " = " + to + ": no transformation\n";
+  return out;
+}
+
+std::vector<std::string> catalog_frame_names() {
+  std::set<std::string> names;
+  for (const auto& c : catalog_transformations()) {
+    names.insert(c.from);
+    names.insert(c.to);
+  }
+  return {names.begin(), names.end()};
+}
+
+FramePath find_frame_path(std::string_view from, std::string_view to, std::string_view where) {
+  const auto names = catalog_frame_names();
+  const auto known = [&](std::string_view n) { return std::find(names.begin(), names.end(), n) != names.end(); };
+  for (std::string_view n : {from, to}) {
+    if (!known(n)) {
+      std::string list;
+      for (const auto& k : names) list += (list.empty() ? "" : ", ") + k;
+      throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
+                  std::string(where) + ": frame " + std::string(n) + " is not in geoanchor's catalog; it knows " + list);
+    }
+  }
+  FramePath path{std::string(from), std::string(to), {}};
+  if (from == to) return path;
+  // Breadth-first over frames: fewest steps; among equally short paths the
+  // smaller sum of squared accuracies wins.
+  struct Best {
+    int steps = -1;
+    double acc2 = 0.0;
+    std::vector<FramePathStep> path;
+  };
+  std::map<std::string, Best, std::less<>> best;
+  best[std::string(from)] = {0, 0.0, {}};
+  std::deque<std::string> queue{std::string(from)};
+  while (!queue.empty()) {
+    const std::string here = queue.front();
+    queue.pop_front();
+    const Best current = best[here];
+    for (const auto& e : catalog_transformations()) {
+      for (bool reverse : {false, true}) {
+        const std::string& a = reverse ? e.to : e.from;
+        const std::string& b = reverse ? e.from : e.to;
+        if (a != here) continue;
+        Best next{current.steps + 1, current.acc2 + e.accuracy_m * e.accuracy_m, current.path};
+        next.path.push_back({&e, reverse});
+        auto it = best.find(b);
+        if (it == best.end()) {
+          best[b] = next;
+          queue.push_back(b);
+        } else if (it->second.steps == next.steps && next.acc2 < it->second.acc2) {
+          it->second = next;
+        }
+      }
+    }
+  }
+  const auto it = best.find(to);
+  if (it == best.end()) {
+    throw Error(ErrorKind::input, "E_FRAME_NO_PATH",
+                std::string(where) + ": no published transformation connects " + std::string(from) + " and " + std::string(to));
+  }
+  path.steps = it->second.path;
+  return path;
+}
+
+}  // namespace geoanchor::geodesy

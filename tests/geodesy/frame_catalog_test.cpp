@@ -1,0 +1,175 @@
+// The frame catalog against PROJ: the IERS parameter sets between ITRF
+// realizations (PROJ's own ITRF2014 and ITRF2008 init files, from the same
+// IERS tables, and the EPSG operations in PROJ's database for ITRF2020),
+// the ITRF2014 plate motion model (PROJ's ITRF2014 file, from Altamimi et
+// al. 2017), and the path search.
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame_catalog.hpp"
+#include "proj_reference.hpp"
+
+namespace geoanchor::geodesy {
+namespace {
+
+using testing::ProjPipeline;
+
+// Both sides evaluate the same small-angle Helmert in float64 on
+// coordinates of 6.4e6 m: they agree to rounding (~1e-9 m); the issue asks
+// for 1e-6 m.
+constexpr double kProjAgreement_m = 1e-6;
+constexpr double kRoundTrip_m = 1e-8;  // a chain of exact inverses, float64
+
+const double kEpochs[] = {1995.0, 2010.0, 2015.0, 2024.5};
+
+std::vector<EcefPosition> stations(std::size_t n) {
+  std::mt19937_64 rng(2020);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), h(-100.0, 5000.0);
+  std::vector<EcefPosition> out;
+  while (out.size() < n) {
+    const Eigen::Vector3d d(u(rng), u(rng), u(rng));
+    if (d.norm() < 0.1 || d.norm() > 1.0) continue;
+    out.emplace_back(Eigen::Vector3d(d.normalized() * (6371000.0 + h(rng))));
+  }
+  return out;
+}
+
+// PROJ reads "EPSG:n" as a CRS; an operation from its database by URN.
+std::string operation_urn(const std::string& epsg_code) {
+  return "urn:ogc:def:coordinateOperation:EPSG::" + epsg_code.substr(5);
+}
+
+void expect_path_matches_proj(const std::string& from, const std::string& to, const std::string& proj) {
+  const FramePath path = find_frame_path(from, to, "test");
+  ASSERT_EQ(path.steps.size(), 1u) << from << " -> " << to;
+  const ProjPipeline reference(proj);
+  for (double t : kEpochs) {
+    for (const auto& x : stations(50)) {
+      const Eigen::Vector3d expected = reference.forward(x.m, t);
+      EXPECT_LT((path.apply(x, DecimalYear{t}).m - expected).norm(), kProjAgreement_m) << from << " -> " << to << " at " << t;
+    }
+  }
+}
+
+TEST(FrameCatalog, Itrf2014ToEarlierRealizationsAgreeWithProjsItrf2014InitFile) {
+  // PROJ's ITRF2014 file transcribes the ITRF97 row with two typos
+  // ("+d=0.0038", "+dx0.0001"), so PROJ applies no scale and no x rate
+  // there; ITRF96 and ITRF94 have the same published values and are checked
+  // (docs/frames.md).
+  for (const char* f : {"ITRF2008", "ITRF2005", "ITRF2000", "ITRF96", "ITRF94", "ITRF93", "ITRF92", "ITRF91", "ITRF90",
+                        "ITRF89", "ITRF88"}) {
+    expect_path_matches_proj("ITRF2014", f, std::string("+proj=helmert +init=ITRF2014:") + f);
+  }
+}
+
+TEST(FrameCatalog, Itrf2008ToEarlierRealizationsAgreeWithProjsItrf2008InitFile) {
+  // PROJ's ITRF2008 file has Tz = -3.86 mm for ITRF93 where the IERS table
+  // has -38.6 mm, and leaves out ITRF88's Rx = 0.10 mas (3 mm at the
+  // surface) (docs/frames.md); those rows are checked against EPSG below.
+  for (const char* f : {"ITRF2005", "ITRF2000", "ITRF97", "ITRF96", "ITRF94", "ITRF92", "ITRF91", "ITRF90", "ITRF89"}) {
+    expect_path_matches_proj("ITRF2008", f, std::string("+proj=helmert +init=ITRF2008:") + f);
+  }
+}
+
+TEST(FrameCatalog, EveryParameterSetAgreesWithItsEpsgOperationInProjsDatabase) {
+  // Each set names the EPSG operation that publishes it in the opposite
+  // direction (EPSG copies the IERS tables, reversed); PROJ's database is
+  // an independent transcription.
+  for (const auto& edge : catalog_transformations()) {
+    const auto at = edge.source.find("EPSG:");
+    ASSERT_NE(at, std::string::npos) << edge.from << " -> " << edge.to;
+    const std::string code = edge.source.substr(at, edge.source.find(' ', at) - at);
+    const FramePath path{edge.to, edge.from, {FramePathStep{&edge, true}}};
+    const ProjPipeline reference(operation_urn(code));
+    for (double t : kEpochs) {
+      for (const auto& x : stations(10)) {
+        EXPECT_LT((path.apply(x, DecimalYear{t}).m - reference.forward(x.m, t)).norm(), kProjAgreement_m)
+            << code << ": " << edge.to << " -> " << edge.from << " at " << t;
+      }
+    }
+  }
+  EXPECT_EQ(catalog_transformations().size(), 36u);  // 13 + 12 + 11 IERS rows
+}
+
+TEST(FrameCatalog, EarlierRealizationsToItrf2020AgreeWithTheEpsgOperationsInProjsDatabase) {
+  // EPSG publishes the IERS ITRF2020 table in the opposite direction
+  // (EPSG:9991 ITRF2014 to ITRF2020, ..., EPSG:10105 ITRF88 to ITRF2020).
+  const struct {
+    const char* frame;
+    const char* epsg;
+  } kCases[] = {{"ITRF2014", "EPSG:9991"}, {"ITRF2008", "EPSG:9992"}, {"ITRF2005", "EPSG:9993"}, {"ITRF2000", "EPSG:9994"},
+                {"ITRF97", "EPSG:9995"},   {"ITRF96", "EPSG:9996"},   {"ITRF94", "EPSG:9997"},   {"ITRF93", "EPSG:9998"},
+                {"ITRF92", "EPSG:9999"},   {"ITRF91", "EPSG:10100"},  {"ITRF90", "EPSG:10103"},  {"ITRF89", "EPSG:10104"},
+                {"ITRF88", "EPSG:10105"}};
+  for (const auto& c : kCases) {
+    const FramePath path = find_frame_path(c.frame, "ITRF2020", "test");
+    ASSERT_EQ(path.steps.size(), 1u);
+    EXPECT_TRUE(path.steps[0].reverse);
+    EXPECT_NE(path.steps[0].edge->source.find(c.epsg), std::string::npos) << path.steps[0].edge->source;
+    expect_path_matches_proj(c.frame, "ITRF2020", operation_urn(c.epsg));
+  }
+  // And the other way, through PROJ's inverse.
+  const ProjPipeline epsg9991(operation_urn("EPSG:9991"));
+  const FramePath down = find_frame_path("ITRF2020", "ITRF2014", "test");
+  for (double t : kEpochs) {
+    for (const auto& x : stations(20)) {
+      EXPECT_LT((down.apply(x, DecimalYear{t}).m - epsg9991.inverse(x.m, t)).norm(), kProjAgreement_m);
+    }
+  }
+}
+
+TEST(FrameCatalog, TheItrf2014PlateMotionModelAgreesWithProjsItrf2014File) {
+  // PROJ applies a pole as a rotation rate: x(t) = x + (t − t0) ω × x.
+  for (const char* plate : {"ANTA", "ARAB", "AUST", "EURA", "INDI", "NAZC", "NOAM", "NUBI", "PCFC", "SOAM", "SOMA"}) {
+    const auto model = find_plate_motion_model("ITRF2014", plate);
+    ASSERT_TRUE(model.has_value()) << plate;
+    const ProjPipeline pmm(std::string("+proj=helmert +init=ITRF2014:") + plate + " +t_epoch=2010.0");
+    for (const auto& x : stations(20)) {
+      const Eigen::Vector3d v_proj = pmm.forward(x.m, 2011.0) - pmm.forward(x.m, 2010.0);
+      EXPECT_LT((model->velocity_m_per_year(x) - v_proj).norm(), 1e-9) << plate;  // m/yr, float64 rounding
+    }
+  }
+  EXPECT_FALSE(find_plate_motion_model("ITRF2014", "MARS").has_value());
+}
+
+TEST(FramePathSearch, FindsDirectEdgesHubsAndRefusesUnknownFrames) {
+  EXPECT_TRUE(find_frame_path("ITRF2014", "ITRF2014", "test").steps.empty());
+  // Realizations listed only under older tables reach each other through a hub.
+  const FramePath two = find_frame_path("ITRF88", "ITRF2005", "test");
+  ASSERT_EQ(two.steps.size(), 2u);
+  EXPECT_EQ(two.steps[0].from(), "ITRF88");
+  EXPECT_EQ(two.steps[1].to(), "ITRF2005");
+  EXPECT_NEAR(two.accuracy_m(), std::sqrt(2.0) * 0.01, 1e-12);
+  EXPECT_NE(two.describe().find("reverse of"), std::string::npos);
+  try {
+    find_frame_path("ITRF2030", "ITRF2014", "--from");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::input);
+    EXPECT_NE(std::string(e.what()).find("--from: frame ITRF2030 is not in geoanchor's catalog; it knows ITRF2000"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(FramePathSearch, ThereAndBackClosesAndTheTablesAgreeWithinTheirStatedAccuracy) {
+  const FramePath there = find_frame_path("ITRF2020", "ITRF88", "test"), back = find_frame_path("ITRF88", "ITRF2020", "test");
+  // ITRF2014 → ITRF2008 directly and through ITRF2020 are two IERS
+  // estimates of the same transformation; they differ by less than the
+  // stated ±1 cm (in practice a few millimetres).
+  const FramePath direct = find_frame_path("ITRF2014", "ITRF2008", "test");
+  const FramePath via{"ITRF2014", "ITRF2008",
+                      {find_frame_path("ITRF2014", "ITRF2020", "test").steps[0], find_frame_path("ITRF2020", "ITRF2008", "test").steps[0]}};
+  for (const auto& x : stations(50)) {
+    for (double t : kEpochs) {
+      EXPECT_LT((back.apply(there.apply(x, DecimalYear{t}), DecimalYear{t}).m - x.m).norm(), kRoundTrip_m);
+      EXPECT_LT((direct.apply(x, DecimalYear{t}).m - via.apply(x, DecimalYear{t}).m).norm(), 0.01);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace geoanchor::geodesy
