@@ -11,6 +11,7 @@
 #include "convert_command.hpp"
 #include "fit_command.hpp"
 #include "snapshot_command.hpp"
+#include "transform_command.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "version.hpp"
@@ -34,6 +35,9 @@ int main(int argc, char** argv) {
   geoanchor::cli::ApplyOptions apply;
   apply.argv.assign(argv, argv + argc);
   auto* apply_cmd = geoanchor::cli::add_apply_command(app, apply);
+  geoanchor::cli::TransformOptions transform;
+  transform.argv.assign(argv, argv + argc);
+  auto* transform_cmd = geoanchor::cli::add_transform_command(app, transform);
   geoanchor::cli::SnapshotOptions snapshot;
   snapshot.workbench.argv.assign(argv, argv + argc);
   auto* snapshot_cmd = geoanchor::cli::add_snapshot_command(app, snapshot);
@@ -60,6 +64,7 @@ int main(int argc, char** argv) {
     if (convert_cmd->parsed()) geoanchor::cli::run_convert(convert);
     if (fit_cmd->parsed()) return geoanchor::cli::run_fit(fit);
     if (apply_cmd->parsed()) return geoanchor::cli::run_apply(apply);
+    if (transform_cmd->parsed()) geoanchor::cli::run_transform(transform);
     if (snapshot_cmd->parsed()) return geoanchor::cli::run_snapshot(snapshot);
     if (report_cmd->parsed()) return geoanchor::cli::run_report(report);
   } catch (const Error& e) {

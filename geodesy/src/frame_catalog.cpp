@@ -9,6 +9,7 @@
 #include <set>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::geodesy {
@@ -186,6 +187,39 @@ std::string FramePath::describe() const {
   }
   if (steps.empty()) out = from + " = " + to + ": no transformation\n";
   return out;
+}
+
+StateVector transform_state(const StateVector& in, std::string_view from, DecimalYear t_from, std::string_view to,
+                            DecimalYear t_to, const EpochPropagation& propagation, std::string_view where) {
+  const double dt = t_to.year - t_from.year;
+  if (dt == 0.0 || in.v_m_per_year) {
+    const FramePath path = find_frame_path(from, to, where);
+    StateVector out{path.apply(in.x, t_from), std::nullopt};
+    if (in.v_m_per_year) {
+      // d/dt of the transformed position along the point's motion: the
+      // parameters are linear in time and the velocity is constant, so a
+      // central difference over a year is exact to terms of order ṡ·v·(1 yr)
+      // (1e-12 m/yr).
+      constexpr double kStep_yr = 1.0;
+      const Eigen::Vector3d& v = *in.v_m_per_year;
+      const EcefPosition ahead = path.apply(EcefPosition(Eigen::Vector3d(in.x.m + kStep_yr * v)), DecimalYear{t_from.year + kStep_yr});
+      const EcefPosition behind = path.apply(EcefPosition(Eigen::Vector3d(in.x.m - kStep_yr * v)), DecimalYear{t_from.year - kStep_yr});
+      out.v_m_per_year = (ahead.m - behind.m) / (2.0 * kStep_yr);
+      out.x.m += *out.v_m_per_year * dt;
+    }
+    return out;
+  }
+  if (!propagation.plate) {
+    throw Error(ErrorKind::input, "E_EPOCH_PROPAGATION",
+                std::string(where) + ": moving coordinates from " + format_decimal_year(t_from) + " to " +
+                    format_decimal_year(t_to) +
+                    " needs velocities (columns vx_m_per_year, vy_m_per_year, vz_m_per_year) or a plate motion model "
+                    "(--plate, e.g. EURA)");
+  }
+  const PlateMotionModel& pmm = *propagation.plate;
+  EcefPosition hub = find_frame_path(from, pmm.frame, where).apply(in.x, t_from);
+  hub.m += pmm.velocity_m_per_year(hub) * dt;
+  return {find_frame_path(pmm.frame, to, where).apply(hub, t_to), std::nullopt};
 }
 
 std::vector<std::string> catalog_frame_names() {

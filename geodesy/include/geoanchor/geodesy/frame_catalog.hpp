@@ -83,6 +83,30 @@ struct FramePath {
 // know (listing those it does) or two frames it cannot connect.
 FramePath find_frame_path(std::string_view from, std::string_view to, std::string_view where);
 
+// A position and optionally its velocity (ECEF, m and m/yr).
+struct StateVector {
+  EcefPosition x;
+  std::optional<Eigen::Vector3d> v_m_per_year;
+};
+
+// How coordinates move from one epoch to another: the points' own
+// velocities (carried through the transformation), or a plate's rotation in
+// its model's frame. Without either, only equal epochs are allowed.
+struct EpochPropagation {
+  const PlateMotionModel* plate = nullptr;
+};
+
+// `in`, in frame `from` at epoch t_from, to frame `to` at epoch t_to:
+//  1. with velocities: the path at t_from, then x += v·(t_to − t_from) in
+//     `to`; the velocity is carried (v_to = dx_to/dt along the path);
+//  2. with a plate model: the path to the model's frame at t_from, the
+//     plate's rotation over t_to − t_from there, the path to `to` at t_to;
+//  3. otherwise t_to must equal t_from.
+// Throws geoanchor::Error (input) naming `where` when the epochs differ and
+// there is neither.
+StateVector transform_state(const StateVector& in, std::string_view from, DecimalYear t_from, std::string_view to,
+                            DecimalYear t_to, const EpochPropagation& propagation, std::string_view where);
+
 // The frame names the catalog knows, sorted.
 std::vector<std::string> catalog_frame_names();
 

@@ -1,0 +1,220 @@
+#include "transform_command.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/frame_catalog.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/atomic_file.hpp"
+#include "geoanchor/io/coordinate_codec.hpp"
+#include "geoanchor/io/csv.hpp"
+#include "geoanchor/io/hash.hpp"
+#include "option_parsing.hpp"
+#include "version.hpp"
+
+namespace geoanchor::cli {
+namespace {
+
+using geodesy::DecimalYear;
+using nlohmann::json;
+
+constexpr const char* kVelocityColumns[3] = {"vx_m_per_year", "vy_m_per_year", "vz_m_per_year"};
+
+}  // namespace
+
+CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
+  auto* cmd = app.add_subcommand("transform", "Move coordinates between reference frames and epochs (frame catalog)");
+  cmd->add_option("IN", o.input, "Input CSV (x_m,y_m,z_m or lat_deg,lon_deg,h_m; optional vx/vy/vz_m_per_year), - for stdin");
+  cmd->add_option("-o,--output", o.output, "Output CSV (default: standard output); written atomically");
+  cmd->add_option("--from", o.from, "Frame and epoch of the input, e.g. ITRF2014@2010.0")->required();
+  cmd->add_option("--to", o.to, "Frame and epoch of the output, e.g. ITRF2020@2024.5 (epoch default: --from's)")->required();
+  cmd->add_option("--plate", o.plate, "Plate motion model for the epoch change when there are no velocity columns (ITRF2014-PMM: EURA, NOAM, ...)");
+  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic columns (default GRS80, the ITRF convention)");
+  cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")->check(CLI::Range(0, 15));
+  cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
+  return cmd;
+}
+
+void run_transform(const TransformOptions& o) {
+  const geodesy::Frame from = geodesy::Frame::parse(o.from, "--from");
+  const geodesy::Frame to = geodesy::Frame::parse(o.to, "--to");
+  const geodesy::FramePath path = geodesy::find_frame_path(from.name(), to.name(), "--from/--to");
+  if (!path.steps.empty() && !from.epoch()) {
+    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
+                "--from " + o.from + ": the transformation " + from.name() + " → " + to.name() +
+                    " is time-dependent: give the coordinates' epoch, e.g. " + from.name() + "@2010.0");
+  }
+  const DecimalYear t_from = from.epoch().value_or(DecimalYear{0.0});
+  const DecimalYear t_to = to.epoch().value_or(t_from);
+  std::optional<geodesy::PlateMotionModel> plate;
+  if (o.plate) {
+    plate = geodesy::find_plate_motion_model("ITRF2014", *o.plate);
+    if (!plate) {
+      std::string list;
+      for (const auto& m : geodesy::plate_motion_models()) list += (list.empty() ? "" : ", ") + m.plate;
+      throw Error(ErrorKind::usage, "E_OPTION", "--plate " + *o.plate + ": expected a plate of the ITRF2014 plate motion model: " + list);
+    }
+  }
+  const geodesy::Ellipsoid ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
+
+  std::ifstream file_in;
+  std::istream* in = &std::cin;
+  const bool from_stdin = o.input == "-";
+  const std::string source_name = from_stdin ? "<stdin>" : o.input;
+  if (!from_stdin) {
+    file_in.open(o.input, std::ios::binary);
+    if (!file_in) throw Error(ErrorKind::io, "E_READ", o.input + ": cannot open input: " + std::strerror(errno));
+    in = &file_in;
+  }
+  io::CsvReader reader(*in, source_name);
+  const auto& header = reader.header();
+  const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
+  if (columns.kind != io::CoordinateKind::ecef && columns.kind != io::CoordinateKind::geodetic) {
+    throw Error(ErrorKind::input, "E_COLUMN",
+                source_name + ": transform reads ECEF (x_m,y_m,z_m) or geodetic (lat_deg,lon_deg,h_m) columns, not " +
+                    std::string(io::to_string(columns.kind)) + " (use convert first)");
+  }
+  std::optional<std::size_t> velocity[3];
+  for (std::size_t k = 0; k < 3; ++k) {
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (header[i] == kVelocityColumns[k]) velocity[k] = i;
+    }
+  }
+  const bool has_velocity = velocity[0] && velocity[1] && velocity[2];
+  if (!has_velocity && (velocity[0] || velocity[1] || velocity[2])) {
+    throw Error(ErrorKind::input, "E_COLUMN", source_name + ": velocities need all three columns vx_m_per_year, vy_m_per_year, vz_m_per_year");
+  }
+  if (t_to.year != t_from.year && !has_velocity && !plate) {
+    throw Error(ErrorKind::usage, "E_EPOCH_PROPAGATION",
+                "--to " + o.to + ": moving coordinates from " + geodesy::format_decimal_year(t_from) + " to " +
+                    geodesy::format_decimal_year(t_to) +
+                    " needs velocities (columns vx_m_per_year, vy_m_per_year, vz_m_per_year) or a plate motion model (--plate, e.g. EURA)");
+  }
+  if (has_velocity && plate) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--plate: the input has velocity columns; give one or the other");
+  }
+  if (has_velocity && columns.kind != io::CoordinateKind::ecef) {
+    throw Error(ErrorKind::input, "E_COLUMN", source_name + ": velocities (ECEF, m/yr) need ECEF coordinates x_m,y_m,z_m");
+  }
+
+  io::InputCoordinateFrame in_frame;
+  in_frame.ellipsoid = ellipsoid;
+  const io::CoordinateDecoder decoder(columns, header, in_frame, source_name);
+  io::OutputCoordinateFrame out_frame;
+  out_frame.kind = columns.kind == io::CoordinateKind::ecef ? io::OutputKind::ecef : io::OutputKind::geodetic;
+  out_frame.ellipsoid = ellipsoid;
+  const io::NumberFormat numbers{o.precision};
+  const io::CoordinateEncoder encoder(out_frame, numbers);
+  std::size_t first_coordinate = 0;
+  const auto out_header = io::output_header(header, columns, encoder.column_names(), source_name, first_coordinate);
+
+  std::unique_ptr<io::AtomicOutputFile> out_file, sidecar;
+  if (!o.output.empty()) {
+    if (!from_stdin) io::refuse_same_file(o.input, o.output);
+    const io::Overwrite overwrite = o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
+    out_file = std::make_unique<io::AtomicOutputFile>(o.output, overwrite);
+    sidecar = std::make_unique<io::AtomicOutputFile>(o.output + ".geoanchor.json", overwrite);
+  }
+  std::ostream& out = out_file ? out_file->stream() : std::cout;
+  // The path, each step's source and the stated accuracy: on standard
+  // error (standard output may be the CSV), and in the sidecar.
+  std::ostream& report = std::cerr;
+  report << "geoanchor transform: " << from.to_string() << " -> " << to.name() << "@" << geodesy::format_decimal_year(t_to)
+         << "\n";
+  for (const auto& st : path.steps) {
+    report << "  step " << st.from() << " -> " << st.to() << (st.reverse ? " (reverse)" : "") << ", ±"
+           << format_shortest(st.edge->accuracy_m) << " m: " << st.edge->source << "\n";
+  }
+  if (t_to.year != t_from.year) {
+    report << "  epoch " << geodesy::format_decimal_year(t_from) << " -> " << geodesy::format_decimal_year(t_to) << " by "
+           << (has_velocity ? std::string("the points' velocities") : "plate " + plate->plate + " of " + plate->source) << "\n";
+  }
+  report << "  stated accuracy of the path: ±" << format_fixed(path.accuracy_m(), 3) << " m (steps combined as independent)\n";
+
+  for (const auto& c : reader.leading_comments()) out << c << '\n';
+  io::write_csv_line(out, out_header);
+  io::CsvRecord record;
+  std::size_t rows = 0;
+  std::vector<std::string> fields;
+  const geodesy::EpochPropagation propagation{plate ? &*plate : nullptr};
+  while (reader.next(record)) {
+    if (record.is_comment) {
+      out << record.comment << '\n';
+      continue;
+    }
+    const std::string where = source_name + ":" + std::to_string(record.line);
+    geodesy::StateVector state{decoder.decode(record), std::nullopt};
+    if (has_velocity) {
+      Eigen::Vector3d v;
+      for (std::size_t k = 0; k < 3; ++k) {
+        const auto value = parse_finite_double(record.values[*velocity[k]]);
+        if (!value) {
+          throw Error(ErrorKind::input, "E_VALUE",
+                      where + ": " + kVelocityColumns[k] + " '" + record.values[*velocity[k]] + "': expected a finite number (m/yr)");
+        }
+        v(static_cast<Eigen::Index>(k)) = *value;
+      }
+      state.v_m_per_year = v;
+    }
+    const geodesy::StateVector moved = geodesy::transform_state(state, from.name(), t_from, to.name(), t_to, propagation, where);
+    const auto coords = encoder.encode(moved.x, where);
+    fields.clear();
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (i == first_coordinate) fields.insert(fields.end(), coords.begin(), coords.end());
+      if (columns.is_coordinate(i)) continue;
+      bool replaced = false;
+      for (std::size_t k = 0; k < 3 && has_velocity; ++k) {
+        if (i == *velocity[k]) {
+          fields.push_back(numbers.metres((*moved.v_m_per_year)(static_cast<Eigen::Index>(k))));
+          replaced = true;
+        }
+      }
+      if (!replaced) fields.push_back(record.raw[i]);
+    }
+    io::write_csv_line(out, fields);
+    ++rows;
+  }
+  if (!out_file) {
+    out.flush();
+    if (!out) throw Error(ErrorKind::io, "E_WRITE", "<stdout>: write failed");
+    return;
+  }
+  json steps = json::array();
+  for (const auto& st : path.steps) {
+    steps.push_back({{"from", std::string(st.from())},
+                     {"to", std::string(st.to())},
+                     {"reverse_of_published", st.reverse},
+                     {"accuracy_m", st.edge->accuracy_m},
+                     {"source", st.edge->source}});
+  }
+  json side;
+  side["geoanchor_version"] = GEOANCHOR_VERSION;
+  side["command"] = o.argv;
+  side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
+                   {"sha256", from_stdin ? json(nullptr) : json(io::sha256_file_hex(o.input))},
+                   {"frame", from.name()},
+                   {"epoch", t_from.year},
+                   {"kind", std::string(io::to_string(columns.kind))},
+                   {"ellipsoid", ellipsoid.name()}};
+  side["output"] = {{"path", o.output}, {"frame", to.name()}, {"epoch", t_to.year}, {"rows", rows},
+                    {"height_type", "ellipsoidal"}, {"ellipsoid", ellipsoid.name()}};
+  side["path"] = {{"steps", steps}, {"accuracy_m", path.accuracy_m()}};
+  if (t_to.year != t_from.year) {
+    side["epoch_propagation"] = has_velocity ? json{{"by", "velocities"}}
+                                             : json{{"by", "plate_motion_model"}, {"plate", plate->plate},
+                                                    {"frame", plate->frame}, {"source", plate->source}};
+  }
+  sidecar->stream() << side.dump(2) << '\n';
+  out_file->commit();
+  sidecar->commit();
+}
+
+}  // namespace geoanchor::cli

@@ -1,0 +1,30 @@
+#pragma once
+// `geoanchor transform`: coordinates (and velocities) from one reference
+// frame and epoch to another through the frame catalog. See
+// docs/commands/transform.md.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace geoanchor::cli {
+
+struct TransformOptions {
+  std::string input = "-";
+  std::string output;
+  std::string from, to;
+  std::optional<std::string> plate;
+  std::string ellipsoid = "GRS80";
+  std::optional<int> precision;
+  bool overwrite = false;
+  std::vector<std::string> argv;
+};
+
+CLI::App* add_transform_command(CLI::App& app, TransformOptions& o);
+void run_transform(const TransformOptions& o);
+
+}  // namespace geoanchor::cli

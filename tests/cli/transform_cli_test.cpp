@@ -1,0 +1,133 @@
+// `geoanchor transform` against PROJ: the same epoch through an EPSG
+// operation from PROJ's database, an epoch change by the ITRF2014 plate
+// motion model as PROJ's ITRF2014 file applies it, and per-point velocities;
+// then its refusals.
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <sstream>
+
+#include "cli_support.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "proj_reference.hpp"
+
+namespace geoanchor {
+namespace {
+
+using testing::CliTest;
+using testing::ProjPipeline;
+using testing::slurp;
+
+constexpr double kProjAgreement_m = 1e-6;        // the bound; float64 rounding is ~1e-9 m
+constexpr double kVelocityAgreement_m_per_year = 1e-9;
+
+const char* kEpsg9991 = "urn:ogc:def:coordinateOperation:EPSG::9991";  // ITRF2014 to ITRF2020
+
+// Marks of the EUREF network (ECEF, m, rounded) and velocities of the size
+// of Eurasia's motion.
+const Eigen::Vector3d kMarks[] = {{4331297.0, 567555.6, 4633133.7}, {4027893.7, 307045.8, 4919474.9}, {3946489.4, 1316564.8, 4836751.5}};
+const Eigen::Vector3d kVelocity(-0.0135, 0.0180, 0.0100);
+
+std::vector<Eigen::Vector3d> read_xyz(const std::string& csv, std::vector<Eigen::Vector3d>* velocities = nullptr) {
+  std::istringstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  std::vector<Eigen::Vector3d> out;
+  while (std::getline(in, line)) {
+    std::vector<double> v;
+    std::stringstream row(line);
+    std::string cell;
+    std::getline(row, cell, ',');  // id
+    while (std::getline(row, cell, ',')) v.push_back(std::stod(cell));
+    out.emplace_back(v[0], v[1], v[2]);
+    if (velocities && v.size() >= 6) velocities->emplace_back(v[3], v[4], v[5]);
+  }
+  return out;
+}
+
+class TransformCli : public CliTest {
+ protected:
+  std::string marks_csv(bool with_velocity) const {
+    std::string s = with_velocity ? "id,x_m,y_m,z_m,vx_m_per_year,vy_m_per_year,vz_m_per_year\n" : "id,x_m,y_m,z_m\n";
+    int i = 0;
+    for (const auto& m : kMarks) {
+      s += "M" + std::to_string(i++) + "," + format_shortest(m.x()) + "," + format_shortest(m.y()) + "," + format_shortest(m.z());
+      if (with_velocity) s += "," + format_shortest(kVelocity.x()) + "," + format_shortest(kVelocity.y()) + "," + format_shortest(kVelocity.z());
+      s += "\n";
+    }
+    return s;
+  }
+};
+
+TEST_F(TransformCli, SameEpochMatchesTheEpsgOperationInProjsDatabase) {
+  const auto in = write("in.csv", marks_csv(false));
+  const auto r = run("transform " + in.string() + " --from ITRF2014@2010.0 --to ITRF2020@2010.0 -o " + path("out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("step ITRF2014 -> ITRF2020 (reverse), ±0.001 m: IERS, Transfo-ITRF2020_TRFs.txt"), std::string::npos) << r.err;
+  const ProjPipeline epsg(kEpsg9991);
+  const auto got = read_xyz(slurp(path("out.csv")));
+  ASSERT_EQ(got.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_LT((got[i] - epsg.forward(kMarks[i], 2010.0)).norm(), kProjAgreement_m);
+  const auto side = nlohmann::json::parse(slurp(path("out.csv.geoanchor.json")));
+  EXPECT_EQ(side["output"]["frame"], "ITRF2020");
+  EXPECT_EQ(side["path"]["steps"][0]["from"], "ITRF2014");
+  EXPECT_EQ(side["path"]["accuracy_m"], 0.001);
+}
+
+TEST_F(TransformCli, AnEpochChangeByThePlateMotionModelMatchesProj) {
+  const auto in = write("in.csv", marks_csv(false));
+  const auto r = run("transform " + in.string() + " --from ITRF2014@2010.0 --to ITRF2020@2024.5 --plate EURA -o " + path("out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // PROJ: the EURA pole of its ITRF2014 file from 2010.0 to 2024.5, then EPSG:9991 at 2024.5.
+  const ProjPipeline pmm("+proj=helmert +init=ITRF2014:EURA +t_epoch=2010.0"), epsg(kEpsg9991);
+  const auto got = read_xyz(slurp(path("out.csv")));
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Eigen::Vector3d expected = epsg.forward(pmm.forward(kMarks[i], 2024.5), 2024.5);
+    EXPECT_LT((got[i] - expected).norm(), kProjAgreement_m) << i;
+    EXPECT_GT((got[i] - kMarks[i]).norm(), 0.3);  // 14.5 years of Eurasia's ~2.5 cm/yr
+  }
+}
+
+TEST_F(TransformCli, VelocitiesCarryThePointsAndAreTransformedWithThem) {
+  const auto in = write("in.csv", marks_csv(true));
+  const auto r = run("transform " + in.string() + " --from ITRF2014@2010.0 --to ITRF2020@2024.5 -o " + path("out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::vector<Eigen::Vector3d> v_out;
+  const auto got = read_xyz(slurp(path("out.csv")), &v_out);
+  ASSERT_EQ(v_out.size(), 3u);
+  const ProjPipeline epsg(kEpsg9991);
+  for (std::size_t i = 0; i < 3; ++i) {
+    // The mark where its velocity takes it by 2024.5, in ITRF2020 at 2024.5.
+    EXPECT_LT((got[i] - epsg.forward(kMarks[i] + 14.5 * kVelocity, 2024.5)).norm(), kProjAgreement_m) << i;
+    // Its velocity in ITRF2020: the time derivative of PROJ's output along the motion.
+    const Eigen::Vector3d v_proj = (epsg.forward(kMarks[i] + kVelocity, 2011.0) - epsg.forward(kMarks[i] - kVelocity, 2009.0)) / 2.0;
+    EXPECT_LT((v_out[i] - v_proj).norm(), kVelocityAgreement_m_per_year) << i;
+  }
+}
+
+TEST_F(TransformCli, RefusesWhatItCannotDoAndLeavesNothing) {
+  const auto in = write("in.csv", marks_csv(false));
+  write("partial.csv", "id,x_m,y_m,z_m,vx_m_per_year\nA,4331297,567555.6,4633133.7,0.01\n");
+  const struct {
+    std::string args, message;
+    int exit_code;
+  } cases[] = {
+      {"in.csv --from ITRF2014 --to ITRF2020", "--from ITRF2014: the transformation ITRF2014 → ITRF2020 is time-dependent", 2},
+      {"in.csv --from ITRF2014@2010 --to ITRF2020@2020", "moving coordinates from 2010.0 to 2020.0 needs velocities", 2},
+      {"in.csv --from ITRF2030@2010 --to ITRF2020", "frame ITRF2030 is not in geoanchor's catalog", 3},
+      {"in.csv --from ITRF2014@2010 --to ITRF2020@2020 --plate MARS", "--plate MARS: expected a plate of the ITRF2014 plate motion model", 2},
+      {"partial.csv --from ITRF2014@2010 --to ITRF2020", "velocities need all three columns", 3},
+  };
+  for (const auto& c : cases) {
+    const auto r = shell("cd '" + dir_.string() + "' && " + GEOANCHOR_EXE + " transform " + c.args + " -o out.csv");
+    EXPECT_EQ(r.exit_code, c.exit_code) << c.args << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_EQ(leftovers({"in.csv", "partial.csv"}), std::vector<std::string>{}) << c.args;
+  }
+  (void)in;
+}
+
+}  // namespace
+}  // namespace geoanchor
