@@ -47,6 +47,10 @@ void run_transform(const TransformOptions& o) {
   const geodesy::Frame from = geodesy::Frame::parse(o.from, "--from");
   const geodesy::Frame to = geodesy::Frame::parse(o.to, "--to");
   const geodesy::FramePath path = geodesy::find_frame_path(from.name(), to.name(), "--from/--to");
+  if (to.epoch() && !from.epoch()) {
+    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
+                "--from " + o.from + ": --to names an epoch, so the input's epoch is needed too, e.g. " + from.name() + "@2010.0");
+  }
   if (!path.steps.empty() && !from.epoch()) {
     throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
                 "--from " + o.from + ": the transformation " + from.name() + " → " + to.name() +
