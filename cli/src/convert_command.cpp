@@ -3,8 +3,6 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include <cstring>
-#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -16,6 +14,7 @@
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/io/transform_file.hpp"
+#include "command_input.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
 
@@ -154,17 +153,10 @@ void run_convert(const ConvertOptions& o) {
   if (o.epoch) flag_epoch = geodesy::parse_decimal_year(*o.epoch, "--epoch");
   const EcefStep step(transform, o.inverse, flag_epoch);
 
-  // Input.
-  std::ifstream file_in;
-  std::istream* in = &std::cin;
-  const bool from_stdin = o.input == "-";
-  const std::string source_name = from_stdin ? "<stdin>" : o.input;
-  if (!from_stdin) {
-    file_in.open(o.input, std::ios::binary);
-    if (!file_in) throw Error(ErrorKind::io, "E_READ", o.input + ": cannot open input: " + std::strerror(errno));
-    in = &file_in;
-  }
-  io::CsvReader reader(*in, source_name);
+  CommandInput input(o.input);
+  const bool from_stdin = input.from_stdin();
+  const std::string& source_name = input.name();
+  io::CsvReader reader(input.stream(), source_name);
   const auto& header = reader.header();
   const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
   const io::CoordinateDecoder decoder(columns, header, in_frame, source_name);

@@ -3,9 +3,6 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include <cerrno>
-#include <cstring>
-#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -17,6 +14,7 @@
 #include "geoanchor/io/coordinate_codec.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
+#include "command_input.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
 
@@ -69,16 +67,10 @@ void run_transform(const TransformOptions& o) {
   }
   const geodesy::Ellipsoid ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
 
-  std::ifstream file_in;
-  std::istream* in = &std::cin;
-  const bool from_stdin = o.input == "-";
-  const std::string source_name = from_stdin ? "<stdin>" : o.input;
-  if (!from_stdin) {
-    file_in.open(o.input, std::ios::binary);
-    if (!file_in) throw Error(ErrorKind::io, "E_READ", o.input + ": cannot open input: " + std::strerror(errno));
-    in = &file_in;
-  }
-  io::CsvReader reader(*in, source_name);
+  CommandInput input(o.input);
+  const bool from_stdin = input.from_stdin();
+  const std::string& source_name = input.name();
+  io::CsvReader reader(input.stream(), source_name);
   const auto& header = reader.header();
   const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
   if (columns.kind != io::CoordinateKind::ecef && columns.kind != io::CoordinateKind::geodetic) {
