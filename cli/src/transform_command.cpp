@@ -127,7 +127,9 @@ void run_transform(const TransformOptions& o) {
          << "\n";
   for (const auto& st : path.steps) {
     report << "  step " << st.from() << " -> " << st.to() << (st.reverse ? " (reverse)" : "") << ", ±"
-           << format_shortest(st.edge->accuracy_m) << " m: " << st.edge->source << "\n";
+           << format_shortest(st.edge->accuracy_m) << " m: " << st.edge->source;
+    if (!st.edge->epsg.empty()) report << " = " << st.edge->epsg << (st.edge->epsg_reversed ? " reversed" : "");
+    report << "\n";
   }
   if (t_to.year != t_from.year) {
     report << "  epoch " << geodesy::format_decimal_year(t_from) << " -> " << geodesy::format_decimal_year(t_to) << " by "
@@ -189,7 +191,9 @@ void run_transform(const TransformOptions& o) {
                      {"to", std::string(st.to())},
                      {"reverse_of_published", st.reverse},
                      {"accuracy_m", st.edge->accuracy_m},
-                     {"source", st.edge->source}});
+                     {"source", st.edge->source},
+                     {"epsg", st.edge->epsg.empty() ? json(nullptr) : json(st.edge->epsg)},
+                     {"epsg_reversed", st.edge->epsg_reversed}});
   }
   json side;
   side["geoanchor_version"] = GEOANCHOR_VERSION;

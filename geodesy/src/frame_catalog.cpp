@@ -25,7 +25,8 @@ struct IersRow {
   const char* epsg;  // the EPSG operation in the opposite direction
 };
 
-CatalogTransformation from_iers(const char* from, double epoch, const IersRow& r, const std::string& table) {
+CatalogTransformation from_iers(const char* from, double epoch, const IersRow& r, const std::string& table,
+                                bool epsg_reversed = true) {
   CatalogTransformation c;
   c.from = from;
   c.to = r.to;
@@ -43,7 +44,9 @@ CatalogTransformation from_iers(const char* from, double epoch, const IersRow& r
   v.dds_per_year = ScaleDifference::ppb(r.dd);
   c.params.reference_epoch = DecimalYear{epoch};
   c.accuracy_m = r.accuracy_m;
-  c.source = table + (r.epsg[0] ? std::string("; ") + r.epsg + " is the same operation reversed" : std::string());
+  c.source = table;
+  c.epsg = r.epsg;
+  c.epsg_reversed = epsg_reversed;
   return c;
 }
 
@@ -111,6 +114,46 @@ std::vector<CatalogTransformation> build_catalog() {
       {"ITRF88", 22.8, 2.6, -125.2, 10.41, 0.10, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6291"},
   };
   for (const auto& r : kFrom2008) out.push_back(from_iers("ITRF2008", 2000.0, r, t2008));
+
+  // EUREF Technical Note 1 (Altamimi, "Relationship and transformation
+  // between the International and the European Terrestrial Reference
+  // Systems"): each ETRFyy from its ITRFyy by the rotation of stable Eurasia
+  // since 1989.0 (plus the translations of the early realizations), and
+  // ETRF2000 from the later ITRFs. ETRS89 realizations are defined by these
+  // sets, hence no stated error (EPSG gives 0 m). TN1 prints the
+  // translations of ETRF89…ETRF2000 in centimetres; they are in millimetres
+  // here like every other row.
+  const std::string tn1 = "EUREF TN1 (Altamimi), ITRF to ETRF";
+  const struct {
+    const char* from;
+    double epoch;
+    IersRow row;
+  } kEuref[] = {
+      {"ITRF89", 1989.0, {"ETRF89", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.11, 0.57, -0.71, 0.0, "EPSG:7932"}},
+      {"ITRF90", 1989.0, {"ETRF90", 19.0, 28.0, -23.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.11, 0.57, -0.71, 0.0, "EPSG:7933"}},
+      {"ITRF91", 1989.0, {"ETRF91", 21.0, 25.0, -37.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.21, 0.52, -0.68, 0.0, "EPSG:7934"}},
+      {"ITRF92", 1989.0, {"ETRF92", 38.0, 40.0, -37.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.21, 0.52, -0.68, 0.0, "EPSG:7935"}},
+      {"ITRF93", 1989.0, {"ETRF93", 19.0, 53.0, -21.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.32, 0.78, -0.67, 0.0, "EPSG:7936"}},
+      {"ITRF94", 1989.0, {"ETRF94", 41.0, 41.0, -49.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.20, 0.50, -0.65, 0.0, "EPSG:7937"}},
+      {"ITRF96", 1989.0, {"ETRF96", 41.0, 41.0, -49.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.20, 0.50, -0.65, 0.0, "EPSG:7938"}},
+      {"ITRF97", 1989.0, {"ETRF97", 41.0, 41.0, -49.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.20, 0.50, -0.65, 0.0, "EPSG:7939"}},
+      {"ITRF2000", 1989.0, {"ETRF2000", 54.0, 51.0, -48.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.081, 0.490, -0.792, 0.0, "EPSG:7940"}},
+      {"ITRF2005", 1989.0, {"ETRF2005", 56.0, 48.0, -37.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.054, 0.518, -0.781, 0.0, "EPSG:5900"}},
+      {"ITRF2014", 1989.0, {"ETRF2014", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.085, 0.531, -0.770, 0.0, "EPSG:8366"}},
+      // ETRF2000 from ITRF2005, ITRF2008 and ITRF2014 (TN1's tables for ETRF2000).
+      {"ITRF2005", 2000.0, {"ETRF2000", 54.1, 50.2, -53.8, 0.40, 0.891, 5.390, -8.712, -0.2, 0.1, -1.8, 0.08, 0.081, 0.490, -0.792, 0.0, "EPSG:7950"}},
+      {"ITRF2008", 2000.0, {"ETRF2000", 52.1, 49.3, -58.5, 1.34, 0.891, 5.390, -8.712, 0.1, 0.1, -1.8, 0.08, 0.081, 0.490, -0.792, 0.0, "EPSG:7951"}},
+      {"ITRF2014", 2010.0, {"ETRF2000", 54.7, 52.2, -74.1, 2.12, 1.701, 10.290, -16.632, 0.1, 0.1, -1.9, 0.11, 0.081, 0.490, -0.792, 0.0, "EPSG:8405"}},
+  };
+  for (const auto& e : kEuref) {
+    out.push_back(from_iers(e.from, e.epoch, e.row, tn1 + " (" + e.from + " to " + e.row.to + ")", false));
+  }
+  // ETRF2020 (TN1, 2023 edition): ITRF2020 turned by stable Eurasia's rotation
+  // since 1989.0. Not in PROJ 9.1.1's EPSG v10.076; EPSG:10574 (ITRF2014 to
+  // ETRF2020) is this set composed with ITRF2014 to ITRF2020.
+  out.push_back(from_iers("ITRF2020", 1989.0,
+                          {"ETRF2020", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.086, 0.519, -0.753, 0.0, ""},
+                          tn1 + " (ITRF2020 to ETRF2020, 2023 edition)", false));
   return out;
 }
 
@@ -183,7 +226,9 @@ std::string FramePath::describe() const {
   for (const auto& st : steps) {
     out += std::string(st.from()) + " → " + std::string(st.to());
     if (st.reverse) out += " (reverse of " + st.edge->from + " → " + st.edge->to + ")";
-    out += ", ±" + format_shortest(st.edge->accuracy_m) + " m: " + st.edge->source + "\n";
+    out += ", ±" + format_shortest(st.edge->accuracy_m) + " m: " + st.edge->source;
+    if (!st.edge->epsg.empty()) out += " = " + st.edge->epsg + (st.edge->epsg_reversed ? " reversed" : "");
+    out += "\n";
   }
   if (steps.empty()) out = from + " = " + to + ": no transformation\n";
   return out;

@@ -76,23 +76,44 @@ TEST(FrameCatalog, Itrf2008ToEarlierRealizationsAgreeWithProjsItrf2008InitFile) 
 }
 
 TEST(FrameCatalog, EveryParameterSetAgreesWithItsEpsgOperationInProjsDatabase) {
-  // Each set names the EPSG operation that publishes it in the opposite
-  // direction (EPSG copies the IERS tables, reversed); PROJ's database is
-  // an independent transcription.
+  // Each set names the EPSG operation that publishes it (the IERS tables
+  // reversed, EUREF's in the same direction); PROJ's database is an
+  // independent transcription.
+  std::size_t compared = 0;
   for (const auto& edge : catalog_transformations()) {
-    const auto at = edge.source.find("EPSG:");
-    ASSERT_NE(at, std::string::npos) << edge.from << " -> " << edge.to;
-    const std::string code = edge.source.substr(at, edge.source.find(' ', at) - at);
-    const FramePath path{edge.to, edge.from, {FramePathStep{&edge, true}}};
-    const ProjPipeline reference(operation_urn(code));
+    if (edge.epsg.empty()) continue;  // ETRF2020: newer than PROJ 9.1.1's EPSG v10.076 (checked below)
+    const FramePath path = edge.epsg_reversed ? FramePath{edge.to, edge.from, {FramePathStep{&edge, true}}}
+                                              : FramePath{edge.from, edge.to, {FramePathStep{&edge, false}}};
+    const ProjPipeline reference(operation_urn(edge.epsg));
     for (double t : kEpochs) {
       for (const auto& x : stations(10)) {
         EXPECT_LT((path.apply(x, DecimalYear{t}).m - reference.forward(x.m, t)).norm(), kProjAgreement_m)
-            << code << ": " << edge.to << " -> " << edge.from << " at " << t;
+            << edge.epsg << ": " << path.from << " -> " << path.to << " at " << t;
       }
     }
+    ++compared;
   }
-  EXPECT_EQ(catalog_transformations().size(), 36u);  // 13 + 12 + 11 IERS rows
+  EXPECT_EQ(compared, 36u + 14u);  // 13 + 12 + 11 IERS rows, 14 EUREF rows
+}
+
+TEST(FrameCatalog, Etrf2020IsEpsg10574ComposedWithItrf2014ToItrf2020) {
+  // EPSG:10574 "ITRF2014 to ETRF2020 (1)" (EPSG dataset v10.0xx, 2023;
+  // not in PROJ 9.1.1's database), epoch 2015.0: T = (1.4, 0.9, -1.4) mm,
+  // R = (2.236, 13.494, -19.578) mas, D = 0.42 ppb; rates (0, 0.1, -0.2)
+  // mm/yr, (0.086, 0.519, -0.753) mas/yr, 0 ppb/yr.
+  const ProjPipeline epsg10574(
+      "+proj=helmert +x=0.0014 +y=0.0009 +z=-0.0014 +rx=0.002236 +ry=0.013494 +rz=-0.019578 +s=0.00042 "
+      "+dx=0 +dy=0.0001 +dz=-0.0002 +drx=0.000086 +dry=0.000519 +drz=-0.000753 +ds=0 +t_epoch=2015.0 "
+      "+convention=position_vector");
+  const FramePath path = find_frame_path("ITRF2014", "ETRF2020", "test");
+  ASSERT_EQ(path.steps.size(), 2u);
+  for (double t : kEpochs) {
+    for (const auto& x : stations(20)) {
+      // The composition of two small-angle Helmerts and EPSG's single set
+      // differ by second-order terms: |R|·|ΔT| + D·R·x ≈ 1e-10 · 6.4e6 m.
+      EXPECT_LT((path.apply(x, DecimalYear{t}).m - epsg10574.forward(x.m, t)).norm(), kProjAgreement_m) << t;
+    }
+  }
 }
 
 TEST(FrameCatalog, EarlierRealizationsToItrf2020AgreeWithTheEpsgOperationsInProjsDatabase) {
@@ -109,7 +130,7 @@ TEST(FrameCatalog, EarlierRealizationsToItrf2020AgreeWithTheEpsgOperationsInProj
     const FramePath path = find_frame_path(c.frame, "ITRF2020", "test");
     ASSERT_EQ(path.steps.size(), 1u);
     EXPECT_TRUE(path.steps[0].reverse);
-    EXPECT_NE(path.steps[0].edge->source.find(c.epsg), std::string::npos) << path.steps[0].edge->source;
+    EXPECT_EQ(path.steps[0].edge->epsg, c.epsg);
     expect_path_matches_proj(c.frame, "ITRF2020", operation_urn(c.epsg));
   }
   // And the other way, through PROJ's inverse.
@@ -150,7 +171,7 @@ TEST(FramePathSearch, FindsDirectEdgesHubsAndRefusesUnknownFrames) {
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::input);
-    EXPECT_NE(std::string(e.what()).find("--from: frame ITRF2030 is not in geoanchor's catalog; it knows ITRF2000"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("--from: frame ITRF2030 is not in geoanchor's catalog; it knows ETRF2000, ETRF2005"), std::string::npos)
         << e.what();
   }
 }

@@ -13,9 +13,9 @@
 //
 // In place (issue 6, part 1): the ITRF family — the IERS sets from
 // ITRF2020, ITRF2014 and ITRF2008 to every earlier realization back to
-// ITRF88 — and the ITRF2014 plate motion model. To come: ETRF89…ETRF2020,
-// the WGS 84 realizations, NAD83(2011)/(CSRS), GDA94/GDA2020 and the
-// ITRF2020 plate motion model.
+// ITRF88 —, ETRF89…ETRF2020 from EUREF TN1, and the ITRF2014 plate motion
+// model. To come: the WGS 84 realizations, NAD83(2011)/(CSRS),
+// GDA94/GDA2020 and the ITRF2020 plate motion model.
 
 #include <Eigen/Core>
 
@@ -34,7 +34,9 @@ struct CatalogTransformation {
   std::string from, to;               // frame names as Frame::name() prints them: "ITRF2020", "ITRF2014"
   Helmert14<PositionVector> params;   // to = params(from), evaluated at the observation epoch
   double accuracy_m = 0.0;            // as the source (or EPSG, for the same operation) states it
-  std::string source;                 // the publication, table and, where it exists, the EPSG code
+  std::string source;                 // the publication and table
+  std::string epsg;                   // the same operation in the EPSG dataset ("EPSG:9991"), or empty
+  bool epsg_reversed = false;         // EPSG publishes it in the opposite direction
 };
 
 // A plate's rotation pole in a frame: v = ω × x (ECEF, m/yr for x in m).
