@@ -49,13 +49,18 @@ void run_transform(const TransformOptions& o) {
     throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
                 "--from " + o.from + ": --to names an epoch, so the input's epoch is needed too, e.g. " + from.name() + "@2010.0");
   }
-  if (!path.steps.empty() && !from.epoch()) {
+  if (path.time_dependent() && !from.epoch()) {
     throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
                 "--from " + o.from + ": the transformation " + from.name() + " → " + to.name() +
                     " is time-dependent: give the coordinates' epoch, e.g. " + from.name() + "@2010.0");
   }
-  const DecimalYear t_from = from.epoch().value_or(DecimalYear{0.0});
+  // A static path needs no epoch; its steps ignore the one used here.
+  const DecimalYear t_from = from.epoch().value_or(DecimalYear{2000.0});
   const DecimalYear t_to = to.epoch().value_or(t_from);
+  const bool epochs_given = from.epoch().has_value();
+  const auto frame_text = [&](const geodesy::Frame& f, DecimalYear t) {
+    return epochs_given ? f.name() + "@" + geodesy::format_decimal_year(t) : f.name();
+  };
   std::optional<geodesy::PlateMotionModel> plate;
   if (o.plate) {
     plate = geodesy::find_plate_motion_model("ITRF2014", *o.plate);
@@ -123,8 +128,7 @@ void run_transform(const TransformOptions& o) {
   // The path, each step's source and the stated accuracy: on standard
   // error (standard output may be the CSV), and in the sidecar.
   std::ostream& report = std::cerr;
-  report << "geoanchor transform: " << from.to_string() << " -> " << to.name() << "@" << geodesy::format_decimal_year(t_to)
-         << "\n";
+  report << "geoanchor transform: " << frame_text(from, t_from) << " -> " << frame_text(to, t_to) << "\n";
   for (const auto& st : path.steps) {
     report << "  step " << st.from() << " -> " << st.to() << (st.reverse ? " (reverse)" : "") << ", ±"
            << format_shortest(st.edge->accuracy_m) << " m: " << st.edge->source;
@@ -201,10 +205,10 @@ void run_transform(const TransformOptions& o) {
   side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
                    {"sha256", from_stdin ? json(nullptr) : json(io::sha256_file_hex(o.input))},
                    {"frame", from.name()},
-                   {"epoch", t_from.year},
+                   {"epoch", epochs_given ? json(t_from.year) : json(nullptr)},
                    {"kind", std::string(io::to_string(columns.kind))},
                    {"ellipsoid", ellipsoid.name()}};
-  side["output"] = {{"path", o.output}, {"frame", to.name()}, {"epoch", t_to.year}, {"rows", rows},
+  side["output"] = {{"path", o.output}, {"frame", to.name()}, {"epoch", epochs_given ? json(t_to.year) : json(nullptr)}, {"rows", rows},
                     {"height_type", "ellipsoidal"}, {"ellipsoid", ellipsoid.name()}};
   side["path"] = {{"steps", steps}, {"accuracy_m", path.accuracy_m()}};
   if (t_to.year != t_from.year) {

@@ -154,6 +154,69 @@ std::vector<CatalogTransformation> build_catalog() {
   out.push_back(from_iers("ITRF2020", 1989.0,
                           {"ETRF2020", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.086, 0.519, -0.753, 0.0, ""},
                           tn1 + " (ITRF2020 to ETRF2020, 2023 edition)", false));
+
+  // National and WGS 84 frames, each as its producer publishes it. Rows are
+  // in the position-vector convention, mm, mas and ppb; where the source
+  // (and EPSG) uses the coordinate-frame convention the rotations and their
+  // rates are negated here, and the row says so. EPSG states 0 m for the
+  // defining sets.
+  const struct {
+    const char* from;
+    double epoch;
+    IersRow row;
+    const char* source;
+  } kNational[] = {
+      // NGS: Pearson & Snay (2013), "Introducing HTDP 3.1 to transform coordinates across time and spatial reference
+      // frames", GPS Solutions 17(1), Table 7 (coordinate frame; rotations negated).
+      {"ITRF2008", 1997.0,
+       {"NAD83(2011)", 993.43, -1903.31, -526.55, 1.71504, -25.91467, -9.42645, -11.59935, 0.79, -0.60, -1.34, -0.10201,
+        -0.06667, 0.75744, 0.05133, 0.0, "EPSG:7807"},
+       "NGS, Pearson & Snay (2013), GPS Solutions 17, ITRF2008 to NAD83(2011) (coordinate frame, rotations negated)"},
+      // NGS (HTDP 3.2.5, 2017), ITRF2014 to NAD83(2011) (coordinate frame; rotations negated).
+      {"ITRF2014", 2010.0,
+       {"NAD83(2011)", 1005.3, -1909.2, -541.6, 0.37, -26.7814, 0.4203, -10.9321, 0.8, -0.6, -1.4, -0.07, -0.0667, 0.7574,
+        0.0513, 0.0, "EPSG:8970"},
+       "NGS, HTDP 3.2.5 (2017), ITRF2014 to NAD83(2011) (coordinate frame, rotations negated)"},
+      // NRCan: the NGS sets in the position-vector convention, for NAD83(CSRS) v6 and v7.
+      {"ITRF2008", 1997.0,
+       {"NAD83(CSRSv6)", 993.43, -1903.31, -526.55, 1.71504, -25.91467, -9.42645, -11.59935, 0.79, -0.60, -1.34, -0.102,
+        -0.06667, 0.75744, 0.05133, 0.0, "EPSG:8264"},
+       "NRCan, NAD83(CSRS) v6 from ITRF2008"},
+      {"ITRF2014", 2010.0,
+       {"NAD83(CSRSv7)", 1005.3, -1909.2, -541.6, 0.37, -26.7814, 0.4203, -10.9321, 0.8, -0.6, -1.4, -0.07, -0.0667, 0.7574,
+        0.0513, 0.0, "EPSG:8265"},
+       "NRCan, NAD83(CSRS) v7 from ITRF2014"},
+      // ICSM, GDA2020 Technical Manual (v1.x), GDA94 to GDA2020 (7 parameters, coordinate frame; rotations negated)
+      // and ITRF2014 to GDA2020 (the Australian plate's rotation since 2020.0, coordinate frame; rates negated).
+      {"GDA94", 2020.0,
+       {"GDA2020", 61.55, -10.87, -40.19, -9.994, 39.4924, 32.7221, 32.8979, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.01,
+        "EPSG:8048"},
+       "ICSM, GDA2020 Technical Manual, GDA94 to GDA2020 (coordinate frame, rotations negated)"},
+      {"ITRF2014", 2020.0,
+       {"GDA2020", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.50379, -1.18346, -1.20716, 0.03, "EPSG:8049"},
+       "ICSM, GDA2020 Technical Manual, ITRF2014 to GDA2020 (coordinate frame, rates negated)"},
+      // WGS 84 realizations (NGA), tied to their ITRF as EPSG records them, and NGA's sets between realizations
+      // (coordinate frame; rotations negated).
+      {"WGS84(G730)", 2000.0, {"ITRF92", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.2, "EPSG:7672"}, "NGA/EPSG, WGS 84 (G730) aligned with ITRF92"},
+      {"WGS84(G873)", 2000.0, {"ITRF94", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.1, "EPSG:9076"}, "NGA/EPSG, WGS 84 (G873) aligned with ITRF94"},
+      {"WGS84(G1150)", 2000.0, {"ITRF2000", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.02, "EPSG:7670"}, "NGA/EPSG, WGS 84 (G1150) aligned with ITRF2000"},
+      {"WGS84(G1674)", 2000.0, {"ITRF2008", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.01, "EPSG:7669"}, "NGA/EPSG, WGS 84 (G1674) aligned with ITRF2008"},
+      {"WGS84(G1762)", 2000.0, {"ITRF2008", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.01, "EPSG:7666"}, "NGA/EPSG, WGS 84 (G1762) aligned with ITRF2008"},
+      {"WGS84(G2139)", 2000.0, {"ITRF2014", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.01, "EPSG:9757"}, "NGA/EPSG, WGS 84 (G2139) aligned with ITRF2014"},
+      {"WGS84(G730)", 2000.0, {"WGS84(G873)", -20.0, -16.0, 14.0, -0.69, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.04, "EPSG:9961"},
+       "NGA, WGS 84 (G730) to (G873)"},
+      {"WGS84(G873)", 2005.0, {"WGS84(G1150)", 1.1, -4.7, 22.0, 1.45, 0.0, 0.0, -0.16, 0.0, 0.6, 1.4, -0.01, 0.0, 0.0, -0.02, 0.03, "EPSG:9962"},
+       "NGA, WGS 84 (G873) to (G1150) (coordinate frame, rotations negated)"},
+      {"WGS84(G1150)", 2005.0, {"WGS84(G1674)", -2.4, 1.6, 23.2, 2.08, 0.27, -0.27, 0.38, -0.1, -0.1, 1.8, -0.08, 0.0, 0.0, 0.0, 0.02, "EPSG:9963"},
+       "NGA, WGS 84 (G1150) to (G1674) (coordinate frame, rotations negated)"},
+      {"WGS84(G1674)", 2000.0, {"WGS84(G1762)", -4.0, 3.0, 4.0, -6.9, -0.27, 0.27, -0.38, 0, 0, 0, 0, 0, 0, 0, 0.01, "EPSG:7667"},
+       "NGA, WGS 84 (G1674) to (G1762) (coordinate frame, rotations negated)"},
+      {"WGS84(G1150)", 2000.0, {"WGS84(G1762)", -6.0, 5.0, 20.0, -4.5, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.02, "EPSG:7668"},
+       "NGA, WGS 84 (G1150) to (G1762) (coordinate frame)"},
+      {"WGS84(G1762)", 2000.0, {"WGS84(G2139)", 5.8, -6.4, 7.0, -4.4, -0.08, -0.04, -0.12, 0, 0, 0, 0, 0, 0, 0, 0.01, "EPSG:9756"},
+       "NGA, WGS 84 (G1762) to (G2139) (coordinate frame, rotations negated)"},
+  };
+  for (const auto& n : kNational) out.push_back(from_iers(n.from, n.epoch, n.row, n.source, false));
   return out;
 }
 
@@ -207,6 +270,16 @@ std::optional<PlateMotionModel> find_plate_motion_model(std::string_view frame, 
 EcefPosition FramePathStep::apply(const EcefPosition& x, DecimalYear t) const {
   const AffineMap m = target_from_source(evaluate_at(edge->params, t), RotationModel::small_angle);
   return EcefPosition(reverse ? m.inverse().apply(x.m) : m.apply(x.m));
+}
+
+bool CatalogTransformation::time_dependent() const {
+  const auto& r = params.rates;
+  return !r.dt_m_per_year.isZero(0.0) || r.drx_per_year.rad() != 0.0 || r.dry_per_year.rad() != 0.0 ||
+         r.drz_per_year.rad() != 0.0 || r.dds_per_year.unitless() != 0.0;
+}
+
+bool FramePath::time_dependent() const {
+  return std::any_of(steps.begin(), steps.end(), [](const FramePathStep& s) { return s.edge->time_dependent(); });
 }
 
 double FramePath::accuracy_m() const {

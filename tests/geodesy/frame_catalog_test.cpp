@@ -82,6 +82,9 @@ TEST(FrameCatalog, EveryParameterSetAgreesWithItsEpsgOperationInProjsDatabase) {
   std::size_t compared = 0;
   for (const auto& edge : catalog_transformations()) {
     if (edge.epsg.empty()) continue;  // ETRF2020: newer than PROJ 9.1.1's EPSG v10.076 (checked below)
+    // EPSG:8048 is defined in the geographic 2D domain, which PROJ applies to
+    // latitude and longitude, not to ECEF (checked below).
+    if (edge.epsg == "EPSG:8048") continue;
     const FramePath path = edge.epsg_reversed ? FramePath{edge.to, edge.from, {FramePathStep{&edge, true}}}
                                               : FramePath{edge.from, edge.to, {FramePathStep{&edge, false}}};
     const ProjPipeline reference(operation_urn(edge.epsg));
@@ -93,7 +96,23 @@ TEST(FrameCatalog, EveryParameterSetAgreesWithItsEpsgOperationInProjsDatabase) {
     }
     ++compared;
   }
-  EXPECT_EQ(compared, 36u + 14u);  // 13 + 12 + 11 IERS rows, 14 EUREF rows
+  EXPECT_EQ(compared, 36u + 14u + 17u);  // 13 + 12 + 11 IERS rows, 14 EUREF, 17 of the 18 NGS/NRCan/ICSM/NGA rows
+}
+
+TEST(FrameCatalog, Gda94ToGda2020IsTheTechnicalManualsSevenParameterSet) {
+  // ICSM, GDA2020 Technical Manual: tx 61.55, ty -10.87, tz -40.19 mm,
+  // rx -39.4924, ry -32.7221, rz -32.8979 mas, ds -9.994 ppb, coordinate
+  // frame convention — written out for PROJ, which applies it in ECEF.
+  const ProjPipeline manual("+proj=helmert +x=0.06155 +y=-0.01087 +z=-0.04019 +rx=-0.0394924 +ry=-0.0327221 "
+                            "+rz=-0.0328979 +s=-0.009994 +convention=coordinate_frame");
+  const FramePath path = find_frame_path("GDA94", "GDA2020", "test");
+  ASSERT_EQ(path.steps.size(), 1u);
+  EXPECT_FALSE(path.time_dependent());
+  for (const auto& x : stations(50)) {
+    EXPECT_LT((path.apply(x, DecimalYear{2020.0}).m - manual.forward(x.m)).norm(), kProjAgreement_m);
+    // Static: the epoch does not matter.
+    EXPECT_EQ(path.apply(x, DecimalYear{1994.0}).m, path.apply(x, DecimalYear{2020.0}).m);
+  }
 }
 
 TEST(FrameCatalog, Etrf2020IsEpsg10574ComposedWithItrf2014ToItrf2020) {

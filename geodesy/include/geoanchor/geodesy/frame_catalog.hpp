@@ -14,8 +14,10 @@
 // In place (issue 6, part 1): the ITRF family — the IERS sets from
 // ITRF2020, ITRF2014 and ITRF2008 to every earlier realization back to
 // ITRF88 —, ETRF89…ETRF2020 from EUREF TN1, and the ITRF2014 plate motion
-// model. To come: the WGS 84 realizations, NAD83(2011)/(CSRS),
-// GDA94/GDA2020 and the ITRF2020 plate motion model.
+// model; NAD83(2011) from ITRF2008/ITRF2014 (NGS), NAD83(CSRSv6/v7)
+// (NRCan), GDA94 → GDA2020 and ITRF2014 → GDA2020 (ICSM), and the WGS 84
+// realizations G730…G2139 (NGA/EPSG). To come: ITRF2020 → NAD83(2011),
+// WGS 84 (G2296), the ITRF2020 plate motion model.
 
 #include <Eigen/Core>
 
@@ -37,6 +39,8 @@ struct CatalogTransformation {
   std::string source;                 // the publication and table
   std::string epsg;                   // the same operation in the EPSG dataset ("EPSG:9991"), or empty
   bool epsg_reversed = false;         // EPSG publishes it in the opposite direction
+  // Whether any rate is non-zero (then the observation epoch matters).
+  bool time_dependent() const;
 };
 
 // A plate's rotation pole in a frame: v = ω × x (ECEF, m/yr for x in m).
@@ -71,6 +75,7 @@ struct FramePathStep {
 struct FramePath {
   std::string from, to;
   std::vector<FramePathStep> steps;  // empty when from == to
+  bool time_dependent() const;  // any step is
   // The stated accuracies of the steps combined as independent errors (root
   // sum of squares), metres.
   double accuracy_m() const;
