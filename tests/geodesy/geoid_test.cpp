@@ -1,0 +1,92 @@
+// EGM96 undulations from PROJ's egm96_15.gtx, read and interpolated by
+// geoanchor, against PROJ's own vgridshift on the same grid; and the grid
+// reader's refusals.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geoid.hpp"
+#include "proj_reference.hpp"
+
+namespace geoanchor::geodesy {
+namespace {
+
+using testing::proj_radians;
+using testing::ProjPipeline;
+
+// The bound is 1 mm; both sides interpolate the same float32 grid
+// bilinearly in double, so they agree to rounding.
+constexpr double kProjAgreement_m = 1e-3;
+constexpr double kRounding_m = 1e-6;
+
+TEST(Egm96, AgreesWithProjsVgridshiftOnTheSameGrid) {
+  const GeoidGrid& egm96 = GeoidGrid::egm96();
+  EXPECT_EQ(egm96.model_name(), "EGM96 (15' grid, egm96_15.gtx)");
+  // vgridshift: z_out = z_in + multiplier × N.
+  const ProjPipeline vgridshift("+proj=vgridshift +grids=egm96_15.gtx +multiplier=1");
+  std::mt19937_64 rng(96);
+  std::uniform_real_distribution<double> lat(-89.9, 89.9), lon(-180.0, 180.0);
+  double worst = 0;
+  for (int i = 0; i < 5000; ++i) {
+    const double la = lat(rng), lo = lon(rng);
+    const double n_proj = vgridshift.forward(Eigen::Vector3d(proj_radians(lo), proj_radians(la), 0.0)).z();
+    const double n = egm96.undulation_m(Angle::degrees(la), Angle::degrees(lo));
+    ASSERT_TRUE(std::isfinite(n)) << la << " " << lo;
+    worst = std::max(worst, std::abs(n - n_proj));
+    EXPECT_LT(std::abs(n - n_proj), kProjAgreement_m) << la << " " << lo;
+  }
+  EXPECT_LT(worst, kRounding_m);
+  // Across the antimeridian and on grid nodes.
+  for (double lo : {-180.0, -179.9, 179.9, 180.0, 0.0}) {
+    for (double la : {-89.0, 0.0, 47.25, 89.0}) {
+      const double n_proj = vgridshift.forward(Eigen::Vector3d(proj_radians(lo), proj_radians(la), 0.0)).z();
+      EXPECT_NEAR(egm96.undulation_m(Angle::degrees(la), Angle::degrees(lo)), n_proj, kRounding_m) << la << " " << lo;
+    }
+  }
+}
+
+TEST(Egm96, ARangeOfKnownMagnitudes) {
+  // The geoid's known extremes: about −106 m south of India, about +85 m
+  // over New Guinea; about 48 m at Zurich (EGM96).
+  const GeoidGrid& g = GeoidGrid::egm96();
+  EXPECT_LT(g.undulation_m(Angle::degrees(5.0), Angle::degrees(78.0)), -100.0);
+  EXPECT_GT(g.undulation_m(Angle::degrees(-5.0), Angle::degrees(147.0)), 70.0);
+  EXPECT_NEAR(g.undulation_m(Angle::degrees(47.46), Angle::degrees(8.55)), 48.0, 2.0);
+  EXPECT_TRUE(std::isnan(g.undulation_m(Angle::degrees(std::nan("")), Angle::degrees(0.0))));
+}
+
+TEST(GeoidGrid, RefusesFilesThatAreNotGtxGridsNamingThem) {
+  const auto dir = std::filesystem::path(::testing::TempDir());
+  const auto short_file = dir / "geoanchor_short.gtx";
+  std::ofstream(short_file, std::ios::binary) << "not a grid";
+  try {
+    (void)GeoidGrid::load_gtx(short_file, "x");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::input);
+    EXPECT_NE(std::string(e.what()).find("geoanchor_short.gtx: 10 bytes, shorter than a .gtx header (40)"), std::string::npos) << e.what();
+  }
+  // A real header with the data cut short.
+  {
+    std::ifstream in("/usr/share/proj/egm96_15.gtx", std::ios::binary);
+    std::string head(1000, '\0');
+    in.read(head.data(), 1000);
+    std::ofstream(dir / "geoanchor_cut.gtx", std::ios::binary) << head;
+  }
+  try {
+    (void)GeoidGrid::load_gtx(dir / "geoanchor_cut.gtx", "x");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("1000 bytes; a 721 × 1440 .gtx grid has 4153000"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)GeoidGrid::load_gtx(dir / "geoanchor_none.gtx", "x"), Error);
+  std::filesystem::remove(short_file);
+  std::filesystem::remove(dir / "geoanchor_cut.gtx");
+}
+
+}  // namespace
+}  // namespace geoanchor::geodesy
