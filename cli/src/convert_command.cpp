@@ -101,6 +101,8 @@ CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   cmd->add_option("--epoch", o.epoch, "Observation epoch (decimal year) for a 14-parameter transform");
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")
       ->check(CLI::Range(0, 15));
+  cmd->add_option("--geoid", o.geoid, "Geoid model for orthometric heights (H_m columns): EGM96");
+  cmd->add_option("--output-heights", o.output_heights, "ellipsoidal (h_m, default) | orthometric (H_m, needs --geoid)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
   return cmd;
 }
@@ -134,8 +136,19 @@ void run_convert(const ConvertOptions& o) {
     in_frame.projection = geodesy::ProjectionDef{in_ellipsoid, parse_tm(*o.tm, "--tm"), std::nullopt};
   }
 
+  const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
+  in_frame.geoid = geoid;
+  if (o.output_heights != "ellipsoidal" && o.output_heights != "orthometric") {
+    throw Error(ErrorKind::usage, "E_OPTION", "--output-heights " + o.output_heights + ": expected ellipsoidal or orthometric");
+  }
+  const bool orthometric_out = o.output_heights == "orthometric";
+  if (orthometric_out && !geoid) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--output-heights orthometric: needs the geoid model: give --geoid EGM96");
+  }
+
   io::OutputCoordinateFrame out_frame;
   out_frame.kind = out_kind;
+  if (orthometric_out) out_frame.geoid = geoid;
   out_frame.ellipsoid = out_ellipsoid;
   if (o.origin) out_frame.origin = parse_origin(*o.origin, "--origin", out_ellipsoid);
   if (o.zone) out_frame.zone = parse_zone(*o.zone, "--zone");
@@ -236,6 +249,10 @@ void run_convert(const ConvertOptions& o) {
                    {"sha256", from_stdin ? json(nullptr) : json(io::sha256_file_hex(o.input))},
                    {"kind", std::string(io::to_string(columns.kind))},
                    {"ellipsoid", in_ellipsoid.name()}};
+  if (columns.kind == io::CoordinateKind::geodetic || columns.kind == io::CoordinateKind::projected) {
+    side["input"]["height_type"] = columns.orthometric ? "orthometric" : "ellipsoidal";
+    if (columns.orthometric) side["input"]["geoid_model"] = geoid->model_name();
+  }
   if (in_frame.origin && (columns.kind == io::CoordinateKind::enu || columns.kind == io::CoordinateKind::ned)) {
     side["input"]["origin"] = origin_json(*in_frame.origin);
   }
@@ -244,7 +261,9 @@ void run_convert(const ConvertOptions& o) {
     if (in_frame.projection->utm) side["input"]["utm_zone"] = in_frame.projection->utm->to_string();
   }
   side["output"] = {{"path", o.output}, {"kind", std::string(io::to_string(out_kind))},
-                    {"ellipsoid", out_ellipsoid.name()}, {"rows", rows}, {"height_type", "ellipsoidal"}};
+                    {"ellipsoid", out_ellipsoid.name()}, {"rows", rows},
+                    {"height_type", orthometric_out ? "orthometric" : "ellipsoidal"}};
+  if (orthometric_out) side["output"]["geoid_model"] = geoid->model_name();
   if (out_frame.origin && (out_kind == io::OutputKind::enu || out_kind == io::OutputKind::ned)) {
     side["output"]["origin"] = origin_json(*out_frame.origin);
   }

@@ -26,6 +26,8 @@ struct ConvertOptions {
   bool inverse = false;
   std::optional<std::string> epoch;
   std::optional<int> precision;
+  std::optional<std::string> geoid;  // EGM96: reads H_m input, and writes H_m with --output-heights orthometric
+  std::string output_heights = "ellipsoidal";
   bool overwrite = false;
   std::vector<std::string> argv;  // for the provenance record
 };

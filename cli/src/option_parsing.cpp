@@ -120,4 +120,11 @@ solver::Convention parse_convention(std::string_view text, std::string_view flag
   throw Error(ErrorKind::usage, "E_OPTION", std::string(flag) + " " + std::string(text) + ": expected position_vector or coordinate_frame");
 }
 
+const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view flag) {
+  if (text == "EGM96") return geodesy::GeoidGrid::egm96();
+  throw Error(ErrorKind::usage, "E_OPTION",
+              std::string(flag) + " " + std::string(text) +
+                  ": expected EGM96 (the 15' grid in Debian's proj-data; EGM2008 is not packaged and is not downloaded)");
+}
+
 }  // namespace geoanchor::cli

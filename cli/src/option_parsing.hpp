@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/ellipsoid.hpp"
+#include "geoanchor/geodesy/geoid.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/geodesy/projection.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
@@ -29,6 +30,10 @@ geodesy::UtmZone parse_zone(std::string_view text, std::string_view flag);
 // `count` comma-separated finite numbers; `expected` describes them.
 std::vector<double> split_numbers(std::string_view text, std::string_view flag, std::size_t count,
                                   const std::string& expected);
+
+// The geoid model named by --geoid: EGM96 (PROJ's egm96_15.gtx). Throws
+// geoanchor::Error (usage) for any other name, saying which are available.
+const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view flag);
 
 // translation3, helmert6, helmert7, helmert14, molodensky-badekas,
 // enu-origin or site-calibration.

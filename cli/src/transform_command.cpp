@@ -37,6 +37,7 @@ CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
   cmd->add_option("--plate", o.plate, "Plate motion model for the epoch change when there are no velocity columns (ITRF2014-PMM: EURA, NOAM, ...)");
   cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic columns (default GRS80, the ITRF convention)");
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")->check(CLI::Range(0, 15));
+  cmd->add_option("--geoid", o.geoid, "Geoid model of H_m (orthometric height) columns: EGM96; H_m is written back on it");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
   return cmd;
 }
@@ -106,12 +107,15 @@ void run_transform(const TransformOptions& o) {
     throw Error(ErrorKind::input, "E_COLUMN", source_name + ": velocities (ECEF, m/yr) need ECEF coordinates x_m,y_m,z_m");
   }
 
+  const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
   io::InputCoordinateFrame in_frame;
   in_frame.ellipsoid = ellipsoid;
+  in_frame.geoid = geoid;
   const io::CoordinateDecoder decoder(columns, header, in_frame, source_name);
   io::OutputCoordinateFrame out_frame;
   out_frame.kind = columns.kind == io::CoordinateKind::ecef ? io::OutputKind::ecef : io::OutputKind::geodetic;
   out_frame.ellipsoid = ellipsoid;
+  if (columns.orthometric) out_frame.geoid = geoid;  // H_m in, H_m out
   const io::NumberFormat numbers{o.precision};
   const io::CoordinateEncoder encoder(out_frame, numbers);
   std::size_t first_coordinate = 0;
@@ -209,7 +213,8 @@ void run_transform(const TransformOptions& o) {
                    {"kind", std::string(io::to_string(columns.kind))},
                    {"ellipsoid", ellipsoid.name()}};
   side["output"] = {{"path", o.output}, {"frame", to.name()}, {"epoch", epochs_given ? json(t_to.year) : json(nullptr)}, {"rows", rows},
-                    {"height_type", "ellipsoidal"}, {"ellipsoid", ellipsoid.name()}};
+                    {"height_type", columns.orthometric ? "orthometric" : "ellipsoidal"}, {"ellipsoid", ellipsoid.name()}};
+  if (columns.orthometric) side["output"]["geoid_model"] = geoid->model_name();
   side["path"] = {{"steps", steps}, {"accuracy_m", path.accuracy_m()}};
   if (t_to.year != t_from.year) {
     side["epoch_propagation"] = has_velocity ? json{{"by", "velocities"}}

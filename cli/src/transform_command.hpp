@@ -20,6 +20,7 @@ struct TransformOptions {
   std::optional<std::string> plate;
   std::string ellipsoid = "GRS80";
   std::optional<int> precision;
+  std::optional<std::string> geoid;  // for H_m columns (read and written on the same model)
   bool overwrite = false;
   std::vector<std::string> argv;
 };

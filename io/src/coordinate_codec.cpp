@@ -38,7 +38,24 @@ CoordinateDecoder::CoordinateDecoder(const CoordinateColumns& columns, const std
       break;
     default: break;
   }
+  if (columns_.orthometric && !frame_.geoid) {
+    throw Error(ErrorKind::input, "E_HEIGHT_TYPE",
+                source_ + ": column '" + header_[*columns_.third] +
+                    "': orthometric height: reading it needs the geoid model: give --geoid EGM96 (h = H + N)");
+  }
 }
+
+namespace {
+// h = H + N at the point's latitude and longitude.
+GeodeticPosition with_ellipsoidal_height(GeodeticPosition g, const geodesy::GeoidGrid& geoid, const std::string& where) {
+  const double n = geoid.undulation_m(g.lat, g.lon);
+  if (!std::isfinite(n)) {
+    throw Error(ErrorKind::input, "E_GEOID_RANGE", where + ": outside the grid of " + geoid.model_name());
+  }
+  g.h.m += n;
+  return g;
+}
+}  // namespace
 
 double CoordinateDecoder::number(const CsvRecord& r, std::size_t column) const {
   return number_cell(r, column, header_, source_);
@@ -60,8 +77,9 @@ EcefPosition CoordinateDecoder::decode(const CsvRecord& r) const {
                         ": longitude not in [-180, 180] degrees");
       }
       const double h = columns_.third ? number(r, *columns_.third) : 0.0;
-      return geocentric_.ecef_from_geodetic(
-          GeodeticPosition{Angle::degrees(a), Angle::degrees(b), EllipsoidalHeight{h}});
+      GeodeticPosition g{Angle::degrees(a), Angle::degrees(b), EllipsoidalHeight{h}};
+      if (columns_.orthometric) g = with_ellipsoidal_height(g, *frame_.geoid, source_ + ":" + std::to_string(r.line));
+      return geocentric_.ecef_from_geodetic(g);
     }
     case CoordinateKind::ecef: return EcefPosition(a, b, number(r, *columns_.third));
     case CoordinateKind::enu:
@@ -84,6 +102,7 @@ EcefPosition CoordinateDecoder::decode(const CsvRecord& r) const {
                     source_ + ":" + std::to_string(r.line) + ": easting/northing " + r.values[columns_.first] + ", " +
                         r.values[columns_.second] + ": outside the projection's domain");
       }
+      if (columns_.orthometric) g = with_ellipsoidal_height(g, *frame_.geoid, source_ + ":" + std::to_string(r.line));
       return geocentric_.ecef_from_geodetic(g);
     }
   }
@@ -156,6 +175,23 @@ CoordinateEncoder::CoordinateEncoder(OutputCoordinateFrame frame, NumberFormat f
       names_ = coordinate_column_names(CoordinateKind::projected);
       break;
   }
+  if (frame_.geoid) {
+    if (frame_.kind != OutputKind::geodetic && frame_.kind != OutputKind::utm && frame_.kind != OutputKind::tm) {
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  "--output-heights orthometric: only geodetic, UTM and TM outputs have a height column (not " +
+                      std::string(to_string(frame_.kind)) + ")");
+    }
+    names_[2] = "H_m";
+  }
+}
+
+double CoordinateEncoder::height(const GeodeticPosition& g, std::string_view where) const {
+  if (!frame_.geoid) return g.h.m;
+  const double n = frame_.geoid->undulation_m(g.lat, g.lon);
+  if (!std::isfinite(n)) {
+    throw Error(ErrorKind::input, "E_GEOID_RANGE", std::string(where) + ": outside the grid of " + frame_.geoid->model_name());
+  }
+  return g.h.m - n;
 }
 
 std::vector<std::string> CoordinateEncoder::encode(const EcefPosition& p, std::string_view where) const {
@@ -164,7 +200,7 @@ std::vector<std::string> CoordinateEncoder::encode(const EcefPosition& p, std::s
     case OutputKind::ecef: return {f.metres(p.m.x()), f.metres(p.m.y()), f.metres(p.m.z())};
     case OutputKind::geodetic: {
       const auto g = geocentric_.geodetic_from_ecef(p);
-      return {f.degrees(g.lat.deg()), f.degrees(g.lon.deg()), f.metres(g.h.m)};
+      return {f.degrees(g.lat.deg()), f.degrees(g.lon.deg()), f.metres(height(g, where))};
     }
     case OutputKind::enu: {
       const auto e = plane_->enu_from_ecef(p).enu_m;
@@ -190,7 +226,7 @@ std::vector<std::string> CoordinateEncoder::encode(const EcefPosition& p, std::s
         }
         q = utm(*zone).forward(g);
       }
-      std::vector<std::string> out = {f.metres(q.easting_m), f.metres(q.northing_m), f.metres(q.h.m)};
+      std::vector<std::string> out = {f.metres(q.easting_m), f.metres(q.northing_m), f.metres(height(g, where))};
       if (frame_.kind == OutputKind::utm) out.push_back(zone->to_string());
       return out;
     }

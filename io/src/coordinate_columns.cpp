@@ -125,11 +125,14 @@ CoordinateColumns classify_coordinate_header(const std::vector<std::string>& hea
       utm_zone = i;
       continue;
     }
-    // Orthometric heights have their own type and are not convertible here.
+    // Orthometric heights: H[_role]_m, read through a geoid model (h = H + N).
+    if (name == name_of("H", role, "m")) {
+      if (found.count("H")) fail(source, i, name, "appears twice in the header");
+      found["H"] = i;
+      continue;
+    }
     if (name == "H" || name.rfind("H_", 0) == 0) {
-      fail(source, i, name,
-           "orthometric height: geodetic/ECEF conversion needs the ellipsoidal height h" + role_infix +
-               "_m (h = H + N, N the geoid undulation)");
+      fail(source, i, name, "orthometric height without its unit; expected H" + role_infix + "_m (metres above the geoid)");
     }
     const std::string low = lower(name);
     for (const auto& q : kQuantities) {
@@ -209,30 +212,43 @@ CoordinateColumns classify_coordinate_header(const std::vector<std::string>& hea
     case CoordinateKind::geodetic:
       c.first = require("lat");
       c.second = require("lon");
+      if (has("h") && has("H")) fail(source, col("H"), header[col("H")], "an ellipsoidal (h) and an orthometric (H) height in one header; give one");
       if (has("h")) c.third = col("h");
+      if (has("H")) {
+        c.third = col("H");
+        c.orthometric = true;
+      }
       break;
     case CoordinateKind::ecef:
       c.first = require("x");
       c.second = require("y");
       c.third = require("z");
       forbid("h");
+      forbid("H");
       break;
     case CoordinateKind::enu:
       c.first = require("e");
       c.second = require("n");
       c.third = require("u");
       forbid("h");
+      forbid("H");
       break;
     case CoordinateKind::ned:
       c.first = require("n");
       c.second = require("e");
       c.third = require("d");
       forbid("h");
+      forbid("H");
       break;
     case CoordinateKind::projected:
       c.first = require("easting");
       c.second = require("northing");
+      if (has("h") && has("H")) fail(source, col("H"), header[col("H")], "an ellipsoidal (h) and an orthometric (H) height in one header; give one");
       if (has("h")) c.third = col("h");
+      if (has("H")) {
+        c.third = col("H");
+        c.orthometric = true;
+      }
       c.utm_zone = utm_zone;
       break;
   }

@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -188,6 +189,53 @@ struct BadCase {
   int exit_code;
   const char* message;    // expected substring of stderr
 };
+
+// Orthometric heights through EGM96: H_m read as h = H + N and written as
+// H = h − N, against PROJ's vgridshift on the same grid followed by its
+// geocentric conversion.
+TEST_F(ConvertCli, OrthometricHeightsGoThroughEgm96AsProjsVgridshiftDoes) {
+  constexpr double kVsProjTol_m = 1e-6;  // the 1 mm; both interpolate the same grid in float64
+  const auto in = write("H.csv", "id,lat_deg,lon_deg,H_m\nZH,47.46,8.55,432.0\nSYD,-33.86,151.2,40.0\nIND,5.0,78.0,0.0\n");
+  const auto r = run("convert " + in.string() + " --to ecef --geoid EGM96 -o " + path("ecef.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const ProjPipeline proj("+proj=pipeline +step +proj=vgridshift +grids=egm96_15.gtx +multiplier=1 +step +proj=cart +ellps=WGS84");
+  const Table t = parse_table(slurp(path("ecef.csv")));
+  const double marks[3][3] = {{47.46, 8.55, 432.0}, {-33.86, 151.2, 40.0}, {5.0, 78.0, 0.0}};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Eigen::Vector3d expected =
+        proj.forward(Eigen::Vector3d(proj_radians(marks[i][1]), proj_radians(marks[i][0]), marks[i][2]));
+    const Eigen::Vector3d got(t.num(i, "x_m"), t.num(i, "y_m"), t.num(i, "z_m"));
+    EXPECT_LT((got - expected).norm(), kVsProjTol_m) << i;
+  }
+  const auto side = nlohmann::json::parse(slurp(path("ecef.csv.geoanchor.json")));
+  EXPECT_EQ(side["input"]["height_type"], "orthometric");
+  EXPECT_EQ(side["input"]["geoid_model"], "EGM96 (15' grid, egm96_15.gtx)");
+
+  // And back: ECEF to geodetic with orthometric heights gives the H we started from.
+  const auto back = run("convert " + path("ecef.csv").string() + " --to geodetic --geoid EGM96 --output-heights orthometric -o " +
+                        path("back.csv").string());
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  const Table b = parse_table(slurp(path("back.csv")));
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(b.num(i, "H_m"), marks[i][2], kVsProjTol_m) << i;
+  const auto side_back = nlohmann::json::parse(slurp(path("back.csv.geoanchor.json")));
+  EXPECT_EQ(side_back["output"]["height_type"], "orthometric");
+  EXPECT_EQ(side_back["output"]["geoid_model"], "EGM96 (15' grid, egm96_15.gtx)");
+
+  // Refusals: another model, orthometric output without a geoid, or where no height column exists.
+  const struct {
+    std::string args, message;
+  } bad[] = {
+      {"--to ecef --geoid EGM2008", "--geoid EGM2008: expected EGM96"},
+      {"--to geodetic --output-heights orthometric", "--output-heights orthometric: needs the geoid model"},
+      {"--to ecef --geoid EGM96 --output-heights orthometric", "only geodetic, UTM and TM outputs have a height column"},
+  };
+  for (const auto& c : bad) {
+    const auto e = run("convert " + in.string() + " " + c.args + " -o " + path("bad.csv").string());
+    EXPECT_EQ(e.exit_code, 2) << c.args << ": " << e.err;
+    EXPECT_NE(e.err.find(c.message), std::string::npos) << c.args << ": " << e.err;
+    EXPECT_FALSE(std::filesystem::exists(path("bad.csv"))) << c.args;
+  }
+}
 
 class ConvertBadInput : public ConvertCli, public ::testing::WithParamInterface<BadCase> {};
 

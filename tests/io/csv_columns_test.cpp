@@ -77,6 +77,16 @@ TEST(CoordinateColumns, RecognisesEachKindAndPassesAttributesThrough) {
   EXPECT_EQ(src.kind, CoordinateKind::geodetic);
 }
 
+TEST(CoordinateColumns, AnOrthometricHeightIsTheThirdGeodeticOrProjectedColumn) {
+  const auto c = classify_coordinate_header({"id", "lat_deg", "lon_deg", "H_m"}, "points.csv");
+  EXPECT_EQ(c.kind, CoordinateKind::geodetic);
+  EXPECT_TRUE(c.orthometric);
+  EXPECT_EQ(c.third, 3u);
+  const auto p = classify_coordinate_header({"easting_m", "northing_m", "H_m"}, "points.csv");
+  EXPECT_TRUE(p.orthometric);
+  EXPECT_FALSE(classify_coordinate_header({"lat_deg", "lon_deg", "h_m"}, "points.csv").orthometric);
+}
+
 TEST(CoordinateColumns, RefusesMixedMissingUnknownAndOrthometricColumns) {
   EXPECT_EQ(error_of("lat_deg,lon_deg,x_m,y_m,z_m"),
             "points.csv: header mixes coordinate kinds (lat/lon and x/y/z); expected the columns of exactly one kind");
@@ -84,7 +94,10 @@ TEST(CoordinateColumns, RefusesMixedMissingUnknownAndOrthometricColumns) {
             "points.csv: header has lat/lon columns but no lon_deg; expected lat_deg,lon_deg,h_m");
   EXPECT_NE(error_of("lat_rad,lon_deg").find("header column 1 'lat_rad': unit 'rad' is not read"), std::string::npos);
   EXPECT_NE(error_of("lat,lon").find("header column 1 'lat': coordinate column without a unit"), std::string::npos);
-  EXPECT_NE(error_of("lat_deg,lon_deg,H_m").find("'H_m': orthometric height"), std::string::npos);
+  EXPECT_NE(error_of("lat_deg,lon_deg,H_ft").find("'H_ft': orthometric height without its unit; expected H_m"), std::string::npos);
+  EXPECT_NE(error_of("lat_deg,lon_deg,h_m,H_m").find("an ellipsoidal (h) and an orthometric (H) height in one header"),
+            std::string::npos);
+  EXPECT_NE(error_of("x_m,y_m,z_m,H_m").find("'H_m': does not belong with x/y/z coordinates"), std::string::npos);
   EXPECT_NE(error_of("LAT_DEG,lon_deg").find("case-sensitive; expected lat_deg"), std::string::npos);
   EXPECT_NE(error_of("e_m,n_m,u_m,d_m").find("mixes ENU (u) and NED (d)"), std::string::npos);
   EXPECT_NE(error_of("x_m,y_m,z_m,x_m").find("appears twice"), std::string::npos);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/geoid.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/projection.hpp"
 #include "geoanchor/io/coordinate_columns.hpp"
@@ -20,13 +21,14 @@ struct InputCoordinateFrame {
   geodesy::Ellipsoid ellipsoid = geodesy::Ellipsoid::wgs84();
   std::optional<geodesy::LocalOrigin> origin;         // ENU/NED input
   std::optional<geodesy::ProjectionDef> projection;   // projected input, unless a utm_zone column gives it
+  const geodesy::GeoidGrid* geoid = nullptr;          // for an H_m column (h = H + N)
 };
 
 class CoordinateDecoder {
  public:
   // Throws geoanchor::Error (usage) when the frame lacks what `columns`
-  // needs (an origin for ENU/NED, a projection for easting/northing);
-  // `origin_flag` and `projection_flags` name the flags in the message.
+  // needs (an origin for ENU/NED, a projection for easting/northing), and
+  // (input) for an H_m column without a geoid.
   CoordinateDecoder(const CoordinateColumns& columns, const std::vector<std::string>& header,
                     InputCoordinateFrame frame, std::string source_name);
 
@@ -62,6 +64,9 @@ struct OutputCoordinateFrame {
   std::optional<geodesy::LocalOrigin> origin;        // enu, ned
   std::optional<geodesy::UtmZone> zone;              // utm: fixed zone, else each point's own
   std::optional<geodesy::TransverseMercatorParams> tm;
+  // Geodetic, UTM and TM output: write orthometric heights H_m = h − N on
+  // this geoid instead of h_m.
+  const geodesy::GeoidGrid* geoid = nullptr;
 };
 
 // Text of numbers: full precision (shortest round trip) by default; with
@@ -81,11 +86,12 @@ class CoordinateEncoder {
   const std::vector<std::string>& column_names() const { return names_; }
   // Text of each output column for a point. Throws geoanchor::Error (input)
   // naming `where` when the point cannot be expressed (UTM outside
-  // [-80°, 84°], ...).
+  // [-80°, 84°], outside the geoid grid, ...).
   std::vector<std::string> encode(const geodesy::EcefPosition& p, std::string_view where) const;
 
  private:
   const geodesy::TransverseMercator& utm(const geodesy::UtmZone& zone) const;
+  double height(const geodesy::GeodeticPosition& g, std::string_view where) const;  // h, or H = h − N
   OutputCoordinateFrame frame_;
   NumberFormat format_;
   std::vector<std::string> names_;

@@ -36,6 +36,10 @@ struct CoordinateColumns {
   std::optional<std::size_t> third;
   std::optional<std::size_t> epoch;
   std::optional<std::size_t> utm_zone;
+  // Geodetic or projected input whose third column is an orthometric
+  // height H (H_m) instead of the ellipsoidal h (h_m); reading it needs a
+  // geoid model (h = H + N).
+  bool orthometric = false;
 
   // Whether header column i is one of the coordinates above (the epoch
   // column is not: it passes through to outputs).
