@@ -34,7 +34,8 @@ CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
   cmd->add_option("-o,--output", o.output, "Output CSV (default: standard output); written atomically");
   cmd->add_option("--from", o.from, "Frame and epoch of the input, e.g. ITRF2014@2010.0")->required();
   cmd->add_option("--to", o.to, "Frame and epoch of the output, e.g. ITRF2020@2024.5 (epoch default: --from's)")->required();
-  cmd->add_option("--plate", o.plate, "Plate motion model for the epoch change when there are no velocity columns (ITRF2014-PMM: EURA, NOAM, ...)");
+  cmd->add_option("--plate", o.plate, "Plate whose motion carries the epoch change when there are no velocity columns (EURA, NOAM, AUST, ...)");
+  cmd->add_option("--plate-model", o.plate_model, "ITRF2020 (ITRF2020-PMM, default) | ITRF2014 (ITRF2014-PMM)");
   cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic columns (default GRS80, the ITRF convention)");
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")->check(CLI::Range(0, 15));
   cmd->add_option("--geoid", o.geoid, "Geoid model of H_m (orthometric height) columns: EGM96; H_m is written back on it");
@@ -64,11 +65,17 @@ void run_transform(const TransformOptions& o) {
   };
   std::optional<geodesy::PlateMotionModel> plate;
   if (o.plate) {
-    plate = geodesy::find_plate_motion_model("ITRF2014", *o.plate);
+    if (o.plate_model != "ITRF2020" && o.plate_model != "ITRF2014") {
+      throw Error(ErrorKind::usage, "E_OPTION", "--plate-model " + o.plate_model + ": expected ITRF2020 or ITRF2014");
+    }
+    plate = geodesy::find_plate_motion_model(o.plate_model, *o.plate);
     if (!plate) {
       std::string list;
-      for (const auto& m : geodesy::plate_motion_models()) list += (list.empty() ? "" : ", ") + m.plate;
-      throw Error(ErrorKind::usage, "E_OPTION", "--plate " + *o.plate + ": expected a plate of the ITRF2014 plate motion model: " + list);
+      for (const auto& m : geodesy::plate_motion_models()) {
+        if (m.frame == o.plate_model) list += (list.empty() ? "" : ", ") + m.plate;
+      }
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  "--plate " + *o.plate + ": expected a plate of the " + o.plate_model + " plate motion model: " + list);
     }
   }
   const geodesy::Ellipsoid ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");

@@ -10,6 +10,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::geodesy {
@@ -239,7 +240,27 @@ std::vector<PlateMotionModel> build_plate_models() {
       {"SOAM", -0.270, -0.301, -0.140}, {"SOMA", -0.121, -0.794, 0.884},
   };
   std::vector<PlateMotionModel> out;
-  for (const auto& p : kItrf2014) out.push_back({"ITRF2014", p.plate, Eigen::Vector3d(p.wx, p.wy, p.wz), src});
+  for (const auto& p : kItrf2014) {
+    out.push_back({"ITRF2014", p.plate, Eigen::Vector3d(p.wx, p.wy, p.wz), Eigen::Vector3d::Zero(), src});
+  }
+  // Altamimi, Métivier, Rebischung, Collilieux, Chanard, Barnéoud (2023),
+  // "ITRF2020 plate motion model", Geophys. Res. Lett. 50, e2023GL106373,
+  // doi:10.1029/2023GL106373: Table 1 (ω in mas/yr) and Table 2 (origin rate
+  // bias 0.37, 0.35, 0.74 mm/yr).
+  const std::string src2020 =
+      "Altamimi et al. (2023), ITRF2020 plate motion model, GRL 50, doi:10.1029/2023GL106373, Tables 1 and 2";
+  const struct {
+    const char* plate;
+    double wx, wy, wz;
+  } kItrf2020[] = {
+      {"AMUR", -0.131, -0.551, 0.837}, {"ANTA", -0.269, -0.312, 0.678}, {"ARAB", 1.129, -0.146, 1.438},
+      {"AUST", 1.487, 1.175, 1.223},   {"CARB", 0.207, -1.422, 0.726},  {"EURA", -0.085, -0.519, 0.753},
+      {"INDI", 1.137, 0.013, 1.444},   {"NAZC", -0.327, -1.561, 1.605}, {"NOAM", 0.045, -0.666, -0.098},
+      {"NUBI", 0.090, -0.585, 0.717},  {"PCFC", -0.404, 1.021, -2.154}, {"SOAM", -0.261, -0.282, -0.157},
+      {"SOMA", -0.081, -0.719, 0.864},
+  };
+  const Eigen::Vector3d orb_2020 = 1e-3 * Eigen::Vector3d(0.37, 0.35, 0.74);
+  for (const auto& p : kItrf2020) out.push_back({"ITRF2020", p.plate, Eigen::Vector3d(p.wx, p.wy, p.wz), orb_2020, src2020});
   return out;
 }
 
@@ -247,7 +268,17 @@ std::vector<PlateMotionModel> build_plate_models() {
 
 Eigen::Vector3d PlateMotionModel::velocity_m_per_year(const EcefPosition& x) const {
   const Eigen::Vector3d w_rad = omega_mas_per_year * (Angle::milliarcseconds(1.0).rad());
-  return w_rad.cross(x.m);
+  Eigen::Vector3d v = w_rad.cross(x.m);
+  if (!origin_rate_bias_m_per_year.isZero(0.0)) {
+    // The bias's horizontal part: its component along the ellipsoidal
+    // normal (GRS80) removed.
+    static const GeocentricConverter grs80(Ellipsoid::grs80());
+    const GeodeticPosition g = grs80.geodetic_from_ecef(x);
+    const double cl = std::cos(g.lat.rad()), sl = std::sin(g.lat.rad());
+    const Eigen::Vector3d up(cl * std::cos(g.lon.rad()), cl * std::sin(g.lon.rad()), sl);
+    v += origin_rate_bias_m_per_year - origin_rate_bias_m_per_year.dot(up) * up;
+  }
+  return v;
 }
 
 const std::vector<CatalogTransformation>& catalog_transformations() {

@@ -78,7 +78,8 @@ TEST_F(TransformCli, SameEpochMatchesTheEpsgOperationInProjsDatabase) {
 
 TEST_F(TransformCli, AnEpochChangeByThePlateMotionModelMatchesProj) {
   const auto in = write("in.csv", marks_csv(false));
-  const auto r = run("transform " + in.string() + " --from ITRF2014@2010.0 --to ITRF2020@2024.5 --plate EURA -o " + path("out.csv").string());
+  const auto r = run("transform " + in.string() + " --from ITRF2014@2010.0 --to ITRF2020@2024.5 --plate EURA --plate-model ITRF2014 -o " +
+                     path("out.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // PROJ: the EURA pole of its ITRF2014 file from 2010.0 to 2024.5, then EPSG:9991 at 2024.5.
   const ProjPipeline pmm("+proj=helmert +init=ITRF2014:EURA +t_epoch=2010.0"), epsg(kEpsg9991);
@@ -87,6 +88,26 @@ TEST_F(TransformCli, AnEpochChangeByThePlateMotionModelMatchesProj) {
     const Eigen::Vector3d expected = epsg.forward(pmm.forward(kMarks[i], 2024.5), 2024.5);
     EXPECT_LT((got[i] - expected).norm(), kProjAgreement_m) << i;
     EXPECT_GT((got[i] - kMarks[i]).norm(), 0.3);  // 14.5 years of Eurasia's ~2.5 cm/yr
+  }
+}
+
+TEST_F(TransformCli, AMarkOnStableEurasiaStaysPutInEtrf2020AndMovesInItrf2020) {
+  // ETRF2020 is ITRF2020 turned with stable Eurasia (EUREF TN1), so the
+  // ITRF2020-PMM's EURA motion, taken over 14.5 years, nearly cancels there.
+  // Left over: its origin rate bias (<= 0.9 mm/yr horizontally, by design
+  // not in ETRF) and the 0.001 mas/yr between the two published poles.
+  constexpr double kLeftOver_m = 0.015;
+  const auto in = write("in.csv", marks_csv(false));
+  const auto etrf = run("transform " + in.string() + " --from ITRF2020@2010.0 --to ETRF2020@2024.5 --plate EURA -o " + path("e.csv").string());
+  ASSERT_EQ(etrf.exit_code, 0) << etrf.err;
+  const auto etrf_start = run("transform " + in.string() + " --from ITRF2020@2010.0 --to ETRF2020@2010.0 -o " + path("e0.csv").string());
+  ASSERT_EQ(etrf_start.exit_code, 0) << etrf_start.err;
+  const auto itrf = run("transform " + in.string() + " --from ITRF2020@2010.0 --to ITRF2020@2024.5 --plate EURA -o " + path("i.csv").string());
+  ASSERT_EQ(itrf.exit_code, 0) << itrf.err;
+  const auto e = read_xyz(slurp(path("e.csv"))), e0 = read_xyz(slurp(path("e0.csv"))), i = read_xyz(slurp(path("i.csv")));
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_LT((e[k] - e0[k]).norm(), kLeftOver_m) << k;
+    EXPECT_GT((i[k] - kMarks[k]).norm(), 0.3) << k;  // ~2.5 cm/yr for 14.5 years
   }
 }
 
@@ -117,7 +138,8 @@ TEST_F(TransformCli, RefusesWhatItCannotDoAndLeavesNothing) {
       {"in.csv --from ITRF2014 --to ITRF2020", "--from ITRF2014: the transformation ITRF2014 → ITRF2020 is time-dependent", 2},
       {"in.csv --from ITRF2014@2010 --to ITRF2020@2020", "moving coordinates from 2010.0 to 2020.0 needs velocities", 2},
       {"in.csv --from ITRF2030@2010 --to ITRF2020", "frame ITRF2030 is not in geoanchor's catalog", 3},
-      {"in.csv --from ITRF2014@2010 --to ITRF2020@2020 --plate MARS", "--plate MARS: expected a plate of the ITRF2014 plate motion model", 2},
+      {"in.csv --from ITRF2014@2010 --to ITRF2020@2020 --plate MARS", "--plate MARS: expected a plate of the ITRF2020 plate motion model: AMUR", 2},
+      {"in.csv --from ITRF2014@2010 --to ITRF2020@2020 --plate EURA --plate-model NNR", "--plate-model NNR: expected ITRF2020 or ITRF2014", 2},
       {"partial.csv --from ITRF2014@2010 --to ITRF2020", "velocities need all three columns", 3},
   };
   for (const auto& c : cases) {

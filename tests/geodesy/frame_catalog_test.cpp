@@ -4,8 +4,11 @@
 // the ITRF2014 plate motion model (PROJ's ITRF2014 file, from Altamimi et
 // al. 2017), and the path search.
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <string>
 
@@ -174,6 +177,33 @@ TEST(FrameCatalog, TheItrf2014PlateMotionModelAgreesWithProjsItrf2014File) {
     }
   }
   EXPECT_FALSE(find_plate_motion_model("ITRF2014", "MARS").has_value());
+}
+
+TEST(FrameCatalog, TheItrf2020PlateMotionModelAgreesWithEurefAndKeepsItsBiasHorizontal) {
+  // EUREF's ITRF2020 → ETRF2020 rotation rates (0.086, 0.519, −0.753) mas/yr
+  // (EPSG:10574) turn stable Eurasia back: the EURA pole of the ITRF2020-PMM
+  // is their negative to the published rounding.
+  constexpr double kPublishedRounding_mas_per_year = 0.0015;
+  const auto eura = find_plate_motion_model("ITRF2020", "EURA");
+  ASSERT_TRUE(eura.has_value());
+  EXPECT_LT((eura->omega_mas_per_year + Eigen::Vector3d(0.086, 0.519, -0.753)).cwiseAbs().maxCoeff(), kPublishedRounding_mas_per_year);
+  // The origin rate bias adds to the horizontal velocity only.
+  for (const auto& m : plate_motion_models()) {
+    if (m.frame != "ITRF2020") continue;
+    for (const auto& x : stations(10)) {
+      const Eigen::Vector3d v = m.velocity_m_per_year(x);
+      const Eigen::Vector3d w = m.omega_mas_per_year * Angle::milliarcseconds(1.0).rad();
+      const Eigen::Vector3d rotation = w.cross(x.m);
+      const Eigen::Vector3d bias = v - rotation;
+      EXPECT_LE(bias.norm(), m.origin_rate_bias_m_per_year.norm() + 1e-15);
+      EXPECT_GT(bias.norm(), 0.0);
+      // Horizontal: orthogonal to the ellipsoidal normal, which is within 0.2° of the radial direction.
+      EXPECT_LT(std::abs(bias.dot(x.m.normalized())), m.origin_rate_bias_m_per_year.norm() * std::sin(0.2 * M_PI / 180.0)) << m.plate;
+    }
+  }
+  EXPECT_EQ(std::count_if(plate_motion_models().begin(), plate_motion_models().end(),
+                          [](const PlateMotionModel& m) { return m.frame == "ITRF2020"; }),
+            13);
 }
 
 TEST(FramePathSearch, FindsDirectEdgesHubsAndRefusesUnknownFrames) {

@@ -14,10 +14,10 @@
 // In place (issue 6, part 1): the ITRF family — the IERS sets from
 // ITRF2020, ITRF2014 and ITRF2008 to every earlier realization back to
 // ITRF88 —, ETRF89…ETRF2020 from EUREF TN1, and the ITRF2014 plate motion
-// model; NAD83(2011) from ITRF2008/ITRF2014 (NGS), NAD83(CSRSv6/v7)
+// model and the ITRF2020 plate motion model; NAD83(2011) from ITRF2008/ITRF2014 (NGS), NAD83(CSRSv6/v7)
 // (NRCan), GDA94 → GDA2020 and ITRF2014 → GDA2020 (ICSM), and the WGS 84
 // realizations G730…G2139 (NGA/EPSG). To come: ITRF2020 → NAD83(2011),
-// WGS 84 (G2296), the ITRF2020 plate motion model.
+// WGS 84 (G2296).
 
 #include <Eigen/Core>
 
@@ -43,11 +43,15 @@ struct CatalogTransformation {
   bool time_dependent() const;
 };
 
-// A plate's rotation pole in a frame: v = ω × x (ECEF, m/yr for x in m).
+// A plate's rotation pole in a frame: v = ω × x (ECEF, m/yr for x in m),
+// plus the horizontal part of the model's origin rate bias where the model
+// has one (ITRF2020-PMM: its authors advise adding the bias to the
+// predicted horizontal velocities and discarding the vertical part).
 struct PlateMotionModel {
-  std::string frame;  // "ITRF2014"
+  std::string frame;  // "ITRF2014", "ITRF2020"
   std::string plate;  // "EURA", "NOAM", "AUST", ...
   Eigen::Vector3d omega_mas_per_year = Eigen::Vector3d::Zero();
+  Eigen::Vector3d origin_rate_bias_m_per_year = Eigen::Vector3d::Zero();
   std::string source;
 
   // The plate's velocity at x, in m/yr.
