@@ -168,16 +168,16 @@ std::vector<CatalogTransformation> build_catalog() {
     const char* source;
   } kNational[] = {
       // NGS: Pearson & Snay (2013), "Introducing HTDP 3.1 to transform coordinates across time and spatial reference
-      // frames", GPS Solutions 17(1), Table 7 (coordinate frame; rotations negated).
+      // frames", GPS Solutions 17(1) (coordinate frame; rotations negated).
       {"ITRF2008", 1997.0,
        {"NAD83(2011)", 993.43, -1903.31, -526.55, 1.71504, -25.91467, -9.42645, -11.59935, 0.79, -0.60, -1.34, -0.10201,
         -0.06667, 0.75744, 0.05133, 0.0, "EPSG:7807"},
        "NGS, Pearson & Snay (2013), GPS Solutions 17, ITRF2008 to NAD83(2011) (coordinate frame, rotations negated)"},
-      // NGS (HTDP 3.2.5, 2017), ITRF2014 to NAD83(2011) (coordinate frame; rotations negated).
+      // NGS, ITRF2014 to NAD83(2011) as HTDP applies it (coordinate frame; rotations negated).
       {"ITRF2014", 2010.0,
        {"NAD83(2011)", 1005.3, -1909.2, -541.6, 0.37, -26.7814, 0.4203, -10.9321, 0.8, -0.6, -1.4, -0.07, -0.0667, 0.7574,
         0.0513, 0.0, "EPSG:8970"},
-       "NGS, HTDP 3.2.5 (2017), ITRF2014 to NAD83(2011) (coordinate frame, rotations negated)"},
+       "NGS (HTDP), ITRF2014 to NAD83(2011) (coordinate frame, rotations negated)"},
       // NRCan: the NGS sets in the position-vector convention, for NAD83(CSRS) v6 and v7.
       {"ITRF2008", 1997.0,
        {"NAD83(CSRSv6)", 993.43, -1903.31, -526.55, 1.71504, -25.91467, -9.42645, -11.59935, 0.79, -0.60, -1.34, -0.102,
