@@ -20,6 +20,25 @@ ProjPipeline::ProjPipeline(const std::string& definition)
   }
 }
 
+ProjPipeline::ProjPipeline(pj_ctx* ctx, PJconsts* pj, std::string definition)
+    : definition_(std::move(definition)), ctx_(ctx), pj_(pj) {}
+
+ProjPipeline ProjPipeline::crs_to_crs(const std::string& source_crs, const std::string& target_crs) {
+  PJ_CONTEXT* ctx = proj_context_create();
+  PJ* pj = proj_create_crs_to_crs(ctx, source_crs.c_str(), target_crs.c_str(), nullptr);
+  if (!pj) {
+    const std::string why = proj_context_errno_string(ctx, proj_context_errno(ctx));
+    proj_context_destroy(ctx);
+    throw std::runtime_error("PROJ has no operation from " + source_crs + " to " + target_crs + ": " + why);
+  }
+  return ProjPipeline(ctx, pj, source_crs + " -> " + target_crs);
+}
+
+std::string ProjPipeline::description() const {
+  const PJ_PROJ_INFO info = proj_pj_info(pj_);
+  return info.description ? info.description : definition_;
+}
+
 ProjPipeline::~ProjPipeline() {
   proj_destroy(pj_);
   proj_context_destroy(ctx_);

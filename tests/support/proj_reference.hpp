@@ -15,6 +15,11 @@ namespace geoanchor::testing {
 class ProjPipeline {
  public:
   explicit ProjPipeline(const std::string& definition);
+  // The operation PROJ itself chooses between two CRSs (proj_create_crs_to_crs;
+  // for dynamic CRSs the coordinate epoch is each point's t).
+  static ProjPipeline crs_to_crs(const std::string& source_crs, const std::string& target_crs);
+  // PROJ's description of the operation (for messages and docs).
+  std::string description() const;
   ~ProjPipeline();
   ProjPipeline(const ProjPipeline&) = delete;
   ProjPipeline& operator=(const ProjPipeline&) = delete;
@@ -27,6 +32,7 @@ class ProjPipeline {
 
  private:
   Eigen::Vector3d trans(const Eigen::Vector3d& xyz, double t, int direction) const;
+  ProjPipeline(pj_ctx* ctx, PJconsts* pj, std::string definition);
   std::string definition_;
   pj_ctx* ctx_;
   PJconsts* pj_;
