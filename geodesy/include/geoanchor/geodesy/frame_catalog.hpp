@@ -11,13 +11,15 @@
 // at t. Units on entry: millimetres, milliarc-seconds, parts per billion
 // and their rates per year, as the IERS tables print them.
 //
-// In place (issue 6, part 1): the ITRF family — the IERS sets from
-// ITRF2020, ITRF2014 and ITRF2008 to every earlier realization back to
-// ITRF88 —, ETRF89…ETRF2020 from EUREF TN1, and the ITRF2014 plate motion
-// model and the ITRF2020 plate motion model; NAD83(2011) from ITRF2008/ITRF2014 (NGS), NAD83(CSRSv6/v7)
-// (NRCan), GDA94 → GDA2020 and ITRF2014 → GDA2020 (ICSM), and the WGS 84
-// realizations G730…G2139 (NGA/EPSG). To come: ITRF2020 → NAD83(2011),
-// WGS 84 (G2296).
+// In the catalog (docs/frames.md):
+//   - the ITRF family: the IERS sets from ITRF2020, ITRF2014 and ITRF2008 to
+//     every earlier realization back to ITRF88;
+//   - ETRF89…ETRF2020 (EUREF TN1);
+//   - NAD83(2011) from ITRF2008/ITRF2014 (NGS), NAD83(CSRSv6/v7) (NRCan);
+//   - GDA94 → GDA2020 and ITRF2014 → GDA2020 (ICSM);
+//   - the WGS 84 realizations G730…G2139 (NGA, as EPSG records them);
+//   - the ITRF2014 and ITRF2020 plate motion models.
+// Not yet: ITRF2020 → NAD83(2011) and NAD83(CSRS) v8, WGS 84 (G2296).
 
 #include <Eigen/Core>
 
