@@ -180,6 +180,9 @@ void run_convert(const ConvertOptions& o) {
     warnings.push_back(source_name + ": no h_m column: every height is taken as 0 m above the ellipsoid (" +
                        std::string(io::to_string(columns.kind)) + " input)");
   }
+  if (geoid && !columns.orthometric && !orthometric_out) {
+    warnings.push_back("--geoid " + *o.geoid + " unused: no H_m column and ellipsoidal output heights (--output-heights orthometric writes H_m)");
+  }
   if (flag_epoch && !(transform && transform->time_dependent())) {
     warnings.push_back("--epoch " + *o.epoch + " ignored: " +
                        (transform ? "the transform is not time-dependent" : std::string("no --transform given")));

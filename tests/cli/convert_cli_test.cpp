@@ -221,6 +221,11 @@ TEST_F(ConvertCli, OrthometricHeightsGoThroughEgm96AsProjsVgridshiftDoes) {
   EXPECT_EQ(side_back["output"]["height_type"], "orthometric");
   EXPECT_EQ(side_back["output"]["geoid_model"], "EGM96 (15' grid, egm96_15.gtx)");
 
+  // A geoid that nothing uses is said so.
+  const auto unused = run("convert " + path("ecef.csv").string() + " --to geodetic --geoid EGM96");
+  EXPECT_EQ(unused.exit_code, 0) << unused.err;
+  EXPECT_NE(unused.err.find("--geoid EGM96 unused"), std::string::npos) << unused.err;
+
   // Refusals: another model, orthometric output without a geoid, or where no height column exists.
   const struct {
     std::string args, message;
