@@ -9,12 +9,10 @@
 #include <imgui_impl_glfw.h>
 #include <imgui_impl_opengl3.h>
 
-#include <cmath>
 #include <iostream>
 #include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/gui/image.hpp"
 #include "geoanchor/gui/palette.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
@@ -37,14 +35,8 @@ struct WindowOptions {
 void glfw_error(int code, const char* what) { std::cerr << "geoanchor-gui: GLFW error " << code << ": " << what << '\n'; }
 
 int run(const WindowOptions& o) {
-  const auto view = geoanchor::gui::view_from_string(o.view);
-  if (!view) throw Error(ErrorKind::usage, "E_OPTION", "--view " + o.view + ": expected workbench, plan, histogram, table, parameters or comparison");
-  const auto x = o.size.find('x');
-  const auto w = x == std::string::npos ? std::nullopt : geoanchor::parse_finite_double(o.size.substr(0, x));
-  const auto h = x == std::string::npos ? std::nullopt : geoanchor::parse_finite_double(o.size.substr(x + 1));
-  if (!w || !h || *w < 64 || *h < 64 || *w > 8192 || *h > 8192 || *w != std::floor(*w) || *h != std::floor(*h)) {
-    throw Error(ErrorKind::usage, "E_OPTION", "--size " + o.size + ": expected WIDTHxHEIGHT in pixels, 64 … 8192 each");
-  }
+  const geoanchor::gui::View view = geoanchor::cli::parse_view(o.view, "--view");
+  const auto [width, height] = geoanchor::cli::parse_size(o.size, "--size");
   geoanchor::cli::WorkbenchSession s = geoanchor::cli::open_workbench(o.workbench);
   for (const auto& n : s.notes) std::cerr << "geoanchor-gui: note: " << n << '\n';
 
@@ -58,7 +50,7 @@ int run(const WindowOptions& o) {
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
   const std::string title = "geoanchor workbench — " + o.workbench.control;
-  GLFWwindow* window = glfwCreateWindow(static_cast<int>(*w), static_cast<int>(*h), title.c_str(), nullptr, nullptr);
+  GLFWwindow* window = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
   if (!window) {
     glfwTerminate();
     throw Error(ErrorKind::io, "E_DISPLAY", "cannot open an OpenGL 3.3 core window");
@@ -67,9 +59,8 @@ int run(const WindowOptions& o) {
   glfwSwapInterval(1);
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
-  int exit_status = 0;
   try {
-    geoanchor::gui::WorkbenchUi::configure_context(static_cast<float>(*h));
+    geoanchor::gui::WorkbenchUi::configure_context(static_cast<float>(height));
     ImGui_ImplGlfw_InitForOpenGL(window, true);
     ImGui_ImplOpenGL3_Init("#version 330 core");
     geoanchor::gui::WorkbenchUi ui(*s.model, {s.save_path, s.generator});
@@ -80,7 +71,7 @@ int run(const WindowOptions& o) {
       ImGui_ImplGlfw_NewFrame();
       ImGui::NewFrame();
       const ImVec2 size = ImGui::GetIO().DisplaySize;
-      ui.draw(*view, size.x, size.y);
+      ui.draw(view, size.x, size.y);
       ImGui::Render();
       int fw = 0, fh = 0;
       glfwGetFramebufferSize(window, &fw, &fh);
@@ -99,7 +90,6 @@ int run(const WindowOptions& o) {
       glfwSwapBuffers(window);
     }
   } catch (...) {
-    exit_status = -1;
     ImGui::DestroyContext();
     glfwDestroyWindow(window);
     glfwTerminate();
@@ -110,7 +100,7 @@ int run(const WindowOptions& o) {
   ImGui::DestroyContext();
   glfwDestroyWindow(window);
   glfwTerminate();
-  return exit_status;
+  return 0;
 }
 
 }  // namespace

@@ -4,14 +4,12 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
 
 #include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/gui/fit_export.hpp"
 #include "geoanchor/gui/offscreen.hpp"
 #include "geoanchor/io/atomic_file.hpp"
@@ -23,16 +21,6 @@ namespace geoanchor::cli {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::pair<int, int> parse_size(const std::string& text) {
-  const auto x = text.find('x');
-  const auto w = x == std::string::npos ? std::nullopt : parse_finite_double(text.substr(0, x));
-  const auto h = x == std::string::npos ? std::nullopt : parse_finite_double(text.substr(x + 1));
-  if (!w || !h || *w != std::floor(*w) || *h != std::floor(*h) || *w < 64 || *h < 64 || *w > 8192 || *h > 8192) {
-    throw Error(ErrorKind::usage, "E_OPTION", "--size " + text + ": expected WIDTHxHEIGHT in pixels, 64 … 8192 each, e.g. 1600x1000");
-  }
-  return {static_cast<int>(*w), static_cast<int>(*h)};
-}
 
 void print_notes(const WorkbenchSession& s) {
   for (const auto& n : s.notes) std::cerr << "geoanchor: note: " << n << '\n';
@@ -66,12 +54,8 @@ CLI::App* add_report_command(CLI::App& app, ReportOptions& o) {
 }
 
 int run_snapshot(const SnapshotOptions& o) {
-  const auto view = gui::view_from_string(o.view);
-  if (!view) {
-    throw Error(ErrorKind::usage, "E_OPTION",
-                "--view " + o.view + ": expected workbench, plan, histogram, table, parameters or comparison");
-  }
-  const auto [w, h] = parse_size(o.size);
+  const gui::View view = parse_view(o.view, "--view");
+  const auto [w, h] = parse_size(o.size, "--size");
   if (fs::path(o.output).extension() != ".png") {
     throw Error(ErrorKind::usage, "E_OPTION", "-o " + o.output + ": expected a file name ending in .png");
   }
@@ -83,13 +67,13 @@ int run_snapshot(const SnapshotOptions& o) {
   print_notes(s);
   gui::OffscreenRenderer renderer(w, h);
   gui::WorkbenchUi ui(*s.model, {s.save_path, s.generator});
-  gui::write_png(renderer.render(ui, *view), o.output, o.overwrite);
-  std::cout << "wrote " << o.output << " (" << w << "x" << h << ", view " << gui::to_string(*view) << ")\n";
+  gui::write_png(renderer.render(ui, view), o.output, o.overwrite);
+  std::cout << "wrote " << o.output << " (" << w << "x" << h << ", view " << gui::to_string(view) << ")\n";
   return 0;
 }
 
 int run_report(const ReportOptions& o) {
-  const auto [w, h] = parse_size(o.size);
+  const auto [w, h] = parse_size(o.size, "--size");
   if (o.workbench.transform.empty()) {
     throw Error(ErrorKind::usage, "E_OPTION", "--transform: required (the transform file the report is about)");
   }

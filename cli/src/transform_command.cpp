@@ -157,7 +157,7 @@ void run_transform(const TransformOptions& o) {
   io::CsvRecord record;
   std::size_t rows = 0;
   std::vector<std::string> fields;
-  const geodesy::EpochPropagation propagation{plate ? &*plate : nullptr};
+  const geodesy::FrameEpochTransform transformation(path, t_from, t_to, plate ? &*plate : nullptr, "--from/--to");
   while (reader.next(record)) {
     if (record.is_comment) {
       out << record.comment << '\n';
@@ -177,7 +177,7 @@ void run_transform(const TransformOptions& o) {
       }
       state.v_m_per_year = v;
     }
-    const geodesy::StateVector moved = geodesy::transform_state(state, from.name(), t_from, to.name(), t_to, propagation, where);
+    const geodesy::StateVector moved = transformation.apply(state, where);
     const auto coords = encoder.encode(moved.x, where);
     fields.clear();
     for (std::size_t i = 0; i < header.size(); ++i) {

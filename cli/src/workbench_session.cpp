@@ -44,6 +44,23 @@ double largest_difference_m(const io::TransformFile& file, const io::TransformFi
 
 }  // namespace
 
+gui::View parse_view(const std::string& text, std::string_view flag) {
+  if (const auto view = gui::view_from_string(text)) return *view;
+  throw Error(ErrorKind::usage, "E_OPTION",
+              std::string(flag) + " " + text + ": expected workbench, plan, histogram, table, parameters or comparison");
+}
+
+std::pair<int, int> parse_size(const std::string& text, std::string_view flag) {
+  const auto x = text.find('x');
+  const auto w = x == std::string::npos ? std::nullopt : parse_finite_double(text.substr(0, x));
+  const auto h = x == std::string::npos ? std::nullopt : parse_finite_double(text.substr(x + 1));
+  if (!w || !h || *w != std::floor(*w) || *h != std::floor(*h) || *w < 64 || *h < 64 || *w > 8192 || *h > 8192) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                std::string(flag) + " " + text + ": expected WIDTHxHEIGHT in pixels, 64 … 8192 each, e.g. 1600x1000");
+  }
+  return {static_cast<int>(*w), static_cast<int>(*h)};
+}
+
 WorkbenchSession open_workbench(const WorkbenchOptions& o) {
   WorkbenchSession s;
   gui::FitChoices choices;

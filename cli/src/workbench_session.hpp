@@ -6,9 +6,12 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "geoanchor/gui/workbench_model.hpp"
+#include "geoanchor/gui/workbench_ui.hpp"
 #include "geoanchor/io/transform_file.hpp"
 
 namespace CLI {
@@ -37,6 +40,11 @@ struct WorkbenchSession {
   std::string save_path;  // proposed by Save transform…
   std::string generator;
 };
+
+// "--view NAME" and "--size WIDTHxHEIGHT" (pixels, 64 … 8192 each), shared
+// by the window and the off-screen commands. Throw geoanchor::Error (usage).
+gui::View parse_view(const std::string& text, std::string_view flag);
+std::pair<int, int> parse_size(const std::string& text, std::string_view flag);
 
 // Choices: --model/--convention, else the transform file's, else helmert7 in
 // the position-vector convention (the workbench shows it and lets the user

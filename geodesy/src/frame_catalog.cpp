@@ -319,6 +319,15 @@ double FramePath::accuracy_m() const {
   return std::sqrt(s);
 }
 
+AffineMap FramePath::at(DecimalYear t) const {
+  AffineMap m = AffineMap::identity();
+  for (const auto& st : steps) {
+    const AffineMap step = target_from_source(evaluate_at(st.edge->params, t), RotationModel::small_angle);
+    m = compose(st.reverse ? step.inverse() : step, m);
+  }
+  return m;
+}
+
 EcefPosition FramePath::apply(const EcefPosition& x, DecimalYear t) const {
   EcefPosition y = x;
   for (const auto& st : steps) y = st.apply(y, t);
@@ -338,37 +347,42 @@ std::string FramePath::describe() const {
   return out;
 }
 
-StateVector transform_state(const StateVector& in, std::string_view from, DecimalYear t_from, std::string_view to,
-                            DecimalYear t_to, const EpochPropagation& propagation, std::string_view where) {
-  const double dt = t_to.year - t_from.year;
-  if (dt == 0.0 || in.v_m_per_year) {
-    const FramePath path = find_frame_path(from, to, where);
-    StateVector out{path.apply(in.x, t_from), std::nullopt};
-    if (in.v_m_per_year) {
-      // d/dt of the transformed position along the point's motion: the
-      // parameters are linear in time and the velocity is constant, so a
-      // central difference over a year is exact to terms of order ṡ·v·(1 yr)
-      // (1e-12 m/yr).
-      constexpr double kStep_yr = 1.0;
-      const Eigen::Vector3d& v = *in.v_m_per_year;
-      const EcefPosition ahead = path.apply(EcefPosition(Eigen::Vector3d(in.x.m + kStep_yr * v)), DecimalYear{t_from.year + kStep_yr});
-      const EcefPosition behind = path.apply(EcefPosition(Eigen::Vector3d(in.x.m - kStep_yr * v)), DecimalYear{t_from.year - kStep_yr});
-      out.v_m_per_year = (ahead.m - behind.m) / (2.0 * kStep_yr);
-      out.x.m += *out.v_m_per_year * dt;
-    }
-    return out;
+FrameEpochTransform::FrameEpochTransform(FramePath path, DecimalYear t_from, DecimalYear t_to, const PlateMotionModel* plate,
+                                         std::string_view where)
+    : path_(std::move(path)),
+      t_from_(t_from),
+      t_to_(t_to),
+      at_from_(path_.at(t_from)),
+      // A central difference over a year gives the velocity through the
+      // path: the parameters are linear in time and a point's velocity is
+      // constant, so it is exact to terms of order ṡ·v·(1 yr) (1e-12 m/yr).
+      ahead_(path_.at(DecimalYear{t_from.year + 1.0})),
+      behind_(path_.at(DecimalYear{t_from.year - 1.0})),
+      plate_(plate) {
+  if (plate_ && t_to.year != t_from.year) {
+    to_plate_frame_ = find_frame_path(path_.from, plate_->frame, where).at(t_from);
+    from_plate_frame_ = find_frame_path(plate_->frame, path_.to, where).at(t_to);
   }
-  if (!propagation.plate) {
+}
+
+StateVector FrameEpochTransform::apply(const StateVector& in, std::string_view where) const {
+  const double dt = t_to_.year - t_from_.year;
+  if (in.v_m_per_year) {
+    const Eigen::Vector3d& v = *in.v_m_per_year;
+    const Eigen::Vector3d v_to = (ahead_.apply(in.x.m + v) - behind_.apply(in.x.m - v)) / 2.0;
+    return {EcefPosition(Eigen::Vector3d(at_from_.apply(in.x.m) + v_to * dt)), v_to};
+  }
+  if (dt == 0.0) return {EcefPosition(at_from_.apply(in.x.m)), std::nullopt};
+  if (!to_plate_frame_) {
     throw Error(ErrorKind::input, "E_EPOCH_PROPAGATION",
-                std::string(where) + ": moving coordinates from " + format_decimal_year(t_from) + " to " +
-                    format_decimal_year(t_to) +
+                std::string(where) + ": moving coordinates from " + format_decimal_year(t_from_) + " to " +
+                    format_decimal_year(t_to_) +
                     " needs velocities (columns vx_m_per_year, vy_m_per_year, vz_m_per_year) or a plate motion model "
                     "(--plate, e.g. EURA)");
   }
-  const PlateMotionModel& pmm = *propagation.plate;
-  EcefPosition hub = find_frame_path(from, pmm.frame, where).apply(in.x, t_from);
-  hub.m += pmm.velocity_m_per_year(hub) * dt;
-  return {find_frame_path(pmm.frame, to, where).apply(hub, t_to), std::nullopt};
+  EcefPosition hub(to_plate_frame_->apply(in.x.m));
+  hub.m += plate_->velocity_m_per_year(hub) * dt;
+  return {EcefPosition(from_plate_frame_->apply(hub.m)), std::nullopt};
 }
 
 std::vector<std::string> catalog_frame_names() {

@@ -118,3 +118,13 @@ double GeoidGrid::undulation_m(Angle lat, Angle lon) const {
 }
 
 }  // namespace geoanchor::geodesy
+
+namespace geoanchor::geodesy {
+
+double GeoidGrid::undulation_m(Angle lat, Angle lon, std::string_view where) const {
+  const double n = undulation_m(lat, lon);
+  if (!std::isfinite(n)) throw Error(ErrorKind::input, "E_GEOID_RANGE", std::string(where) + ": outside the grid of " + name_);
+  return n;
+}
+
+}  // namespace geoanchor::geodesy

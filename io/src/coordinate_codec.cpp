@@ -48,11 +48,7 @@ CoordinateDecoder::CoordinateDecoder(const CoordinateColumns& columns, const std
 namespace {
 // h = H + N at the point's latitude and longitude.
 GeodeticPosition with_ellipsoidal_height(GeodeticPosition g, const geodesy::GeoidGrid& geoid, const std::string& where) {
-  const double n = geoid.undulation_m(g.lat, g.lon);
-  if (!std::isfinite(n)) {
-    throw Error(ErrorKind::input, "E_GEOID_RANGE", where + ": outside the grid of " + geoid.model_name());
-  }
-  g.h.m += n;
+  g.h.m += geoid.undulation_m(g.lat, g.lon, where);
   return g;
 }
 }  // namespace
@@ -186,12 +182,7 @@ CoordinateEncoder::CoordinateEncoder(OutputCoordinateFrame frame, NumberFormat f
 }
 
 double CoordinateEncoder::height(const GeodeticPosition& g, std::string_view where) const {
-  if (!frame_.geoid) return g.h.m;
-  const double n = frame_.geoid->undulation_m(g.lat, g.lon);
-  if (!std::isfinite(n)) {
-    throw Error(ErrorKind::input, "E_GEOID_RANGE", std::string(where) + ": outside the grid of " + frame_.geoid->model_name());
-  }
-  return g.h.m - n;
+  return frame_.geoid ? g.h.m - frame_.geoid->undulation_m(g.lat, g.lon, where) : g.h.m;
 }
 
 std::vector<std::string> CoordinateEncoder::encode(const EcefPosition& p, std::string_view where) const {

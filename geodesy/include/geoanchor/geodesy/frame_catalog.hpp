@@ -28,6 +28,7 @@
 #include <string_view>
 #include <vector>
 
+#include "geoanchor/geodesy/affine.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/geodesy/units.hpp"
@@ -86,6 +87,8 @@ struct FramePath {
   // sum of squares), metres.
   double accuracy_m() const;
   EcefPosition apply(const EcefPosition& x, DecimalYear t) const;
+  // The whole path at epoch t as one affine map.
+  AffineMap at(DecimalYear t) const;
   // One line per step: "ITRF2014 → ITRF2020 (reverse of ITRF2020 → ITRF2014), ±0.001 m: IERS …".
   std::string describe() const;
 };
@@ -102,23 +105,34 @@ struct StateVector {
   std::optional<Eigen::Vector3d> v_m_per_year;
 };
 
-// How coordinates move from one epoch to another: the points' own
-// velocities (carried through the transformation), or a plate's rotation in
-// its model's frame. Without either, only equal epochs are allowed.
-struct EpochPropagation {
-  const PlateMotionModel* plate = nullptr;
-};
-
-// `in`, in frame `from` at epoch t_from, to frame `to` at epoch t_to:
-//  1. with velocities: the path at t_from, then x += v·(t_to − t_from) in
-//     `to`; the velocity is carried (v_to = dx_to/dt along the path);
-//  2. with a plate model: the path to the model's frame at t_from, the
-//     plate's rotation over t_to − t_from there, the path to `to` at t_to;
+// Coordinates in frame `from` at epoch t_from to frame `to` at epoch t_to,
+// set up once (paths found, maps composed) and applied per point:
+//  1. a point with a velocity: the path at t_from, then x += v·(t_to − t_from)
+//     in `to`; the velocity is carried (v_to = dx_to/dt along the path);
+//  2. otherwise, with a plate model: the path to the model's frame at
+//     t_from, the plate's motion over t_to − t_from there, the path to `to`
+//     at t_to;
 //  3. otherwise t_to must equal t_from.
-// Throws geoanchor::Error (input) naming `where` when the epochs differ and
-// there is neither.
-StateVector transform_state(const StateVector& in, std::string_view from, DecimalYear t_from, std::string_view to,
-                            DecimalYear t_to, const EpochPropagation& propagation, std::string_view where);
+class FrameEpochTransform {
+ public:
+  // `path` from find_frame_path; `plate` may be null and must outlive this
+  // object. Throws as find_frame_path (for the paths to and from the plate
+  // model's frame).
+  FrameEpochTransform(FramePath path, DecimalYear t_from, DecimalYear t_to, const PlateMotionModel* plate,
+                      std::string_view where);
+
+  const FramePath& path() const { return path_; }
+  // Throws geoanchor::Error (input) naming `where` when the epochs differ
+  // and the point has no velocity and there is no plate model.
+  StateVector apply(const StateVector& in, std::string_view where) const;
+
+ private:
+  FramePath path_;
+  DecimalYear t_from_, t_to_;
+  AffineMap at_from_, ahead_, behind_;  // the path at t_from, t_from + 1 yr, t_from − 1 yr
+  const PlateMotionModel* plate_;
+  std::optional<AffineMap> to_plate_frame_, from_plate_frame_;  // at t_from and at t_to
+};
 
 // The frame names the catalog knows, sorted.
 std::vector<std::string> catalog_frame_names();

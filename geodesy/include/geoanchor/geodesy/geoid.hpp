@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "geoanchor/geodesy/units.hpp"
@@ -33,6 +34,9 @@ class GeoidGrid {
 
   // N in metres at (lat, lon); NaN outside the grid or for NaN input.
   double undulation_m(Angle lat, Angle lon) const;
+  // The same, throwing geoanchor::Error (input) that names `where` and the
+  // model outside the grid.
+  double undulation_m(Angle lat, Angle lon, std::string_view where) const;
 
   const std::string& model_name() const { return name_; }
   const std::filesystem::path& path() const { return path_; }
