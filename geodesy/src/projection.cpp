@@ -4,6 +4,7 @@
 #include <GeographicLib/UTMUPS.hpp>
 
 #include <charconv>
+#include <cmath>
 #include <limits>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -109,6 +110,15 @@ GeodeticPosition TransverseMercator::inverse(const ProjectedPosition& p) const {
   impl_->tm.Reverse(def_.tm.lon0.deg(), p.easting_m - def_.tm.false_easting_m,
                     p.northing_m - def_.tm.false_northing_m + impl_->northing_of_origin_m, lat, lon);
   return GeodeticPosition{Angle::degrees(lat), Angle::degrees(lon), p.h};
+}
+
+WebMercatorInverse web_mercator_inverse(double easting_m, double northing_m) {
+  constexpr double kRadiusM = 6378137.0;  // EPSG:3857's sphere: the WGS 84 semi-major axis
+  // EPSG method 1024: lat = π/2 − 2 atan(exp(−N/a)), lon = E/a; atan(sinh(N/a))
+  // is the same function (the inverse Gudermannian) without cancellation.
+  const double lat = std::atan(std::sinh(northing_m / kRadiusM));
+  const double lon = easting_m / kRadiusM;
+  return WebMercatorInverse{Angle::radians(lat), Angle::radians(lon)};
 }
 
 }  // namespace geoanchor::geodesy

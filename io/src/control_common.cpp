@@ -11,6 +11,22 @@ namespace geoanchor::io::detail {
 
 RoleConverter::RoleConverter(const ControlReadOptions& options) : options_(options), geocentric_(options.ellipsoid) {
   if (options_.origin) plane_.emplace(*options_.origin);
+  if (options_.src_projection) src_grid_.emplace(*options_.src_projection);
+  if (options_.dst_projection) dst_grid_.emplace(*options_.dst_projection);
+}
+
+geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<geodesy::ProjectionDef>& projection) {
+  geodesy::ControlInputForm f;
+  switch (kind) {
+    case CoordinateKind::geodetic: f.form = geodesy::CoordinateForm::geodetic; break;
+    case CoordinateKind::enu: f.form = geodesy::CoordinateForm::enu; break;
+    case CoordinateKind::projected:
+      f.form = geodesy::CoordinateForm::projected;
+      f.projection = projection;
+      break;
+    default: f.form = geodesy::CoordinateForm::ecef; break;
+  }
+  return f;
 }
 
 void RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const RoleFail& fail,
@@ -35,7 +51,19 @@ void RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const 
       position = plane_->ecef_from_enu(geodesy::EnuPosition{Eigen::Vector3d(v.a, v.b, v.c), *options_.origin});
       local_to_ecef = plane_->enu_from_ecef_rotation().transpose();
       break;
-    default: fail(RoleField::first, "control sets take ECEF, geodetic or ENU coordinates");
+    case CoordinateKind::projected: {
+      const auto& grid = v.source ? src_grid_ : dst_grid_;
+      if (!grid) fail(RoleField::first, "projected control coordinates need their grid (--src-zone/--src-tm, --dst-zone/--dst-tm)");
+      const geodesy::GeodeticPosition g =
+          grid->inverse(geodesy::ProjectedPosition{v.a, v.b, geodesy::EllipsoidalHeight{v.c}, grid->definition()});
+      if (!(std::fabs(g.lat.deg()) <= 90.0) || !std::isfinite(g.lon.deg())) {
+        fail(RoleField::first, "not a position on the declared grid");
+      }
+      position = geocentric_.ecef_from_geodetic(g);
+      local_to_ecef = geodesy::enu_from_ecef_rotation(g.lat, g.lon).transpose();
+      break;
+    }
+    default: fail(RoleField::first, "control sets take ECEF, geodetic, ENU or projected coordinates");
   }
   Eigen::Matrix3d local = Eigen::Matrix3d::Identity();  // unit weight when the set gives no sigmas at all
   if (v.sigma_m) {

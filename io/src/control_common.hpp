@@ -13,6 +13,7 @@
 #include "geoanchor/geodesy/control_point.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/projection.hpp"
 #include "geoanchor/io/control_csv.hpp"
 #include "geoanchor/io/coordinate_columns.hpp"
 
@@ -24,6 +25,7 @@ struct RoleValues {
   double a = 0.0, b = 0.0, c = 0.0;              // x,y,z | lat,lon,h | e,n,u
   std::optional<double> sigma_m;                 // isotropic
   std::optional<std::array<double, 6>> cov_m2;   // xx, xy, xz, yy, yz, zz in the coordinates' axes
+  bool source = true;                            // which frame (for its projection)
 };
 
 // Which value a failure is about: the three coordinates, the sigma, the covariance.
@@ -42,7 +44,11 @@ class RoleConverter {
   ControlReadOptions options_;
   geodesy::GeocentricConverter geocentric_;
   std::optional<geodesy::LocalTangentPlane> plane_;
+  std::optional<geodesy::TransverseMercator> src_grid_, dst_grid_;
 };
+
+// The form of one frame's coordinates as the set records it.
+geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<geodesy::ProjectionDef>& projection);
 
 // Adds `p` to `set`, refusing a duplicate id at the same epoch; `where` names
 // the new point (file:line or JSON path), `where_of` an earlier one.

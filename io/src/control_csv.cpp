@@ -41,7 +41,8 @@ struct RoleColumns {
   bool has_cov = false;
 };
 
-RoleColumns role_columns(const std::vector<std::string>& header, const std::string& source, const std::string& role) {
+RoleColumns role_columns(const std::vector<std::string>& header, const std::string& source, const std::string& role,
+                         bool has_grid) {
   // Classify with only this role's coordinate columns visible, so that the
   // other role's columns do not read as a mix of kinds.
   std::vector<std::string> visible;
@@ -59,15 +60,25 @@ RoleColumns role_columns(const std::vector<std::string>& header, const std::stri
   RoleColumns rc;
   rc.role = role;
   CoordinateColumns c = classify_coordinate_header(visible, source, role);
-  if (c.kind == CoordinateKind::ned || c.kind == CoordinateKind::projected) {
+  if (c.kind == CoordinateKind::ned) {
     throw Error(ErrorKind::input, "E_COLUMN",
                 source + ": " + role + " coordinates: control sets take ECEF (x_" + role + "_m...), geodetic (lat_" +
-                    role + "_deg...) or ENU (e_" + role + "_m...) columns");
+                    role + "_deg...), ENU (e_" + role + "_m...) or projected (easting_" + role + "_m...) columns");
   }
-  if (c.kind == CoordinateKind::geodetic && !c.third) {
+  if (c.kind == CoordinateKind::projected && !has_grid) {
+    throw Error(ErrorKind::usage, "E_GRID_MISSING",
+                source + ": easting_" + role + "_m,northing_" + role + "_m need their grid: give --" + role +
+                    "-zone ZONE (UTM, e.g. 32N) or --" + role + "-tm LAT0,LON0,K0,FE,FN");
+  }
+  if (c.utm_zone) {
+    throw Error(ErrorKind::input, "E_COLUMN",
+                source + ": a utm_zone column in a control set; give the grid of each frame with --" + role + "-zone");
+  }
+  if ((c.kind == CoordinateKind::geodetic || c.kind == CoordinateKind::projected) && !c.third) {
     throw Error(ErrorKind::input, "E_COLUMN_MISSING",
-                source + ": header has lat_" + role + "_deg,lon_" + role + "_deg but no h_" + role +
-                    "_m; a control point needs its ellipsoidal height");
+                source + ": header has " + (c.kind == CoordinateKind::geodetic ? "lat_" + role + "_deg,lon_" + role + "_deg"
+                                                                                : "easting_" + role + "_m,northing_" + role + "_m") +
+                    " but no h_" + role + "_m; a control point needs its ellipsoidal height");
   }
   c.first = index[c.first];
   c.second = index[c.second];
@@ -120,8 +131,8 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   if (!id_col) {
     throw Error(ErrorKind::input, "E_COLUMN_MISSING", source_name + ": no 'id' column; every control point needs an id");
   }
-  const RoleColumns src = role_columns(header, source_name, "src");
-  const RoleColumns dst = role_columns(header, source_name, "dst");
+  const RoleColumns src = role_columns(header, source_name, "src", o.src_projection.has_value());
+  const RoleColumns dst = role_columns(header, source_name, "dst", o.dst_projection.has_value());
   const auto epoch_col = find_column(header, "epoch");
   // Velocities: ECEF components per frame, with a required isotropic sigma.
   struct VelocityColumns {
@@ -178,11 +189,17 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     }
   }
   set.has_a_priori_sigmas = src.sigma || src.has_cov || dst.sigma || dst.has_cov;
+  set.source_input = detail::input_form(src.coords.kind, o.src_projection);
+  set.target_input = detail::input_form(dst.coords.kind, o.dst_projection);
+  set.ellipsoid = o.ellipsoid;
+  set.origin = o.origin;
 
   // ECEF position and covariance of one role in one row.
-  auto read_role = [&](const CsvRecord& r, const RoleColumns& rc, geodesy::EcefPosition& p, Eigen::Matrix3d& cov) {
+  auto read_role = [&](const CsvRecord& r, const RoleColumns& rc, geodesy::EcefPosition& p, Eigen::Matrix3d& cov,
+                       Eigen::Vector3d& as_read) {
     detail::RoleValues v;
     v.kind = rc.coords.kind;
+    v.source = rc.role == "src";
     v.a = rows.number(r, rc.coords.first);
     v.b = rows.number(r, rc.coords.second);
     v.c = rows.number(r, *rc.coords.third);
@@ -200,6 +217,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
                                                                : *rc.cov[0];
       rows.fail(r, col, f == detail::RoleField::covariance ? "covariance of " + rc.role + ": " + message : message);
     };
+    as_read = Eigen::Vector3d(v.a, v.b, v.c);
     converter.convert(v, set.has_a_priori_sigmas, fail, p, cov);
   };
 
@@ -211,8 +229,8 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     p.id = r.values[*id_col];
     p.line = r.line;
     if (p.id.empty()) rows.fail(r, *id_col, "empty id");
-    read_role(r, src, p.source, p.source_cov_m2);
-    read_role(r, dst, p.target, p.target_cov_m2);
+    read_role(r, src, p.source, p.source_cov_m2, p.source_as_read);
+    read_role(r, dst, p.target, p.target_cov_m2, p.target_as_read);
     if (epoch_col && !r.values[*epoch_col].empty()) {
       p.epoch = geodesy::parse_decimal_year(r.values[*epoch_col], source_name + ":" + std::to_string(r.line) + ": epoch");
     }

@@ -38,6 +38,7 @@ detail::RoleValues role_values(const json& point, const std::string& role, const
   const json& c = point.at(frame);
   const std::string at = where + "." + frame;
   detail::RoleValues v;
+  v.source = role == "src";
   const char* const kinds[3][3] = {{"x_m", "y_m", "z_m"}, {"lat_deg", "lon_deg", "h_m"}, {"e_m", "n_m", "u_m"}};
   const CoordinateKind kind_of[3] = {CoordinateKind::ecef, CoordinateKind::geodetic, CoordinateKind::enu};
   int found = -1;
@@ -113,6 +114,12 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
   }
   const std::set<std::string> known = {"id", "source", "target", "sigma_src_m", "sigma_dst_m", "cov_src_m2", "cov_dst_m2", "epoch", "use"};
   const detail::RoleConverter converter(o);
+  set.ellipsoid = o.ellipsoid;
+  set.origin = o.origin;
+  // The forms of the first point; a set whose points use several forms is
+  // recorded as ECEF (as_read then holds the ECEF positions).
+  std::optional<CoordinateKind> src_kind, dst_kind;
+  bool mixed_src = false, mixed_dst = false;
   std::map<std::pair<std::string, double>, std::size_t> seen;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const std::string where = source_name + ": points[" + std::to_string(i) + "]";
@@ -136,7 +143,12 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
                                                                  : nullptr;
         fail(where + "." + (field ? std::string(field) : frame), message);
       };
-      if (std::string(role) == "src") {
+      const bool src = std::string(role) == "src";
+      auto& kind = src ? src_kind : dst_kind;
+      if (!kind) kind = v.kind;
+      (src ? mixed_src : mixed_dst) |= *kind != v.kind;
+      (src ? p.source_as_read : p.target_as_read) = Eigen::Vector3d(v.a, v.b, v.c);
+      if (src) {
         converter.convert(v, set.has_a_priori_sigmas, on_fail, p.source, p.source_cov_m2);
       } else {
         converter.convert(v, set.has_a_priori_sigmas, on_fail, p.target, p.target_cov_m2);
@@ -151,6 +163,12 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     }
     detail::add_point(set, std::move(p), seen, where,
                       [&](const geodesy::ControlPoint& q) { return "points[" + std::to_string(q.line) + "]"; });
+  }
+  set.source_input = detail::input_form(mixed_src || !src_kind ? CoordinateKind::ecef : *src_kind, std::nullopt);
+  set.target_input = detail::input_form(mixed_dst || !dst_kind ? CoordinateKind::ecef : *dst_kind, std::nullopt);
+  for (auto& p : set.points) {
+    if (mixed_src) p.source_as_read = p.source.m;
+    if (mixed_dst) p.target_as_read = p.target.m;
   }
   return set;
 }

@@ -149,5 +149,19 @@ TEST(TransverseMercator, PositionOnAnotherProjectionIsRefused) {
   EXPECT_TRUE(std::isnan(a.inverse(on_33).lat.deg()));
 }
 
+TEST(WebMercator, InverseAgreesWithProjMercOnTheSphere) {
+  // EPSG:3857 is PROJ's merc on a sphere of radius 6 378 137 m (EPSG method 1024).
+  const ProjPipeline proj("+proj=merc +a=6378137 +b=6378137");
+  std::mt19937 rng(3857);
+  std::uniform_real_distribution<double> lat(-85.0, 85.0), lon(-180.0, 180.0);
+  for (int i = 0; i < 1000; ++i) {
+    const double la = lat(rng), lo = lon(rng);
+    const Eigen::Vector3d en = proj.forward(Eigen::Vector3d(proj_radians(lo), proj_radians(la), 0.0));
+    const auto g = web_mercator_inverse(en.x(), en.y());
+    EXPECT_NEAR(g.lat.deg(), la, kInverseVsProjTol_deg);
+    EXPECT_NEAR(g.lon.deg(), lo, kInverseVsProjTol_deg);
+  }
+}
+
 }  // namespace
 }  // namespace geoanchor::geodesy

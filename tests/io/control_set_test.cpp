@@ -6,7 +6,9 @@
 #include <sstream>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/io/control_csv.hpp"
+#include "proj_reference.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -60,6 +62,33 @@ TEST(ControlSet, CsvAndJsonReadTheSameMarksTheSameWay) {
   constexpr double kCovTol_m2 = 1e-18;  // float64 noise on values of 1e-5 m²
   EXPECT_NEAR(a.points[0].source_cov_m2(0, 1), 0.0, kCovTol_m2);
   EXPECT_NEAR(a.points[0].source_cov_m2.trace(), 3 * 0.003 * 0.003, kCovTol_m2);
+}
+
+TEST(ControlSet, ProjectedColumnsAreReadOnTheirDeclaredGrid) {
+  // UTM 32N on WGS 84, as PROJ inverts it, then to ECEF.
+  constexpr double kVsProjTol_m = 1e-6;
+  const testing::ProjPipeline utm("+proj=pipeline +step +inv +proj=utm +zone=32 +ellps=WGS84 +step +proj=cart +ellps=WGS84");
+  const std::string csv =
+      "id,x_src_m,y_src_m,z_src_m,easting_dst_m,northing_dst_m,h_dst_m\n"
+      "P1,4271315.7,641096.4,4678048.5,465012.345,5256789.012,480.5\n";
+  std::istringstream in(csv);
+  ControlReadOptions o;
+  o.dst_projection = geodesy::utm_projection(geodesy::Ellipsoid::wgs84(), geodesy::UtmZone{32, geodesy::Hemisphere::north});
+  const auto set = read_control_csv(in, "p.csv", o);
+  const Eigen::Vector3d expected = utm.forward(Eigen::Vector3d(465012.345, 5256789.012, 480.5));
+  EXPECT_LT((set.points[0].target.m - expected).norm(), kVsProjTol_m);
+  EXPECT_EQ(set.target_input.form, geodesy::CoordinateForm::projected);
+  EXPECT_EQ(set.source_input.form, geodesy::CoordinateForm::ecef);
+  EXPECT_EQ(set.points[0].target_as_read, Eigen::Vector3d(465012.345, 5256789.012, 480.5));
+
+  std::istringstream again(csv);
+  try {
+    read_control_csv(again, "p.csv", {});
+    FAIL() << "projected columns without a grid were accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::usage);
+    EXPECT_NE(std::string(e.what()).find("--dst-zone"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ControlSet, JsonErrorsNameThePath) {

@@ -11,10 +11,22 @@
 #include <vector>
 
 #include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/positions.hpp"
+#include "geoanchor/geodesy/projection.hpp"
 #include "geoanchor/geodesy/units.hpp"
 
 namespace geoanchor::geodesy {
+
+// How one frame's coordinates were written in the control file, so that a
+// diagnosis can read them again another way (swapped, in other units, on
+// another projection).
+enum class CoordinateForm { ecef, geodetic, enu, projected };
+
+struct ControlInputForm {
+  CoordinateForm form = CoordinateForm::ecef;
+  std::optional<ProjectionDef> projection;  // projected: the declared grid
+};
 
 struct ControlPoint {
   std::string id;
@@ -32,6 +44,10 @@ struct ControlPoint {
   std::optional<Eigen::Vector3d> target_velocity_m_per_year;
   Eigen::Matrix3d source_velocity_cov = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d target_velocity_cov = Eigen::Matrix3d::Zero();
+  // The three numbers of each frame as written (x, y, z | lat, lon, h in
+  // degrees and metres | e, n, u | easting, northing, h).
+  Eigen::Vector3d source_as_read = Eigen::Vector3d::Zero();
+  Eigen::Vector3d target_as_read = Eigen::Vector3d::Zero();
 };
 
 struct ControlSet {
@@ -42,6 +58,12 @@ struct ControlSet {
   // False when the file gave no sigmas: weights are then equal (1 m²) and
   // only σ0 estimated from the residuals gives them a scale.
   bool has_a_priori_sigmas = true;
+  // How the coordinates were read: their forms, the ellipsoid of geodetic
+  // and projected values, the nominal origin of ENU values.
+  ControlInputForm source_input;
+  ControlInputForm target_input;
+  Ellipsoid ellipsoid = Ellipsoid::wgs84();
+  std::optional<LocalOrigin> origin;
 };
 
 }  // namespace geoanchor::geodesy

@@ -85,4 +85,17 @@ class TransverseMercator {
   std::unique_ptr<Impl> impl_;
 };
 
+// Web Mercator ("Popular Visualisation Pseudo Mercator", EPSG method 1024,
+// the projection of EPSG:3857): the spherical Mercator formulas applied to
+// WGS 84 latitude and longitude with the sphere's radius a = 6 378 137 m, no
+// false origin. It is not conformal on the ellipsoid and its scale is
+// 1/cos(lat) everywhere, so its metres are not ground metres (EPSG Guidance
+// Note 7-2, method 1024). Latitude and longitude of easting, northing;
+// NaN for non-finite input.
+struct WebMercatorInverse {
+  Angle lat;
+  Angle lon;
+};
+WebMercatorInverse web_mercator_inverse(double easting_m, double northing_m);
+
 }  // namespace geoanchor::geodesy

@@ -4,6 +4,7 @@
 //
 //   id                                       required, unique per epoch
 //   source: x_src_m,y_src_m,z_src_m | lat_src_deg,lon_src_deg,h_src_m | e_src_m,n_src_m,u_src_m
+//           | easting_src_m,northing_src_m,h_src_m (on the grid given as src_projection)
 //   target: the same with _dst
 //   sigma_src_m, sigma_dst_m                 isotropic standard deviations (m), optional
 //   cov_src_xx_m2, cov_src_xy_m2, cov_src_xz_m2, cov_src_yy_m2, cov_src_yz_m2, cov_src_zz_m2
@@ -35,6 +36,11 @@ namespace geoanchor::io {
 struct ControlReadOptions {
   geodesy::Ellipsoid ellipsoid = geodesy::Ellipsoid::wgs84();
   std::optional<geodesy::LocalOrigin> origin;  // for e_src_m/e_dst_m columns
+  // The grids of easting_src_m/northing_src_m and easting_dst_m/northing_dst_m
+  // columns (a UTM zone or a Transverse Mercator, on `ellipsoid`); h_src_m
+  // beside them is ellipsoidal. Projected columns without one are refused.
+  std::optional<geodesy::ProjectionDef> src_projection;
+  std::optional<geodesy::ProjectionDef> dst_projection;
 };
 
 geodesy::ControlSet read_control_csv(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
