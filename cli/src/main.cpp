@@ -9,6 +9,7 @@
 
 #include "apply_command.hpp"
 #include "convert_command.hpp"
+#include "diagnose_command.hpp"
 #include "fit_command.hpp"
 #include "snapshot_command.hpp"
 #include "transform_command.hpp"
@@ -38,6 +39,8 @@ int main(int argc, char** argv) {
   geoanchor::cli::TransformOptions transform;
   transform.argv.assign(argv, argv + argc);
   auto* transform_cmd = geoanchor::cli::add_transform_command(app, transform);
+  geoanchor::cli::DiagnoseCommandOptions diagnose;
+  auto* diagnose_cmd = geoanchor::cli::add_diagnose_command(app, diagnose);
   geoanchor::cli::SnapshotOptions snapshot;
   snapshot.workbench.argv.assign(argv, argv + argc);
   auto* snapshot_cmd = geoanchor::cli::add_snapshot_command(app, snapshot);
@@ -65,6 +68,7 @@ int main(int argc, char** argv) {
     if (fit_cmd->parsed()) return geoanchor::cli::run_fit(fit);
     if (apply_cmd->parsed()) return geoanchor::cli::run_apply(apply);
     if (transform_cmd->parsed()) geoanchor::cli::run_transform(transform);
+    if (diagnose_cmd->parsed()) geoanchor::cli::run_diagnose(diagnose);
     if (snapshot_cmd->parsed()) return geoanchor::cli::run_snapshot(snapshot);
     if (report_cmd->parsed()) return geoanchor::cli::run_report(report);
   } catch (const Error& e) {

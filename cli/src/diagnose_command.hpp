@@ -1,0 +1,31 @@
+#pragma once
+// `geoanchor diagnose`: which classic datum mistake explains a bad fit. See
+// docs/commands/diagnose.md.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace geoanchor::cli {
+
+struct DiagnoseCommandOptions {
+  std::string control;
+  std::optional<std::string> transform;
+  bool json = false;
+  std::string model = "helmert7";
+  std::optional<std::string> convention;
+  std::optional<std::string> origin;
+  std::string ellipsoid = "WGS84";
+  std::optional<std::string> src_zone, src_tm, dst_zone, dst_tm;
+  std::optional<std::string> source_frame, target_frame;
+  std::optional<double> sigma;
+};
+
+CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& options);
+void run_diagnose(const DiagnoseCommandOptions& options);
+
+}  // namespace geoanchor::cli
