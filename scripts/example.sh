@@ -41,6 +41,12 @@ echo "== report =="
 grep -E "differ by|σ0 =|global test|OUTLIER" "$out/report/report.txt" | sed 's/^ */  /'
 
 echo
+echo "== diagnose =="
+# The same control set with its target heights made orthometric (a planted
+# classic mistake): which one it is, and how large.
+"$geoanchor" diagnose fixtures/airport_control_orthometric.csv | grep -E "^verdict|^  +1 "
+
+echo
 echo "== convert =="
 
 "$geoanchor" convert fixtures/airport_points.csv --to ecef -o "$out/points_ecef.csv" --overwrite

@@ -39,14 +39,6 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& o) {
 
 namespace {
 
-std::optional<geodesy::ProjectionDef> grid_of(const std::optional<std::string>& zone, const std::optional<std::string>& tm,
-                                              const geodesy::Ellipsoid& e, const std::string& role) {
-  if (zone && tm) throw Error(ErrorKind::usage, "E_OPTION", "--" + role + "-zone and --" + role + "-tm: give one grid, not both");
-  if (zone) return geodesy::utm_projection(e, parse_zone(*zone, "--" + role + "-zone"));
-  if (tm) return geodesy::ProjectionDef{e, parse_tm(*tm, "--" + role + "-tm"), std::nullopt};
-  return std::nullopt;
-}
-
 // The file's transform with its rotations read in the other convention: the
 // same numbers, the other type.
 io::TransformFile with_other_convention(const io::TransformFile& t) {
@@ -117,8 +109,8 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
   io::ControlReadOptions ro;
   ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
   if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
-  ro.src_projection = grid_of(o.src_zone, o.src_tm, ro.ellipsoid, "src");
-  ro.dst_projection = grid_of(o.dst_zone, o.dst_tm, ro.ellipsoid, "dst");
+  ro.src_projection = parse_grid(o.src_zone, o.src_tm, ro.ellipsoid, "src");
+  ro.dst_projection = parse_grid(o.dst_zone, o.dst_tm, ro.ellipsoid, "dst");
 
   solver::DiagnoseOptions d;
   d.fit.model = parse_model(o.model, "--model");

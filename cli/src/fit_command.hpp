@@ -26,6 +26,7 @@ struct FitCommandOptions {
   bool fix_yaw = false;
   bool with_scale = false;
   std::optional<std::string> origin;
+  std::optional<std::string> src_zone, src_tm, dst_zone, dst_tm;  // grids of easting/northing columns
   std::string ellipsoid = "WGS84";
   std::optional<std::string> source_frame, target_frame;
   double alpha = 0.05;

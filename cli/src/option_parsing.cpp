@@ -127,4 +127,13 @@ const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view fl
                   ": expected EGM96 (the 15' grid in Debian's proj-data; EGM2008 is not packaged and is not downloaded)");
 }
 
+std::optional<geodesy::ProjectionDef> parse_grid(const std::optional<std::string>& zone,
+                                                 const std::optional<std::string>& tm, const geodesy::Ellipsoid& e,
+                                                 const std::string& role) {
+  if (zone && tm) throw Error(ErrorKind::usage, "E_OPTION", "--" + role + "-zone and --" + role + "-tm: give one grid, not both");
+  if (zone) return geodesy::utm_projection(e, parse_zone(*zone, "--" + role + "-zone"));
+  if (tm) return geodesy::ProjectionDef{e, parse_tm(*tm, "--" + role + "-tm"), std::nullopt};
+  return std::nullopt;
+}
+
 }  // namespace geoanchor::cli

@@ -27,6 +27,12 @@ geodesy::TransverseMercatorParams parse_tm(std::string_view text, std::string_vi
 
 geodesy::UtmZone parse_zone(std::string_view text, std::string_view flag);
 
+// The grid of a control set's easting/northing columns for `role` ("src",
+// "dst"): --ROLE-zone (UTM on `e`) or --ROLE-tm; not both.
+std::optional<geodesy::ProjectionDef> parse_grid(const std::optional<std::string>& zone,
+                                                 const std::optional<std::string>& tm, const geodesy::Ellipsoid& e,
+                                                 const std::string& role);
+
 // `count` comma-separated finite numbers; `expected` describes them.
 std::vector<double> split_numbers(std::string_view text, std::string_view flag, std::size_t count,
                                   const std::string& expected);

@@ -67,8 +67,9 @@ RoleColumns role_columns(const std::vector<std::string>& header, const std::stri
   }
   if (c.kind == CoordinateKind::projected && !has_grid) {
     throw Error(ErrorKind::usage, "E_GRID_MISSING",
-                source + ": easting_" + role + "_m,northing_" + role + "_m need their grid: give --" + role +
-                    "-zone ZONE (UTM, e.g. 32N) or --" + role + "-tm LAT0,LON0,K0,FE,FN");
+                source + ": easting_" + role + "_m,northing_" + role + "_m need their grid: a UTM zone or a Transverse "
+                    "Mercator (fit and diagnose take --" + role + "-zone ZONE, e.g. 32N, or --" + role +
+                    "-tm LAT0,LON0,K0,FE,FN)");
   }
   if (c.utm_zone) {
     throw Error(ErrorKind::input, "E_COLUMN",

@@ -553,6 +553,8 @@ HypothesisResult from_signature(Hypothesis name, const Vectors& a, const Signatu
   h.variants_tried = variants;
   h.plausible = f.plausible && f.log10_bf_over_offset >= kDecisiveLog10BayesFactor;
   h.effect = std::move(effect) + ": discrepancy RMS " + fmt(h.rms_before_m, 3) + " m → " + fmt(h.rms_after_m, 3) + " m";
+  if (!f.plausible) h.effect += " (only with an estimate far outside what the hypothesis allows)";
+  else if (f.log10_bf_over_offset < kDecisiveLog10BayesFactor) h.effect += " (no better than an offset within its stated accuracy)";
   return h;
 }
 
