@@ -599,15 +599,17 @@ HypothesisResult height_type(const Engine& e, const Expectation& x, double rms_b
 }
 
 bool itrf_like(const std::optional<geodesy::Frame>& f) {
-  if (!f) return true;
+  if (!f) return false;
   return f->datum() == "ITRF" || f->datum() == "WGS84" || f->datum() == "IGS" || f->datum() == "IGb";
 }
 
 HypothesisResult epoch_hypothesis(const Engine& e, const Expectation& x, double rms_base) {
   if (!x.discrepancy) return not_applicable(Hypothesis::epoch, rms_base, "expectation " + x.description);
-  if (!itrf_like(e.set.source_frame) && !itrf_like(e.set.target_frame)) {
+  const auto dated = [](const std::optional<geodesy::Frame>& f) { return f && f->epoch() && itrf_like(f); };
+  if (!dated(e.set.source_frame) && !dated(e.set.target_frame)) {
     return not_applicable(Hypothesis::epoch, rms_base,
-                          "both frames are plate-fixed: their coordinates barely move with the epoch");
+                          "needs a declared epoch to be wrong: an ITRF or WGS 84 frame with @EPOCH (plate-fixed frames "
+                          "barely move with the epoch)");
   }
   const auto& a = *x.discrepancy;
   Eigen::VectorXd prior(1);
