@@ -872,8 +872,11 @@ Diagnosis diagnose(const ControlSet& set, const DiagnoseOptions& options) {
   } else {
     std::string departure;
     if (d.departure_rms_m && *d.departure_rms_m > kExplainedNoiseFactor * e.noise_rms && !options.transform) {
-      departure = "; the points depart from the expected transformation by " + fmt(*d.departure_rms_m, 3) +
-                  " m RMS in a way none of them predicts";
+      departure = set.source_frame && set.target_frame
+                      ? "; the points depart from the expected transformation by " + fmt(*d.departure_rms_m, 3) +
+                            " m RMS in a way none of them predicts"
+                      : "; the two coordinate sets differ by " + fmt(*d.departure_rms_m, 3) +
+                            " m RMS (declare their frames to test for datum and epoch mistakes)";
     }
     d.verdict = "No classic mistake explains the data: residual RMS " + fmt(rb, 3) + " m against a noise level of " +
                 fmt(e.noise_rms, 3) + " m" + departure +
