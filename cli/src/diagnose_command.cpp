@@ -39,36 +39,29 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& o) {
 
 namespace {
 
-// The file's transform with its rotations read in the other convention: the
-// same numbers, the other type.
+// A parameter set with its rotations read in the other convention: the same
+// numbers, the other type.
+template <class C>
+using OtherConvention =
+    std::conditional_t<std::is_same_v<C, geodesy::PositionVector>, geodesy::CoordinateFrame, geodesy::PositionVector>;
+
+template <class C>
+geodesy::Helmert7<OtherConvention<C>> swapped(const geodesy::Helmert7<C>& h) {
+  return {h.t_m, h.rx, h.ry, h.rz, h.ds};
+}
+
+template <class C>
+geodesy::Helmert14<OtherConvention<C>> swapped(const geodesy::Helmert14<C>& h) {
+  geodesy::Helmert14<OtherConvention<C>> o;
+  o.at_reference_epoch = swapped(h.at_reference_epoch);
+  o.rates = {h.rates.dt_m_per_year, h.rates.drx_per_year, h.rates.dry_per_year, h.rates.drz_per_year, h.rates.dds_per_year};
+  o.reference_epoch = h.reference_epoch;
+  return o;
+}
+
 io::TransformFile with_other_convention(const io::TransformFile& t) {
   io::TransformFile s = t;
-  std::visit(
-      [&](const auto& h) {
-        using H = std::decay_t<decltype(h)>;
-        if constexpr (std::is_same_v<H, geodesy::Helmert7<geodesy::PositionVector>>) {
-          s.helmert = geodesy::Helmert7<geodesy::CoordinateFrame>{h.t_m, h.rx, h.ry, h.rz, h.ds};
-        } else if constexpr (std::is_same_v<H, geodesy::Helmert7<geodesy::CoordinateFrame>>) {
-          s.helmert = geodesy::Helmert7<geodesy::PositionVector>{h.t_m, h.rx, h.ry, h.rz, h.ds};
-        } else if constexpr (std::is_same_v<H, geodesy::Helmert14<geodesy::PositionVector>>) {
-          geodesy::Helmert14<geodesy::CoordinateFrame> o;
-          o.at_reference_epoch = {h.at_reference_epoch.t_m, h.at_reference_epoch.rx, h.at_reference_epoch.ry,
-                                  h.at_reference_epoch.rz, h.at_reference_epoch.ds};
-          o.rates = {h.rates.dt_m_per_year, h.rates.drx_per_year, h.rates.dry_per_year, h.rates.drz_per_year,
-                     h.rates.dds_per_year};
-          o.reference_epoch = h.reference_epoch;
-          s.helmert = o;
-        } else {
-          geodesy::Helmert14<geodesy::PositionVector> o;
-          o.at_reference_epoch = {h.at_reference_epoch.t_m, h.at_reference_epoch.rx, h.at_reference_epoch.ry,
-                                  h.at_reference_epoch.rz, h.at_reference_epoch.ds};
-          o.rates = {h.rates.dt_m_per_year, h.rates.drx_per_year, h.rates.dry_per_year, h.rates.drz_per_year,
-                     h.rates.dds_per_year};
-          o.reference_epoch = h.reference_epoch;
-          s.helmert = o;
-        }
-      },
-      t.helmert);
+  std::visit([&](const auto& h) { s.helmert = swapped(h); }, t.helmert);
   return s;
 }
 

@@ -286,7 +286,7 @@ HypothesisResult utm_zone(const Engine& e, const Vectors& base) {
       for (auto hemi : {geodesy::Hemisphere::north, geodesy::Hemisphere::south}) {
         const geodesy::UtmZone z{(declared.number - 1 + dz + 60) % 60 + 1, hemi};
         if (z == declared) continue;
-        const geodesy::TransverseMercator grid(geodesy::utm_projection(e.set.ellipsoid, z));
+        const geodesy::TransverseMercator grid(geodesy::utm_projection(in.projection->ellipsoid, z));
         const auto s = reread_set(e, source, [&](const Eigen::Vector3d& v) -> std::optional<EcefPosition> {
           const auto g = grid.inverse(geodesy::ProjectedPosition{v[0], v[1], geodesy::EllipsoidalHeight{v[2]}, grid.definition()});
           return from_geodetic(e, g.lat.deg(), g.lon.deg(), v[2]);
