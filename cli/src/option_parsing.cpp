@@ -122,9 +122,11 @@ solver::Convention parse_convention(std::string_view text, std::string_view flag
 
 const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view flag) {
   if (text == "EGM96") return geodesy::GeoidGrid::egm96();
+  if (text == "EGM96-NGA") return geodesy::GeoidGrid::egm96_nga();
   throw Error(ErrorKind::usage, "E_OPTION",
               std::string(flag) + " " + std::string(text) +
-                  ": expected EGM96 (the 15' grid in Debian's proj-data; EGM2008 is not packaged and is not downloaded)");
+                  ": expected EGM96 (the 15' grid in Debian's proj-data, bilinear as PROJ's vgridshift) or EGM96-NGA (the "
+                  "same grid interpolated as NGA's INTPT); EGM2008 is not packaged and is not downloaded");
 }
 
 std::optional<geodesy::ProjectionDef> parse_grid(const std::optional<std::string>& zone,

@@ -37,7 +37,8 @@ std::optional<geodesy::ProjectionDef> parse_grid(const std::optional<std::string
 std::vector<double> split_numbers(std::string_view text, std::string_view flag, std::size_t count,
                                   const std::string& expected);
 
-// The geoid model named by --geoid: EGM96 (PROJ's egm96_15.gtx). Throws
+// The geoid model named by --geoid: EGM96 (PROJ's egm96_15.gtx, bilinear as
+// vgridshift) or EGM96-NGA (the same grid, NGA's spline). Throws
 // geoanchor::Error (usage) for any other name, saying which are available.
 const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view flag);
 

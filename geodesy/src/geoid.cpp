@@ -1,5 +1,6 @@
 #include "geoanchor/geodesy/geoid.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdlib>
@@ -90,6 +91,50 @@ const GeoidGrid& GeoidGrid::egm96() {
   return grid;
 }
 
+const GeoidGrid& GeoidGrid::egm96_nga() {
+  static std::once_flag once;
+  static GeoidGrid grid;
+  std::call_once(once, [] {
+    grid = egm96();
+    grid.name_ = "EGM96 (15' grid, egm96_15.gtx, NGA INTPT spline)";
+    grid.interpolation_ = GeoidInterpolation::nga_spline;
+  });
+  return grid;
+}
+
+namespace {
+
+// The natural cubic spline through y0..y3 at x = 0, 1, 2, 3 (zero second
+// derivative at both ends), evaluated at 1 + u, u in [0, 1].
+double natural_spline_middle(double y0, double y1, double y2, double y3, double u) {
+  // Interior second derivatives: M0 + 4 M1 + M2 = 6 (y2 − 2 y1 + y0) and
+  // M1 + 4 M2 + M3 = 6 (y3 − 2 y2 + y1), with M0 = M3 = 0.
+  const double a = 6.0 * (y2 - 2.0 * y1 + y0), b = 6.0 * (y3 - 2.0 * y2 + y1);
+  const double m1 = (4.0 * a - b) / 15.0, m2 = (4.0 * b - a) / 15.0;
+  const double v = 1.0 - u;
+  return v * y1 + u * y2 + (v * v * v - v) * m1 / 6.0 + (u * u * u - u) * m2 / 6.0;
+}
+
+}  // namespace
+
+double GeoidGrid::spline_m(double y, double x) const {
+  const auto r0 = static_cast<std::int32_t>(std::floor(y));
+  const auto c0 = static_cast<std::int32_t>(std::floor(x));
+  const auto at = [&](std::int32_t r, std::int32_t c) {
+    // Rows beyond the grid's edge repeat the edge (NGA limits its spline to
+    // |lat| ≤ 89°44'24"); columns wrap on a global grid and clamp otherwise.
+    r = std::clamp(r, 0, rows_ - 1);
+    c = global_lon_ ? (c % cols_ + cols_) % cols_ : std::clamp(c, 0, cols_ - 1);
+    return static_cast<double>(values_m_[static_cast<std::size_t>(r) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(c)]);
+  };
+  double column[4];
+  for (std::int32_t k = 0; k < 4; ++k) {
+    const std::int32_t r = r0 - 1 + k;
+    column[k] = natural_spline_middle(at(r, c0 - 1), at(r, c0), at(r, c0 + 1), at(r, c0 + 2), x - c0);
+  }
+  return natural_spline_middle(column[0], column[1], column[2], column[3], y - r0);
+}
+
 double GeoidGrid::undulation_m(Angle lat, Angle lon) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double y = (lat.deg() - lat0_deg_) / dlat_deg_;
@@ -97,6 +142,9 @@ double GeoidGrid::undulation_m(Angle lat, Angle lon) const {
   if (!std::isfinite(x) || !std::isfinite(y)) return nan;
   if (global_lon_) x = std::fmod(std::fmod(x, cols_) + cols_, cols_);
   if (y < 0 || y > rows_ - 1) return nan;
+  if (interpolation_ == GeoidInterpolation::nga_spline && (global_lon_ || (x >= 0 && x <= cols_ - 1))) {
+    return spline_m(y, x);
+  }
   const auto r0 = static_cast<std::int32_t>(std::floor(y));
   const auto c0 = static_cast<std::int32_t>(std::floor(x));
   const std::int32_t r1 = std::min(r0 + 1, rows_ - 1);

@@ -190,6 +190,24 @@ struct BadCase {
   const char* message;    // expected substring of stderr
 };
 
+// --geoid EGM96-NGA: orthometric heights at NGA's published check points
+// (readme of WW15MGH.GRD, N to the millimetre) with h = 0, so that H = −N.
+TEST_F(ConvertCli, NgaInterpolationGivesNgasPublishedUndulations) {
+  constexpr double kPublishedEgm96Tol_m = 0.01;  // the bound against published EGM96 values
+  const auto in = write("h.csv",
+                        "id,lat_deg,lon_deg,h_m\nA,38.6281550,-90.2208450,0\nB,-14.6212170,-54.9788860,0\n"
+                        "C,46.8743190,102.4487290,0\nD,-23.6174460,133.8747120,0\nE,38.6254730,-0.0005000,0\n"
+                        "F,-0.4667440,0.0023000,0\n");
+  const auto r = run("convert " + in.string() + " --to geodetic --geoid EGM96-NGA --output-heights orthometric -o " +
+                     path("H.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Table t = parse_table(slurp(path("H.csv")));
+  const double published_n[] = {-31.628, -2.969, -43.575, 15.871, 50.066, 17.329};
+  for (std::size_t i = 0; i < 6; ++i) EXPECT_NEAR(t.num(i, "H_m"), -published_n[i], kPublishedEgm96Tol_m) << i;
+  const auto side = nlohmann::json::parse(slurp(path("H.csv.geoanchor.json")));
+  EXPECT_EQ(side["output"]["geoid_model"], "EGM96 (15' grid, egm96_15.gtx, NGA INTPT spline)");
+}
+
 // Orthometric heights through EGM96: H_m read as h = H + N and written as
 // H = h − N, against PROJ's vgridshift on the same grid followed by its
 // geocentric conversion.

@@ -49,6 +49,58 @@ TEST(Egm96, AgreesWithProjsVgridshiftOnTheSameGrid) {
   }
 }
 
+// NGA's check values for its 15′ grid interpolation (the readme of
+// WW15MGH.GRD, "OUTINTPT.DAT": latitude, longitude east, N in metres to the
+// millimetre), computed by NGA's INTPT.F.
+struct NgaCheckPoint {
+  double lat_deg, lon_deg, n_m;
+};
+constexpr NgaCheckPoint kNgaCheckPoints[] = {
+    {38.6281550, 269.7791550, -31.628}, {-14.6212170, 305.0211140, -2.969}, {46.8743190, 102.4487290, -43.575},
+    {-23.6174460, 133.8747120, 15.871}, {38.6254730, 359.9995000, 50.066},  {-0.4667440, 0.0023000, 17.329}};
+// The bound against published values; NGA prints millimetres.
+constexpr double kPublishedAgreement_m = 0.01;
+constexpr double kPublishedRounding_m = 0.001;  // measured: 0.6 mm at worst
+
+TEST(Egm96, NgaInterpolationReproducesNgasPublishedCheckValues) {
+  const GeoidGrid& nga = GeoidGrid::egm96_nga();
+  EXPECT_EQ(nga.interpolation(), GeoidInterpolation::nga_spline);
+  EXPECT_NE(nga.model_name(), GeoidGrid::egm96().model_name());
+  for (const auto& p : kNgaCheckPoints) {
+    const double n = nga.undulation_m(Angle::degrees(p.lat_deg), Angle::degrees(p.lon_deg));
+    EXPECT_NEAR(n, p.n_m, kPublishedAgreement_m) << p.lat_deg << " " << p.lon_deg;
+    EXPECT_NEAR(n, p.n_m, kPublishedRounding_m) << p.lat_deg << " " << p.lon_deg;
+  }
+}
+
+TEST(Egm96, BilinearAsProjDiffersFromNgasValuesByCentimetres) {
+  // What docs/frames.md states: PROJ's bilinear interpolation of the same
+  // grid is within 6 cm of NGA's values at its check points, not within 1 cm.
+  constexpr double kBilinearVsNgaBound_m = 0.06;
+  const GeoidGrid& bilinear = GeoidGrid::egm96();
+  double worst = 0.0;
+  for (const auto& p : kNgaCheckPoints) {
+    worst = std::max(worst, std::abs(bilinear.undulation_m(Angle::degrees(p.lat_deg), Angle::degrees(p.lon_deg)) - p.n_m));
+  }
+  EXPECT_LT(worst, kBilinearVsNgaBound_m);
+  EXPECT_GT(worst, kPublishedAgreement_m);
+}
+
+TEST(Egm96, NgaSplinePassesThroughTheGridNodesAndWrapsInLongitude) {
+  const GeoidGrid& nga = GeoidGrid::egm96_nga();
+  const GeoidGrid& bilinear = GeoidGrid::egm96();
+  for (double la : {-60.0, 0.0, 47.25, 80.5}) {
+    for (double lo : {-180.0, -0.25, 0.0, 8.5, 179.75}) {
+      // At a node both interpolations return the node's value.
+      EXPECT_NEAR(nga.undulation_m(Angle::degrees(la), Angle::degrees(lo)),
+                  bilinear.undulation_m(Angle::degrees(la), Angle::degrees(lo)), kRounding_m)
+          << la << " " << lo;
+    }
+    EXPECT_NEAR(nga.undulation_m(Angle::degrees(la), Angle::degrees(-179.9)),
+                nga.undulation_m(Angle::degrees(la), Angle::degrees(180.1)), kRounding_m);
+  }
+}
+
 TEST(Egm96, ARangeOfKnownMagnitudes) {
   // The geoid's known extremes: about −106 m south of India, about +85 m
   // over New Guinea; about 48 m at Zurich (EGM96).

@@ -1,15 +1,21 @@
 #pragma once
 // Geoid undulations from a grid: N such that h (ellipsoidal) = H
 // (orthometric) + N. The grid is read from a NOAA VDatum ".gtx" file, the
-// format of PROJ's egm96_15.gtx (proj-data), and interpolated bilinearly in
-// latitude and longitude as PROJ's vgridshift does, so that geoanchor and a
-// PROJ pipeline on the same grid give the same heights.
+// format of PROJ's egm96_15.gtx (proj-data), and interpolated in one of two
+// ways:
+//  - bilinear in latitude and longitude, as PROJ's vgridshift does, so that
+//    geoanchor and a PROJ pipeline on the same grid give the same heights
+//    (model "EGM96");
+//  - as NGA's own INTPT.F interpolates its 15′ grid: a natural cubic spline
+//    through the 4 × 4 nodes around the point, along each row and then down
+//    the column (model "EGM96-NGA"). It reproduces NGA's published check
+//    values (readme of WW15MGH.GRD) to the millimetre they are given in.
+// The two differ by up to several centimetres where the geoid is rough (5.6
+// cm at one of NGA's six check points); docs/frames.md gives the figures.
 //
 // EGM96 on its 15′ grid: NGA/NASA's Earth Gravitational Model 1996 (Lemoine
 // et al. 1998, NASA/TP-1998-206861) tabulated at 15′ in the tide-free
-// system relative to WGS 84. Bilinear interpolation of that grid differs
-// from the model's spherical-harmonic values by up to several centimetres
-// in rough gravity fields; docs/frames.md gives the figures.
+// system relative to WGS 84.
 
 #include <cstdint>
 #include <filesystem>
@@ -21,6 +27,8 @@
 
 namespace geoanchor::geodesy {
 
+enum class GeoidInterpolation { bilinear, nga_spline };
+
 class GeoidGrid {
  public:
   // Throws geoanchor::Error: io when the file cannot be read, input when it
@@ -31,6 +39,9 @@ class GeoidGrid {
   // /usr/share/proj), loaded once. Throws as load_gtx, saying which package
   // provides it.
   static const GeoidGrid& egm96();
+  // The same grid interpolated as NGA's INTPT.F does (4 × 4 natural cubic
+  // spline); its model name says so.
+  static const GeoidGrid& egm96_nga();
 
   // N in metres at (lat, lon); NaN outside the grid or for NaN input.
   double undulation_m(Angle lat, Angle lon) const;
@@ -39,6 +50,7 @@ class GeoidGrid {
   double undulation_m(Angle lat, Angle lon, std::string_view where) const;
 
   const std::string& model_name() const { return name_; }
+  GeoidInterpolation interpolation() const { return interpolation_; }
   const std::filesystem::path& path() const { return path_; }
 
  private:
@@ -47,6 +59,8 @@ class GeoidGrid {
   double lat0_deg_ = 0, lon0_deg_ = 0, dlat_deg_ = 0, dlon_deg_ = 0;
   std::int32_t rows_ = 0, cols_ = 0;
   bool global_lon_ = false;  // the columns span 360°: longitudes wrap
+  GeoidInterpolation interpolation_ = GeoidInterpolation::bilinear;
+  double spline_m(double row, double col) const;
   std::vector<float> values_m_;  // rows_ × cols_, south row first, west to east
 };
 
