@@ -204,6 +204,12 @@ std::vector<CatalogTransformation> build_catalog() {
       {"WGS84(G1674)", 2000.0, {"ITRF2008", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.01, "EPSG:7669"}, "NGA/EPSG, WGS 84 (G1674) aligned with ITRF2008"},
       {"WGS84(G1762)", 2000.0, {"ITRF2008", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.01, "EPSG:7666"}, "NGA/EPSG, WGS 84 (G1762) aligned with ITRF2008"},
       {"WGS84(G2139)", 2000.0, {"ITRF2014", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.01, "EPSG:9757"}, "NGA/EPSG, WGS 84 (G2139) aligned with ITRF2014"},
+      // NGA Office of Geomatics press release NGA-U-2023-02846 (2024-01-02):
+      // WGS 84 (G2296), in use from 2024-01-07 (GPS week 2296), is aligned
+      // with ITRF2020 (through IGS20); EPSG CRS 10604. NGA gives no separate
+      // accuracy for the tie: that of G2139 to ITRF2014 (EPSG:9757) is used.
+      // The operation is newer than PROJ 9.1.1's EPSG database.
+      {"WGS84(G2296)", 2000.0, {"ITRF2020", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.01, ""}, "NGA, WGS 84 (G2296) aligned with ITRF2020 (press release NGA-U-2023-02846)"},
       {"WGS84(G730)", 2000.0, {"WGS84(G873)", -20.0, -16.0, 14.0, -0.69, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.04, "EPSG:9961"},
        "NGA, WGS 84 (G730) to (G873)"},
       {"WGS84(G873)", 2005.0, {"WGS84(G1150)", 1.1, -4.7, 22.0, 1.45, 0.0, 0.0, -0.16, 0.0, 0.6, 1.4, -0.01, 0.0, 0.0, -0.02, 0.03, "EPSG:9962"},

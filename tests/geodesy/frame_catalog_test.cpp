@@ -206,6 +206,20 @@ TEST(FrameCatalog, TheItrf2020PlateMotionModelAgreesWithEurefAndKeepsItsBiasHori
             13);
 }
 
+TEST(FrameCatalog, Wgs84G2296IsAlignedWithItrf2020AsNgaAnnounced) {
+  // NGA press release NGA-U-2023-02846 (2024-01-02): WGS 84 (G2296) is
+  // aligned with ITRF2020. The tie is the identity; to G2139 the path runs
+  // through the IERS's ITRF2020 → ITRF2014 set.
+  const auto tie = find_frame_path("WGS84(G2296)", "ITRF2020", "test");
+  ASSERT_EQ(tie.steps.size(), 1u);
+  EXPECT_NE(tie.steps[0].edge->source.find("NGA-U-2023-02846"), std::string::npos);
+  const EcefPosition x(Eigen::Vector3d(4027894.006, 307045.600, 4919474.910));
+  EXPECT_EQ(tie.apply(x, DecimalYear{2024.0}).m, x.m);
+  const auto to_g2139 = find_frame_path("WGS84(G2296)", "WGS84(G2139)", "test");
+  const auto itrf = find_frame_path("ITRF2020", "ITRF2014", "test");
+  EXPECT_LT((to_g2139.apply(x, DecimalYear{2024.0}).m - itrf.apply(x, DecimalYear{2024.0}).m).norm(), 1e-9);
+}
+
 TEST(FramePathSearch, FindsDirectEdgesHubsAndRefusesUnknownFrames) {
   EXPECT_TRUE(find_frame_path("ITRF2014", "ITRF2014", "test").steps.empty());
   // Realizations listed only under older tables reach each other through a hub.
