@@ -187,6 +187,13 @@ std::vector<CatalogTransformation> build_catalog() {
        {"NAD83(CSRSv7)", 1005.3, -1909.2, -541.6, 0.37, -26.7814, 0.4203, -10.9321, 0.8, -0.6, -1.4, -0.07, -0.0667, 0.7574,
         0.0513, 0.0, "EPSG:8265"},
        "NRCan, NAD83(CSRS) v7 from ITRF2014"},
+      // NRCan: NAD83(CSRS) v8 from ITRF2020 (2022), as TRX applies it: the v7
+      // set composed with the IERS ITRF2020 → ITRF2014 set (T and D at 2010.0
+      // shifted by it, rates likewise). Newer than PROJ 9.1.1's database.
+      {"ITRF2020", 2010.0,
+       {"NAD83(CSRSv8)", 1003.90, -1909.61, -541.17, -0.05109, -26.78138, 0.42027, -10.93206, 0.79, -0.70, -1.24, -0.07201,
+        -0.06667, 0.75744, 0.05133, 0.0, ""},
+       "NRCan, NAD83(CSRS) v8 from ITRF2020 (v7 composed with ITRF2020 to ITRF2014)"},
       // ICSM, GDA2020 Technical Manual (v1.x), GDA94 to GDA2020 (7 parameters, coordinate frame; rotations negated)
       // and ITRF2014 to GDA2020 (the Australian plate's rotation since 2020.0, coordinate frame; rates negated).
       {"GDA94", 2020.0,

@@ -11,7 +11,7 @@
 //  - NGS, HTDP (https://geodesy.noaa.gov/TOOLS/Htdp/Htdp.shtml): ITRF2014 →
 //    NAD83(2011) at 2010.0, from the same record;
 //  - NRCan, TRX (https://webapp.csrs-scrs.nrcan-rncan.gc.ca/geod/tools-outils/trx.php):
-//    ITRF2020 → NAD83(CSRS) at 2010.0, from the same record.
+//    ITRF2020 → NAD83(CSRS) v8 at 2010.0, from the same record.
 // Each value is given to 0.1 mm (GDA2020, EPN) or 1 mm (HTDP); the issue's
 // bound is 1 mm.
 
@@ -133,14 +133,38 @@ TEST(Htdp, Itrf2014ToNad83_2011At2010) {
       << out.v_m_per_year->transpose();
 }
 
-TEST(Trx, Itrf2020ToNad83CsrsAt2010ThroughItrf2014) {
-  // TRX's NAD83(CSRS) is the current version (v8, defined from ITRF2020),
-  // which the catalog does not hold yet; the catalog's path ITRF2020 →
-  // ITRF2014 → NAD83(CSRS) v7 lands within 0.6 mm of it at 2010.0.
+TEST(Trx, Itrf2020ToNad83CsrsV8At2010) {
+  // TRX's NAD83(CSRS) is the current version, v8, defined from ITRF2020.
   const Eigen::Vector3d x(1267458.677, -4294620.216, 4526843.210);
-  const auto out = run("ITRF2020", "NAD83(CSRSv7)", 2010.0, x, Eigen::Vector3d(-0.01578, -0.00380, 0.00466));
+  const Eigen::Vector3d v(-0.01578, -0.00380, 0.00466);
   const Eigen::Vector3d expected(1267459.462, -4294621.605, 4526843.224);
+  const auto out = run("ITRF2020", "NAD83(CSRSv8)", 2010.0, x, v);
   EXPECT_LT((out.x.m - expected).norm(), kWorkedExampleTol_m) << (out.x.m - expected).transpose();
+  constexpr double kTrxVelocityTol_m_per_year = 0.00001;  // TRX prints 0.01 mm/yr
+  ASSERT_TRUE(out.v_m_per_year.has_value());
+  EXPECT_LT((*out.v_m_per_year - Eigen::Vector3d(0.00261, -0.00241, -0.00017)).cwiseAbs().maxCoeff(),
+            kTrxVelocityTol_m_per_year)
+      << out.v_m_per_year->transpose();
+  // The path through ITRF2014 and v7 (EPSG's rounded v7 values) lands within 1 mm too.
+  EXPECT_LT((run("ITRF2020", "NAD83(CSRSv7)", 2010.0, x).x.m - expected).norm(), kWorkedExampleTol_m);
+}
+
+TEST(CsrsV8, IsV7ComposedWithTheIersItrf2020ToItrf2014Set) {
+  // v8 = v7 ∘ (ITRF2020 → ITRF2014); EPSG rounds v7's translations to 0.1 mm
+  // and its rates to 0.1 mm/yr, hence the tolerance over 2000–2025.
+  constexpr double kEpsgRoundingOver15Years_m = 0.001;
+  const auto v8 = find_frame_path("ITRF2020", "NAD83(CSRSv8)", "test");
+  ASSERT_EQ(v8.steps.size(), 1u);
+  const auto via_v7 = find_frame_path("ITRF2020", "ITRF2014", "test");
+  const auto v7 = find_frame_path("ITRF2014", "NAD83(CSRSv7)", "test");
+  for (double t : {2000.0, 2010.0, 2015.0, 2025.0}) {
+    for (const Eigen::Vector3d& x : {Eigen::Vector3d(1267458.677, -4294620.216, 4526843.210),
+                                     Eigen::Vector3d(-2705105.358, -4262045.769, 3885381.686)}) {
+      const auto a = v8.apply(EcefPosition(x), DecimalYear{t});
+      const auto b = v7.apply(via_v7.apply(EcefPosition(x), DecimalYear{t}), DecimalYear{t});
+      EXPECT_LT((a.m - b.m).norm(), kEpsgRoundingOver15Years_m) << t;
+    }
+  }
 }
 
 }  // namespace
