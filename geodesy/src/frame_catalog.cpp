@@ -178,6 +178,13 @@ std::vector<CatalogTransformation> build_catalog() {
        {"NAD83(2011)", 1005.3, -1909.2, -541.6, 0.37, -26.7814, 0.4203, -10.9321, 0.8, -0.6, -1.4, -0.07, -0.0667, 0.7574,
         0.0513, 0.0, "EPSG:8970"},
        "NGS (HTDP), ITRF2014 to NAD83(2011) (coordinate frame, rotations negated)"},
+      // NGS, HTDP user guide (v3.5 and later), table 5: ITRF2020 to NAD83(2011)
+      // (coordinate frame; rotations negated); EPSG:10334, newer than PROJ
+      // 9.1.1's database. The same numbers as NRCan's CSRS v8 set below.
+      {"ITRF2020", 2010.0,
+       {"NAD83(2011)", 1003.90, -1909.61, -541.17, -0.05109, -26.78138, 0.42027, -10.93206, 0.79, -0.70, -1.24, -0.07201,
+        -0.06667, 0.75744, 0.05133, 0.0, ""},
+       "NGS, HTDP user guide table 5, ITRF2020 to NAD83(2011) = EPSG:10334 (coordinate frame, rotations negated)"},
       // NRCan: the NGS sets in the position-vector convention, for NAD83(CSRS) v6 and v7.
       {"ITRF2008", 1997.0,
        {"NAD83(CSRSv6)", 993.43, -1903.31, -526.55, 1.71504, -25.91467, -9.42645, -11.59935, 0.79, -0.60, -1.34, -0.102,

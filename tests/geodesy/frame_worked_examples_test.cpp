@@ -149,6 +149,23 @@ TEST(Trx, Itrf2020ToNad83CsrsV8At2010) {
   EXPECT_LT((run("ITRF2020", "NAD83(CSRSv7)", 2010.0, x).x.m - expected).norm(), kWorkedExampleTol_m);
 }
 
+TEST(Ngs, Itrf2020ToNad83_2011IsDirectAndAgreesWithThePathThroughItrf2014) {
+  // NGS's ITRF2020 set (HTDP user guide, table 5) against NGS's ITRF2014 set
+  // after the IERS ITRF2020 → ITRF2014 set: the same frame two ways.
+  constexpr double kTwoNgsSetsAgree_m = 0.001;
+  const auto direct = find_frame_path("ITRF2020", "NAD83(2011)", "test");
+  ASSERT_EQ(direct.steps.size(), 1u);
+  EXPECT_NE(direct.steps[0].edge->source.find("HTDP"), std::string::npos);
+  const auto to2014 = find_frame_path("ITRF2020", "ITRF2014", "test");
+  const auto ngs2014 = find_frame_path("ITRF2014", "NAD83(2011)", "test");
+  const EcefPosition x(Eigen::Vector3d(-2705105.358, -4262045.769, 3885381.686));
+  for (double t : {2005.0, 2010.0, 2015.0, 2024.5}) {
+    const auto a = direct.apply(x, DecimalYear{t});
+    const auto b = ngs2014.apply(to2014.apply(x, DecimalYear{t}), DecimalYear{t});
+    EXPECT_LT((a.m - b.m).norm(), kTwoNgsSetsAgree_m) << t;
+  }
+}
+
 TEST(CsrsV8, IsV7ComposedWithTheIersItrf2020ToItrf2014Set) {
   // v8 = v7 ∘ (ITRF2020 → ITRF2014); EPSG rounds v7's translations to 0.1 mm
   // and its rates to 0.1 mm/yr, hence the tolerance over 2000–2025.

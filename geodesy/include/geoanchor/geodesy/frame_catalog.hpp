@@ -15,14 +15,12 @@
 //   - the ITRF family: the IERS sets from ITRF2020, ITRF2014 and ITRF2008 to
 //     every earlier realization back to ITRF88;
 //   - ETRF89…ETRF2020 (EUREF TN1);
-//   - NAD83(2011) from ITRF2008/ITRF2014 (NGS), NAD83(CSRSv6/v7/v8) from
+//   - NAD83(2011) from ITRF2008/2014/2020 (NGS), NAD83(CSRSv6/v7/v8) from
 //     ITRF2008/2014/2020 (NRCan);
 //   - GDA94 → GDA2020 and ITRF2014 → GDA2020 (ICSM);
 //   - the WGS 84 realizations G730…G2139 (NGA, as EPSG records them) and
 //     G2296 (NGA's announcement: aligned with ITRF2020);
 //   - the ITRF2014 and ITRF2020 plate motion models.
-// Not yet: ITRF2020 → NAD83(2011) as NGS's own set (a path through ITRF2014
-// composes it).
 
 #include <Eigen/Core>
 
