@@ -26,10 +26,7 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& o) {
   cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame of the fitted model (residuals do not depend on it)");
   cmd->add_option("--origin", o.origin, "Nominal origin LAT,LON,H of ENU control coordinates");
   cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic, projected and ENU coordinates (default WGS84)");
-  cmd->add_option("--src-zone", o.src_zone, "UTM zone of easting_src_m/northing_src_m (e.g. 32N)");
-  cmd->add_option("--src-tm", o.src_tm, "Transverse Mercator LAT0,LON0,K0,FE,FN of easting_src_m/northing_src_m");
-  cmd->add_option("--dst-zone", o.dst_zone, "UTM zone of easting_dst_m/northing_dst_m");
-  cmd->add_option("--dst-tm", o.dst_tm, "Transverse Mercator of easting_dst_m/northing_dst_m");
+  add_control_grid_options(*cmd, o.grids);
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--sigma", o.sigma, "Noise per coordinate and frame (m, 1σ) assumed when the set gives none (default 0.01)")
@@ -102,8 +99,7 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
   io::ControlReadOptions ro;
   ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
   if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
-  ro.src_projection = parse_grid(o.src_zone, o.src_tm, ro.ellipsoid, "src");
-  ro.dst_projection = parse_grid(o.dst_zone, o.dst_tm, ro.ellipsoid, "dst");
+  apply_control_grids(o.grids, ro);
 
   solver::DiagnoseOptions d;
   d.fit.model = parse_model(o.model, "--model");

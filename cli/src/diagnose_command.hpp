@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "option_parsing.hpp"
+
 namespace CLI {
 class App;
 }
@@ -20,7 +22,7 @@ struct DiagnoseCommandOptions {
   std::optional<std::string> convention;
   std::optional<std::string> origin;
   std::string ellipsoid = "WGS84";
-  std::optional<std::string> src_zone, src_tm, dst_zone, dst_tm;
+  ControlGridOptions grids;  // easting/northing columns
   std::optional<std::string> source_frame, target_frame;
   std::optional<double> sigma;
 };

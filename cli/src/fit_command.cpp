@@ -38,10 +38,7 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   cmd->add_option("--reference-epoch", o.reference_epoch, "helmert14: parameter epoch (default: mean observation epoch)");
   cmd->add_option("--origin", o.origin, "Nominal origin LAT,LON,H of ENU control coordinates");
   cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic/ENU/projected control coordinates (default WGS84)");
-  cmd->add_option("--src-zone", o.src_zone, "UTM zone of easting_src_m/northing_src_m (e.g. 32N)");
-  cmd->add_option("--src-tm", o.src_tm, "Transverse Mercator LAT0,LON0,K0,FE,FN of easting_src_m/northing_src_m");
-  cmd->add_option("--dst-zone", o.dst_zone, "UTM zone of easting_dst_m/northing_dst_m");
-  cmd->add_option("--dst-tm", o.dst_tm, "Transverse Mercator of easting_dst_m/northing_dst_m");
+  add_control_grid_options(*cmd, o.grids);
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--alpha", o.alpha, "Significance of the global test (default 0.05)")->check(CLI::Range(1e-6, 0.5));
@@ -155,8 +152,7 @@ int run_fit(const FitCommandOptions& o) {
   io::ControlReadOptions ro;
   ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
   if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
-  ro.src_projection = parse_grid(o.src_zone, o.src_tm, ro.ellipsoid, "src");
-  ro.dst_projection = parse_grid(o.dst_zone, o.dst_tm, ro.ellipsoid, "dst");
+  apply_control_grids(o.grids, ro);
   if (o.compare) {
     fo.nominal_origin = ro.origin;
   } else if (fo.model == FitModel::enu_origin || fo.model == FitModel::site_calibration) {

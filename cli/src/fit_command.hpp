@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "option_parsing.hpp"
+
 namespace CLI {
 class App;
 }
@@ -26,7 +28,7 @@ struct FitCommandOptions {
   bool fix_yaw = false;
   bool with_scale = false;
   std::optional<std::string> origin;
-  std::optional<std::string> src_zone, src_tm, dst_zone, dst_tm;  // grids of easting/northing columns
+  ControlGridOptions grids;  // easting/northing columns
   std::string ellipsoid = "WGS84";
   std::optional<std::string> source_frame, target_frame;
   double alpha = 0.05;

@@ -1,5 +1,7 @@
 #include "option_parsing.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <cmath>
 #include <vector>
 
@@ -129,6 +131,8 @@ const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view fl
                   "same grid interpolated as NGA's INTPT); EGM2008 is not packaged and is not downloaded");
 }
 
+namespace {
+
 std::optional<geodesy::ProjectionDef> parse_grid(const std::optional<std::string>& zone,
                                                  const std::optional<std::string>& tm, const geodesy::Ellipsoid& e,
                                                  const std::string& role) {
@@ -136,6 +140,20 @@ std::optional<geodesy::ProjectionDef> parse_grid(const std::optional<std::string
   if (zone) return geodesy::utm_projection(e, parse_zone(*zone, "--" + role + "-zone"));
   if (tm) return geodesy::ProjectionDef{e, parse_tm(*tm, "--" + role + "-tm"), std::nullopt};
   return std::nullopt;
+}
+
+}  // namespace
+
+void add_control_grid_options(CLI::App& cmd, ControlGridOptions& o) {
+  cmd.add_option("--src-zone", o.src_zone, "UTM zone of easting_src_m/northing_src_m (e.g. 32N)");
+  cmd.add_option("--src-tm", o.src_tm, "Transverse Mercator LAT0,LON0,K0,FE,FN of easting_src_m/northing_src_m");
+  cmd.add_option("--dst-zone", o.dst_zone, "UTM zone of easting_dst_m/northing_dst_m");
+  cmd.add_option("--dst-tm", o.dst_tm, "Transverse Mercator of easting_dst_m/northing_dst_m");
+}
+
+void apply_control_grids(const ControlGridOptions& o, io::ControlReadOptions& read) {
+  read.src_projection = parse_grid(o.src_zone, o.src_tm, read.ellipsoid, "src");
+  read.dst_projection = parse_grid(o.dst_zone, o.dst_tm, read.ellipsoid, "dst");
 }
 
 }  // namespace geoanchor::cli

@@ -12,7 +12,12 @@
 #include "geoanchor/geodesy/geoid.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/geodesy/projection.hpp"
+#include "geoanchor/io/control_csv.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
+
+namespace CLI {
+class App;
+}
 
 namespace geoanchor::cli {
 
@@ -27,11 +32,16 @@ geodesy::TransverseMercatorParams parse_tm(std::string_view text, std::string_vi
 
 geodesy::UtmZone parse_zone(std::string_view text, std::string_view flag);
 
-// The grid of a control set's easting/northing columns for `role` ("src",
-// "dst"): --ROLE-zone (UTM on `e`) or --ROLE-tm; not both.
-std::optional<geodesy::ProjectionDef> parse_grid(const std::optional<std::string>& zone,
-                                                 const std::optional<std::string>& tm, const geodesy::Ellipsoid& e,
-                                                 const std::string& role);
+// The grids of a control set's easting/northing columns: --src-zone (UTM)
+// or --src-tm, likewise dst; registered on `cmd` by add_control_grid_options
+// and turned into the read options' projections (on their ellipsoid) by
+// apply_control_grids, which throws (usage) for a zone and a TM given for
+// one frame.
+struct ControlGridOptions {
+  std::optional<std::string> src_zone, src_tm, dst_zone, dst_tm;
+};
+void add_control_grid_options(CLI::App& cmd, ControlGridOptions& o);
+void apply_control_grids(const ControlGridOptions& o, io::ControlReadOptions& read);
 
 // `count` comma-separated finite numbers; `expected` describes them.
 std::vector<double> split_numbers(std::string_view text, std::string_view flag, std::size_t count,
