@@ -812,7 +812,16 @@ Diagnosis diagnose(const ControlSet& set, const DiagnoseOptions& options) {
 
   Vectors base;
   if (options.transform) {
-    base = *e.residuals(set, &options.transform->apply);  // throws through apply for a missing epoch
+    // Not through residuals(), which turns a failure into "cannot evaluate":
+    // here a point without the epoch a time-dependent transform needs is the
+    // user's error, and says so.
+    for (std::size_t i : e.used) {
+      const auto& p = set.points[i];
+      base.push_back(p.target.m - options.transform->apply(p.source, epoch_of(set, p)).m);
+    }
+    if (!std::all_of(base.begin(), base.end(), [](const Eigen::Vector3d& r) { return r.allFinite(); })) {
+      throw Error(ErrorKind::input, "E_TRANSFORM", set.source_name + ": the transform gives non-finite positions");
+    }
     d.baseline = "applied " + options.transform->description;
   } else {
     const FitResult fit = fit_helmert(set, e.fit_options());  // throws `rejected` for an ill-posed set

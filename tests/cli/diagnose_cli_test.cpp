@@ -348,6 +348,19 @@ TEST_F(DiagnoseCli, TextReportAndRefusals) {
 
   const RunResult both = run("diagnose '" + p.string() + "' --dst-zone 32N --dst-tm 0,9,1,0,0");
   EXPECT_EQ(both.exit_code, 2) << both.err;
+
+  // A time-dependent transform on points without an epoch (and no frame
+  // epoch to fall back on) is refused, not diagnosed.
+  const auto undated = write("undated.csv", control_csv(SetText{}));
+  write("t14.json", R"({"model": "helmert14", "convention": "position_vector", "rotation_model": "small_angle",
+    "reference_epoch": 2010.0,
+    "parameters": {"tx_m": 0.01, "ty_m": 0.0, "tz_m": 0.0, "rx_arcsec": 0.0, "ry_arcsec": 0.0, "rz_arcsec": 0.0,
+                   "ds_ppm": 0.0, "dtx_m_per_year": 0.001, "dty_m_per_year": 0.0, "dtz_m_per_year": 0.0,
+                   "drx_arcsec_per_year": 0.0, "dry_arcsec_per_year": 0.0, "drz_arcsec_per_year": 0.0,
+                   "dds_ppm_per_year": 0.0}})");
+  const RunResult no_epoch = run("diagnose '" + undated.string() + "' --transform '" + path("t14.json").string() + "'");
+  EXPECT_EQ(no_epoch.exit_code, 3) << no_epoch.err;
+  EXPECT_NE(no_epoch.err.find("epoch"), std::string::npos) << no_epoch.err;
 }
 
 }  // namespace
