@@ -768,6 +768,9 @@ HypothesisResult datum_mix(const Engine& e, const Expectation& x, double rms_bas
 }
 
 HypothesisResult convention_swap_signature(const Engine& e, const Expectation& x, double rms_base) {
+  if (e.options.transform) {
+    return not_applicable(Hypothesis::convention_swap, rms_base, "the given transform has no rotations");
+  }
   if (!x.discrepancy || !x.map) {
     return not_applicable(Hypothesis::convention_swap, rms_base,
                           "a fitted transform takes the signs of its rotations from the data; give --transform (or "
