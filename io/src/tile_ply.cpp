@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/float32.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
 #include "tile_common.hpp"
@@ -136,12 +137,6 @@ PlyHeader read_header(std::istream& in, const std::string& source) {
   }
   return h;
 }
-
-// What a float property holds of `v`. Out of line on purpose: GCC 12.2's
-// SLP vectorizer was seen to drop a float truncation inside a loop
-// (tests/io/tile_metadata_test.cpp), which here would read a float32 PLY
-// more precisely than the file says.
-[[gnu::noinline]] double as_float32(double v) { return static_cast<float>(v); }
 
 std::size_t offset_of(const PlyHeader& h, std::size_t index) {
   std::size_t o = 0;
@@ -283,7 +278,7 @@ TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& ou
             fail(source, std::to_string(line_no),
                  h.properties[coord[k]].name + "=" + t[coord[k]] + ": not a finite number");
           }
-          *dst[k] = h.properties[coord[k]].size == 4 ? as_float32(*v) : *v;
+          *dst[k] = h.properties[coord[k]].size == 4 ? geodesy::round_to_float32(*v) : *v;
         }
         lines[i] = line_no;
       }

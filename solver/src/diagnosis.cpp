@@ -12,6 +12,7 @@
 #include <numbers>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/float32.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
@@ -140,11 +141,6 @@ struct Engine {
 
   std::optional<Vectors> baseline_residuals(const ControlSet& s) const {
     return residuals(s, options.transform ? &options.transform->apply : nullptr);
-  }
-
-  Eigen::Vector3d up_at(const EcefPosition& x) const {
-    const auto g = geocentric.geodetic_from_ecef(x);
-    return geodesy::enu_from_ecef_rotation(g.lat, g.lon).row(2).transpose();
   }
 };
 
@@ -322,17 +318,13 @@ double log_normal_interval(double a, double b) {
 }
 
 // Whether x is a float32 value written in decimal (to 9 significant digits).
-// The conversions go through a volatile float: GCC 12 at -O3 was seen to drop
-// a double → float → double round trip when it vectorised neighbouring ones.
 bool float32_valued(double x) {
-  const volatile float rounded = static_cast<float>(x);
-  const double f = rounded;
+  const double f = geodesy::round_to_float32(x);
   return std::fabs(x - f) <= 5e-9 * std::fabs(x) + 1e-12;
 }
 
 double float32_spacing(double x) {
-  const volatile float rounded = static_cast<float>(x);
-  const float f = std::fabs(static_cast<float>(rounded));
+  const auto f = static_cast<float>(std::fabs(geodesy::round_to_float32(x)));  // exact: already a float32 value
   return static_cast<double>(std::nextafter(f, std::numeric_limits<float>::infinity()) - f);
 }
 
@@ -570,7 +562,7 @@ HypothesisResult height_type(const Engine& e, const Expectation& x, double rms_b
     const auto geo = e.geocentric.geodetic_from_ecef(p.target);
     const double n = e.options.geoid->undulation_m(geo.lat, geo.lon);
     if (!std::isfinite(n)) return not_applicable(Hypothesis::height_type, rms_base, "a point lies outside the geoid grid");
-    const Eigen::Vector3d up = e.up_at(p.target);
+    const Eigen::Vector3d up = geodesy::enu_from_ecef_rotation(geo.lat, geo.lon).row(2).transpose();
     up_n.push_back(up * n);
     g.push_back(up);
     mean_n += n / static_cast<double>(e.used.size());
@@ -701,8 +693,8 @@ HypothesisResult datum_mix(const Engine& e, const Expectation& x, double rms_bas
     const auto t = x.epoch ? x.epoch : e.set.points[i].epoch;
     return t.value_or(DecimalYear{2000.0});
   };
-  // The catalog's positions of each used point's source in `frame`.
-  auto positions_in = [&](std::string_view from, std::string_view to, bool from_target) -> std::optional<Vectors> {
+  // The used points' sources carried from frame `from` to frame `to` by the catalog.
+  auto positions_in = [&](std::string_view from, std::string_view to) -> std::optional<Vectors> {
     try {
       const auto path = geodesy::find_frame_path(from, to, "datum_mix");
       if (path.time_dependent() && !x.epoch) {
@@ -713,14 +705,14 @@ HypothesisResult datum_mix(const Engine& e, const Expectation& x, double rms_bas
       Vectors out;
       for (std::size_t i : e.used) {
         const auto& p = e.set.points[i];
-        out.push_back(path.apply(from_target ? p.target : p.source, t_of(i)).m);
+        out.push_back(path.apply(p.source, t_of(i)).m);
       }
       return out;
     } catch (const Error&) {
       return std::nullopt;
     }
   };
-  const auto declared = positions_in(fs->name(), ft->name(), false);
+  const auto declared = positions_in(fs->name(), ft->name());
   if (!declared) return not_applicable(Hypothesis::datum_mix, rms_base, "the declared frames are not in the catalog");
   struct Candidate {
     std::string what;
@@ -733,7 +725,7 @@ HypothesisResult datum_mix(const Engine& e, const Expectation& x, double rms_bas
       if (name == (source ? fs->name() : ft->name())) continue;
       // Target actually in `name`: t = P(fs→name)(s). Source actually in
       // `name`: t = P(name→ft)(s).
-      const auto actual = source ? positions_in(name, ft->name(), false) : positions_in(fs->name(), name, false);
+      const auto actual = source ? positions_in(name, ft->name()) : positions_in(fs->name(), name);
       if (!actual) continue;
       Vectors s;
       for (std::size_t k = 0; k < a.size(); ++k) s.push_back((*actual)[k] - (*declared)[k]);

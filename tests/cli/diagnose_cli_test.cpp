@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "cli_support.hpp"
+#include "geoanchor/geodesy/float32.hpp"
 #include "proj_reference.hpp"
 
 namespace geoanchor::testing {
@@ -292,15 +293,10 @@ TEST_F(DiagnoseCli, Float32EcefRanksFirst) {
   s.header_comments = kSameFrame;
   s.target_decimals = 3;
   s.target = [](const Eigen::Vector3d& x) {
-    // Stored as float32 somewhere on the way (0.0625–0.5 m spacing here).
-    // Through a volatile: GCC 12 at -O3 vectorised the three conversions of
-    // a plain array initializer into a copy that kept two of them double.
-    std::array<double, 3> out{};
-    for (int k = 0; k < 3; ++k) {
-      volatile float f = static_cast<float>(x[k]);
-      out[static_cast<std::size_t>(k)] = f;
-    }
-    return out;
+    // Stored as float32 somewhere on the way (0.0625–0.5 m spacing here);
+    // see float32.hpp for why not an inline cast.
+    return std::array<double, 3>{geodesy::round_to_float32(x[0]), geodesy::round_to_float32(x[1]),
+                                 geodesy::round_to_float32(x[2])};
   };
   expect_first(diagnose(s), "float32_ecef");
 }
