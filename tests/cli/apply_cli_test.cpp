@@ -489,7 +489,7 @@ TEST_F(ApplyCli, InterruptedMidTileLeavesNoPartialFileAtTheOutputPath) {
   }
   write("big.csv.geoanchor.json", slurp(kTile + ".geoanchor.json"));
   const fs::path out = out_dir();
-  const std::string exe = GEOANCHOR_EXE;
+  const std::string exe = CliTest::exe();
   std::vector<std::string> args = {exe, "apply", path("big.csv").string(), "--to", "geodetic", "--quiet", "--out-dir", out.string()};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());

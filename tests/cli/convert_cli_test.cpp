@@ -353,7 +353,7 @@ TEST_F(ConvertCli, InterruptedMidStreamLeavesNeitherOutputNorTemporary) {
   // its temporary output open, when SIGINT arrives.
   const fs::path fifo = path("in.fifo"), out = path("out.csv");
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  const std::string exe = GEOANCHOR_EXE, cmd = "convert", in = fifo.string(), to = "--to", kind = "ecef", o = "-o",
+  const std::string exe = CliTest::exe(), cmd = "convert", in = fifo.string(), to = "--to", kind = "ecef", o = "-o",
                     out_s = out.string();
   char* argv[] = {const_cast<char*>(exe.c_str()), const_cast<char*>(cmd.c_str()), const_cast<char*>(in.c_str()),
                   const_cast<char*>(to.c_str()),  const_cast<char*>(kind.c_str()), const_cast<char*>(o.c_str()),

@@ -143,7 +143,7 @@ TEST_F(TransformCli, RefusesWhatItCannotDoAndLeavesNothing) {
       {"partial.csv --from ITRF2014@2010 --to ITRF2020", "velocities need all three columns", 3},
   };
   for (const auto& c : cases) {
-    const auto r = shell("cd '" + dir_.string() + "' && " + GEOANCHOR_EXE + " transform " + c.args + " -o out.csv");
+    const auto r = shell("cd '" + dir_.string() + "' && " + exe() + " transform " + c.args + " -o out.csv");
     EXPECT_EQ(r.exit_code, c.exit_code) << c.args << ": " << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << ": " << r.err;
     EXPECT_EQ(leftovers({"in.csv", "partial.csv"}), std::vector<std::string>{}) << c.args;

@@ -34,7 +34,7 @@ class WorkbenchCli : public CliTest {};
 TEST_F(WorkbenchCli, SnapshotRendersEveryViewWithoutADisplay) {
   for (const char* view : {"workbench", "plan", "histogram", "table", "parameters", "comparison"}) {
     const auto out = path(std::string(view) + ".png");
-    const auto r = shell(kNoDisplay + GEOANCHOR_EXE + " snapshot " + kControl + " --view " + view + " --size 1600x1000 -o " + out.string());
+    const auto r = shell(kNoDisplay + exe() + " snapshot " + kControl + " --view " + view + " --size 1600x1000 -o " + out.string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_NE(r.out.find("wrote"), std::string::npos);
     const gui::RgbImage image = gui::read_png(out);
@@ -42,7 +42,7 @@ TEST_F(WorkbenchCli, SnapshotRendersEveryViewWithoutADisplay) {
     EXPECT_EQ(image.height, 1000);
   }
   // Other sizes are honoured.
-  const auto r = shell(kNoDisplay + GEOANCHOR_EXE + " snapshot " + kControl + " --view plan --size 800x600 -o " + path("small.png").string());
+  const auto r = shell(kNoDisplay + exe() + " snapshot " + kControl + " --view plan --size 800x600 -o " + path("small.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(gui::read_png(path("small.png")).width, 800);
 }
@@ -61,7 +61,7 @@ TEST_F(WorkbenchCli, SnapshotRefusesBadOptionsAndLeavesNothing) {
       {"--model enu-origin -o a.png", "--origin: the enu-origin model needs the origin", 2},
   };
   for (const auto& c : cases) {
-    const auto r = shell("cd '" + dir_.string() + "' && " + kNoDisplay + GEOANCHOR_EXE + " snapshot " + kControl + " " + c.args);
+    const auto r = shell("cd '" + dir_.string() + "' && " + kNoDisplay + exe() + " snapshot " + kControl + " " + c.args);
     EXPECT_EQ(r.exit_code, c.exit_code) << c.args << ": " << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << ": " << r.err;
     EXPECT_TRUE(leftovers({}).empty()) << c.args;
@@ -82,7 +82,7 @@ TEST_F(WorkbenchCli, ReportWritesTheFitReportAndEveryViewAndReopensTheTransforms
   const auto fit = run("fit " + kControl + " --model helmert7 --convention coordinate_frame -o " + t.string());
   ASSERT_EQ(fit.exit_code, 0) << fit.err;
   const auto dir = path("report");
-  const auto r = shell(kNoDisplay + GEOANCHOR_EXE + " report " + kControl + " --transform " + t.string() + " -o " + dir.string());
+  const auto r = shell(kNoDisplay + exe() + " report " + kControl + " --transform " + t.string() + " -o " + dir.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(files(dir), (std::vector<std::string>{"comparison.png", "histogram.png", "parameters.png", "plan.png", "report.txt",
                                                   "table.png", "workbench.png"}));
@@ -145,7 +145,7 @@ TEST_F(WorkbenchCli, TheWindowRendersUnderXvfbTheSameFramesAsTheOffScreenShell) 
   const auto w = shell(kWindow + std::string(GEOANCHOR_GUI_EXE) + " " + kControl +
                        " --size 1600x1000 --frames 4 --screenshot " + window_png.string());
   ASSERT_EQ(w.exit_code, 0) << w.err;
-  const auto s = shell(kNoDisplay + GEOANCHOR_EXE + " snapshot " + kControl + " --size 1600x1000 -o " + snapshot_png.string());
+  const auto s = shell(kNoDisplay + exe() + " snapshot " + kControl + " --size 1600x1000 -o " + snapshot_png.string());
   ASSERT_EQ(s.exit_code, 0) << s.err;
   const gui::RgbImage a = gui::read_png(window_png), b = gui::read_png(snapshot_png);
   ASSERT_EQ(a.width, b.width);
@@ -161,12 +161,12 @@ TEST_F(WorkbenchCli, TheWindowRendersUnderXvfbTheSameFramesAsTheOffScreenShell) 
   }
   EXPECT_LE(static_cast<double>(different), kWindowDifferentPixelsMax * a.width * a.height) << different << " pixels differ";
   // `geoanchor gui` starts the same window.
-  const auto g = shell(kWindow + std::string(GEOANCHOR_EXE) + " gui " + kControl + " --frames 2");
+  const auto g = shell(kWindow + exe() + " gui " + kControl + " --frames 2");
   EXPECT_EQ(g.exit_code, 0) << g.err;
 }
 
 TEST_F(WorkbenchCli, TheWindowWithoutADisplaySaysSoAndPointsToSnapshot) {
-  const auto r = shell(kNoDisplay + GEOANCHOR_EXE + " gui " + kControl);
+  const auto r = shell(kNoDisplay + exe() + " gui " + kControl);
   EXPECT_EQ(r.exit_code, 5) << r.err;
   EXPECT_NE(r.err.find("no display"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("geoanchor snapshot"), std::string::npos) << r.err;

@@ -1,10 +1,17 @@
 #pragma once
 // Running the real geoanchor executable in tests: a fresh folder per test
-// (kept when the test fails, for a look), commands with their exit code,
-// standard output and standard error, and what files a run left behind.
+// (mkdtemp, so two runs of the suite never share one; kept when the test
+// fails, for a look), commands with their exit code, standard output and
+// standard error, and what files a run left behind.
+//
+// GEOANCHOR_TEST_EXE in the environment runs the suite against another
+// geoanchor executable (e.g. an older build, to show that a new test fails
+// on it); by default it is the one this build made.
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -31,11 +38,14 @@ inline std::string slurp(const std::filesystem::path& p) {
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::path(::testing::TempDir()) /
-           ("geoanchor_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_suite()->name()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
+    std::string name = std::string("geoanchor_cli_") + ::testing::UnitTest::GetInstance()->current_test_suite()->name() +
+                       "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    for (char& c : name) {
+      if (c == '/') c = '_';  // parameterised test names
+    }
+    std::string templ = (std::filesystem::path(::testing::TempDir()) / (name + "_XXXXXX")).string();
+    ASSERT_NE(::mkdtemp(templ.data()), nullptr) << "cannot create a temporary folder from " << templ;
+    dir_ = templ;
   }
   void TearDown() override {
     if (!HasFailure()) std::filesystem::remove_all(dir_);
@@ -62,9 +72,15 @@ class CliTest : public ::testing::Test {
     return r;
   }
 
+  // The executable under test (GEOANCHOR_TEST_EXE, else this build's).
+  static std::string exe() {
+    const char* other = std::getenv("GEOANCHOR_TEST_EXE");
+    return other && *other ? std::string(other) : std::string(GEOANCHOR_EXE);
+  }
+
   // geoanchor with `args`.
   RunResult run(const std::string& args, const std::string& stdin_file = "") const {
-    return shell(std::string(GEOANCHOR_EXE) + " " + args, stdin_file);
+    return shell(exe() + " " + args, stdin_file);
   }
 
   // The names in `folder` (default: the test's folder), sorted.
