@@ -9,7 +9,8 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
-#include "geoanchor/gui/fit_export.hpp"
+#include "geoanchor/workflow/fit_checks.hpp"
+#include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/control_csv.hpp"
 #include "geoanchor/io/transform_file.hpp"
@@ -74,8 +75,8 @@ int run_compare(const geodesy::ControlSet& set, const solver::FitOptions& base) 
     }
     const auto& g = c.fit->global_test;
     const std::string verdict = !g.applicable ? "n/a" : g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED high" : "FAILED low";
-    std::snprintf(line, sizeof line, "  %-16s %3d %6d %8.3f   %-12s %10.2f %10.1f\n", name.c_str(), c.parameters, c.fit->dof,
-                  c.fit->sigma0, verdict.c_str(), c.max_w, c.aic);
+    std::snprintf(line, sizeof line, "  %-16s %3d %6d %8s   %-12s %10.2f %10.1f\n", name.c_str(), c.parameters, c.fit->dof,
+                  (c.fit->sigma0 ? format_fixed(*c.fit->sigma0, 3) : std::string("undef")).c_str(), verdict.c_str(), c.max_w, c.aic);
     std::cout << line;
     if (!best || c.aic < best->aic) best = &c;
   }
@@ -174,36 +175,26 @@ int run_fit(const FitCommandOptions& o) {
   geodesy::ControlSet set = io::read_control_set(o.control, ro);
   if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");
-  std::vector<std::string> frame_warnings;
-  for (const auto* f : {&set.source_frame, &set.target_frame}) {
-    if (*f && (*f)->datum() == "WGS84" && (*f)->realization().empty()) {
-      frame_warnings.push_back("frame " + (*f)->to_string() +
-                               " is the WGS 84 ensemble: its realizations differ by up to about 2 m; name one, e.g. "
-                               "WGS84(G2139)");
-    }
-  }
+  if (const auto swap = workflow::likely_lat_lon_swap(set)) throw Error(ErrorKind::input, "E_AXIS_SWAP", *swap);
+  const std::vector<std::string> set_warnings = workflow::control_set_warnings(set);
   if (o.compare) {
-    for (const auto& w : frame_warnings) std::cerr << "geoanchor: warning: " << w << '\n';
+    for (const auto& w : set_warnings) std::cerr << "geoanchor: warning: " << w << '\n';
     return run_compare(set, fo);
   }
 
   solver::FitResult r = solver::fit_helmert(set, fo);
-  r.warnings.insert(r.warnings.begin(), frame_warnings.begin(), frame_warnings.end());
-  gui::write_fit_report(std::cout, r, set, fo);
+  r.warnings.insert(r.warnings.begin(), set_warnings.begin(), set_warnings.end());
+  workflow::write_fit_report(std::cout, r, set, fo);
   for (const auto& w : r.warnings) std::cerr << "geoanchor: warning: " << w << '\n';
 
-  const auto& g = r.global_test;
-  if (g.applicable && g.statistic > g.critical_upper && !o.accept_failed_global_test) {
-    std::cerr << "geoanchor: error[E_FIT_GLOBAL_TEST]: " << o.control << ": global test failed high (" << format_fixed(g.statistic, 2)
-              << " > " << format_fixed(g.critical_upper, 2) << ", σ0 = " << format_fixed(r.sigma0, 3)
-              << "): the residuals do not fit the stated sigmas; no transform was written. hint: look for blunders "
-                 "(residual table), wrong sigmas, or a wrong model; --accept-failed-global-test writes it anyway\n";
+  if (const auto refusal = workflow::fit_refusal(r, o.control, o.accept_failed_global_test)) {
+    std::cerr << "geoanchor: error[" << refusal->code << "]: " << refusal->message << '\n';
     return exit_code(ErrorKind::rejected);
   }
   if (out) {
     std::string cmd;
     for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
-    out->stream() << io::to_json_text(gui::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
+    out->stream() << io::to_json_text(workflow::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
     out->commit();
     std::cout << "\nwrote " << o.output << "\n";
   }

@@ -10,7 +10,8 @@
 #include <sstream>
 
 #include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/gui/fit_export.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/gui/offscreen.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/hash.hpp"
@@ -101,7 +102,7 @@ int run_report(const ReportOptions& o) {
   for (const auto& n : s.notes) text << "  note: " << n << "\n";
   text << "\n";
   if (s.model->fit()) {
-    gui::write_fit_report(text, *s.model->fit(), s.model->control(), s.model->options());
+    workflow::write_fit_report(text, *s.model->fit(), s.model->control(), s.model->options());
     if (!s.model->fit()->warnings.empty()) text << "\nWarnings\n";
     for (const auto& warning : s.model->fit()->warnings) text << "  " << warning << "\n";
   } else {
@@ -116,8 +117,8 @@ int run_report(const ReportOptions& o) {
       continue;
     }
     const auto& g = c.fit->global_test;
-    std::snprintf(line, sizeof line, "  %-16s %3d %6d %8.3f   %-11s %8.2f %10.1f\n", name.c_str(), c.parameters, c.fit->dof,
-                  c.fit->sigma0, !g.applicable ? "n/a" : g.passed ? "PASSED" : "FAILED", c.max_w, c.aic);
+    std::snprintf(line, sizeof line, "  %-16s %3d %6d %8s   %-11s %8.2f %10.1f\n", name.c_str(), c.parameters, c.fit->dof,
+                  (c.fit->sigma0 ? format_fixed(*c.fit->sigma0, 3) : std::string("undef")).c_str(), !g.applicable ? "n/a" : g.passed ? "PASSED" : "FAILED", c.max_w, c.aic);
     text << line;
   }
   text << "\nFigures (" << w << "x" << h << " px)\n";

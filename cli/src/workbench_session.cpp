@@ -7,7 +7,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
-#include "geoanchor/gui/fit_export.hpp"
+#include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/io/control_csv.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
@@ -63,11 +63,11 @@ std::pair<int, int> parse_size(const std::string& text, std::string_view flag) {
 
 WorkbenchSession open_workbench(const WorkbenchOptions& o) {
   WorkbenchSession s;
-  gui::FitChoices choices;
+  workflow::FitChoices choices;
   choices.options.model = solver::FitModel::helmert7;
   if (!o.transform.empty()) {
     s.transform = io::read_transform_file(o.transform);
-    choices = gui::fit_choices_from_transform(*s.transform);
+    choices = workflow::fit_choices_from_transform(*s.transform);
     s.notes.push_back("model, convention and fit settings from " + o.transform +
                       (s.transform->fit ? "" : " (published parameters, no fit record: the workbench fits that model to the control)"));
   }
@@ -104,7 +104,7 @@ WorkbenchSession open_workbench(const WorkbenchOptions& o) {
   s.model->wait();
   if (s.transform && s.model->fit()) {
     const io::TransformFile refit =
-        gui::transform_file_from_fit(*s.model->fit(), s.model->control(), fo, s.model->left_out(), s.generator);
+        workflow::transform_file_from_fit(*s.model->fit(), s.model->control(), fo, s.model->left_out(), s.generator);
     const double d = largest_difference_m(*s.transform, refit, s.model->control());
     if (!std::isfinite(d)) {
       s.notes.push_back(o.transform + " could not be compared with the refit at the control marks (a time-dependent "

@@ -1,6 +1,7 @@
 #include "geoanchor/geodesy/helmert.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 namespace geoanchor::geodesy {
 
@@ -76,5 +77,56 @@ Eigen::Matrix3d rotation_matrix(const Helmert7<PositionVector>& h, RotationModel
   // the same numbers (PROJ's definition, in both rotation models).
   return coordinate_frame_matrix(h.rx.rad(), h.ry.rad(), h.rz.rad(), model).transpose();
 }
+
+}  // namespace geoanchor::geodesy
+
+namespace geoanchor::geodesy {
+namespace {
+
+// A parameter's effect at the Earth's surface (mean radius 6 371 km).
+constexpr double kEarthRadius_m = 6371000.0;
+
+std::string three_digits(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g", v);
+  return b;
+}
+
+}  // namespace
+
+template <RotationConvention C>
+std::vector<std::string> implausible_parameter_warnings(const Helmert7<C>& h) {
+  std::vector<std::string> out;
+  const char* axes[3] = {"tx", "ty", "tz"};
+  for (int k = 0; k < 3; ++k) {
+    const double t = h.t_m(k);
+    if (!(std::fabs(t) <= kPlausibleTranslation_m)) {
+      out.push_back(std::string(axes[k]) + " = " + three_digits(t) + " m is implausible for a datum transform (> " +
+                    three_digits(kPlausibleTranslation_m) +
+                    " m): check the units (mm read as m?) and that both frames are geocentric");
+    }
+  }
+  const Angle r[3] = {h.rx, h.ry, h.rz};
+  const char* rot[3] = {"rx", "ry", "rz"};
+  for (int k = 0; k < 3; ++k) {
+    const double a = r[k].arcsec();
+    if (!(std::fabs(a) <= kPlausibleRotation_arcsec)) {
+      out.push_back(std::string(rot[k]) + " = " + three_digits(a) + "″ is implausible for a datum transform (> " +
+                    three_digits(kPlausibleRotation_arcsec) + "″, " +
+                    three_digits(std::fabs(r[k].rad()) * kEarthRadius_m) +
+                    " m at the Earth's surface): check the convention and the units (mas read as arc-seconds?)");
+    }
+  }
+  const double s = h.ds.ppm();
+  if (!(std::fabs(s) <= kPlausibleScale_ppm)) {
+    out.push_back("ds = " + three_digits(s) + " ppm is implausible for a datum transform (> " +
+                  three_digits(kPlausibleScale_ppm) + " ppm, " + three_digits(std::fabs(h.ds.unitless()) * kEarthRadius_m) +
+                  " m at the Earth's surface): check the units (ppb read as ppm?)");
+  }
+  return out;
+}
+
+template std::vector<std::string> implausible_parameter_warnings(const Helmert7<PositionVector>&);
+template std::vector<std::string> implausible_parameter_warnings(const Helmert7<CoordinateFrame>&);
 
 }  // namespace geoanchor::geodesy

@@ -237,7 +237,7 @@ void WorkbenchUi::draw_parameters() {
     ImGui::EndTable();
   }
   const auto& g = fit.global_test;
-  ImGui::TextUnformatted(("σ0 = " + detail::fmt("%.3f", fit.sigma0) + ", dof = " + std::to_string(fit.dof)).c_str());
+  ImGui::TextUnformatted(("σ0 = " + (fit.sigma0 ? detail::fmt("%.3f", *fit.sigma0) : std::string("undefined")) + ", dof = " + std::to_string(fit.dof)).c_str());
   ImGui::TextUnformatted(fit.covariance_scaled_by_sigma0 ? "σ scaled by σ0" : "σ from the a-priori weights (σ0 = 1)");
   if (g.applicable) {
     ImGui::TextUnformatted(("global test χ² = " + detail::fmt("%.2f", g.statistic) + " in [" + detail::fmt("%.2f", g.critical_lower) +
@@ -341,7 +341,7 @@ void WorkbenchUi::draw_comparison() {
     ImGui::TableNextColumn();
     ImGui::Text("%d", c.fit->dof);
     ImGui::TableNextColumn();
-    ImGui::TextUnformatted(detail::fmt("%.3f", c.fit->sigma0).c_str());
+    ImGui::TextUnformatted((c.fit->sigma0 ? detail::fmt("%.3f", *c.fit->sigma0) : std::string("undefined")).c_str());
     ImGui::TableNextColumn();
     if (!g.applicable) {
       ImGui::TextUnformatted("n/a");

@@ -5,7 +5,8 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/gui/fit_export.hpp"
+#include "geoanchor/workflow/fit_checks.hpp"
+#include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/transform_file.hpp"
 
@@ -122,8 +123,13 @@ void WorkbenchModel::save_transform(const std::string& path, bool overwrite, con
   if (!fit_) {
     throw Error(ErrorKind::rejected, "E_FIT_NONE", path + ": no transform to save: " + (error_.empty() ? "no fit" : error_));
   }
+  // The same refusals as `geoanchor fit` (the window has no
+  // --accept-failed-global-test: a failing fit is explored, not saved).
+  if (const auto refusal = workflow::fit_refusal(*fit_, control_.source_name, false)) {
+    throw Error(ErrorKind::rejected, refusal->code, refusal->message);
+  }
   io::AtomicOutputFile out(path, overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
-  out.stream() << io::to_json_text(transform_file_from_fit(*fit_, control_, options_, left_out(), generator));
+  out.stream() << io::to_json_text(workflow::transform_file_from_fit(*fit_, control_, options_, left_out(), generator));
   out.commit();
 }
 

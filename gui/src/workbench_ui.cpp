@@ -204,7 +204,7 @@ void WorkbenchUi::draw_bar() {
   } else {
     const auto& f = *model_.fit();
     const auto& g = f.global_test;
-    std::string s = "σ0 = " + detail::fmt("%.3f", f.sigma0) + ", dof " + std::to_string(f.dof);
+    std::string s = "σ0 = " + (f.sigma0 ? detail::fmt("%.3f", *f.sigma0) : std::string("undefined")) + ", dof " + std::to_string(f.dof);
     if (!g.applicable) {
       ImGui::TextUnformatted((s + ", global test n/a").c_str());
     } else {

@@ -505,7 +505,7 @@ std::optional<FitRecord> parse_fit_uncertainty(const json& doc, std::string_view
   }
   if (doc.contains("statistics") && doc.at("statistics").is_object()) {
     const json& st = doc.at("statistics");
-    if (st.contains("sigma0") && st.at("sigma0").is_number()) f.sigma0 = st.at("sigma0").get<double>();
+    if (st.contains("sigma0") && st.at("sigma0").is_number()) f.sigma0 = st.at("sigma0").get<double>();  // null: undefined
     if (st.contains("dof") && st.at("dof").is_number_integer()) f.dof = st.at("dof").get<int>();
     if (st.contains("sigmas_scaled_by_sigma0") && st.at("sigmas_scaled_by_sigma0").is_boolean()) {
       f.sigmas_scaled_by_sigma0 = st.at("sigmas_scaled_by_sigma0").get<bool>();
@@ -811,7 +811,7 @@ std::string to_json_text(const TransformFile& t) {
                                {"hull_en_m", hull}};
     }
     doc["statistics"] = {
-        {"sigma0", number(f.sigma0)},
+        {"sigma0", f.sigma0 ? number(*f.sigma0) : json(nullptr)},
         {"dof", f.dof},
         {"sigmas_scaled_by_sigma0", f.sigmas_scaled_by_sigma0},
         {"alpha", number(f.alpha)},
@@ -831,8 +831,8 @@ std::string to_json_text(const TransformFile& t) {
     for (const auto& p : f.points) {
       json jp = {{"id", p.id},
                  {"residual_enu_m", {number(p.residual_enu_m[0]), number(p.residual_enu_m[1]), number(p.residual_enu_m[2])}},
-                 {"w_test", number(p.w_test)},
-                 {"w_enu", {number(p.w_enu[0]), number(p.w_enu[1]), number(p.w_enu[2])}},
+                 {"w_test", json_number_or_null(p.w_test)},
+                 {"w_enu", {json_number_or_null(p.w_enu[0]), json_number_or_null(p.w_enu[1]), json_number_or_null(p.w_enu[2])}},
                  {"redundancy_enu", {number(p.redundancy_enu[0]), number(p.redundancy_enu[1]), number(p.redundancy_enu[2])}},
                  {"mdb_m", json_number_or_null(p.mdb_m)},
                  {"point_test", {{"statistic", number(p.point_test)}, {"dof", p.point_test_dof}, {"p_value", number(p.point_test_p)}}},

@@ -12,7 +12,7 @@
 #include <numbers>
 
 #include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/float32.hpp"
+#include "geoanchor/geodesy/quantization.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
@@ -317,17 +317,6 @@ double log_normal_interval(double a, double b) {
   return std::log1p(-std::exp(log_upper_tail(b)) - std::exp(log_upper_tail(-a)));
 }
 
-// Whether x is a float32 value written in decimal (to 9 significant digits).
-bool float32_valued(double x) {
-  const double f = geodesy::round_to_float32(x);
-  return std::fabs(x - f) <= 5e-9 * std::fabs(x) + 1e-12;
-}
-
-double float32_spacing(double x) {
-  const auto f = static_cast<float>(std::fabs(geodesy::round_to_float32(x)));  // exact: already a float32 value
-  return static_cast<double>(std::nextafter(f, std::numeric_limits<float>::infinity()) - f);
-}
-
 HypothesisResult float32_ecef(const Engine& e, const Vectors& base) {
   HypothesisResult h;
   h.name = Hypothesis::float32_ecef;
@@ -338,7 +327,7 @@ HypothesisResult float32_ecef(const Engine& e, const Vectors& base) {
     bool all = !e.used.empty();
     for (std::size_t i : e.used) {
       const auto& v = source ? e.set.points[i].source_as_read : e.set.points[i].target_as_read;
-      all = all && float32_valued(v[0]) && float32_valued(v[1]) && float32_valued(v[2]);
+      all = all && geodesy::is_float32_valued(v[0]) && geodesy::is_float32_valued(v[1]) && geodesy::is_float32_valued(v[2]);
     }
     if (all) roles.push_back(source);
   }
@@ -359,7 +348,7 @@ HypothesisResult float32_ecef(const Engine& e, const Vectors& base) {
       const double s = e.sigma[k];
       Eigen::Vector3d x = Eigen::Vector3d::Zero();
       for (int c = 0; c < 3; ++c) {
-        const double q = float32_spacing(v[c]);
+        const double q = geodesy::float32_spacing(v[c]);
         widest = std::max(widest, q);
         const double r = base[k][c];
         // Quantization (uniform over q) plus noise, against noise alone.

@@ -97,29 +97,33 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
 
   std::vector<std::size_t> active = init_points(result, control);
   const int u = 3 + (o.enu_yaw ? 1 : 0) + (o.enu_scale ? 1 : 0);
-  const double z_point = normal_quantile(1.0 - o.alpha_point / 2.0);
-  result.w_critical = z_point;
-  const double lambda0 = std::pow(z_point + normal_quantile(o.power), 2.0);
+  const PointTestLevels levels = point_test_levels(o);
+  result.w_critical = levels.w_critical;
   const geodesy::GeocentricConverter geocentric(geodesy::Ellipsoid::wgs84());
 
-  // Per point: map ENU, target relative to the nominal origin, whitening.
+  // Per point: map ENU, target relative to the nominal origin, whitening of
+  // C_target + J C_source Jᵀ with J the linear part of the correction (the
+  // identity before the first solve; the yaw turns the map's covariance).
   struct Obs {
     Eigen::Vector3d enu, target_rel;
     Eigen::Matrix3d w;
   };
-  std::vector<Obs> all(control.points.size());
-  for (std::size_t i = 0; i < control.points.size(); ++i) {
-    const auto& p = control.points[i];
-    Eigen::Matrix3d c = control.has_a_priori_sigmas ? Eigen::Matrix3d(p.target_cov_m2 + p.source_cov_m2)
-                                                    : Eigen::Matrix3d::Identity();
+  auto whitening = [&](const geodesy::ControlPoint& p, const Eigen::Matrix3d& j) {
+    const Eigen::Matrix3d c = control.has_a_priori_sigmas ? Eigen::Matrix3d(p.target_cov_m2 + j * p.source_cov_m2 * j.transpose())
+                                                          : Eigen::Matrix3d::Identity();
     const Eigen::LLT<Eigen::Matrix3d> llt(c);
     if (llt.info() != Eigen::Success) {
       throw Error(ErrorKind::input, "E_SIGMA", control.source_name + ":" + std::to_string(p.line) + ": id=" + p.id +
                                                    ": combined covariance is not positive definite");
     }
-    all[i] = Obs{plane.enu_from_ecef(p.source).enu_m, p.target.m - plane.origin_ecef_m(),
-                 llt.matrixL().solve(Eigen::Matrix3d::Identity())};
+    return Eigen::Matrix3d(llt.matrixL().solve(Eigen::Matrix3d::Identity()));
+  };
+  std::vector<Obs> all(control.points.size());
+  for (std::size_t i = 0; i < control.points.size(); ++i) {
+    const auto& p = control.points[i];
+    all[i] = Obs{plane.enu_from_ecef(p.source).enu_m, p.target.m - plane.origin_ecef_m(), whitening(p, Eigen::Matrix3d::Identity())};
   }
+  Eigen::Matrix3d weights_j = Eigen::Matrix3d::Identity();  // the J the weights were made with
 
   while (true) {
     const int n = static_cast<int>(active.size());
@@ -136,25 +140,50 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
     }
 
     double shift[3] = {0, 0, 0}, yaw[1] = {0}, ds[1] = {0};
-    ceres::Problem problem;
-    for (std::size_t i : active) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1>(
-                                   new EnuOriginCost{all[i].enu, all[i].target_rel, all[i].w, &nominal}),
-                               nullptr, shift, yaw, ds);
+    std::unique_ptr<ceres::Problem> problem;
+    std::vector<const double*> blocks;
+    ceres::Solver::Summary summary;
+    constexpr int kMaxWeightPasses = 5;
+    constexpr double kWeightChange = 1e-12;  // change of J between passes
+    for (int pass = 0; pass < kMaxWeightPasses; ++pass) {
+      problem = std::make_unique<ceres::Problem>();
+      for (std::size_t i : active) {
+        problem->AddResidualBlock(new ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1>(
+                                      new EnuOriginCost{all[i].enu, all[i].target_rel, all[i].w, &nominal}),
+                                  nullptr, shift, yaw, ds);
+      }
+      blocks = {shift};
+      if (o.enu_yaw) {
+        blocks.push_back(yaw);
+      } else {
+        problem->SetParameterBlockConstant(yaw);
+      }
+      if (o.enu_scale) {
+        blocks.push_back(ds);
+      } else {
+        problem->SetParameterBlockConstant(ds);
+      }
+      summary = solve_tightly(*problem, ceres::DENSE_QR, o.max_solver_iterations);
+      if (!control.has_a_priori_sigmas) break;
+      const Eigen::Matrix3d j = geodesy::enu_origin_correction(*o.nominal_origin, Eigen::Vector3d(shift[0], shift[1], shift[2]),
+                                                               Angle::radians(yaw[0] / nominal.l_m),
+                                                               geodesy::ScaleDifference::unitless(ds[0] / nominal.l_m))
+                                    .linear();
+      if ((j - weights_j).cwiseAbs().maxCoeff() <= kWeightChange) break;
+      weights_j = j;
+      for (std::size_t i = 0; i < control.points.size(); ++i) all[i].w = whitening(control.points[i], weights_j);
     }
-    std::vector<const double*> blocks = {shift};
-    if (o.enu_yaw) {
-      blocks.push_back(yaw);
-    } else {
-      problem.SetParameterBlockConstant(yaw);
+    const Eigen::MatrixXd cov_scaled = covariance_or_reject(*problem, blocks, u);
+    // Every estimated parameter moves the points by metres at the map's RMS
+    // radius (yaw and scale are solved times L): the geometry check applies as is.
+    const GeometryDilution gd = geometry_dilution(cov_scaled, {0, 1, 2});
+    if (!(gd.dilution <= kRefuseDilution)) {
+      reject("E_FIT_WEAK_GEOMETRY", "the map points' geometry leaves the " +
+                                        std::string(o.enu_scale ? "yaw and scale" : "yaw") + " determined " +
+                                        fmt(gd.dilution, 3) +
+                                        " times less precisely than the shift; use --fix-yaw "
+                                        "or add points farther from the line through the others");
     }
-    if (o.enu_scale) {
-      blocks.push_back(ds);
-    } else {
-      problem.SetParameterBlockConstant(ds);
-    }
-    const ceres::Solver::Summary summary = solve_tightly(problem, ceres::DENSE_QR);
-    const Eigen::MatrixXd cov_scaled = covariance_or_reject(problem, blocks, u);
 
     // The correction as an ECEF map, and the corrected origin.
     const double yaw_rad = yaw[0] / nominal.l_m, ds_unitless = ds[0] / nominal.l_m;
@@ -174,8 +203,7 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
     }
     const int dof = 3 * n - u;
     fill_global_test(result, omega, dof, o.alpha, control.has_a_priori_sigmas);
-    const auto& g = result.global_test;
-    const double sigma_scale = o.scale_by_sigma0 && dof > 0 ? result.sigma0 : 1.0;
+    const double scale = sigma_scale(result, o);
 
     // Whitened Jacobians in the scaled parameters (A N⁻¹ Aᵀ is invariant).
     std::vector<double*> pblocks = {shift, yaw, ds};
@@ -192,17 +220,14 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
       if (o.enu_scale) a.col(c++) = Eigen::Vector3d(j2[0], j2[1], j2[2]);
       const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() + (in_fit ? -1.0 : 1.0) * a * cov_scaled * a.transpose();
       const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(control.points[i].target);
-      test_point(PointTestInput{vi, all[i].w, q, geodesy::enu_from_ecef_rotation(at.lat, at.lon), in_fit}, sigma_scale,
-                 lambda0, result.points[i]);
+      test_point(PointTestInput{vi, all[i].w, q, geodesy::enu_from_ecef_rotation(at.lat, at.lon), in_fit}, scale,
+                 levels.lambda0, result.points[i]);
     };
     for (std::size_t k = 0; k < active.size(); ++k) {
       tests(active[k], v[k], true);
       result.points[active[k]].used = true;
     }
-    if (const auto removed = snoop(result, active, o, u)) {
-      active.erase(active.begin() + static_cast<std::ptrdiff_t>(*removed));
-      continue;
-    }
+    if (snoop(result, active, o, u, o.enu_yaw || o.enu_scale ? 2 : 1) == SnoopStep::removed) continue;
     std::vector<bool> in_fit(control.points.size(), false);
     for (std::size_t i : active) in_fit[i] = true;
     for (std::size_t i = 0; i < control.points.size(); ++i) {
@@ -211,8 +236,8 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
 
     // Parameters in their reporting units, covariance likewise.
     Eigen::MatrixXd cov = cov_scaled;
-    if (o.scale_by_sigma0 && dof > 0) cov *= result.sigma0 * result.sigma0;
-    result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && dof > 0;
+    if (o.scale_by_sigma0 && result.sigma0) cov *= *result.sigma0 * *result.sigma0;
+    result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && result.sigma0.has_value();
     std::vector<double> factor = {1.0, 1.0, 1.0};
     result.covariance_names = {"shift_e_m", "shift_n_m", "shift_u_m"};
     if (o.enu_yaw) {
@@ -244,38 +269,12 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
                   sigma_of("shift_e_m") / (nominal.normal_radius_m * std::cos(nominal.lat_rad)) * 180.0 / M_PI, false},
         Parameter{"origin_h_m", corrected.h.m, sigma_of("shift_u_m"), false},
     };
-    {
-      auto prop = std::make_shared<detail::Propagation>();
-      prop->covariance = cov;  // scaled parameters, σ0² applied when asked
-      const Nominal nom = nominal;
-      const geodesy::LocalTangentPlane nominal_plane(*o.nominal_origin);
-      const std::array<double, 5> at = {shift[0], shift[1], shift[2], yaw[0], ds[0]};
-      const bool with_yaw = o.enu_yaw, with_scale = o.enu_scale;
-      prop->jacobian = [=](const geodesy::EcefPosition& x, std::optional<geodesy::DecimalYear>) {
-        EnuOriginCost cost{nominal_plane.enu_from_ecef(x).enu_m, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), &nom};
-        ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1> cost_function(new EnuOriginCost(cost));
-        double p0[3] = {at[0], at[1], at[2]}, p1[1] = {at[3]}, p2[1] = {at[4]};
-        const double* params[3] = {p0, p1, p2};
-        double res[3] = {}, j0[9] = {}, j1[3] = {}, j2[3] = {};
-        double* jac[3] = {j0, j1, j2};
-        cost_function.Evaluate(params, res, jac);
-        Eigen::MatrixXd out(3, 3 + (with_yaw ? 1 : 0) + (with_scale ? 1 : 0));
-        int c = 0;
-        for (int k = 0; k < 3; ++k) out.col(c++) = -Eigen::Vector3d(j0[k], j0[3 + k], j0[6 + k]);  // residual = −model
-        if (with_yaw) out.col(c++) = -Eigen::Vector3d(j1[0], j1[1], j1[2]);
-        if (with_scale) out.col(c++) = -Eigen::Vector3d(j2[0], j2[1], j2[2]);
-        return out;
-      };
-      result.propagation = prop;
+    if (!(gd.dilution <= kWarnDilution)) {
+      result.warnings.push_back("weak geometry: the map points determine the " +
+                                std::string(o.enu_scale ? "yaw and scale" : "yaw") + " " + fmt(gd.dilution, 3) +
+                                " times less precisely than the shift");
     }
-    if (dof <= 5) {
-      result.warnings.push_back("low redundancy (dof = " + std::to_string(dof) +
-                                "): the global test and the w-tests have little power");
-    }
-    if (g.applicable && !g.passed) {
-      result.warnings.push_back(std::string("global test ") +
-                                (omega > g.critical_upper ? "FAILED high" : "low") + " (σ0 = " + fmt(result.sigma0, 4) + ")");
-    }
+    add_statistics_warnings(result);
     result.ceres_iterations = static_cast<int>(summary.iterations.size());
     result.ceres_report = summary.BriefReport();
     return result;

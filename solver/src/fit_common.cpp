@@ -40,10 +40,23 @@ void note_missing_sigmas(FitResult& result, FitOptions& options, const geodesy::
                             "not applicable");
 }
 
-ceres::Solver::Summary solve_tightly(ceres::Problem& problem, ceres::LinearSolverType solver) {
+void quiet_ceres_logging() {
+  // Ceres reports through glog on standard error (rank deficiency, line
+  // search failures); geoanchor checks every outcome itself and says what
+  // went wrong, so those lines would only come first and confuse. Fatal
+  // messages (a violated Ceres invariant) still print.
+  static const bool once = [] {
+    FLAGS_minloglevel = google::GLOG_FATAL;
+    return true;
+  }();
+  (void)once;
+}
+
+ceres::Solver::Summary solve_tightly(ceres::Problem& problem, ceres::LinearSolverType solver, int max_iterations) {
+  quiet_ceres_logging();
   ceres::Solver::Options so;
   so.linear_solver_type = solver;
-  so.max_num_iterations = 200;
+  so.max_num_iterations = max_iterations;
   so.function_tolerance = 1e-16;
   so.gradient_tolerance = 1e-20;
   so.parameter_tolerance = 1e-15;
@@ -53,13 +66,15 @@ ceres::Solver::Summary solve_tightly(ceres::Problem& problem, ceres::LinearSolve
   ceres::Solve(so, &problem, &summary);
   if (summary.termination_type != ceres::CONVERGENCE) {
     reject("E_FIT_NO_CONVERGENCE", "the least-squares solve did not converge (Ceres: " +
-                                       std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
-                                       summary.message + "); no transform was written");
+                                       std::string(ceres::TerminationTypeToString(summary.termination_type)) + " after " +
+                                       std::to_string(summary.iterations.size()) + " iterations: " + summary.message +
+                                       "); no transform was written");
   }
   return summary;
 }
 
 Eigen::MatrixXd covariance_or_reject(ceres::Problem& problem, const std::vector<const double*>& blocks, int u) {
+  quiet_ceres_logging();
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
   co.null_space_rank = 0;

@@ -26,9 +26,12 @@ std::vector<std::size_t> init_points(FitResult& result, const geodesy::ControlSe
 // result says so.
 void note_missing_sigmas(FitResult& result, FitOptions& options, const geodesy::ControlSet& control);
 
+// Silences Ceres' own glog lines (below fatal), once per process.
+void quiet_ceres_logging();
+
 // Solves with tolerances at float64 noise (Ceres' defaults stop measurably
 // short of the optimum); refuses anything but CONVERGENCE.
-ceres::Solver::Summary solve_tightly(ceres::Problem& problem, ceres::LinearSolverType solver);
+ceres::Solver::Summary solve_tightly(ceres::Problem& problem, ceres::LinearSolverType solver, int max_iterations);
 
 // (JᵀJ)⁻¹ over `blocks` (u parameters in all) by ceres::Covariance
 // (DENSE_SVD); refuses a rank-deficient problem.

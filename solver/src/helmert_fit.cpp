@@ -176,6 +176,7 @@ void geocentric_from_centred(const T* tc, const Eigen::Vector3d& cx, const Eigen
 struct Solution {
   std::array<double, kMaxParams> theta{};  // centred, solver units
   Eigen::MatrixXd cov_centred;             // over `estimated` indices, a-priori σ0 = 1
+  Eigen::MatrixXd cov_scaled;              // the same in the scaled units (every column metres at the RMS radius)
   std::vector<int> estimated;              // indices into θ
   int iterations = 0;
   std::string report;
@@ -402,11 +403,12 @@ Solution solve_reduced(const std::vector<Observation>& obs, const FitOptions& o)
     for (int k = 7; k < 14; ++k) sol.estimated.push_back(k);
   }
 
-  const ceres::Solver::Summary summary = solve_tightly(problem, ceres::DENSE_QR);
+  const ceres::Solver::Summary summary = solve_tightly(problem, ceres::DENSE_QR, o.max_solver_iterations);
   sol.iterations = static_cast<int>(summary.iterations.size());
   sol.report = summary.BriefReport();
   const int u = static_cast<int>(sol.estimated.size());
   const Eigen::MatrixXd c = covariance_or_reject(problem, blocks, u);
+  sol.cov_scaled = c;
   sol.cov_centred = c;
   for (int a = 0; a < u; ++a) {
     for (int b = 0; b < u; ++b) {
@@ -437,12 +439,6 @@ std::string_view to_string(FitModel m) {
     case FitModel::site_calibration: return "site-calibration";
   }
   return "?";
-}
-
-Eigen::Matrix3d transformed_covariance_m2(const FitResult& fit, const geodesy::EcefPosition& source,
-                                          std::optional<DecimalYear> epoch) {
-  const Eigen::MatrixXd j = fit.propagation->jacobian(source, epoch);
-  return j * fit.propagation->covariance * j.transpose();
 }
 
 geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPosition& source,
@@ -519,9 +515,8 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
   note_missing_sigmas(result, o, control);
   std::vector<std::size_t> active = init_points(result, control);
 
-  const double z_point = normal_quantile(1.0 - o.alpha_point / 2.0);
-  result.w_critical = z_point;
-  const double lambda0 = std::pow(z_point + normal_quantile(o.power), 2.0);
+  const PointTestLevels levels = point_test_levels(o);
+  result.w_critical = levels.w_critical;
 
   // Variance factors of the source and target covariances (--vce).
   double f_src = 1.0, f_dst = 1.0;
@@ -607,11 +602,10 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     }
 
     // --- observations ----------------------------------------------------
-    std::vector<Observation> obs;
-    obs.reserve(active.size());
-    for (std::size_t i : active) {
-      const auto& p = control.points[i];
-      Eigen::Matrix3d c = f_dst * p.target_cov_m2 + f_src * p.source_cov_m2;  // J ≈ I: error |r| + |ds| relative (≈1e-5)
+    // Weights from C_target + J C_source Jᵀ, J = (1 + ds(t)) R(r(t)) of the
+    // current estimate (the identity before the first solve).
+    auto whitening = [&](const geodesy::ControlPoint& p, const Eigen::Matrix3d& j) {
+      Eigen::Matrix3d c = f_dst * p.target_cov_m2 + f_src * (j * p.source_cov_m2 * j.transpose());
       if (!control.has_a_priori_sigmas) c = Eigen::Matrix3d::Identity();
       const Eigen::LLT<Eigen::Matrix3d> llt(c);
       if (llt.info() != Eigen::Success) {
@@ -619,10 +613,24 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
                     control.source_name + ":" + std::to_string(p.line) + ": id=" + p.id +
                         ": combined covariance is not positive definite (zero sigmas in both frames?)");
       }
+      return Eigen::Matrix3d(llt.matrixL().solve(Eigen::Matrix3d::Identity()));  // L⁻¹: (L⁻¹)ᵀ L⁻¹ = C⁻¹
+    };
+    // J at θ for an epoch offset dt.
+    auto linear_part = [&](const std::array<double, kMaxParams>& th, double dt) {
+      double r[3];
+      double s = th[6];
+      for (int k = 0; k < 3; ++k) r[k] = th[static_cast<std::size_t>(3 + k)] + (td ? dt * th[static_cast<std::size_t>(10 + k)] : 0.0);
+      if (td) s += dt * th[13];
+      return Eigen::Matrix3d((1.0 + s) * rotation_pv(r, o.rotation_model));
+    };
+    std::vector<Observation> obs;
+    obs.reserve(active.size());
+    for (std::size_t i : active) {
+      const auto& p = control.points[i];
       Observation ob;
       ob.x = p.source.m - cx;
       ob.y = p.target.m - cy;
-      ob.w = llt.matrixL().solve(Eigen::Matrix3d::Identity());  // L⁻¹: (L⁻¹)ᵀ L⁻¹ = C⁻¹
+      ob.w = whitening(p, Eigen::Matrix3d::Identity());
       ob.dt = td ? p.epoch->year - o.reference_epoch->year : 0.0;
       if (td && p.source_velocity_m_per_year && p.target_velocity_m_per_year) {
         const Eigen::LLT<Eigen::Matrix3d> vllt(p.source_velocity_cov + p.target_velocity_cov);
@@ -636,9 +644,72 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       obs.push_back(ob);
     }
 
-    const Solution sol = solve(obs, o, td);
+    Solution sol = solve(obs, o, td);
+    // Re-weight with J from the estimate until it settles (the source
+    // covariance turned and scaled as the transform turns and scales it).
+    constexpr int kMaxWeightPasses = 5;
+    constexpr double kWeightChange = 1e-12;  // relative change of J between passes
+    if (control.has_a_priori_sigmas) {
+      std::vector<Eigen::Matrix3d> used(obs.size(), Eigen::Matrix3d::Identity());
+      for (int pass = 0; pass < kMaxWeightPasses; ++pass) {
+        double change = 0.0;
+        for (std::size_t k = 0; k < obs.size(); ++k) {
+          const Eigen::Matrix3d j = linear_part(sol.theta, obs[k].dt);
+          const double d = (j - used[k]).cwiseAbs().maxCoeff();
+          if (!(d <= change)) change = d;
+          used[k] = j;
+        }
+        if (change <= kWeightChange) break;
+        for (std::size_t k = 0; k < obs.size(); ++k) obs[k].w = whitening(control.points[active[k]], used[k]);
+        sol = solve(obs, o, td);
+      }
+    }
     const int u = static_cast<int>(sol.estimated.size());
     int dof = 3 * n - u;  // plus the velocity observations, below
+
+    // --- geometry: is every parameter determined? --------------------------
+    std::string geometry_warning;
+    {
+      const GeometryDilution gd = geometry_dilution(sol.cov_scaled, {0, 1, 2});
+      if (!(gd.dilution <= kWarnDilution)) {
+        const char* short_names[kMaxParams] = {"tx", "ty", "tz", "rx", "ry", "rz", "ds", "dtx", "dty", "dtz", "drx", "dry", "drz", "dds"};
+        // The combination, named by its largest components, and for a
+        // rotation its axis in the network's local east, north, up.
+        std::string combination;
+        Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+        for (int a = 0; a < u; ++a) {
+          const int k = sol.estimated[static_cast<std::size_t>(a)];
+          if (k >= 3 && k <= 5) axis(k - 3) = gd.direction(a);
+          if (std::fabs(gd.direction(a)) >= 0.3) {
+            combination += (combination.empty() ? "" : " ") + std::string(gd.direction(a) < 0 ? "-" : "+") +
+                           fmt(std::fabs(gd.direction(a)), 2) + "·" + short_names[k];
+          }
+        }
+        std::string where;
+        if (axis.norm() > 0.5) {
+          const geodesy::LocalTangentPlane plane(geodesy::LocalOrigin{
+              geodesy::geodetic_from_ecef(geodesy::Ellipsoid::wgs84(), geodesy::EcefPosition(cx)), geodesy::Ellipsoid::wgs84()});
+          const Eigen::Vector3d enu = plane.enu_from_ecef_rotation() * axis.normalized();
+          const double azimuth = std::fmod(std::atan2(enu.x(), enu.y()) * 180.0 / M_PI + 360.0, 180.0);
+          const double elevation = std::asin(std::clamp(std::fabs(enu.z()), 0.0, 1.0)) * 180.0 / M_PI;
+          where = ": mostly a rotation about the axis at azimuth " + format_fixed(azimuth, 1) + "°, elevation " +
+                  format_fixed(elevation, 1) + "° through the marks' centroid";
+        }
+        const double radius_m = parameter_scale(obs).l;
+        const double sigma_m = std::sqrt(gd.direction.dot(sol.cov_scaled * gd.direction));  // displacement at radius_m
+        const std::string what =
+            "the marks' geometry leaves a combination of parameters (" + combination + ")" + where + " determined " +
+            fmt(gd.dilution, 3) + " times less precisely than the translation: σ " + fmt(sigma_m, 3) +
+            " m at the network's RMS radius of " + fmt(radius_m, 4) + " m (" + fmt(sigma_m / radius_m * kArcsecPerRad, 3) +
+            "″)";
+        if (!(gd.dilution <= kRefuseDilution)) {
+          reject("E_FIT_WEAK_GEOMETRY", what + ": the marks are (nearly) collinear or otherwise degenerate for model " +
+                                             std::string(to_string(o.model)) +
+                                             "; add marks off their line, or fit a translation only (--model translation3)");
+        }
+        geometry_warning = "weak geometry: " + what;
+      }
+    }
 
     // --- geocentric parameters and covariance ----------------------------
     std::array<double, kMaxParams> g{};
@@ -727,17 +798,8 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       }
     }
     dof += 3 * velocity_observations;
-    result.dof = dof;
-    result.sigma0 = dof > 0 ? std::sqrt(omega / dof) : 0.0;
-    result.global_test.statistic = omega;
-    result.global_test.applicable = control.has_a_priori_sigmas && dof > 0;
-    if (dof > 0) {
-      result.global_test.critical_lower = chi_squared_quantile(dof, o.alpha / 2.0);
-      result.global_test.critical_upper = chi_squared_quantile(dof, 1.0 - o.alpha / 2.0);
-      result.global_test.passed =
-          omega >= result.global_test.critical_lower && omega <= result.global_test.critical_upper;
-    }
-    const double sigma_scale = o.scale_by_sigma0 && dof > 0 ? result.sigma0 : 1.0;
+    fill_global_test(result, omega, dof, o.alpha, control.has_a_priori_sigmas);
+    const double tau = sigma_scale(result, o);
 
     // Per point: w-tests along local E, N, U; redundancy; MDB.
     using NormalMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxParams, kMaxParams>;
@@ -754,8 +816,6 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       for (int c = 0; c < u; ++c) a.col(c) = ob.w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
       return Eigen::Matrix3d(Eigen::Matrix3d::Identity() + sign * (a * n_inv * a.transpose()));
     };
-    double worst_p = 1.0;
-    std::size_t worst = active.size();
     const geodesy::GeocentricConverter geocentric(geodesy::Ellipsoid::wgs84());
     std::vector<Eigen::Matrix3d> qvs(active.size());  // whitened Q_vv per point, kept for --vce
     for (std::size_t k = 0; k < active.size(); ++k) {
@@ -765,11 +825,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
       PointResult& pr = result.points[active[k]];
       pr.used = true;
-      test_point(PointTestInput{v[k], obs[k].w, qv, enu, true}, sigma_scale, lambda0, pr);
-      if (pr.point_dof > 0 && pr.point_p_value < worst_p) {
-        worst_p = pr.point_p_value;
-        worst = k;
-      }
+      test_point(PointTestInput{v[k], obs[k].w, qv, enu, true}, tau, levels.lambda0, pr);
     }
 
     // --- variance components (--vce) -----------------------------------------
@@ -799,7 +855,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
         reject("E_VCE_INSEPARABLE",
                "--vce: the source and target covariances have nearly the same pattern at every point (correlation of "
                "the two variance estimates " + fmt(rho, 5) +
-                   "), so only their sum is estimable: σ0² = " + fmt(result.sigma0 * result.sigma0, 4) +
+                   "), so only their sum is estimable: σ0² = " + fmt(result.sigma0.value_or(0.0) * result.sigma0.value_or(0.0), 4) +
                    " already estimates it. Separate components need sigmas that differ between points or axes");
       }
       const double new_src = den_src > 0.0 ? f_src * num_src / den_src : f_src;
@@ -813,24 +869,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     }
 
     // --- data snooping ------------------------------------------------------
-    if (o.data_snooping && dof > 0 && worst < active.size() && worst_p < o.alpha_point) {
-      const std::size_t idx = active[worst];
-      PointResult& pr = result.points[idx];
-      const std::string why = "point test " + fmt(pr.point_statistic, 4) + " (χ²(" + std::to_string(pr.point_dof) +
-                              "), p = " + fmt(pr.point_p_value, 2) + " < " + fmt(o.alpha_point) + "); max |w| " +
-                              fmt(pr.w_max) + "; residual E/N/U " + fmt(pr.residual_enu_m.x()) + ", " +
-                              fmt(pr.residual_enu_m.y()) + ", " + fmt(pr.residual_enu_m.z()) + " m";
-      if (n - 1 < min_points(o.model) || 3 * (n - 1) - u <= 0) {
-        result.warnings.push_back("point " + control.points[idx].id + " fails the " + why +
-                                  ", but too few points remain to remove it");
-      } else {
-        pr.outlier = true;
-        pr.used = false;
-        pr.removed_because = "data snooping: " + why;
-        active.erase(active.begin() + static_cast<std::ptrdiff_t>(worst));
-        continue;
-      }
-    }
+    if (snoop(result, active, o, u, min_points(o.model)) == SnoopStep::removed) continue;
 
     // --- points outside the final fit: tested against it ---------------------
     // Their residuals come from the final parameters, and their tests are
@@ -844,47 +883,19 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       Observation ob;
       ob.x = p.source.m - cx;
       ob.y = p.target.m - cy;
-      const Eigen::Matrix3d c = control.has_a_priori_sigmas ? Eigen::Matrix3d(f_dst * p.target_cov_m2 + f_src * p.source_cov_m2)
-                                                            : Eigen::Matrix3d::Identity();
-      const Eigen::LLT<Eigen::Matrix3d> llt(c);
-      if (llt.info() != Eigen::Success) continue;
-      ob.w = llt.matrixL().solve(Eigen::Matrix3d::Identity());
       ob.dt = td ? p.epoch->year - o.reference_epoch->year : 0.0;
+      ob.w = whitening(p, linear_part(sol.theta, ob.dt));
       const Eigen::Vector3d vi = p.target.m - apply_fit(result, p.source, td ? p.epoch : std::nullopt).m;
       const Eigen::Matrix3d q = cofactor(ob, +1.0);
       const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(p.target);
       const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
-      test_point(PointTestInput{vi, ob.w, q, enu, false}, sigma_scale, lambda0, result.points[i]);
+      test_point(PointTestInput{vi, ob.w, q, enu, false}, tau, levels.lambda0, result.points[i]);
     }
 
     // --- report -------------------------------------------------------------
-    if (dof <= 5) {
-      result.warnings.push_back("low redundancy (dof = " + std::to_string(dof) +
-                                "): the global test and the w-tests have little power");
-    }
-    if (o.scale_by_sigma0 && dof > 0) cov *= result.sigma0 * result.sigma0;
-    result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && dof > 0;
-    {
-      // Propagation in the centred parameters, where the Jacobian is predict()'s.
-      auto prop = std::make_shared<detail::Propagation>();
-      prop->covariance = sol.cov_centred * (result.covariance_scaled_by_sigma0 ? result.sigma0 * result.sigma0 : 1.0);
-      const auto theta = sol.theta;
-      const auto estimated = sol.estimated;
-      const auto model = o.rotation_model;
-      const double t0 = o.reference_epoch ? o.reference_epoch->year : 0.0;
-      prop->jacobian = [=](const geodesy::EcefPosition& x, std::optional<DecimalYear> epoch) {
-        Observation ob;
-        ob.x = x.m - cx;
-        ob.dt = td ? epoch.value().year - t0 : 0.0;
-        Eigen::Vector3d pred;
-        Eigen::Matrix<double, 3, kMaxParams> j;
-        predict(ob, theta.data(), model, td, pred, &j);
-        Eigen::MatrixXd out(3, static_cast<Eigen::Index>(estimated.size()));
-        for (std::size_t c = 0; c < estimated.size(); ++c) out.col(static_cast<Eigen::Index>(c)) = j.col(estimated[c]);
-        return out;
-      };
-      result.propagation = prop;
-    }
+    if (!geometry_warning.empty()) result.warnings.push_back(geometry_warning);
+    if (o.scale_by_sigma0 && result.sigma0) cov *= *result.sigma0 * *result.sigma0;
+    result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && result.sigma0.has_value();
 
     // Names and unit factors, in the reported convention.
     const bool cf = result.convention == Convention::coordinate_frame;
@@ -899,13 +910,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     Eigen::VectorXd f(u);
     for (int a = 0; a < u; ++a) f(a) = factor(sol.estimated[static_cast<std::size_t>(a)]);
     result.covariance = symmetric(f.asDiagonal() * cov * f.asDiagonal());
-    result.correlation = result.covariance;
-    for (int a = 0; a < u; ++a) {
-      for (int b = 0; b < u; ++b) {
-        result.correlation(a, b) = result.covariance(a, b) /
-                                   std::sqrt(result.covariance(a, a) * result.covariance(b, b));
-      }
-    }
+    result.correlation = correlation_of(result.covariance);
     result.covariance_names.clear();
     for (int a = 0; a < u; ++a) result.covariance_names.emplace_back(names[sol.estimated[static_cast<std::size_t>(a)]]);
     result.parameters.clear();
@@ -963,30 +968,27 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
             (worst_multiple > 0.999999 ? "1 - " + fmt(1.0 - worst_multiple, 2) : fmt(worst_multiple, 6)) +
             "; largest pairwise |corr(" + pair +
             ")| = " + fmt(worst_pair, 4) +
-            ". The network is small compared with its distance from the Earth's centre: the transform is sound, "
+            ". The network is small compared with its distance from the Earth's centre: " +
+            (geometry_warning.empty() ? "the transform is sound, " : "") +
             "its geocentric parameters are not individually meaningful; consider --model molodensky-badekas");
       }
     }
-    // Implausible magnitudes for a datum transform (RELIABILITY #15).
-    for (const auto& p : result.parameters) {
-      if ((p.name == "rx_arcsec" || p.name == "ry_arcsec" || p.name == "rz_arcsec") && std::fabs(p.value) > 10.0) {
-        result.warnings.push_back(p.name + " = " + fmt(p.value, 4) + "″ is implausible for a datum transform (> 10″, " +
-                                  fmt(std::fabs(p.value) * 30.9, 3) + " m at the Earth's surface): check the convention, "
-                                  "units (mas read as arcsec?) and the points");
+    // Implausible magnitudes for a datum transform (RELIABILITY #15), as
+    // reported (for Molodensky-Badekas: at the pivot).
+    {
+      geodesy::Helmert7<geodesy::PositionVector> as_reported;
+      for (const auto& p : result.parameters) {
+        if (p.name == "tx_m") as_reported.t_m.x() = p.value;
+        if (p.name == "ty_m") as_reported.t_m.y() = p.value;
+        if (p.name == "tz_m") as_reported.t_m.z() = p.value;
+        if (p.name == "rx_arcsec") as_reported.rx = Angle::arcseconds(p.value);
+        if (p.name == "ry_arcsec") as_reported.ry = Angle::arcseconds(p.value);
+        if (p.name == "rz_arcsec") as_reported.rz = Angle::arcseconds(p.value);
+        if (p.name == "ds_ppm") as_reported.ds = geodesy::ScaleDifference::ppm(p.value);
       }
-      if (p.name == "ds_ppm" && std::fabs(p.value) > 100.0) {
-        result.warnings.push_back("ds_ppm = " + fmt(p.value, 4) + " is implausible for a datum transform (> 100 ppm, " +
-                                  fmt(std::fabs(p.value) * 6.4, 3) + " m at the Earth's surface): check the units");
-      }
+      for (auto& w : geodesy::implausible_parameter_warnings(as_reported)) result.warnings.push_back(std::move(w));
     }
-    if (result.global_test.applicable && !result.global_test.passed) {
-      result.warnings.push_back(
-          std::string("global test ") +
-          (omega > result.global_test.critical_upper ? "FAILED high: residuals are larger than the a-priori sigmas allow"
-                                                     : "low: residuals are smaller than the a-priori sigmas suggest "
-                                                       "(sigmas too pessimistic?)") +
-          " (σ0 = " + fmt(result.sigma0, 4) + ")");
-    }
+    add_statistics_warnings(result);
     result.ceres_iterations = sol.iterations;
     result.ceres_report = sol.report;
     result.rotation_model = o.rotation_model;

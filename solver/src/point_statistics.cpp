@@ -2,13 +2,17 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 
+#include "fit_common.hpp"
 #include "statistics.hpp"
 
 namespace geoanchor::solver {
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
 
 void test_point(const PointTestInput& in, double sigma_scale, double lambda0, PointResult& pr) {
   const Eigen::Vector3d vw = in.w * in.v_m;
@@ -38,32 +42,41 @@ void test_point(const PointTestInput& in, double sigma_scale, double lambda0, Po
 
   // w-tests (Baarda) for a blunder along each local axis.
   pr.w_max = 0.0;
-  pr.mdb_m = in.in_fit ? 0.0 : std::numeric_limits<double>::quiet_NaN();  // outside the fit: no detectability
+  pr.mdb_m = in.in_fit ? 0.0 : kNaN;  // outside the fit: no detectability
   for (int axis = 0; axis < 3; ++axis) {
     const Eigen::Vector3d b = in.w * in.enu.row(axis).transpose();  // blunder direction, whitened
     const double q = b.dot(in.q * b);
     if (!(q > 1e-12 * b.squaredNorm())) {  // no redundancy along this axis: the blunder is invisible
-      pr.w_enu(axis) = 0.0;
+      pr.w_enu(axis) = kNaN;
       pr.redundancy_enu(axis) = 0.0;
-      pr.mdb_m = std::numeric_limits<double>::infinity();
+      if (in.in_fit) pr.mdb_m = std::numeric_limits<double>::infinity();
       continue;
     }
     const double w = b.dot(vw) / std::sqrt(q) / sigma_scale;  // τ-test when σ0 is estimated
     pr.w_enu(axis) = w;
-    pr.w_max = std::max(pr.w_max, std::fabs(w));
+    if (!(std::fabs(w) <= pr.w_max)) pr.w_max = std::fabs(w);
     if (in.in_fit) {
       pr.redundancy_enu(axis) = q / b.squaredNorm();
-      pr.mdb_m = std::max(pr.mdb_m, std::sqrt(lambda0) * sigma_scale / std::sqrt(q));
+      const double mdb = std::sqrt(lambda0) * sigma_scale / std::sqrt(q);
+      if (!(mdb <= pr.mdb_m)) pr.mdb_m = mdb;
     } else {
       pr.redundancy_enu(axis) = 0.0;
     }
   }
 }
 
+PointTestLevels point_test_levels(const FitOptions& o) {
+  PointTestLevels l;
+  l.w_critical = normal_quantile(1.0 - o.alpha_point / 2.0);
+  l.lambda0 = std::pow(l.w_critical + normal_quantile(o.power), 2.0);
+  return l;
+}
+
 void fill_global_test(FitResult& r, double omega, int dof, double alpha, bool a_priori_sigmas) {
   r.dof = dof;
-  r.sigma0 = dof > 0 ? std::sqrt(omega / dof) : 0.0;
+  r.sigma0 = dof > 0 ? std::optional<double>(std::sqrt(omega / dof)) : std::nullopt;
   auto& g = r.global_test;
+  g = GlobalTest{};
   g.statistic = omega;
   g.applicable = a_priori_sigmas && dof > 0;
   if (dof > 0) {
@@ -73,6 +86,8 @@ void fill_global_test(FitResult& r, double omega, int dof, double alpha, bool a_
   }
 }
 
+double sigma_scale(const FitResult& r, const FitOptions& o) { return o.scale_by_sigma0 && r.sigma0 ? *r.sigma0 : 1.0; }
+
 Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov) {
   Eigen::MatrixXd c = cov;
   for (Eigen::Index a = 0; a < cov.rows(); ++a) {
@@ -81,9 +96,12 @@ Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov) {
   return c;
 }
 
-std::optional<std::size_t> snoop(FitResult& r, const std::vector<std::size_t>& active, const FitOptions& o, int u) {
-  const int n = static_cast<int>(active.size());
-  if (!o.data_snooping || r.dof <= 0 || 3 * (n - 1) - u <= 0) return std::nullopt;
+std::size_t max_snooped(std::size_t n, const FitOptions& o) {
+  return std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(o.max_outlier_share * static_cast<double>(n))));
+}
+
+SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions& o, int u, int min_points) {
+  if (!o.data_snooping || r.dof <= 0) return SnoopStep::none;
   double worst_p = 1.0;
   std::optional<std::size_t> worst;
   for (std::size_t k = 0; k < active.size(); ++k) {
@@ -93,15 +111,71 @@ std::optional<std::size_t> snoop(FitResult& r, const std::vector<std::size_t>& a
       worst = k;
     }
   }
-  if (!worst || worst_p >= o.alpha_point) return std::nullopt;
+  if (!worst || !(worst_p < o.alpha_point)) return SnoopStep::none;
   PointResult& pr = r.points[active[*worst]];
-  char why[200];
-  std::snprintf(why, sizeof why, "data snooping: point test %.4g (χ²(%d), p = %.2g < %.3g); max |w| %.3g", pr.point_statistic,
-                pr.point_dof, pr.point_p_value, o.alpha_point, pr.w_max);
+  const std::string why = "point test " + fmt(pr.point_statistic, 4) + " (χ²(" + std::to_string(pr.point_dof) +
+                          "), p = " + fmt(pr.point_p_value, 2) + " < " + fmt(o.alpha_point) + "); max |w| " +
+                          fmt(pr.w_max) + "; residual E/N/U " + fmt(pr.residual_enu_m.x()) + ", " +
+                          fmt(pr.residual_enu_m.y()) + ", " + fmt(pr.residual_enu_m.z()) + " m";
+  const int n = static_cast<int>(active.size());
+  if (n - 1 < min_points || 3 * (n - 1) - u <= 0) {
+    r.warnings.push_back("point " + pr.id + " fails the " + why + ", but too few points remain to remove it");
+    return SnoopStep::stopped;
+  }
+  const std::size_t marks = r.points.size();
+  const std::size_t removed = static_cast<std::size_t>(std::count_if(r.points.begin(), r.points.end(),
+                                                                     [](const PointResult& p) { return p.outlier; }));
+  if (removed + 1 > max_snooped(marks, o)) {
+    const auto& g = r.global_test;
+    std::string global;
+    if (g.applicable) {
+      global = std::string("; the global test ") + (g.passed ? "passes" : g.statistic > g.critical_upper ? "fails high" : "fails low") +
+               " (" + fmt(g.statistic, 4) + " vs [" + fmt(g.critical_lower, 4) + ", " + fmt(g.critical_upper, 4) +
+               "], σ0 = " + fmt(r.sigma0.value_or(0.0), 4) + ")";
+    }
+    r.refused_because = "data snooping stopped after removing " + std::to_string(removed) + " of " +
+                        std::to_string(marks) + " marks (the limit is " + fmt(100.0 * o.max_outlier_share, 3) +
+                        " %, --max-outlier-share): " + pr.id + " still fails its " + why + global +
+                        ". So many failing marks mean the data or the model is wrong (frames, units, height types, "
+                        "quantized coordinates), not a few blunders";
+    r.warnings.push_back(r.refused_because);
+    return SnoopStep::stopped;
+  }
   pr.outlier = true;
   pr.used = false;
-  pr.removed_because = why;
-  return worst;
+  pr.removed_because = "data snooping: " + why;
+  active.erase(active.begin() + static_cast<std::ptrdiff_t>(*worst));
+  return SnoopStep::removed;
+}
+
+GeometryDilution geometry_dilution(const Eigen::MatrixXd& scaled_cov, const std::vector<int>& translations) {
+  GeometryDilution g;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled_cov);
+  const Eigen::Index top = scaled_cov.rows() - 1;
+  double reference = 0.0;
+  for (int t : translations) reference += scaled_cov(t, t) / static_cast<double>(translations.size());
+  g.dilution = std::sqrt(std::max(eig.eigenvalues()(top), 0.0) / reference);
+  g.direction = eig.eigenvectors().col(top);
+  return g;
+}
+
+void add_statistics_warnings(FitResult& r) {
+  if (r.dof <= 0) {
+    r.warnings.push_back("no redundancy (dof = " + std::to_string(r.dof) +
+                         "): σ0, the global test and the point tests are undefined; the residuals are zero by "
+                         "construction and prove nothing");
+  } else if (r.dof <= 5) {
+    r.warnings.push_back("low redundancy (dof = " + std::to_string(r.dof) +
+                         "): the global test and the w-tests have little power");
+  }
+  const auto& g = r.global_test;
+  if (g.applicable && !g.passed) {
+    r.warnings.push_back(std::string("global test ") +
+                         (g.statistic > g.critical_upper ? "FAILED high: residuals are larger than the a-priori sigmas allow"
+                                                         : "low: residuals are smaller than the a-priori sigmas suggest "
+                                                           "(sigmas too pessimistic?)") +
+                         " (σ0 = " + fmt(r.sigma0.value_or(0.0), 4) + ")");
+  }
 }
 
 }  // namespace geoanchor::solver

@@ -80,9 +80,8 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
   }
   const geodesy::TransverseMercator tm(grid);
 
-  const double z_point = normal_quantile(1.0 - o.alpha_point / 2.0);
-  result.w_critical = z_point;
-  const double lambda0 = std::pow(z_point + normal_quantile(o.power), 2.0);
+  const PointTestLevels levels = point_test_levels(o);
+  result.w_critical = levels.w_critical;
 
   // Per point: local e, n, u; the target on the grid; covariances in
   // (grid E, grid N, up). The grid axes differ from local east/north by the
@@ -114,6 +113,7 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
   };
 
   std::array<double, kParams> params{};
+  std::string geometry_warning;
   while (true) {
     const int n = static_cast<int>(active.size());
     double e0 = 0.0, n0 = 0.0;
@@ -150,13 +150,32 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
         problem->AddResidualBlock(new ceres::AutoDiffCostFunction<SiteCost, 3, kParams>(new SiteCost{ob, e0, n0}), nullptr,
                                   params.data());
       }
-      const ceres::Solver::Summary summary = solve_tightly(*problem, ceres::DENSE_QR);
+      const ceres::Solver::Summary summary = solve_tightly(*problem, ceres::DENSE_QR, o.max_solver_iterations);
       result.ceres_iterations = static_cast<int>(summary.iterations.size());
       result.ceres_report = summary.BriefReport();
       similarity << params[2], -params[3], params[3], params[2];
     }
     const Eigen::Matrix<double, kParams, kParams> cov7 =
         covariance_or_reject(*problem, std::vector<const double*>{params.data()}, kParams);
+    // The geometry check, with a, b and the slopes times the plan's RMS
+    // radius (then each parameter moves points by metres there).
+    {
+      const double radius_m = std::sqrt(scatter.trace() / n);
+      Eigen::Matrix<double, kParams, 1> sc;
+      sc << 1.0, 1.0, radius_m, radius_m, 1.0, radius_m, radius_m;
+      const GeometryDilution gd = geometry_dilution(sc.asDiagonal() * cov7 * sc.asDiagonal(), {0, 1, 4});
+      if (!(gd.dilution <= kRefuseDilution)) {
+        reject("E_FIT_WEAK_GEOMETRY", "the site points' geometry leaves the rotation, scale or cross-tilt determined " +
+                                          fmt(gd.dilution, 3) +
+                                          " times less precisely than the shifts: they are "
+                                          "(nearly) collinear in plan; add a point off their line");
+      }
+      geometry_warning.clear();
+      if (!(gd.dilution <= kWarnDilution)) {
+        geometry_warning = "weak geometry: the site points determine the rotation, scale and tilts " + fmt(gd.dilution, 3) +
+                           " times less precisely than the shifts";
+      }
+    }
 
     geodesy::SiteCalibrationParams sp;
     sp.shift_e_m = params[0];
@@ -180,7 +199,7 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
     }
     const int dof = 3 * n - kParams;
     fill_global_test(result, omega, dof, o.alpha, control.has_a_priori_sigmas);
-    const double sigma_scale = o.scale_by_sigma0 && dof > 0 ? result.sigma0 : 1.0;
+    const double scale = sigma_scale(result, o);
     auto tests = [&](const SiteObs& ob, const Eigen::Vector3d& vi, bool in_fit, PointResult& pr) {
       ceres::AutoDiffCostFunction<SiteCost, 3, kParams> f(new SiteCost{ob, e0, n0});
       double res[3] = {}, jac[3 * kParams] = {};
@@ -189,16 +208,13 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
       f.Evaluate(ps, res, jacs);
       const Eigen::Map<Eigen::Matrix<double, 3, kParams, Eigen::RowMajor>> aw(jac);
       const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() + (in_fit ? -1.0 : 1.0) * aw * cov7 * aw.transpose();
-      test_point(PointTestInput{vi, ob.w, q, Eigen::Matrix3d::Identity(), in_fit}, sigma_scale, lambda0, pr);
+      test_point(PointTestInput{vi, ob.w, q, Eigen::Matrix3d::Identity(), in_fit}, scale, levels.lambda0, pr);
     };
     for (std::size_t m = 0; m < active.size(); ++m) {
       result.points[active[m]].used = true;
       tests(obs[m], v[m], true, result.points[active[m]]);
     }
-    if (const auto removed = snoop(result, active, o, kParams)) {
-      active.erase(active.begin() + static_cast<std::ptrdiff_t>(*removed));
-      continue;
-    }
+    if (snoop(result, active, o, kParams, 3) == SnoopStep::removed) continue;
     std::vector<bool> in_fit(control.points.size(), false);
     for (std::size_t i : active) in_fit[i] = true;
     for (std::size_t i = 0; i < control.points.size(); ++i) {
@@ -215,8 +231,8 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
     jr(3, 3) = b / k * 1e6;
     jr(5, 5) = jr(6, 6) = 1e6;
     Eigen::MatrixXd cov = jr * cov7 * jr.transpose();
-    if (o.scale_by_sigma0 && dof > 0) cov *= result.sigma0 * result.sigma0;
-    result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && dof > 0;
+    if (o.scale_by_sigma0 && result.sigma0) cov *= *result.sigma0 * *result.sigma0;
+    result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && result.sigma0.has_value();
     result.covariance = symmetric(cov);
     result.correlation = correlation_of(cov);
     result.covariance_names = {"shift_e_m", "shift_n_m", "rotation_arcsec", "scale_ppm", "vertical_shift_m", "slope_n_ppm",
@@ -231,29 +247,8 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
     result.parameters.push_back(Parameter{"centroid_n_m", n0, 0.0, false});
     result.parameters.push_back(Parameter{"grid_lat0_deg", grid.tm.lat0.deg(), 0.0, false});
     result.parameters.push_back(Parameter{"grid_lon0_deg", grid.tm.lon0.deg(), 0.0, false});
-    {
-      auto prop = std::make_shared<detail::Propagation>();
-      prop->covariance = cov7 * (result.covariance_scaled_by_sigma0 ? result.sigma0 * result.sigma0 : 1.0);
-      const auto cal = *result.site_calibration;
-      const double ce = e0, cn = n0;
-      const auto pl = plane;
-      prop->jacobian = [=](const geodesy::EcefPosition& x, std::optional<geodesy::DecimalYear>) {
-        // ∂(E, N, h)/∂θ at the point, taken to ECEF through local east/north/up.
-        const Eigen::Vector3d l = pl.enu_from_ecef(x).enu_m;
-        Eigen::Matrix<double, 3, kParams> jg;
-        jg << 1, 0, l.x(), -l.y(), 0, 0, 0,  //
-            0, 1, l.y(), l.x(), 0, 0, 0,       //
-            0, 0, 0, 0, 1, l.y() - cn, l.x() - ce;
-        const geodesy::GeodeticPosition g =
-            geodesy::GeocentricConverter(cal.grid().ellipsoid).geodetic_from_ecef(cal.target_from_source(x));
-        return Eigen::MatrixXd(geodesy::enu_from_ecef_rotation(g.lat, g.lon).transpose() * jg);
-      };
-      result.propagation = prop;
-    }
-    if (dof <= 5) {
-      result.warnings.push_back("low redundancy (dof = " + std::to_string(dof) +
-                                "): the global test and the w-tests have little power");
-    }
+    if (!geometry_warning.empty()) result.warnings.push_back(geometry_warning);
+    add_statistics_warnings(result);
     return result;
   }
 }

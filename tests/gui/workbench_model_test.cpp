@@ -11,12 +11,14 @@
 #include <fstream>
 
 #include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/gui/fit_export.hpp"
+#include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/gui/workbench_model.hpp"
 #include "geoanchor/io/control_csv.hpp"
 
 namespace geoanchor::gui {
 namespace {
+using workflow::FitChoices;
+using workflow::fit_choices_from_transform;
 
 const std::string kControl = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv";
 

@@ -5,14 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <limits>
 #include <map>
 #include <random>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
-#include "geoanchor/gui/fit_export.hpp"
-#include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
+#include "generated_control.hpp"
 #include "proj_reference.hpp"
 #include "test_support.hpp"
 
@@ -35,38 +35,8 @@ constexpr double kDecorrelatedTol = 0.2;     // |corr(t, r)| about the centroid 
 constexpr double kGeocentricCorrelatedFloor = 0.5;  // geocentric t and r of a 3 km network: strongly correlated
 constexpr double kSameFitSigma0Tol = 1e-9;   // one fit, two parametrisations
 
-// Points spread over a region: `n` marks within `radius_deg` of (lat, lon).
-std::vector<EcefPosition> region(std::size_t n, double lat, double lon, double radius_deg, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> d(-radius_deg, radius_deg), h(-50.0, 2000.0);
-  const geodesy::GeocentricConverter conv(geodesy::Ellipsoid::grs80());
-  std::vector<EcefPosition> out;
-  for (std::size_t i = 0; i < n; ++i) {
-    out.push_back(conv.ecef_from_geodetic({Angle::degrees(std::clamp(lat + d(rng), -89.0, 89.0)),
-                                           Angle::degrees(lon + d(rng)), geodesy::EllipsoidalHeight{h(rng)}}));
-  }
-  return out;
-}
-
-ControlSet control_from_proj(const std::vector<EcefPosition>& src, const std::string& proj, double sigma_m,
-                             const std::vector<double>& epochs = {}) {
-  const ProjPipeline pipe(proj);
-  ControlSet set;
-  set.source_name = "generated";
-  for (std::size_t i = 0; i < src.size(); ++i) {
-    ControlPoint p;
-    p.id = "P" + std::to_string(i);
-    p.line = i + 2;
-    p.source = src[i];
-    const double t = epochs.empty() ? 0.0 : epochs[i % epochs.size()];
-    if (!epochs.empty()) p.epoch = DecimalYear{t};
-    p.target = EcefPosition(pipe.forward(src[i].m, t));
-    p.source_cov_m2 = Eigen::Matrix3d::Identity() * sigma_m * sigma_m / 2.0;
-    p.target_cov_m2 = Eigen::Matrix3d::Identity() * sigma_m * sigma_m / 2.0;
-    set.points.push_back(p);
-  }
-  return set;
-}
+using testing::control_from_proj;
+using testing::region;
 
 double param(const FitResult& r, const std::string& name) {
   for (const auto& p : r.parameters) {
@@ -215,9 +185,11 @@ TEST(HelmertFit, MolodenskyBadekasAboutTheCentroidDecorrelatesTranslationFromRot
                            [](const std::string& w) { return w.find("weak geometry") != std::string::npos; }));
   // The 20″ rotation of this synthetic set is flagged as implausible for a datum transform.
   EXPECT_TRUE(std::any_of(mb.warnings.begin(), mb.warnings.end(),
-                          [](const std::string& w) { return w.find("rz_arcsec") != std::string::npos; }));
+                          [](const std::string& w) { return w.rfind("rz = ", 0) == 0 && w.find("implausible") != std::string::npos; }))
+      << ::testing::PrintToString(mb.warnings);
   // Same transform, two parametrisations: identical residuals and σ0.
-  EXPECT_NEAR(mb.sigma0, h7.sigma0, kSameFitSigma0Tol);
+  ASSERT_TRUE(mb.sigma0 && h7.sigma0);
+  EXPECT_NEAR(*mb.sigma0, *h7.sigma0, kSameFitSigma0Tol);
   for (std::size_t i = 0; i < set.points.size(); ++i) {
     EXPECT_LT((mb.points[i].residual_enu_m - h7.points[i].residual_enu_m).norm(), kResidualTol_m);
   }
@@ -300,7 +272,7 @@ TEST(HelmertFit, MonteCarloSigmasCoverTheTruthAndSigma0IsOne) {
       p.target.m += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
     }
     const FitResult r = fit_helmert(set, o);
-    sigma0_sum += r.sigma0;
+    sigma0_sum += r.sigma0.value_or(std::numeric_limits<double>::quiet_NaN());
     for (std::size_t k = 0; k < 7; ++k) {
       if (std::fabs(r.parameters[k].value - truth_fit.parameters[k].value) <= 1.96 * r.parameters[k].sigma) ++covered[k];
     }
@@ -443,7 +415,6 @@ struct AirportMap {
 
 constexpr double kYawTruth_arcsec = 20.0;
 constexpr double kEnuOriginTol_m = 0.001;  // issue acceptance: corrected to 1 mm without noise
-constexpr double kRelativeTraceTol = 1e-9;  // a rotation leaves the trace unchanged up to rounding
 
 std::string topocentric(double lat, double lon, double h) {
   char def[200];
@@ -498,11 +469,6 @@ TEST(EnuOriginFit, CorrectsAWrongOriginAndYawToAMillimetreWithoutNoise) {
   EXPECT_THAT(corrected, testing::IsNearVector(m.true_origin_ecef, kEnuOriginTol_m));
   EXPECT_NEAR(param(r, "yaw_arcsec"), kYawTruth_arcsec, kEnuOriginTol_m / 3000.0 * 206264.8);
   for (const auto& p : r.points) EXPECT_LT(p.residual_enu_m.norm(), kEnuOriginTol_m) << p.id;
-  // At the map's own origin only the shift matters: the propagated covariance
-  // is the shift's, rotated (same trace).
-  const EcefPosition at_origin = geodesy::ecef_from_geodetic(geodesy::Ellipsoid::wgs84(), m.nominal.point);
-  const double shift_trace = r.covariance.topLeftCorner(3, 3).trace();
-  EXPECT_NEAR(transformed_covariance_m2(r, at_origin, std::nullopt).trace(), shift_trace, kRelativeTraceTol * shift_trace);
   // The shift is the true origin seen from the nominal one: about (−0.30, 0.20, −0.05) m.
   EXPECT_NEAR(param(r, "shift_e_m"), -0.30, kEnuOriginTol_m);
   EXPECT_NEAR(param(r, "shift_n_m"), 0.20, kEnuOriginTol_m);
@@ -532,70 +498,6 @@ TEST(EnuOriginFit, WithOneCentimetreNoiseTheTruthIsWithinTwoSigma) {
   }
   for (const auto& [name, count] : within) EXPECT_GE(count, kTrials * 90 / 100) << name;
   EXPECT_EQ(within.size(), 4u);
-}
-
-
-// The propagated uncertainty of a transformed point is what Monte Carlo
-// shows: the spread of transformed positions over noisy fits.
-TEST(TransformedCovariance, MatchesTheMonteCarloSpreadAndGrowsAwayFromTheNetwork) {
-  constexpr int kTrials = 400;
-  constexpr double kSpreadRelTol = 0.15;  // the sample σ of 400 trials is within ~7 % of the truth (2σ)
-  const auto src = region(20, 47.46, 8.55, 0.03, 41);
-  const ControlSet clean = control_from_proj(
-      src, "+proj=helmert +x=0.5 +y=-0.3 +z=0.8 +rx=0.12 +ry=-0.05 +rz=0.2 +s=1.2 +convention=position_vector", 0.005);
-  FitOptions o;
-  o.model = FitModel::helmert7;
-  o.convention = Convention::position_vector;
-  o.data_snooping = false;
-  const geodesy::GeocentricConverter conv(geodesy::Ellipsoid::grs80());
-  const EcefPosition near = conv.ecef_from_geodetic({Angle::degrees(47.46), Angle::degrees(8.55), geodesy::EllipsoidalHeight{500}});
-  const EcefPosition far = conv.ecef_from_geodetic({Angle::degrees(47.9), Angle::degrees(9.3), geodesy::EllipsoidalHeight{500}});
-  const FitResult base = fit_helmert(clean, o);
-  const Eigen::Matrix3d c_near = transformed_covariance_m2(base, near, std::nullopt);
-  const Eigen::Matrix3d c_far = transformed_covariance_m2(base, far, std::nullopt);
-  EXPECT_GT(c_far.trace(), 4.0 * c_near.trace());  // 60 km out vs the centre of a 3 km network
-
-  std::mt19937_64 rng(43);
-  std::normal_distribution<double> noise(0.0, 0.005 / std::sqrt(2.0));
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d sum2 = Eigen::Matrix3d::Zero();
-  for (int t = 0; t < kTrials; ++t) {
-    ControlSet set = clean;
-    for (auto& p : set.points) {
-      p.source.m += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
-      p.target.m += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
-    }
-    const Eigen::Vector3d y = apply_fit(fit_helmert(set, o), far, std::nullopt).m - apply_fit(base, far, std::nullopt).m;
-    sum += y;
-    sum2 += y * y.transpose();
-  }
-  const Eigen::Matrix3d sample = (sum2 - sum * sum.transpose() / kTrials) / (kTrials - 1);
-  EXPECT_NEAR(std::sqrt(sample.trace()), std::sqrt(c_far.trace()), kSpreadRelTol * std::sqrt(c_far.trace()));
-}
-
-// What apply reports from a transform file (sigmas and correlation as
-// written by fit and read back, Jacobian by central differences) against the solver's analytic
-// J Σθ Jᵀ from the same fit.
-TEST(TransformedCovariance, TheTransformFileGivesTheSolversCovariance) {
-  constexpr double kRelativeTol = 1e-6;
-  const auto src = region(20, 47.46, 8.55, 0.03, 44);
-  const ControlSet set = control_from_proj(
-      src, "+proj=helmert +x=0.5 +y=-0.3 +z=0.8 +rx=0.12 +ry=-0.05 +rz=0.2 +s=1.2 +convention=position_vector", 0.005);
-  FitOptions o;
-  o.model = FitModel::helmert7;
-  o.convention = Convention::position_vector;
-  const FitResult r = fit_helmert(set, o);
-  // The file as `fit -o` writes it and `apply` reads it back.
-  const io::TransformFile t =
-      io::parse_transform_json(io::to_json_text(gui::transform_file_from_fit(r, set, o, {}, "test")), "fit.json");
-  const geodesy::GeocentricConverter conv(geodesy::Ellipsoid::grs80());
-  for (const auto& at : {std::pair{47.46, 8.55}, std::pair{47.9, 9.3}}) {
-    const EcefPosition x = conv.ecef_from_geodetic({Angle::degrees(at.first), Angle::degrees(at.second), geodesy::EllipsoidalHeight{500}});
-    const Eigen::Matrix3d analytic = transformed_covariance_m2(r, x, std::nullopt);
-    const auto numeric = io::propagated_covariance_m2(t, x, std::nullopt, false);
-    ASSERT_TRUE(numeric.has_value());
-    EXPECT_LT((*numeric - analytic).norm(), kRelativeTol * analytic.norm()) << at.first << " " << at.second;
-  }
 }
 
 
@@ -630,7 +532,7 @@ TEST(VarianceComponents, RecoverASourceNoiseStatedTwiceTooSmall) {
   ASSERT_TRUE(r.variance_factors.has_value());
   EXPECT_NEAR(r.variance_factors->first, 4.0, kSourceFactorTol);
   EXPECT_NEAR(r.variance_factors->second, 1.0, kTargetFactorTol);
-  EXPECT_NEAR(r.sigma0, 1.0, kSigma0Tol);
+  EXPECT_NEAR(r.sigma0.value_or(std::numeric_limits<double>::quiet_NaN()), 1.0, kSigma0Tol);
 
   // With the same pattern in both frames at every point, only the sum is estimable: refused.
   for (auto& p : set.points) p.source_cov_m2 = Eigen::Matrix3d::Identity() * 0.003 * 0.003;
@@ -775,6 +677,167 @@ TEST(HelmertFit, FourteenParametersFromPositionsAndVelocitiesAtOneEpoch) {
   EXPECT_NEAR(param(r, "dry_arcsec_per_year"), -0.000357, kRotRateTol_arcsec_per_year);
   EXPECT_NEAR(param(r, "dds_ppm_per_year"), -0.00011, kScaleRateTol_ppm_per_year);
   EXPECT_EQ(r.dof, 6 * 30 - 14);  // velocities count as observations
+}
+
+// --- issue 12: statistics that hold in every model ---------------------------
+
+// Five marks on a straight line of latitude and longitude (a survey along a
+// runway): the rotation about their line is determined only by the line's
+// curvature in ECEF, with σ of hundreds of arc-seconds. Refused, naming it.
+// issue 12 point 8
+TEST(HelmertFit, NearlyCollinearMarksAreRefusedNamingTheUndeterminedRotation) {
+  const geodesy::GeocentricConverter conv(geodesy::Ellipsoid::grs80());
+  std::vector<EcefPosition> src;
+  for (int i = 0; i < 5; ++i) {
+    src.push_back(conv.ecef_from_geodetic({Angle::degrees(47.45 + 0.004 * i), Angle::degrees(8.54 + 0.006 * i),
+                                           geodesy::EllipsoidalHeight{430.0}}));
+  }
+  const ControlSet set = control_from_proj(
+      src, "+proj=helmert +x=0.05 +y=0.05 +z=-0.07 +rx=0.002 +ry=0.014 +rz=-0.021 +s=0.002 +convention=position_vector", 0.005);
+  FitOptions o;
+  o.model = FitModel::helmert7;
+  o.convention = Convention::position_vector;
+  const std::string why = rejection(set, o);
+  EXPECT_EQ(why.rfind("E_FIT_WEAK_GEOMETRY: ", 0), 0u) << why;
+  EXPECT_NE(why.find("rotation about the axis at azimuth"), std::string::npos) << why;
+  EXPECT_EQ(why.find("sound"), std::string::npos) << why;
+  // The same marks with one off the line: accepted.
+  std::vector<EcefPosition> spread = src;
+  spread.push_back(conv.ecef_from_geodetic({Angle::degrees(47.46), Angle::degrees(8.57), geodesy::EllipsoidalHeight{440.0}}));
+  EXPECT_EQ(rejection(control_from_proj(spread, "+proj=helmert +x=0.05 +y=0.05 +z=-0.07 +rx=0.002 +ry=0.014 +rz=-0.021 "
+                                                "+s=0.002 +convention=position_vector",
+                                        0.005),
+                      o),
+            "accepted");
+}
+
+// Zero degrees of freedom: σ0 and the global test are undefined, never 0.
+// issue 12, one home for the statistics
+TEST(HelmertFit, WithoutRedundancySigma0IsUndefinedAndNoTestPasses) {
+  const ControlSet one = tiny({{0, 0, 0}});
+  FitOptions o;
+  o.model = FitModel::translation3;
+  const FitResult r = fit_helmert(one, o);
+  EXPECT_EQ(r.dof, 0);
+  EXPECT_FALSE(r.sigma0.has_value());
+  EXPECT_FALSE(r.global_test.applicable);
+  EXPECT_FALSE(r.global_test.passed);
+  EXPECT_EQ(r.points[0].point_dof, 0);
+  EXPECT_TRUE(std::isnan(r.points[0].w_enu.x()));
+  EXPECT_TRUE(std::any_of(r.warnings.begin(), r.warnings.end(),
+                          [](const std::string& w) { return w.find("no redundancy (dof = 0)") != std::string::npos; }));
+}
+
+// The same snooping in every model: a failing point that cannot be removed
+// is named, never kept silently (enu-origin kept it without a word).
+// issue 12, one home for the statistics
+TEST(EnuOriginFit, AFailingPointThatCannotBeRemovedIsNamed) {
+  AirportMap m = airport_map(0.0, 3);
+  m.set.points.resize(2);
+  m.set.points[1].target.m += Eigen::Vector3d(0.5, 0.0, 0.0);  // 0.5 m with σ 1 mm
+  FitOptions o;
+  o.model = FitModel::enu_origin;
+  o.nominal_origin = m.nominal;
+  const FitResult r = fit_helmert(m.set, o);
+  EXPECT_TRUE(std::any_of(r.warnings.begin(), r.warnings.end(),
+                          [](const std::string& w) { return w.find("too few points remain to remove it") != std::string::npos; }))
+      << ::testing::PrintToString(r.warnings);
+}
+
+// Data snooping stops at its limit and the fit is refused, naming the test
+// that failed: 36 marks with 8 blunders are a wrong data set, not 8 blunders.
+// issue 12 point 4
+TEST(HelmertFit, DataSnoopingPastItsLimitRefusesTheFit) {
+  const auto src = region(36, 47.46, 8.55, 0.03, 61);
+  ControlSet set = control_from_proj(
+      src, "+proj=helmert +x=0.05 +y=0.05 +z=-0.07 +rx=0.002 +ry=0.014 +rz=-0.021 +s=0.002 +convention=position_vector", 0.005);
+  for (std::size_t i = 0; i < 8; ++i) set.points[4 * i].target.m += Eigen::Vector3d(0.3 + 0.05 * static_cast<double>(i), 0.0, 0.0);
+  FitOptions o;
+  o.model = FitModel::helmert7;
+  o.convention = Convention::position_vector;
+  const FitResult r = fit_helmert(set, o);
+  const auto removed = std::count_if(r.points.begin(), r.points.end(), [](const PointResult& p) { return p.outlier; });
+  EXPECT_EQ(removed, 3);  // 10 % of 36, rounded down
+  EXPECT_NE(r.refused_because.find("data snooping stopped after removing 3 of 36 marks"), std::string::npos) << r.refused_because;
+  EXPECT_NE(r.refused_because.find("still fails its point test"), std::string::npos) << r.refused_because;
+  // Within the limit the same blunders are removed and nothing is refused.
+  FitOptions generous = o;
+  generous.max_outlier_share = 0.25;
+  const FitResult g = fit_helmert(set, generous);
+  EXPECT_TRUE(g.refused_because.empty()) << g.refused_because;
+  EXPECT_EQ(std::count_if(g.points.begin(), g.points.end(), [](const PointResult& p) { return p.outlier; }), 8);
+}
+
+// The solver's own refusals: a solve that has not converged, and a
+// covariance that cannot be computed, are refused, never reported.
+// issue 12, tests that can fail
+TEST(HelmertFit, ASolveThatDidNotConvergeIsRefused) {
+  const ControlSet set = control_from_proj(
+      region(20, 47.46, 8.55, 0.03, 71),
+      "+proj=helmert +x=0.5 +y=-0.3 +z=0.8 +rx=0.12 +ry=-0.05 +rz=0.2 +s=1.2 +convention=position_vector", 0.005);
+  FitOptions o;
+  o.model = FitModel::helmert7;
+  o.convention = Convention::position_vector;
+  o.max_solver_iterations = 1;
+  const std::string why = rejection(set, o);
+  EXPECT_EQ(why.rfind("E_FIT_NO_CONVERGENCE: the least-squares solve did not converge (Ceres: NO_CONVERGENCE", 0), 0u) << why;
+  EXPECT_NE(why.find("no transform was written"), std::string::npos);
+}
+
+TEST(HelmertFit, AParameterNoObservationDeterminesIsRefusedByTheCovarianceCheck) {
+  // helmert14 from four marks at one epoch and one mark's velocities: three
+  // velocity components cannot fix seven rates.
+  ControlSet set = tiny({{0, 0, 0}, {1000, 0, 0}, {0, 1000, 0}, {500, 500, 300}});
+  for (auto& p : set.points) p.epoch = DecimalYear{2020.0};
+  set.points[0].source_velocity_m_per_year = Eigen::Vector3d(0.01, 0.0, 0.0);
+  set.points[0].target_velocity_m_per_year = Eigen::Vector3d(0.01, 0.0, 0.0);
+  set.points[0].source_velocity_cov = set.points[0].target_velocity_cov = Eigen::Matrix3d::Identity() * 1e-6;
+  FitOptions o;
+  o.model = FitModel::helmert14;
+  o.convention = Convention::position_vector;
+  const std::string why = rejection(set, o);
+  EXPECT_EQ(why.rfind("E_FIT_COVARIANCE: ", 0), 0u) << why;
+}
+
+// Errors in both frames are weighted by C_target + J C_source Jᵀ with J the
+// fitted (1 + ds) R: with a 30° rotation and a source covariance 100 times
+// larger along x than across, the a-posteriori σ0 of correct weights is 1
+// on average; weighting by C_source unturned would make it about 4.
+// issue 12, docs that disagree with the code (the fit header's promise)
+TEST(HelmertFit, SourceCovariancesAreTurnedWithTheFittedRotation) {
+  constexpr int kTrials = 60;
+  constexpr double kMeanSigma0SqTol = 0.25;  // mean of 60 χ²(dof)/dof with dof ≈ 50: σ ≈ 0.03; wrong weights give ≈ 16
+  const auto src = region(19, 47.46, 8.55, 0.03, 81);
+  const ProjPipeline truth("+proj=helmert +x=100 +y=-50 +z=30 +rx=0 +ry=0 +rz=108000 +s=0 +exact +convention=position_vector");
+  const Eigen::Matrix3d c_src = Eigen::Vector3d(1e-4, 1e-6, 1e-6).asDiagonal();  // 10 mm along x, 1 mm across
+  const Eigen::Matrix3d c_dst = Eigen::Matrix3d::Identity() * 1e-8;
+  const Eigen::LLT<Eigen::Matrix3d> l_src(c_src), l_dst(c_dst);
+  std::mt19937_64 rng(82);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  FitOptions o;
+  o.model = FitModel::helmert7;
+  o.convention = Convention::position_vector;
+  o.rotation_model = geodesy::RotationModel::exact;
+  o.data_snooping = false;
+  double sum = 0.0;
+  for (int t = 0; t < kTrials; ++t) {
+    ControlSet set;
+    set.source_name = "turned";
+    for (std::size_t i = 0; i < src.size(); ++i) {
+      ControlPoint p;
+      p.id = "T" + std::to_string(i);
+      const Eigen::Vector3d true_source = src[i].m;
+      p.source = EcefPosition(Eigen::Vector3d(true_source + l_src.matrixL() * Eigen::Vector3d(unit(rng), unit(rng), unit(rng))));
+      p.target = EcefPosition(Eigen::Vector3d(truth.forward(true_source) + l_dst.matrixL() * Eigen::Vector3d(unit(rng), unit(rng), unit(rng))));
+      p.source_cov_m2 = c_src;
+      p.target_cov_m2 = c_dst;
+      set.points.push_back(p);
+    }
+    const FitResult r = fit_helmert(set, o);
+    ASSERT_TRUE(r.sigma0.has_value());
+    sum += *r.sigma0 * *r.sigma0;
+  }
+  EXPECT_NEAR(sum / kTrials, 1.0, kMeanSigma0SqTol);
 }
 
 }  // namespace

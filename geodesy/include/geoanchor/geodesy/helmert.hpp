@@ -31,7 +31,9 @@
 #include <Eigen/Core>
 
 #include <concepts>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "geoanchor/geodesy/affine.hpp"
 #include "geoanchor/geodesy/positions.hpp"
@@ -129,5 +131,23 @@ Helmert7<C> negated_parameters(const Helmert7<C>& h) {
   out.ds = -h.ds;
   return out;
 }
+
+// Plausibility of a datum transform's parameters (RELIABILITY #15): between
+// geocentric or near-geocentric frames, translations stay below a few
+// hundred metres (Tokyo → JGD2000, among the largest classical shifts, is
+// about 860 m), rotations below a few arc-seconds and scale differences
+// below some tens of ppm. Larger values are usually a wrong unit (mas read
+// as arc-seconds, ppb as ppm), a wrong convention, or local coordinates fitted
+// as if geocentric. One set of limits serves `fit`, `convert` and `apply`.
+inline constexpr double kPlausibleTranslation_m = 1000.0;
+inline constexpr double kPlausibleRotation_arcsec = 10.0;
+inline constexpr double kPlausibleScale_ppm = 100.0;
+// One warning per implausible parameter, quoting its effect at the Earth's
+// surface; empty when all are plausible. For a 14-parameter set pass the
+// parameters at the epoch of use (evaluate_at).
+template <RotationConvention C>
+std::vector<std::string> implausible_parameter_warnings(const Helmert7<C>& h);
+extern template std::vector<std::string> implausible_parameter_warnings(const Helmert7<PositionVector>&);
+extern template std::vector<std::string> implausible_parameter_warnings(const Helmert7<CoordinateFrame>&);
 
 }  // namespace geoanchor::geodesy

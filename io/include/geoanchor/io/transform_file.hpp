@@ -42,8 +42,8 @@ std::string_view to_string(TransformModel m);
 struct FitPointRecord {
   std::string id;
   std::array<double, 3> residual_enu_m{};
-  double w_test = 0.0;                 // the w-test of largest magnitude, signed
-  std::array<double, 3> w_enu{};       // w-tests along local E, N, U
+  double w_test = 0.0;                 // the w-test of largest magnitude, signed (NaN: untestable, written null)
+  std::array<double, 3> w_enu{};       // w-tests along local E, N, U (NaN: untestable, written null)
   std::array<double, 3> redundancy_enu{};
   double mdb_m = 0.0;
   double point_test = 0.0;
@@ -77,7 +77,7 @@ struct FitRecord {
   std::vector<std::string> correlation_names;
   std::vector<std::vector<double>> correlation;
   bool sigmas_scaled_by_sigma0 = false;
-  double sigma0 = 0.0;
+  std::optional<double> sigma0;  // undefined without redundancy (written as null)
   int dof = 0;
   double alpha = 0.05;
   double alpha_point = 0.001;

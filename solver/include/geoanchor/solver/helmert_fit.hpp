@@ -6,7 +6,10 @@
 //   target_i = T(t_i) + (1 + ds(t_i)) · R(r(t_i)) · source_i + e_i
 // with p(t) = p + ṗ·(t − t_ref) for helmert14 and p(t) = p otherwise.
 // Errors are allowed in both frames: each point is weighted by the inverse
-// of C_target + J C_source Jᵀ (J = (1 + ds) R at the first estimate).
+// of C_target + J C_source Jᵀ, with J = (1 + ds) R the linear part of the
+// transform at the point's epoch: the solve runs first with J = I, then with
+// J from the estimate until J changes by less than 1e-12 (two or three
+// passes; it matters for large rotations of anisotropic covariances).
 //
 // The solve runs in Ceres on centroid-referenced parameters (well
 // conditioned even for a 2 km network, where geocentric translations and
@@ -16,6 +19,10 @@
 // same minimiser and the same JᵀJ as the one with 3n residuals: fitting 10⁶
 // points takes about a second. The parameter covariance is ceres::Covariance
 // (DENSE_SVD) of that problem.
+//
+// Every model shares one implementation of the statistics (σ0 and the χ²
+// global test, w-tests, redundancy numbers, MDB, point tests, data snooping
+// and its limit, the geometry check): solver/src/point_statistics.hpp.
 
 #include <Eigen/Core>
 
@@ -31,10 +38,6 @@
 #include "geoanchor/geodesy/site_calibration.hpp"
 
 namespace geoanchor::solver {
-
-namespace detail {
-struct Propagation;  // what transformed_covariance_m2 needs; private
-}
 
 // molodensky_badekas: the seven parameters of helmert7 about a pivot p
 // (default: the centroid of the used source points),
@@ -75,6 +78,13 @@ struct FitOptions {
   double alpha_point = 0.001;   // w-tests and data snooping
   double power = 0.80;          // for the minimal detectable bias
   bool data_snooping = true;
+  // Data snooping removes at most this share of the marks (at least one);
+  // when a mark still fails past it the fit is refused (refused_because):
+  // so many failures mean the data or the model is wrong, not blunders.
+  double max_outlier_share = 0.10;
+  // Ceres' iteration limit; a solve that has not converged within it is
+  // refused (E_FIT_NO_CONVERGENCE), never reported as a result.
+  int max_solver_iterations = 200;
   // Robust loss for exploration (iteratively reweighted least squares on
   // each point's standardized residual e: Huber w = min(1, K/e), Cauchy
   // w = 1/(1 + (e/K)²)). Statistics are then approximate; no snooping.
@@ -111,10 +121,10 @@ struct PointResult {
   bool outlier = false; // removed by data snooping
   std::string removed_because;
   Eigen::Vector3d residual_enu_m = Eigen::Vector3d::Zero();  // target − transformed source, local E, N, U
-  Eigen::Vector3d w_enu = Eigen::Vector3d::Zero();           // w-test per local axis
+  Eigen::Vector3d w_enu = Eigen::Vector3d::Zero();           // w-test per local axis (NaN: untestable, no redundancy)
   Eigen::Vector3d redundancy_enu = Eigen::Vector3d::Zero();  // redundancy numbers per local axis
   double w_max = 0.0;
-  double mdb_m = 0.0;  // largest minimal detectable bias over the three axes
+  double mdb_m = 0.0;  // largest minimal detectable bias over the three axes (inf: an axis without redundancy)
   // The point test: r̄ᵀ Q⁺ r̄ of the whitened residual, χ²(point_dof) under
   // H0; data snooping removes the point with the smallest p-value while it is
   // below alpha_point.
@@ -150,7 +160,7 @@ struct FitResult {
   Eigen::MatrixXd correlation;
   std::vector<std::string> covariance_names;
   bool covariance_scaled_by_sigma0 = false;
-  double sigma0 = 0.0;
+  std::optional<double> sigma0;  // a posteriori; undefined (nullopt) without redundancy
   int dof = 0;
   GlobalTest global_test;
   double w_critical = 0.0;  // |w| above this fails its w-test at alpha_point
@@ -162,24 +172,21 @@ struct FitResult {
   int robust_iterations = 0;
   int ceres_iterations = 0;
   std::string ceres_report;  // one line
-  std::shared_ptr<const detail::Propagation> propagation;
+  // Set when the fit must not be written whatever the caller accepts (data
+  // snooping reached its limit): why, naming the test that failed.
+  std::string refused_because;
 };
 
 // Throws geoanchor::Error: `rejected` for ill-posed problems (too few
-// points, collinear or coincident points, one epoch for helmert14, Ceres
-// failure, covariance not computable), `usage` for a missing convention.
+// points, coincident points, collinear or nearly collinear points — any
+// combination of parameters the geometry leaves undetermined, named from
+// the parameter covariance — one epoch for helmert14, Ceres failure,
+// covariance not computable), `usage` for a missing convention.
 FitResult fit_helmert(const geodesy::ControlSet& control, const FitOptions& options);
 
 // The target position of `source` under the fitted transform at `epoch`
 // (required for helmert14).
 geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPosition& source,
                                 std::optional<geodesy::DecimalYear> epoch);
-
-// The covariance (ECEF, m²) that the parameters' own uncertainty gives the
-// transformed position of `source`: J Σθ Jᵀ with J = ∂target/∂θ. Scaled by
-// σ0² when the fit's covariance is. It grows with the distance from the
-// control points: this is what `apply` reports for a tile.
-Eigen::Matrix3d transformed_covariance_m2(const FitResult& fit, const geodesy::EcefPosition& source,
-                                          std::optional<geodesy::DecimalYear> epoch);
 
 }  // namespace geoanchor::solver

@@ -1,14 +1,15 @@
-#include "geoanchor/gui/fit_export.hpp"
+#include "geoanchor/workflow/fit_export.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numeric>
 #include <ostream>
 
 #include "geoanchor/geodesy/number_text.hpp"
 
-namespace geoanchor::gui {
+namespace geoanchor::workflow {
 using solver::FitModel;
 
 // The printed report: parameters, statistics with verdict, residuals with
@@ -41,7 +42,8 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
     out << line;
   }
   const auto& g = r.global_test;
-  out << "\nStatistics\n  σ0 = " << format_fixed(r.sigma0, 3) << ", dof = " << r.dof << "\n";
+  out << "\nStatistics\n  σ0 = " << (r.sigma0 ? format_fixed(*r.sigma0, 3) : "undefined (no redundancy)") << ", dof = " << r.dof
+      << "\n";
   if (r.variance_factors) {
     out << "  variance factors (--vce): source " << format_fixed(r.variance_factors->first, 3) << ", target "
         << format_fixed(r.variance_factors->second, 3) << " (σ scale " << format_fixed(std::sqrt(r.variance_factors->first), 3) << ", "
@@ -67,11 +69,16 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
     const auto& p = r.points[i];
     char line[200];
     const std::string mdb = std::isfinite(p.mdb_m) ? format_fixed(1e3 * p.mdb_m, 1) : "-";
-    const std::string status = p.outlier ? "OUTLIER (removed)" : !p.used ? "not used"
-                               : p.robust_weight < 1.0 ? "weight " + format_fixed(p.robust_weight, 3) : "ok";
-    std::snprintf(line, sizeof line, "  %-10s %8.1f %8.1f %8.1f  %6.2f %6.2f %6.2f  %8s  %s\n", p.id.c_str(),
-                  1e3 * p.residual_enu_m.x(), 1e3 * p.residual_enu_m.y(), 1e3 * p.residual_enu_m.z(), p.w_enu.x(),
-                  p.w_enu.y(), p.w_enu.z(), mdb.c_str(), status.c_str());
+    const std::string status = p.outlier                        ? "OUTLIER (removed)"
+                               : !p.used                        ? "not used"
+                               : p.point_dof == 0               ? "untestable (no redundancy)"
+                               : p.point_p_value < o.alpha_point ? "FAILS its point test"
+                               : p.robust_weight < 1.0          ? "weight " + format_fixed(p.robust_weight, 3)
+                                                                : "ok";
+    const auto w = [](double v) { return std::isfinite(v) ? format_fixed(v, 2) : std::string("-"); };
+    std::snprintf(line, sizeof line, "  %-10s %8.1f %8.1f %8.1f  %6s %6s %6s  %8s  %s\n", p.id.c_str(),
+                  1e3 * p.residual_enu_m.x(), 1e3 * p.residual_enu_m.y(), 1e3 * p.residual_enu_m.z(), w(p.w_enu.x()).c_str(),
+                  w(p.w_enu.y()).c_str(), w(p.w_enu.z()).c_str(), mdb.c_str(), status.c_str());
     out << line;
   }
   for (const auto& p : r.points) {
@@ -160,9 +167,11 @@ io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geod
       q.w_enu[static_cast<std::size_t>(k)] = p.w_enu(k);
       q.redundancy_enu[static_cast<std::size_t>(k)] = p.redundancy_enu(k);
     }
-    Eigen::Index worst = 0;
-    p.w_enu.cwiseAbs().maxCoeff(&worst);
-    q.w_test = p.w_enu(worst);
+    // The w-test of largest magnitude among the testable axes (NaN: none is).
+    q.w_test = std::numeric_limits<double>::quiet_NaN();
+    for (int k = 0; k < 3; ++k) {
+      if (std::isfinite(p.w_enu(k)) && !(std::fabs(p.w_enu(k)) <= std::fabs(q.w_test))) q.w_test = p.w_enu(k);
+    }
     q.mdb_m = p.mdb_m;
     q.point_test = p.point_statistic;
     q.point_test_dof = p.point_dof;
@@ -243,4 +252,4 @@ FitChoices fit_choices_from_transform(const io::TransformFile& t) {
   return c;
 }
 
-}  // namespace geoanchor::gui
+}  // namespace geoanchor::workflow

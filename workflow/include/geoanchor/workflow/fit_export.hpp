@@ -13,7 +13,7 @@
 #include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 
-namespace geoanchor::gui {
+namespace geoanchor::workflow {
 
 // What a point left out by the user is noted as in the transform file's
 // per-point records; fit_choices_from_transform() reads it back.
@@ -42,4 +42,4 @@ struct FitChoices {
 };
 FitChoices fit_choices_from_transform(const io::TransformFile& t);
 
-}  // namespace geoanchor::gui
+}  // namespace geoanchor::workflow

@@ -1,0 +1,40 @@
+#pragma once
+// What `fit` (and the workbench's Save transform…) check around a fit: the
+// control set before it (frames, quantized coordinates, swapped axes, heights
+// absorbed by the vertical offset) and the result after it (written, or
+// refused and why). The same checks for both faces, so that a transform the
+// command refuses cannot be saved from the window either.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/control_point.hpp"
+#include "geoanchor/solver/helmert_fit.hpp"
+
+namespace geoanchor::workflow {
+
+// Warnings about the control set itself:
+//  - a frame that is the WGS 84 ensemble (its realizations differ by up to
+//    about 2 m);
+//  - a frame whose ECEF values as read are all float32 values (quantized to
+//    0.25–0.5 m): its residuals are quantization, not blunders.
+std::vector<std::string> control_set_warnings(const geodesy::ControlSet& set);
+
+// When the set's latitudes and longitudes look swapped in one frame: both
+// frames are geodetic, the marks lie hundreds of kilometres apart as read,
+// and reading one frame's columns the other way round brings them within a
+// kilometre of each other. The message names the frame and the columns.
+std::optional<std::string> likely_lat_lon_swap(const geodesy::ControlSet& set);
+
+// Why a fit must not be written, if it must not: the solver's own refusal
+// (data snooping at its limit), else a global test that fails high unless
+// `accept_failed_global_test`. `code` is the error code to report.
+struct FitRefusal {
+  std::string code;
+  std::string message;
+};
+std::optional<FitRefusal> fit_refusal(const solver::FitResult& fit, const std::string& source_name,
+                                      bool accept_failed_global_test);
+
+}  // namespace geoanchor::workflow

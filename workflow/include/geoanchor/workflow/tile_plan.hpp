@@ -1,0 +1,65 @@
+#pragma once
+// What frame and coordinates a tile is in, and what it becomes: the first
+// step of `apply` for each tile (apply.hpp).
+//
+// The input's frame comes from, in this order: the tile's sidecar
+// (TILE.geoanchor.json), the LAS file's WKT (with the sidecar, the two must
+// agree), or the request's --from-* values (which must then not contradict
+// the sidecar or WKT: flags are never silently preferred). It is checked
+// against the transform's frames and epochs; the output takes the
+// transform's target frame (with the input's epoch when the target names
+// none) and the requested output coordinates, else the tile's own.
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/units.hpp"
+#include "geoanchor/io/tile_apply.hpp"
+#include "geoanchor/io/tile_metadata.hpp"
+#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/workflow/apply.hpp"
+
+namespace geoanchor::workflow {
+
+struct TilePlan {
+  std::filesystem::path input, output, sidecar;
+  io::TileFormat format = io::TileFormat::las;
+  io::TileMetadata in;
+  std::string in_frame_source;  // "sidecar PATH", "LAS WKT", "command line"
+  io::TileMetadata out;
+  std::optional<geodesy::DecimalYear> epoch;  // for a time-dependent transform
+  std::uint64_t las_points = 0;               // LAS: the header's count, for progress
+  std::vector<std::string> warnings;
+};
+
+class TilePlanner {
+ public:
+  // Parses the request's output and --from-* values once, so that a bad one
+  // fails before any tile (geoanchor::Error, usage, naming the flag).
+  // `transform` must outlive the planner.
+  TilePlanner(const ApplyRequest& request, const std::optional<io::TransformFile>& transform);
+
+  // Throws geoanchor::Error naming the tile: an unknown or conflicting
+  // frame, orthometric heights, a transform whose frames or epochs do not
+  // match the tile's, a missing origin or projection for the output.
+  TilePlan plan(const std::filesystem::path& input) const;
+
+ private:
+  struct OutputSpec {
+    std::optional<io::CoordinateKind> kind;
+    bool utm = false;
+    std::optional<geodesy::Ellipsoid> ellipsoid;
+  };
+  io::TileMetadata input_metadata(TilePlan& p) const;
+  void check_flags_against(const io::TileMetadata& m, const std::string& what, const std::string& tile) const;
+  const ApplyRequest& o_;
+  const std::optional<io::TransformFile>& t_;
+  OutputSpec out_;
+  std::optional<geodesy::Frame> from_frame_;
+};
+
+}  // namespace geoanchor::workflow

@@ -1,0 +1,484 @@
+#include "geoanchor/workflow/apply.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/atomic_file.hpp"
+#include "geoanchor/io/hash.hpp"
+#include "geoanchor/io/point_chain.hpp"
+#include "geoanchor/io/tile_apply.hpp"
+#include "geoanchor/io/tile_metadata.hpp"
+#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/workflow/tile_plan.hpp"
+
+namespace geoanchor::workflow {
+namespace {
+
+namespace fs = std::filesystem;
+using geodesy::DecimalYear;
+using io::ArrayFrame;
+using io::TileMetadata;
+using nlohmann::json;
+
+constexpr char kSummarySchema[] = "geoanchor.apply-summary/1";
+
+// ---------------------------------------------------------------- inputs
+
+bool is_manifest(const fs::path& p) {
+  const auto e = p.extension().string();
+  return e == ".txt" || e == ".lst" || e == ".manifest";
+}
+
+bool is_tile(const fs::path& p) {
+  const std::string name = p.filename().string();
+  if (name.size() > 15 && name.ends_with(".geoanchor.json")) return false;
+  return io::tile_format_of(p).has_value();
+}
+
+// Files, folders (their tiles, recursively, sorted) and manifests (one path
+// per line, relative to the manifest's folder; '#' starts a comment), in
+// the order given, each tile once.
+std::vector<fs::path> expand_inputs(const std::vector<std::string>& inputs) {
+  std::vector<fs::path> tiles;
+  std::set<std::string> seen;
+  auto add = [&](const fs::path& p, const std::string& where) {
+    if (!is_tile(p)) {
+      throw Error(ErrorKind::usage, "E_INPUT", where + ": " + p.string() + ": not a tile; expected .las, .csv or .ply");
+    }
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec)) throw Error(ErrorKind::io, "E_READ", where + ": " + p.string() + ": no such file");
+    const std::string key = fs::weakly_canonical(p, ec).string();
+    if (seen.insert(key).second) tiles.push_back(p);
+  };
+  for (const auto& in : inputs) {
+    const fs::path p(in);
+    std::error_code ec;
+    if (fs::is_directory(p, ec)) {
+      std::vector<fs::path> found;
+      for (const auto& e : fs::recursive_directory_iterator(p, ec)) {
+        if (e.is_regular_file() && is_tile(e.path())) found.push_back(e.path());
+      }
+      std::sort(found.begin(), found.end());
+      for (const auto& f : found) add(f, in);
+    } else if (is_manifest(p)) {
+      std::ifstream m(p);
+      if (!m) throw Error(ErrorKind::io, "E_READ", in + ": cannot open manifest");
+      std::string line;
+      std::size_t n = 0;
+      while (std::getline(m, line)) {
+        ++n;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        const auto first = line.find_first_not_of(" \t");
+        if (first == std::string::npos || line[first] == '#') continue;
+        const auto last = line.find_last_not_of(" \t");
+        fs::path entry(line.substr(first, last - first + 1));
+        if (entry.is_relative()) entry = p.parent_path() / entry;
+        add(entry, in + ":" + std::to_string(n));
+      }
+    } else {
+      add(p, "input");
+    }
+  }
+  return tiles;
+}
+
+// "I/N", 0-based I.
+std::pair<std::size_t, std::size_t> parse_shard(const std::string& s) {
+  const auto slash = s.find('/');
+  auto bad = [&](const std::string& why) {
+    return Error(ErrorKind::usage, "E_OPTION", "--shard " + s + ": " + why + "; expected I/N with 0 <= I < N (I is 0-based, "
+                                               "as SLURM_ARRAY_TASK_ID with --array=0-<N-1> or a Kubernetes "
+                                               "JOB_COMPLETION_INDEX)");
+  };
+  if (slash == std::string::npos) throw bad("no '/'");
+  const auto i = parse_finite_double(s.substr(0, slash));
+  const auto n = parse_finite_double(s.substr(slash + 1));
+  if (!i || !n || *i != std::floor(*i) || *n != std::floor(*n) || *n < 1 || *i < 0) throw bad("not two integers");
+  if (*i >= *n) throw bad("I is not below N");
+  return {static_cast<std::size_t>(*i), static_cast<std::size_t>(*n)};
+}
+
+// ---------------------------------------------------------------- one tile
+
+// The options that decide an output's content, for the resumability check.
+json request_json(const ApplyRequest& o) {
+  auto opt = [](const std::optional<std::string>& v) { return v ? json(*v) : json(nullptr); };
+  return json{{"to", opt(o.to)},
+              {"origin", opt(o.origin)},
+              {"zone", opt(o.zone)},
+              {"tm", opt(o.tm)},
+              {"ellipsoid", opt(o.ellipsoid)},
+              {"from_frame", opt(o.from_frame)},
+              {"from_origin", opt(o.from_origin)},
+              {"from_zone", opt(o.from_zone)},
+              {"from_tm", opt(o.from_tm)},
+              {"inverse", o.inverse},
+              {"resolution_m", o.resolution_m ? json(*o.resolution_m) : json(nullptr)},
+              {"epoch_from_gps_time", o.epoch_from_gps_time}};
+}
+
+json enu_sigma_json(const Eigen::Matrix3d& cov_ecef, const geodesy::LocalOrigin& at) {
+  const Eigen::Matrix3d r = geodesy::enu_from_ecef_rotation(at.point.lat, at.point.lon);
+  const Eigen::Matrix3d c = r * cov_ecef * r.transpose();
+  return json{{"sigma_e_m", std::sqrt(std::max(c(0, 0), 0.0))},
+              {"sigma_n_m", std::sqrt(std::max(c(1, 1), 0.0))},
+              {"sigma_u_m", std::sqrt(std::max(c(2, 2), 0.0))}};
+}
+
+class TileRunner {
+ public:
+  TileRunner(const ApplyRequest& o, const TilePlanner& planner, const std::optional<io::TransformFile>& t,
+             const std::string& transform_sha, ApplyProgress& progress)
+      : o_(o), planner_(planner), t_(t), transform_sha_(transform_sha), progress_(progress) {}
+
+  TileOutcome run(const fs::path& input) const;
+
+ private:
+  void process(const TilePlan& p, TileOutcome& r) const;
+  const ApplyRequest& o_;
+  const TilePlanner& planner_;
+  const std::optional<io::TransformFile>& t_;
+  const std::string& transform_sha_;
+  ApplyProgress& progress_;
+};
+
+TileOutcome TileRunner::run(const fs::path& input) const {
+  TileOutcome r;
+  r.input = input.string();
+  const auto start = std::chrono::steady_clock::now();
+  std::error_code ec;
+  const auto bytes = fs::file_size(input, ec);
+  try {
+    const TilePlan p = planner_.plan(input);
+    r.output = p.output.string();
+    process(p, r);
+  } catch (const Error& e) {
+    r.status = "failed";
+    r.error = e.what();
+    r.error_code = e.code();
+    r.exit_code = exit_code(e.kind());
+  } catch (const std::exception& e) {
+    r.status = "failed";
+    r.error = e.what();
+    r.error_code = "E_INTERNAL";
+    r.exit_code = 1;
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  progress_.tiles_done++;
+  if (bytes > r.bytes_accounted) progress_.bytes_done += bytes - r.bytes_accounted;
+  return r;
+}
+
+void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
+  const std::string tile = p.input.string();
+  io::refuse_same_file(p.input, p.output);
+  const std::string input_sha = io::sha256_file_hex(p.input);
+  const json request = request_json(o_);
+
+  // Resumable: an output whose provenance names this input, transform and
+  // request is up to date.
+  std::error_code ec;
+  if (!o_.overwrite && fs::exists(p.output, ec) && fs::exists(p.sidecar, ec)) {
+    try {
+      const TileMetadata done = io::read_tile_metadata(p.sidecar);
+      if (!done.provenance_json.empty()) {
+        const json prov = json::parse(done.provenance_json);
+        const bool same = prov.value("input_sha256", "") == input_sha &&
+                          prov.value("transform_sha256", json(nullptr)) ==
+                              (t_ ? json(transform_sha_) : json(nullptr)) &&
+                          prov.value("request", json()) == request &&
+                          prov.value("output_size_bytes", std::uint64_t{0}) == fs::file_size(p.output, ec);
+        if (same) {
+          r.status = "skipped";
+          r.points = prov.value("points", std::uint64_t{0});
+          return;
+        }
+      }
+    } catch (const Error&) {
+      // An unreadable sidecar is not ours: fall through to the refusal.
+    }
+  }
+  const io::Overwrite overwrite = o_.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
+  io::AtomicOutputFile out(p.output, overwrite);
+  io::AtomicOutputFile side(p.sidecar, overwrite);
+
+  const io::PointChain chain(p.in.coordinates, t_, o_.inverse, p.epoch, p.out.coordinates);
+  io::TileApplyOptions ao;
+  ao.from = p.in.coordinates;
+  ao.to = p.out.coordinates;
+  ao.resolution_m = o_.resolution_m;
+  ao.epochs_from_gps_time = o_.epoch_from_gps_time && t_ && t_->time_dependent();
+  if (p.format == io::TileFormat::las) ao.output_wkt = io::tile_crs_wkt(p.out);
+  // Progress in bytes of input, where the point count is known up front.
+  const std::uint64_t expected = p.las_points;
+  const std::uint64_t tile_bytes = fs::file_size(p.input, ec);
+  std::uint64_t reported = 0;
+  ao.progress = [&](std::uint64_t done) {
+    progress_.points += done - reported;
+    reported = done;
+    if (expected > 0) {
+      const auto share = static_cast<std::uint64_t>(static_cast<double>(tile_bytes) * static_cast<double>(done) /
+                                                    static_cast<double>(expected));
+      if (share > r.bytes_accounted) {
+        progress_.bytes_done += share - r.bytes_accounted;
+        r.bytes_accounted = share;
+      }
+    }
+  };
+  io::TileApplyResult res;
+  switch (p.format) {
+    case io::TileFormat::las: res = io::apply_las_tile(p.input, out.stream(), p.output.string(), chain, ao); break;
+    case io::TileFormat::csv: res = io::apply_csv_tile(p.input, out.stream(), p.output.string(), chain, ao); break;
+    case io::TileFormat::ply: res = io::apply_ply_tile(p.input, out.stream(), p.output.string(), chain, ao); break;
+  }
+  r.points = res.points;
+  std::vector<std::string> warnings = p.warnings;
+  warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
+
+  // The tile's corners in the source frame's ECEF: extent and uncertainty.
+  json extrapolation = nullptr, uncertainty = nullptr;
+  if (t_ && res.points > 0) {
+    ArrayFrame ecef;
+    const io::PointChain to_ecef(p.in.coordinates, std::nullopt, false, std::nullopt, ecef);
+    std::vector<double> a, b, c;
+    for (int k = 0; k < 9; ++k) {
+      const bool centre = k == 8;
+      a.push_back(centre ? 0.5 * (res.in_min[0] + res.in_max[0]) : (k & 1 ? res.in_max[0] : res.in_min[0]));
+      b.push_back(centre ? 0.5 * (res.in_min[1] + res.in_max[1]) : (k & 2 ? res.in_max[1] : res.in_min[1]));
+      c.push_back(centre ? 0.5 * (res.in_min[2] + res.in_max[2]) : (k & 4 ? res.in_max[2] : res.in_min[2]));
+    }
+    to_ecef.apply(a, b, c);
+    // The extent is the source frame's; with --inverse the tile is in the
+    // target frame, metres at most from it, which does not matter at the
+    // scale of the extrapolation limit.
+    if (t_->fit && t_->fit->extent) {
+      double worst = 0.0;
+      for (std::size_t k = 0; k < 9; ++k) worst = std::max(worst, t_->fit->extent->distance_m(geodesy::EcefPosition(a[k], b[k], c[k])));
+      extrapolation = {{"distance_outside_control_m", worst}, {"limit_m", o_.max_extrapolation_m}};
+      if (worst > o_.max_extrapolation_m) {
+        throw Error(ErrorKind::rejected, "E_EXTRAPOLATION",
+                    tile + ": the tile reaches " + format_fixed(worst, 1) +
+                        " m outside the control network of " + *o_.transform + " (limit --max-extrapolation " +
+                        format_shortest(o_.max_extrapolation_m) + " m); nothing was written");
+      }
+      if (worst > 0.0) {
+        warnings.push_back(tile + ": the tile reaches " + format_fixed(worst, 1) +
+                           " m outside the control network: the transform is extrapolated there");
+      }
+    }
+    {
+      // The worst corner's propagated uncertainty, in ENU at the tile's centre.
+      // With per-point epochs: at the middle of their range.
+      std::optional<DecimalYear> at = p.epoch;
+      if (!at && res.epoch_range) at = DecimalYear{0.5 * ((*res.epoch_range)[0] + (*res.epoch_range)[1])};
+      std::optional<Eigen::Matrix3d> worst;
+      for (std::size_t k = 0; k < 9; ++k) {
+        const auto cov = io::propagated_covariance_m2(*t_, geodesy::EcefPosition(a[k], b[k], c[k]), at, o_.inverse);
+        if (cov && (!worst || cov->trace() > worst->trace())) worst = cov;
+      }
+      if (worst) {
+        const geodesy::GeocentricConverter g(geodesy::Ellipsoid::wgs84());
+        geodesy::LocalOrigin centre;
+        centre.point = g.geodetic_from_ecef(geodesy::EcefPosition(a[8], b[8], c[8]));
+        uncertainty = enu_sigma_json(*worst, centre);
+        uncertainty["at"] = "the tile's bounding-box corner with the largest propagated variance";
+        uncertainty["scaled_by_sigma0"] = t_->fit->sigmas_scaled_by_sigma0;
+      }
+    }
+  }
+
+  // Flush the tile to learn its size, then the sidecar, then commit both.
+  out.stream().flush();
+  const auto output_size = static_cast<std::uint64_t>(out.stream().tellp());
+  nlohmann::ordered_json prov;
+  prov["tool"] = o_.tool;
+  prov["command"] = o_.command;
+  prov["input"] = p.input.string();
+  prov["input_sha256"] = input_sha;
+  prov["input_format"] = std::string(io::to_string(p.format));
+  prov["input_frame"] = p.in.frame->to_string();
+  prov["input_coordinates"] = io::kind_name(p.in.coordinates);
+  prov["input_frame_from"] = p.in_frame_source;
+  if (p.in.coordinates.origin) {
+    const auto& g = p.in.coordinates.origin->point;
+    prov["input_enu_origin"] = {{"lat_deg", g.lat.deg()}, {"lon_deg", g.lon.deg()}, {"h_m", g.h.m}};
+  }
+  prov["request"] = request;
+  if (t_) {
+    prov["transform"] = *o_.transform;
+    prov["transform_sha256"] = transform_sha_;
+    prov["transform_model"] = std::string(io::to_string(t_->model));
+    prov["transform_convention"] = std::string(t_->convention_name());
+    prov["transform_direction"] = o_.inverse ? "inverse (exact)" : "forward";
+    if (t_->source_frame) prov["transform_source_frame"] = t_->source_frame->to_string();
+    if (t_->target_frame) prov["transform_target_frame"] = t_->target_frame->to_string();
+    prov["transform_sigma0"] = t_->fit ? (t_->fit->sigma0 ? json(*t_->fit->sigma0) : json(nullptr)) : json(nullptr);
+    prov["transform_dof"] = t_->fit ? json(t_->fit->dof) : json(nullptr);
+    if (p.epoch) prov["observation_epoch"] = p.epoch->year;
+    if (res.epoch_range) {
+      prov["observation_epoch"] = "per point, from its GPS time";
+      prov["observation_epoch_range"] = {(*res.epoch_range)[0], (*res.epoch_range)[1]};
+    }
+    prov["propagated_uncertainty"] = uncertainty;
+    prov["extrapolation"] = extrapolation;
+  } else {
+    prov["transform_sha256"] = nullptr;
+  }
+  prov["points"] = res.points;
+  prov["bounds"] = {{"min", res.min}, {"max", res.max}};
+  if (p.format == io::TileFormat::las) prov["las"] = {{"scale", res.scale}, {"offset", res.offset}};
+  prov["output_size_bytes"] = output_size;
+  prov["warnings"] = warnings;
+  TileMetadata meta = p.out;
+  meta.horizontal_crs = meta.frame->to_string() + " " + io::kind_name(meta.coordinates) +
+                        (p.format == io::TileFormat::las ? " (WKT2 in the LAS file's LASF_Projection 2112 record)" : "");
+  meta.provenance_json = prov.dump();
+  side.stream() << io::to_json_text(meta);
+  out.commit();
+  side.commit();
+  r.status = "done";
+  r.warnings = warnings;
+}
+
+}  // namespace
+
+struct ApplyRun::Impl {
+  ApplyRequest request;
+  std::optional<io::TransformFile> transform;
+  std::string transform_sha;
+  std::vector<fs::path> tiles;
+  std::string shard_text, summary_name;
+  std::uint64_t total_bytes = 0;
+};
+
+ApplyRun::ApplyRun(ApplyRequest request) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.request = std::move(request);
+  const ApplyRequest& o = m.request;
+  if (o.transform) {
+    m.transform = io::read_transform_file(*o.transform);
+    m.transform_sha = io::sha256_file_hex(*o.transform);
+  }
+  // The planner parses every value flag: a bad one fails before any output.
+  const TilePlanner check(o, m.transform);
+  m.tiles = expand_inputs(o.inputs);
+  m.summary_name = "geoanchor-apply-summary.json";
+  if (o.shard) {
+    const auto [i, n] = parse_shard(*o.shard);
+    std::vector<fs::path> mine;
+    for (std::size_t k = i; k < m.tiles.size(); k += n) mine.push_back(m.tiles[k]);
+    m.tiles = std::move(mine);
+    m.shard_text = std::to_string(i) + "/" + std::to_string(n);
+    m.summary_name = "geoanchor-apply-summary.shard-" + std::to_string(i) + "-of-" + std::to_string(n) + ".json";
+  }
+  // Two inputs must not write the same output.
+  std::map<std::string, std::string> by_name;
+  for (const auto& t : m.tiles) {
+    const auto [it, fresh] = by_name.emplace(t.filename().string(), t.string());
+    if (!fresh) {
+      throw Error(ErrorKind::usage, "E_OUTPUT_CLASH",
+                  t.string() + " and " + it->second + " would both be written to " +
+                      (fs::path(o.out_dir) / t.filename()).string() + "; process them in separate runs");
+    }
+  }
+  if (m.tiles.empty() && !o.shard) throw Error(ErrorKind::usage, "E_INPUT", "no tiles to process");
+  std::error_code ec;
+  for (const auto& t : m.tiles) m.total_bytes += fs::file_size(t, ec);
+  if (!fs::is_directory(o.out_dir, ec)) {
+    // Created when missing (as mkdir -p); never a file in its place.
+    if (fs::exists(o.out_dir, ec) || !fs::create_directories(o.out_dir, ec) || ec) {
+      throw Error(ErrorKind::io, "E_OUTPUT_DIR",
+                  "--out-dir " + o.out_dir + ": not a folder and cannot be created" +
+                      (ec ? ": " + ec.message() : std::string()));
+    }
+  }
+}
+
+ApplyRun::~ApplyRun() = default;
+
+std::size_t ApplyRun::tile_count() const { return impl_->tiles.size(); }
+std::uint64_t ApplyRun::total_bytes() const { return impl_->total_bytes; }
+
+ApplyResult ApplyRun::run(ApplyProgress& progress, const std::function<void(const TileOutcome&)>& on_tile) {
+  const Impl& m = *impl_;
+  const ApplyRequest& o = m.request;
+  const TilePlanner planner(o, m.transform);
+  const TileRunner runner(o, planner, m.transform, m.transform_sha, progress);
+  const auto& tiles = m.tiles;
+
+  ApplyResult result;
+  const auto start = std::chrono::steady_clock::now();
+  result.tiles.resize(tiles.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex report;
+  auto worker = [&] {
+    for (std::size_t k; (k = next++) < tiles.size();) {
+      result.tiles[k] = runner.run(tiles[k]);
+      if (on_tile) {
+        const std::lock_guard<std::mutex> lock(report);
+        on_tile(result.tiles[k]);
+      }
+    }
+  };
+  result.jobs = std::max(1u, std::min<unsigned>(o.jobs, static_cast<unsigned>(std::max<std::size_t>(tiles.size(), 1))));
+  std::vector<std::thread> pool;
+  for (unsigned j = 1; j < result.jobs; ++j) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // The run summary, written beside the outputs.
+  json summary;
+  summary["schema"] = kSummarySchema;
+  summary["tool"] = o.tool;
+  summary["command"] = o.command;
+  summary["shard"] = o.shard ? json(m.shard_text) : json(nullptr);
+  summary["transform"] = o.transform ? json(*o.transform) : json(nullptr);
+  summary["transform_sha256"] = o.transform ? json(m.transform_sha) : json(nullptr);
+  json list = json::array();
+  for (const auto& r : result.tiles) {
+    json t = {{"input", r.input}, {"output", r.output}, {"status", r.status}, {"points", r.points},
+              {"seconds", r.seconds}, {"warnings", r.warnings}};
+    if (r.status == "failed") {
+      t["error"] = r.error;
+      t["error_code"] = r.error_code;
+      ++result.failed;
+      if (result.exit_code == 0) result.exit_code = r.exit_code;
+    } else if (r.status == "skipped") {
+      ++result.skipped;
+    } else {
+      ++result.done;
+      result.processed += r.points;
+    }
+    result.points += r.points;
+    list.push_back(t);
+  }
+  summary["tiles"] = list;
+  summary["tiles_done"] = result.done;
+  summary["tiles_skipped"] = result.skipped;
+  summary["tiles_failed"] = result.failed;
+  summary["points"] = result.points;
+  summary["seconds"] = result.seconds;
+  summary["points_per_second"] = result.seconds > 0 ? static_cast<double>(result.processed) / result.seconds : 0.0;
+  summary["jobs"] = result.jobs;
+  result.summary_path = fs::path(o.out_dir) / m.summary_name;
+  result.summary_json = summary.dump(2) + "\n";
+  io::AtomicOutputFile summary_file(result.summary_path, io::Overwrite::allow);
+  summary_file.stream() << result.summary_json;
+  summary_file.commit();
+  return result;
+}
+
+}  // namespace geoanchor::workflow

@@ -1,0 +1,112 @@
+#include "geoanchor/workflow/fit_checks.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/quantization.hpp"
+
+namespace geoanchor::workflow {
+namespace {
+
+// A swap is named when the marks lie farther apart than any datum shift as
+// read and closer than this once one frame is read the other way round.
+constexpr double kFarApart_m = 100e3;
+constexpr double kSwappedClose_m = 1e3;
+
+double median(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+}  // namespace
+
+std::vector<std::string> control_set_warnings(const geodesy::ControlSet& set) {
+  std::vector<std::string> out;
+  for (const auto* f : {&set.source_frame, &set.target_frame}) {
+    if (*f && (*f)->datum() == "WGS84" && (*f)->realization().empty()) {
+      out.push_back("frame " + (*f)->to_string() +
+                    " is the WGS 84 ensemble: its realizations differ by up to about 2 m; name one, e.g. WGS84(G2139)");
+    }
+  }
+  for (const bool source : {true, false}) {
+    const geodesy::ControlInputForm& form = source ? set.source_input : set.target_input;
+    if (form.form != geodesy::CoordinateForm::ecef || set.points.size() < 3) continue;
+    bool all = true;
+    double widest = 0.0;
+    for (const auto& p : set.points) {
+      const Eigen::Vector3d& v = source ? p.source_as_read : p.target_as_read;
+      for (int c = 0; c < 3; ++c) {
+        all = all && geodesy::is_float32_valued(v(c));
+        const double q = geodesy::float32_spacing(v(c));
+        if (!(q <= widest)) widest = q;
+      }
+      if (!all) break;
+    }
+    if (all) {
+      out.push_back(std::string(source ? "source" : "target") +
+                    " ECEF coordinates: every value in " + set.source_name +
+                    " is a float32 value (or integer metres): they were stored in single precision, quantized in steps "
+                    "of up to " + format_fixed(widest, 3) +
+                    " m; residuals of that size are quantization, not blunders, and no fit to them is better than that. "
+                    "Export the coordinates in double precision");
+    }
+  }
+  return out;
+}
+
+std::optional<std::string> likely_lat_lon_swap(const geodesy::ControlSet& set) {
+  if (set.source_input.form != geodesy::CoordinateForm::geodetic || set.target_input.form != geodesy::CoordinateForm::geodetic ||
+      set.points.empty()) {
+    return std::nullopt;
+  }
+  const geodesy::GeocentricConverter conv(set.ellipsoid);
+  auto swapped = [&](const Eigen::Vector3d& as_read) -> std::optional<geodesy::EcefPosition> {
+    if (!(std::fabs(as_read.y()) <= 90.0)) return std::nullopt;
+    return conv.ecef_from_geodetic({geodesy::Angle::degrees(as_read.y()), geodesy::Angle::degrees(as_read.x()),
+                                    geodesy::EllipsoidalHeight{as_read.z()}});
+  };
+  std::vector<double> as_read, src_swapped, dst_swapped;
+  for (const auto& p : set.points) {
+    as_read.push_back((p.target.m - p.source.m).norm());
+    const auto s = swapped(p.source_as_read), t = swapped(p.target_as_read);
+    src_swapped.push_back(s ? (p.target.m - s->m).norm() : std::numeric_limits<double>::infinity());
+    dst_swapped.push_back(t ? (t->m - p.source.m).norm() : std::numeric_limits<double>::infinity());
+  }
+  const double apart = median(as_read);
+  if (!(apart > kFarApart_m)) return std::nullopt;
+  for (const bool source : {true, false}) {
+    const double close = median(source ? src_swapped : dst_swapped);
+    if (close < kSwappedClose_m) {
+      const std::string role = source ? "src" : "dst";
+      return set.source_name + ": the marks lie " + format_fixed(apart / 1e3, 1) +
+             " km apart between the frames (median), but " + format_fixed(close, 3) + " m apart when lat_" + role +
+             "_deg and lon_" + role + "_deg are read the other way round: the " + (source ? "source" : "target") +
+             " latitude and longitude columns look swapped; check the header against the data";
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<FitRefusal> fit_refusal(const solver::FitResult& r, const std::string& source_name,
+                                      bool accept_failed_global_test) {
+  if (!r.refused_because.empty()) {
+    return FitRefusal{"E_FIT_SNOOPING_LIMIT", source_name + ": " + r.refused_because + "; no transform was written"};
+  }
+  const auto& g = r.global_test;
+  if (g.applicable && g.statistic > g.critical_upper && !accept_failed_global_test) {
+    return FitRefusal{
+        "E_FIT_GLOBAL_TEST",
+        source_name + ": global test failed high (" + format_fixed(g.statistic, 2) + " > " + format_fixed(g.critical_upper, 2) +
+            ", σ0 = " + (r.sigma0 ? format_fixed(*r.sigma0, 3) : std::string("undefined")) +
+            "): the residuals do not fit the stated sigmas; no transform was written. hint: look for blunders "
+            "(residual table), wrong sigmas, or a wrong model; --accept-failed-global-test writes it anyway"};
+  }
+  return std::nullopt;
+}
+
+}  // namespace geoanchor::workflow

@@ -1,0 +1,324 @@
+#include "geoanchor/workflow/tile_plan.hpp"
+
+#include <cmath>
+#include <fstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/csv.hpp"
+#include "geoanchor/io/las.hpp"
+#include "geoanchor/workflow/value_text.hpp"
+
+namespace geoanchor::workflow {
+namespace {
+
+namespace fs = std::filesystem;
+using geodesy::DecimalYear;
+using geodesy::Frame;
+using io::CoordinateKind;
+using io::TileMetadata;
+
+// Origins given twice (flag and sidecar) agree when they name the same
+// point to well below a millimetre.
+constexpr double kSameOriginDeg = 1e-10;  // ≈ 0.01 mm
+constexpr double kSameOriginM = 1e-5;
+
+Frame with_epoch(const Frame& f, DecimalYear e) {
+  return Frame::parse(f.name() + "@" + geodesy::format_decimal_year(e), "frame");
+}
+
+bool same_origin(const geodesy::LocalOrigin& a, const geodesy::LocalOrigin& b) {
+  return std::abs(a.point.lat.deg() - b.point.lat.deg()) < kSameOriginDeg &&
+         std::abs(a.point.lon.deg() - b.point.lon.deg()) < kSameOriginDeg &&
+         std::abs(a.point.h.m - b.point.h.m) < kSameOriginM;
+}
+
+}  // namespace
+
+TilePlanner::TilePlanner(const ApplyRequest& o, const std::optional<io::TransformFile>& t) : o_(o), t_(t) {
+  if (o.to) {
+    const std::string& k = *o.to;
+    if (k == "ecef") {
+      out_.kind = CoordinateKind::ecef;
+    } else if (k == "geodetic") {
+      out_.kind = CoordinateKind::geodetic;
+    } else if (k == "enu") {
+      out_.kind = CoordinateKind::enu;
+    } else if (k == "utm" || k == "tm") {
+      out_.kind = CoordinateKind::projected;
+      out_.utm = k == "utm";
+    } else {
+      throw Error(ErrorKind::usage, "E_OPTION", "--to " + k + ": expected ecef, geodetic, enu, utm or tm");
+    }
+  }
+  if (o.zone && o.tm) throw Error(ErrorKind::usage, "E_OPTION", "--zone and --tm: give one");
+  if (o.from_zone && o.from_tm) throw Error(ErrorKind::usage, "E_OPTION", "--from-zone and --from-tm: give one");
+  if (o.from_origin && (o.from_zone || o.from_tm)) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--from-origin with --from-zone/--from-tm: a tile is ENU or projected");
+  }
+  if (out_.kind == CoordinateKind::projected && out_.utm && o.tm) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--to utm with --tm: use --to tm");
+  }
+  if (out_.kind == CoordinateKind::projected && !out_.utm && o.zone) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--to tm with --zone: use --to utm");
+  }
+  if (o.ellipsoid) out_.ellipsoid = parse_ellipsoid(*o.ellipsoid, "--ellipsoid");
+  if (o.from_frame) from_frame_ = Frame::parse(*o.from_frame, "--from-frame");
+  if (o.inverse && !t) throw Error(ErrorKind::usage, "E_OPTION", "--inverse: needs --transform T.json");
+  // Parse the value flags once, so that a bad one fails before any tile.
+  const auto e = out_.ellipsoid.value_or(geodesy::Ellipsoid::wgs84());
+  if (o.origin) parse_origin(*o.origin, "--origin", e);
+  if (o.from_origin) parse_origin(*o.from_origin, "--from-origin", e);
+  if (o.zone) parse_zone(*o.zone, "--zone");
+  if (o.from_zone) parse_zone(*o.from_zone, "--from-zone");
+  if (o.tm) parse_tm(*o.tm, "--tm");
+  if (o.from_tm) parse_tm(*o.from_tm, "--from-tm");
+}
+
+
+// What the flags say about a tile with no sidecar and no WKT.
+TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
+  const std::string tile = p.input.string();
+  std::optional<TileMetadata> side, wkt;
+  const fs::path side_path = io::sidecar_path(p.input);
+  std::error_code ec;
+  if (fs::exists(side_path, ec)) side = io::read_tile_metadata(side_path);
+  bool geotiff_only = false;
+  if (p.format == io::TileFormat::las) {
+    io::LasReader reader(p.input);
+    p.las_points = reader.header().point_count;
+    if (const auto w = reader.wkt()) {
+      wkt = io::tile_metadata_from_wkt(*w, tile);
+    } else {
+      for (const auto& v : reader.vlrs()) geotiff_only |= io::is_geotiff_crs_vlr(v);
+    }
+  }
+  if (side && wkt) {
+    // A WKT written by another tool may name the realization without the
+    // coordinate epoch: the sidecar supplies it.
+    if (wkt->frame && side->frame && !wkt->frame->epoch() && side->frame->epoch() &&
+        wkt->frame->name() == side->frame->name()) {
+      wkt->frame = side->frame;
+    }
+    const std::string diff = io::describe_mismatch(*side, side_path.string(), *wkt, tile + " WKT");
+    if (!diff.empty()) {
+      throw Error(ErrorKind::input, "E_FRAME_CONFLICT", tile + ": the sidecar and the LAS WKT disagree: " + diff);
+    }
+  }
+  if (side) {
+    p.in_frame_source = "sidecar " + side_path.string();
+    check_flags_against(*side, p.in_frame_source, tile);
+    return *side;
+  }
+  if (wkt && !wkt->frame) {
+    // A datum geoanchor cannot name: --from-frame names it, and is recorded.
+    if (!from_frame_) {
+      throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
+                  tile + ": the LAS WKT's datum '" + wkt->wkt_datum +
+                      "' is not a frame geoanchor can name; give --from-frame NAME@EPOCH or a sidecar");
+    }
+    wkt->frame = from_frame_;
+    p.in_frame_source = "LAS WKT (datum '" + wkt->wkt_datum + "' named by --from-frame)";
+    check_flags_against(*wkt, p.in_frame_source, tile);
+    return *wkt;
+  }
+  if (wkt) {
+    p.in_frame_source = "LAS WKT";
+    check_flags_against(*wkt, p.in_frame_source, tile);
+    return *wkt;
+  }
+  // Flags only.
+  TileMetadata m;
+  p.in_frame_source = "command line";
+  if (!from_frame_) {
+    throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
+                tile + ": the tile's frame is unknown: no sidecar " + side_path.filename().string() +
+                    (p.format == io::TileFormat::las ? ", no WKT in the LAS file" : "") +
+                    (geotiff_only ? " (its GeoTIFF CRS keys are not read: they cannot state a realization and "
+                                    "epoch)"
+                                  : "") +
+                    " and no --from-frame NAME@EPOCH");
+  }
+  m.frame = from_frame_;
+  m.coordinates.ellipsoid = out_.ellipsoid.value_or(geodesy::Ellipsoid::wgs84());
+  if (o_.from_origin) {
+    m.coordinates.kind = CoordinateKind::enu;
+    m.coordinates.origin = parse_origin(*o_.from_origin, "--from-origin", m.coordinates.ellipsoid);
+    m.origin_source = "--from-origin";
+  } else if (o_.from_zone) {
+    m.coordinates.kind = CoordinateKind::projected;
+    m.coordinates.projection = geodesy::utm_projection(m.coordinates.ellipsoid, parse_zone(*o_.from_zone, "--from-zone"));
+  } else if (o_.from_tm) {
+    m.coordinates.kind = CoordinateKind::projected;
+    m.coordinates.projection = geodesy::ProjectionDef{m.coordinates.ellipsoid, parse_tm(*o_.from_tm, "--from-tm"), std::nullopt};
+  } else {
+    m.coordinates.kind = CoordinateKind::ecef;
+  }
+  if (p.format == io::TileFormat::csv) {
+    // The header names the kind; flags must agree with it.
+    std::ifstream f(p.input, std::ios::binary);
+    if (!f) throw Error(ErrorKind::io, "E_READ", tile + ": cannot open");
+    io::CsvReader reader(f, tile);
+    const auto cols = io::classify_coordinate_header(reader.header(), tile);
+    if (cols.kind == CoordinateKind::geodetic) {
+      if (o_.from_origin || o_.from_zone || o_.from_tm) {
+        throw Error(ErrorKind::usage, "E_FRAME_CONFLICT", tile + ": the header has geodetic columns but a --from-origin/"
+                                                                 "--from-zone/--from-tm flag was given");
+      }
+      m.coordinates.kind = CoordinateKind::geodetic;
+    } else if (cols.kind == CoordinateKind::ned && m.coordinates.kind == CoordinateKind::enu) {
+      m.coordinates.kind = CoordinateKind::ned;
+    }
+  }
+  if (m.coordinates.kind == CoordinateKind::geodetic || m.coordinates.kind == CoordinateKind::projected) {
+    m.height_type = "ellipsoidal";  // h_m is ellipsoidal by geoanchor's column convention
+  }
+  m.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
+  return m;
+}
+
+void TilePlanner::check_flags_against(const TileMetadata& m, const std::string& what, const std::string& tile) const {
+  auto conflict = [&](const std::string& flag, const std::string& value, const std::string& stated) {
+    throw Error(ErrorKind::usage, "E_FRAME_CONFLICT",
+                tile + ": " + flag + " " + value + " contradicts the " + what + ", which says " + stated +
+                    "; drop the flag or fix the metadata (flags are never silently preferred)");
+  };
+  if (from_frame_ && m.frame && !(*from_frame_ == *m.frame)) conflict("--from-frame", *o_.from_frame, m.frame->to_string());
+  if (o_.from_origin) {
+    const auto o = parse_origin(*o_.from_origin, "--from-origin", m.coordinates.ellipsoid);
+    if (!m.coordinates.origin) conflict("--from-origin", *o_.from_origin, io::kind_name(m.coordinates) + " coordinates");
+    if (!same_origin(o, *m.coordinates.origin)) {
+      const auto& s = m.coordinates.origin->point;
+      conflict("--from-origin", *o_.from_origin,
+               "origin " + format_shortest(s.lat.deg()) + "," + format_shortest(s.lon.deg()) + "," + format_shortest(s.h.m));
+    }
+  }
+  if (o_.from_zone) {
+    const auto z = parse_zone(*o_.from_zone, "--from-zone");
+    if (!m.coordinates.projection || !m.coordinates.projection->utm || !(*m.coordinates.projection->utm == z)) {
+      conflict("--from-zone", *o_.from_zone,
+               m.coordinates.projection && m.coordinates.projection->utm ? "UTM zone " + m.coordinates.projection->utm->to_string()
+                                                                         : io::kind_name(m.coordinates) + " coordinates");
+    }
+  }
+  if (o_.from_tm) {
+    const geodesy::ProjectionDef d{m.coordinates.ellipsoid, parse_tm(*o_.from_tm, "--from-tm"), std::nullopt};
+    if (!m.coordinates.projection || !(m.coordinates.projection->tm.lat0 == d.tm.lat0 &&
+                                       m.coordinates.projection->tm.lon0 == d.tm.lon0 &&
+                                       m.coordinates.projection->tm.k0 == d.tm.k0 &&
+                                       m.coordinates.projection->tm.false_easting_m == d.tm.false_easting_m &&
+                                       m.coordinates.projection->tm.false_northing_m == d.tm.false_northing_m)) {
+      conflict("--from-tm", *o_.from_tm, "another projection (" + io::kind_name(m.coordinates) + ")");
+    }
+  }
+}
+
+TilePlan TilePlanner::plan(const fs::path& input) const {
+  TilePlan p;
+  p.input = input;
+  p.format = *io::tile_format_of(input);
+  p.output = fs::path(o_.out_dir) / input.filename();
+  p.sidecar = io::sidecar_path(p.output);
+  p.in = input_metadata(p);
+  const std::string tile = input.string();
+  const TileMetadata& in = p.in;
+  if (!in.frame) throw Error(ErrorKind::input, "E_FRAME_UNKNOWN", tile + ": the " + p.in_frame_source + " names no frame");
+  if (in.height_type == "orthometric") {
+    throw Error(ErrorKind::input, "E_HEIGHT_TYPE",
+                tile + ": heights are orthometric (" + in.geoid_model.value_or("geoid not named") +
+                    ", per the " + p.in_frame_source +
+                    "); apply moves ellipsoidal heights only: convert them to ellipsoidal heights first");
+  }
+
+  // The frames: the tile's against the transform's.
+  std::optional<Frame> out_frame = in.frame;
+  if (t_) {
+    const auto& src = o_.inverse ? t_->target_frame : t_->source_frame;
+    const auto& dst = o_.inverse ? t_->source_frame : t_->target_frame;
+    const char* src_key = o_.inverse ? "target_frame" : "source_frame";
+    const char* dst_key = o_.inverse ? "source_frame" : "target_frame";
+    if (!src || !dst) {
+      if (t_->model != io::TransformModel::enu_origin || src || dst) {
+        throw Error(ErrorKind::input, "E_TRANSFORM_FRAMES",
+                    *o_.transform + ": the transform names no " + (src ? dst_key : src_key) +
+                        "; apply must know both frames to check the tile and label the output (refit with "
+                        "--source-frame/--target-frame)");
+      }
+    } else {
+      if (src->name() != in.frame->name()) {
+        throw Error(ErrorKind::input, "E_FRAME_MISMATCH",
+                    tile + ": the tile is in " + in.frame->to_string() + " (" + p.in_frame_source + ") but the transform's " +
+                        src_key + " is " + src->to_string() + " (" + *o_.transform + ")");
+      }
+      if (t_->time_dependent() && o_.epoch_from_gps_time) {
+        if (p.format != io::TileFormat::las) {
+          throw Error(ErrorKind::usage, "E_OPTION",
+                      tile + ": --epoch-from-gps-time reads LAS GPS times; for per-row epochs in a CSV use "
+                             "`geoanchor convert` with an epoch column");
+        }
+      } else if (t_->time_dependent()) {
+        if (!in.frame->epoch()) {
+          throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                      tile + ": the tile's frame " + in.frame->to_string() + " has no coordinate epoch, and the " +
+                          "14-parameter transform must be evaluated at it; the reference epoch is never substituted");
+        }
+        p.epoch = *in.frame->epoch();
+      } else if (src->epoch() && !(in.frame->epoch() && *in.frame->epoch() == *src->epoch())) {
+        throw Error(ErrorKind::input, "E_FRAME_MISMATCH",
+                    tile + ": the tile is in " + in.frame->to_string() + " (" + p.in_frame_source +
+                        ") but the transform's " + src_key + " is " + src->to_string() +
+                        ": the coordinate epochs differ, and a static transform does not move points in time; "
+                        "bring the tile to epoch " + geodesy::format_decimal_year(*src->epoch()) + " first");
+      }
+      out_frame = dst;
+      const bool per_point = t_->time_dependent() && o_.epoch_from_gps_time;
+      if (!dst->epoch() && in.frame->epoch() && !per_point) out_frame = with_epoch(*dst, *in.frame->epoch());
+    }
+  }
+
+  // The output coordinates: flags, else the tile's own.
+  TileMetadata& out = p.out;
+  out.frame = out_frame;
+  out.coordinates.kind = out_.kind.value_or(in.coordinates.kind);
+  out.coordinates.ellipsoid = out_.ellipsoid.value_or(in.coordinates.ellipsoid);
+  const bool same_kind = out.coordinates.kind == in.coordinates.kind;
+  if (out.coordinates.kind == CoordinateKind::enu || out.coordinates.kind == CoordinateKind::ned) {
+    if (o_.origin) {
+      out.coordinates.origin = parse_origin(*o_.origin, "--origin", out.coordinates.ellipsoid);
+      out.origin_source = "--origin";
+    } else if (in.coordinates.origin) {
+      out.coordinates.origin = in.coordinates.origin;
+      out.coordinates.origin->ellipsoid = out.coordinates.ellipsoid;
+      out.origin_source = in.origin_source;
+    } else {
+      throw Error(ErrorKind::usage, "E_ORIGIN_MISSING", tile + ": ENU output needs --origin LAT,LON,H");
+    }
+  } else if (out.coordinates.kind == CoordinateKind::projected) {
+    const bool want_utm = out_.kind ? out_.utm : (in.coordinates.projection && in.coordinates.projection->utm);
+    if (want_utm && o_.zone) {
+      out.coordinates.projection = geodesy::utm_projection(out.coordinates.ellipsoid, parse_zone(*o_.zone, "--zone"));
+    } else if (!want_utm && o_.tm) {
+      out.coordinates.projection = geodesy::ProjectionDef{out.coordinates.ellipsoid, parse_tm(*o_.tm, "--tm"), std::nullopt};
+    } else if (same_kind && in.coordinates.projection && (in.coordinates.projection->utm.has_value() == want_utm)) {
+      out.coordinates.projection = in.coordinates.projection;
+      out.coordinates.projection->ellipsoid = out.coordinates.ellipsoid;
+    } else {
+      throw Error(ErrorKind::usage, "E_PROJECTION_MISSING",
+                  tile + (want_utm ? ": UTM output needs --zone Z (a tile has one zone)" : ": TM output needs --tm LAT0,LON0,K0,FE,FN"));
+    }
+  }
+  if (p.format == io::TileFormat::las &&
+      (out.coordinates.kind == CoordinateKind::ned || in.coordinates.kind == CoordinateKind::ned)) {
+    throw Error(ErrorKind::usage, "E_TILE_KIND", tile + ": LAS tiles are ENU, not NED");
+  }
+  // ENU/NED heights are along the ellipsoid normal at an origin given by
+  // its ellipsoidal height; only ECEF has no height at all.
+  out.height_type = out.coordinates.kind == CoordinateKind::ecef ? "" : "ellipsoidal";
+  out.vertical_datum = out.height_type.empty() ? "" : "ellipsoid " + out.coordinates.ellipsoid.name();
+  out.survey_method = in.survey_method;
+  out.rtk_fixed_percent = in.rtk_fixed_percent;
+  out.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
+  return p;
+}
+
+}  // namespace geoanchor::workflow
