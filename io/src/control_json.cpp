@@ -12,6 +12,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/json_input.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -84,12 +85,9 @@ detail::RoleValues role_values(const json& point, const std::string& role, const
 }  // namespace
 
 geodesy::ControlSet read_control_json(std::istream& in, const std::string& source_name, const ControlReadOptions& o) {
-  json doc;
-  try {
-    doc = json::parse(in);
-  } catch (const json::exception& e) {
-    throw Error(ErrorKind::input, "E_JSON", source_name + ": not valid JSON: " + e.what());
-  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  const json doc = parse_json_strict<json>(text.str(), source_name);
   if (!doc.is_object()) fail(source_name, "expected a JSON object with \"points\"");
   for (const auto& [key, value] : doc.items()) {
     if (key != "points" && key != "source_frame" && key != "target_frame" && key != "description") {

@@ -9,6 +9,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/json_input.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
 
 namespace geoanchor::io {
@@ -98,12 +99,7 @@ TileMetadata read_tile_metadata(const std::filesystem::path& path) {
 }
 
 TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view source) {
-  json j;
-  try {
-    j = json::parse(text_in);
-  } catch (const json::exception& e) {
-    throw Error(ErrorKind::input, "E_JSON", std::string(source) + ": not valid JSON: " + e.what());
-  }
+  const json j = parse_json_strict<json>(text_in, source);
   only_keys(j, source, "", {"schema", "frame", "coordinates", "enu_origin", "projection", "horizontal_crs",
                             "vertical", "survey", "provenance"});
   TileMetadata m;

@@ -12,6 +12,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/json_input.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -351,11 +352,7 @@ TransformFile parse_site_calibration(const json& doc, TransformFile t, std::stri
 }
 
 TransformFile parse_transform_core(std::string_view text, std::string_view source, json& doc) {
-  try {
-    doc = json::parse(text);
-  } catch (const json::exception& e) {
-    throw Error(ErrorKind::input, "E_JSON", std::string(source) + ": not valid JSON: " + e.what());
-  }
+  doc = parse_json_strict<json>(text, source);
   if (!doc.is_object()) fail(source, "(top level)", "expected a JSON object");
   for (const auto& [key, value] : doc.items()) {
     if (!kTopLevelKeys.count(key)) {

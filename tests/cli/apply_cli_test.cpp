@@ -509,5 +509,20 @@ TEST_F(ApplyCli, InterruptedMidTileLeavesNoPartialFileAtTheOutputPath) {
   EXPECT_EQ(files(out), std::vector<std::string>{}) << "left behind";
 }
 
+// issue 12 point 3
+TEST_F(ApplyCli, Point3_ATransformWithADuplicateKeyIsRefusedAndNothingIsWritten) {
+  std::string t = slurp(fit());
+  // nlohmann keeps the last: without the check the tile would be moved as coordinate_frame.
+  replace(t, "\"convention\": \"position_vector\",", "\"convention\": \"position_vector\",\n  \"convention\": \"coordinate_frame\",");
+  write("T2.json", t);
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + kTile + " --transform " + path("T2.json").string() + " --out-dir " + out.string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("error[E_JSON_DUPLICATE_KEY]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("T2.json:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(": convention: key given twice"), std::string::npos) << r.err;
+  EXPECT_EQ(files(out), std::vector<std::string>{});
+}
+
 }  // namespace
 }  // namespace geoanchor

@@ -464,5 +464,38 @@ INSTANTIATE_TEST_SUITE_P(
                 "--model helmert7 --convention position_vector --robust tukey:2", 2, "--robust tukey:2: expected huber:K or cauchy:K"}),
     [](const ::testing::TestParamInfo<Refusal>& param_info) { return std::string(param_info.param.name); });
 
+// The bundled control set as a control-set JSON; `extra_first` is added to
+// the first point's record.
+std::string control_json(const std::string& extra_first = "") {
+  std::vector<std::string> header;
+  const auto rows = csv_rows(slurp(kControl), &header);
+  std::string out = R"({"source_frame": "ITRF2014@2024.5", "target_frame": "ETRF2000@2024.5", "points": [)";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    auto v = [&](const char* name) { return r[col(header, name)]; };
+    std::string p = "\n  {\"id\": \"" + v("id") + "\", \"source\": {\"lat_deg\": " + v("lat_src_deg") + ", \"lon_deg\": " +
+                    v("lon_src_deg") + ", \"h_m\": " + v("h_src_m") + "}, \"target\": {\"lat_deg\": " + v("lat_dst_deg") +
+                    ", \"lon_deg\": " + v("lon_dst_deg") + ", \"h_m\": " + v("h_dst_m") + "}, \"sigma_src_m\": " +
+                    v("sigma_src_m") + ", \"sigma_dst_m\": " + v("sigma_dst_m") + "}";
+    if (i == 0) p.insert(p.size() - 1, extra_first);
+    out += (i ? "," : "") + p;
+  }
+  return out + "]}\n";
+}
+
+// issue 12 point 3
+TEST_F(FitCli, Point3_AControlSetJsonWithADuplicateKeyIsRefused) {
+  write("c.json", control_json());
+  const RunResult good = run("fit " + path("c.json").string() + " --model helmert7 --convention position_vector");
+  ASSERT_EQ(good.exit_code, 0) << good.err;
+  // The second sigma, 100 times the first, would weight P01 silently.
+  write("dup.json", control_json(", \"sigma_src_m\": 0.3"));
+  const RunResult r = run("fit " + path("dup.json").string() + " --model helmert7 --convention position_vector -o " +
+                          path("T.json").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("dup.json:2: points[0].sigma_src_m: key given twice"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("T.json")));
+}
+
 }  // namespace
 }  // namespace geoanchor

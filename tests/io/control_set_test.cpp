@@ -113,5 +113,15 @@ TEST(ControlSet, JsonErrorsNameThePath) {
   EXPECT_NE(json_error("{\"points\": [").find("c.json: not valid JSON"), std::string::npos);
 }
 
+// issue 12 point 3
+TEST(ControlSet, Point3_JsonDuplicateKeyIsRefusedWithItsPath) {
+  std::string twice = kJson;
+  twice.replace(twice.find("\"sigma_src_m\": 0.003"), 20, "\"sigma_src_m\": 0.003, \"sigma_src_m\": 0.3");
+  EXPECT_NE(json_error(twice).find("c.json:3: points[0].sigma_src_m: key given twice"), std::string::npos) << json_error(twice);
+  std::string frames = kJson;
+  frames.replace(frames.find("\"target_frame\""), 14, "\"source_frame\"");
+  EXPECT_NE(json_error(frames).find("c.json:1: source_frame: key given twice"), std::string::npos) << json_error(frames);
+}
+
 }  // namespace
 }  // namespace geoanchor::io

@@ -357,5 +357,28 @@ TEST(ControlExtentTest, DistanceIsZeroInsideAndGrowsOutside) {
   EXPECT_NEAR(e.distance_m(plane.ecef_from_enu({Eigen::Vector3d(4000, 5000, 0), o})), 5000.0, kPlanesTol_m);
 }
 
+std::string sidecar_error(const std::string& text) {
+  try {
+    parse_tile_metadata(text, "t.json");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+std::string sidecar_with(const std::string& from, const std::string& to) {
+  std::string s = kSidecar;
+  s.replace(s.find(from), from.size(), to);
+  return s;
+}
+
+// issue 12 point 3
+TEST(TileMetadata, Point3_DuplicateKeyIsRefusedWithItsPathAndLine) {
+  const std::string twice = sidecar_with("\"frame\": \"ITRF2014@2024.5\",", "\"frame\": \"ITRF2014@2024.5\", \"frame\": \"ITRF2008@2024.5\",");
+  EXPECT_NE(sidecar_error(twice).find("t.json:3: frame: key given twice"), std::string::npos) << sidecar_error(twice);
+  const std::string nested = sidecar_with("\"h_m\": 480.0,", "\"h_m\": 480.0, \"h_m\": 0.0,");
+  EXPECT_NE(sidecar_error(nested).find("t.json:5: enu_origin.h_m: key given twice"), std::string::npos) << sidecar_error(nested);
+}
+
 }  // namespace
 }  // namespace geoanchor::io

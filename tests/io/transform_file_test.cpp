@@ -105,5 +105,46 @@ TEST(TransformFile, WritesWhatItReads) {
   }
 }
 
+// The seven-parameter set above with a fit record appended: `fit` is the
+// text of the extra keys (without the leading comma).
+std::string helmert7_with(const std::string& fit) {
+  std::string s = kHelmert7;
+  s.insert(s.size() - 1, ", " + fit);
+  return s;
+}
+
+std::string code_of(const std::string& json) {
+  try {
+    parse_transform_json(json, "T.json");
+  } catch (const Error& e) {
+    return e.code();
+  }
+  return "";
+}
+
+// issue 12 point 3
+TEST(TransformFile, Point3_DuplicateKeyIsRefusedWithItsPathAndLine) {
+  // nlohmann keeps the last duplicate: the file would apply coordinate_frame.
+  const std::string twice = replace(kHelmert7, R"("convention": "position_vector",)",
+                                    R"("convention": "position_vector", "convention": "coordinate_frame",)");
+  EXPECT_EQ(code_of(twice), "E_JSON_DUPLICATE_KEY");
+  EXPECT_NE(error_of(twice).find("T.json:1: convention: key given twice"), std::string::npos) << error_of(twice);
+  // Nested, on a later line: the path and the line of the second one.
+  const std::string nested = replace(kHelmert7, R"("rz_arcsec": 0.554,)", R"("rz_arcsec": 0.554,
+      "rz_arcsec": -0.554,)");
+  EXPECT_NE(error_of(nested).find("T.json:4: parameters.rz_arcsec: key given twice"), std::string::npos) << error_of(nested);
+  // Inside an array of objects.
+  const std::string in_points =
+      helmert7_with(R"("points": [{"id": "A", "used": true}, {"id": "B", "used": true, "used": false}])");
+  EXPECT_NE(error_of(in_points).find("points[1].used: key given twice"), std::string::npos) << error_of(in_points);
+  // The same key in two different objects is not a duplicate.
+  EXPECT_EQ(error_of(helmert7_with(R"("points": [{"id": "A", "used": true}, {"id": "B", "used": true}])")), "");
+  // Malformed JSON still names the file and the position.
+  EXPECT_NE(error_of("{\"model\": \"helmert7\",\n \"convention\" \"x\"}").find("T.json: not valid JSON: "), std::string::npos);
+  EXPECT_NE(error_of("{\"model\": \"helmert7\",\n \"convention\" \"x\"}").find("line 2, column"), std::string::npos);
+  EXPECT_NE(error_of(replace(kHelmert7, "4.5", "4e999")).find("(at line 3, column"), std::string::npos)
+      << error_of(replace(kHelmert7, "4.5", "4e999"));
+}
+
 }  // namespace
 }  // namespace geoanchor::io
