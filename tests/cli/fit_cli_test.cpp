@@ -497,5 +497,22 @@ TEST_F(FitCli, Point3_AControlSetJsonWithADuplicateKeyIsRefused) {
   EXPECT_FALSE(fs::exists(path("T.json")));
 }
 
+// issue 12 point 10
+TEST_F(FitCli, Point10_ConvertRefusesAnOrthometricOriginHeightType) {
+  const std::string t = R"({"model": "enu-origin",
+    "nominal_origin": {"lat_deg": 47.4647, "lon_deg": 8.5492, "h_m": 480.05, "height_type": "orthometric", "ellipsoid": "WGS84"},
+    "parameters": {"shift_e_m": -0.30, "shift_n_m": 0.20, "shift_u_m": -0.05, "yaw_arcsec": 20.0}})";
+  write("T.json", t);
+  write("p.csv", "id,x_m,y_m,z_m\nA,4271315.696,641096.356,4678048.542\n");
+  const RunResult r = run("convert " + path("p.csv").string() + " --to ecef --transform " + path("T.json").string() + " -o " +
+                          path("out.csv").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("T.json: nominal_origin.height_type: value \"orthometric\" not read: an origin's h_m is an ellipsoidal "
+                       "height"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("out.csv")));
+}
+
 }  // namespace
 }  // namespace geoanchor
