@@ -498,6 +498,46 @@ TEST_F(FitCli, Point3_AControlSetJsonWithADuplicateKeyIsRefused) {
 }
 
 // issue 12 point 10
+TEST_F(FitCli, Point10_ControlColumnsThatLookLikeOursAreRefusedByName) {
+  std::string csv = slurp(kControl);
+  const auto header_at = csv.find("id,lat_src_deg");
+  ASSERT_NE(header_at, std::string::npos);
+  struct Case {
+    std::string from, to, expected;
+  };
+  for (const auto& [from, to, expected] : std::vector<Case>{
+           {"sigma_src_m,", "sigma_scr_m,", "header column 8 'sigma_scr_m': not read: a priori sigmas are read from sigma_src_m"},
+           {"sigma_src_m,", "sigma_src_mm,", "header column 8 'sigma_src_mm': not read: a priori sigmas are read from sigma_src_m"},
+           {"sigma_dst_m,", "sigma_dst_m,h_dst_ft,", "header column 10 'h_dst_ft': not read: a frame's coordinates are read"}}) {
+    std::string edited = csv;
+    edited.replace(edited.find(from, header_at), from.size(), to);
+    if (to.find("h_dst_ft") != std::string::npos) {
+      // one more value per row for the new column
+      std::string rows;
+      std::istringstream in(edited);
+      std::string line;
+      bool past_header = false;
+      while (std::getline(in, line)) {
+        if (past_header && !line.empty() && line[0] != '#') {
+          const auto last = line.rfind(',');
+          line.insert(last, ",1575.1");
+        }
+        past_header = past_header || line.rfind("id,", 0) == 0;
+        rows += line + "\n";
+      }
+      edited = rows;
+    }
+    write("c.csv", edited);
+    const std::string t = "T_" + to.substr(0, to.size() - 1) + ".json";  // one output per case
+    const RunResult r = run("fit " + path("c.csv").string() + " --model helmert7 --convention position_vector -o " +
+                            path(t).string());
+    EXPECT_EQ(r.exit_code, 3) << to << ": " << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path(t))) << to;
+  }
+}
+
+// issue 12 point 10
 TEST_F(FitCli, Point10_ConvertRefusesAnOrthometricOriginHeightType) {
   const std::string t = R"({"model": "enu-origin",
     "nominal_origin": {"lat_deg": 47.4647, "lon_deg": 8.5492, "h_m": 480.05, "height_type": "orthometric", "ellipsoid": "WGS84"},
