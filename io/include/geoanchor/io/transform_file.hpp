@@ -16,8 +16,10 @@
 // Every parameter key carries its unit; mm, mas and ppb spellings are read
 // too (tx_mm, rx_mas, ds_ppb, dtx_mm_per_year, drx_mas_per_year,
 // dds_ppb_per_year). A parameter given twice in two units, a missing
-// convention, a helmert14 without reference_epoch, a missing parameter and
-// any unknown key are errors naming the file and the key.
+// convention, a helmert14 without reference_epoch, a missing parameter, any
+// unknown key, a key given twice in one object, a key of another model and
+// a value of the wrong type are errors naming the file and the key's JSON
+// path (FitRecord below says how sigmas and correlations are checked).
 
 #include <array>
 #include <filesystem>
