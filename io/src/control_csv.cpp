@@ -2,11 +2,14 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
@@ -107,6 +110,89 @@ RoleColumns role_columns(const std::vector<std::string>& header, const std::stri
   return rc;
 }
 
+// Every column name a control set reads, for the nearest-name hint.
+std::vector<std::string> readable_names() {
+  std::vector<std::string> out = {"id", "epoch", "use"};
+  for (const char* role : {"src", "dst"}) {
+    for (const auto kind : {CoordinateKind::ecef, CoordinateKind::geodetic, CoordinateKind::enu, CoordinateKind::projected}) {
+      for (const auto& n : coordinate_column_names(kind, role)) {
+        if (std::find(out.begin(), out.end(), n) == out.end()) out.push_back(n);
+      }
+    }
+    out.push_back(std::string("sigma_") + role + "_m");
+    for (const char* c : kCovComponents) out.push_back(std::string("cov_") + role + "_" + c + "_m2");
+    for (const char* v : {"vx_", "vy_", "vz_"}) out.push_back(v + std::string(role) + "_m_per_year");
+    out.push_back(std::string("sigma_v_") + role + "_m_per_year");
+    out.push_back(std::string("H_") + role + "_m");  // orthometric heights: the coordinate reader's to judge
+  }
+  return out;
+}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// Why a column the control set does not read cannot pass through as an
+// attribute: it looks like one of geoanchor's own (a sigma, covariance,
+// velocity or coordinate of a frame), so a typo or another unit would be
+// dropped silently. nullopt for an attribute column (`kind`, `note`).
+std::optional<std::string> unread_column_problem(const std::string& name, bool velocities) {
+  auto starts = [&](const char* prefix) { return name.rfind(prefix, 0) == 0; };
+  const bool roled = name.find("_src") != std::string::npos || name.find("_dst") != std::string::npos;
+  std::string what;
+  if (starts("sigma_v_")) {
+    what = velocities || (name != "sigma_v_src_m_per_year" && name != "sigma_v_dst_m_per_year")
+               ? "velocity sigmas are read from sigma_v_src_m_per_year and sigma_v_dst_m_per_year (metres per year)"
+               : "a velocity sigma is read only with the velocities vx_src_m_per_year, vy_src_m_per_year, "
+                 "vz_src_m_per_year (and the same with dst)";
+  } else if (starts("sigma_")) {
+    what = "a priori sigmas are read from sigma_src_m and sigma_dst_m (isotropic, in metres) or the cov_ columns";
+  } else if (starts("cov_")) {
+    what = "covariances are read from cov_src_xx_m2, cov_src_xy_m2, cov_src_xz_m2, cov_src_yy_m2, cov_src_yz_m2, "
+           "cov_src_zz_m2 (m², in the axes of the coordinates; and the same with dst)";
+  } else if (starts("vx_") || starts("vy_") || starts("vz_")) {
+    what = "velocities are read from vx_src_m_per_year, vy_src_m_per_year, vz_src_m_per_year (ECEF, metres per year; "
+           "and the same with dst)";
+  } else if (roled) {
+    what = "a frame's coordinates are read from x_src_m,y_src_m,z_src_m | lat_src_deg,lon_src_deg,h_src_m | "
+           "e_src_m,n_src_m,u_src_m | easting_src_m,northing_src_m,h_src_m (and the same with dst; lengths in metres, "
+           "angles in degrees); a column naming src or dst that is none of them is not an attribute";
+  } else {
+    for (const auto kind : {CoordinateKind::ecef, CoordinateKind::geodetic, CoordinateKind::enu, CoordinateKind::ned,
+                            CoordinateKind::projected}) {
+      const auto names = coordinate_column_names(kind);
+      if (std::find(names.begin(), names.end(), name) != names.end() || name == "H_m") {
+        const auto under = name.find('_');
+        const std::string stem = name.substr(0, under), unit = name.substr(under + 1);
+        what = "a control set names each coordinate's frame: " + stem + "_src_" + unit + " or " + stem + "_dst_" + unit;
+      }
+    }
+    if (what.empty()) return std::nullopt;
+  }
+  // The nearest name geoanchor reads, when the column is likely a typo of it.
+  std::string nearest;
+  std::size_t best = 3;
+  for (const auto& n : readable_names()) {
+    const std::size_t d = edit_distance(name, n);
+    if (d < best) {
+      best = d;
+      nearest = n;
+    }
+  }
+  return "not read: " + what + (nearest.empty() ? "" : " (did you mean " + nearest + "?)");
+}
+
 class RowReader {
  public:
   RowReader(const std::vector<std::string>& header, std::string source) : header_(header), source_(std::move(source)) {}
@@ -131,6 +217,18 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   const auto id_col = find_column(header, "id");
   if (!id_col) {
     throw Error(ErrorKind::input, "E_COLUMN_MISSING", source_name + ": no 'id' column; every control point needs an id");
+  }
+  // A column that looks like ours but is no name we read is refused before
+  // the coordinates are classified, with what is read instead.
+  {
+    const auto readable = readable_names();
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (std::find(readable.begin(), readable.end(), header[i]) != readable.end()) continue;
+      if (const auto problem = unread_column_problem(header[i], false)) {
+        throw Error(ErrorKind::input, "E_COLUMN",
+                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] + "': " + *problem);
+      }
+    }
   }
   const RoleColumns src = role_columns(header, source_name, "src", o.src_projection.has_value());
   const RoleColumns dst = role_columns(header, source_name, "dst", o.dst_projection.has_value());
@@ -168,6 +266,44 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   }
   const auto use_col = find_column(header, "use");
   const RowReader rows(header, source_name);
+
+  // Every column is read, or an attribute that passes through: a name we
+  // read that is not read here (given twice, or a velocity sigma without
+  // velocities) is refused by name too.
+  {
+    std::vector<bool> read(header.size(), false);
+    auto mark = [&](std::optional<std::size_t> c) {
+      if (c) read[*c] = true;
+    };
+    mark(id_col);
+    mark(epoch_col);
+    mark(use_col);
+    for (const RoleColumns* rc : {&src, &dst}) {
+      mark(rc->coords.first);
+      mark(rc->coords.second);
+      mark(rc->coords.third);
+      mark(rc->sigma);
+      for (const auto& c : rc->cov) mark(c);
+    }
+    for (const auto* vc : {&vel_src, &vel_dst}) {
+      for (const auto& c : vc->v) mark(c);
+      if (vc->v[0]) mark(vc->sigma);
+    }
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (read[i]) continue;
+      const auto first = std::find(header.begin(), header.end(), header[i]);
+      if (first != header.begin() + static_cast<std::ptrdiff_t>(i) && read[static_cast<std::size_t>(first - header.begin())]) {
+        throw Error(ErrorKind::input, "E_COLUMN",
+                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] +
+                        "': appears twice in the header (also column " +
+                        std::to_string(static_cast<std::size_t>(first - header.begin()) + 1) + "); only one would be read");
+      }
+      if (const auto problem = unread_column_problem(header[i], vel_src.v[0].has_value())) {
+        throw Error(ErrorKind::input, "E_COLUMN",
+                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] + "': " + *problem);
+      }
+    }
+  }
 
   if ((src.coords.kind == CoordinateKind::enu || dst.coords.kind == CoordinateKind::enu) && !o.origin) {
     throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",

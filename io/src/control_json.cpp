@@ -12,6 +12,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/json_input.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -51,7 +52,10 @@ detail::RoleValues role_values(const json& point, const std::string& role, const
   if (found < 0) fail(at, "no coordinates; expected x_m,y_m,z_m | lat_deg,lon_deg,h_m | e_m,n_m,u_m");
   for (const auto& [key, value] : c.items()) {
     const auto* row = kinds[found];
-    if (key != row[0] && key != row[1] && key != row[2]) fail(at + "." + key, "unknown key for these coordinates");
+    if (key != row[0] && key != row[1] && key != row[2]) {
+      fail(at + "." + key, std::string("unknown key for these coordinates; expected ") + row[0] + ", " + row[1] + ", " + row[2] +
+                               " (heights ellipsoidal, in metres)");
+    }
   }
   v.kind = kind_of[found];
   v.a = number_at(c, kinds[found][0], at);
@@ -67,7 +71,10 @@ detail::RoleValues role_values(const json& point, const std::string& role, const
     for (std::size_t i = 0; i < 3; ++i) {
       if (!m[i].is_array() || m[i].size() != 3) fail(where + "." + cov_key, "expected a 3×3 array of arrays (m²)");
       for (std::size_t j = 0; j < 3; ++j) {
-        if (!m[i][j].is_number()) fail(where + "." + cov_key, "entry " + m[i][j].dump() + " is not a number");
+        if (!m[i][j].is_number()) {
+          fail(where + "." + cov_key + "[" + std::to_string(i) + "][" + std::to_string(j) + "]",
+               "entry " + m[i][j].dump() + " is not a number");
+        }
         full[3 * i + j] = m[i][j].get<double>();
       }
     }
@@ -84,17 +91,18 @@ detail::RoleValues role_values(const json& point, const std::string& role, const
 }  // namespace
 
 geodesy::ControlSet read_control_json(std::istream& in, const std::string& source_name, const ControlReadOptions& o) {
-  json doc;
-  try {
-    doc = json::parse(in);
-  } catch (const json::exception& e) {
-    throw Error(ErrorKind::input, "E_JSON", source_name + ": not valid JSON: " + e.what());
-  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  const json doc = parse_json_strict<json>(text.str(), source_name);
   if (!doc.is_object()) fail(source_name, "expected a JSON object with \"points\"");
   for (const auto& [key, value] : doc.items()) {
     if (key != "points" && key != "source_frame" && key != "target_frame" && key != "description") {
       fail(source_name + ": " + key, "unknown key; expected points, source_frame, target_frame, description");
     }
+  }
+  // Free text for people; typed so that a misplaced value is not kept as one.
+  if (doc.contains("description") && !doc.at("description").is_string()) {
+    fail(source_name + ": description", "value " + doc.at("description").dump() + " is not a string");
   }
   geodesy::ControlSet set;
   set.source_name = source_name;
@@ -126,7 +134,10 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     const json& jp = points[i];
     if (!jp.is_object()) fail(where, "expected an object");
     for (const auto& [key, value] : jp.items()) {
-      if (!known.count(key)) fail(where + "." + key, "unknown key");
+      if (!known.count(key)) {
+        fail(where + "." + key, "unknown key; expected id, source, target, sigma_src_m, sigma_dst_m (isotropic, metres), "
+                                "cov_src_m2, cov_dst_m2 (3×3, m²), epoch, use");
+      }
     }
     geodesy::ControlPoint p;
     if (!jp.contains("id") || !jp.at("id").is_string() || jp.at("id").get<std::string>().empty()) {

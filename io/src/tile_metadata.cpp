@@ -9,6 +9,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/json_input.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
 
 namespace geoanchor::io {
@@ -31,7 +32,21 @@ void only_keys(const json& j, std::string_view source, const std::string& where,
   }
 }
 
-const json* member(const json& j, const char* key) {
+// The value of `key`, or nullptr when absent. null is not a value: a key
+// given as null is refused (it would otherwise read as absent, and a default
+// would stand in for it), except where the schema writes null itself
+// (vertical.geoid_model: member_or_null).
+const json* member(const json& j, const char* key, std::string_view source, const std::string& where) {
+  const auto it = j.find(key);
+  if (it == j.end()) return nullptr;
+  if (it->is_null()) {
+    fail(source, where.empty() ? std::string(key) : where + "." + key,
+         "value null; give the key a value or leave it out");
+  }
+  return &*it;
+}
+
+const json* member_or_null(const json& j, const char* key) {
   const auto it = j.find(key);
   return it == j.end() || it->is_null() ? nullptr : &*it;
 }
@@ -57,12 +72,12 @@ geodesy::Ellipsoid ellipsoid(const json& j, std::string_view source) {
     fail(source, "coordinates.ellipsoid", "value \"" + name + "\" unknown; expected WGS84, GRS80 or {\"a_m\", \"rf\"}");
   }
   only_keys(j, source, "coordinates.ellipsoid", {"a_m", "rf", "name"});
-  const json* a = member(j, "a_m");
-  const json* rf = member(j, "rf");
+  const json* a = member(j, "a_m", source, "coordinates.ellipsoid");
+  const json* rf = member(j, "rf", source, "coordinates.ellipsoid");
   if (!a || !rf) fail(source, "coordinates.ellipsoid", "a custom ellipsoid needs a_m and rf");
   const double a_m = number(*a, source, "coordinates.ellipsoid.a_m", 6.0e6, 7.0e6, "[6000000, 7000000] m");
   const double inv_f = number(*rf, source, "coordinates.ellipsoid.rf", 250.0, 350.0, "[250, 350]");
-  const json* n = member(j, "name");
+  const json* n = member(j, "name", source, "coordinates.ellipsoid");
   return geodesy::Ellipsoid::custom(a_m, inv_f, n ? text(*n, source, "coordinates.ellipsoid.name") : "custom");
 }
 
@@ -98,52 +113,47 @@ TileMetadata read_tile_metadata(const std::filesystem::path& path) {
 }
 
 TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view source) {
-  json j;
-  try {
-    j = json::parse(text_in);
-  } catch (const json::exception& e) {
-    throw Error(ErrorKind::input, "E_JSON", std::string(source) + ": not valid JSON: " + e.what());
-  }
+  const json j = parse_json_strict<json>(text_in, source);
   only_keys(j, source, "", {"schema", "frame", "coordinates", "enu_origin", "projection", "horizontal_crs",
                             "vertical", "survey", "provenance"});
   TileMetadata m;
-  const json* schema = member(j, "schema");
+  const json* schema = member(j, "schema", source, "");
   if (!schema || text(*schema, source, "schema") != kTileSchema) {
     fail(source, "schema", std::string("expected \"") + std::string(kTileSchema) + "\"" +
                                (schema ? ", got " + schema->dump() : std::string(", the key is missing")));
   }
-  const json* frame = member(j, "frame");
+  const json* frame = member(j, "frame", source, "");
   if (!frame) fail(source, "frame", "missing: the tile's datum, realization and epoch, e.g. \"ITRF2014@2024.5\"");
   m.frame = geodesy::Frame::parse(text(*frame, source, "frame"), std::string(source) + ": frame");
 
-  const json* coords = member(j, "coordinates");
+  const json* coords = member(j, "coordinates", source, "");
   if (!coords) fail(source, "coordinates", "missing: {\"kind\", \"ellipsoid\", \"storage\"}");
   only_keys(*coords, source, "coordinates", {"kind", "ellipsoid", "storage"});
-  const json* kind = member(*coords, "kind");
+  const json* kind = member(*coords, "kind", source, "coordinates");
   if (!kind) fail(source, "coordinates.kind", "missing; expected enu, ned, ecef, geodetic, utm or tm");
   const std::string k = text(*kind, source, "coordinates.kind");
-  if (const json* e = member(*coords, "ellipsoid")) {
+  if (const json* e = member(*coords, "ellipsoid", source, "coordinates")) {
     m.coordinates.ellipsoid = ellipsoid(*e, source);
   } else if (k != "ecef") {
     fail(source, "coordinates.ellipsoid", "missing for " + k + " coordinates; expected WGS84, GRS80 or {\"a_m\", \"rf\"}");
   }
-  if (const json* st = member(*coords, "storage")) {
+  if (const json* st = member(*coords, "storage", source, "coordinates")) {
     m.storage = text(*st, source, "coordinates.storage");
     if (m.storage != "float64" && m.storage != "float32" && m.storage != "int32_scaled") {
       fail(source, "coordinates.storage", "value \"" + m.storage + "\" unknown; expected float64, float32 or int32_scaled");
     }
   }
 
-  const json* origin = member(j, "enu_origin");
-  const json* projection = member(j, "projection");
+  const json* origin = member(j, "enu_origin", source, "");
+  const json* projection = member(j, "projection", source, "");
   if (k == "enu" || k == "ned") {
     m.coordinates.kind = k == "enu" ? CoordinateKind::enu : CoordinateKind::ned;
     if (!origin) fail(source, "enu_origin", "missing for " + k + " coordinates: {\"lat_deg\", \"lon_deg\", \"h_m\", \"height_type\", \"source\"}");
     only_keys(*origin, source, "enu_origin", {"lat_deg", "lon_deg", "h_m", "height_type", "source"});
-    const json* lat = member(*origin, "lat_deg");
-    const json* lon = member(*origin, "lon_deg");
-    const json* h = member(*origin, "h_m");
-    const json* ht = member(*origin, "height_type");
+    const json* lat = member(*origin, "lat_deg", source, "enu_origin");
+    const json* lon = member(*origin, "lon_deg", source, "enu_origin");
+    const json* h = member(*origin, "h_m", source, "enu_origin");
+    const json* ht = member(*origin, "height_type", source, "enu_origin");
     if (!lat || !lon || !h) fail(source, "enu_origin", "needs lat_deg, lon_deg and h_m");
     if (!ht || text(*ht, source, "enu_origin.height_type") != "ellipsoidal") {
       fail(source, "enu_origin.height_type",
@@ -155,7 +165,7 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
     o.point.lon = geodesy::Angle::degrees(number(*lon, source, "enu_origin.lon_deg", -180, 180, "[-180, 180]"));
     o.point.h = geodesy::EllipsoidalHeight{number(*h, source, "enu_origin.h_m", -1.0e4, 1.0e5, "[-10000, 100000] m")};
     m.coordinates.origin = o;
-    if (const json* src = member(*origin, "source")) m.origin_source = text(*src, source, "enu_origin.source");
+    if (const json* src = member(*origin, "source", source, "enu_origin")) m.origin_source = text(*src, source, "enu_origin.source");
   } else if (k == "ecef") {
     m.coordinates.kind = CoordinateKind::ecef;
   } else if (k == "geodetic") {
@@ -164,18 +174,23 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
     m.coordinates.kind = CoordinateKind::projected;
     if (!projection) fail(source, "projection", "missing for " + k + " coordinates");
     only_keys(*projection, source, "projection", {"utm_zone", "tm"});
+    // Each kind reads one of the two; the other would be ignored.
+    if (const char* other = k == "utm" ? "tm" : "utm_zone"; projection->contains(other)) {
+      fail(source, std::string("projection.") + other, "given for " + k + " coordinates, which read projection." +
+                                                            (k == "utm" ? "utm_zone" : "tm") + " only; remove it");
+    }
     if (k == "utm") {
-      const json* z = member(*projection, "utm_zone");
+      const json* z = member(*projection, "utm_zone", source, "projection");
       if (!z) fail(source, "projection.utm_zone", "missing for utm coordinates (e.g. \"32N\")");
       m.coordinates.projection = geodesy::utm_projection(
           m.coordinates.ellipsoid,
           geodesy::parse_utm_zone(text(*z, source, "projection.utm_zone"), std::string(source) + ": projection.utm_zone"));
     } else {
-      const json* t = member(*projection, "tm");
+      const json* t = member(*projection, "tm", source, "projection");
       if (!t) fail(source, "projection.tm", "missing for tm coordinates");
       only_keys(*t, source, "projection.tm", {"lat0_deg", "lon0_deg", "k0", "false_easting_m", "false_northing_m"});
       for (const char* key : {"lat0_deg", "lon0_deg", "k0", "false_easting_m", "false_northing_m"}) {
-        if (!member(*t, key)) fail(source, std::string("projection.tm.") + key, "missing");
+        if (!member(*t, key, source, "projection.tm")) fail(source, std::string("projection.tm.") + key, "missing");
       }
       geodesy::TransverseMercatorParams p;
       p.lat0 = geodesy::Angle::degrees(number((*t)["lat0_deg"], source, "projection.tm.lat0_deg", -90, 90, "[-90, 90]"));
@@ -191,17 +206,17 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
   if (origin && !m.coordinates.origin) fail(source, "enu_origin", "given for " + k + " coordinates, which have none");
   if (projection && !m.coordinates.projection) fail(source, "projection", "given for " + k + " coordinates, which have none");
 
-  if (const json* hc = member(j, "horizontal_crs")) m.horizontal_crs = text(*hc, source, "horizontal_crs");
-  if (const json* v = member(j, "vertical")) {
+  if (const json* hc = member(j, "horizontal_crs", source, "")) m.horizontal_crs = text(*hc, source, "horizontal_crs");
+  if (const json* v = member(j, "vertical", source, "")) {
     only_keys(*v, source, "vertical", {"datum", "height_type", "geoid_model"});
-    if (const json* d = member(*v, "datum")) m.vertical_datum = text(*d, source, "vertical.datum");
-    if (const json* ht = member(*v, "height_type")) {
+    if (const json* d = member(*v, "datum", source, "vertical")) m.vertical_datum = text(*d, source, "vertical.datum");
+    if (const json* ht = member(*v, "height_type", source, "vertical")) {
       m.height_type = text(*ht, source, "vertical.height_type");
       if (m.height_type != "ellipsoidal" && m.height_type != "orthometric") {
         fail(source, "vertical.height_type", "value \"" + m.height_type + "\" unknown; expected ellipsoidal or orthometric");
       }
     }
-    if (const json* g = member(*v, "geoid_model")) m.geoid_model = text(*g, source, "vertical.geoid_model");
+    if (const json* g = member_or_null(*v, "geoid_model")) m.geoid_model = text(*g, source, "vertical.geoid_model");
   }
   const bool has_heights = m.coordinates.kind == CoordinateKind::geodetic || m.coordinates.kind == CoordinateKind::projected;
   if (has_heights && m.height_type.empty()) {
@@ -211,15 +226,31 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
   if (m.height_type == "orthometric" && !m.geoid_model) {
     fail(source, "vertical.geoid_model", "missing: orthometric heights need the geoid model that relates them");
   }
-  if (const json* s = member(j, "survey")) {
+  if (const json* s = member(j, "survey", source, "")) {
     only_keys(*s, source, "survey", {"method", "rtk_fixed_percent"});
-    if (const json* me = member(*s, "method")) m.survey_method = text(*me, source, "survey.method");
-    if (const json* r = member(*s, "rtk_fixed_percent")) {
+    if (const json* me = member(*s, "method", source, "survey")) m.survey_method = text(*me, source, "survey.method");
+    if (const json* r = member(*s, "rtk_fixed_percent", source, "survey")) {
       m.rtk_fixed_percent = number(*r, source, "survey.rtk_fixed_percent", 0, 100, "[0, 100] %");
     }
   }
-  if (const json* p = member(j, "provenance")) {
+  if (const json* p = member(j, "provenance", source, "")) {
     if (!p->is_object()) fail(source, "provenance", "expected a JSON object");
+    // apply's record of how the tile was made: kept as is, and written only,
+    // except the keys apply reads back to decide whether an output is up to
+    // date (a value of the wrong type there would make it compare wrongly).
+    const std::pair<const char*, const char*> resume_keys[] = {
+        {"input_sha256", "a string"}, {"transform_sha256", "a string or null"}, {"request", "an object"},
+        {"output_size_bytes", "a byte count"}, {"points", "a point count"}};
+    for (const auto& [key, expected] : resume_keys) {
+      const auto it = p->find(key);
+      if (it == p->end()) continue;
+      const std::string_view name(key);
+      const bool ok = name == "input_sha256"        ? it->is_string()
+                      : name == "transform_sha256" ? it->is_string() || it->is_null()
+                      : name == "request"          ? it->is_object()
+                                                   : it->is_number_unsigned();
+      if (!ok) fail(source, std::string("provenance.") + key, "value " + it->dump() + " is not " + expected);
+    }
     m.provenance_json = p->dump();
   }
   return m;

@@ -1,17 +1,24 @@
 #include "geoanchor/io/transform_file.hpp"
 
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/json_input.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -22,8 +29,9 @@ using geodesy::PositionVector;
 using geodesy::ScaleDifference;
 using nlohmann::json;
 
-// Top-level keys. The fit issue's statistics travel in the same file; apply
-// and convert read only what they need and check that nothing is misspelt.
+// Top-level keys. What a model reads (model_keys below), what `geoanchor fit`
+// adds about the fit (read into FitRecord), and what it adds that describes
+// the same transform again (checked against it, never applied).
 const std::set<std::string> kTopLevelKeys = {
     "model",       "convention", "rotation_model", "source_frame", "target_frame", "reference_epoch",
     "parameters",  "sigmas",     "correlation",    "statistics",   "points",       "proj_pipeline",
@@ -32,6 +40,12 @@ const std::set<std::string> kTopLevelKeys = {
 
 [[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& what) {
   throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
 }
 
 // One parameter, which may be written in either of two units.
@@ -52,6 +66,27 @@ constexpr std::array<ParamSpec, 7> kSeven = {{{"tx", "m", 1.0, "mm", 1e-3},
                                               {"rz", "arcsec", 1.0, "mas", 1e-3},
                                               {"ds", "ppm", 1.0, "ppb", 1e-3}}};
 
+std::string spec_key(const ParamSpec& p, bool rate, bool unit_b) {
+  return (rate ? std::string("d") : std::string()) + p.name + "_" + (unit_b ? p.unit_b : p.unit_a) + (rate ? "_per_year" : "");
+}
+
+// A parameter a fit estimates, as the file states it: the canonical key
+// (what to_json_text writes and FitRecord holds), the key the file's
+// `parameters` uses, and the factor from that key's unit to the canonical one.
+struct Estimated {
+  std::string canonical;
+  std::string key;
+  double to_canonical = 1.0;
+  std::string other_key;  // the same parameter in its other unit ("" if none)
+};
+
+// What a sigma may be given for: the model's estimated parameters, and why
+// each other parameter key has none.
+struct ModelParameters {
+  std::vector<Estimated> estimated;
+  std::map<std::string, std::string> no_sigma;  // key -> why it has no sigma
+};
+
 class ParameterReader {
  public:
   // Misspelt keys are reported first, by name, before any missing parameter.
@@ -59,9 +94,9 @@ class ParameterReader {
     if (!params_.is_object()) fail(source_, "parameters", "expected an object of unit-named numbers");
     std::set<std::string> known;
     for (const auto& p : kSeven) {
-      for (const char* unit : {p.unit_a, p.unit_b}) {
-        known.insert(std::string(p.name) + "_" + unit);
-        known.insert(std::string("d") + p.name + "_" + unit + "_per_year");
+      for (const bool b : {false, true}) {
+        known.insert(spec_key(p, false, b));
+        known.insert(spec_key(p, true, b));
       }
     }
     for (const char* pivot : {"px_m", "py_m", "pz_m"}) known.insert(pivot);
@@ -74,12 +109,10 @@ class ParameterReader {
     }
   }
 
-  // The value in canonical units, or nullopt if absent.
-  std::optional<double> get(const ParamSpec& p, bool rate) {
-    const std::string suffix = rate ? "_per_year" : "";
-    const std::string prefix = rate ? std::string("d") + p.name : std::string(p.name);
-    const std::string key_a = prefix + "_" + p.unit_a + suffix;
-    const std::string key_b = prefix + "_" + p.unit_b + suffix;
+  // The value in canonical units, or nullopt if absent; `used` receives the
+  // key the file spells it with and that key's factor to the canonical unit.
+  std::optional<double> get(const ParamSpec& p, bool rate, Estimated* used = nullptr) {
+    const std::string key_a = spec_key(p, rate, false), key_b = spec_key(p, rate, true);
     const bool has_a = params_.contains(key_a), has_b = params_.contains(key_b);
     if (has_a && has_b) fail(source_, "parameters." + key_a, "given twice, also as " + key_b + "; keep one");
     if (!has_a && !has_b) return std::nullopt;
@@ -87,7 +120,9 @@ class ParameterReader {
     used_.insert(key);
     const json& v = params_.at(key);
     if (!v.is_number()) fail(source_, "parameters." + key, "value " + v.dump() + " is not a number");
-    return v.get<double>() * (has_a ? p.factor_a : p.factor_b);
+    const double factor = has_a ? p.factor_a : p.factor_b;
+    if (used) *used = Estimated{key_a, key, factor, has_a ? key_b : key_a};
+    return v.get<double>() * factor;
   }
 
   // A parameter with a single unit (the Molodensky-Badekas pivot).
@@ -99,13 +134,11 @@ class ParameterReader {
     return v.get<double>();
   }
 
-  double require(const ParamSpec& p, bool rate, std::string_view model) {
-    const auto v = get(p, rate);
+  double require(const ParamSpec& p, bool rate, std::string_view model, Estimated* used = nullptr) {
+    const auto v = get(p, rate, used);
     if (!v) {
-      const std::string prefix = rate ? std::string("d") + p.name : std::string(p.name);
-      const std::string suffix = rate ? "_per_year" : "";
-      fail(source_, "parameters", "missing " + prefix + "_" + p.unit_a + suffix + " (or " + prefix + "_" + p.unit_b +
-                                      suffix + ") for model " + std::string(model));
+      fail(source_, "parameters", "missing " + spec_key(p, rate, false) + " (or " + spec_key(p, rate, true) +
+                                      ") for model " + std::string(model));
     }
     return *v;
   }
@@ -226,39 +259,112 @@ geodesy::AffineMap TransformFile::target_from_source(std::optional<geodesy::Deci
 
 namespace {
 
-double number_field(const json& obj, const std::string& key, const std::string& where, std::string_view source) {
-  if (!obj.contains(key)) fail(source, where + key, "missing");
-  const json& v = obj.at(key);
-  if (!v.is_number()) fail(source, where + key, "value " + v.dump() + " is not a number");
+// Defined with the writer below.
+template <class H>
+json parameters_json(const H& h);
+TransformFile swapped_convention(const TransformFile& t);
+
+}  // namespace
+
+namespace {
+
+// Typed access; every message names the file and the key's JSON path.
+const json* member(const json& obj, const std::string& key) {
+  const auto it = obj.find(key);
+  return it == obj.end() ? nullptr : &*it;
+}
+
+double number_at(const json& v, const std::string& path, std::string_view source) {
+  if (!v.is_number()) fail(source, path, "value " + v.dump() + " is not a number");
   return v.get<double>();
 }
 
-constexpr double kCorrectedOriginTol_m = 0.001;
+double number_field(const json& obj, const std::string& key, const std::string& where, std::string_view source) {
+  if (!obj.contains(key)) fail(source, where + key, "missing");
+  return number_at(obj.at(key), where + key, source);
+}
 
-geodesy::LocalOrigin origin_of(const json& doc, std::string_view source) {
-  if (!doc.contains("nominal_origin") || !doc.at("nominal_origin").is_object()) {
-    fail(source, "nominal_origin", "missing; enu-origin needs {\"lat_deg\", \"lon_deg\", \"h_m\", \"ellipsoid\"}");
+std::string string_at(const json& v, const std::string& path, std::string_view source) {
+  if (!v.is_string()) fail(source, path, "value " + v.dump() + " is not a string");
+  return v.get<std::string>();
+}
+
+bool bool_at(const json& v, const std::string& path, std::string_view source) {
+  if (!v.is_boolean()) fail(source, path, "value " + v.dump() + " is not true or false");
+  return v.get<bool>();
+}
+
+int count_at(const json& v, const std::string& path, std::string_view source) {
+  if (!v.is_number_integer() || v.get<long long>() < 0 || v.get<long long>() > 2147483647LL) {
+    fail(source, path, "value " + v.dump() + " is not a count (an integer >= 0)");
   }
-  const json& no = doc.at("nominal_origin");
-  for (const auto& [key, value] : no.items()) {
-    if (key != "lat_deg" && key != "lon_deg" && key != "h_m" && key != "ellipsoid" && key != "height_type") {
-      fail(source, "nominal_origin." + key, "unknown key; expected lat_deg, lon_deg, h_m, ellipsoid");
+  return static_cast<int>(v.get<long long>());
+}
+
+// Every key of `obj` must be one of `known`.
+void only_keys(const json& obj, const std::string& where, std::string_view source, const std::vector<std::string>& known) {
+  if (!obj.is_object()) fail(source, where, "value " + obj.dump() + " is not an object; expected the keys " + joined(known));
+  for (const auto& [key, value] : obj.items()) {
+    if (std::find(known.begin(), known.end(), key) == known.end()) {
+      fail(source, where + "." + key, "unknown key; expected " + joined(known));
     }
   }
+}
+
+std::array<double, 3> triple_at(const json& v, const std::string& path, std::string_view source) {
+  if (!v.is_array() || v.size() != 3) fail(source, path, "value " + v.dump() + " is not [e, n, u]");
+  std::array<double, 3> out{};
+  for (std::size_t k = 0; k < 3; ++k) out[k] = number_at(v[k], path + "[" + std::to_string(k) + "]", source);
+  return out;
+}
+
+geodesy::Ellipsoid ellipsoid_at(const json& v, const std::string& path, std::string_view source) {
+  const std::string name = string_at(v, path, source);
+  if (name == "WGS84") return geodesy::Ellipsoid::wgs84();
+  if (name == "GRS80") return geodesy::Ellipsoid::grs80();
+  fail(source, path, "value \"" + name + "\" unknown; expected WGS84 or GRS80");
+}
+
+constexpr double kCorrectedOriginTol_m = 0.001;
+constexpr double kGridCopyTol_deg = 1e-9;  // the same number written twice; 1e-9° is 0.1 mm
+// Correlations: geoanchor writes them at full precision, so a symmetric
+// matrix is symmetric to the last bit and its diagonal is 1 within rounding;
+// 1e-9 also accepts a matrix typed in with nine or more digits.
+constexpr double kCorrelationTol = 1e-9;
+// The smallest eigenvalue of a correlation matrix may be this far below 0:
+// rounding a correlation matrix to seven significant digits moves its
+// eigenvalues by less than 14 × 5e-8 = 7e-7 (14 parameters at most); a typo
+// or a wrong sign moves them by ~1e-2 or more.
+constexpr double kCorrelationPsdTol = 1e-6;
+// alternatives[i].parameters are written as the exact negation of the
+// rotations at full precision; 1e-9 (m, ″, ppm) allows a re-spelling in mm,
+// mas or ppb.
+constexpr double kAlternativeTol = 1e-9;
+
+geodesy::LocalOrigin origin_of(const json& doc, std::string_view model, std::string_view source) {
+  const json* no = member(doc, "nominal_origin");
+  if (!no) {
+    fail(source, "nominal_origin",
+         "missing; model " + std::string(model) +
+             " needs {\"lat_deg\", \"lon_deg\", \"h_m\", \"height_type\": \"ellipsoidal\", \"ellipsoid\"}");
+  }
+  only_keys(*no, "nominal_origin", source, {"lat_deg", "lon_deg", "h_m", "height_type", "ellipsoid"});
   geodesy::Ellipsoid e = geodesy::Ellipsoid::wgs84();
-  if (no.contains("ellipsoid")) {
-    const std::string name = string_field(no, "ellipsoid", source);
-    if (name == "GRS80") {
-      e = geodesy::Ellipsoid::grs80();
-    } else if (name != "WGS84") {
-      fail(source, "nominal_origin.ellipsoid", "value \"" + name + "\" unknown; expected WGS84 or GRS80");
+  if (const json* el = member(*no, "ellipsoid")) e = ellipsoid_at(*el, "nominal_origin.ellipsoid", source);
+  // An origin's h_m is an ellipsoidal height: the only type there is to state.
+  if (const json* ht = member(*no, "height_type")) {
+    const std::string v = string_at(*ht, "nominal_origin.height_type", source);
+    if (v != "ellipsoidal") {
+      fail(source, "nominal_origin.height_type",
+           "value \"" + v + "\" not read: an origin's h_m is an ellipsoidal height (orthometric origins are not "
+                            "supported); expected \"ellipsoidal\"");
     }
   }
-  const double lat = number_field(no, "lat_deg", "nominal_origin.", source);
-  const double lon = number_field(no, "lon_deg", "nominal_origin.", source);
+  const double lat = number_field(*no, "lat_deg", "nominal_origin.", source);
+  const double lon = number_field(*no, "lon_deg", "nominal_origin.", source);
   if (std::fabs(lat) > 90.0) fail(source, "nominal_origin.lat_deg", "latitude " + format_shortest(lat) + " not in [-90, 90]");
   if (std::fabs(lon) > 180.0) fail(source, "nominal_origin.lon_deg", "longitude " + format_shortest(lon) + " not in [-180, 180]");
-  return {{Angle::degrees(lat), Angle::degrees(lon), geodesy::EllipsoidalHeight{number_field(no, "h_m", "nominal_origin.", source)}}, e};
+  return {{Angle::degrees(lat), Angle::degrees(lon), geodesy::EllipsoidalHeight{number_field(*no, "h_m", "nominal_origin.", source)}}, e};
 }
 
 void frames_of(const json& doc, TransformFile& t, std::string_view source) {
@@ -270,10 +376,31 @@ void frames_of(const json& doc, TransformFile& t, std::string_view source) {
   }
 }
 
-TransformFile parse_enu_origin(const json& doc, TransformFile t, std::string_view source) {
+// Keys that only some models read: refused by name where they would be ignored.
+void check_model_keys(const json& doc, TransformModel m, std::string_view source) {
+  const std::string name(to_string(m));
+  const bool helmert = m != TransformModel::enu_origin && m != TransformModel::site_calibration;
+  if (!helmert) {
+    const std::pair<const char*, const char*> not_read[] = {
+        {"convention", "its rotation is defined by the model's formula (docs/transform-file.md), not by a convention"},
+        {"rotation_model", "its rotation is always exact"},
+        {"reference_epoch", "it is not time-dependent"}};
+    for (const auto& [key, why] : not_read) {
+      if (doc.contains(key)) fail(source, key, "not read for model " + name + ": " + why + "; remove it");
+    }
+  }
+  if (helmert && doc.contains("nominal_origin")) {
+    fail(source, "nominal_origin", "not read for model " + name + ": only enu-origin and site-calibration have a nominal origin; remove it");
+  }
+  if (m != TransformModel::site_calibration && doc.contains("grid")) {
+    fail(source, "grid", "not read for model " + name + ": only site-calibration has a grid; remove it");
+  }
+}
+
+TransformFile parse_enu_origin(const json& doc, TransformFile t, ModelParameters& mp, std::string_view source) {
   frames_of(doc, t, source);
   EnuOriginCorrection c;
-  c.nominal = origin_of(doc, source);
+  c.nominal = origin_of(doc, "enu-origin", source);
   const geodesy::Ellipsoid e = c.nominal.ellipsoid;
   if (!doc.contains("parameters") || !doc.at("parameters").is_object()) fail(source, "parameters", "missing");
   const json& p = doc.at("parameters");
@@ -290,6 +417,18 @@ TransformFile parse_enu_origin(const json& doc, TransformFile t, std::string_vie
                                   number_field(p, "shift_u_m", "parameters.", source));
   c.yaw = Angle::arcseconds(p.contains("yaw_arcsec") ? number_field(p, "yaw_arcsec", "parameters.", source) : 0.0);
   c.ds = ScaleDifference::ppm(p.contains("ds_ppm") ? number_field(p, "ds_ppm", "parameters.", source) : 0.0);
+  for (const char* key : {"shift_e_m", "shift_n_m", "shift_u_m", "yaw_arcsec", "ds_ppm"}) {
+    if (p.contains(key)) {
+      mp.estimated.push_back(Estimated{key, key, 1.0, ""});
+    } else {
+      mp.no_sigma[key] = std::string("parameters states no ") + key + ", so it is held at 0 (not estimated)";
+    }
+  }
+  for (const char* key : {"origin_lat_deg", "origin_lon_deg", "origin_h_m"}) {
+    mp.no_sigma[key] = std::string(key) +
+                       " is derived from nominal_origin and the shift, not estimated: its uncertainty is that of "
+                       "shift_e_m, shift_n_m and shift_u_m";
+  }
   // The corrected origin is derived; if given, it must agree with the shift.
   if (p.contains("origin_lat_deg") || p.contains("origin_lon_deg") || p.contains("origin_h_m")) {
     const geodesy::LocalOrigin derived = geodesy::corrected_origin(c.nominal, c.shift_enu_m);
@@ -297,7 +436,7 @@ TransformFile parse_enu_origin(const json& doc, TransformFile t, std::string_vie
                                            Angle::degrees(number_field(p, "origin_lon_deg", "parameters.", source)),
                                            geodesy::EllipsoidalHeight{number_field(p, "origin_h_m", "parameters.", source)}};
     const double d = (geodesy::ecef_from_geodetic(e, stated).m - geodesy::ecef_from_geodetic(e, derived.point).m).norm();
-    if (d > kCorrectedOriginTol_m) {
+    if (!(d <= kCorrectedOriginTol_m)) {
       fail(source, "parameters.origin_lat_deg", "the corrected origin is " + format_shortest(d) +
                                                     " m from nominal_origin + shift; expected them to agree within 1 mm");
     }
@@ -307,21 +446,26 @@ TransformFile parse_enu_origin(const json& doc, TransformFile t, std::string_vie
   return t;
 }
 
-TransformFile parse_site_calibration(const json& doc, TransformFile t, std::string_view source) {
+TransformFile parse_site_calibration(const json& doc, TransformFile t, ModelParameters& mp, std::string_view source) {
   frames_of(doc, t, source);
-  const geodesy::LocalOrigin local = origin_of(doc, source);
-  if (!doc.contains("grid") || !doc.at("grid").is_object()) {
+  const geodesy::LocalOrigin local = origin_of(doc, "site-calibration", source);
+  if (!doc.contains("grid")) {
     fail(source, "grid", "missing; expected {\"lat0_deg\", \"lon0_deg\", \"k0\", \"false_easting_m\", \"false_northing_m\"}");
   }
   const json& g = doc.at("grid");
-  for (const auto& [key, value] : g.items()) {
-    if (key != "lat0_deg" && key != "lon0_deg" && key != "k0" && key != "false_easting_m" && key != "false_northing_m" &&
-        key != "ellipsoid") {
-      fail(source, "grid." + key, "unknown key");
-    }
-  }
+  only_keys(g, "grid", source, {"lat0_deg", "lon0_deg", "k0", "false_easting_m", "false_northing_m", "ellipsoid"});
   geodesy::ProjectionDef grid;
   grid.ellipsoid = local.ellipsoid;
+  // The grid is on the origin's ellipsoid (fit puts both on --ellipsoid); a
+  // file that names another one for the grid would not be applied as it says.
+  if (const json* ge = member(g, "ellipsoid")) {
+    const geodesy::Ellipsoid named = ellipsoid_at(*ge, "grid.ellipsoid", source);
+    if (!(named == local.ellipsoid)) {
+      fail(source, "grid.ellipsoid",
+           "value \"" + named.name() + "\" differs from nominal_origin.ellipsoid " + local.ellipsoid.name() +
+               " (WGS84 when not given); the grid is applied on the origin's ellipsoid: state the same one in both");
+    }
+  }
   grid.tm.lat0 = Angle::degrees(number_field(g, "lat0_deg", "grid.", source));
   grid.tm.lon0 = Angle::degrees(number_field(g, "lon0_deg", "grid.", source));
   grid.tm.k0 = number_field(g, "k0", "grid.", source);
@@ -330,11 +474,14 @@ TransformFile parse_site_calibration(const json& doc, TransformFile t, std::stri
   if (!(grid.tm.k0 > 0.0 && grid.tm.k0 < 2.0)) fail(source, "grid.k0", "not in (0, 2)");
   if (!doc.contains("parameters") || !doc.at("parameters").is_object()) fail(source, "parameters", "missing");
   const json& p = doc.at("parameters");
-  const std::set<std::string> known = {"shift_e_m",   "shift_n_m",   "rotation_arcsec", "scale_ppm",   "vertical_shift_m",
-                                       "slope_n_ppm", "slope_e_ppm", "centroid_e_m",    "centroid_n_m", "grid_lat0_deg",
-                                       "grid_lon0_deg"};
+  const std::vector<std::string> estimated = {"shift_e_m",        "shift_n_m",   "rotation_arcsec", "scale_ppm",
+                                              "vertical_shift_m", "slope_n_ppm", "slope_e_ppm"};
+  std::vector<std::string> known = estimated;
+  for (const char* k : {"centroid_e_m", "centroid_n_m", "grid_lat0_deg", "grid_lon0_deg"}) known.emplace_back(k);
   for (const auto& [key, value] : p.items()) {
-    if (!known.count(key)) fail(source, "parameters." + key, "unknown parameter for site-calibration");
+    if (std::find(known.begin(), known.end(), key) == known.end()) {
+      fail(source, "parameters." + key, "unknown parameter for site-calibration; expected " + joined(known));
+    }
   }
   geodesy::SiteCalibrationParams sp;
   sp.shift_e_m = number_field(p, "shift_e_m", "parameters.", source);
@@ -346,16 +493,30 @@ TransformFile parse_site_calibration(const json& doc, TransformFile t, std::stri
   sp.slope_e = number_field(p, "slope_e_ppm", "parameters.", source) * 1e-6;
   sp.centroid_e_m = number_field(p, "centroid_e_m", "parameters.", source);
   sp.centroid_n_m = number_field(p, "centroid_n_m", "parameters.", source);
+  // The grid's origin repeated among the parameters (as the fit reports it):
+  // read, and held to the grid's.
+  for (const auto& [key, grid_key, value] : {std::tuple<const char*, const char*, double>{"grid_lat0_deg", "lat0_deg", grid.tm.lat0.deg()},
+                                            {"grid_lon0_deg", "lon0_deg", grid.tm.lon0.deg()}}) {
+    if (!p.contains(key)) continue;
+    const double stated = number_field(p, key, "parameters.", source);
+    if (!(std::fabs(stated - value) <= kGridCopyTol_deg)) {
+      fail(source, std::string("parameters.") + key,
+           "value " + format_shortest(stated) + " differs from grid." + grid_key + " " + format_shortest(value) +
+               "; the grid's origin is stated twice, differently: correct one");
+    }
+  }
+  for (const auto& key : estimated) mp.estimated.push_back(Estimated{key, key, 1.0, ""});
+  for (const char* key : {"centroid_e_m", "centroid_n_m"}) {
+    mp.no_sigma[key] = std::string(key) + " is the point the slopes refer to (the control's centroid), not estimated";
+  }
+  for (const char* key : {"grid_lat0_deg", "grid_lon0_deg"}) {
+    mp.no_sigma[key] = std::string(key) + " is the grid's origin, a given, not estimated";
+  }
   t.site_calibration.emplace(local, grid, sp);
   return t;
 }
 
-TransformFile parse_transform_core(std::string_view text, std::string_view source, json& doc) {
-  try {
-    doc = json::parse(text);
-  } catch (const json::exception& e) {
-    throw Error(ErrorKind::input, "E_JSON", std::string(source) + ": not valid JSON: " + e.what());
-  }
+TransformFile parse_transform_doc(const json& doc, std::string_view source, ModelParameters& mp) {
   if (!doc.is_object()) fail(source, "(top level)", "expected a JSON object");
   for (const auto& [key, value] : doc.items()) {
     if (!kTopLevelKeys.count(key)) {
@@ -378,15 +539,16 @@ TransformFile parse_transform_core(std::string_view text, std::string_view sourc
     t.model = TransformModel::molodensky_badekas;
   } else if (model == "enu-origin") {
     t.model = TransformModel::enu_origin;
-    return parse_enu_origin(doc, std::move(t), source);
   } else if (model == "site-calibration") {
     t.model = TransformModel::site_calibration;
-    return parse_site_calibration(doc, std::move(t), source);
   } else {
     fail(source, "model", "value \"" + model +
                               "\" not read by this command; expected helmert7, helmert6, translation3, helmert14, "
                               "molodensky-badekas, enu-origin or site-calibration");
   }
+  check_model_keys(doc, t.model, source);
+  if (t.model == TransformModel::enu_origin) return parse_enu_origin(doc, std::move(t), mp, source);
+  if (t.model == TransformModel::site_calibration) return parse_site_calibration(doc, std::move(t), mp, source);
 
   bool position_vector = true;
   if (doc.contains("convention")) {
@@ -415,12 +577,7 @@ TransformFile parse_transform_core(std::string_view text, std::string_view sourc
     }
   }
 
-  for (const char* key : {"source_frame", "target_frame"}) {
-    if (doc.contains(key)) {
-      auto f = geodesy::Frame::parse(string_field(doc, key, source), std::string(source) + ": " + key);
-      (std::string_view(key) == "source_frame" ? t.source_frame : t.target_frame) = std::move(f);
-    }
-  }
+  frames_of(doc, t, source);
 
   if (doc.contains("reference_epoch")) {
     const json& v = doc.at("reference_epoch");
@@ -437,19 +594,36 @@ TransformFile parse_transform_core(std::string_view text, std::string_view sourc
   std::array<double, 7> p{};
   for (std::size_t i = 0; i < 7; ++i) {
     const bool is_translation = i < 3, is_scale = i == 6;
-    const bool required = t.model == TransformModel::helmert7 || t.model == TransformModel::helmert14 ||
-                          t.model == TransformModel::molodensky_badekas ||
-                          (t.model == TransformModel::helmert6 && !is_scale) ||
-                          (t.model == TransformModel::translation3 && is_translation);
-    if (required) {
-      p[i] = reader.require(kSeven[i], false, model_name);
+    // The parameters the model estimates (and which may have a sigma); the
+    // others are held fixed, at 0 unless stated.
+    const bool estimated = t.model == TransformModel::helmert7 || t.model == TransformModel::helmert14 ||
+                           t.model == TransformModel::molodensky_badekas ||
+                           (t.model == TransformModel::helmert6 && !is_scale) ||
+                           (t.model == TransformModel::translation3 && is_translation);
+    if (estimated) {
+      Estimated e;
+      p[i] = reader.require(kSeven[i], false, model_name, &e);
+      mp.estimated.push_back(e);
     } else {
-      p[i] = reader.get(kSeven[i], false).value_or(0.0);  // a fixed parameter, zero unless stated
+      p[i] = reader.get(kSeven[i], false).value_or(0.0);
+      for (const bool b : {false, true}) {
+        mp.no_sigma[spec_key(kSeven[i], false, b)] =
+            "model " + std::string(model_name) + " holds " + kSeven[i].name + " fixed (not estimated), so it has no sigma";
+      }
     }
+  }
+  if (!doc.contains("convention") && (p[3] != 0.0 || p[4] != 0.0 || p[5] != 0.0)) {
+    fail(source, "convention",
+         "missing; parameters states a rotation, whose sign depends on it: expected position_vector or "
+         "coordinate_frame (it is never assumed)");
   }
   if (t.model == TransformModel::helmert14) {
     std::array<double, 7> r{};
-    for (std::size_t i = 0; i < 7; ++i) r[i] = reader.require(kSeven[i], true, model_name);
+    for (std::size_t i = 0; i < 7; ++i) {
+      Estimated e;
+      r[i] = reader.require(kSeven[i], true, model_name, &e);
+      mp.estimated.push_back(e);
+    }
     if (position_vector) {
       t.helmert = geodesy::Helmert14<PositionVector>{seven_from<PositionVector>(p), rates_from<PositionVector>(r),
                                                      *t.reference_epoch};
@@ -457,103 +631,404 @@ TransformFile parse_transform_core(std::string_view text, std::string_view sourc
       t.helmert = geodesy::Helmert14<CoordinateFrame>{seven_from<CoordinateFrame>(p),
                                                       rates_from<CoordinateFrame>(r), *t.reference_epoch};
     }
-  } else if (position_vector) {
-    t.helmert = seven_from<PositionVector>(p);
   } else {
-    t.helmert = seven_from<CoordinateFrame>(p);
+    for (const auto& spec : kSeven) {
+      for (const bool b : {false, true}) {
+        mp.no_sigma[spec_key(spec, true, b)] = "rates are parameters of model helmert14 only";
+      }
+    }
+    if (position_vector) {
+      t.helmert = seven_from<PositionVector>(p);
+    } else {
+      t.helmert = seven_from<CoordinateFrame>(p);
+    }
   }
   if (t.model == TransformModel::molodensky_badekas) {
     t.pivot_m = Eigen::Vector3d(reader.require_plain("px_m", model_name), reader.require_plain("py_m", model_name),
                                 reader.require_plain("pz_m", model_name));
   }
+  for (const char* pivot : {"px_m", "py_m", "pz_m"}) {
+    mp.no_sigma[pivot] = "the pivot is chosen (the control's centroid), not estimated";
+  }
   reader.check_all_used(model_name);
   return t;
 }
 
-// What convert and apply use of a fit record: the uncertainty and extent.
-std::optional<FitRecord> parse_fit_uncertainty(const json& doc, std::string_view source) {
-  if (!doc.contains("sigmas")) return std::nullopt;
-  FitRecord f;
-  const json& sig = doc.at("sigmas");
-  if (!sig.is_object()) fail(source, "sigmas", "expected an object of parameter -> sigma");
-  for (const auto& [key, value] : sig.items()) {
-    if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() < 0.0) {
-      fail(source, "sigmas." + key, "value " + value.dump() + " is not a sigma (a finite number >= 0)");
+TransformFile parse_transform_core(std::string_view text, std::string_view source, json& doc, ModelParameters& mp) {
+  doc = parse_json_strict<json>(text, source);
+  return parse_transform_doc(doc, source, mp);
+}
+
+// Keys that describe the transform again (for PROJ, EPSG, the other
+// convention) or say where it came from: type-checked, and where they state
+// the convention or the parameters a second time, held to the first.
+void check_written_keys(const json& doc, const TransformFile& t, std::string_view source) {
+  const std::string model(to_string(t.model));
+  if (const json* v = member(doc, "format_version")) {
+    if (!v->is_number_integer() || v->get<long long>() != 1) {
+      fail(source, "format_version", "value " + v->dump() + " not read by this geoanchor, which reads format 1");
     }
-    f.sigmas.emplace_back(key, value.get<double>());
   }
-  if (doc.contains("correlation_parameters")) {
-    const json& names = doc.at("correlation_parameters");
-    const json& corr = doc.contains("correlation") ? doc.at("correlation") : json();
-    if (!names.is_array() || !corr.is_array() || corr.size() != names.size()) {
-      fail(source, "correlation", "expected a square matrix with one row per correlation_parameters entry");
+  for (const char* key : {"description", "generator", "proj_pipeline", "wkt2"}) {
+    if (const json* v = member(doc, key)) string_at(*v, key, source);
+  }
+  if (const json* v = member(doc, "projjson")) {
+    if (!v->is_object()) fail(source, "projjson", "value is not a JSON object");
+  }
+  if (const json* v = member(doc, "epsg_method")) {
+    const std::string stated = string_at(*v, "epsg_method", source);
+    const std::string expected = epsg_method(t);
+    if (expected.empty()) fail(source, "epsg_method", "no EPSG method describes model " + model + "; remove it");
+    if (stated != expected) {
+      fail(source, "epsg_method",
+           "value \"" + stated + "\" contradicts model " + model + " in convention " + std::string(t.convention_name()) +
+               " (" + expected + "): the file states its method twice, differently; correct one");
     }
-    for (const auto& n : names) f.correlation_names.push_back(n.get<std::string>());
-    for (std::size_t i = 0; i < corr.size(); ++i) {
-      if (!corr[i].is_array() || corr[i].size() != names.size()) {
-        fail(source, "correlation[" + std::to_string(i) + "]", "expected " + std::to_string(names.size()) + " values");
+  }
+  const json* alts = member(doc, "alternatives");
+  if (!alts) return;
+  if (t.enu_origin || t.site_calibration) {
+    fail(source, "alternatives", "not read for model " + model + ": it has no other rotation convention; remove it");
+  }
+  if (!alts->is_array()) fail(source, "alternatives", "value is not an array");
+  const TransformFile other = swapped_convention(t);
+  const std::string other_convention(other.convention_name());
+  for (std::size_t i = 0; i < alts->size(); ++i) {
+    const std::string where = "alternatives[" + std::to_string(i) + "]";
+    const json& a = (*alts)[i];
+    only_keys(a, where, source, {"convention", "epsg_method", "parameters", "proj_pipeline", "wkt2", "projjson"});
+    if (!a.contains("convention")) fail(source, where + ".convention", "missing");
+    const std::string c = string_at(a.at("convention"), where + ".convention", source);
+    if (c != other_convention) {
+      fail(source, where + ".convention",
+           "value \"" + c + "\" is not the other convention of convention " + std::string(t.convention_name()) +
+               "; the file states its convention twice, differently: correct one (or remove alternatives)");
+    }
+    if (const json* e = member(a, "epsg_method")) {
+      const std::string stated = string_at(*e, where + ".epsg_method", source);
+      if (stated != epsg_method(other)) {
+        fail(source, where + ".epsg_method", "value \"" + stated + "\" is not " + epsg_method(other) + ", the method of " +
+                                                 other_convention);
       }
-      std::vector<double> row;
-      for (const auto& v : corr[i]) {
-        if (!v.is_number() || !(std::abs(v.get<double>()) <= 1.0 + 1e-9)) {
-          fail(source, "correlation[" + std::to_string(i) + "]", "value " + v.dump() + " is not a correlation in [-1, 1]");
+    }
+    for (const char* key : {"proj_pipeline", "wkt2"}) {
+      if (const json* v = member(a, key)) string_at(*v, where + "." + key, source);
+    }
+    if (const json* v = member(a, "projjson")) {
+      if (!v->is_object()) fail(source, where + ".projjson", "value is not a JSON object");
+    }
+    if (const json* params = member(a, "parameters")) {
+      // The same transform in the other convention: read as a transform
+      // file of its own, then compared parameter by parameter.
+      json alt = {{"model", doc.at("model")}, {"convention", c}, {"parameters", *params}};
+      for (const char* key : {"rotation_model", "reference_epoch"}) {
+        if (doc.contains(key)) alt[key] = doc.at(key);
+      }
+      ModelParameters unused;
+      const TransformFile read = parse_transform_doc(alt, std::string(source) + ": " + where, unused);
+      const json got = std::visit([](const auto& h) { return parameters_json(h); }, read.helmert);
+      const json want = std::visit([](const auto& h) { return parameters_json(h); }, other.helmert);
+      for (const auto& [key, value] : want.items()) {
+        const double g = got.at(key).get<double>(), w = value.get<double>();
+        if (!(std::fabs(g - w) <= kAlternativeTol)) {
+          fail(source, where + ".parameters." + key,
+               "value " + format_shortest(g) + " is not the " + other_convention + " form (" + format_shortest(w) +
+                   ") of parameters; the file states its parameters twice, differently: correct one (or remove "
+                   "alternatives)");
         }
-        row.push_back(v.get<double>());
       }
+      if (read.pivot_m && t.pivot_m && !((*read.pivot_m - *t.pivot_m).norm() <= kAlternativeTol)) {
+        fail(source, where + ".parameters.px_m", "the pivot differs from parameters'");
+      }
+    }
+  }
+}
+
+// The fit record's sigmas and correlation, checked against the model's
+// parameters (point by point: what apply propagates is what the file says).
+void parse_sigmas(const json& doc, const TransformFile& t, const ModelParameters& mp, FitRecord& f, std::string_view source) {
+  const std::string model(to_string(t.model));
+  std::vector<std::string> sigma_keys;  // as the file spells them, in its order
+  std::map<std::string, std::string> canonical_of;
+  std::vector<std::string> expected;
+  for (const auto& e : mp.estimated) expected.push_back(e.key);
+  const json* sig = member(doc, "sigmas");
+  if (sig) {
+    if (!sig->is_object()) fail(source, "sigmas", "expected an object of parameter -> sigma");
+    for (const auto& [key, value] : sig->items()) {
+      const auto e = std::find_if(mp.estimated.begin(), mp.estimated.end(), [&](const Estimated& x) { return x.key == key; });
+      if (e == mp.estimated.end()) {
+        const auto other = std::find_if(mp.estimated.begin(), mp.estimated.end(),
+                                        [&](const Estimated& x) { return !x.other_key.empty() && x.other_key == key; });
+        if (other != mp.estimated.end()) {
+          fail(source, "sigmas." + key,
+               "parameters states this parameter as " + other->key + "; give its sigma in the same unit, as sigmas." + other->key);
+        }
+        const auto why = mp.no_sigma.find(key);
+        fail(source, "sigmas." + key,
+             (why != mp.no_sigma.end() ? why->second : "not a parameter of model " + model) +
+                 "; sigmas are read for the estimated parameters, in the units of parameters: " + joined(expected));
+      }
+      if (!value.is_number() || !(value.get<double>() >= 0.0)) {
+        fail(source, "sigmas." + key, "value " + value.dump() + " is not a sigma (a finite number >= 0)");
+      }
+      f.sigmas.emplace_back(e->canonical, value.get<double>() * e->to_canonical);
+      sigma_keys.push_back(key);
+      canonical_of[key] = e->canonical;
+    }
+  }
+  const json* corr = member(doc, "correlation");
+  const json* names = member(doc, "correlation_parameters");
+  if (corr && corr->is_string()) {
+    const std::string v = corr->get<std::string>();
+    if (v != "none") {
+      fail(source, "correlation",
+           "value \"" + v + "\" unknown; expected a matrix [[...], ...] with correlation_parameters, or \"none\" "
+                            "(the parameters are uncorrelated)");
+    }
+    if (names) fail(source, "correlation_parameters", "given with \"correlation\": \"none\", which has no matrix to order; remove it");
+    if (sigma_keys.empty()) fail(source, "correlation", "\"none\" without sigmas: there is nothing to correlate");
+    f.uncorrelated = true;
+    return;
+  }
+  if (corr) {
+    if (!sig) fail(source, "correlation", "given without sigmas; a correlation matrix needs the sigmas it scales");
+    if (!corr->is_array()) fail(source, "correlation", "value " + corr->dump() + " is neither a matrix [[...], ...] nor \"none\"");
+    if (!names) {
+      fail(source, "correlation_parameters",
+           "missing; the correlation matrix needs the order of its rows and columns, e.g. [\"tx_m\", \"ty_m\", ...]");
+    }
+    if (!names->is_array()) fail(source, "correlation_parameters", "value " + names->dump() + " is not an array of parameter names");
+    std::vector<std::string> order;
+    for (std::size_t i = 0; i < names->size(); ++i) {
+      const std::string where = "correlation_parameters[" + std::to_string(i) + "]";
+      const std::string n = string_at((*names)[i], where, source);
+      if (!canonical_of.count(n)) {
+        fail(source, where, n + " has no sigma in sigmas; expected the parameters sigmas gives: " + joined(sigma_keys));
+      }
+      if (std::find(order.begin(), order.end(), n) != order.end()) fail(source, where, n + " appears twice");
+      order.push_back(n);
+    }
+    for (const auto& k : sigma_keys) {
+      if (std::find(order.begin(), order.end(), k) == order.end()) {
+        fail(source, "correlation_parameters",
+             "misses " + k + ", which sigmas gives; the matrix must cover every parameter with a sigma (or say "
+                             "\"correlation\": \"none\" when the parameters are uncorrelated)");
+      }
+    }
+    const std::size_t n = order.size();
+    if (corr->size() != n) {
+      fail(source, "correlation", "has " + std::to_string(corr->size()) + " rows; expected " + std::to_string(n) +
+                                      ", one per correlation_parameters entry");
+    }
+    Eigen::MatrixXd r(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::string row_at = "correlation[" + std::to_string(i) + "]";
+      const json& row = (*corr)[i];
+      if (!row.is_array() || row.size() != n) fail(source, row_at, "expected " + std::to_string(n) + " values (a square matrix)");
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::string at = row_at + "[" + std::to_string(j) + "]";
+        const double v = number_at(row[j], at, source);
+        if (!(std::fabs(v) <= 1.0 + kCorrelationTol)) fail(source, at, "value " + format_shortest(v) + " is not a correlation in [-1, 1]");
+        if (i == j && !(std::fabs(v - 1.0) <= kCorrelationTol)) {
+          fail(source, at, "value " + format_shortest(v) + " on the diagonal; the correlation of " + order[i] + " with itself is 1");
+        }
+        r(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = v;
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < i; ++j) {
+        const double a = r(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+        const double b = r(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i));
+        if (!(std::fabs(a - b) <= kCorrelationTol)) {
+          fail(source, "correlation[" + std::to_string(i) + "][" + std::to_string(j) + "]",
+               "value " + format_shortest(a) + " but correlation[" + std::to_string(j) + "][" + std::to_string(i) +
+                   "] is " + format_shortest(b) + " (" + order[i] + " / " + order[j] + "); the matrix must be symmetric");
+        }
+      }
+    }
+    if (n > 0) {
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(r, Eigen::EigenvaluesOnly);
+      const double smallest = eig.eigenvalues().minCoeff();
+      if (eig.info() != Eigen::Success || !(smallest >= -kCorrelationPsdTol)) {
+        fail(source, "correlation",
+             "not positive semi-definite (smallest eigenvalue " + format_shortest(smallest) + ", below -" +
+                 format_shortest(kCorrelationPsdTol) + "): no covariance has these correlations; look for a typo or a "
+                                                       "wrong sign");
+      }
+    }
+    for (const auto& k : order) f.correlation_names.push_back(canonical_of.at(k));
+    for (std::size_t i = 0; i < n; ++i) {
+      std::vector<double> row;
+      for (std::size_t j = 0; j < n; ++j) row.push_back(r(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
       f.correlation.push_back(row);
     }
+    return;
   }
-  if (doc.contains("statistics") && doc.at("statistics").is_object()) {
-    const json& st = doc.at("statistics");
-    if (st.contains("sigma0") && st.at("sigma0").is_number()) f.sigma0 = st.at("sigma0").get<double>();  // null: undefined
-    if (st.contains("dof") && st.at("dof").is_number_integer()) f.dof = st.at("dof").get<int>();
-    if (st.contains("sigmas_scaled_by_sigma0") && st.at("sigmas_scaled_by_sigma0").is_boolean()) {
-      f.sigmas_scaled_by_sigma0 = st.at("sigmas_scaled_by_sigma0").get<bool>();
+  if (names) fail(source, "correlation_parameters", "given without correlation; expected both, or neither");
+  if (!sigma_keys.empty()) {
+    fail(source, "correlation",
+         "missing; sigmas without a correlation matrix would be propagated as if the parameters were uncorrelated, "
+         "which can understate or overstate a tile's uncertainty many times: give correlation and "
+         "correlation_parameters, or \"correlation\": \"none\" when the parameters are uncorrelated");
+  }
+}
+
+void parse_statistics(const json& st, FitRecord& f, std::string_view source) {
+  only_keys(st, "statistics", source,
+            {"sigma0", "dof", "sigmas_scaled_by_sigma0", "alpha", "alpha_point", "global_test", "warnings", "variance_factors"});
+  // null where the fit left a number undefined (no degrees of freedom).
+  const auto number_or_null = [&](const json& v, const std::string& path) {
+    return v.is_null() ? std::numeric_limits<double>::quiet_NaN() : number_at(v, path, source);
+  };
+  if (const json* v = member(st, "sigma0")) {
+    const double s0 = number_or_null(*v, "statistics.sigma0");
+    if (!v->is_null()) f.sigma0 = s0;
+    if (!v->is_null() && !(s0 >= 0.0)) {
+      fail(source, "statistics.sigma0", "value " + v->dump() + " is not a standard deviation (>= 0)");
     }
-    // The significance levels the fit used (the workbench reopens with them).
-    for (const auto& [key, target] : {std::pair<const char*, double*>{"alpha", &f.alpha}, {"alpha_point", &f.alpha_point}}) {
-      if (!st.contains(key)) continue;
-      const json& v = st.at(key);
-      if (!v.is_number() || !(v.get<double>() > 0.0 && v.get<double>() < 1.0)) {
-        fail(source, std::string("statistics.") + key, "value " + v.dump() + " is not a significance level in (0, 1)");
+  }
+  if (const json* v = member(st, "dof")) f.dof = count_at(*v, "statistics.dof", source);
+  if (const json* v = member(st, "sigmas_scaled_by_sigma0")) {
+    f.sigmas_scaled_by_sigma0 = bool_at(*v, "statistics.sigmas_scaled_by_sigma0", source);
+  }
+  // The significance levels the fit used (the workbench reopens with them).
+  for (const auto& [key, target] : {std::pair<const char*, double*>{"alpha", &f.alpha}, {"alpha_point", &f.alpha_point}}) {
+    const json* v = member(st, key);
+    if (!v) continue;
+    const double a = number_at(*v, std::string("statistics.") + key, source);
+    if (!(a > 0.0 && a < 1.0)) {
+      fail(source, std::string("statistics.") + key, "value " + v->dump() + " is not a significance level in (0, 1)");
+    }
+    *target = a;
+  }
+  if (const json* g = member(st, "global_test")) {
+    const std::string at = "statistics.global_test";
+    only_keys(*g, at, source, {"statistic", "critical", "critical_lower", "passed", "applicable"});
+    if (const json* v = member(*g, "statistic")) f.global_statistic = number_or_null(*v, at + ".statistic");
+    if (const json* v = member(*g, "critical")) f.global_critical_upper = number_or_null(*v, at + ".critical");
+    if (const json* v = member(*g, "critical_lower")) f.global_critical_lower = number_or_null(*v, at + ".critical_lower");
+    if (const json* v = member(*g, "applicable")) f.global_applicable = bool_at(*v, at + ".applicable", source);
+    if (const json* v = member(*g, "passed")) {
+      if (v->is_null()) {
+        // null: the test does not apply.
+        if (member(*g, "applicable") && f.global_applicable) {
+          fail(source, at + ".passed", "null (the test does not apply) but applicable is true");
+        }
+        f.global_applicable = false;
+        f.global_passed = false;
+      } else {
+        f.global_passed = bool_at(*v, at + ".passed", source);
       }
-      *target = v.get<double>();
     }
   }
-  // Per point: which were used, removed or left out, and why.
-  if (doc.contains("points") && doc.at("points").is_array()) {
-    std::size_t i = 0;
-    for (const auto& jp : doc.at("points")) {
-      const std::string where = "points[" + std::to_string(i++) + "]";
-      if (!jp.is_object() || !jp.contains("id") || !jp.at("id").is_string()) fail(source, where, "expected an object with a string id");
-      FitPointRecord q;
-      q.id = jp.at("id").get<std::string>();
-      if (jp.contains("used") && jp.at("used").is_boolean()) q.used = jp.at("used").get<bool>();
-      if (jp.contains("outlier") && jp.at("outlier").is_boolean()) q.outlier = jp.at("outlier").get<bool>();
-      if (jp.contains("note") && jp.at("note").is_string()) q.note = jp.at("note").get<std::string>();
-      f.points.push_back(q);
+  if (const json* w = member(st, "warnings")) {
+    if (!w->is_array()) fail(source, "statistics.warnings", "value " + w->dump() + " is not an array of strings");
+    for (std::size_t i = 0; i < w->size(); ++i) {
+      f.warnings.push_back(string_at((*w)[i], "statistics.warnings[" + std::to_string(i) + "]", source));
     }
   }
-  if (doc.contains("control_extent")) {
-    const json& e = doc.at("control_extent");
-    const std::string where = "control_extent";
-    if (!e.is_object() || !e.contains("centroid") || !e.contains("hull_en_m") || !e.at("hull_en_m").is_array()) {
-      fail(source, where, "expected {\"centroid\": {lat_deg, lon_deg, h_m}, \"hull_en_m\": [[e, n], ...]}");
+  if (const json* vf = member(st, "variance_factors")) {
+    const std::string at = "statistics.variance_factors";
+    only_keys(*vf, at, source, {"source", "target"});
+    const double s = number_field(*vf, "source", at + ".", source), t = number_field(*vf, "target", at + ".", source);
+    if (!(s > 0.0)) fail(source, at + ".source", "value " + format_shortest(s) + " is not a variance factor (> 0)");
+    if (!(t > 0.0)) fail(source, at + ".target", "value " + format_shortest(t) + " is not a variance factor (> 0)");
+    f.variance_factors = std::make_pair(s, t);
+  }
+}
+
+// Per point: which were used, removed or left out, and why, with the tests.
+void parse_points(const json& pts, FitRecord& f, std::string_view source) {
+  if (!pts.is_array()) fail(source, "points", "value is not an array of point records");
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const std::string where = "points[" + std::to_string(i) + "]";
+    const json& jp = pts[i];
+    only_keys(jp, where, source,
+              {"id", "residual_enu_m", "w_test", "w_enu", "redundancy_enu", "mdb_m", "point_test", "outlier", "used", "note",
+               "robust_weight"});
+    FitPointRecord q;
+    if (!jp.contains("id")) fail(source, where + ".id", "missing; every point record names its mark");
+    q.id = string_at(jp.at("id"), where + ".id", source);
+    if (const json* v = member(jp, "residual_enu_m")) q.residual_enu_m = triple_at(*v, where + ".residual_enu_m", source);
+    if (const json* v = member(jp, "w_test")) q.w_test = number_at(*v, where + ".w_test", source);
+    if (const json* v = member(jp, "w_enu")) q.w_enu = triple_at(*v, where + ".w_enu", source);
+    if (const json* v = member(jp, "redundancy_enu")) q.redundancy_enu = triple_at(*v, where + ".redundancy_enu", source);
+    if (const json* v = member(jp, "mdb_m")) {
+      q.mdb_m = v->is_null() ? std::numeric_limits<double>::quiet_NaN() : number_at(*v, where + ".mdb_m", source);
     }
-    const json& c = e.at("centroid");
-    ControlExtent x;
-    x.centroid.point = geodesy::GeodeticPosition{Angle::degrees(number_field(c, "lat_deg", where + ".centroid.", source)),
-                                                 Angle::degrees(number_field(c, "lon_deg", where + ".centroid.", source)),
-                                                 geodesy::EllipsoidalHeight{number_field(c, "h_m", where + ".centroid.", source)}};
-    for (const auto& v : e.at("hull_en_m")) {
-      if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number()) {
-        fail(source, where + ".hull_en_m", "value " + v.dump() + " is not [e, n] in metres");
+    if (const json* v = member(jp, "point_test")) {
+      only_keys(*v, where + ".point_test", source, {"statistic", "dof", "p_value"});
+      if (const json* s = member(*v, "statistic")) q.point_test = number_at(*s, where + ".point_test.statistic", source);
+      if (const json* d = member(*v, "dof")) q.point_test_dof = count_at(*d, where + ".point_test.dof", source);
+      if (const json* p = member(*v, "p_value")) {
+        q.point_test_p = number_at(*p, where + ".point_test.p_value", source);
+        if (!(q.point_test_p >= 0.0 && q.point_test_p <= 1.0)) {
+          fail(source, where + ".point_test.p_value", "value " + p->dump() + " is not a probability in [0, 1]");
+        }
       }
-      x.hull_en_m.push_back({v[0].get<double>(), v[1].get<double>()});
     }
-    if (x.hull_en_m.empty()) fail(source, where + ".hull_en_m", "empty");
-    f.extent = x;
+    if (const json* v = member(jp, "outlier")) q.outlier = bool_at(*v, where + ".outlier", source);
+    if (const json* v = member(jp, "used")) q.used = bool_at(*v, where + ".used", source);
+    if (const json* v = member(jp, "note")) q.note = string_at(*v, where + ".note", source);
+    if (const json* v = member(jp, "robust_weight")) {
+      q.robust_weight = number_at(*v, where + ".robust_weight", source);
+      if (!(q.robust_weight > 0.0 && q.robust_weight <= 1.0)) {
+        fail(source, where + ".robust_weight", "value " + v->dump() + " is not a weight in (0, 1]");
+      }
+    }
+    f.points.push_back(q);
   }
+}
+
+ControlExtent parse_extent(const json& e, std::string_view source) {
+  const std::string where = "control_extent";
+  only_keys(e, where, source, {"centroid", "hull_en_m"});
+  if (!e.contains("centroid")) fail(source, where + ".centroid", "missing; expected {\"lat_deg\", \"lon_deg\", \"h_m\"}");
+  if (!e.contains("hull_en_m")) fail(source, where + ".hull_en_m", "missing; expected [[e, n], ...] in metres");
+  const json& c = e.at("centroid");
+  only_keys(c, where + ".centroid", source, {"lat_deg", "lon_deg", "h_m", "ellipsoid"});
+  // ControlExtent::of puts the centroid on WGS84; no other is read.
+  if (const json* el = member(c, "ellipsoid")) {
+    const std::string name = string_at(*el, where + ".centroid.ellipsoid", source);
+    if (name != "WGS84") fail(source, where + ".centroid.ellipsoid", "value \"" + name + "\" not read; the extent's centroid is on WGS84");
+  }
+  ControlExtent x;
+  const double lat = number_field(c, "lat_deg", where + ".centroid.", source);
+  const double lon = number_field(c, "lon_deg", where + ".centroid.", source);
+  if (!(std::fabs(lat) <= 90.0)) fail(source, where + ".centroid.lat_deg", "latitude " + format_shortest(lat) + " not in [-90, 90]");
+  if (!(std::fabs(lon) <= 180.0)) fail(source, where + ".centroid.lon_deg", "longitude " + format_shortest(lon) + " not in [-180, 180]");
+  x.centroid.point = geodesy::GeodeticPosition{Angle::degrees(lat), Angle::degrees(lon),
+                                               geodesy::EllipsoidalHeight{number_field(c, "h_m", where + ".centroid.", source)}};
+  x.centroid.ellipsoid = geodesy::Ellipsoid::wgs84();
+  const json& hull = e.at("hull_en_m");
+  if (!hull.is_array()) fail(source, where + ".hull_en_m", "value is not an array of [e, n] in metres");
+  for (std::size_t i = 0; i < hull.size(); ++i) {
+    const json& v = hull[i];
+    const std::string at = where + ".hull_en_m[" + std::to_string(i) + "]";
+    if (!v.is_array() || v.size() != 2) fail(source, at, "value " + v.dump() + " is not [e, n] in metres");
+    x.hull_en_m.push_back({number_at(v[0], at + "[0]", source), number_at(v[1], at + "[1]", source)});
+  }
+  if (x.hull_en_m.empty()) fail(source, where + ".hull_en_m", "empty");
+  return x;
+}
+
+// What `geoanchor fit` adds: read back whole (the workbench reopens a fit
+// with it; apply propagates the sigmas and checks the extent).
+std::optional<FitRecord> parse_fit_record(const json& doc, const TransformFile& t, const ModelParameters& mp,
+                                          std::string_view source) {
+  bool any = false;
+  for (const char* key : {"sigmas", "correlation", "correlation_parameters", "statistics", "points", "control_extent"}) {
+    any = any || doc.contains(key);
+  }
+  if (!any) return std::nullopt;
+  FitRecord f;
+  f.sigma0.reset();  // not known unless statistics states it
+  if (const json* g = member(doc, "generator")) f.generator = string_at(*g, "generator", source);
+  parse_sigmas(doc, t, mp, f, source);
+  if (const json* st = member(doc, "statistics")) parse_statistics(*st, f, source);
+  if (const json* pts = member(doc, "points")) parse_points(*pts, f, source);
+  if (const json* e = member(doc, "control_extent")) f.extent = parse_extent(*e, source);
   return f;
 }
 
@@ -561,8 +1036,10 @@ std::optional<FitRecord> parse_fit_uncertainty(const json& doc, std::string_view
 
 TransformFile parse_transform_json(std::string_view text, std::string_view source) {
   json doc;
-  TransformFile t = parse_transform_core(text, source, doc);
-  t.fit = parse_fit_uncertainty(doc, source);
+  ModelParameters mp;
+  TransformFile t = parse_transform_core(text, source, doc, mp);
+  check_written_keys(doc, t, source);
+  t.fit = parse_fit_record(doc, t, mp, source);
   return t;
 }
 
@@ -762,7 +1239,8 @@ std::string to_json_text(const TransformFile& t) {
     doc["nominal_origin"] = {{"lat_deg", number(o.point.lat.deg())}, {"lon_deg", number(o.point.lon.deg())},
                              {"h_m", number(o.point.h.m)}, {"height_type", "ellipsoidal"}, {"ellipsoid", o.ellipsoid.name()}};
     doc["grid"] = {{"lat0_deg", number(g.tm.lat0.deg())}, {"lon0_deg", number(g.tm.lon0.deg())}, {"k0", number(g.tm.k0)},
-                   {"false_easting_m", number(g.tm.false_easting_m)}, {"false_northing_m", number(g.tm.false_northing_m)}};
+                   {"false_easting_m", number(g.tm.false_easting_m)}, {"false_northing_m", number(g.tm.false_northing_m)},
+                   {"ellipsoid", g.ellipsoid.name()}};
     doc["parameters"] = {{"shift_e_m", number(p.shift_e_m)},           {"shift_n_m", number(p.shift_n_m)},
                          {"rotation_arcsec", number(p.rotation.arcsec())}, {"scale_ppm", number(p.scale.ppm())},
                          {"vertical_shift_m", number(p.vertical_shift_m)}, {"slope_n_ppm", number(p.slope_n * 1e6)},
@@ -792,14 +1270,18 @@ std::string to_json_text(const TransformFile& t) {
     json sig = json::object();
     for (const auto& [name, value] : f.sigmas) sig[name] = number(value);
     doc["sigmas"] = sig;
-    json corr = json::array();
-    for (const auto& row : f.correlation) {
-      json r = json::array();
-      for (double v : row) r.push_back(number(v));
-      corr.push_back(r);
+    if (f.uncorrelated && f.correlation.empty()) {
+      doc["correlation"] = "none";  // the parameters are uncorrelated, as the file read said
+    } else {
+      json corr = json::array();
+      for (const auto& row : f.correlation) {
+        json r = json::array();
+        for (double v : row) r.push_back(number(v));
+        corr.push_back(r);
+      }
+      doc["correlation"] = corr;  // rows and columns in the order of correlation_parameters
+      doc["correlation_parameters"] = f.correlation_names;
     }
-    doc["correlation"] = corr;  // rows and columns in the order of correlation_parameters
-    doc["correlation_parameters"] = f.correlation_names;
     if (f.extent) {
       json hull = json::array();
       for (const auto& v : f.extent->hull_en_m) hull.push_back({number(v[0]), number(v[1])});
@@ -817,9 +1299,9 @@ std::string to_json_text(const TransformFile& t) {
         {"alpha", number(f.alpha)},
         {"alpha_point", number(f.alpha_point)},
         {"global_test",
-         {{"statistic", number(f.global_statistic)},
-          {"critical", number(f.global_critical_upper)},
-          {"critical_lower", number(f.global_critical_lower)},
+         {{"statistic", json_number_or_null(f.global_statistic)},
+          {"critical", json_number_or_null(f.global_critical_upper)},
+          {"critical_lower", json_number_or_null(f.global_critical_lower)},
           {"passed", f.global_applicable ? json(f.global_passed) : json(nullptr)},
           {"applicable", f.global_applicable}}},
         {"warnings", f.warnings}};

@@ -509,5 +509,96 @@ TEST_F(ApplyCli, InterruptedMidTileLeavesNoPartialFileAtTheOutputPath) {
   EXPECT_EQ(files(out), std::vector<std::string>{}) << "left behind";
 }
 
+// issue 12 point 3
+TEST_F(ApplyCli, Point3_ATransformWithADuplicateKeyIsRefusedAndNothingIsWritten) {
+  std::string t = slurp(fit());
+  // nlohmann keeps the last: without the check the tile would be moved as coordinate_frame.
+  replace(t, "\"convention\": \"position_vector\",", "\"convention\": \"position_vector\",\n  \"convention\": \"coordinate_frame\",");
+  write("T2.json", t);
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + kTile + " --transform " + path("T2.json").string() + " --out-dir " + out.string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("error[E_JSON_DUPLICATE_KEY]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("T2.json:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(": convention: key given twice"), std::string::npos) << r.err;
+  EXPECT_EQ(files(out), std::vector<std::string>{});
+}
+
+// A translation ITRF2014@2024.5 -> ETRF2000@2024.5 (the bundled tile's frame)
+// with one sigma per axis and `fit_keys` after them.
+std::string translation_with_sigmas(const std::string& fit_keys) {
+  return R"({"model": "translation3", "source_frame": "ITRF2014@2024.5", "target_frame": "ETRF2000@2024.5",
+  "parameters": {"tx_m": 0.05, "ty_m": 0.05, "tz_m": -0.07},
+  "sigmas": {"tx_m": 0.02, "ty_m": 0.02, "tz_m": 0.02})" +
+         fit_keys + "}";
+}
+
+// issue 12 point 9
+TEST_F(ApplyCli, Point9_SigmasAreCheckedAndPropagatedAsTheFileStatesThem) {
+  // Each case in its own folder, so that each refusal is seen on its own.
+  fs::path out = out_dir("nocorr");
+  // Sigmas without a correlation matrix: the baseline propagated them as uncorrelated.
+  write("nocorr.json", translation_with_sigmas(""));
+  const RunResult nocorr = run("apply " + kTile + " --transform " + path("nocorr.json").string() + " --out-dir " + out.string());
+  EXPECT_EQ(nocorr.exit_code, 3) << nocorr.err;
+  EXPECT_NE(nocorr.err.find("nocorr.json: correlation: missing; sigmas without a correlation matrix"), std::string::npos) << nocorr.err;
+  EXPECT_EQ(files(out), std::vector<std::string>{});
+  // A typo'd sigma key: the baseline dropped it and propagated the rest.
+  std::string typo_text = translation_with_sigmas(R"(, "correlation": "none")");
+  replace(typo_text, "\"tz_m\": 0.02", "\"tz_n\": 0.02");
+  write("typo.json", typo_text);
+  out = out_dir("typo");
+  const RunResult typo = run("apply " + kTile + " --transform " + path("typo.json").string() + " --out-dir " + out.string());
+  EXPECT_EQ(typo.exit_code, 3) << typo.err;
+  EXPECT_NE(typo.err.find("typo.json: sigmas.tz_n: not a parameter of model translation3; sigmas are read for the estimated "
+                          "parameters, in the units of parameters: tx_m, ty_m, tz_m"),
+            std::string::npos)
+      << typo.err;
+  EXPECT_EQ(files(out), std::vector<std::string>{});
+  // A correlation that no covariance can have.
+  write("psd.json", translation_with_sigmas(R"(, "correlation_parameters": ["tx_m", "ty_m", "tz_m"],
+      "correlation": [[1, 0.9, -0.9], [0.9, 1, 0.9], [-0.9, 0.9, 1]])"));
+  out = out_dir("psd");
+  const RunResult psd = run("apply " + kTile + " --transform " + path("psd.json").string() + " --out-dir " + out.string());
+  EXPECT_EQ(psd.exit_code, 3) << psd.err;
+  EXPECT_NE(psd.err.find("psd.json: correlation: not positive semi-definite"), std::string::npos) << psd.err;
+  EXPECT_EQ(files(out), std::vector<std::string>{});
+
+  // Stated uncorrelated: Σ = σ² I in ECEF for a translation (J = I), which is
+  // σ along any axes, so the tile's east, north and up sigmas are each 0.02 m.
+  constexpr double kPropagatedSigmaTol_m = 1e-9;  // a translation is linear: central differences carry only float64 rounding
+  write("none.json", translation_with_sigmas(R"(, "correlation": "none")"));
+  out = out_dir("none");
+  const RunResult ok = run("apply " + kTile + " --transform " + path("none.json").string() + " --out-dir " + out.string());
+  ASSERT_EQ(ok.exit_code, 0) << ok.err;
+  const json u = json::parse(slurp(out / "airport_tile.las.geoanchor.json"))["provenance"]["propagated_uncertainty"];
+  for (const char* k : {"sigma_e_m", "sigma_n_m", "sigma_u_m"}) {
+    ASSERT_TRUE(u[k].is_number()) << u.dump();
+    EXPECT_NEAR(u[k].get<double>(), 0.02, kPropagatedSigmaTol_m) << k;
+  }
+}
+
+// issue 12 point 10
+TEST_F(ApplyCli, Point10_WronglyTypedFitStatisticsAndNullSidecarValuesAreRefused) {
+  std::string t = slurp(fit());
+  // The baseline skipped a value of the wrong type and reported unscaled sigmas.
+  replace(t, "\"sigmas_scaled_by_sigma0\": false", "\"sigmas_scaled_by_sigma0\": \"false\"");
+  write("T2.json", t);
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + kTile + " --transform " + path("T2.json").string() + " --out-dir " + out.string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("T2.json: statistics.sigmas_scaled_by_sigma0: value \"false\" is not true or false"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(files(out), std::vector<std::string>{});
+  // A sidecar value given as null read as absent, and its default stood in.
+  const fs::path in = tile("in/tile.las", [](std::string& s) { replace(s, "\"storage\": \"int32_scaled\"", "\"storage\": null"); });
+  const fs::path out2 = out_dir("out2");
+  const RunResult n = run("apply " + in.string() + " --to ecef --out-dir " + out2.string());
+  EXPECT_EQ(n.exit_code, 3) << n.err;
+  EXPECT_NE(n.err.find("tile.las.geoanchor.json: coordinates.storage: value null"), std::string::npos) << n.err;
+  EXPECT_FALSE(fs::exists(out2 / "tile.las"));  // (the run's summary names the failure)
+  EXPECT_FALSE(fs::exists(out2 / "tile.las.geoanchor.json"));
+}
+
 }  // namespace
 }  // namespace geoanchor

@@ -464,5 +464,95 @@ INSTANTIATE_TEST_SUITE_P(
                 "--model helmert7 --convention position_vector --robust tukey:2", 2, "--robust tukey:2: expected huber:K or cauchy:K"}),
     [](const ::testing::TestParamInfo<Refusal>& param_info) { return std::string(param_info.param.name); });
 
+// The bundled control set as a control-set JSON; `extra_first` is added to
+// the first point's record.
+std::string control_json(const std::string& extra_first = "") {
+  std::vector<std::string> header;
+  const auto rows = csv_rows(slurp(kControl), &header);
+  std::string out = R"({"source_frame": "ITRF2014@2024.5", "target_frame": "ETRF2000@2024.5", "points": [)";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    auto v = [&](const char* name) { return r[col(header, name)]; };
+    std::string p = "\n  {\"id\": \"" + v("id") + "\", \"source\": {\"lat_deg\": " + v("lat_src_deg") + ", \"lon_deg\": " +
+                    v("lon_src_deg") + ", \"h_m\": " + v("h_src_m") + "}, \"target\": {\"lat_deg\": " + v("lat_dst_deg") +
+                    ", \"lon_deg\": " + v("lon_dst_deg") + ", \"h_m\": " + v("h_dst_m") + "}, \"sigma_src_m\": " +
+                    v("sigma_src_m") + ", \"sigma_dst_m\": " + v("sigma_dst_m") + "}";
+    if (i == 0) p.insert(p.size() - 1, extra_first);
+    out += (i ? "," : "") + p;
+  }
+  return out + "]}\n";
+}
+
+// issue 12 point 3
+TEST_F(FitCli, Point3_AControlSetJsonWithADuplicateKeyIsRefused) {
+  write("c.json", control_json());
+  const RunResult good = run("fit " + path("c.json").string() + " --model helmert7 --convention position_vector");
+  ASSERT_EQ(good.exit_code, 0) << good.err;
+  // The second sigma, 100 times the first, would weight P01 silently.
+  write("dup.json", control_json(", \"sigma_src_m\": 0.3"));
+  const RunResult r = run("fit " + path("dup.json").string() + " --model helmert7 --convention position_vector -o " +
+                          path("T.json").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("dup.json:2: points[0].sigma_src_m: key given twice"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("T.json")));
+}
+
+// issue 12 point 10
+TEST_F(FitCli, Point10_ControlColumnsThatLookLikeOursAreRefusedByName) {
+  std::string csv = slurp(kControl);
+  const auto header_at = csv.find("id,lat_src_deg");
+  ASSERT_NE(header_at, std::string::npos);
+  struct Case {
+    std::string from, to, expected;
+  };
+  for (const auto& [from, to, expected] : std::vector<Case>{
+           {"sigma_src_m,", "sigma_scr_m,", "header column 8 'sigma_scr_m': not read: a priori sigmas are read from sigma_src_m"},
+           {"sigma_src_m,", "sigma_src_mm,", "header column 8 'sigma_src_mm': not read: a priori sigmas are read from sigma_src_m"},
+           {"sigma_dst_m,", "sigma_dst_m,h_dst_ft,", "header column 10 'h_dst_ft': not read: a frame's coordinates are read"}}) {
+    std::string edited = csv;
+    edited.replace(edited.find(from, header_at), from.size(), to);
+    if (to.find("h_dst_ft") != std::string::npos) {
+      // one more value per row for the new column
+      std::string rows;
+      std::istringstream in(edited);
+      std::string line;
+      bool past_header = false;
+      while (std::getline(in, line)) {
+        if (past_header && !line.empty() && line[0] != '#') {
+          const auto last = line.rfind(',');
+          line.insert(last, ",1575.1");
+        }
+        past_header = past_header || line.rfind("id,", 0) == 0;
+        rows += line + "\n";
+      }
+      edited = rows;
+    }
+    write("c.csv", edited);
+    const std::string t = "T_" + to.substr(0, to.size() - 1) + ".json";  // one output per case
+    const RunResult r = run("fit " + path("c.csv").string() + " --model helmert7 --convention position_vector -o " +
+                            path(t).string());
+    EXPECT_EQ(r.exit_code, 3) << to << ": " << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path(t))) << to;
+  }
+}
+
+// issue 12 point 10
+TEST_F(FitCli, Point10_ConvertRefusesAnOrthometricOriginHeightType) {
+  const std::string t = R"({"model": "enu-origin",
+    "nominal_origin": {"lat_deg": 47.4647, "lon_deg": 8.5492, "h_m": 480.05, "height_type": "orthometric", "ellipsoid": "WGS84"},
+    "parameters": {"shift_e_m": -0.30, "shift_n_m": 0.20, "shift_u_m": -0.05, "yaw_arcsec": 20.0}})";
+  write("T.json", t);
+  write("p.csv", "id,x_m,y_m,z_m\nA,4271315.696,641096.356,4678048.542\n");
+  const RunResult r = run("convert " + path("p.csv").string() + " --to ecef --transform " + path("T.json").string() + " -o " +
+                          path("out.csv").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("T.json: nominal_origin.height_type: value \"orthometric\" not read: an origin's h_m is an ellipsoidal "
+                       "height"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("out.csv")));
+}
+
 }  // namespace
 }  // namespace geoanchor

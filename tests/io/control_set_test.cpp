@@ -113,5 +113,89 @@ TEST(ControlSet, JsonErrorsNameThePath) {
   EXPECT_NE(json_error("{\"points\": [").find("c.json: not valid JSON"), std::string::npos);
 }
 
+std::string csv_error(const std::string& text) {
+  std::istringstream in(text);
+  try {
+    read_control_csv(in, "c.csv", {});
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+// One mark, geodetic source and ECEF target, with an attribute column and
+// one more column `extra` (value 0.003).
+std::string csv_with(const std::string& extra) {
+  return "id,lat_src_deg,lon_src_deg,h_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,kind," + extra +
+         "\nP1,47.46,8.55,480.1,4271315.7,641096.4,4678048.5,0.003,runway_threshold,0.003\n";
+}
+
+// issue 12 point 3
+TEST(ControlSet, Point3_JsonDuplicateKeyIsRefusedWithItsPath) {
+  std::string twice = kJson;
+  twice.replace(twice.find("\"sigma_src_m\": 0.003"), 20, "\"sigma_src_m\": 0.003, \"sigma_src_m\": 0.3");
+  EXPECT_NE(json_error(twice).find("c.json:3: points[0].sigma_src_m: key given twice"), std::string::npos) << json_error(twice);
+  std::string frames = kJson;
+  frames.replace(frames.find("\"target_frame\""), 14, "\"source_frame\"");
+  EXPECT_NE(json_error(frames).find("c.json:1: source_frame: key given twice"), std::string::npos) << json_error(frames);
+}
+
+// issue 12 point 10
+TEST(ControlSet, Point10_CsvColumnsThatLookLikeOursAreReadOrRefusedByName) {
+  EXPECT_EQ(csv_error(csv_with("note")), "accepted");  // an attribute passes through
+  EXPECT_NE(csv_error(csv_with("sigma_scr_m"))
+                .find("c.csv: header column 10 'sigma_scr_m': not read: a priori sigmas are read from sigma_src_m and "
+                      "sigma_dst_m (isotropic, in metres) or the cov_ columns (did you mean sigma_src_m?)"),
+            std::string::npos)
+      << csv_error(csv_with("sigma_scr_m"));
+  EXPECT_NE(csv_error(csv_with("sigma_src_mm")).find("'sigma_src_mm': not read: a priori sigmas are read from sigma_src_m and "
+                                                     "sigma_dst_m (isotropic, in metres)"),
+            std::string::npos)
+      << csv_error(csv_with("sigma_src_mm"));
+  EXPECT_NE(csv_error(csv_with("sigma_src_mm")).find("(did you mean sigma_src_m?)"), std::string::npos);
+  EXPECT_NE(csv_error(csv_with("cov_dst_xx_m")).find("'cov_dst_xx_m': not read: covariances are read from cov_src_xx_m2"),
+            std::string::npos);
+  EXPECT_NE(csv_error(csv_with("vx_src_mm_per_year")).find("'vx_src_mm_per_year': not read: velocities are read from vx_src_m_per_year"),
+            std::string::npos);
+  EXPECT_NE(csv_error(csv_with("h_dst_ft")).find("'h_dst_ft': not read: a frame's coordinates are read from x_src_m"),
+            std::string::npos)
+      << csv_error(csv_with("h_dst_ft"));
+  EXPECT_NE(csv_error(csv_with("lat_src_rad")).find("'lat_src_rad': not read"), std::string::npos);
+  EXPECT_NE(csv_error(csv_with("h_m")).find("'h_m': not read: a control set names each coordinate's frame: h_src_m or h_dst_m"),
+            std::string::npos)
+      << csv_error(csv_with("h_m"));
+  // Names we read, but not here: a velocity sigma without velocities, a column given twice.
+  EXPECT_NE(csv_error(csv_with("sigma_v_src_m_per_year"))
+                .find("'sigma_v_src_m_per_year': not read: a velocity sigma is read only with the velocities"),
+            std::string::npos)
+      << csv_error(csv_with("sigma_v_src_m_per_year"));
+  EXPECT_NE(csv_error(csv_with("sigma_src_m")).find("header column 10 'sigma_src_m': appears twice in the header (also column 8)"),
+            std::string::npos)
+      << csv_error(csv_with("sigma_src_m"));
+  // The bundled set and its attribute column still read.
+  EXPECT_EQ(read_control_set(std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv", {}).points.size(), 36u);
+}
+
+// issue 12 point 10
+TEST(ControlSet, Point10_JsonKeysAreReadOrRefusedWithTheirPath) {
+  const std::string good = kJson;
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  EXPECT_NE(json_error(replaced("\"sigma_src_m\": 0.003", "\"sigma_src_mm\": 3"))
+                .find("c.json: points[0].sigma_src_mm: unknown key; expected id, source, target, sigma_src_m, sigma_dst_m"),
+            std::string::npos);
+  EXPECT_NE(json_error(replaced("\"h_m\": 480.1", "\"h_ft\": 480.1"))
+                .find("points[0].source.h_ft: unknown key for these coordinates; expected lat_deg, lon_deg, h_m"),
+            std::string::npos);
+  EXPECT_NE(json_error(replaced("\"source_frame\": \"ITRF2014@2024.5\"", "\"source_frame\": \"ITRF2014@2024.5\", \"description\": 5"))
+                .find("c.json: description: value 5 is not a string"),
+            std::string::npos);
+  EXPECT_NE(json_error(replaced("[1e-6, 2e-5, 0]", "[1e-6, \"2e-5\", 0]")).find("points[0].cov_dst_m2[1][1]: entry \"2e-5\" is not a number"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace geoanchor::io

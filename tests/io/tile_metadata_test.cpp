@@ -357,5 +357,59 @@ TEST(ControlExtentTest, DistanceIsZeroInsideAndGrowsOutside) {
   EXPECT_NEAR(e.distance_m(plane.ecef_from_enu({Eigen::Vector3d(4000, 5000, 0), o})), 5000.0, kPlanesTol_m);
 }
 
+std::string sidecar_error(const std::string& text) {
+  try {
+    parse_tile_metadata(text, "t.json");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+std::string sidecar_with(const std::string& from, const std::string& to) {
+  std::string s = kSidecar;
+  s.replace(s.find(from), from.size(), to);
+  return s;
+}
+
+// issue 12 point 3
+TEST(TileMetadata, Point3_DuplicateKeyIsRefusedWithItsPathAndLine) {
+  const std::string twice = sidecar_with("\"frame\": \"ITRF2014@2024.5\",", "\"frame\": \"ITRF2014@2024.5\", \"frame\": \"ITRF2008@2024.5\",");
+  EXPECT_NE(sidecar_error(twice).find("t.json:3: frame: key given twice"), std::string::npos) << sidecar_error(twice);
+  const std::string nested = sidecar_with("\"h_m\": 480.0,", "\"h_m\": 480.0, \"h_m\": 0.0,");
+  EXPECT_NE(sidecar_error(nested).find("t.json:5: enu_origin.h_m: key given twice"), std::string::npos) << sidecar_error(nested);
+}
+
+// issue 12 point 10
+TEST(TileMetadata, Point10_NullsWrongTypesAndUnreadKeysAreRefused) {
+  // null would read as absent, and a default would stand in for it.
+  EXPECT_NE(sidecar_error(sidecar_with("\"storage\": \"int32_scaled\"", "\"storage\": null"))
+                .find("t.json: coordinates.storage: value null; give the key a value or leave it out"),
+            std::string::npos);
+  EXPECT_NE(sidecar_error(sidecar_with("\"survey\": {", "\"horizontal_crs\": null, \"survey\": {")).find("t.json: horizontal_crs: value null"),
+            std::string::npos);
+  // geoid_model is written as null and reads as none.
+  EXPECT_EQ(sidecar_error(sidecar_with("\"vertical\": {\"height_type\": \"ellipsoidal\"}",
+                                       "\"vertical\": {\"height_type\": \"ellipsoidal\", \"geoid_model\": null}")),
+            "accepted");
+  // A utm tile reads projection.utm_zone only; a tm next to it would be ignored.
+  const std::string utm = R"({"schema": "geoanchor.tile/1", "frame": "ETRF2000@2024.5",
+      "coordinates": {"kind": "utm", "ellipsoid": "GRS80"}, "vertical": {"height_type": "ellipsoidal"},
+      "projection": {"utm_zone": "32N", "tm": {"lat0_deg": 0, "lon0_deg": 9, "k0": 0.9996, "false_easting_m": 500000,
+                     "false_northing_m": 0}}})";
+  EXPECT_NE(sidecar_error(utm).find("t.json: projection.tm: given for utm coordinates, which read projection.utm_zone only"),
+            std::string::npos)
+      << sidecar_error(utm);
+  // The provenance keys apply reads back to resume are typed.
+  EXPECT_EQ(sidecar_error(sidecar_with("\"survey\": {", "\"provenance\": {\"input_sha256\": \"ab\", \"points\": 12}, \"survey\": {")),
+            "accepted");
+  EXPECT_NE(sidecar_error(sidecar_with("\"survey\": {", "\"provenance\": {\"input_sha256\": 12}, \"survey\": {"))
+                .find("t.json: provenance.input_sha256: value 12 is not a string"),
+            std::string::npos);
+  EXPECT_NE(sidecar_error(sidecar_with("\"survey\": {", "\"provenance\": {\"output_size_bytes\": \"12\"}, \"survey\": {"))
+                .find("provenance.output_size_bytes: value \"12\" is not a byte count"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace geoanchor::io

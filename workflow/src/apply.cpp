@@ -17,6 +17,7 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/hash.hpp"
+#include "geoanchor/io/json_input.hpp"
 #include "geoanchor/io/point_chain.hpp"
 #include "geoanchor/io/tile_apply.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
@@ -194,7 +195,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
     try {
       const TileMetadata done = io::read_tile_metadata(p.sidecar);
       if (!done.provenance_json.empty()) {
-        const json prov = json::parse(done.provenance_json);
+        const json prov = io::parse_json_strict<json>(done.provenance_json, p.sidecar.string() + ": provenance");
         const bool same = prov.value("input_sha256", "") == input_sha &&
                           prov.value("transform_sha256", json(nullptr)) ==
                               (t_ ? json(transform_sha_) : json(nullptr)) &&

@@ -19,7 +19,11 @@
 //    "provenance": {...}}                                  (written by apply)
 //
 // Unknown keys are errors naming the file and the key: a misspelt field
-// that is silently ignored is a wrong frame.
+// that is silently ignored is a wrong frame. So are a key given twice in one
+// object and a null value (it would read as absent), except
+// vertical.geoid_model: null. The provenance is kept as is; the keys apply
+// reads back to resume (input_sha256, transform_sha256, request,
+// output_size_bytes, points) are typed.
 
 #include <filesystem>
 #include <optional>

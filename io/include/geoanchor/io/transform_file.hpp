@@ -16,8 +16,10 @@
 // Every parameter key carries its unit; mm, mas and ppb spellings are read
 // too (tx_mm, rx_mas, ds_ppb, dtx_mm_per_year, drx_mas_per_year,
 // dds_ppb_per_year). A parameter given twice in two units, a missing
-// convention, a helmert14 without reference_epoch, a missing parameter and
-// any unknown key are errors naming the file and the key.
+// convention, a helmert14 without reference_epoch, a missing parameter, any
+// unknown key, a key given twice in one object, a key of another model and
+// a value of the wrong type are errors naming the file and the key's JSON
+// path (FitRecord below says how sigmas and correlations are checked).
 
 #include <array>
 #include <filesystem>
@@ -38,7 +40,8 @@ enum class TransformModel { helmert7, helmert6, translation3, helmert14, moloden
 std::string_view to_string(TransformModel m);
 
 // What `geoanchor fit` adds to a transform file: the statistics that justify
-// the parameters. Written, not read back by convert/apply.
+// the parameters. Read back whole (every key typed, unknown keys refused);
+// convert and apply use none of it.
 struct FitPointRecord {
   std::string id;
   std::array<double, 3> residual_enu_m{};
@@ -68,14 +71,24 @@ struct ControlExtent {
   double distance_m(const geodesy::EcefPosition& x) const;
 };
 
-// Read back from a fitted file: sigmas, correlation, correlation_parameters,
-// statistics.sigma0/dof/sigmas_scaled_by_sigma0/alpha/alpha_point,
-// control_extent, and of each point record its id, used, outlier and note
-// (the workbench reopens a saved fit with them); the rest is written only.
+// The fit record, read back whole from a fitted file (present when the file
+// has any of sigmas, correlation, correlation_parameters, statistics, points,
+// control_extent). apply and convert use the sigmas, correlation and extent;
+// the workbench reopens a saved fit with alpha, alpha_point, the sigmas'
+// scaling and each point's id, used, outlier and note.
+//
+// Sigmas are checked against the model when read: every key names an
+// estimated parameter of the file's model as `parameters` spells it (tx_m or
+// tx_mm, rz_arcsec or rz_mas, ...; held at canonical units here), finite and
+// >= 0. The correlation matrix names exactly the sigma'd parameters
+// (correlation_parameters, each once) and is square, symmetric, has a unit
+// diagonal, |r| <= 1 and is positive semi-definite; a file with sigmas and
+// no matrix is refused unless it says "correlation": "none" (uncorrelated).
 struct FitRecord {
-  std::vector<std::pair<std::string, double>> sigmas;  // parameter name -> σ (same units)
-  std::vector<std::string> correlation_names;
+  std::vector<std::pair<std::string, double>> sigmas;  // canonical parameter name -> σ (canonical units)
+  std::vector<std::string> correlation_names;           // canonical names, the order of `correlation`
   std::vector<std::vector<double>> correlation;
+  bool uncorrelated = false;  // "correlation": "none": the sigma'd parameters are uncorrelated
   bool sigmas_scaled_by_sigma0 = false;
   std::optional<double> sigma0;  // undefined without redundancy (written as null)
   int dof = 0;
@@ -140,8 +153,11 @@ struct TransformFile {
 
 // The covariance (ECEF, m²) that the fitted parameters' uncertainty gives
 // the transformed position of `x` (J Σθ Jᵀ, J by central differences of
-// width σ on each parameter, Σθ from the file's sigmas and correlation).
-// std::nullopt when the file carries no sigmas.
+// width σ on each parameter, Σθ from the file's sigmas and correlation; the
+// identity correlation only when the record says `uncorrelated`).
+// std::nullopt when the file carries no sigmas; NaN in every entry for a
+// record whose correlation does not cover a sigma'd parameter (only a record
+// built in code can be so: the reader refuses it).
 std::optional<Eigen::Matrix3d> propagated_covariance_m2(const TransformFile& t, const geodesy::EcefPosition& x,
                                                         std::optional<geodesy::DecimalYear> epoch, bool inverse);
 
