@@ -12,6 +12,7 @@
 
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/workflow/apply.hpp"
+#include "option_parsing.hpp"
 #include "version.hpp"
 
 namespace geoanchor::cli {
@@ -83,13 +84,13 @@ CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
   cmd->add_option("--from-zone", o.from_zone, "Input UTM zone, when no sidecar or WKT states it");
   cmd->add_option("--from-tm", o.from_tm, "Input Transverse Mercator, when no sidecar or WKT states it");
   cmd->add_option("--resolution", o.resolution_m, "LAS quantization step in metres (default: the input's)")
-      ->check(CLI::Range(1e-6, 10.0));
+      ->check(finite_range(1e-6, 10.0));
   cmd->add_flag("--epoch-from-gps-time", o.epoch_from_gps_time,
                 "LAS: evaluate a 14-parameter transform at each point's GPS time (adjusted standard GPS time)");
   cmd->add_option("--max-extrapolation", o.max_extrapolation_m,
                   "Refuse tiles farther than this (m) outside the control network (default 10000)")
-      ->check(CLI::Range(0.0, 1e7));
-  cmd->add_option("--jobs", o.jobs, "Tiles processed at once (threads, default 1)")->check(CLI::Range(1u, workflow::kMaxApplyJobs));
+      ->check(finite_range(0.0, 1e7));
+  cmd->add_option("--jobs", o.jobs, "Tiles processed at once (threads, default 1)")->check(integer_range(1, workflow::kMaxApplyJobs));
   cmd->add_option("--shard", o.shard, "Process only slice I of N of the tile list (I/N, 0-based I)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
   cmd->add_flag("--quiet", o.quiet, "No progress bar and no per-tile lines");

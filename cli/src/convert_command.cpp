@@ -100,7 +100,7 @@ CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   cmd->add_flag("--inverse", o.inverse, "Apply the transform's exact inverse (target -> source)");
   cmd->add_option("--epoch", o.epoch, "Observation epoch (decimal year) for a 14-parameter transform");
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")
-      ->check(CLI::Range(0, 15));
+      ->check(integer_range(0, 15));
   cmd->add_option("--geoid", o.geoid, "Geoid model for orthometric heights (H_m columns): EGM96");
   cmd->add_option("--output-heights", o.output_heights, "ellipsoidal (h_m, default) | orthometric (H_m, needs --geoid)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
@@ -237,6 +237,9 @@ void run_convert(const ConvertOptions& o) {
     ++rows;
   }
 
+  // Points a forced UTM zone does not contain (--zone, --from-zone, utm_zone column).
+  for (auto& w : decoder.warnings()) warnings.push_back(std::move(w));
+  for (auto& w : encoder.warnings()) warnings.push_back(std::move(w));
   for (const auto& w : warnings) std::cerr << "geoanchor: warning: " << w << '\n';
   if (!out_file) {
     out.flush();

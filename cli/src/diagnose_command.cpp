@@ -30,7 +30,7 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& o) {
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--sigma", o.sigma, "Noise per coordinate and frame (m, 1σ) assumed when the set gives none (default 0.01)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive());
   return cmd;
 }
 

@@ -42,9 +42,9 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   add_control_grid_options(*cmd, o.grids);
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
-  cmd->add_option("--alpha", o.alpha, "Significance of the global test (default 0.05)")->check(CLI::Range(1e-6, 0.5));
+  cmd->add_option("--alpha", o.alpha, "Significance of the global test (default 0.05)")->check(finite_range(1e-6, 0.5));
   cmd->add_option("--alpha-point", o.alpha_point, "Significance of point tests and data snooping (default 0.001)")
-      ->check(CLI::Range(1e-9, 0.5));
+      ->check(finite_range(1e-9, 0.5));
   cmd->add_flag("--no-snooping", o.no_snooping, "Report outliers but remove none");
   cmd->add_flag("--scale-by-sigma0", o.scale_by_sigma0, "Scale parameter sigmas by the a-posteriori σ0");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test,

@@ -10,12 +10,14 @@
 #include <imgui_impl_opengl3.h>
 
 #include <iostream>
+#include <limits>
 #include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/gui/image.hpp"
 #include "geoanchor/gui/palette.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
+#include "option_parsing.hpp"
 #include "version.hpp"
 #include "workbench_session.hpp"
 
@@ -112,12 +114,16 @@ int main(int argc, char** argv) {
   geoanchor::cli::add_workbench_options(&app, o.workbench);
   app.add_option("--view", o.view, "workbench|plan|histogram|table|parameters|comparison (default workbench)");
   app.add_option("--size", o.size, "Window WIDTHxHEIGHT in pixels (default 1600x1000)");
-  app.add_option("--frames", o.frames, "Render this many frames, then exit (0: until closed)")->check(CLI::NonNegativeNumber);
+  app.add_option("--frames", o.frames, "Render this many frames, then exit (0: until closed)")->check(geoanchor::cli::integer_range(0, std::numeric_limits<int>::max()));
   app.add_option("--screenshot", o.screenshot, "With --frames: write the last frame to this PNG");
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // As geoanchor's own parse errors: the message, exit 2 (usage).
+    std::cerr << "geoanchor-gui: error[E_USAGE]: " << e.what() << "\n(run 'geoanchor-gui --help')\n";
+    return geoanchor::exit_code(ErrorKind::usage);
   }
   try {
     if (!o.screenshot.empty() && o.frames == 0) throw Error(ErrorKind::usage, "E_OPTION", "--screenshot: needs --frames N");

@@ -7,6 +7,7 @@
 
 namespace CLI {
 class App;
+class Validator;
 }
 
 namespace geoanchor::cli {
@@ -21,6 +22,17 @@ using workflow::parse_origin;
 using workflow::parse_tm;
 using workflow::parse_zone;
 using workflow::split_numbers;
+
+// Checks for every numeric command-line option (issue 12 point 6). CLI11's
+// CLI::Range lets "nan" through (every comparison with NaN is false) and
+// prints the largest double as the bound of CLI::PositiveNumber; these take
+// the option's text, accept only a finite number (std::from_chars, no
+// "nan"/"inf", no '+', no spaces) inside the stated range, and otherwise
+// make CLI11 report `--flag: value nan is not a finite number; expected a
+// number in [1e-06, 0.5]` (geoanchor: error[E_USAGE], exit 2).
+CLI::Validator finite_range(double lo, double hi);          // [lo, hi]
+CLI::Validator finite_positive();                           // > 0, finite
+CLI::Validator integer_range(long long lo, long long hi);   // an integer in [lo, hi]
 
 // --src-zone, --src-tm, --dst-zone, --dst-tm: the grids of a control set's
 // easting/northing columns.

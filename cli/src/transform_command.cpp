@@ -37,7 +37,7 @@ CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
   cmd->add_option("--plate", o.plate, "Plate whose motion carries the epoch change when there are no velocity columns (EURA, NOAM, AUST, ...)");
   cmd->add_option("--plate-model", o.plate_model, "ITRF2020 (ITRF2020-PMM, default) | ITRF2014 (ITRF2014-PMM)");
   cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic columns (default GRS80, the ITRF convention)");
-  cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")->check(CLI::Range(0, 15));
+  cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")->check(integer_range(0, 15));
   cmd->add_option("--geoid", o.geoid, "Geoid model of H_m (orthometric height) columns: EGM96; H_m is written back on it");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
   return cmd;

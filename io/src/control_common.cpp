@@ -54,11 +54,11 @@ void RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const 
     case CoordinateKind::projected: {
       const auto& grid = v.source ? src_grid_ : dst_grid_;
       if (!grid) fail(RoleField::first, "projected control coordinates need their grid (--src-zone/--src-tm, --dst-zone/--dst-tm)");
-      const geodesy::GeodeticPosition g =
-          grid->inverse(geodesy::ProjectedPosition{v.a, v.b, geodesy::EllipsoidalHeight{v.c}, grid->definition()});
-      if (!(std::fabs(g.lat.deg()) <= 90.0) || !std::isfinite(g.lon.deg())) {
-        fail(RoleField::first, "not a position on the declared grid");
-      }
+      geodesy::TmOutcome how;
+      const auto inverse =
+          grid->try_inverse(geodesy::ProjectedPosition{v.a, v.b, geodesy::EllipsoidalHeight{v.c}, grid->definition()}, &how);
+      if (!inverse) fail(RoleField::first, "not a position on the declared grid: " + grid->explain(how));
+      const geodesy::GeodeticPosition g = *inverse;
       position = geocentric_.ecef_from_geodetic(g);
       local_to_ecef = geodesy::enu_from_ecef_rotation(g.lat, g.lon).transpose();
       break;

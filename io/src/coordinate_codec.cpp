@@ -12,6 +12,72 @@ using geodesy::EcefPosition;
 using geodesy::EllipsoidalHeight;
 using geodesy::GeodeticPosition;
 
+void UtmBandTally::add(const geodesy::UtmZone& z, const GeodeticPosition& p, const geodesy::UtmBandCheck& check,
+                       std::size_t index, std::string_view where) {
+  zone = z;
+  ++points;
+  const double excess = check.excess.deg();
+  if (points == 1 || excess > worst_excess_deg) {
+    worst_excess_deg = excess;
+    worst_lat_deg = p.lat.deg();
+    worst_lon_deg = p.lon.deg();
+    worst_index = index;
+    worst_where = std::string(where);
+    zone_unused = !check.band_exists;
+  }
+}
+
+void UtmBandTally::absorb(const UtmBandTally& other, std::string_view where) {
+  if (other.points == 0) return;
+  const bool farther = points == 0 || other.worst_excess_deg > worst_excess_deg;
+  zone = other.zone;
+  points += other.points;
+  if (farther) {
+    worst_excess_deg = other.worst_excess_deg;
+    worst_lat_deg = other.worst_lat_deg;
+    worst_lon_deg = other.worst_lon_deg;
+    worst_index = other.worst_index;
+    worst_where = std::string(where);
+    zone_unused = other.zone_unused;
+  }
+}
+
+std::optional<std::string> UtmBandTally::warning(std::string_view role) const {
+  if (points == 0 || !zone) return std::nullopt;
+  std::string w = std::string(role) + " UTM zone " + zone->to_string() + ": " + std::to_string(points) +
+                  (points == 1 ? " point lies" : " points lie") + " outside the zone's band";
+  const std::string band = geodesy::utm_band_text(*zone, Angle::degrees(worst_lat_deg));
+  w += zone_unused ? " (" + band + ")" : " (" + band + ") by more than the " +
+                                             format_shortest(geodesy::kUtmBandMargin.deg()) + "° margin";
+  // To 1e-9° (0.1 mm): the point came through ECEF and back.
+  auto deg = [](double v) {
+    const double r = std::round(v * 1e9) / 1e9;
+    return format_shortest(r == 0.0 ? 0.0 : r);
+  };
+  w += "; the farthest is " + worst_where + " (lat " + deg(worst_lat_deg) + ", lon " + deg(worst_lon_deg) + ")";
+  if (!zone_unused) w += ", " + format_fixed(worst_excess_deg, 2) + "° beyond";
+  w += ". Its coordinates are computed (UTM keeps its 5 nm accuracy to " +
+       format_shortest(geodesy::kTmSeriesLimit.deg()) +
+       "° from the central meridian and is refused beyond), but they are not the point's own zone: check the zone";
+  return w;
+}
+
+namespace {
+// Refuses a non-finite output value: no NaN or infinity is ever written.
+void require_finite(const std::vector<double>& values, const std::vector<std::string>& names, const EcefPosition& p,
+                    std::string_view where) {
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!std::isfinite(values[i])) {
+      throw Error(ErrorKind::input, "E_NON_FINITE",
+                  std::string(where) + ": output " + names[i] + "=" + format_shortest(values[i]) +
+                      " is not finite for the point at ECEF (" + format_shortest(p.m.x()) + ", " +
+                      format_shortest(p.m.y()) + ", " + format_shortest(p.m.z()) +
+                      ") m; no NaN or infinity is written: check the input and the transform");
+    }
+  }
+}
+}  // namespace
+
 CoordinateDecoder::CoordinateDecoder(const CoordinateColumns& columns, const std::vector<std::string>& header,
                                      InputCoordinateFrame frame, std::string source_name)
     : columns_(columns), header_(header), frame_(std::move(frame)), source_(std::move(source_name)),
@@ -85,18 +151,21 @@ EcefPosition CoordinateDecoder::decode(const CsvRecord& r) const {
           geodesy::NedPosition{Eigen::Vector3d(a, b, number(r, *columns_.third)), *frame_.origin}));
     case CoordinateKind::projected: {
       const double h = columns_.third ? number(r, *columns_.third) : 0.0;
-      GeodeticPosition g;
-      if (projection_) {
-        g = projection_->inverse(geodesy::ProjectedPosition{a, b, EllipsoidalHeight{h}, projection_->definition()});
-      } else {
-        const auto zone = geodesy::parse_utm_zone(r.values[*columns_.utm_zone], where(*columns_.utm_zone));
-        const geodesy::TransverseMercator& tm = utm(zone);
-        g = tm.inverse(geodesy::ProjectedPosition{a, b, EllipsoidalHeight{h}, tm.definition()});
-      }
-      if (!std::isfinite(g.lat.deg()) || !std::isfinite(g.lon.deg())) {
+      std::optional<geodesy::UtmZone> row_zone;
+      if (!projection_) row_zone = geodesy::parse_utm_zone(r.values[*columns_.utm_zone], where(*columns_.utm_zone));
+      const geodesy::TransverseMercator& tm = projection_ ? *projection_ : utm(*row_zone);
+      geodesy::TmOutcome how;
+      const auto inverse = tm.try_inverse(geodesy::ProjectedPosition{a, b, EllipsoidalHeight{h}, tm.definition()}, &how);
+      if (!inverse) {
         throw Error(ErrorKind::input, "E_PROJECTED_RANGE",
-                    source_ + ":" + std::to_string(r.line) + ": easting/northing " + r.values[columns_.first] + ", " +
-                        r.values[columns_.second] + ": outside the projection's domain");
+                    where(columns_.first) + "=" + r.values[columns_.first] + ", " + header_[columns_.second] + "=" +
+                        r.values[columns_.second] + ": outside the projection's domain: " + tm.explain(how));
+      }
+      GeodeticPosition g = *inverse;
+      if (const auto& z = tm.definition().utm) {
+        if (const auto c = geodesy::utm_band_check(*z, g); geodesy::outside_band_margin(c)) {
+          band_by_zone_[z->to_string()].add(*z, g, c, 0, source_ + ":" + std::to_string(r.line));
+        }
       }
       if (columns_.orthometric) g = with_ellipsoidal_height(g, *frame_.geoid, source_ + ":" + std::to_string(r.line));
       return geocentric_.ecef_from_geodetic(g);
@@ -122,6 +191,21 @@ const geodesy::TransverseMercator& CoordinateDecoder::utm(const geodesy::UtmZone
 
 const geodesy::TransverseMercator& CoordinateEncoder::utm(const geodesy::UtmZone& zone) const {
   return cached_utm(utm_by_zone_, frame_.ellipsoid, zone);
+}
+
+std::vector<std::string> CoordinateDecoder::warnings() const {
+  std::vector<std::string> out;
+  const std::string role = projection_ ? "input" : "input (utm_zone column)";
+  for (const auto& [name, tally] : band_by_zone_) {
+    if (auto w = tally.warning(role)) out.push_back(source_ + ": " + *w);
+  }
+  return out;
+}
+
+std::vector<std::string> CoordinateEncoder::warnings() const {
+  std::vector<std::string> out;
+  if (auto w = band_.warning("--zone: output")) out.push_back(*w);
+  return out;
 }
 
 std::string_view to_string(OutputKind k) {
@@ -187,27 +271,37 @@ double CoordinateEncoder::height(const GeodeticPosition& g, std::string_view whe
 
 std::vector<std::string> CoordinateEncoder::encode(const EcefPosition& p, std::string_view where) const {
   const auto& f = format_;
+  std::vector<double> v;
   switch (frame_.kind) {
-    case OutputKind::ecef: return {f.metres(p.m.x()), f.metres(p.m.y()), f.metres(p.m.z())};
+    case OutputKind::ecef:
+      v = {p.m.x(), p.m.y(), p.m.z()};
+      require_finite(v, names_, p, where);
+      return {f.metres(v[0]), f.metres(v[1]), f.metres(v[2])};
     case OutputKind::geodetic: {
       const auto g = geocentric_.geodetic_from_ecef(p);
-      return {f.degrees(g.lat.deg()), f.degrees(g.lon.deg()), f.metres(height(g, where))};
+      v = {g.lat.deg(), g.lon.deg(), height(g, where)};
+      require_finite(v, names_, p, where);
+      return {f.degrees(v[0]), f.degrees(v[1]), f.metres(v[2])};
     }
     case OutputKind::enu: {
       const auto e = plane_->enu_from_ecef(p).enu_m;
-      return {f.metres(e.x()), f.metres(e.y()), f.metres(e.z())};
+      v = {e.x(), e.y(), e.z()};
+      require_finite(v, names_, p, where);
+      return {f.metres(v[0]), f.metres(v[1]), f.metres(v[2])};
     }
     case OutputKind::ned: {
       const auto n = geodesy::ned_from_enu(plane_->enu_from_ecef(p)).ned_m;
-      return {f.metres(n.x()), f.metres(n.y()), f.metres(n.z())};
+      v = {n.x(), n.y(), n.z()};
+      require_finite(v, names_, p, where);
+      return {f.metres(v[0]), f.metres(v[1]), f.metres(v[2])};
     }
     case OutputKind::utm:
     case OutputKind::tm: {
       const auto g = geocentric_.geodetic_from_ecef(p);
       std::optional<geodesy::UtmZone> zone = frame_.zone;
-      geodesy::ProjectedPosition q;
+      const geodesy::TransverseMercator* tm = nullptr;
       if (projection_) {
-        q = projection_->forward(g);
+        tm = &*projection_;
       } else {
         zone = geodesy::standard_utm_zone(g);
         if (!zone) {
@@ -215,9 +309,22 @@ std::vector<std::string> CoordinateEncoder::encode(const EcefPosition& p, std::s
                       std::string(where) + ": latitude " + format_shortest(g.lat.deg()) +
                           ": outside UTM's [-80, 84) degrees (polar regions use UPS, which convert does not write)");
         }
-        q = utm(*zone).forward(g);
+        tm = &utm(*zone);
       }
-      std::vector<std::string> out = {f.metres(q.easting_m), f.metres(q.northing_m), f.metres(height(g, where))};
+      geodesy::TmOutcome how;
+      const auto q = tm->try_forward(g, &how);
+      if (!q) {
+        throw Error(ErrorKind::input, "E_PROJECTION_DOMAIN",
+                    std::string(where) + ": outside the projection's domain: " + tm->explain(how));
+      }
+      if (frame_.zone) {
+        if (const auto c = geodesy::utm_band_check(*frame_.zone, g); geodesy::outside_band_margin(c)) {
+          band_.add(*frame_.zone, g, c, 0, where);
+        }
+      }
+      v = {q->easting_m, q->northing_m, height(g, where)};
+      require_finite(v, names_, p, where);
+      std::vector<std::string> out = {f.metres(v[0]), f.metres(v[1]), f.metres(v[2])};
       if (frame_.kind == OutputKind::utm) out.push_back(zone->to_string());
       return out;
     }

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric_batch.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -72,7 +74,7 @@ PointChain::PointChain(const ArrayFrame& from, const std::optional<TransformFile
   }
 }
 
-geodesy::EcefPosition PointChain::to_ecef(double a, double b, double c) const {
+geodesy::EcefPosition PointChain::to_ecef(double a, double b, double c, std::size_t i, ChainReport& report) const {
   switch (from_.kind) {
     case CoordinateKind::ecef: return geodesy::EcefPosition(a, b, c);
     case CoordinateKind::geodetic:
@@ -81,14 +83,56 @@ geodesy::EcefPosition PointChain::to_ecef(double a, double b, double c) const {
     case CoordinateKind::enu: return from_plane_->ecef_from_enu({Eigen::Vector3d(a, b, c), *from_.origin});
     case CoordinateKind::ned:
       return from_plane_->ecef_from_enu(geodesy::enu_from_ned({Eigen::Vector3d(a, b, c), *from_.origin}));
-    case CoordinateKind::projected:
-      return from_geocentric_.ecef_from_geodetic(
-          from_tm_->inverse({a, b, geodesy::EllipsoidalHeight{c}, from_tm_->definition()}));
+    case CoordinateKind::projected: {
+      geodesy::TmOutcome how;
+      const auto g = from_tm_->try_inverse({a, b, geodesy::EllipsoidalHeight{c}, from_tm_->definition()}, &how);
+      if (!g) {
+        if (!report.first_refused) {
+          report.first_refused = i;
+          report.refusal = "input easting/northing " + format_shortest(a) + ", " + format_shortest(b) +
+                           ": outside the projection's domain: " + from_tm_->explain(how);
+        }
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        return geodesy::EcefPosition(nan, nan, nan);
+      }
+      if (const auto& z = from_tm_->definition().utm) {
+        if (const auto band = geodesy::utm_band_check(*z, *g); geodesy::outside_band_margin(band)) {
+          report.input_band.add(*z, *g, band, i, "");
+        }
+      }
+      return from_geocentric_.ecef_from_geodetic(*g);
+    }
   }
   return geodesy::EcefPosition();
 }
 
-void PointChain::from_ecef(const geodesy::EcefPosition& x, double& a, double& b, double& c) const {
+void PointChain::project(double lat_deg, double lon_deg, double h_m, double& a, double& b, double& c, std::size_t i,
+                         ChainReport& report) const {
+  const geodesy::GeodeticPosition g{geodesy::Angle::degrees(lat_deg), geodesy::Angle::degrees(lon_deg),
+                                    geodesy::EllipsoidalHeight{h_m}};
+  geodesy::TmOutcome how;
+  const auto q = to_tm_->try_forward(g, &how);
+  if (!q) {
+    // A non-finite point from an earlier step is not the projection's doing:
+    // the caller names it as non-finite.
+    if (!report.first_refused && how.refusal != geodesy::TmRefusal::non_finite) {
+      report.first_refused = i;
+      report.refusal = "outside the output projection's domain: " + to_tm_->explain(how);
+    }
+    a = b = std::numeric_limits<double>::quiet_NaN();
+    c = h_m;
+    return;
+  }
+  if (const auto& z = to_tm_->definition().utm) {
+    if (const auto band = geodesy::utm_band_check(*z, g); geodesy::outside_band_margin(band)) {
+      report.output_band.add(*z, g, band, i, "");
+    }
+  }
+  a = q->easting_m, b = q->northing_m, c = q->h.m;
+}
+
+void PointChain::from_ecef(const geodesy::EcefPosition& x, double& a, double& b, double& c, std::size_t i,
+                           ChainReport& report) const {
   switch (to_.kind) {
     case CoordinateKind::ecef: a = x.m.x(), b = x.m.y(), c = x.m.z(); return;
     case CoordinateKind::geodetic: {
@@ -107,8 +151,8 @@ void PointChain::from_ecef(const geodesy::EcefPosition& x, double& a, double& b,
       return;
     }
     case CoordinateKind::projected: {
-      const auto q = to_tm_->forward(to_geocentric_.geodetic_from_ecef(x));
-      a = q.easting_m, b = q.northing_m, c = q.h.m;
+      const auto g = to_geocentric_.geodetic_from_ecef(x);
+      project(g.lat.deg(), g.lon.deg(), g.h.m, a, b, c, i, report);
       return;
     }
   }
@@ -132,7 +176,8 @@ void apply_affine(const geodesy::AffineMap& m, std::span<double> a, std::span<do
 
 }  // namespace
 
-void PointChain::finish_from_output_ecef(std::span<double> a, std::span<double> b, std::span<double> c) const {
+void PointChain::finish_from_output_ecef(std::span<double> a, std::span<double> b, std::span<double> c,
+                                         ChainReport& report) const {
   const std::size_t n = std::min({a.size(), b.size(), c.size()});
   if (ecef_out_) {
     apply_affine(ecef_out_->inverse(), a, b, c);
@@ -140,22 +185,16 @@ void PointChain::finish_from_output_ecef(std::span<double> a, std::span<double> 
   }
   geodesy::geodetic_from_ecef_batch(to_.ellipsoid, a.first(n), b.first(n), c.first(n));
   if (to_.kind == CoordinateKind::projected) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto q = to_tm_->forward({geodesy::Angle::degrees(a[i]), geodesy::Angle::degrees(b[i]),
-                                      geodesy::EllipsoidalHeight{c[i]}});
-      a[i] = q.easting_m, b[i] = q.northing_m, c[i] = q.h.m;
-    }
+    for (std::size_t i = 0; i < n; ++i) project(a[i], b[i], c[i], a[i], b[i], c[i], i, report);
   }
 }
 
-void PointChain::apply_at_epochs(std::span<double> a, std::span<double> b, std::span<double> c,
-                                 std::span<const double> epochs) const {
+ChainReport PointChain::apply_at_epochs(std::span<double> a, std::span<double> b, std::span<double> c,
+                                        std::span<const double> epochs) const {
   const std::size_t n = std::min({a.size(), b.size(), c.size(), epochs.size()});
-  if (!transform_ || !transform_->time_dependent()) {
-    apply(a.first(n), b.first(n), c.first(n));
-    return;
-  }
-  if (n == 0) return;
+  if (!transform_ || !transform_->time_dependent()) return apply(a.first(n), b.first(n), c.first(n));
+  ChainReport report;
+  if (n == 0) return report;
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(epochs[i])) {
       throw Error(ErrorKind::input, "E_EPOCH", "point " + std::to_string(i + 1) + " of a chunk has no finite epoch");
@@ -179,18 +218,20 @@ void PointChain::apply_at_epochs(std::span<double> a, std::span<double> b, std::
       const Eigen::Vector3d p = p0 + w * (m1.apply(x) - p0);
       a[i] = p.x(), b[i] = p.y(), c[i] = p.z();
     }
-    finish_from_output_ecef(a.first(n), b.first(n), c.first(n));
-    return;
+    finish_from_output_ecef(a.first(n), b.first(n), c.first(n), report);
+    return report;
   }
   for (std::size_t i = 0; i < n; ++i) {
-    geodesy::EcefPosition x = to_ecef(a[i], b[i], c[i]);
+    geodesy::EcefPosition x = to_ecef(a[i], b[i], c[i], i, report);
     x = transform_->apply(x, geodesy::DecimalYear{epochs[i]}, inverse_, "transform");
-    from_ecef(x, a[i], b[i], c[i]);
+    from_ecef(x, a[i], b[i], c[i], i, report);
   }
+  return report;
 }
 
-void PointChain::apply(std::span<double> a, std::span<double> b, std::span<double> c) const {
+ChainReport PointChain::apply(std::span<double> a, std::span<double> b, std::span<double> c) const {
   const std::size_t n = std::min({a.size(), b.size(), c.size()});
+  ChainReport report;
   if (transform_ && transform_->time_dependent() && !epoch_) {
     throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
                 "a 14-parameter transform needs the observation epoch of the points; the reference epoch is never "
@@ -198,18 +239,19 @@ void PointChain::apply(std::span<double> a, std::span<double> b, std::span<doubl
   }
   if (fused_) {
     apply_affine(*fused_, a.first(n), b.first(n), c.first(n));
-    return;
+    return report;
   }
   if (to_output_ecef_) {
     apply_affine(*to_output_ecef_, a.first(n), b.first(n), c.first(n));
-    finish_from_output_ecef(a.first(n), b.first(n), c.first(n));
-    return;
+    finish_from_output_ecef(a.first(n), b.first(n), c.first(n), report);
+    return report;
   }
   for (std::size_t i = 0; i < n; ++i) {
-    geodesy::EcefPosition x = to_ecef(a[i], b[i], c[i]);
+    geodesy::EcefPosition x = to_ecef(a[i], b[i], c[i], i, report);
     if (transform_) x = transform_->apply(x, epoch_, inverse_, "transform");
-    from_ecef(x, a[i], b[i], c[i]);
+    from_ecef(x, a[i], b[i], c[i], i, report);
   }
+  return report;
 }
 
 }  // namespace geoanchor::io

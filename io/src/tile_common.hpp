@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <span>
+#include <string>
 
 #include "geoanchor/io/tile_apply.hpp"
 
@@ -44,6 +45,19 @@ inline std::size_t first_non_finite(std::span<const double> a, std::span<const d
     if (!std::isfinite(a[i]) || !std::isfinite(b[i]) || !std::isfinite(c[i])) return i;
   }
   return a.size();
+}
+
+// ", because ..." for the message refusing point `i`, when the chain
+// refused it (a projection's domain); "" when it is non-finite otherwise.
+inline std::string refusal_reason(const ChainReport& report, std::size_t i) {
+  return report.first_refused && *report.first_refused == i ? ": " + report.refusal : std::string();
+}
+
+// The tile's warnings about points outside their UTM zone's band.
+inline void add_band_warnings(TileApplyResult& r, const std::string& source, const UtmBandTally& in,
+                              const UtmBandTally& out) {
+  if (auto w = in.warning("input")) r.warnings.push_back(source + ": " + *w);
+  if (auto w = out.warning("output")) r.warnings.push_back(source + ": " + *w);
 }
 
 // Geodetic coordinates are (lat, lon, h) in a PointChain but (lon, lat, h)

@@ -46,6 +46,7 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
   TileApplyResult r;
   r.storage = "float64";
   detail::Bounds in_bounds, out_bounds;
+  UtmBandTally band_in, band_out;
   const std::size_t chunk = std::max<std::size_t>(o.chunk_points, 1);
   std::vector<CsvRecord> records(chunk);
   std::vector<double> a(chunk), b(chunk), c(chunk);
@@ -76,11 +77,15 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
     const std::size_t n = rows.size();
     std::span<double> as(a.data(), n), bs(b.data(), n), cs(c.data(), n);
     in_bounds.add(as, bs, cs);
-    chain.apply(as, bs, cs);
+    const ChainReport report = chain.apply(as, bs, cs);
+    auto line_of = [&](std::size_t k) { return source + ":" + std::to_string(records[rows[k]].line); };
     if (const std::size_t bad = detail::first_non_finite(as, bs, cs); bad < n) {
       throw Error(ErrorKind::input, "E_TRANSFORM",
-                  source + ":" + std::to_string(records[rows[bad]].line) + ": the point has no finite position in the output frame");
+                  line_of(bad) + ": the point has no finite position in the output frame" +
+                      detail::refusal_reason(report, bad) + "; nothing was written");
     }
+    if (report.input_band.points) band_in.absorb(report.input_band, line_of(report.input_band.worst_index));
+    if (report.output_band.points) band_out.absorb(report.output_band, line_of(report.output_band.worst_index));
     out_bounds.add(as, bs, cs);
     std::size_t k = 0;
     for (std::size_t j = 0; j < filled; ++j) {
@@ -106,6 +111,7 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
   }
   if (!out) throw Error(ErrorKind::io, "E_WRITE", out_name + ": write failed");
   detail::set_bounds(r, in_bounds, out_bounds);
+  detail::add_band_warnings(r, source, band_in, band_out);
   return r;
 }
 

@@ -93,6 +93,7 @@ class LasTile {
   std::size_t gps_time_offset_ = 0;
   double epoch_lo_ = std::numeric_limits<double>::infinity(), epoch_hi_ = -std::numeric_limits<double>::infinity();
   std::array<std::int32_t, 3> in_qmin_{INT32_MAX, INT32_MAX, INT32_MAX}, in_qmax_{INT32_MIN, INT32_MIN, INT32_MIN};
+  UtmBandTally band_in_, band_out_;  // of the last pass: points outside a UTM zone's band
 };
 
 template <class Sink>
@@ -102,6 +103,7 @@ void LasTile::pass(Sink&& sink) {
   const bool geo_in = detail::lon_first_in_files(o_.from);
   const bool geo_out = detail::lon_first_in_files(o_.to);
   reader_.rewind();
+  band_in_ = band_out_ = UtmBandTally{};
   std::uint64_t done = 0;
   x_.resize(o_.chunk_points);
   y_.resize(o_.chunk_points);
@@ -131,6 +133,7 @@ void LasTile::pass(Sink&& sink) {
     std::span<double> a(geo_in ? y_.data() : x_.data(), n);
     std::span<double> b(geo_in ? x_.data() : y_.data(), n);
     std::span<double> c(z_.data(), n);
+    ChainReport report;
     if (o_.epochs_from_gps_time) {
       // Adjusted standard GPS time: GPS seconds minus 1e9.
       epochs_.resize(n);
@@ -147,19 +150,24 @@ void LasTile::pass(Sink&& sink) {
         epoch_lo_ = std::min(epoch_lo_, epochs_[i]);
         epoch_hi_ = std::max(epoch_hi_, epochs_[i]);
       }
-      chain_.apply_at_epochs(a, b, c, epochs_);
+      report = chain_.apply_at_epochs(a, b, c, epochs_);
     } else {
-      chain_.apply(a, b, c);
+      report = chain_.apply(a, b, c);
     }
+    auto point_name = [&](std::size_t i) {
+      return "point " + std::to_string(done + i + 1) + " (byte " + std::to_string(h.offset_to_points + (done + i) * len) +
+             ")";
+    };
     // The chain wrote the output in its order into the same arrays.
     std::span<double> xs = geo_out ? b : a;
     std::span<double> ys = geo_out ? a : b;
     if (const std::size_t bad = detail::first_non_finite(xs, ys, c); bad < n) {
       throw Error(ErrorKind::input, "E_TRANSFORM",
-                  reader_.path().string() + ": point " + std::to_string(done + bad + 1) + " (byte " +
-                      std::to_string(h.offset_to_points + (done + bad) * len) +
-                      ") has no finite position in the output frame");
+                  reader_.path().string() + ": " + point_name(bad) + " has no finite position in the output frame" +
+                      detail::refusal_reason(report, bad) + "; nothing was written");
     }
+    band_in_.absorb(report.input_band, point_name(report.input_band.worst_index));
+    band_out_.absorb(report.output_band, point_name(report.output_band.worst_index));
     sink(xs, ys, c, n, done);
     done += n;
     if (o_.progress) o_.progress(done);
@@ -348,6 +356,7 @@ TileApplyResult LasTile::run() {
     }
   }
   writer.finish(h.points_by_return, r.min, r.max);
+  detail::add_band_warnings(r, reader_.path().string(), band_in_, band_out_);
   if (o_.epochs_from_gps_time && r.points) r.epoch_range = std::array<double, 2>{epoch_lo_, epoch_hi_};
   // Input bounds in the chain's order (lat, lon, h for geodetic input).
   const bool geo_in = detail::lon_first_in_files(o_.from);

@@ -183,6 +183,7 @@ TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& ou
   TileApplyResult r;
   r.storage = "float64";
   detail::Bounds in_bounds, out_bounds;
+  UtmBandTally band_in, band_out;
   const bool geo_in = detail::lon_first_in_files(o.from);
   const bool geo_out = detail::lon_first_in_files(o.to);
   const std::size_t chunk = std::max<std::size_t>(o.chunk_points, 1);
@@ -192,12 +193,16 @@ TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& ou
   auto transform = [&](std::size_t n, const std::string& where_first) {
     std::span<double> a(geo_in ? y.data() : x.data(), n), b(geo_in ? x.data() : y.data(), n), c(z.data(), n);
     in_bounds.add(a, b, c);
-    chain.apply(a, b, c);
+    const ChainReport report = chain.apply(a, b, c);
+    auto vertex = [&](std::size_t i) { return "vertex " + std::to_string(r.points + i + 1); };
     if (const std::size_t bad = detail::first_non_finite(a, b, c); bad < n) {
       throw Error(ErrorKind::input, "E_TRANSFORM",
-                  source + ": vertex " + std::to_string(r.points + bad + 1) + " (" + where_first +
-                      ") has no finite position in the output frame");
+                  source + ": " + vertex(bad) + " (of the chunk from " + where_first +
+                      ") has no finite position in the output frame" + detail::refusal_reason(report, bad) +
+                      "; nothing was written");
     }
+    if (report.input_band.points) band_in.absorb(report.input_band, vertex(report.input_band.worst_index));
+    if (report.output_band.points) band_out.absorb(report.output_band, vertex(report.output_band.worst_index));
     out_bounds.add(geo_out ? b : a, geo_out ? a : b, c);
   };
 
@@ -301,6 +306,7 @@ TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& ou
   if (file.peek() != std::char_traits<char>::eof()) out << file.rdbuf();
   if (!out) throw Error(ErrorKind::io, "E_WRITE", out_name + ": write failed");
   detail::set_bounds(r, in_bounds, out_bounds);
+  detail::add_band_warnings(r, source, band_in, band_out);
   return r;
 }
 

@@ -600,5 +600,59 @@ TEST_F(ApplyCli, Point10_WronglyTypedFitStatisticsAndNullSidecarValuesAreRefused
   EXPECT_FALSE(fs::exists(out2 / "tile.las.geoanchor.json"));
 }
 
+// issue 12 point 1
+TEST_F(ApplyCli, Issue12Point1_ACsvTileWithAPointOutsideTheTmDomainIsRefusedAndNothingWritten) {
+  const std::string side = R"({"schema": "geoanchor.tile/1", "frame": "ITRF2014@2024.5",
+      "coordinates": {"kind": "geodetic", "ellipsoid": "WGS84", "storage": "float64"},
+      "vertical": {"height_type": "ellipsoidal", "geoid_model": null}})";
+  // (0, 85): the series wrote a finite easting 3 280 km from the exact projection's.
+  write("in/tile.csv", "id,lat_deg,lon_deg,h_m\nA,10,5,0\nB,0,85,0\nC,20,10,0\n");
+  write("in/tile.csv.geoanchor.json", side);
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + path("in/tile.csv").string() + " --to tm --tm 0,0,0.9996,0,0 --out-dir " + out.string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("error[E_TRANSFORM]: " + path("in/tile.csv").string() +
+                       ":3: the point has no finite position in the output frame: outside the output projection's "
+                       "domain: lat 0, lon 85: 85.0° from the central meridian 0°; this Transverse Mercator is computed "
+                       "within 75°"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(files(out), std::vector<std::string>{"geoanchor-apply-summary.json"});
+}
+
+// issue 12 point 1
+TEST_F(ApplyCli, Issue12Point1_ATilePointOutsideTheForcedZonesBandIsWarnedInStderrAndProvenance) {
+  const std::string side = R"({"schema": "geoanchor.tile/1", "frame": "ITRF2014@2024.5",
+      "coordinates": {"kind": "geodetic", "ellipsoid": "WGS84", "storage": "float64"},
+      "vertical": {"height_type": "ellipsoidal", "geoid_model": null}})";
+  write("in/tile.csv", "id,lat_deg,lon_deg,h_m\nA,47,4,0\nB,47,10.5,0\n");
+  write("in/tile.csv.geoanchor.json", side);
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + path("in/tile.csv").string() + " --to utm --zone 31N --out-dir " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string expected = "output UTM zone 31N: 1 point lies outside the zone's band (0°–6°E, 0°–84°N) by more "
+                               "than the 1° margin; the farthest is " + path("in/tile.csv").string() +
+                               ":3 (lat 47, lon 10.5), 4.50° beyond";
+  EXPECT_NE(r.err.find("geoanchor: warning: " + path("in/tile.csv").string() + ": " + expected), std::string::npos) << r.err;
+  const json prov = json::parse(slurp(out / "tile.csv.geoanchor.json"))["provenance"];
+  bool recorded = false;
+  for (const auto& w : prov["warnings"]) recorded = recorded || w.get<std::string>().find(expected) != std::string::npos;
+  EXPECT_TRUE(recorded) << prov.dump(2);
+  const ProjPipeline utm31("+proj=utm +zone=31 +ellps=WGS84");
+  const Eigen::Vector3d ref = utm31.forward({testing::proj_radians(10.5), testing::proj_radians(47.0), 0.0});
+  std::istringstream lines(slurp(out / "tile.csv"));
+  std::string line;
+  std::getline(lines, line);
+  std::getline(lines, line);
+  std::getline(lines, line);
+  std::stringstream f(line);
+  std::string id, e, n;
+  std::getline(f, id, ',');
+  std::getline(f, e, ',');
+  std::getline(f, n, ',');
+  EXPECT_NEAR(std::stod(e), ref.x(), kVsProjTol_m) << line;
+  EXPECT_NEAR(std::stod(n), ref.y(), kVsProjTol_m) << line;
+}
+
 }  // namespace
 }  // namespace geoanchor

@@ -2,6 +2,7 @@
 // with PROJ, and every bad-input case checked for its message, its exit code
 // and the absence of any output file.
 
+#include <GeographicLib/TransverseMercatorExact.hpp>
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -378,6 +379,135 @@ TEST_F(ConvertCli, InterruptedMidStreamLeavesNeitherOutputNorTemporary) {
   ::close(fd);
   EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << "status " << status;
   EXPECT_TRUE(leftovers({"in.fifo"}).empty()) << "left behind: " << ::testing::PrintToString(leftovers({"in.fifo"}));
+}
+
+// ---- issue 12 point 1: no NaN, no infinity, no projection outside its domain ----
+
+// What a refused conversion must leave: nothing but its input.
+#define EXPECT_NOTHING_LEFT(...)                                                         \
+  do {                                                                                   \
+    const std::vector<std::string> inputs_ = {__VA_ARGS__};                              \
+    EXPECT_TRUE(leftovers(inputs_).empty()) << "left behind: " << ::testing::PrintToString(leftovers(inputs_)); \
+  } while (false)
+
+// issue 12 point 1
+TEST_F(ConvertCli, Issue12Point1_TmNinetyDegreesFromTheMeridianIsRefusedNamingTheRowNeverWrittenAsNaN) {
+  // The issue's reproduction wrote "-nan,-nan" with exit 0.
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nA,10,5,0\nB,0,90,0\n");
+  const RunResult r = run("convert - --to tm --tm 0,0,0.9996,0,0", path("in.csv").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_EQ(r.out.find("nan"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("error[E_PROJECTION_DOMAIN]: <stdin>:3: outside the projection's domain: lat 0, lon 90: 90.0° "
+                       "from the central meridian 0°; this Transverse Mercator is computed within 75°"),
+            std::string::npos)
+      << r.err;
+  const RunResult f = run("convert " + path("in.csv").string() + " --to tm --tm 0,0,0.9996,0,0 -o " + path("out.csv").string());
+  EXPECT_EQ(f.exit_code, 3) << f.err;
+  EXPECT_NE(f.err.find("in.csv:3: outside the projection's domain: lat 0, lon 90"), std::string::npos) << f.err;
+  EXPECT_NOTHING_LEFT("in.csv");
+}
+
+// issue 12 point 1
+TEST_F(ConvertCli, Issue12Point1_AForcedUtmZoneFarFromThePointIsRefusedNamingTheRow) {
+  // The issue's reproduction: lon 89° in zone 31N (central meridian 3°E) wrote a 15 356 km easting.
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nFAR,10,89,0\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --to utm --zone 31N -o " + path("out.csv").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("in.csv:2: outside the projection's domain: lat 10, lon 89: 79.2° from the central meridian "
+                       "3°E; UTM zone 31N is computed within 35°"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NOTHING_LEFT("in.csv");
+}
+
+// issue 12 point 1
+TEST_F(ConvertCli, Issue12Point1_AnEastingOutsideTheZonesGridIsRefusedNamingTheRow) {
+  // 52 000 km of easting in zone 31N was read as lat 0, lon 93 before.
+  write("in.csv", "id,easting_m,northing_m,h_m\nOK,500000,5000000,0\nFAR,52000000,1100000,0\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --from-zone 31N --to geodetic -o " + path("out.csv").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("error[E_PROJECTED_RANGE]: " + path("in.csv").string() +
+                       ":3: easting_m=52000000, northing_m=1100000: outside the projection's domain"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("UTM zone 31N is computed within 35°"), std::string::npos) << r.err;
+  EXPECT_NOTHING_LEFT("in.csv");
+}
+
+// issue 12 point 1
+TEST_F(ConvertCli, Issue12Point1_FortyDegreesFromTheMeridianATmAgreesWithProjTmerc) {
+  // 38.5° from the central meridian: the exact method, compared with PROJ's
+  // tmerc (Poder/Engsager, 23 nm from the exact projection at 42°).
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nP,20,40,12.5\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --to tm --tm 0,0,0.9996,0,0");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Table t = parse_table(r.out);
+  const ProjPipeline tmerc("+proj=tmerc +ellps=WGS84 +k=0.9996");
+  const Eigen::Vector3d ref = tmerc.forward({proj_radians(40.0), proj_radians(20.0), 12.5});
+  EXPECT_NEAR(t.num(0, "easting_m"), ref.x(), kVsProjEnuTol_m);
+  EXPECT_NEAR(t.num(0, "northing_m"), ref.y(), kVsProjEnuTol_m);
+  EXPECT_NEAR(t.num(0, "h_m"), 12.5, kRoundTripTol_m);  // through ECEF and back
+}
+
+// issue 12 point 1
+TEST_F(ConvertCli, Issue12Point1_SeventyFourDegreesFromTheMeridianATmIsTheExactProjection) {
+  // 74° from the central meridian the series is 0.11 m off; the reference is
+  // GeographicLib's TransverseMercatorExact (Lee 1976, about 8 nm everywhere;
+  // TransverseMercatorExact.hpp), with the false origin added here.
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nP,2,74,0\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --to tm --tm 0,0,0.9996,100000,200000");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Table t = parse_table(r.out);
+  const GeographicLib::TransverseMercatorExact exact(6378137.0, 1.0 / 298.257223563, 0.9996);
+  double x = 0, y = 0, gamma = 0, k = 0;
+  exact.Forward(0.0, 2.0, 74.0, x, y, gamma, k);
+  EXPECT_NEAR(t.num(0, "easting_m"), 100000.0 + x, kVsProjEnuTol_m);
+  EXPECT_NEAR(t.num(0, "northing_m"), 200000.0 + y, kVsProjEnuTol_m);
+  // And back, to the degree's 1e-9 (0.1 mm).
+  write("tm.csv", r.out);
+  const RunResult back = run("convert " + path("tm.csv").string() + " --from-tm 0,0,0.9996,100000,200000 --to geodetic");
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  const Table g = parse_table(back.out);
+  EXPECT_NEAR(g.num(0, "lat_deg"), 2.0, 1e-9);
+  EXPECT_NEAR(g.num(0, "lon_deg"), 74.0, 1e-9);
+}
+
+// issue 12 point 1
+TEST_F(ConvertCli, Issue12Point1_AForcedZoneOutsideItsBandWarnsOnStderrAndInTheSidecar) {
+  // 10.5°E is 4.5° east of zone 31's band (0°-6°E): still computed, as PROJ's utm does, with a warning.
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nIN,47,4,0\nNEAR,47,6.5,0\nOUT,47,10.5,0\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --to utm --zone 31N -o " + path("utm.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string expected = "--zone: output UTM zone 31N: 1 point lies outside the zone's band (0°–6°E, 0°–84°N) by "
+                               "more than the 1° margin; the farthest is " + path("in.csv").string() +
+                               ":4 (lat 47, lon 10.5), 4.50° beyond";
+  EXPECT_NE(r.err.find("geoanchor: warning: " + expected), std::string::npos) << r.err;
+  const nlohmann::json side = nlohmann::json::parse(slurp(path("utm.csv.geoanchor.json")));
+  ASSERT_EQ(side["warnings"].size(), 1u) << side.dump(2);
+  EXPECT_EQ(side["warnings"][0].get<std::string>().rfind(expected, 0), 0u) << side["warnings"][0];
+  const Table t = parse_table(slurp(path("utm.csv")));
+  const ProjPipeline utm31("+proj=utm +zone=31 +ellps=WGS84");
+  const Eigen::Vector3d ref = utm31.forward({proj_radians(10.5), proj_radians(47.0), 0.0});
+  EXPECT_NEAR(t.num(2, "easting_m"), ref.x(), kVsProjEnuTol_m);
+  EXPECT_NEAR(t.num(2, "northing_m"), ref.y(), kVsProjEnuTol_m);
+  // Read back on the same zone, the input side warns as well.
+  const RunResult back = run("convert " + path("utm.csv").string() + " --from-zone 31N --to geodetic");
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  EXPECT_NE(back.err.find("input UTM zone 31N: 1 point lies outside the zone's band"), std::string::npos) << back.err;
+}
+
+// issue 12 point 1
+TEST_F(ConvertCli, Issue12Point1_ANonFiniteOutputIsRefusedNeverWritten) {
+  // A transform of 1.7e308 m gives an infinite height: it was written as "inf".
+  write("T.json", R"({"model": "translation3", "parameters": {"tx_m": 1.7e308, "ty_m": 1.7e308, "tz_m": 0}})");
+  write("in.csv", "id,x_m,y_m,z_m\nA,4000000,600000,4700000\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --transform " + path("T.json").string() +
+                          " --to geodetic -o " + path("out.csv").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("error[E_NON_FINITE]: " + path("in.csv").string() + ":2: output h_m=inf is not finite"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NOTHING_LEFT("in.csv", "T.json");
 }
 
 }  // namespace

@@ -137,5 +137,81 @@ TEST(PointChain, PerPointEpochsAgreeWithProjAtEachPointsTime) {
   EXPECT_LT(worst_h, kVsProjTol_m);
 }
 
+// issue 12 point 1
+TEST(PointChain, Issue12Point1_APointOutsideTheOutputProjectionsDomainIsNaNWithItsReason) {
+  // Geodetic -> TM on the Greenwich meridian: the array path (batch ECEF ->
+  // geodetic, then the projection point by point) and the point-by-point
+  // path (a geodetic input) both refuse (0, 90), which the series wrote as
+  // -nan before, and keep the point beside it.
+  geodesy::TransverseMercatorParams p;
+  p.k0 = 0.9996;
+  const geodesy::ProjectionDef tm{geodesy::Ellipsoid::wgs84(), p, std::nullopt};
+  const ProjPipeline proj("+proj=tmerc +ellps=WGS84 +k=0.9996");
+  for (const CoordinateKind from : {CoordinateKind::ecef, CoordinateKind::geodetic}) {
+    const PointChain chain(ArrayFrame{from, geodesy::Ellipsoid::wgs84(), std::nullopt, std::nullopt}, std::nullopt, false,
+                           std::nullopt, ArrayFrame{CoordinateKind::projected, geodesy::Ellipsoid::wgs84(), std::nullopt, tm});
+    std::vector<double> a = {47.0, 0.0, 10.0}, b = {8.0, 90.0, 5.0}, c = {400.0, 0.0, 0.0};
+    if (from == CoordinateKind::ecef) {
+      const geodesy::GeocentricConverter g(geodesy::Ellipsoid::wgs84());
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        const auto x = g.ecef_from_geodetic({Angle::degrees(a[i]), Angle::degrees(b[i]), geodesy::EllipsoidalHeight{c[i]}});
+        a[i] = x.m.x(), b[i] = x.m.y(), c[i] = x.m.z();
+      }
+    }
+    const ChainReport report = chain.apply(a, b, c);
+    ASSERT_TRUE(report.first_refused.has_value());
+    EXPECT_EQ(*report.first_refused, 1u);
+    EXPECT_TRUE(std::isnan(a[1]) && std::isnan(b[1]));
+    EXPECT_NE(report.refusal.find("90.0° from the central meridian 0°"), std::string::npos) << report.refusal;
+    EXPECT_NE(report.refusal.find("within 75°"), std::string::npos) << report.refusal;
+    const Eigen::Vector3d r0 = proj.forward({testing::proj_radians(8.0), testing::proj_radians(47.0), 0.0});
+    EXPECT_NEAR(a[0], r0.x(), kVsProjTol_m);
+    EXPECT_NEAR(b[0], r0.y(), kVsProjTol_m);
+    const Eigen::Vector3d r2 = proj.forward({testing::proj_radians(5.0), testing::proj_radians(10.0), 0.0});
+    EXPECT_NEAR(a[2], r2.x(), kVsProjTol_m);
+    EXPECT_NEAR(b[2], r2.y(), kVsProjTol_m);
+  }
+}
+
+// issue 12 point 1
+TEST(PointChain, Issue12Point1_PointsOutsideAForcedUtmZonesBandAreCountedAndEastingsOutsideTheGridRefused) {
+  const auto z31 = geodesy::utm_projection(geodesy::Ellipsoid::wgs84(), {31, geodesy::Hemisphere::north});
+  const PointChain out(ArrayFrame{CoordinateKind::geodetic, geodesy::Ellipsoid::wgs84(), std::nullopt, std::nullopt},
+                       std::nullopt, false, std::nullopt,
+                       ArrayFrame{CoordinateKind::projected, geodesy::Ellipsoid::wgs84(), std::nullopt, z31});
+  // Inside the band, 0.5° beyond it (within the margin), 7° beyond it (counted), 83° beyond it (refused).
+  std::vector<double> a = {45.0, 45.0, 45.0, 10.0}, b = {3.0, 6.5, 13.0, 89.0}, c = {0.0, 0.0, 0.0, 0.0};
+  const ChainReport report = out.apply(a, b, c);
+  EXPECT_EQ(report.output_band.points, 1u);
+  EXPECT_EQ(report.output_band.worst_index, 2u);
+  EXPECT_NEAR(report.output_band.worst_excess_deg, 7.0, 1e-9);
+  ASSERT_TRUE(report.first_refused.has_value());
+  EXPECT_EQ(*report.first_refused, 3u);
+  EXPECT_NE(report.refusal.find("UTM zone 31N is computed within 35°"), std::string::npos) << report.refusal;
+  const ProjPipeline utm("+proj=utm +zone=31 +ellps=WGS84");
+  const Eigen::Vector3d r = utm.forward({testing::proj_radians(13.0), testing::proj_radians(45.0), 0.0});
+  EXPECT_NEAR(a[2], r.x(), kVsProjTol_m);  // still computed, as PROJ does
+  EXPECT_NEAR(b[2], r.y(), kVsProjTol_m);
+  const auto w = report.output_band.warning("output");
+  ASSERT_TRUE(w.has_value());
+  EXPECT_NE(w->find("output UTM zone 31N: 1 point lies outside the zone's band (0°–6°E, 0°–84°N)"), std::string::npos) << *w;
+
+  // Input on zone 31N: an easting 52 000 km out is refused, not read as a point.
+  const PointChain in(ArrayFrame{CoordinateKind::projected, geodesy::Ellipsoid::wgs84(), std::nullopt, z31}, std::nullopt,
+                      false, std::nullopt,
+                      ArrayFrame{CoordinateKind::geodetic, geodesy::Ellipsoid::wgs84(), std::nullopt, std::nullopt});
+  std::vector<double> e = {500000.0, 52.0e6}, n = {5.0e6, 1.1e6}, h = {0.0, 0.0};
+  const ChainReport back = in.apply(e, n, h);
+  ASSERT_TRUE(back.first_refused.has_value());
+  EXPECT_EQ(*back.first_refused, 1u);
+  EXPECT_TRUE(std::isnan(e[1]) && std::isnan(n[1]));
+  EXPECT_TRUE(std::isfinite(e[0]) && std::isfinite(n[0]));
+  EXPECT_NE(back.refusal.find("input easting/northing 5.2e+07, 1100000: outside the projection's domain: no point "
+                              "within the projection's domain maps to this easting/northing; UTM zone 31N is computed "
+                              "within 35°"),
+            std::string::npos)
+      << back.refusal;
+}
+
 }  // namespace
 }  // namespace geoanchor::io

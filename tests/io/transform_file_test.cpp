@@ -387,7 +387,7 @@ TEST(TransformFile, Point10_FitRecordValuesOfTheWrongTypeAndUnknownKeysAreRefuse
   const TransformFile with_extent = parse_transform_json(helmert7_with(extent), "T.json");
   ASSERT_TRUE(with_extent.fit);
   EXPECT_TRUE(with_extent.fit->extent);
-  EXPECT_TRUE(std::isnan(with_extent.fit->sigma0));  // no statistics: σ0 unknown, not 0
+  EXPECT_FALSE(with_extent.fit->sigma0.has_value());  // no statistics: σ0 unknown, not 0
 }
 
 // issue 12 point 10

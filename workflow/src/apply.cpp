@@ -260,13 +260,36 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
       b.push_back(centre ? 0.5 * (res.in_min[1] + res.in_max[1]) : (k & 2 ? res.in_max[1] : res.in_min[1]));
       c.push_back(centre ? 0.5 * (res.in_min[2] + res.in_max[2]) : (k & 4 ? res.in_max[2] : res.in_min[2]));
     }
-    to_ecef.apply(a, b, c);
+    const io::ChainReport corners = to_ecef.apply(a, b, c);
+    // A bounding-box corner may lie outside the input projection's domain
+    // even when every point lies inside it: measure from the others, and say so.
+    std::vector<std::size_t> usable;
+    for (std::size_t k = 0; k < 9; ++k) {
+      if (std::isfinite(a[k]) && std::isfinite(b[k]) && std::isfinite(c[k])) usable.push_back(k);
+    }
+    if (usable.empty()) {
+      throw Error(ErrorKind::input, "E_PROJECTION_DOMAIN",
+                  tile + ": no corner of the tile's bounding box lies in its projection's domain (" + corners.refusal +
+                      "): its extent outside the control network cannot be measured; nothing was written");
+    }
+    if (usable.size() < 9) {
+      warnings.push_back(tile + ": " + std::to_string(9 - usable.size()) +
+                         " of the bounding box's corners lie outside the input projection's domain (" + corners.refusal +
+                         "); the extrapolation and uncertainty are measured at the other corners");
+    }
     // The extent is the source frame's; with --inverse the tile is in the
     // target frame, metres at most from it, which does not matter at the
     // scale of the extrapolation limit.
     if (t_->fit && t_->fit->extent) {
       double worst = 0.0;
-      for (std::size_t k = 0; k < 9; ++k) worst = std::max(worst, t_->fit->extent->distance_m(geodesy::EcefPosition(a[k], b[k], c[k])));
+      for (std::size_t k : usable) {
+        const double d = t_->fit->extent->distance_m(geodesy::EcefPosition(a[k], b[k], c[k]));
+        if (!(d <= worst)) worst = d;  // NaN propagates to the refusal below
+      }
+      if (!std::isfinite(worst)) {
+        throw Error(ErrorKind::input, "E_EXTRAPOLATION", tile + ": the distance outside the control network of " + *o_.transform +
+                                                             " cannot be computed; nothing was written");
+      }
       extrapolation = {{"distance_outside_control_m", worst}, {"limit_m", o_.max_extrapolation_m}};
       if (worst > o_.max_extrapolation_m) {
         throw Error(ErrorKind::rejected, "E_EXTRAPOLATION",
@@ -285,14 +308,21 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
       std::optional<DecimalYear> at = p.epoch;
       if (!at && res.epoch_range) at = DecimalYear{0.5 * ((*res.epoch_range)[0] + (*res.epoch_range)[1])};
       std::optional<Eigen::Matrix3d> worst;
-      for (std::size_t k = 0; k < 9; ++k) {
+      for (std::size_t k : usable) {
         const auto cov = io::propagated_covariance_m2(*t_, geodesy::EcefPosition(a[k], b[k], c[k]), at, o_.inverse);
-        if (cov && (!worst || cov->trace() > worst->trace())) worst = cov;
+        if (!cov) continue;
+        if (!cov->allFinite()) {
+          throw Error(ErrorKind::input, "E_TRANSFORM_SIGMAS",
+                      *o_.transform + ": the propagated uncertainty of the tile is not finite (the file's sigmas or "
+                                      "correlation do not cover its parameters); nothing was written");
+        }
+        if (!worst || cov->trace() > worst->trace()) worst = cov;
       }
       if (worst) {
         const geodesy::GeocentricConverter g(geodesy::Ellipsoid::wgs84());
         geodesy::LocalOrigin centre;
-        centre.point = g.geodetic_from_ecef(geodesy::EcefPosition(a[8], b[8], c[8]));
+        const std::size_t mid = std::isfinite(a[8]) && std::isfinite(b[8]) && std::isfinite(c[8]) ? 8 : usable.front();
+        centre.point = g.geodetic_from_ecef(geodesy::EcefPosition(a[mid], b[mid], c[mid]));
         uncertainty = enu_sigma_json(*worst, centre);
         uncertainty["at"] = "the tile's bounding-box corner with the largest propagated variance";
         uncertainty["scaled_by_sigma0"] = t_->fit->sigmas_scaled_by_sigma0;

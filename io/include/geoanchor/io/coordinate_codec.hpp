@@ -16,6 +16,31 @@
 
 namespace geoanchor::io {
 
+// The points a UTM zone was forced onto (--zone, --from-zone, a tile's
+// zone, a utm_zone column) although they lie outside its band by more than
+// geodesy::kUtmBandMargin: how many, and the farthest. They are still
+// computed (up to 35° from the central meridian, where UTM keeps its
+// accuracy); the tally becomes one warning per zone, not one per point.
+struct UtmBandTally {
+  std::optional<geodesy::UtmZone> zone;
+  std::size_t points = 0;
+  double worst_excess_deg = 0.0;  // degrees beyond the band at the farthest point
+  double worst_lat_deg = 0.0, worst_lon_deg = 0.0;
+  std::size_t worst_index = 0;    // in the arrays of one PointChain call
+  std::string worst_where;        // file:line or "point N", set by the caller
+  bool zone_unused = false;       // a zone the grid does not use there (32X, 34X, 36X)
+
+  // Counts `p`, whose `check` is outside_band_margin (callers test that
+  // first, so that the points inside cost no text).
+  void add(const geodesy::UtmZone& z, const geodesy::GeodeticPosition& p, const geodesy::UtmBandCheck& check,
+           std::size_t index, std::string_view where);
+  // Adds another tally's points; its farthest point is named `where`.
+  void absorb(const UtmBandTally& other, std::string_view where);
+  // "output UTM zone 31N: 2 points lie outside its band ...", or nothing
+  // when no point was counted. `role` says which zone ("output", "--zone").
+  std::optional<std::string> warning(std::string_view role) const;
+};
+
 // The frame the input coordinates are in, beyond what the header says.
 struct InputCoordinateFrame {
   geodesy::Ellipsoid ellipsoid = geodesy::Ellipsoid::wgs84();
@@ -42,6 +67,10 @@ class CoordinateDecoder {
     return (columns_.kind == CoordinateKind::geodetic || columns_.kind == CoordinateKind::projected) && !columns_.third;
   }
 
+  // Warnings about the rows decoded so far: easting/northing whose UTM zone
+  // (--from-zone, a utm_zone column) does not contain them, one per zone.
+  std::vector<std::string> warnings() const;
+
  private:
   double number(const CsvRecord& r, std::size_t column) const;
   const geodesy::TransverseMercator& utm(const geodesy::UtmZone& zone) const;
@@ -53,6 +82,7 @@ class CoordinateDecoder {
   std::optional<geodesy::LocalTangentPlane> plane_;
   std::optional<geodesy::TransverseMercator> projection_;
   mutable std::map<std::string, geodesy::TransverseMercator> utm_by_zone_;  // per-row zones, built once each
+  mutable std::map<std::string, UtmBandTally> band_by_zone_;                // rows outside their zone's band
 };
 
 enum class OutputKind { geodetic, ecef, enu, ned, utm, tm };
@@ -86,8 +116,14 @@ class CoordinateEncoder {
   const std::vector<std::string>& column_names() const { return names_; }
   // Text of each output column for a point. Throws geoanchor::Error (input)
   // naming `where` when the point cannot be expressed (UTM outside
-  // [-80°, 84°], outside the geoid grid, ...).
+  // [-80°, 84°], a projection outside its domain, outside the geoid grid,
+  // ...) and whenever a value would not be finite: no NaN or infinity is
+  // ever written.
   std::vector<std::string> encode(const geodesy::EcefPosition& p, std::string_view where) const;
+
+  // Warnings about the points encoded so far: points outside the band of
+  // the forced --zone (one warning for all of them).
+  std::vector<std::string> warnings() const;
 
  private:
   const geodesy::TransverseMercator& utm(const geodesy::UtmZone& zone) const;
@@ -99,6 +135,7 @@ class CoordinateEncoder {
   std::optional<geodesy::LocalTangentPlane> plane_;
   std::optional<geodesy::TransverseMercator> projection_;
   mutable std::map<std::string, geodesy::TransverseMercator> utm_by_zone_;  // per-point zones, built once each
+  mutable UtmBandTally band_;                                               // points outside the forced --zone's band
 };
 
 }  // namespace geoanchor::io

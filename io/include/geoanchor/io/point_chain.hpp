@@ -28,6 +28,15 @@ struct ArrayFrame {
   std::optional<geodesy::ProjectionDef> projection;  // projected
 };
 
+// What one PointChain call met besides numbers: the first point a
+// projection refused (its output is NaN: the caller refuses the tile, with
+// this reason) and the points a UTM zone holds outside its band.
+struct ChainReport {
+  std::optional<std::size_t> first_refused;  // index in the arrays
+  std::string refusal;                       // why, with the point and the projection's domain
+  UtmBandTally input_band, output_band;      // worst_index: in the arrays
+};
+
 class PointChain {
  public:
   // Throws geoanchor::Error (usage) when a frame lacks its origin or
@@ -39,8 +48,10 @@ class PointChain {
   const std::optional<geodesy::AffineMap>& fused() const { return fused_; }
 
   // Transforms the points (a[i], b[i], c[i]) in place: x,y,z | lat,lon,h
-  // (degrees) | e,n,u | n,e,d | easting,northing,h.
-  void apply(std::span<double> a, std::span<double> b, std::span<double> c) const;
+  // (degrees) | e,n,u | n,e,d | easting,northing,h. A point outside a
+  // projection's domain (geodesy/projection.hpp) becomes NaN, and the
+  // report says which and why; the caller must refuse non-finite output.
+  ChainReport apply(std::span<double> a, std::span<double> b, std::span<double> c) const;
 
   // The same with a time-dependent transform evaluated at each point's own
   // epoch (decimal years, e.g. from LAS GPS time). Affine chains are built
@@ -48,14 +59,20 @@ class PointChain {
   // point: a 14-parameter Helmert is linear in time, up to the product of
   // scale and rotation rates (below 1e-12 m per year² at Earth radius).
   // Other transforms ignore `epochs`.
-  void apply_at_epochs(std::span<double> a, std::span<double> b, std::span<double> c,
-                       std::span<const double> epochs) const;
+  ChainReport apply_at_epochs(std::span<double> a, std::span<double> b, std::span<double> c,
+                              std::span<const double> epochs) const;
 
  private:
-  geodesy::EcefPosition to_ecef(double a, double b, double c) const;
-  void from_ecef(const geodesy::EcefPosition& x, double& a, double& b, double& c) const;
+  geodesy::EcefPosition to_ecef(double a, double b, double c, std::size_t i, ChainReport& report) const;
+  void from_ecef(const geodesy::EcefPosition& x, double& a, double& b, double& c, std::size_t i,
+                 ChainReport& report) const;
+  // Easting, northing of a geodetic point on the output projection (NaN
+  // when refused, noted in `report`).
+  void project(double lat_deg, double lon_deg, double h_m, double& a, double& b, double& c, std::size_t i,
+               ChainReport& report) const;
   static std::optional<geodesy::AffineMap> affine_ecef_from(const ArrayFrame& f);  // frame -> ECEF, if affine
-  void finish_from_output_ecef(std::span<double> a, std::span<double> b, std::span<double> c) const;
+  void finish_from_output_ecef(std::span<double> a, std::span<double> b, std::span<double> c,
+                               ChainReport& report) const;
   std::optional<geodesy::AffineMap> ecef_in_;   // input -> ECEF, when affine
   std::optional<geodesy::AffineMap> ecef_out_;  // output -> ECEF, when affine
 

@@ -1,0 +1,106 @@
+// Every numeric command-line option of every subcommand refuses NaN and
+// infinities (issue 12 point 6): CLI11's CLI::Range lets "nan" through, and
+// `--max-extrapolation nan` used to switch the extrapolation refusal off,
+// `--alpha nan` to end in an internal Boost error. Each flag is given `nan`,
+// `inf` and `-inf` (as --flag=VALUE, so that "-inf" is not read as short
+// options) and must be refused at parse time: exit 2, the flag, the value and
+// the expected range in the message, nothing written.
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "cli_support.hpp"
+
+namespace geoanchor {
+namespace {
+
+using testing::CliTest;
+using testing::RunResult;
+
+struct NumericOption {
+  const char* name;      // test name
+  const char* command;   // the command line before the flag (inputs need not exist: parsing fails first)
+  const char* flag;
+  const char* expected;  // what the message says is accepted
+};
+
+struct Case {
+  NumericOption option;
+  const char* value;
+};
+
+void PrintTo(const Case& c, std::ostream* os) { *os << c.option.name << "_" << c.value; }
+
+const NumericOption kOptions[] = {
+    {"convert_precision", "convert in.csv --to ecef", "--precision", "expected an integer in [0, 15]"},
+    {"transform_precision", "transform in.csv --from ITRF2014@2010.0 --to ITRF2020", "--precision",
+     "expected an integer in [0, 15]"},
+    {"apply_resolution", "apply tile.csv --out-dir out", "--resolution", "expected a finite number in [1e-06, 10]"},
+    {"apply_max_extrapolation", "apply tile.csv --out-dir out", "--max-extrapolation",
+     "expected a finite number in [0, 1e+07]"},
+    {"apply_jobs", "apply tile.csv --out-dir out", "--jobs", "expected an integer in [1, 32]"},
+    {"fit_alpha", "fit control.csv --model helmert7 --convention position_vector", "--alpha",
+     "expected a finite number in [1e-06, 0.5]"},
+    {"fit_alpha_point", "fit control.csv --model helmert7 --convention position_vector", "--alpha-point",
+     "expected a finite number in [1e-09, 0.5]"},
+    {"diagnose_sigma", "diagnose control.csv", "--sigma", "expected a finite number > 0"},
+#ifdef GEOANCHOR_GUI_EXE
+    // The window: `geoanchor gui` hands its arguments to geoanchor-gui.
+    {"gui_frames", "gui control.csv", "--frames", "expected an integer in [0, 2147483647]"},
+#endif
+};
+
+std::vector<Case> all_cases() {
+  std::vector<Case> out;
+  for (const auto& o : kOptions) {
+    for (const char* v : {"nan", "inf", "-inf"}) out.push_back({o, v});
+  }
+  return out;
+}
+
+class NumericOptionCli : public CliTest, public ::testing::WithParamInterface<Case> {};
+
+// issue 12 point 6
+TEST_P(NumericOptionCli, Issue12Point6_NonFiniteValueIsRefusedNamingTheFlagTheValueAndTheRange) {
+  const Case c = GetParam();
+  const std::string flag = c.option.flag, value = c.value;
+  const RunResult r = run(std::string(c.option.command) + " " + flag + "=" + value);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const std::string expected =
+      "error[E_USAGE]: " + flag + ": value " + value + " is not a finite number; " + c.option.expected;
+  EXPECT_NE(r.err.find(expected), std::string::npos) << "expected: " << expected << "\nstderr: " << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  EXPECT_TRUE(leftovers({}).empty()) << "left behind: " << ::testing::PrintToString(leftovers({}));
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryNumericOption, NumericOptionCli, ::testing::ValuesIn(all_cases()),
+                         [](const ::testing::TestParamInfo<Case>& p) {
+                           std::string v = p.param.value;
+                           if (v == "-inf") v = "minus_inf";
+                           return std::string(p.param.option.name) + "_" + v;
+                         });
+
+class OptionsCli : public CliTest {};
+
+// issue 12 point 6
+TEST_F(OptionsCli, Issue12Point6_AFiniteValueOutsideTheRangeOrNotAnIntegerIsRefusedToo) {
+  const RunResult frac = run("convert in.csv --to ecef --precision=2.5");
+  EXPECT_EQ(frac.exit_code, 2) << frac.err;
+  EXPECT_NE(frac.err.find("--precision: value 2.5 is not an integer; expected an integer in [0, 15]"), std::string::npos)
+      << frac.err;
+  const RunResult big = run("apply tile.csv --out-dir out --max-extrapolation=2e7");
+  EXPECT_EQ(big.exit_code, 2) << big.err;
+  EXPECT_NE(big.err.find("--max-extrapolation: value 2e7 is out of range; expected a finite number in [0, 1e+07]"),
+            std::string::npos)
+      << big.err;
+  const RunResult zero = run("diagnose control.csv --sigma=0");
+  EXPECT_EQ(zero.exit_code, 2) << zero.err;
+  EXPECT_NE(zero.err.find("--sigma: value 0 is out of range; expected a finite number > 0"), std::string::npos)
+      << zero.err;
+  EXPECT_TRUE(leftovers({}).empty()) << "left behind: " << ::testing::PrintToString(leftovers({}));
+}
+
+}  // namespace
+}  // namespace geoanchor
