@@ -97,7 +97,7 @@ TEST(WorkbenchModel, TheComparisonPanelFitsEveryModelOnThePointsInUse) {
   const auto rows = model.comparison();
   std::vector<std::string> names;
   for (const auto& c : rows) names.push_back(std::string(solver::to_string(c.model)));
-  EXPECT_EQ(names, (std::vector<std::string>{"translation3", "helmert6", "helmert7"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"translation3", "helmert6", "helmert7", "molodensky-badekas"}));
   // Each row is the solver's fit of the same points without data snooping.
   solver::FitOptions o = helmert7_pv();
   o.data_snooping = false;
@@ -186,6 +186,40 @@ TEST(WorkbenchModel, ASavedTransformReopensWithItsModelConventionAndLeftOutPoint
     EXPECT_EQ(reopened.parameters()[i].value, model.parameters()[i].value) << model.parameters()[i].name;
   }
   std::filesystem::remove(path);
+}
+
+// issue 12 point 14
+TEST(WorkbenchModelPoint14, TheComparisonIncludesMolodenskyBadekasWithHelmert7sResidualsAndSaysSo) {
+  const geodesy::ControlSet set = io::read_control_set(kControl, io::ControlReadOptions{});
+  solver::FitOptions o = helmert7_pv();
+  o.model = solver::FitModel::molodensky_badekas;
+  WorkbenchModel model(set, o);
+  const auto& rows = model.comparison();
+  const auto find = [&](solver::FitModel m) {
+    const auto it = std::find_if(rows.begin(), rows.end(), [&](const auto& c) { return c.model == m; });
+    if (it == rows.end()) throw std::runtime_error("no row for " + std::string(solver::to_string(m)));
+    return *it;
+  };
+  const auto h7 = find(solver::FitModel::helmert7), mb = find(solver::FitModel::molodensky_badekas);
+  ASSERT_TRUE(h7.fit && mb.fit);
+  // One model in two parametrisations: the same residuals and statistics.
+  constexpr double kSameFit_m = 1e-9;     // both are solved from the same centred normal equations
+  constexpr double kSameSigma0 = 1e-9;    // relative
+  EXPECT_NEAR(mb.fit->sigma0, h7.fit->sigma0, kSameSigma0 * h7.fit->sigma0);
+  EXPECT_EQ(mb.parameters, h7.parameters);
+  EXPECT_NEAR(mb.aic, h7.aic, solver::kAicTie);
+  for (std::size_t i = 0; i < set.points.size(); ++i) {
+    EXPECT_NEAR((mb.fit->points[i].residual_enu_m - h7.fit->points[i].residual_enu_m).norm(), 0.0, kSameFit_m) << set.points[i].id;
+  }
+  // … but other parameters: the translation at the pivot.
+  EXPECT_GT(std::abs(mb.fit->parameters[0].value - h7.fit->parameters[0].value), 0.01);
+  EXPECT_NE(mb.note.find("same residuals"), std::string::npos) << mb.note;
+  EXPECT_TRUE(h7.note.empty());
+  // They tie for the lowest AIC or neither has it.
+  const auto lowest = solver::lowest_aic(rows);
+  const bool has_h7 = std::find(lowest.begin(), lowest.end(), solver::FitModel::helmert7) != lowest.end();
+  const bool has_mb = std::find(lowest.begin(), lowest.end(), solver::FitModel::molodensky_badekas) != lowest.end();
+  EXPECT_EQ(has_h7, has_mb);
 }
 
 }  // namespace
