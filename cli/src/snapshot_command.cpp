@@ -171,14 +171,15 @@ int run_report(const ReportOptions& o) {
   text << "\nFigures (" << w << "x" << h << " px)\n";
   gui::OffscreenRenderer renderer(w, h);
   gui::WorkbenchUi ui(*s.model, {s.save_path, s.generator});
-  std::vector<std::pair<std::string, gui::RgbImage>> images;
+  // PNG-encoded at once: a 10⁴-mark report has some 300 table pages.
+  std::vector<std::pair<std::string, std::string>> images;
   for (gui::View v : gui::kAllViews) {
     if (v == gui::View::table) {
       // As many pages as the marks need: each holds the rows wholly in view.
       std::size_t start = 0;
       for (std::size_t page = 1;; ++page) {
         ui.set_table_start(start);
-        images.emplace_back(table_page_name(page), renderer.render(ui, v));
+        images.emplace_back(table_page_name(page), gui::encode_png(renderer.render(ui, v), table_page_name(page)));
         const gui::TableGeometry& t = ui.table();
         if (t.total == 0) {
           text << "  " << images.back().first << ": no marks\n";
@@ -196,7 +197,8 @@ int run_report(const ReportOptions& o) {
       ui.set_table_start(0);
       continue;
     }
-    images.emplace_back(std::string(gui::to_string(v)) + ".png", renderer.render(ui, v));
+    const std::string name = std::string(gui::to_string(v)) + ".png";
+    images.emplace_back(name, gui::encode_png(renderer.render(ui, v), name));
     text << "  " << images.back().first;
     if (v == gui::View::workbench && ui.table().drawn && ui.table().total > 0) {
       const gui::TableGeometry& t = ui.table();
@@ -232,8 +234,10 @@ int run_report(const ReportOptions& o) {
       out.commit();
       written.push_back(dir / "report.txt");
     }
-    for (const auto& [name, image] : images) {
-      gui::write_png(image, dir / name, o.overwrite);
+    for (const auto& [name, png] : images) {
+      io::AtomicOutputFile out(dir / name, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+      out.stream().write(png.data(), static_cast<std::streamsize>(png.size()));
+      out.commit();
       written.push_back(dir / name);
     }
   } catch (...) {

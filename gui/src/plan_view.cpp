@@ -202,7 +202,18 @@ void WorkbenchUi::draw_plan() {
     return d;
   };
   const auto outlier_label = [](const PointRow& r) { return r.id + " outlier, " + detail::fmt("%.0f mm", r.residual_enu_mm.norm()); };
-  for (int pass = 0; pass < 3; ++pass) {
+  PlanLayout& cache = plan_layout_;
+  const bool cached = cache.generation == shown_generation_ && cache.x == c0.x && cache.y == c0.y && cache.w == avail.x &&
+                      cache.h == avail.y && cache.font == font;
+  if (cached) {
+    g = cache.geometry;
+    labels = g.labels;
+    unlabelled = g.unlabelled;
+    caption = cache.caption;
+    short_side_px = std::min(g.right - g.left, g.bottom - g.top);
+    k = g.arrow_exaggeration * g.px_per_m;
+  }
+  for (int pass = 0; pass < 3 && !cached; ++pass) {
     g.left = c0.x;
     g.top = c0.y;
     g.right = c0.x + std::max(avail.x - legend_w, 4 * kPlanMarginPx);
@@ -281,6 +292,9 @@ void WorkbenchUi::draw_plan() {
   g.drawn = true;
   g.labels = labels;
   g.unlabelled = unlabelled;
+  g.hovered.clear();
+  g.ellipses_drawn = 0;
+  if (!cached) cache = {shown_generation_, c0.x, c0.y, avail.x, avail.y, font, g, caption};
 
   dl->AddRectFilled(ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), col(palette::kBackground));
   dl->AddRect(ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), col(palette::kGrid));
@@ -291,7 +305,7 @@ void WorkbenchUi::draw_plan() {
   // antialiasing, and labels only the outliers: a tenth of the geometry,
   // and at that density the marks overlap anyway.
   if (!dense) {
-    constexpr int kSegments = 48;
+    constexpr int kSegments = 32;  // smooth at the sizes drawn (tens of pixels)
     for (const auto& r : rows_) {
       const Ellipse e = confidence_ellipse(r.residual_cov_en_m2, g.ellipse_k);
       if (!std::isfinite(e.a_m)) continue;

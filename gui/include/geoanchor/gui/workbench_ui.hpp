@@ -200,6 +200,15 @@ class WorkbenchUi {
   TableGeometry table_;
   TextAudit audit_;
   std::size_t table_start_ = 0;
+  // The plan's layout (scale, factor, labels, caption) for the shown fit and
+  // the plan's room: recomputed only when either changes.
+  struct PlanLayout {
+    unsigned generation = ~0u;
+    float x = 0, y = 0, w = 0, h = 0, font = 0;
+    PlanGeometry geometry;
+    std::string caption;
+  };
+  PlanLayout plan_layout_;
   float bar_height_px_ = 0.0f;  // measured in the last frame (0: not yet)
   bool composite_ = false;      // drawing the workbench's panels (not one view)
   std::string status_;
