@@ -216,8 +216,14 @@ int run_report(const ReportOptions& o) {
         text << "; " << g.ellipses_drawn << " residual ellipses (" << 100.0 * gui::kEllipseProbability << " %, "
              << format_fixed(g.ellipse_k, 4) << " σ of the a-posteriori residual covariance) at the arrows' factor";
       }
-      text << "; " << g.labels.size() << " of " << s.model->control().points.size() << " marks labelled with their id";
-      if (!g.unlabelled.empty()) text << " (no room for " << joined(g.unlabelled) << ": listed under the plan)";
+      const std::size_t marks = s.model->control().points.size();
+      if (marks > gui::kDensePlanMarks) {
+        text << "; a dense plan (more than " << gui::kDensePlanMarks << " marks): no ellipses, only the outliers' ids ("
+             << g.labels.size() << " labelled)";
+      } else {
+        text << "; " << g.labels.size() << " of " << marks << " marks labelled with their id";
+      }
+      if (!g.unlabelled.empty()) text << " (no room for " << joined(g.unlabelled) << ": named or counted under the plan)";
     }
     text << "\n";
   }

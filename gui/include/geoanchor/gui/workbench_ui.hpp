@@ -118,7 +118,8 @@ struct ClippedText {
   bool vertical = false;  // it runs out at the bottom rather than the side
 };
 
-// A piece of text a view drew, and its box (pixels).
+// A piece of text a view drew, and its box (pixels; a table header, checked
+// by its width only, has the box 0 … its width × 0).
 struct DrawnText {
   std::string text, where;
   float x0 = 0, y0 = 0, x1 = 0, y1 = 0;
