@@ -62,26 +62,33 @@ int run_compare(const geodesy::ControlSet& set, const solver::FitOptions& base) 
   std::cout << "geoanchor fit --compare: " << set.source_name << " (" << set.points.size()
             << " points; data snooping off so that every model sees the same points)\n";
   if (!base.convention) std::cout << "  (give --convention to include the models with rotations)\n";
-  std::cout << "\n  model              u    dof      σ0   global test        max|w|        AIC\n";
+  std::cout << "\n  model                u    dof      σ0   global test        max|w|        AIC\n";
   const auto rows = solver::compare_models(set, base);
   const solver::ModelComparison* best = nullptr;
   for (const auto& c : rows) {
     char line[200];
     const std::string name(solver::to_string(c.model));
     if (!c.fit) {
-      std::snprintf(line, sizeof line, "  %-16s refused: ", name.c_str());
+      std::snprintf(line, sizeof line, "  %-18s refused: ", name.c_str());
       std::cout << line << c.refused << "\n";
       continue;
     }
     const auto& g = c.fit->global_test;
     const std::string verdict = !g.applicable ? "n/a" : g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED high" : "FAILED low";
-    std::snprintf(line, sizeof line, "  %-16s %3d %6d %8s   %-12s %10.2f %10.1f\n", name.c_str(), c.parameters, c.fit->dof,
+    std::snprintf(line, sizeof line, "  %-18s %3d %6d %8s   %-12s %10.2f %10.1f\n", name.c_str(), c.parameters, c.fit->dof,
                   (c.fit->sigma0 ? format_fixed(*c.fit->sigma0, 3) : std::string("undef")).c_str(), verdict.c_str(), c.max_w, c.aic);
     std::cout << line;
     if (!best || c.aic < best->aic) best = &c;
   }
+  for (const auto& c : rows) {
+    if (!c.note.empty()) std::cout << "  (" << solver::to_string(c.model) << ": " << c.note << ")\n";
+  }
   if (best) {
-    std::cout << "\n  lowest AIC: " << solver::to_string(best->model)
+    // helmert7 and molodensky-badekas (one is the other's reparametrisation)
+    // tie: name every model at the lowest AIC.
+    std::string lowest;
+    for (const FitModel m : solver::lowest_aic(rows)) lowest += (lowest.empty() ? "" : " and ") + std::string(solver::to_string(m));
+    std::cout << "\n  lowest AIC: " << lowest
               << " (AIC = Ω + 2u with a-priori sigmas; differences above ~10 are strong evidence)\n";
   }
   return 0;

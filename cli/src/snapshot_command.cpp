@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -29,7 +30,23 @@ void print_notes(const WorkbenchSession& s) {
     std::cerr << "geoanchor: warning: no fit: " << s.model->error() << " (the pictures show why)\n";
     return;
   }
-  for (const auto& w : s.model->fit()->warnings) std::cerr << "geoanchor: warning: " << w << '\n';
+  for (const auto& w : gui::shown_warnings(*s.model->fit())) std::cerr << "geoanchor: warning: " << w << '\n';
+}
+
+// The report's table pages: table.png, table-2.png, …
+std::string table_page_name(std::size_t page) { return page == 1 ? "table.png" : "table-" + std::to_string(page) + ".png"; }
+
+// Whether `name` is a table page other than the first (table-N.png, N ≥ 2).
+bool is_later_table_page(const std::string& name) {
+  if (!name.starts_with("table-") || !name.ends_with(".png") || name.size() <= 10) return false;
+  const std::string n = name.substr(6, name.size() - 10);
+  return std::all_of(n.begin(), n.end(), [](char c) { return c >= '0' && c <= '9'; }) && n.front() != '0';
+}
+
+std::string joined(const std::vector<std::string>& ids) {
+  std::string out;
+  for (const auto& id : ids) out += (out.empty() ? "" : ", ") + id;
+  return out;
 }
 
 }  // namespace
@@ -69,7 +86,14 @@ int run_snapshot(const SnapshotOptions& o) {
   gui::OffscreenRenderer renderer(w, h);
   gui::WorkbenchUi ui(*s.model, {s.save_path, s.generator});
   gui::write_png(renderer.render(ui, view), o.output, o.overwrite);
-  std::cout << "wrote " << o.output << " (" << w << "x" << h << ", view " << gui::to_string(view) << ")\n";
+  std::cout << "wrote " << o.output << " (" << w << "x" << h << ", view " << gui::to_string(view);
+  const gui::TableGeometry& t = ui.table();
+  if (t.drawn && t.total > 0 && t.shown_ids.size() < t.total) {
+    std::cout << "; the table shows " << (t.shown_ids.empty() ? "no whole row" : "marks " + std::to_string(t.first + 1) + "–" +
+                                                                    std::to_string(t.first + t.shown_ids.size()))
+              << " of " << t.total << ": `geoanchor report` pages them all";
+  }
+  std::cout << ")\n";
   return 0;
 }
 
@@ -84,10 +108,21 @@ int run_report(const ReportOptions& o) {
   if (fs::exists(dir) && !fs::is_directory(dir)) {
     throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", o.output + ": exists and is not a folder");
   }
+  // The table's later pages (table-2.png, …) are report files too.
+  std::vector<fs::path> earlier_pages;
+  if (fs::is_directory(dir)) {
+    for (const auto& e : fs::directory_iterator(dir)) {
+      if (is_later_table_page(e.path().filename().string())) earlier_pages.push_back(e.path());
+    }
+    std::sort(earlier_pages.begin(), earlier_pages.end());
+  }
   for (const auto& n : names) {
     if (!o.overwrite && fs::exists(dir / n)) {
       throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", (dir / n).string() + ": exists (use --overwrite to replace the report)");
     }
+  }
+  if (!o.overwrite && !earlier_pages.empty()) {
+    throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", earlier_pages.front().string() + ": exists (use --overwrite to replace the report)");
   }
   WorkbenchSession s = open_workbench(o.workbench);
   print_notes(s);
@@ -103,34 +138,92 @@ int run_report(const ReportOptions& o) {
   text << "\n";
   if (s.model->fit()) {
     workflow::write_fit_report(text, *s.model->fit(), s.model->control(), s.model->options());
-    if (!s.model->fit()->warnings.empty()) text << "\nWarnings\n";
-    for (const auto& warning : s.model->fit()->warnings) text << "  " << warning << "\n";
+    // Without advice to fit the model this report is about.
+    const std::vector<std::string> warnings = gui::shown_warnings(*s.model->fit());
+    if (!warnings.empty()) text << "\nWarnings\n";
+    for (const auto& warning : warnings) text << "  " << warning << "\n";
   } else {
     text << "No fit: " << s.model->error() << "\n";
   }
-  text << "\nModel comparison (same points, data snooping off)\n  model              u    dof      σ0   global test   max|w|        AIC\n";
+  text << "\nModel comparison (same points, data snooping off; ▶ the model fitted)\n"
+       << "    model                u    dof      σ0   global test   max|w|        AIC\n";
   for (const auto& c : s.model->comparison()) {
     char line[200];
     const std::string name(solver::to_string(c.model));
+    const char* mark = c.model == s.model->options().model ? "  ▶ " : "    ";
     if (!c.fit) {
-      text << "  " << name << ": refused: " << c.refused << "\n";
+      text << mark << name << ": refused: " << c.refused << "\n";
       continue;
     }
     const auto& g = c.fit->global_test;
-    std::snprintf(line, sizeof line, "  %-16s %3d %6d %8s   %-11s %8.2f %10.1f\n", name.c_str(), c.parameters, c.fit->dof,
+    std::snprintf(line, sizeof line, "%s%-18s %3d %6d %8s   %-11s %8.2f %10.1f\n", mark, name.c_str(), c.parameters, c.fit->dof,
                   (c.fit->sigma0 ? format_fixed(*c.fit->sigma0, 3) : std::string("undef")).c_str(), !g.applicable ? "n/a" : g.passed ? "PASSED" : "FAILED", c.max_w, c.aic);
     text << line;
+  }
+  for (const auto& c : s.model->comparison()) {
+    if (!c.note.empty()) text << "  (" << solver::to_string(c.model) << ": " << c.note << ")\n";
+  }
+  {
+    std::string lowest;
+    for (const auto m : solver::lowest_aic(s.model->comparison())) lowest += (lowest.empty() ? "" : " and ") + std::string(solver::to_string(m));
+    if (!lowest.empty()) text << "  lowest AIC: " << lowest << "\n";
   }
   text << "\nFigures (" << w << "x" << h << " px)\n";
   gui::OffscreenRenderer renderer(w, h);
   gui::WorkbenchUi ui(*s.model, {s.save_path, s.generator});
-  std::vector<std::pair<std::string, gui::RgbImage>> images;
+  // PNG-encoded at once: a 10⁴-mark report has some 300 table pages.
+  std::vector<std::pair<std::string, std::string>> images;
   for (gui::View v : gui::kAllViews) {
-    images.emplace_back(std::string(gui::to_string(v)) + ".png", renderer.render(ui, v));
+    if (v == gui::View::table) {
+      // As many pages as the marks need: each holds the rows wholly in view.
+      std::size_t start = 0;
+      for (std::size_t page = 1;; ++page) {
+        ui.set_table_start(start);
+        images.emplace_back(table_page_name(page), gui::encode_png(renderer.render(ui, v), table_page_name(page)));
+        const gui::TableGeometry& t = ui.table();
+        if (t.total == 0) {
+          text << "  " << images.back().first << ": no marks\n";
+          break;
+        }
+        if (t.shown_ids.empty() || t.first != start) {
+          throw Error(ErrorKind::usage, "E_OPTION",
+                      "--size " + o.size + ": the table has no room for a whole row; expected a larger size");
+        }
+        text << "  " << images.back().first << ": marks " << t.first + 1 << "–" << t.first + t.shown_ids.size() << " of " << t.total
+             << " (sorted by " << t.sorted_by << "): " << joined(t.shown_ids) << "\n";
+        start = t.first + t.shown_ids.size();
+        if (start >= t.total) break;
+      }
+      ui.set_table_start(0);
+      continue;
+    }
+    const std::string name = std::string(gui::to_string(v)) + ".png";
+    images.emplace_back(name, gui::encode_png(renderer.render(ui, v), name));
     text << "  " << images.back().first;
+    if (v == gui::View::workbench && ui.table().drawn && ui.table().total > 0) {
+      const gui::TableGeometry& t = ui.table();
+      text << ": its table panel shows " << (t.shown_ids.size() == t.total ? "all " + std::to_string(t.total) + " marks"
+                                                                            : "marks " + std::to_string(t.first + 1) + "–" +
+                                                                                  std::to_string(t.first + t.shown_ids.size()) + " of " +
+                                                                                  std::to_string(t.total))
+           << " (every mark is on the table pages)";
+    }
     if (v == gui::View::plan && ui.plan().drawn) {
-      text << ": residual arrows × " << ui.plan().arrow_exaggeration << ", scale bar " << ui.plan().scale_bar_m
-           << " m, vertical residual colour ±" << ui.plan().du_limit_mm << " mm";
+      const gui::PlanGeometry& g = ui.plan();
+      text << ": residual arrows × " << g.arrow_exaggeration << ", scale bar " << g.scale_bar_m
+           << " m, vertical residual colour ±" << g.du_limit_mm << " mm";
+      if (g.ellipses_drawn > 0) {
+        text << "; " << g.ellipses_drawn << " residual ellipses (" << 100.0 * gui::kEllipseProbability << " %, "
+             << format_fixed(g.ellipse_k, 4) << " σ of the a-posteriori residual covariance) at the arrows' factor";
+      }
+      const std::size_t marks = s.model->control().points.size();
+      if (marks > gui::kDensePlanMarks) {
+        text << "; a dense plan (more than " << gui::kDensePlanMarks << " marks): no ellipses, only the outliers' ids ("
+             << g.labels.size() << " labelled)";
+      } else {
+        text << "; " << g.labels.size() << " of " << marks << " marks labelled with their id";
+      }
+      if (!g.unlabelled.empty()) text << " (no room for " << joined(g.unlabelled) << ": named or counted under the plan)";
     }
     text << "\n";
   }
@@ -147,8 +240,10 @@ int run_report(const ReportOptions& o) {
       out.commit();
       written.push_back(dir / "report.txt");
     }
-    for (const auto& [name, image] : images) {
-      gui::write_png(image, dir / name, o.overwrite);
+    for (const auto& [name, png] : images) {
+      io::AtomicOutputFile out(dir / name, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+      out.stream().write(png.data(), static_cast<std::streamsize>(png.size()));
+      out.commit();
       written.push_back(dir / name);
     }
   } catch (...) {
@@ -156,7 +251,15 @@ int run_report(const ReportOptions& o) {
     if (created) fs::remove(dir, ec);
     throw;
   }
-  std::cout << "wrote " << o.output << "/: report.txt and " << images.size() << " PNG views\n";
+  // An earlier report's table pages beyond this one's would be read as this one's.
+  for (const auto& p : earlier_pages) {
+    if (std::none_of(images.begin(), images.end(), [&](const auto& i) { return dir / i.first == p; })) fs::remove(p, ec);
+  }
+  std::size_t pages = 0;
+  for (const auto& i : images) pages += i.first.starts_with("table") ? 1u : 0u;
+  std::cout << "wrote " << o.output << (o.output.ends_with('/') ? "" : "/") << ": report.txt and " << images.size()
+            << " PNG views (the table on " << pages
+            << (pages == 1 ? " page" : " pages") << ")\n";
   return 0;
 }
 

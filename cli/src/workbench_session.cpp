@@ -54,9 +54,13 @@ std::pair<int, int> parse_size(const std::string& text, std::string_view flag) {
   const auto x = text.find('x');
   const auto w = x == std::string::npos ? std::nullopt : parse_finite_double(text.substr(0, x));
   const auto h = x == std::string::npos ? std::nullopt : parse_finite_double(text.substr(x + 1));
-  if (!w || !h || *w != std::floor(*w) || *h != std::floor(*h) || *w < 64 || *h < 64 || *w > 8192 || *h > 8192) {
+  // Below the minimum the views' text would not fit (workbench_ui.hpp).
+  if (!w || !h || *w != std::floor(*w) || *h != std::floor(*h) || *w < gui::kMinimumWidth_px || *h < gui::kMinimumHeight_px ||
+      *w > 8192 || *h > 8192) {
     throw Error(ErrorKind::usage, "E_OPTION",
-                std::string(flag) + " " + text + ": expected WIDTHxHEIGHT in pixels, 64 … 8192 each, e.g. 1600x1000");
+                std::string(flag) + " " + text + ": expected WIDTHxHEIGHT in pixels, " + std::to_string(gui::kMinimumWidth_px) +
+                    " … 8192 wide and " + std::to_string(gui::kMinimumHeight_px) +
+                    " … 8192 tall (the smallest at which every view's text fits), e.g. 1600x1000");
   }
   return {static_cast<int>(*w), static_cast<int>(*h)};
 }

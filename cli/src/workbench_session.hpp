@@ -41,7 +41,8 @@ struct WorkbenchSession {
   std::string generator;
 };
 
-// "--view NAME" and "--size WIDTHxHEIGHT" (pixels, 64 … 8192 each), shared
+// "--view NAME" and "--size WIDTHxHEIGHT" (pixels, gui::kMinimumWidth_px ×
+// gui::kMinimumHeight_px … 8192 × 8192), shared
 // by the window and the off-screen commands. Throw geoanchor::Error (usage).
 gui::View parse_view(const std::string& text, std::string_view flag);
 std::pair<int, int> parse_size(const std::string& text, std::string_view flag);

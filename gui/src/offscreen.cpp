@@ -79,9 +79,12 @@ void OffscreenRenderer::render_frame(WorkbenchUi& ui, View view) {
   glFinish();
 }
 
-RgbImage OffscreenRenderer::render(WorkbenchUi& ui, View view) {
+RgbImage OffscreenRenderer::render(WorkbenchUi& ui, View view, std::optional<std::array<float, 2>> mouse_px) {
+  ImGui::SetCurrentContext(context_->imgui);
+  ImGui::GetIO().MousePos = mouse_px ? ImVec2((*mouse_px)[0], (*mouse_px)[1]) : ImVec2(-FLT_MAX, -FLT_MAX);
   // Auto-sized windows and tables measure in their first frame.
   for (int i = 0; i < 3; ++i) render_frame(ui, view);
+  ImGui::GetIO().MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
   return RgbImage::from_gl_rgba(width_, height_, context_->buffer);
 }
 

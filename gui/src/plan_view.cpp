@@ -1,11 +1,13 @@
 // The plan: control points in ENU (north up, equal scale) with residual
-// arrows, the vertical residual as colour, a scale bar and a legend.
+// arrows and residual ellipses, the vertical residual as colour, every
+// mark's id, a scale bar and a legend.
 
 #include <imgui.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "geoanchor/gui/workbench_ui.hpp"
 #include "ui_common.hpp"
@@ -30,21 +32,154 @@ void arrow(ImDrawList* dl, const Eigen::Vector2d& a, const Eigen::Vector2d& b, I
   dl->AddTriangleFilled(iv(b), iv(base + 0.45 * h * n), iv(base - 0.45 * h * n), c);
 }
 
+struct Box {
+  float x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool overlaps(const Box& o) const { return x0 < o.x1 && o.x0 < x1 && y0 < o.y1 && o.y0 < y1; }
+  bool inside(const Box& o) const { return x0 >= o.x0 && y0 >= o.y0 && x1 <= o.x1 && y1 <= o.y1; }
+};
+
+// Whether the segment a–b passes through the box (Liang–Barsky).
+bool segment_hits(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Box& r) {
+  double t0 = 0.0, t1 = 1.0;
+  const double d[2] = {b.x() - a.x(), b.y() - a.y()};
+  const double lo[2] = {r.x0 - a.x(), r.y0 - a.y()}, hi[2] = {r.x1 - a.x(), r.y1 - a.y()};
+  for (int k = 0; k < 2; ++k) {
+    if (d[k] == 0.0) {
+      if (lo[k] > 0.0 || hi[k] < 0.0) return false;
+      continue;
+    }
+    double ta = lo[k] / d[k], tb = hi[k] / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+// What labels must not cover: marks, arrows, labels already placed. A
+// uniform grid over the plan keeps each query to the items nearby.
+class Obstacles {
+ public:
+  Obstacles(const Box& area, float cell) : area_(area), cell_(std::max(cell, 4.0f)) {
+    cols_ = std::max(1, static_cast<int>(std::ceil((area.x1 - area.x0) / cell_)));
+    rows_ = std::max(1, static_cast<int>(std::ceil((area.y1 - area.y0) / cell_)));
+    cells_.resize(static_cast<std::size_t>(cols_ * rows_));
+  }
+  void add(const Box& b) {
+    boxes_.push_back(b);
+    insert(b, static_cast<int>(boxes_.size()));
+  }
+  void add(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    segments_.emplace_back(a, b);
+    const Box bb{static_cast<float>(std::min(a.x(), b.x())), static_cast<float>(std::min(a.y(), b.y())),
+                 static_cast<float>(std::max(a.x(), b.x())), static_cast<float>(std::max(a.y(), b.y()))};
+    insert(bb, -static_cast<int>(segments_.size()));
+  }
+  bool free(const Box& b) const {
+    const auto [c0, r0, c1, r1] = span(b);
+    for (int r = r0; r <= r1; ++r) {
+      for (int c = c0; c <= c1; ++c) {
+        for (int item : cells_[static_cast<std::size_t>(r * cols_ + c)]) {
+          if (item > 0 ? boxes_[static_cast<std::size_t>(item - 1)].overlaps(b)
+                       : segment_hits(segments_[static_cast<std::size_t>(-item - 1)].first,
+                                      segments_[static_cast<std::size_t>(-item - 1)].second, b)) {
+            return false;
+          }
+        }
+      }
+    }
+    return true;
+  }
+
+ private:
+  std::array<int, 4> span(const Box& b) const {
+    const auto cx = [&](float x) { return std::clamp(static_cast<int>(std::floor((x - area_.x0) / cell_)), 0, cols_ - 1); };
+    const auto cy = [&](float y) { return std::clamp(static_cast<int>(std::floor((y - area_.y0) / cell_)), 0, rows_ - 1); };
+    return {cx(b.x0), cy(b.y0), cx(b.x1), cy(b.y1)};
+  }
+  void insert(const Box& b, int item) {
+    const auto [c0, r0, c1, r1] = span(b);
+    for (int r = r0; r <= r1; ++r) {
+      for (int c = c0; c <= c1; ++c) cells_[static_cast<std::size_t>(r * cols_ + c)].push_back(item);
+    }
+  }
+  Box area_;
+  float cell_;
+  int cols_ = 1, rows_ = 1;
+  std::vector<std::vector<int>> cells_;
+  std::vector<Box> boxes_;
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> segments_;
+};
+
+// Candidate boxes for a label w × h beside a mark at p (radius r): eight
+// directions, nearest first, turned away from the mark's own arrow `away`;
+// then the same further out (drawn with a leader line).
+std::vector<std::pair<Box, bool>> candidates(const Eigen::Vector2d& p, float r, float w, float h, const Eigen::Vector2d& arrow_px,
+                                             float step) {
+  static const Eigen::Vector2d kDirections[8] = {{1, 0},          {-1, 0},         {0.7071, -0.7071}, {0.7071, 0.7071},
+                                                 {-0.7071, -0.7071}, {-0.7071, 0.7071}, {0, -1},          {0, 1}};
+  std::array<int, 8> order{0, 1, 2, 3, 4, 5, 6, 7};
+  if (arrow_px.norm() > 1.0) {
+    const Eigen::Vector2d away = -arrow_px.normalized();
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return kDirections[a].dot(away) > kDirections[b].dot(away); });
+  }
+  std::vector<std::pair<Box, bool>> out;
+  for (const float ring : {0.0f, 1.0f, 2.5f, 4.0f}) {
+    const double d = r + 3.0 + ring * step;
+    for (int k : order) {
+      const Eigen::Vector2d u = kDirections[k];
+      // The box's point nearest the mark sits at distance d along u.
+      const Eigen::Vector2d q = p + d * u;
+      const float x0 = u.x() > 0.3 ? static_cast<float>(q.x()) : u.x() < -0.3 ? static_cast<float>(q.x()) - w : static_cast<float>(q.x()) - 0.5f * w;
+      const float y0 = u.y() > 0.3 ? static_cast<float>(q.y()) : u.y() < -0.3 ? static_cast<float>(q.y()) - h : static_cast<float>(q.y()) - 0.5f * h;
+      out.push_back({Box{x0, y0, x0 + w, y0 + h}, ring > 0.0f});
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 void WorkbenchUi::draw_plan() {
   ImDrawList* dl = ImGui::GetWindowDrawList();
+  ImFont* regular = ImGui::GetIO().Fonts->Fonts[0];
+  ImFont* bold = ImGui::GetIO().Fonts->Fonts[1];
   const float font = ImGui::GetFontSize();
+  const float id_size = std::round(font * 0.8f);  // ids of marks that are not outliers
   const ImVec2 c0 = ImGui::GetCursorScreenPos();
   const ImVec2 avail = ImGui::GetContentRegionAvail();
-  const float legend_w = std::round(font * 7.5f), footer_h = std::round(font * 3.0f);
   PlanGeometry& g = plan_;
-  g.left = c0.x;
-  g.top = c0.y;
-  g.right = c0.x + std::max(avail.x - legend_w, 4 * kPlanMarginPx);
-  g.bottom = c0.y + std::max(avail.y - footer_h, 4 * kPlanMarginPx);
+  g.labels.clear();
+  g.unlabelled.clear();
+  g.hovered.clear();
+  g.ellipses_drawn = 0;
+  g.ellipse_k = chi2_2d_factor(kEllipseProbability);
+  const bool dense = rows_.size() > kDensePlanMarks;
+  const float r_px = std::max(3.0f, std::round(font * 0.3f));
+  const float rd = std::max(2.0f, std::round(r_px * 0.6f));
 
-  // Scale: the points' bounding box fitted with the margin.
+  // Legend column: as wide as its widest entry.
+  const float swatch = font * 1.2f;
+  const std::string ellipse_entry = detail::fmt("%.0f %% ellipse", 100.0 * kEllipseProbability);
+  float legend_w = 0.0f;
+  for (const char* s : {"dU (mm)", "outlier", "not used"}) legend_w = std::max(legend_w, detail::text_size(s).x);
+  legend_w = std::max(legend_w, detail::text_size(ellipse_entry).x + swatch + font * 0.5f);
+  legend_w = std::max(legend_w, swatch + 6.0f + detail::text_size("−1000").x);
+  legend_w = std::round(legend_w + font * 1.5f);
+
+  // The footer (scale bar and captions) wraps at the panel's width; its
+  // height follows from the captions, which follow from the scale: settle
+  // both in up to three passes.
+  const float wrap_w = std::max(avail.x - font * 0.5f, font * 4.0f);
+  float footer_h = std::round(font * 3.0f);
+  std::string caption;
+  double max_h_m = 0.0, max_u_mm = 0.0;
+  for (const auto& r : rows_) {
+    if (!r.used) continue;
+    max_h_m = std::max(max_h_m, 1e-3 * r.residual_enu_mm.head<2>().norm());
+    max_u_mm = std::max(max_u_mm, std::abs(r.residual_enu_mm.z()));
+  }
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (const auto& r : rows_) {
     lo = lo.cwiseMin(r.plan_en_m);
@@ -53,40 +188,142 @@ void WorkbenchUi::draw_plan() {
   if (rows_.empty()) lo = hi = Eigen::Vector2d::Zero();
   g.center_en_m = 0.5 * (lo + hi);
   const Eigen::Vector2d span = (hi - lo).cwiseMax(1.0);
-  g.px_per_m = std::min((g.right - g.left - 2 * kPlanMarginPx) / span.x(), (g.bottom - g.top - 2 * kPlanMarginPx) / span.y());
 
-  // Arrows: the largest horizontal residual of a used point drawn about an
-  // eighth of the plan's short side, the factor rounded to 1, 2 or 5 × 10^k.
-  // Outliers are drawn at the same factor (clipped to the plan, their size
-  // written beside them) so that the used points' pattern stays readable.
-  double max_h_m = 0.0, max_u_mm = 0.0;
-  for (const auto& r : rows_) {
-    if (!r.used) continue;
-    max_h_m = std::max(max_h_m, 1e-3 * r.residual_enu_mm.head<2>().norm());
-    max_u_mm = std::max(max_u_mm, std::abs(r.residual_enu_mm.z()));
+  std::vector<PlanLabel> labels;
+  std::vector<std::string> unlabelled;
+  double short_side_px = 0.0, k = 0.0;  // k: pixels per metre of residual
+  const auto residual_px = [&](const PointRow& r) {
+    return Eigen::Vector2d(k * 1e-3 * r.residual_enu_mm.x(), -k * 1e-3 * r.residual_enu_mm.y());
+  };
+  // An outlier's arrow is shortened to a quarter of the plan's short side at most.
+  const auto drawn_arrow_px = [&](const PointRow& r) {
+    Eigen::Vector2d d = residual_px(r);
+    if (r.outlier && d.norm() > 0.25 * short_side_px) d *= 0.25 * short_side_px / d.norm();
+    return d;
+  };
+  const auto outlier_label = [](const PointRow& r) { return r.id + " outlier, " + detail::fmt("%.0f mm", r.residual_enu_mm.norm()); };
+  PlanLayout& cache = plan_layout_;
+  const bool cached = cache.generation == shown_generation_ && cache.x == c0.x && cache.y == c0.y && cache.w == avail.x &&
+                      cache.h == avail.y && cache.font == font;
+  if (cached) {
+    g = cache.geometry;
+    labels = g.labels;
+    unlabelled = g.unlabelled;
+    caption = cache.caption;
+    short_side_px = std::min(g.right - g.left, g.bottom - g.top);
+    k = g.arrow_exaggeration * g.px_per_m;
   }
-  const double short_side_px = std::min(g.right - g.left, g.bottom - g.top);
-  g.arrow_exaggeration = max_h_m > 0 ? detail::nice_floor(0.125 * short_side_px / (g.px_per_m * max_h_m)) : 1.0;
-  g.du_limit_mm = detail::nice_ceil(std::max(max_u_mm, 1.0));
+  for (int pass = 0; pass < 3 && !cached; ++pass) {
+    g.left = c0.x;
+    g.top = c0.y;
+    g.right = c0.x + std::max(avail.x - legend_w, 4 * kPlanMarginPx);
+    g.bottom = c0.y + std::max(avail.y - footer_h, 4 * kPlanMarginPx);
+    g.px_per_m =
+        std::min((g.right - g.left - 2 * kPlanMarginPx) / span.x(), (g.bottom - g.top - 2 * kPlanMarginPx) / span.y());
+    // Arrows: the largest horizontal residual of a used point drawn about
+    // an eighth of the plan's short side, the factor rounded to 1, 2 or
+    // 5 × 10^k. Outliers are drawn at the same factor (shortened, their size
+    // written beside them) so that the used points' pattern stays readable.
+    short_side_px = std::min(g.right - g.left, g.bottom - g.top);
+    g.arrow_exaggeration = max_h_m > 0 ? detail::nice_floor(0.125 * short_side_px / (g.px_per_m * max_h_m)) : 1.0;
+    g.du_limit_mm = detail::nice_ceil(std::max(max_u_mm, 1.0));
+    g.scale_bar_m = detail::nice_floor(0.25 * (g.right - g.left) / g.px_per_m);
+    k = g.arrow_exaggeration * g.px_per_m;
+
+    // Labels: outliers first, then marks not used, then the rest, each
+    // beside its mark where it covers no mark, arrow or other label, else
+    // further out with a leader line; with no room at all, listed below.
+    labels.clear();
+    unlabelled.clear();
+    const Box area{g.left + 2.0f, g.top + 2.0f, g.right - 2.0f, g.bottom - 2.0f};
+    Obstacles obstacles(area, font * 2.0f);
+    obstacles.add(Box{g.left, g.top, g.left + font * 2.0f, g.top + font * 4.2f});  // the north arrow
+    for (const auto& r : rows_) {
+      const Eigen::Vector2d p = g.pixel_of(r.plan_en_m);
+      const float s = r.outlier ? r_px + 3.0f : r_px + 1.0f;
+      obstacles.add(Box{static_cast<float>(p.x()) - s, static_cast<float>(p.y()) - s, static_cast<float>(p.x()) + s,
+                        static_cast<float>(p.y()) + s});
+      if ((r.used || r.outlier) && !dense) obstacles.add(p, p + drawn_arrow_px(r));
+    }
+    for (int rank = 0; rank < 3; ++rank) {
+      for (const auto& r : rows_) {
+        if ((rank == 0) != r.outlier || (rank == 1 && r.used) || (rank == 2 && !r.used)) continue;
+        if (dense && !r.outlier) continue;
+        const std::string text = r.outlier ? outlier_label(r) : r.id;
+        const ImVec2 ts = detail::text_size(text, r.outlier ? bold : regular, r.outlier ? font : id_size);
+        const Eigen::Vector2d p = g.pixel_of(r.plan_en_m);
+        bool placed = false;
+        for (const auto& [box, leader] : candidates(p, r.outlier ? r_px + 3.0f : r_px, ts.x + 2.0f, ts.y, drawn_arrow_px(r), id_size)) {
+          if (!box.inside(area) || !obstacles.free(box)) continue;
+          obstacles.add(box);
+          labels.push_back({r.id, box.x0, box.y0, box.x1, box.y1, p, leader});
+          placed = true;
+          break;
+        }
+        if (!placed) unlabelled.push_back(r.id);
+      }
+    }
+
+    caption = "arrows: horizontal residual × " + detail::fmt("%g", g.arrow_exaggeration) + " (10 px = " +
+              detail::fmt("%.2g", 10.0 / k * 1e3) + " mm); outliers' arrows shortened to fit";
+    if (dense) {
+      caption += "\nmore than " + std::to_string(kDensePlanMarks) +
+                 " marks: no ellipses, and only outliers' ids (hover over a mark, or see the table)";
+    } else {
+      caption += "\nellipses: where each horizontal residual falls with " + detail::fmt("%.0f", 100.0 * kEllipseProbability) +
+                 " % probability if the model and sigmas are right (a-posteriori residual covariance; for marks not in "
+                 "the fit, the prediction's), " + detail::fmt("%.4f", g.ellipse_k) + " σ, × " + detail::fmt("%g", g.arrow_exaggeration) +
+                 " as the arrows";
+    }
+    if (!unlabelled.empty()) {
+      // Listed while the list takes at most three lines, else counted.
+      std::string ids;
+      for (const auto& id : unlabelled) ids += (ids.empty() ? "" : ", ") + id;
+      const std::string list = "no room on the plan for the id of " + ids;
+      caption += detail::text_size(list, regular, font, wrap_w).y <= 3.2f * font
+                     ? "\n" + list
+                     : "\nno room on the plan for the ids of " + std::to_string(unlabelled.size()) + " of " +
+                           std::to_string(rows_.size()) + " marks (hover over a mark, or see the table)";
+    }
+    const float needed = std::ceil(font * 1.5f + detail::text_size(caption, regular, font, wrap_w).y + font * 0.2f);
+    if (needed <= footer_h) break;
+    footer_h = needed;
+  }
   g.drawn = true;
+  g.labels = labels;
+  g.unlabelled = unlabelled;
+  g.hovered.clear();
+  g.ellipses_drawn = 0;
+  if (!cached) cache = {shown_generation_, c0.x, c0.y, avail.x, avail.y, font, g, caption};
 
   dl->AddRectFilled(ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), col(palette::kBackground));
   dl->AddRect(ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), col(palette::kGrid));
   dl->PushClipRect(ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), true);
-  const double k = g.arrow_exaggeration * g.px_per_m;  // pixels per metre of residual
-  const float r_px = std::max(3.0f, std::round(font * 0.3f));
-  const auto residual_px = [&](const PointRow& r) {
-    return Eigen::Vector2d(k * 1e-3 * r.residual_enu_mm.x(), -k * 1e-3 * r.residual_enu_mm.y());
-  };
-  // Left-out and unused points under the rest, then used points, outliers on
-  // top. A dense plan (more than kDensePlanMarks marks) draws its marks as
-  // small squares and its arrows without antialiasing, labels only the
-  // outliers: a tenth of the geometry, and at that density the marks
-  // overlap anyway.
-  const bool dense = rows_.size() > kDensePlanMarks;
+  // Ellipses under everything else, then left-out and unused points, used
+  // points, outliers on top. A dense plan (more than kDensePlanMarks marks)
+  // draws no ellipses, its marks as small squares and its arrows without
+  // antialiasing, and labels only the outliers: a tenth of the geometry,
+  // and at that density the marks overlap anyway.
+  if (!dense) {
+    constexpr int kSegments = 32;  // smooth at the sizes drawn (tens of pixels)
+    for (const auto& r : rows_) {
+      const Ellipse e = confidence_ellipse(r.residual_cov_en_m2, g.ellipse_k);
+      if (!std::isfinite(e.a_m)) continue;
+      const Eigen::Vector2d p = g.pixel_of(r.plan_en_m);
+      const Eigen::Vector2d major(std::sin(e.azimuth_rad), std::cos(e.azimuth_rad)), minor(major.y(), -major.x());  // E, N
+      ImVec2 pts[kSegments];
+      for (int i = 0; i < kSegments; ++i) {
+        const double t = 2.0 * std::numbers::pi * i / kSegments;
+        const Eigen::Vector2d en = e.a_m * std::cos(t) * major + e.b_m * std::sin(t) * minor;
+        pts[i] = iv(p + k * Eigen::Vector2d(en.x(), -en.y()));
+      }
+      const Rgb c = r.outlier ? palette::kOutlier : r.used ? palette::kEllipse : palette::kLeftOut;
+      dl->AddPolyline(pts, kSegments, col(c, 150), ImDrawFlags_Closed, 1.0f);
+      ++g.ellipses_drawn;
+    }
+  }
   const ImDrawListFlags aa = dl->Flags;
   if (dense) dl->Flags &= ~(ImDrawListFlags_AntiAliasedLines | ImDrawListFlags_AntiAliasedFill);
-  const float rd = std::max(2.0f, std::round(r_px * 0.6f));
   for (const auto& r : rows_) {
     if (r.used || r.outlier) continue;
     const Eigen::Vector2d p = g.pixel_of(r.plan_en_m);
@@ -96,8 +333,6 @@ void WorkbenchUi::draw_plan() {
       continue;
     }
     dl->AddCircle(iv(p), r_px, col(palette::kLeftOut), 12, 1.5f);
-    dl->AddText(ImVec2(static_cast<float>(p.x()) + r_px + 2, static_cast<float>(p.y()) - font * 0.5f), col(palette::kLeftOut),
-                r.id.c_str());
   }
   for (const auto& r : rows_) {
     if (!r.used) continue;
@@ -114,72 +349,99 @@ void WorkbenchUi::draw_plan() {
     dl->AddCircle(iv(p), r_px, col(palette::kInk), 12, 1.0f);
   }
   dl->Flags = aa;
-  ImGui::PushFont(ImGui::GetIO().Fonts->Fonts[1]);
   for (const auto& r : rows_) {
     if (!r.outlier) continue;
     const Eigen::Vector2d p = g.pixel_of(r.plan_en_m);
-    // Shortened to a quarter of the plan's short side at most (the label gives the size).
-    Eigen::Vector2d d = residual_px(r);
-    if (d.norm() > 0.25 * short_side_px) d *= 0.25 * short_side_px / d.norm();
-    arrow(dl, p, p + d, col(palette::kOutlier), 3.0f, font * 0.8f);
+    arrow(dl, p, p + drawn_arrow_px(r), col(palette::kOutlier), 3.0f, font * 0.8f);
     const float s = r_px + 2;
     dl->AddRect(ImVec2(static_cast<float>(p.x()) - s, static_cast<float>(p.y()) - s),
                 ImVec2(static_cast<float>(p.x()) + s, static_cast<float>(p.y()) + s), col(palette::kOutlier), 0, 0, 2.5f);
-    const std::string label = r.id + " outlier, " + detail::fmt("%.0f mm", r.residual_enu_mm.norm());
-    // Beside the square, on the side away from the arrow.
-    const float tx = d.x() > 0 ? static_cast<float>(p.x()) - s - 4 - ImGui::CalcTextSize(label.c_str()).x
-                               : static_cast<float>(p.x()) + s + 4;
-    dl->AddText(ImVec2(tx, static_cast<float>(p.y()) + (d.y() < 0 ? 2.0f : -font - 2.0f)), col(palette::kOutlier), label.c_str());
   }
-  ImGui::PopFont();
+  // The ids, where the placement put them.
+  for (const auto& l : g.labels) {
+    const PointRow* r = nullptr;
+    for (const auto& row : rows_) {
+      if (row.id == l.id) {
+        r = &row;
+        break;
+      }
+    }
+    if (!r) continue;
+    const Rgb c = r->outlier ? palette::kOutlier : r->used ? palette::kInk : palette::kLeftOut;
+    if (l.leader) {
+      const Eigen::Vector2d nearest(std::clamp(l.mark_px.x(), double(l.x0), double(l.x1)), std::clamp(l.mark_px.y(), double(l.y0), double(l.y1)));
+      const Eigen::Vector2d d = nearest - l.mark_px;
+      if (d.norm() > r_px + 2.0) dl->AddLine(iv(l.mark_px + (r_px + 1.0) * d.normalized()), iv(nearest), col(c, 160), 1.0f);
+    }
+    if (r->outlier) {
+      detail::label(audit_, dl, ImVec2(l.x0 + 1.0f, l.y0), col(c), outlier_label(*r), "plan: outlier label", ImVec2(g.left, g.top),
+                    ImVec2(g.right, g.bottom), bold, font);
+    } else {
+      detail::label(audit_, dl, ImVec2(l.x0 + 1.0f, l.y0), col(c), r->id, "plan: id", ImVec2(g.left, g.top), ImVec2(g.right, g.bottom),
+                    regular, id_size);
+    }
+  }
   // North arrow.
   const ImVec2 na(g.left + font * 1.2f, g.top + font * 3.0f);
   dl->AddTriangleFilled(ImVec2(na.x, na.y - font * 1.6f), ImVec2(na.x - font * 0.4f, na.y), ImVec2(na.x + font * 0.4f, na.y),
                         col(palette::kInk));
-  dl->AddText(ImVec2(na.x - font * 0.3f, na.y + 2), col(palette::kInk), "N");
+  detail::label(audit_, dl, ImVec2(na.x - font * 0.3f, na.y + 2), col(palette::kInk), "N", "plan: north arrow");
   dl->PopClipRect();
 
-  // Footer: scale bar and what the arrows mean.
-  g.scale_bar_m = detail::nice_floor(0.25 * (g.right - g.left) / g.px_per_m);
+  // Footer: scale bar and what the arrows and ellipses mean.
   const float bar_px = static_cast<float>(g.scale_bar_m * g.px_per_m);
   const float by = g.bottom + font * 0.7f, bx = g.left + font * 0.5f;
   dl->AddRectFilled(ImVec2(bx, by), ImVec2(bx + bar_px, by + 4), col(palette::kInk));
   dl->AddLine(ImVec2(bx, by - 4), ImVec2(bx, by + 8), col(palette::kInk), 1.5f);
   dl->AddLine(ImVec2(bx + bar_px, by - 4), ImVec2(bx + bar_px, by + 8), col(palette::kInk), 1.5f);
-  dl->AddText(ImVec2(bx + bar_px + font * 0.5f, by - font * 0.5f), col(palette::kInk), detail::length_label(g.scale_bar_m).c_str());
-  const double mm_per_10px = 10.0 / k * 1e3;
-  const std::string caption = "arrows: horizontal residual × " + detail::fmt("%g", g.arrow_exaggeration) + " (10 px = " +
-                              detail::fmt("%.2g", mm_per_10px) + " mm); outliers' arrows shortened to fit";
-  dl->AddText(ImVec2(bx, by + font * 0.6f), col(palette::kInk), caption.c_str());
+  detail::label(audit_, dl, ImVec2(bx + bar_px + font * 0.5f, by - font * 0.5f), col(palette::kInk), detail::length_label(g.scale_bar_m),
+                "plan: scale bar");
+  detail::label(audit_, dl, ImVec2(bx, g.bottom + font * 1.5f), col(palette::kInk), caption, "plan: caption", detail::kNoBound_lo,
+                detail::kNoBound_hi, regular, font, wrap_w - font * 0.5f);
 
-  // Legend: the vertical residual's colour scale, and the point symbols.
-  const float lx = g.right + font * 1.0f, ly0 = g.top + font * 1.6f, lh = std::min(font * 12.0f, (g.bottom - g.top) * 0.5f);
-  const float lw = font * 1.2f;
-  dl->AddText(ImVec2(lx, g.top), col(palette::kInk), "dU (mm)");
+  // Legend: the vertical residual's colour scale, and the symbols.
+  const float lx = g.right + font * 1.0f, ly0 = g.top + font * 1.6f;
+  const float symbols_h = font * 4.8f;
+  const float lh = std::max(font * 2.0f, std::min(font * 12.0f, g.bottom - ly0 - symbols_h - font * 0.5f));
+  detail::label(audit_, dl, ImVec2(lx, g.top), col(palette::kInk), "dU (mm)", "plan: legend");
   constexpr int kSteps = 64;
   for (int i = 0; i < kSteps; ++i) {
     const double t = 1.0 - 2.0 * (i + 0.5) / kSteps;
     const float y0 = ly0 + lh * static_cast<float>(i) / kSteps, y1 = ly0 + lh * static_cast<float>(i + 1) / kSteps;
-    dl->AddRectFilled(ImVec2(lx, y0), ImVec2(lx + lw, y1), col(palette::diverging(t)));
+    dl->AddRectFilled(ImVec2(lx, y0), ImVec2(lx + swatch, y1), col(palette::diverging(t)));
   }
-  dl->AddRect(ImVec2(lx, ly0), ImVec2(lx + lw, ly0 + lh), col(palette::kInk));
+  dl->AddRect(ImVec2(lx, ly0), ImVec2(lx + swatch, ly0 + lh), col(palette::kInk));
   const auto tick = [&](float y, const std::string& s) {
-    dl->AddLine(ImVec2(lx + lw, y), ImVec2(lx + lw + 4, y), col(palette::kInk));
-    dl->AddText(ImVec2(lx + lw + 6, y - font * 0.5f), col(palette::kInk), s.c_str());
+    dl->AddLine(ImVec2(lx + swatch, y), ImVec2(lx + swatch + 4, y), col(palette::kInk));
+    detail::label(audit_, dl, ImVec2(lx + swatch + 6, y - font * 0.5f), col(palette::kInk), s, "plan: legend");
   };
   tick(ly0, detail::fmt("+%g", g.du_limit_mm));
   tick(ly0 + lh * 0.5f, "0");
   tick(ly0 + lh, detail::fmt("−%g", g.du_limit_mm));
-  float sy = ly0 + lh + font * 1.5f;
+  float sy = ly0 + lh + font * 1.0f;
   dl->AddRect(ImVec2(lx, sy), ImVec2(lx + r_px * 2 + 4, sy + r_px * 2 + 4), col(palette::kOutlier), 0, 0, 2.5f);
-  dl->AddText(ImVec2(lx + r_px * 2 + 10, sy), col(palette::kOutlier), "outlier");
+  detail::label(audit_, dl, ImVec2(lx + swatch + font * 0.5f, sy), col(palette::kOutlier), "outlier", "plan: legend");
   sy += font * 1.5f;
   dl->AddCircle(ImVec2(lx + r_px + 2, sy + r_px + 2), r_px, col(palette::kLeftOut), 12, 1.5f);
-  dl->AddText(ImVec2(lx + r_px * 2 + 10, sy), col(palette::kLeftOut), "not used");
+  detail::label(audit_, dl, ImVec2(lx + swatch + font * 0.5f, sy), col(palette::kLeftOut), "not used", "plan: legend");
+  if (!dense) {
+    sy += font * 1.5f;
+    constexpr int kSegments = 32;
+    ImVec2 pts[kSegments];
+    for (int i = 0; i < kSegments; ++i) {
+      const double t = 2.0 * std::numbers::pi * i / kSegments;
+      pts[i] = ImVec2(lx + swatch * 0.5f + swatch * 0.5f * static_cast<float>(std::cos(t)),
+                      sy + font * 0.5f + font * 0.3f * static_cast<float>(std::sin(t)));
+    }
+    dl->AddPolyline(pts, kSegments, col(palette::kEllipse, 200), ImDrawFlags_Closed, 1.0f);
+    detail::label(audit_, dl, ImVec2(lx + swatch + font * 0.5f, sy), col(palette::kInk), ellipse_entry, "plan: legend");
+  }
 
-  // Clicking a point leaves it out or takes it back (not for use = 0 points).
+  // The mark under the mouse: a tooltip with its id and numbers; a click
+  // leaves it out or takes it back (not for use = 0 points).
   ImGui::InvisibleButton("plan", ImVec2(g.right - g.left, g.bottom - g.top));
-  if (ImGui::IsItemClicked()) {
+  const bool hovered = ImGui::IsItemHovered(), clicked = ImGui::IsItemClicked();
+  if (hovered || clicked) {
     const ImVec2 m = ImGui::GetIO().MousePos;
     const PointRow* best = nullptr;
     double best_d = 2.5 * r_px;
@@ -190,7 +452,30 @@ void WorkbenchUi::draw_plan() {
         best = &r;
       }
     }
-    if (best) model_.set_left_out(best->id, !best->left_out);
+    if (best && hovered) {
+      g.hovered = best->id;
+      ImGui::BeginTooltip();
+      ImGui::PushFont(bold);
+      ImGui::TextUnformatted(best->id.c_str());
+      ImGui::PopFont();
+      ImGui::TextUnformatted(("residual E/N/U " + detail::fmt("%.1f", best->residual_enu_mm.x()) + " / " +
+                              detail::fmt("%.1f", best->residual_enu_mm.y()) + " / " + detail::fmt("%.1f", best->residual_enu_mm.z()) +
+                              " mm, w-test " + detail::fmt("%.2f", best->w_test))
+                                 .c_str());
+      const Ellipse e = confidence_ellipse(best->residual_cov_en_m2, g.ellipse_k);
+      if (std::isfinite(e.a_m)) {
+        ImGui::TextUnformatted((detail::fmt("%.0f", 100.0 * kEllipseProbability) + " % ellipse " + detail::fmt("%.1f", 1e3 * e.a_m) + " × " +
+                                detail::fmt("%.1f", 1e3 * e.b_m) + " mm, azimuth " +
+                                detail::fmt("%.0f", e.azimuth_rad * 180.0 / std::numbers::pi) + "°")
+                                   .c_str());
+      }
+      ImGui::TextUnformatted(best->outlier ? "outlier (removed by data snooping)"
+                             : best->left_out ? "left out (click to take it back)"
+                             : !best->used    ? ("not used: " + best->note).c_str()
+                                              : "used (click to leave it out)");
+      ImGui::EndTooltip();
+    }
+    if (best && clicked) model_.set_left_out(best->id, !best->left_out);
   }
 }
 

@@ -31,11 +31,16 @@ void append_bytes(void* context, void* data, int size) {
 }
 }  // namespace
 
-void write_png(const RgbImage& image, const std::filesystem::path& path, bool overwrite) {
+std::string encode_png(const RgbImage& image, const std::string& name) {
   std::string bytes;
   if (stbi_write_png_to_func(append_bytes, &bytes, image.width, image.height, 3, image.rgb.data(), 3 * image.width) == 0) {
-    throw Error(ErrorKind::io, "E_WRITE", path.string() + ": PNG encoding failed");
+    throw Error(ErrorKind::io, "E_WRITE", name + ": PNG encoding failed");
   }
+  return bytes;
+}
+
+void write_png(const RgbImage& image, const std::filesystem::path& path, bool overwrite) {
+  const std::string bytes = encode_png(image, path.string());
   io::AtomicOutputFile out(path, overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
   out.stream().write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   out.commit();

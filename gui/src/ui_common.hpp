@@ -2,13 +2,17 @@
 // Small drawing helpers shared by the view files (private to gui/).
 
 #include <imgui.h>
+#include <imgui_internal.h>  // a table column's extent, for the header check
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <string_view>
 
 #include "geoanchor/gui/palette.hpp"
+#include "geoanchor/gui/workbench_ui.hpp"
 
 namespace geoanchor::gui::detail {
 
@@ -59,10 +63,89 @@ inline NameUnit split_unit(std::string_view full) {
   return {std::string(full), "1"};
 }
 
-inline void text_coloured(Rgb c, const std::string& s) {
+// --- Text that is checked against the room it is drawn in ---------------
+// Each helper draws and then records in the audit whether the text's box
+// lies inside the current clip rectangle (a window's content, a table
+// column) or the given region.
+
+// The last item's box against the current clip rectangle.
+inline void check_item(TextAudit& audit, std::string_view text, std::string_view where, bool vertical = true) {
+  const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  const ImVec2 ca = dl->GetClipRectMin(), cb = dl->GetClipRectMax();
+  audit.check(text, where, a.x, a.y, b.x, b.y, ca.x, ca.y, cb.x, cb.y, vertical);
+}
+
+// `vertical` false inside a scrolling table (its rows may run out of view:
+// the table says which are in view).
+inline void text(TextAudit& audit, const std::string& s, std::string_view where, bool vertical = true) {
+  ImGui::TextUnformatted(s.c_str());
+  check_item(audit, s, where, vertical);
+}
+
+inline void text_coloured(TextAudit& audit, Rgb c, const std::string& s, std::string_view where, bool vertical = true) {
   ImGui::PushStyleColor(ImGuiCol_Text, col4(c));
   ImGui::TextUnformatted(s.c_str());
   ImGui::PopStyleColor();
+  check_item(audit, s, where, vertical);
+}
+
+// Wrapped at the window's right edge: only the bottom can run out.
+inline void wrapped(TextAudit& audit, const std::string& s, std::string_view where) {
+  ImGui::PushTextWrapPos(0.0f);
+  ImGui::TextUnformatted(s.c_str());
+  ImGui::PopTextWrapPos();
+  check_item(audit, s, where);
+}
+
+inline void wrapped_coloured(TextAudit& audit, Rgb c, const std::string& s, std::string_view where) {
+  ImGui::PushStyleColor(ImGuiCol_Text, col4(c));
+  wrapped(audit, s, where);
+  ImGui::PopStyleColor();
+}
+
+// The box of `s` at `size` pixels (0: the current font's size), wrapped at
+// `wrap_px` (0: not wrapped) as ImDrawList::AddText wraps it.
+inline ImVec2 text_size(const std::string& s, ImFont* font = nullptr, float size = 0.0f, float wrap_px = 0.0f) {
+  if (!font) font = ImGui::GetFont();
+  if (size <= 0.0f) size = ImGui::GetFontSize();
+  return font->CalcTextSizeA(size, FLT_MAX, wrap_px, s.c_str());
+}
+
+inline const ImVec2 kNoBound_lo{-FLT_MAX, -FLT_MAX}, kNoBound_hi{FLT_MAX, FLT_MAX};
+
+// Text at `pos` on a draw list, checked against `lo`–`hi` and the list's
+// clip rectangle; wrapped at `wrap_px` when that is > 0.
+inline void label(TextAudit& audit, ImDrawList* dl, ImVec2 pos, ImU32 colour, const std::string& s, std::string_view where,
+                  ImVec2 lo = kNoBound_lo, ImVec2 hi = kNoBound_hi, ImFont* font = nullptr, float size = 0.0f,
+                  float wrap_px = 0.0f) {
+  if (!font) font = ImGui::GetFont();
+  if (size <= 0.0f) size = ImGui::GetFontSize();
+  dl->AddText(font, size, pos, colour, s.c_str(), nullptr, wrap_px);
+  const ImVec2 ts = text_size(s, font, size, wrap_px);
+  const ImVec2 ca = dl->GetClipRectMin(), cb = dl->GetClipRectMax();
+  audit.check(s, where, pos.x, pos.y, pos.x + ts.x, pos.y + ts.y, std::max(lo.x, ca.x), std::max(lo.y, ca.y), std::min(hi.x, cb.x),
+              std::min(hi.y, cb.y));
+}
+
+// A table's header row (what ImGui::TableHeadersRow draws), each header
+// checked against its column: ImGui would shorten it with "…". A sortable
+// column keeps room for the sort arrow.
+inline void header_row(TextAudit& audit, std::string_view where) {
+  ImGuiTable* table = ImGui::GetCurrentTable();
+  ImGui::TableNextRow(ImGuiTableRowFlags_Headers, ImGui::TableGetHeaderRowHeight());
+  const int columns = ImGui::TableGetColumnCount();
+  for (int c = 0; c < columns; ++c) {
+    if (!ImGui::TableSetColumnIndex(c)) continue;
+    const char* name = ImGui::TableGetColumnName(c);
+    const bool sorts = (table->Flags & ImGuiTableFlags_Sortable) && !(ImGui::TableGetColumnFlags(c) & ImGuiTableColumnFlags_NoSort);
+    const float arrow = sorts ? std::floor(ImGui::GetFontSize() * 0.65f + ImGui::GetStyle().FramePadding.x) : 0.0f;
+    const float available = table->Columns[c].MaxX - ImGui::GetCursorScreenPos().x;
+    ImGui::PushID(c);
+    ImGui::TableHeader(name);
+    ImGui::PopID();
+    audit.check_width(name, where, ImGui::CalcTextSize(name).x + arrow, available);
+  }
 }
 
 }  // namespace geoanchor::gui::detail

@@ -1,6 +1,12 @@
 #include "geoanchor/gui/workbench_model.hpp"
 
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <cmath>
+#include <numbers>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
@@ -133,6 +139,46 @@ void WorkbenchModel::save_transform(const std::string& path, bool overwrite, con
   out.commit();
 }
 
+Eigen::Matrix2d residual_covariance_en_m2(const solver::FitResult& fit, const geodesy::ControlSet& control, std::size_t index) {
+  // The solver's own: the covariance its point tests use (one implementation).
+  if (index >= control.points.size() || index >= fit.points.size()) {
+    return Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  }
+  return fit.points[index].residual_cov_enu_m2.topLeftCorner<2, 2>();
+}
+
+Ellipse confidence_ellipse(const Eigen::Matrix2d& cov_en_m2, double k) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!cov_en_m2.allFinite() || !(k >= 0.0)) return {nan, nan, nan};
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(0.5 * (cov_en_m2 + cov_en_m2.transpose()));
+  const Eigen::Vector2d lambda = es.eigenvalues();  // ascending
+  // A residual covariance is positive semi-definite; allow rounding below zero.
+  const double scale = std::max(std::abs(lambda(1)), 1e-300);
+  if (!(lambda(0) >= -1e-9 * scale)) return {nan, nan, nan};
+  const Eigen::Vector2d major = es.eigenvectors().col(1);  // (E, N)
+  double azimuth = std::atan2(major.x(), major.y());
+  if (azimuth < 0.0) azimuth += std::numbers::pi;
+  if (azimuth >= std::numbers::pi) azimuth -= std::numbers::pi;
+  return {k * std::sqrt(std::max(lambda(1), 0.0)), k * std::sqrt(std::max(lambda(0), 0.0)), azimuth};
+}
+
+double chi2_2d_factor(double p) { return std::sqrt(-2.0 * std::log1p(-p)); }
+
+std::vector<std::string> shown_warnings(const solver::FitResult& fit) {
+  const std::string advice = "; consider --model " + std::string(solver::to_string(fit.model));
+  std::vector<std::string> out;
+  for (std::string w : fit.warnings) {
+    for (auto at = w.find(advice); at != std::string::npos; at = w.find(advice)) {
+      const auto end = at + advice.size();
+      // Only the whole advice: "--model helmert7" is not "--model helmert7x".
+      if (end < w.size() && (std::isalnum(static_cast<unsigned char>(w[end])) || w[end] == '-' || w[end] == '_')) break;
+      w.erase(at, advice.size());
+    }
+    out.push_back(std::move(w));
+  }
+  return out;
+}
+
 std::vector<PointRow> WorkbenchModel::rows() const {
   std::vector<PointRow> out;
   for (std::size_t i = 0; i < control_.points.size(); ++i) {
@@ -150,6 +196,7 @@ std::vector<PointRow> WorkbenchModel::rows() const {
       r.used = p.used;
       r.outlier = p.outlier;
       r.note = p.removed_because;
+      r.residual_cov_en_m2 = residual_covariance_en_m2(*fit_, control_, i);
     } else {
       r.used = false;
     }

@@ -42,6 +42,23 @@ float HistogramGeometry::x_of(double w) const {
   return left + static_cast<float>((w - w_low) / span) * (right - left);
 }
 
+void TextAudit::check(std::string_view text, std::string_view where, float x0, float y0, float x1, float y1, float cx0, float cy0,
+                      float cx1, float cy1, bool vertical) {
+  constexpr float kSlack_px = 0.5f;  // vertex positions round to the pixel grid
+  drawn.push_back({std::string(text), std::string(where), x0, y0, x1, y1});
+  if (x0 < cx0 - kSlack_px || x1 > cx1 + kSlack_px) {
+    clipped.push_back({std::string(text), std::string(where), x1 - x0, std::max(0.0f, std::min(x1, cx1) - std::max(x0, cx0)), false});
+  } else if (vertical && (y0 < cy0 - kSlack_px || y1 > cy1 + kSlack_px)) {
+    clipped.push_back({std::string(text), std::string(where), y1 - y0, std::max(0.0f, std::min(y1, cy1) - std::max(y0, cy0)), true});
+  }
+}
+
+void TextAudit::check_width(std::string_view text, std::string_view where, float needed_px, float available_px) {
+  constexpr float kSlack_px = 0.5f;
+  drawn.push_back({std::string(text), std::string(where), 0.0f, 0.0f, needed_px, 0.0f});
+  if (needed_px > available_px + kSlack_px) clipped.push_back({std::string(text), std::string(where), needed_px, available_px, false});
+}
+
 WorkbenchUi::WorkbenchUi(WorkbenchModel& model, UiOptions options) : model_(model), options_(std::move(options)) {
   const std::size_t n = std::min(options_.save_path.size(), save_path_.size() - 1);
   std::memcpy(save_path_.data(), options_.save_path.data(), n);
@@ -98,9 +115,11 @@ constexpr ImGuiWindowFlags kPanelFlags = ImGuiWindowFlags_NoMove | ImGuiWindowFl
                                          ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoBringToFrontOnFocus;
 
 template <class Fn>
-void panel(const char* title, float x, float y, float w, float h, Fn&& body) {
+void panel(TextAudit& audit, const char* title, float x, float y, float w, float h, Fn&& body) {
   ImGui::SetNextWindowPos(ImVec2(x, y), ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(w, h), ImGuiCond_Always);
+  // The title bar shows the title between the frame paddings.
+  audit.check_width(title, std::string(title) + ": title", ImGui::CalcTextSize(title).x + 2.0f * ImGui::GetStyle().FramePadding.x, w);
   if (ImGui::Begin(title, nullptr, kPanelFlags)) body();
   ImGui::End();
 }
@@ -123,11 +142,14 @@ void WorkbenchUi::draw(View view, float width, float height) {
   refresh();
   plan_.drawn = false;
   histogram_.drawn = false;
+  table_.drawn = false;
+  audit_ = TextAudit{};
+  composite_ = view == View::workbench;
   const auto body = [this](View v) {
     return [this, v] {
       // A refused fit leaves every view with the reason only.
       if (!model_.fit() && v != View::table && v != View::comparison) {
-        detail::text_coloured(palette::kOutlier, "No fit: " + model_.error());
+        detail::wrapped_coloured(audit_, palette::kOutlier, "No fit: " + model_.error(), std::string(to_string(v)) + ": no fit");
         return;
       }
       switch (v) {
@@ -141,35 +163,55 @@ void WorkbenchUi::draw(View view, float width, float height) {
     };
   };
   if (view != View::workbench) {
-    panel(panel_title(view), 0, 0, width, height, body(view));
+    panel(audit_, panel_title(view), 0, 0, width, height, body(view));
     return;
   }
+  // The bar's height is what its contents took in the last frame (they
+  // flow onto more lines in a narrow window).
   const float font = ImGui::GetFontSize();
-  const float bar_h = std::round(font * 4.2f);
-  panel("geoanchor workbench", 0, 0, width, bar_h, [this] { draw_bar(); });
-  const float upper = std::round((height - bar_h) * 0.6f);
-  const float x1 = std::round(width * 0.42f), x2 = std::round(width * 0.69f);
-  const float half = std::round(upper * 0.5f);
-  panel(panel_title(View::plan), 0, bar_h, x1, upper, body(View::plan));
-  panel(panel_title(View::histogram), x1, bar_h, x2 - x1, half, body(View::histogram));
-  panel(panel_title(View::comparison), x1, bar_h + half, x2 - x1, upper - half, body(View::comparison));
-  panel(panel_title(View::parameters), x2, bar_h, width - x2, upper, body(View::parameters));
-  panel(panel_title(View::table), 0, bar_h + upper, width, height - bar_h - upper, body(View::table));
+  const float bar_h = bar_height_px_ > 0.0f ? bar_height_px_ : std::round(font * 4.2f);
+  panel(audit_, "geoanchor workbench", 0, 0, width, bar_h, [this] {
+    draw_bar();
+    bar_height_px_ = std::ceil(ImGui::GetCursorPosY() + ImGui::GetStyle().WindowPadding.y - ImGui::GetStyle().ItemSpacing.y);
+  });
+  // Upper row: plan, histogram, parameters; lower row: the table and the comparison.
+  const float upper = std::round((height - bar_h) * 0.58f);
+  const float x1 = std::round(width * 0.42f), x2 = std::round(width * 0.69f), xt = std::round(width * 0.58f);
+  panel(audit_, panel_title(View::plan), 0, bar_h, x1, upper, body(View::plan));
+  panel(audit_, panel_title(View::histogram), x1, bar_h, x2 - x1, upper, body(View::histogram));
+  panel(audit_, panel_title(View::parameters), x2, bar_h, width - x2, upper, body(View::parameters));
+  panel(audit_, panel_title(View::table), 0, bar_h + upper, xt, height - bar_h - upper, body(View::table));
+  panel(audit_, panel_title(View::comparison), xt, bar_h + upper, width - xt, height - bar_h - upper, body(View::comparison));
 }
 
 void WorkbenchUi::draw_bar() {
   const auto& control = model_.control();
   const auto& o = model_.options();
+  const ImGuiStyle& style = ImGui::GetStyle();
+  const float font = ImGui::GetFontSize();
   std::string title = control.source_name + " — " + std::to_string(control.points.size()) + " points";
   if (control.source_frame || control.target_frame) {
     title += ", " + (control.source_frame ? control.source_frame->to_string() : std::string("?")) + " → " +
              (control.target_frame ? control.target_frame->to_string() : std::string("?"));
   }
   ImGui::PushFont(ImGui::GetIO().Fonts->Fonts[1]);
-  ImGui::TextUnformatted(title.c_str());
+  detail::wrapped(audit_, title, "bar: title");
   ImGui::PopFont();
 
-  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 11.0f);
+  // The controls flow: each goes on the line if it fits, else on the next.
+  bool first = true;
+  const float right = ImGui::GetWindowPos().x + ImGui::GetWindowContentRegionMax().x;
+  const auto flow = [&](float width_px, float gap_px) {
+    if (!first && ImGui::GetItemRectMax().x + gap_px + width_px <= right) ImGui::SameLine(0, gap_px);
+    first = false;
+  };
+  const float gap = font * 1.5f;
+  const auto label_w = [&](const char* s) { return ImGui::CalcTextSize(s).x; };
+  const float radio_w = ImGui::GetFrameHeight() + style.ItemInnerSpacing.x;
+
+  const float combo_w = font * 11.0f;
+  flow(combo_w + style.ItemInnerSpacing.x + label_w("model"), gap);
+  ImGui::SetNextItemWidth(combo_w);
   const std::string current(solver::to_string(o.model));
   if (ImGui::BeginCombo("model", current.c_str())) {
     for (auto m : {solver::FitModel::translation3, solver::FitModel::helmert6, solver::FitModel::helmert7,
@@ -182,41 +224,60 @@ void WorkbenchUi::draw_bar() {
     }
     ImGui::EndCombo();
   }
-  ImGui::SameLine(0, ImGui::GetFontSize() * 1.5f);
-  ImGui::TextUnformatted("convention");
+  detail::check_item(audit_, "model " + current, "bar: model");
+  const float convention_w = label_w("convention") + style.ItemSpacing.x + 2.0f * radio_w + label_w("position vector") +
+                             style.ItemSpacing.x + label_w("coordinate frame");
+  flow(convention_w, gap);
+  detail::text(audit_, "convention", "bar: convention");
   ImGui::SameLine();
   const bool pv = o.convention == solver::Convention::position_vector;
   if (ImGui::RadioButton("position vector", o.convention && pv) && !(o.convention && pv)) {
     model_.set_convention(solver::Convention::position_vector);
   }
+  detail::check_item(audit_, "position vector", "bar: convention");
   ImGui::SameLine();
   if (ImGui::RadioButton("coordinate frame", o.convention && !pv) && !(o.convention && !pv)) {
     model_.set_convention(solver::Convention::coordinate_frame);
   }
-  ImGui::SameLine(0, ImGui::GetFontSize() * 1.5f);
+  detail::check_item(audit_, "coordinate frame", "bar: convention");
+  flow(label_w("Save transform…") + 2.0f * style.FramePadding.x, gap);
   if (ImGui::Button("Save transform…")) ImGui::OpenPopup("Save transform");
+  detail::check_item(audit_, "Save transform…", "bar: save");
   draw_save_popup();
-  ImGui::SameLine(0, ImGui::GetFontSize() * 1.5f);
   if (model_.busy()) {
-    ImGui::TextUnformatted("refitting…");
+    flow(label_w("refitting…"), gap);
+    detail::text(audit_, "refitting…", "bar: status");
   } else if (!model_.fit()) {
-    detail::text_coloured(palette::kOutlier, "fit refused");
+    flow(label_w("fit refused"), gap);
+    detail::text_coloured(audit_, palette::kOutlier, "fit refused", "bar: status");
   } else {
     const auto& f = *model_.fit();
     const auto& g = f.global_test;
-    std::string s = "σ0 = " + (f.sigma0 ? detail::fmt("%.3f", *f.sigma0) : std::string("undefined")) + ", dof " + std::to_string(f.dof);
-    if (!g.applicable) {
-      ImGui::TextUnformatted((s + ", global test n/a").c_str());
-    } else {
-      ImGui::TextUnformatted(s.c_str());
+    const std::string s = "σ0 = " + (f.sigma0 ? detail::fmt("%.3f", *f.sigma0) : std::string("undefined")) + ", dof " + std::to_string(f.dof) + (g.applicable ? "" : ", global test n/a");
+    const std::string verdict = g.passed ? "global test passed" : "global test FAILED";
+    flow(label_w(s.c_str()) + (g.applicable ? style.ItemSpacing.x + label_w(verdict.c_str()) : 0.0f), gap);
+    detail::text(audit_, s, "bar: status");
+    if (g.applicable) {
       ImGui::SameLine();
-      detail::text_coloured(g.passed ? palette::kPass : palette::kOutlier,
-                            g.passed ? "global test passed" : "global test FAILED");
+      detail::text_coloured(audit_, g.passed ? palette::kPass : palette::kOutlier, verdict, "bar: status");
+    }
+    const std::size_t warnings = shown_warnings(f).size();
+    if (warnings > 0) {
+      const std::string w = std::to_string(warnings) + (warnings == 1 ? " warning" : " warnings");
+      flow(label_w(w.c_str()), gap);
+      detail::text_coloured(audit_, palette::kOutlier, w, "bar: warnings");
+      if (ImGui::IsItemHovered()) {
+        ImGui::BeginTooltip();
+        ImGui::PushTextWrapPos(font * 40.0f);
+        for (const auto& line : shown_warnings(f)) ImGui::TextUnformatted(line.c_str());
+        ImGui::PopTextWrapPos();
+        ImGui::EndTooltip();
+      }
     }
   }
   if (!status_.empty()) {
-    ImGui::SameLine(0, ImGui::GetFontSize() * 1.5f);
-    ImGui::TextUnformatted(status_.c_str());
+    flow(label_w(status_.c_str()), gap);
+    detail::wrapped(audit_, status_, "bar: saved");
   }
 }
 

@@ -12,6 +12,7 @@ std::vector<ModelComparison> compare_models(const geodesy::ControlSet& set, cons
   if (base.convention) {
     models.push_back(FitModel::helmert6);
     models.push_back(FitModel::helmert7);
+    models.push_back(FitModel::molodensky_badekas);
     bool epochs = !set.points.empty();
     double lo = 1e300, hi = -1e300;
     for (const auto& p : set.points) {
@@ -51,7 +52,24 @@ std::vector<ModelComparison> compare_models(const geodesy::ControlSet& set, cons
     const int obs = r.dof + c.parameters;
     c.aic = set.has_a_priori_sigmas ? r.global_test.statistic + 2.0 * c.parameters
                                     : obs * std::log(r.global_test.statistic / obs) + 2.0 * c.parameters;
+    if (m == FitModel::molodensky_badekas) {
+      c.note = "helmert7 about the pivot (" + std::string(base.pivot_m ? "given" : "the centroid of the used points") +
+               "): the same residuals, σ0, global test and AIC as helmert7, other parameters (its translation is "
+               "nearly uncorrelated with the rotations and scale)";
+    }
     out.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::vector<FitModel> lowest_aic(const std::vector<ModelComparison>& rows) {
+  const ModelComparison* best = nullptr;
+  for (const auto& c : rows) {
+    if (c.fit && (!best || c.aic < best->aic)) best = &c;
+  }
+  std::vector<FitModel> out;
+  for (const auto& c : rows) {
+    if (c.fit && std::fabs(c.aic - best->aic) <= kAicTie) out.push_back(c.model);
   }
   return out;
 }

@@ -17,6 +17,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 void test_point(const PointTestInput& in, double sigma_scale, double lambda0, PointResult& pr) {
   const Eigen::Vector3d vw = in.w * in.v_m;
   pr.residual_enu_m = in.enu * in.v_m;
+  // C_v = W⁻¹ Q W⁻ᵀ (W whitens: Wᵀ W = C⁻¹), in E, N, U, scaled as σ is.
+  const Eigen::Matrix3d w_inv = in.w.inverse();
+  pr.residual_cov_enu_m2 = (sigma_scale * sigma_scale) * (in.enu * w_inv * in.q * w_inv.transpose() * in.enu.transpose());
 
   // The point test over the redundant directions of Q (all three unless the
   // point alone determines some parameter).

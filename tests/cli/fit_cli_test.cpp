@@ -554,5 +554,31 @@ TEST_F(FitCli, Point10_ConvertRefusesAnOrthometricOriginHeightType) {
   EXPECT_FALSE(fs::exists(path("out.csv")));
 }
 
+// issue 12 point 14
+TEST_F(FitCli, Point14_CompareIncludesMolodenskyBadekasAndSaysItIsHelmert7AboutAPivot) {
+  const RunResult r = run("fit " + kControl + " --compare --convention position_vector");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The rows: name, u, dof, σ0, verdict, max|w|, AIC.
+  const auto row = [&](const std::string& model) {
+    const auto at = r.out.find("  " + model + " ");
+    if (at == std::string::npos) return std::vector<std::string>{};
+    std::istringstream line(r.out.substr(at, r.out.find('\n', at) - at));
+    std::vector<std::string> cells;
+    for (std::string cell; line >> cell;) cells.push_back(cell);
+    return cells;
+  };
+  const auto h7 = row("helmert7"), mb = row("molodensky-badekas");
+  ASSERT_EQ(mb.size(), h7.size()) << r.out;
+  ASSERT_GE(mb.size(), 7u) << r.out;
+  // The same model about another point: every number but the name agrees as printed.
+  for (std::size_t k = 1; k < mb.size(); ++k) EXPECT_EQ(mb[k], h7[k]) << "column " << k << "\n" << r.out;
+  EXPECT_NE(r.out.find("(molodensky-badekas: helmert7 about the pivot"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("the same residuals, σ0, global test and AIC as helmert7, other parameters"), std::string::npos) << r.out;
+  // They tie: the lowest AIC names both or neither.
+  const auto lowest = r.out.substr(r.out.find("lowest AIC: "));
+  EXPECT_EQ(lowest.find("helmert7") != std::string::npos, lowest.find("molodensky-badekas") != std::string::npos) << lowest;
+  EXPECT_EQ(files(), std::vector<std::string>{});
+}
+
 }  // namespace
 }  // namespace geoanchor

@@ -6,8 +6,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <random>
+#include <regex>
+#include <set>
+#include <sstream>
 
 #include "cli_support.hpp"
 #include "geoanchor/gui/image.hpp"
@@ -41,10 +47,10 @@ TEST_F(WorkbenchCli, SnapshotRendersEveryViewWithoutADisplay) {
     EXPECT_EQ(image.width, 1600);
     EXPECT_EQ(image.height, 1000);
   }
-  // Other sizes are honoured.
-  const auto r = shell(kNoDisplay + exe() + " snapshot " + kControl + " --view plan --size 800x600 -o " + path("small.png").string());
+  // Other sizes are honoured, down to the smallest at which every text fits.
+  const auto r = shell(kNoDisplay + exe() + " snapshot " + kControl + " --view plan --size 1280x800 -o " + path("small.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(gui::read_png(path("small.png")).width, 800);
+  EXPECT_EQ(gui::read_png(path("small.png")).width, 1280);
 }
 
 TEST_F(WorkbenchCli, SnapshotRefusesBadOptionsAndLeavesNothing) {
@@ -54,7 +60,8 @@ TEST_F(WorkbenchCli, SnapshotRefusesBadOptionsAndLeavesNothing) {
   } cases[] = {
       {"--view map -o a.png", "--view map: expected workbench, plan, histogram, table, parameters or comparison", 2},
       {"--size 1600 -o a.png", "--size 1600: expected WIDTHxHEIGHT in pixels", 2},
-      {"--size 10x10 -o a.png", "--size 10x10: expected WIDTHxHEIGHT in pixels, 64 … 8192 each", 2},
+      {"--size 10x10 -o a.png", "--size 10x10: expected WIDTHxHEIGHT in pixels, 1280 … 8192 wide and 800 … 8192 tall", 2},
+      {"--size 1279x800 -o a.png", "--size 1279x800: expected WIDTHxHEIGHT in pixels, 1280 … 8192 wide", 2},
       {"-o a.jpg", "-o a.jpg: expected a file name ending in .png", 2},
       {"--convention cf -o a.png", "--convention cf: expected position_vector or coordinate_frame", 2},
       {"--model helmert9 -o a.png", "--model helmert9: expected translation3", 2},
@@ -84,8 +91,9 @@ TEST_F(WorkbenchCli, ReportWritesTheFitReportAndEveryViewAndReopensTheTransforms
   const auto dir = path("report");
   const auto r = shell(kNoDisplay + exe() + " report " + kControl + " --transform " + t.string() + " -o " + dir.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The 36 marks' table takes two pages at 1600x1000.
   EXPECT_EQ(files(dir), (std::vector<std::string>{"comparison.png", "histogram.png", "parameters.png", "plan.png", "report.txt",
-                                                  "table.png", "workbench.png"}));
+                                                  "table-2.png", "table.png", "workbench.png"}));
   const std::string text = slurp(dir / "report.txt");
   // The report section is what `fit` printed for the same choices (the
   // convention came from the transform file), and the refit matches the file.
@@ -130,6 +138,149 @@ TEST_F(WorkbenchCli, ReportOnAPublishedParameterSetSaysHowFarTheRefitIs) {
   const double mm = std::stod(text.substr(at + 18));
   EXPECT_GT(mm, 0.0);
   EXPECT_LT(mm, 30.0);
+}
+
+// --- issue 12 point 14: reports that never mislead ---------------------------
+
+// A control set of `n` marks over about 3 km around LSZH, written like the
+// bundled example (geodetic in both frames, σ 3 mm and 4 mm), targets a few
+// centimetres off plus about 4 mm of noise: ids M001 … in input order.
+std::string generated_control(int n) {
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<double> dlat(-0.0135, 0.0135), dlon(-0.02, 0.02), dh(-20.0, 20.0);
+  std::normal_distribution<double> noise_deg(0.0, 3.6e-8), noise_m(0.0, 0.004);
+  std::ostringstream csv;
+  csv.precision(12);
+  csv << "# source_frame = ITRF2014@2024.5\n# target_frame = ETRF2000@2024.5\n"
+      << "id,lat_src_deg,lon_src_deg,h_src_m,lat_dst_deg,lon_dst_deg,h_dst_m,sigma_src_m,sigma_dst_m\n";
+  for (int i = 1; i <= n; ++i) {
+    const double lat = 47.4582 + dlat(rng), lon = 8.5555 + dlon(rng), h = 430.0 + dh(rng);
+    char id[16];
+    std::snprintf(id, sizeof id, "M%03d", i);
+    csv << id << ',' << lat << ',' << lon << ',' << h << ',' << lat - 4.6e-6 + noise_deg(rng) << ',' << lon - 6.8e-6 + noise_deg(rng)
+        << ',' << h + 0.005 + noise_m(rng) << ",0.003,0.004\n";
+  }
+  return csv.str();
+}
+
+// The rows of a point-table picture counted from its pixels alone (the
+// table view, full frame): below the header's pale blue, the rows alternate
+// white and a light grey; a row is whole when its stripe is as tall as most.
+std::size_t whole_table_rows(const gui::RgbImage& image) {
+  const int x = image.width * 3 / 4;  // in the status column, right of its text
+  const auto is_row = [](gui::Rgb c) { return c.r == c.g && c.g == c.b && c.r >= 230; };
+  const auto is_header = [](gui::Rgb c) { return c.b > c.r + 20; };
+  int y = 0;
+  while (y < image.height && !is_header(image.at(x, y))) ++y;
+  while (y < image.height && is_header(image.at(x, y))) ++y;
+  std::vector<int> runs;
+  int start = y;
+  gui::Rgb current = image.at(x, y);
+  for (; y < image.height && is_row(image.at(x, y)); ++y) {
+    if (!(image.at(x, y) == current)) {
+      runs.push_back(y - start);
+      start = y;
+      current = image.at(x, y);
+    }
+  }
+  runs.push_back(y - start);
+  std::vector<int> sorted = runs;
+  std::sort(sorted.begin(), sorted.end());
+  const int typical = sorted[sorted.size() / 2];
+  return static_cast<std::size_t>(std::count_if(runs.begin(), runs.end(), [&](int r) { return r >= typical - 1; }));
+}
+
+// issue 12 point 14
+TEST_F(WorkbenchCli, Point14_ReportPagesTheTableSoThatEveryMarkOfA120MarkSetIsInAPicture) {
+  const auto control = write("big.csv", generated_control(120));
+  const auto t = path("t.json");
+  const auto fit = run("fit " + control.string() + " --model helmert7 --convention position_vector -o " + t.string());
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  const auto dir = path("rep");
+  const auto r = shell(kNoDisplay + exe() + " report " + control.string() + " --transform " + t.string() + " -o " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = slurp(dir / "report.txt");
+  // report.txt lists what each page holds: "  table-2.png: marks 36–70 of 120 (sorted by id ▲): M036, …".
+  const std::regex page_line(R"(\n  (table(-[0-9]+)?\.png): marks ([0-9]+)–([0-9]+) of 120 \(sorted by id ▲\): ([^\n]*))");
+  std::vector<std::string> ids, pages;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), page_line); it != std::sregex_iterator(); ++it) {
+    const std::smatch& m = *it;
+    pages.push_back(m[1]);
+    std::vector<std::string> on_page;
+    std::istringstream list(m[5].str());
+    for (std::string id; std::getline(list, id, ',');) on_page.push_back(id.substr(id.find_first_not_of(' ')));
+    EXPECT_EQ(on_page.size(), std::stoul(m[4]) - std::stoul(m[3]) + 1) << m[0];
+    // Counted in the picture by its pixels, not by the report's own numbers.
+    ASSERT_TRUE(fs::exists(dir / m[1].str())) << m[1];
+    EXPECT_EQ(whole_table_rows(gui::read_png(dir / m[1].str())), on_page.size()) << m[1];
+    ids.insert(ids.end(), on_page.begin(), on_page.end());
+  }
+  ASSERT_GE(pages.size(), 2u) << "120 rows do not fit one 1600x1000 page:\n" << text;
+  EXPECT_EQ(pages.front(), "table.png");
+  EXPECT_EQ(pages[1], "table-2.png");
+  // Every mark exactly once, in id order.
+  std::vector<std::string> expected;
+  for (int i = 1; i <= 120; ++i) {
+    char id[16];
+    std::snprintf(id, sizeof id, "M%03d", i);
+    expected.push_back(id);
+  }
+  EXPECT_EQ(ids, expected);
+  // No page beyond those listed, and the workbench picture says its table panel holds a part.
+  EXPECT_FALSE(fs::exists(dir / ("table-" + std::to_string(pages.size() + 1) + ".png")));
+  EXPECT_NE(text.find("workbench.png: its table panel shows marks 1–"), std::string::npos) << text;
+  EXPECT_NE(r.out.find("(the table on " + std::to_string(pages.size()) + " pages)"), std::string::npos) << r.out;
+  // A later report of fewer marks, with --overwrite, leaves no page of the earlier one behind.
+  const auto small = run("report " + kControl + " --transform " + t.string() + " --model helmert7 -o " + dir.string() + " --overwrite");
+  ASSERT_EQ(small.exit_code, 0) << small.err;
+  const std::string small_text = slurp(dir / "report.txt");
+  std::size_t small_pages = 0;
+  const std::regex small_page_line(R"(\n  table(-[0-9]+)?\.png: marks)");
+  for (auto it = std::sregex_iterator(small_text.begin(), small_text.end(), small_page_line);
+       it != std::sregex_iterator(); ++it) {
+    ++small_pages;
+  }
+  ASSERT_LT(small_pages, pages.size());
+  for (std::size_t page = small_pages + 1; page <= pages.size(); ++page) {
+    EXPECT_FALSE(fs::exists(dir / ("table-" + std::to_string(page) + ".png"))) << page;
+  }
+  // And without --overwrite an earlier report's later page is refused like the others.
+  write("rep2/table-3.png", "old");
+  const auto refused = run("report " + kControl + " --transform " + t.string() + " -o " + path("rep2").string());
+  EXPECT_EQ(refused.exit_code, 5) << refused.err;
+  EXPECT_NE(refused.err.find("table-3.png: exists (use --overwrite to replace the report)"), std::string::npos) << refused.err;
+  EXPECT_EQ(files(path("rep2")), std::vector<std::string>{"table-3.png"});
+}
+
+// issue 12 point 14
+TEST_F(WorkbenchCli, Point14_AReportOnAMolodenskyBadekasFitNeverAdvisesItAndComparesItWithHelmert7) {
+  const auto t = path("mb.json");
+  const auto fit = run("fit " + kControl + " --model molodensky-badekas --convention position_vector -o " + t.string());
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  const auto r = run("report " + kControl + " --transform " + t.string() + " -o " + path("rep").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = slurp(path("rep") / "report.txt");
+  EXPECT_EQ(text.find("consider --model molodensky-badekas"), std::string::npos) << text;
+  EXPECT_EQ(r.err.find("consider --model molodensky-badekas"), std::string::npos) << r.err;
+  // The comparison has the fitted model, marked, and says what it is.
+  const auto comparison = text.substr(text.find("Model comparison"));
+  EXPECT_NE(comparison.find("  ▶ molodensky-badekas  "), std::string::npos) << comparison;
+  EXPECT_NE(comparison.find("(molodensky-badekas: helmert7 about the pivot"), std::string::npos) << comparison;
+  // Under helmert7 the same report still gives the advice (it is about another model).
+  const auto h7 = run("report " + kControl + " --transform " + t.string() + " --model helmert7 -o " + path("rep7").string());
+  ASSERT_EQ(h7.exit_code, 0) << h7.err;
+  EXPECT_NE(slurp(path("rep7") / "report.txt").find("consider --model molodensky-badekas"), std::string::npos);
+}
+
+// issue 12 point 14
+TEST_F(WorkbenchCli, Point14_TheReportSaysEveryMarkIsLabelledOnThePlanAndDrawsItsEllipse) {
+  const auto t = path("t.json");
+  ASSERT_EQ(run("fit " + kControl + " --model helmert7 --convention position_vector -o " + t.string()).exit_code, 0);
+  const auto r = run("report " + kControl + " --transform " + t.string() + " -o " + path("rep").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = slurp(path("rep") / "report.txt");
+  EXPECT_NE(text.find("36 of 36 marks labelled with their id"), std::string::npos) << text;
+  EXPECT_NE(text.find("36 residual ellipses (95 %, 2.4477 σ of the a-posteriori residual covariance)"), std::string::npos) << text;
 }
 
 #ifdef GEOANCHOR_GUI_EXE

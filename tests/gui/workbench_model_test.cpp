@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
@@ -99,7 +100,7 @@ TEST(WorkbenchModel, TheComparisonPanelFitsEveryModelOnThePointsInUse) {
   const auto rows = model.comparison();
   std::vector<std::string> names;
   for (const auto& c : rows) names.push_back(std::string(solver::to_string(c.model)));
-  EXPECT_EQ(names, (std::vector<std::string>{"translation3", "helmert6", "helmert7"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"translation3", "helmert6", "helmert7", "molodensky-badekas"}));
   // Each row is the solver's fit of the same points without data snooping.
   solver::FitOptions o = helmert7_pv();
   o.data_snooping = false;
@@ -188,6 +189,127 @@ TEST(WorkbenchModel, ASavedTransformReopensWithItsModelConventionAndLeftOutPoint
     EXPECT_EQ(reopened.parameters()[i].value, model.parameters()[i].value) << model.parameters()[i].name;
   }
   std::filesystem::remove(path);
+}
+
+// issue 12 point 14
+TEST(WorkbenchModelPoint14, TheComparisonIncludesMolodenskyBadekasWithHelmert7sResidualsAndSaysSo) {
+  const geodesy::ControlSet set = io::read_control_set(kControl, io::ControlReadOptions{});
+  solver::FitOptions o = helmert7_pv();
+  o.model = solver::FitModel::molodensky_badekas;
+  WorkbenchModel model(set, o);
+  const auto& rows = model.comparison();
+  const auto find = [&](solver::FitModel m) {
+    const auto it = std::find_if(rows.begin(), rows.end(), [&](const auto& c) { return c.model == m; });
+    if (it == rows.end()) throw std::runtime_error("no row for " + std::string(solver::to_string(m)));
+    return *it;
+  };
+  const auto h7 = find(solver::FitModel::helmert7), mb = find(solver::FitModel::molodensky_badekas);
+  ASSERT_TRUE(h7.fit && mb.fit);
+  // One model in two parametrisations: the same residuals and statistics.
+  constexpr double kSameFit_m = 1e-9;     // both are solved from the same centred normal equations
+  constexpr double kSameSigma0 = 1e-9;    // relative
+  ASSERT_TRUE(mb.fit->sigma0 && h7.fit->sigma0);
+  EXPECT_NEAR(*mb.fit->sigma0, *h7.fit->sigma0, kSameSigma0 * *h7.fit->sigma0);
+  EXPECT_EQ(mb.parameters, h7.parameters);
+  EXPECT_NEAR(mb.aic, h7.aic, solver::kAicTie);
+  for (std::size_t i = 0; i < set.points.size(); ++i) {
+    EXPECT_NEAR((mb.fit->points[i].residual_enu_m - h7.fit->points[i].residual_enu_m).norm(), 0.0, kSameFit_m) << set.points[i].id;
+  }
+  // … but other parameters: the translation at the pivot.
+  EXPECT_GT(std::abs(mb.fit->parameters[0].value - h7.fit->parameters[0].value), 0.01);
+  EXPECT_NE(mb.note.find("same residuals"), std::string::npos) << mb.note;
+  EXPECT_TRUE(h7.note.empty());
+  // They tie for the lowest AIC or neither has it.
+  const auto lowest = solver::lowest_aic(rows);
+  const bool has_h7 = std::find(lowest.begin(), lowest.end(), solver::FitModel::helmert7) != lowest.end();
+  const bool has_mb = std::find(lowest.begin(), lowest.end(), solver::FitModel::molodensky_badekas) != lowest.end();
+  EXPECT_EQ(has_h7, has_mb);
+}
+
+// issue 12 point 14
+TEST(WorkbenchModelPoint14, AReportOrViewNeverAdvisesTheModelItIsAbout) {
+  const geodesy::ControlSet set = io::read_control_set(kControl, io::ControlReadOptions{});
+  const std::string advice = "consider --model molodensky-badekas";
+  // The bundled example under helmert7 gets the weak-geometry advice, and keeps it.
+  const solver::FitResult h7 = solver::fit_helmert(set, helmert7_pv());
+  const auto h7_shown = shown_warnings(h7);
+  EXPECT_TRUE(std::any_of(h7_shown.begin(), h7_shown.end(), [&](const std::string& w) { return w.find(advice) != std::string::npos; }));
+  // A molodensky-badekas fit never shows it, even if a warning carries it.
+  solver::FitOptions o = helmert7_pv();
+  o.model = solver::FitModel::molodensky_badekas;
+  solver::FitResult mb = solver::fit_helmert(set, o);
+  mb.warnings.push_back("weak geometry: … the transform is sound, its geocentric parameters are not individually meaningful; " + advice);
+  for (const auto& w : shown_warnings(mb)) EXPECT_EQ(w.find(advice), std::string::npos) << w;
+  EXPECT_EQ(shown_warnings(mb).back(),
+            "weak geometry: … the transform is sound, its geocentric parameters are not individually meaningful");
+  // Advice naming a longer model name is not taken for this one.
+  solver::FitResult t3 = mb;
+  t3.model = solver::FitModel::helmert6;
+  t3.warnings = {"x; consider --model helmert6x"};
+  EXPECT_EQ(shown_warnings(t3), t3.warnings);
+}
+
+// issue 12 point 14
+TEST(WorkbenchModelPoint14, EachMarksEllipseCovarianceIsItsResidualsAsTheSolversTestsSeeIt) {
+  // The fixture's sigmas are isotropic (3 mm source, 4 mm target per axis:
+  // its header), C = (0.003² + 0.004²) m² · I. Then the solver's redundancy
+  // number along local east is Q_v,EE / C_EE and its w-test v_E / sqrt(Q_v,EE)
+  // (Baarda; σ0 = 1): two routes to Q_v that do not go through
+  // residual_covariance_en_m2.
+  constexpr double kC_m2 = 0.003 * 0.003 + 0.004 * 0.004;
+  // The solver weights with C_target + J C_source Jᵀ, J ≈ I (helmert_fit.cpp):
+  // a relative error of about |r| + |ds| ≈ 1e-6 here; the rest is rounding.
+  constexpr double kRelTol = 1e-5;
+  const geodesy::ControlSet set = io::read_control_set(kControl, io::ControlReadOptions{});
+  WorkbenchModel model(set, helmert7_pv());
+  ASSERT_TRUE(model.fit().has_value()) << model.error();
+  const auto rows = model.rows();
+  const auto& fit = *model.fit();
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& p = fit.points[i];
+    const Eigen::Matrix2d q = rows[i].residual_cov_en_m2;
+    ASSERT_TRUE(q.allFinite()) << rows[i].id;
+    for (int axis = 0; axis < 2; ++axis) {
+      if (p.used) {
+        EXPECT_NEAR(q(axis, axis), p.redundancy_enu(axis) * kC_m2, kRelTol * kC_m2) << rows[i].id << " axis " << axis;
+      }
+      if (std::abs(p.w_enu(axis)) > 0.5) {  // v / w is well conditioned
+        const double sigma_v_m = std::abs(p.residual_enu_m(axis) / p.w_enu(axis));
+        EXPECT_NEAR(std::sqrt(q(axis, axis)), sigma_v_m, kRelTol * sigma_v_m) << rows[i].id << " axis " << axis;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 30u);
+  // The outlier P17 is tested against the fit: its prediction covariance C + AΣAᵀ exceeds C.
+  const auto p17 = std::find_if(rows.begin(), rows.end(), [](const PointRow& r) { return r.id == "P17"; });
+  ASSERT_TRUE(p17->outlier);
+  EXPECT_GT(p17->residual_cov_en_m2(1, 1), kC_m2);
+}
+
+// issue 12 point 14
+TEST(WorkbenchModelPoint14, AConfidenceEllipseHasTheCovariancesPrincipalAxesTimesK) {
+  // Q with principal standard deviations 2 and 1 mm, the major axis at
+  // azimuth 30° (east of north): Q = R diag(4, 1) Rᵀ mm², R's first column
+  // the unit vector (sin 30°, cos 30°) in (E, N).
+  const double az = 30.0 * std::numbers::pi / 180.0;
+  Eigen::Matrix2d r;
+  r << std::sin(az), std::cos(az), std::cos(az), -std::sin(az);
+  const Eigen::Matrix2d q = 1e-6 * (r * Eigen::Vector2d(4.0, 1.0).asDiagonal() * r.transpose());
+  constexpr double kTol_m = 1e-15;
+  constexpr double kTol_rad = 1e-12;
+  const Ellipse e = confidence_ellipse(q, 2.0);
+  EXPECT_NEAR(e.a_m, 2.0 * 0.002, kTol_m);
+  EXPECT_NEAR(e.b_m, 2.0 * 0.001, kTol_m);
+  EXPECT_NEAR(e.azimuth_rad, az, kTol_rad);
+  // χ²(2) at 0.95 is 5.9915 (NIST/SEMATECH e-Handbook, table 1.3.6.7.4).
+  EXPECT_NEAR(chi2_2d_factor(0.95), std::sqrt(5.991464547107979), 1e-12);
+  // Not a covariance: NaN, never a plausible ellipse.
+  EXPECT_TRUE(std::isnan(confidence_ellipse(Eigen::Matrix2d::Constant(std::nan("")), 2.0).a_m));
+  Eigen::Matrix2d negative = Eigen::Matrix2d::Identity();
+  negative(1, 1) = -1.0;
+  EXPECT_TRUE(std::isnan(confidence_ellipse(negative, 2.0).a_m));
 }
 
 }  // namespace

@@ -27,6 +27,10 @@ struct RgbImage {
   static RgbImage from_gl_rgba(int width, int height, const std::vector<std::uint8_t>& bottom_up_rgba);
 };
 
+// The PNG file's bytes (a report keeps many pages in memory this way: a
+// 1600×1000 view is about 0.2 MB as PNG, 4.8 MB as pixels). Throws
+// geoanchor::Error (io) naming `name` when encoding fails.
+std::string encode_png(const RgbImage& image, const std::string& name);
 // Writes the PNG atomically (temporary file, then rename). Throws
 // geoanchor::Error (io) naming the path.
 void write_png(const RgbImage& image, const std::filesystem::path& path, bool overwrite);

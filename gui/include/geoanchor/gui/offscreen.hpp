@@ -5,7 +5,9 @@
 // The same frames the GLFW window shows; used by `geoanchor snapshot`,
 // `geoanchor report` and the pixel tests. One renderer per thread.
 
+#include <array>
 #include <memory>
+#include <optional>
 
 #include "geoanchor/gui/image.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
@@ -22,8 +24,10 @@ class OffscreenRenderer {
   OffscreenRenderer& operator=(const OffscreenRenderer&) = delete;
 
   // Renders `view` until the layout has settled (auto-sized windows take a
-  // frame) and returns the last frame. The mouse is outside the window.
-  RgbImage render(WorkbenchUi& ui, View view);
+  // frame) and returns the last frame. The mouse is outside the window, or
+  // resting at `mouse_px` (x, y from the top-left corner) for the hover
+  // tests; it never clicks.
+  RgbImage render(WorkbenchUi& ui, View view, std::optional<std::array<float, 2>> mouse_px = std::nullopt);
   // One more frame, without reading it back (for benchmarks).
   void render_frame(WorkbenchUi& ui, View view);
 

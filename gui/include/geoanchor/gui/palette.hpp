@@ -18,6 +18,7 @@ inline constexpr Rgb kBar{86, 180, 233};         // Okabe–Ito sky blue: histog
 inline constexpr Rgb kCritical{204, 121, 167};   // Okabe–Ito reddish purple: critical values
 inline constexpr Rgb kPass{0, 158, 115};         // Okabe–Ito bluish green: passed tests
 inline constexpr Rgb kLeftOut{140, 140, 140};    // points the user left out
+inline constexpr Rgb kEllipse{0, 114, 178};      // Okabe–Ito blue: residual ellipses
 inline constexpr Rgb kGrid{215, 215, 215};
 
 // PuOr at t in [−1, 1]: −1 purple (#5e3c99), 0 near-white (#f7f7f7), +1

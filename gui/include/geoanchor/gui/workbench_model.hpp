@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include <future>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -30,7 +31,36 @@ struct PointRow {
   bool outlier = false;       // removed by data snooping
   bool left_out = false;      // the user left it out
   std::string note;           // why it was not used
+  // The covariance of the horizontal residual (E, N, m²) under the fit: the
+  // a-posteriori residual covariance Q_v = C − A Σθ Aᵀ of a mark in the fit,
+  // C + A Σθ Aᵀ of a mark tested against it (outliers, marks not used); C the
+  // mark's a-priori covariance as the solver weights it (target + J source
+  // Jᵀ, × the --vce factors, ÷ a robust weight), both × σ0² when the fit's
+  // covariance is. See residual_covariance_en_m2().
+  Eigen::Matrix2d residual_cov_en_m2 = Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
+
+// The covariance of `point`'s horizontal residual (local E, N, m²) under
+// `fit`, as PointRow::residual_cov_en_m2 says: the solver's own
+// (solver::PointResult::residual_cov_enu_m2, what its point tests use); for
+// site-calibration in grid E, N. NaN for an index outside the set.
+Eigen::Matrix2d residual_covariance_en_m2(const solver::FitResult& fit, const geodesy::ControlSet& control, std::size_t index);
+
+// The half-axes (a ≥ b, metres) and the azimuth of a (radians east of
+// north) of the ellipse { x : xᵀ Q⁻¹ x ≤ k² } of a 2 × 2 covariance Q (E, N,
+// m²); NaN when Q is not a finite positive semi-definite matrix.
+struct Ellipse {
+  double a_m = 0.0, b_m = 0.0, azimuth_rad = 0.0;
+};
+Ellipse confidence_ellipse(const Eigen::Matrix2d& cov_en_m2, double k);
+// k for a two-dimensional normal at probability p: sqrt(χ²₂(p)) = sqrt(−2 ln(1 − p)).
+double chi2_2d_factor(double p);
+
+// The fit's warnings as a report or view shows them: advice to switch to
+// the model that was fitted ("consider --model molodensky-badekas" on a
+// molodensky-badekas fit) is dropped from the warning that carries it, so
+// that no report advises the model it is about.
+std::vector<std::string> shown_warnings(const solver::FitResult& fit);
 
 // One parameter with its unit and σ, as the solver reports it.
 struct ParameterRow {

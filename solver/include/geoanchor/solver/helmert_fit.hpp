@@ -132,6 +132,10 @@ struct PointResult {
   int point_dof = 0;
   double point_p_value = 1.0;
   double robust_weight = 1.0;  // with a robust loss: the final IRLS weight
+  // The residual's covariance in local E, N, U (m²; for site-calibration:
+  // grid E, grid N, up): C − A Σθ Aᵀ in the fit, C + A Σθ Aᵀ for a point
+  // tested against it (its prediction), scaled like the parameter sigmas.
+  Eigen::Matrix3d residual_cov_enu_m2 = Eigen::Matrix3d::Zero();
 };
 
 struct FitResult {
