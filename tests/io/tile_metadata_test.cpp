@@ -216,7 +216,7 @@ TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
     EXPECT_EQ(line, "# a comment");
     std::getline(out, line);
     EXPECT_EQ(line, "id,lat_deg,lon_deg,h_m,class");
-    double worst_deg = 0, worst_h = 0;
+    testing::WorstCase worst_deg, worst_h;
     for (std::size_t i = 0; i < n && std::getline(out, line); ++i) {
       std::stringstream s(line);
       std::string id, lat, lon, hh, cls;
@@ -228,14 +228,15 @@ TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
       ASSERT_EQ(id, "P" + std::to_string(i));
       ASSERT_EQ(cls, std::to_string(i % 7));
       const Eigen::Vector3d e = to_geo.forward(pts[i]);
-      worst_deg = std::max({worst_deg, std::abs(std::stod(lat) - testing::proj_degrees(e.y())),
-                            std::abs(std::stod(lon) - testing::proj_degrees(e.x()))});
-      worst_h = std::max(worst_h, std::abs(std::stod(hh) - e.z()));
+      worst_deg.add(std::abs(std::stod(lat) - testing::proj_degrees(e.y())), i);
+      worst_deg.add(std::abs(std::stod(lon) - testing::proj_degrees(e.x())), i);
+      worst_h.add(std::abs(std::stod(hh) - e.z()), i);
     }
-    EXPECT_LT(worst_deg, kDegreeTol);
-    EXPECT_LT(worst_h, kVsProjTol_m);
-    ::testing::Test::RecordProperty("csv_worst_deg", testing::scientific(worst_deg));
-    ::testing::Test::RecordProperty("csv_worst_h_m", testing::scientific(worst_h));
+    EXPECT_EQ(worst_h.count(), n);  // every row read back
+    EXPECT_WORST_WITHIN(worst_deg, kDegreeTol);
+    EXPECT_WORST_WITHIN(worst_h, kVsProjTol_m);
+    ::testing::Test::RecordProperty("csv_worst_deg", testing::scientific(worst_deg.value()));
+    ::testing::Test::RecordProperty("csv_worst_h_m", testing::scientific(worst_h.value()));
   }
 
   // PLY, binary and ASCII: ENU(A) as float32 offsets and as doubles ->
@@ -285,7 +286,7 @@ TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
       EXPECT_NE(text.find("property double x\nproperty double y\nproperty double z\nproperty uchar red\n"), std::string::npos);
       EXPECT_EQ(text.substr(text.size() - face.size()), face);
       std::istringstream s(text.substr(body));
-      double worst = 0;
+      testing::WorstCase worst;
       for (std::size_t i = 0; i < m; ++i) {
         Eigen::Vector3d got;
         int red = 0;
@@ -298,11 +299,11 @@ TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
           s >> got.x() >> got.y() >> got.z() >> red;
         }
         ASSERT_EQ(red, static_cast<int>(i % 251));
-        worst = std::max(worst, (got - to_b.forward(used[i])).norm());
+        worst.add((got - to_b.forward(used[i])).norm(), i);
       }
-      EXPECT_LT(worst, kVsProjTol_m);
+      EXPECT_WORST_WITHIN(worst, kVsProjTol_m);
       ::testing::Test::RecordProperty(std::string("ply_worst_m_") + (binary ? "binary" : "ascii") + (as_float ? "_float" : "_double"),
-                                      testing::scientific(worst));
+                                      testing::scientific(worst.value()));
     }
   }
   // float32 is refused where it cannot hold the coordinates.
@@ -332,12 +333,12 @@ TEST(TileFormats, CrossAirportRoundTripClosesToANanometre) {
   auto x0 = x, y0 = y, z0 = z;
   there.apply(x, y, z);
   back.apply(x, y, z);
-  double worst = 0;
+  testing::WorstCase worst;
   for (std::size_t i = 0; i < x.size(); ++i) {
-    worst = std::max(worst, (Eigen::Vector3d(x[i], y[i], z[i]) - Eigen::Vector3d(x0[i], y0[i], z0[i])).norm());
+    worst.add((Eigen::Vector3d(x[i], y[i], z[i]) - Eigen::Vector3d(x0[i], y0[i], z0[i])).norm(), i);
   }
-  EXPECT_LT(worst, kCrossAirportTol_m);
-  ::testing::Test::RecordProperty("round_trip_worst_m", testing::scientific(worst));
+  EXPECT_WORST_WITHIN(worst, kCrossAirportTol_m);
+  ::testing::Test::RecordProperty("round_trip_worst_m", testing::scientific(worst.value()));
 }
 
 TEST(ControlExtentTest, DistanceIsZeroInsideAndGrowsOutside) {
