@@ -1,5 +1,6 @@
 // The test helpers that decide whether an accuracy test can fail: the
-// NaN-proof worst case (more follow). Each is checked by catching the
+// NaN-proof worst case and the PROJ reference's handling of PROJ's own
+// errors. Each is checked by catching the
 // failures it reports (gtest-spi), so that a helper that quietly passes
 // cannot hide behind the tests that use it.
 
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "proj_reference.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor::testing {
@@ -106,6 +108,37 @@ TEST(WorstCase, KeepsTheLargestAndWhereItWasAndMergesWithoutDroppingNan) {
   EXPECT_EQ(b.count(), 3u);
   EXPECT_EQ(b.first_nan_at(), 30u);
   EXPECT_EQ(b.largest_at(), 21u);
+}
+
+// issue 12, tests that can fail, item 2: PROJ's error for a point fails the
+// test, naming the pipeline, the point and PROJ's message (it was a silent
+// NaN that a careless worst case then dropped).
+TEST(ProjReference, AnErrorForAPointFailsTheTestNamingThePipelineThePointAndProjsMessage) {
+  static const std::string kUtm = "+proj=utm +zone=32 +ellps=WGS84";
+  const ProjPipeline utm(kUtm);
+  Eigen::Vector3d got;
+  const auto f = failures_of([&] { got = utm.inverse(Eigen::Vector3d(1e30, 0.0, 0.0)); });
+  ASSERT_EQ(f.size(), 1u);
+  const std::string m = f[0];
+  EXPECT_TRUE(contains(m, "PROJ reported an error")) << m;
+  EXPECT_TRUE(contains(m, "outside of projection domain")) << m;  // PROJ's own words
+  EXPECT_TRUE(contains(m, "inverse of (1e+30, 0, 0, t=0)")) << m;
+  EXPECT_TRUE(contains(m, "'" + kUtm + "'")) << m;
+  EXPECT_TRUE(got.array().isNaN().all());
+
+  // The explicit form, for tests that probe PROJ's own failures.
+  const auto g = failures_of([&] {
+    const ProjPipeline::Result r = utm.try_inverse(Eigen::Vector3d(1e30, 0.0, 0.0));
+    EXPECT_FALSE(r.ok());
+    EXPECT_NE(r.proj_errno, 0);
+    EXPECT_TRUE(contains(r.error, "outside of projection domain")) << r.error;
+    EXPECT_TRUE(r.xyz.array().isNaN().all());
+  });
+  EXPECT_EQ(g.size(), 0u);
+  const ProjPipeline::Result fine = utm.try_forward(Eigen::Vector3d(proj_radians(9.0), proj_radians(47.0), 0.0));
+  EXPECT_TRUE(fine.ok());
+  EXPECT_TRUE(fine.xyz.allFinite());
+  EXPECT_TRUE(fine.error.empty());
 }
 
 }  // namespace
