@@ -14,6 +14,7 @@
 
 #include <benchmark/benchmark.h>
 #include <proj.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -21,6 +22,8 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -197,13 +200,23 @@ void stream_copy(benchmark::State& state) {
 
 // ---------------------------------------------------------------- LAS
 
+// A folder of this run's own (mkdtemp: two runs at once, e.g. from two
+// worktrees, must not write each other's tiles), removed at exit.
 fs::path las_dir() {
-  static const fs::path d = [] {
-    const fs::path p = fs::temp_directory_path() / "geoanchor_apply_bench";
-    fs::create_directories(p);
-    return p;
-  }();
-  return d;
+  struct Folder {
+    fs::path p;
+    Folder() {
+      std::string templ = (fs::temp_directory_path() / "geoanchor_apply_bench_XXXXXX").string();
+      if (::mkdtemp(templ.data()) == nullptr) throw std::runtime_error("cannot create a folder from " + templ);
+      p = templ;
+    }
+    ~Folder() {
+      std::error_code ignored;
+      fs::remove_all(p, ignored);
+    }
+  };
+  static const Folder d;
+  return d.p;
 }
 
 // A LAS 1.4 point format 6 tile of kLasPoints in ENU at A, 1 mm.

@@ -11,6 +11,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geoid.hpp"
 #include "proj_reference.hpp"
+#include "temp_folder.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor::geodesy {
@@ -112,8 +113,10 @@ TEST(Egm96, ARangeOfKnownMagnitudes) {
   EXPECT_TRUE(std::isnan(g.undulation_m(Angle::degrees(std::nan("")), Angle::degrees(0.0))));
 }
 
+// issue 12, tests that can fail, item 6: a folder of the test's own.
 TEST(GeoidGrid, RefusesFilesThatAreNotGtxGridsNamingThem) {
-  const auto dir = std::filesystem::path(::testing::TempDir());
+  const testing::TempFolder folder;
+  const auto& dir = folder.path();
   const auto short_file = dir / "geoanchor_short.gtx";
   std::ofstream(short_file, std::ios::binary) << "not a grid";
   try {
@@ -137,8 +140,6 @@ TEST(GeoidGrid, RefusesFilesThatAreNotGtxGridsNamingThem) {
     EXPECT_NE(std::string(e.what()).find("1000 bytes; a 721 × 1440 .gtx grid has 4153000"), std::string::npos) << e.what();
   }
   EXPECT_THROW((void)GeoidGrid::load_gtx(dir / "geoanchor_none.gtx", "x"), Error);
-  std::filesystem::remove(short_file);
-  std::filesystem::remove(dir / "geoanchor_cut.gtx");
 }
 
 }  // namespace

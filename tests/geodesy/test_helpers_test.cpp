@@ -1,6 +1,6 @@
 // The test helpers that decide whether an accuracy test can fail: the
-// NaN-proof worst case and the PROJ reference's handling of PROJ's own
-// errors. Each is checked by catching the
+// NaN-proof worst case, the PROJ reference's handling of PROJ's own errors,
+// and the per-test temporary folder. Each is checked by catching the
 // failures it reports (gtest-spi), so that a helper that quietly passes
 // cannot hide behind the tests that use it.
 
@@ -9,11 +9,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "proj_reference.hpp"
+#include "temp_folder.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor::testing {
@@ -139,6 +142,23 @@ TEST(ProjReference, AnErrorForAPointFailsTheTestNamingThePipelineThePointAndProj
   EXPECT_TRUE(fine.ok());
   EXPECT_TRUE(fine.xyz.allFinite());
   EXPECT_TRUE(fine.error.empty());
+}
+
+// issue 12, tests that can fail, item 6: every test's folder is its own.
+TEST(TempFolder, EachIsFreshAndItsOwnAndGoesWithItsContents) {
+  std::filesystem::path kept;
+  {
+    const TempFolder a, b("other_prefix");
+    EXPECT_NE(a.path(), b.path());
+    EXPECT_TRUE(std::filesystem::is_directory(a.path()));
+    EXPECT_TRUE(std::filesystem::is_empty(a.path()));
+    EXPECT_TRUE(contains(a.path().filename().string(), "TempFolder_EachIsFreshAndItsOwnAndGoesWithItsContents"))
+        << a.path();
+    EXPECT_TRUE(std::filesystem::equivalent(a.path().parent_path(), ::testing::TempDir())) << a.path();
+    std::ofstream(a / "x.txt") << "x";
+    kept = a.path();
+  }
+  EXPECT_FALSE(std::filesystem::exists(kept));
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <random>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -13,6 +14,7 @@
 #include "geoanchor/io/tile_apply.hpp"
 #include "las_builder.hpp"
 #include "proj_reference.hpp"
+#include "temp_folder.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor::io {
@@ -57,14 +59,12 @@ ArrayFrame enu_frame(const geodesy::LocalOrigin& o) {
 
 class LasTileTest : public ::testing::Test {
  protected:
+  // issue 12, tests that can fail, item 6: a folder of the test's own
+  // (mkdtemp; a fixed name per test was shared by two runs of the suite),
+  // removed unless the test failed.
   void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("geoanchor_las_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
+    folder_.emplace("geoanchor_las");
+    dir_ = folder_->path();
   }
   fs::path write(const std::string& name, const LasBuild& b) const {
     write_bytes(dir_ / name, build_las(b));
@@ -93,6 +93,7 @@ class LasTileTest : public ::testing::Test {
     }
     return xyz;
   }
+  std::optional<testing::TempFolder> folder_;
   fs::path dir_;
 };
 

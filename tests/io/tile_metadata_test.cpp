@@ -13,6 +13,7 @@
 #include "geoanchor/io/tile_apply.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
 #include "proj_reference.hpp"
+#include "temp_folder.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor::io {
@@ -184,7 +185,8 @@ TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
   const ProjPipeline to_geo("+proj=pipeline +step +inv " + topocentric(a) +
                             " +step +proj=helmert +x=0.0547 +y=0.0522 +z=-0.0741 +rx=0.00228 +ry=0.01404 +rz=-0.02168 "
                             "+s=0.00212 +convention=coordinate_frame +step +inv +proj=cart +ellps=GRS80");
-  const fs::path dir = fs::path(::testing::TempDir());
+  const testing::TempFolder folder;  // issue 12, tests that can fail, item 6: was TempDir() itself, fixed names
+  const fs::path& dir = folder.path();
 
   // CSV: ENU(A) -> Helmert -> geodetic, an id and a class column kept.
   {
