@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/float32.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/tile_apply.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
@@ -167,11 +168,6 @@ std::string topocentric(const geodesy::LocalOrigin& o) {
          " +lon_0=" + format_shortest(o.point.lon.deg()) + " +h_0=" + format_shortest(o.point.h.m);
 }
 
-// The float32 value of v. Out of line on purpose: GCC 12.2's SLP vectorizer
-// (-O2 and above) was seen to drop the float truncation of
-// `double{float_array[k]}` inside a loop here, keeping the double.
-[[gnu::noinline]] double as_float32(double v) { return static_cast<float>(v); }
-
 TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
   const auto a = origin(47.464722, 8.549167, 480.0), b = origin(47.2597, 11.3439, 581.0);
   const ArrayFrame fa{CoordinateKind::enu, geodesy::Ellipsoid::grs80(), a, std::nullopt};
@@ -248,7 +244,9 @@ TEST(TileFormats, CsvAndPlyTilesAgreeWithProjAndKeepTheirOtherColumns) {
       std::vector<Eigen::Vector3d> used(m);
       for (std::size_t i = 0; i < m; ++i) {
         const Eigen::Vector3d p =
-            as_float ? Eigen::Vector3d(as_float32(pts[i].x()), as_float32(pts[i].y()), as_float32(pts[i].z())) : pts[i];
+            as_float ? Eigen::Vector3d(geodesy::round_to_float32(pts[i].x()), geodesy::round_to_float32(pts[i].y()),
+                                       geodesy::round_to_float32(pts[i].z()))
+                     : pts[i];
         const float f[3] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())};
         used[i] = p;
         if (binary) {
