@@ -41,7 +41,7 @@ std::vector<std::string> failures_of(F f) {
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-// issue 12, tests that can fail, item 1: std::max(worst, NaN) is worst, so a
+// issue 12, tests that can fail, item 1: std::max(w, NaN) is w, so a
 // comparison against a build that returns NaN everywhere passed.
 TEST(WorstCase, ANanAnywhereMakesTheWorstCaseNanAndTheAssertionFail) {
   EXPECT_EQ(std::max(0.0, kNan), 0.0);  // what the old tests did

@@ -1,9 +1,9 @@
 #pragma once
 // Worst cases of accuracy comparisons that cannot drop a NaN.
 //
-// `worst = std::max(worst, d)` keeps `worst` when `d` is NaN (every
+// `w = std::max(w, d)` keeps `w` when `d` is NaN (every
 // comparison with NaN is false), so a comparison whose code under test
-// returns NaN for every point ends with worst = 0 and passes. Every
+// returns NaN for every point ends with w = 0 and passes. Every
 // accuracy comparison in tests/ and bench/ goes through this header
 // instead: a NaN anywhere makes the worst case NaN, and a worst case of no
 // comparison at all is NaN too (a loop that never ran proves nothing).
