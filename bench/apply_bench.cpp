@@ -14,6 +14,7 @@
 
 #include <benchmark/benchmark.h>
 #include <proj.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -21,12 +22,15 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
 #include "geoanchor/io/las.hpp"
 #include "geoanchor/io/point_chain.hpp"
 #include "geoanchor/io/tile_apply.hpp"
+#include "accuracy.hpp"
 #include "median_reporter.hpp"
 
 namespace {
@@ -196,13 +200,23 @@ void stream_copy(benchmark::State& state) {
 
 // ---------------------------------------------------------------- LAS
 
+// A folder of this run's own (mkdtemp: two runs at once, e.g. from two
+// worktrees, must not write each other's tiles), removed at exit.
 fs::path las_dir() {
-  static const fs::path d = [] {
-    const fs::path p = fs::temp_directory_path() / "geoanchor_apply_bench";
-    fs::create_directories(p);
-    return p;
-  }();
-  return d;
+  struct Folder {
+    fs::path p;
+    Folder() {
+      std::string templ = (fs::temp_directory_path() / "geoanchor_apply_bench_XXXXXX").string();
+      if (::mkdtemp(templ.data()) == nullptr) throw std::runtime_error("cannot create a folder from " + templ);
+      p = templ;
+    }
+    ~Folder() {
+      std::error_code ignored;
+      fs::remove_all(p, ignored);
+    }
+  };
+  static const Folder d;
+  return d.p;
 }
 
 // A LAS 1.4 point format 6 tile of kLasPoints in ENU at A, 1 mm.
@@ -292,28 +306,28 @@ double max_difference_m(const io::PointChain& chain, const std::string& proj_def
   chain.apply(w.a, w.b, w.c);
   std::vector<double> x = source().e, y = source().n, z = source().u;
   Proj(proj_def).run(x, y, z);
-  double worst = 0;
+  // NaN on either side is reported as NaN, never dropped (tests/support/accuracy.hpp).
+  geoanchor::testing::WorstCase worst;
   constexpr double kMetresPerRadian = 6378137.0;
   for (std::size_t i = 0; i < kPoints; ++i) {
-    double d = 0;
-    if (std::isnan(x[i]) || std::isnan(y[i]) || std::isnan(z[i])) {
-      return std::nan("");  // reported, not hidden
-    }
     if (geodetic) {  // ours: lat, lon (degrees); PROJ's: lon, lat (radians)
-      d = std::max({std::abs(proj_torad(w.a[i]) - y[i]) * kMetresPerRadian,
-                    std::abs(proj_torad(w.b[i]) - x[i]) * kMetresPerRadian, std::abs(w.c[i] - z[i])});
+      worst.add(std::abs(proj_torad(w.a[i]) - y[i]) * kMetresPerRadian, i);
+      worst.add(std::abs(proj_torad(w.b[i]) - x[i]) * kMetresPerRadian, i);
     } else {
-      d = std::max({std::abs(w.a[i] - x[i]), std::abs(w.b[i] - y[i]), std::abs(w.c[i] - z[i])});
+      worst.add(std::abs(w.a[i] - x[i]), i);
+      worst.add(std::abs(w.b[i] - y[i]), i);
     }
-    worst = std::max(worst, d);
+    worst.add(std::abs(w.c[i] - z[i]), i);
   }
-  return worst;
+  if (worst.nan_count() > 0) std::printf("  geoanchor vs PROJ: %s\n", worst.describe().c_str());
+  return worst.value();
 }
 
 void print_table(const bench::MedianReporter& r) {
+  // NaN (printed as "nan", never a plausible number) for a benchmark that did not run.
   auto mpts = [&](const char* name, std::size_t n) {
     const double s = r.median_s(name);
-    return s > 0 ? static_cast<double>(n) / s / 1e6 : -1.0;
+    return s > 0 ? static_cast<double>(n) / s / 1e6 : std::nan("");
   };
   const double fused = mpts("fused_enu_to_enu", kPoints), proj = mpts("proj_enu_to_enu", kPoints);
   const double fused_geo = mpts("fused_enu_to_geodetic", kPoints), proj_geo = mpts("proj_enu_to_geodetic", kPoints);

@@ -116,9 +116,10 @@ void print_table(const geoanchor::bench::MedianReporter& r) {
   std::printf("\n%-9s %-6s %14s %16s %8s\n", "points", "model", "fit median s", "closed-form s", "ratio");
   for (const char* m : {"7", "14"}) {
     for (int n = 100; n <= 1000000; n *= 10) {
-      const double f = r.median_s(std::string("fit") + m + "/" + std::to_string(n));
-      const double c = r.median_s(std::string("closed") + m + "/" + std::to_string(n));
-      if (f < 0 || c < 0) continue;
+      const std::string fit = std::string("fit") + m + "/" + std::to_string(n);
+      const std::string closed = std::string("closed") + m + "/" + std::to_string(n);
+      if (!r.ran(fit) && !r.ran(closed)) continue;  // both filtered out; one missing prints nan
+      const double f = r.median_s(fit), c = r.median_s(closed);
       std::printf("%-9d %-6s %14.4f %16.4f %8.1f\n", n, m, f, c, f / c);
     }
   }

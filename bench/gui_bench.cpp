@@ -5,7 +5,10 @@
 
 #include <benchmark/benchmark.h>
 
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -86,7 +89,15 @@ void frame(benchmark::State& state, gui::View view) {
 
 void snapshot_total(benchmark::State& state) {
   const auto set = io::read_control_set(std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv", io::ControlReadOptions{});
-  const auto out = std::filesystem::temp_directory_path() / "geoanchor_gui_bench.png";
+  // A name of this run's own (mkstemps): two runs at once must not share one.
+  std::string templ = (std::filesystem::temp_directory_path() / "geoanchor_gui_bench_XXXXXX.png").string();
+  const int fd = ::mkstemps(templ.data(), 4);
+  if (fd < 0) {
+    state.SkipWithError(("cannot create " + templ).c_str());
+    return;
+  }
+  ::close(fd);
+  const std::filesystem::path out = templ;
   for (auto _ : state) {
     solver::FitOptions o;
     o.model = solver::FitModel::helmert7;

@@ -4,6 +4,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -22,11 +23,13 @@ class MedianReporter : public benchmark::ConsoleReporter {
     }
     ConsoleReporter::ReportRuns(runs);
   }
-  // Median seconds per iteration of `name` ("fit7/1000"), or -1 if it did not run.
+  // Median seconds per iteration of `name` ("fit7/1000"), or NaN if it did
+  // not run (filtered out): a table prints "nan" there, never a number.
   double median_s(const std::string& name) const {
     const auto it = medians_s_.find(name);
-    return it == medians_s_.end() ? -1.0 : it->second;
+    return it == medians_s_.end() ? std::numeric_limits<double>::quiet_NaN() : it->second;
   }
+  bool ran(const std::string& name) const { return medians_s_.count(name) != 0; }
 
  private:
   std::map<std::string, double> medians_s_;

@@ -130,6 +130,8 @@ TEST_F(ConvertCli, StreamsStdinToStdoutWithPrecision) {
   EXPECT_EQ(r.out, "id,lat_deg,lon_deg,h_m\nA,53.80939444,2.12955000,73.000\n");
 }
 
+// issue 12, tests that can fail, item 4: both rows against PROJ (the
+// first was checked only for its zone name).
 TEST_F(ConvertCli, UtmOutputNamesEachPointsZoneAndReadsItBack) {
   write("in.csv", "id,lat_deg,lon_deg,h_m\nZH,47.46,8.55,480\nSYD,-33.95,151.18,21\n");
   const RunResult r = run("convert " + path("in.csv").string() + " --to utm -o " + path("utm.csv").string());
@@ -137,6 +139,10 @@ TEST_F(ConvertCli, UtmOutputNamesEachPointsZoneAndReadsItBack) {
   const Table t = parse_table(slurp(path("utm.csv")));
   EXPECT_EQ(t.rows[0][t.col("utm_zone")], "32N");
   EXPECT_EQ(t.rows[1][t.col("utm_zone")], "56S");
+  const ProjPipeline utm32n("+proj=utm +zone=32 +ellps=WGS84");
+  const Eigen::Vector3d ref_zh = utm32n.forward({proj_radians(8.55), proj_radians(47.46), 480.0});
+  EXPECT_NEAR(t.num(0, "easting_m"), ref_zh.x(), kVsProjEnuTol_m);
+  EXPECT_NEAR(t.num(0, "northing_m"), ref_zh.y(), kVsProjEnuTol_m);
   const ProjPipeline utm56s("+proj=utm +zone=56 +south +ellps=WGS84");
   const Eigen::Vector3d ref = utm56s.forward({proj_radians(151.18), proj_radians(-33.95), 21.0});
   EXPECT_NEAR(t.num(1, "easting_m"), ref.x(), kVsProjEnuTol_m);
@@ -155,6 +161,9 @@ const char* kGda94Transform = R"({"model": "helmert14", "convention": "position_
   "dtz_m_per_year": 0.00090, "drx_arcsec_per_year": -0.0015461, "dry_arcsec_per_year": -0.0011820,
   "drz_arcsec_per_year": -0.0011551, "dds_ppm_per_year": 0.000109}})";
 
+// issue 12, tests that can fail, item 4: the --epoch output against the
+// published value too (it was only taken back by --inverse, i.e. compared
+// with geoanchor itself).
 TEST_F(ConvertCli, AppliesAFourteenParameterTransformAtTheObservationEpoch) {
   // IOGP GN 7-2, EPSG method 1053 example: ITRF2008 at 2013.90 -> GDA94.
   write("T.json", kGda94Transform);
@@ -172,6 +181,10 @@ TEST_F(ConvertCli, AppliesAFourteenParameterTransformAtTheObservationEpoch) {
   const RunResult r2 = run("convert " + path("in2.csv").string() + " --to ecef --epoch 2013.9 --transform " +
                      path("T.json").string() + " -o " + path("gda94.csv").string());
   ASSERT_EQ(r2.exit_code, 0) << r2.err;
+  const Table g = parse_table(slurp(path("gda94.csv")));
+  EXPECT_NEAR(g.num(0, "x_m"), -3789470.004, kPublishedTol_m);
+  EXPECT_NEAR(g.num(0, "y_m"), 4841770.686, kPublishedTol_m);
+  EXPECT_NEAR(g.num(0, "z_m"), -1690895.108, kPublishedTol_m);
   const RunResult back = run("convert " + path("gda94.csv").string() + " --to ecef --epoch 2013.9 --inverse --transform " +
                        path("T.json").string());
   ASSERT_EQ(back.exit_code, 0) << back.err;

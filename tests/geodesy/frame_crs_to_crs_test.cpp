@@ -12,6 +12,7 @@
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "proj_reference.hpp"
+#include "test_support.hpp"
 
 namespace geoanchor::geodesy {
 namespace {
@@ -41,17 +42,20 @@ struct Pair {
   double epoch;
 };
 
-double worst_difference_m(const Pair& p, std::string* description) {
+// The distances between the two, metres (NaN-proof: a path that returned
+// NaN passed this test while the worst case was a std::max).
+testing::WorstCase worst_difference_m(const Pair& p, std::string* description) {
   const FramePath path = find_frame_path(p.from, p.to, "test");
   const ProjPipeline proj = ProjPipeline::crs_to_crs(p.from_crs, p.to_crs);
   *description = proj.description();
-  double worst = 0.0;
+  testing::WorstCase worst;
   for (const auto& x : marks(p.lat0, p.lat1, p.lon0, p.lon1)) {
-    worst = std::max(worst, (path.apply(x, DecimalYear{p.epoch}).m - proj.forward(x.m, p.epoch)).norm());
+    worst.add((path.apply(x, DecimalYear{p.epoch}).m - proj.forward(x.m, p.epoch)).norm());
   }
   return worst;
 }
 
+// issue 12, tests that can fail, item 1: NaN from a frame path fails.
 TEST(FramesAgainstProjsOwnChoice, AgreeToAMillimetreWhereProjPicksTheSameOperation) {
   const Pair kPairs[] = {
       {"ITRF2014", "ITRF2020", "EPSG:7789", "EPSG:9988", -60, 60, -180, 180, 2024.5},
@@ -67,8 +71,8 @@ TEST(FramesAgainstProjsOwnChoice, AgreeToAMillimetreWhereProjPicksTheSameOperati
   };
   for (const auto& p : kPairs) {
     std::string description;
-    const double worst = worst_difference_m(p, &description);
-    EXPECT_LT(worst, kSameOperation_m) << p.from << " -> " << p.to << " (PROJ: " << description << ")";
+    const testing::WorstCase worst = worst_difference_m(p, &description);
+    EXPECT_WORST_WITHIN(worst, kSameOperation_m) << p.from << " -> " << p.to << " (PROJ: " << description << ")";
   }
 }
 
@@ -77,6 +81,7 @@ TEST(FramesAgainstProjsOwnChoice, AgreeToAMillimetreWhereProjPicksTheSameOperati
 // ETRF2014 through ITRF97 (geoanchor: ITRF2014), GDA94 → ITRF2014 by EPSG's
 // direct set (geoanchor: through GDA2020). The published sets are chained
 // consistently, so the routes still agree to 2e-7 m (docs/frames.md).
+// issue 12, tests that can fail, item 1: NaN from a frame path fails.
 TEST(FramesAgainstProjsOwnChoice, PathsThroughAHubAgreeWhicheverHubPicks) {
   const Pair kPairs[] = {
       {"ITRF2020", "ETRF2000", "EPSG:9988", "EPSG:7930", 36, 70, -10, 30, 2024.5},
@@ -89,8 +94,8 @@ TEST(FramesAgainstProjsOwnChoice, PathsThroughAHubAgreeWhicheverHubPicks) {
   };
   for (const auto& p : kPairs) {
     std::string description;
-    const double worst = worst_difference_m(p, &description);
-    EXPECT_LT(worst, kSameOperation_m) << p.from << " -> " << p.to << " at " << p.epoch << " (PROJ: " << description << ")";
+    const testing::WorstCase worst = worst_difference_m(p, &description);
+    EXPECT_WORST_WITHIN(worst, kSameOperation_m) << p.from << " -> " << p.to << " at " << p.epoch << " (PROJ: " << description << ")";
   }
 }
 

@@ -50,21 +50,23 @@ TEST_P(GeocentricVsProj, ForwardAgreesWorldwideFromMinus1kmTo40000km) {
   const ProjPipeline cart(std::string("+proj=cart +ellps=") + GetParam());
   const GeocentricConverter conv(e);
   const auto points = testing::worldwide_points(10000, -1000.0, 4.0e7);
-  double worst_low_m = 0.0, worst_high_rel = 0.0;
+  testing::WorstCase worst_low_m, worst_high_rel;
   for (const auto& p : points) {
     const Eigen::Vector3d ours = conv.ecef_from_geodetic(p).m;
     const Eigen::Vector3d ref = cart.forward({proj_radians(p.lon.deg()), proj_radians(p.lat.deg()), p.h.m});
     const double tol = p.h.m <= 10000.0 ? kForwardTol_m : kForwardRelTol * ref.norm();
     const double d = (ours - ref).norm();
     if (p.h.m <= 10000.0) {
-      worst_low_m = std::max(worst_low_m, d);
+      worst_low_m.add(d);
     } else {
-      worst_high_rel = std::max(worst_high_rel, d / ref.norm());
+      worst_high_rel.add(d / ref.norm());
     }
     ASSERT_LE(d, tol) << "lat " << p.lat.deg() << " lon " << p.lon.deg() << " h " << p.h.m;
   }
-  RecordProperty("worst_forward_difference_up_to_10km_m", testing::scientific(worst_low_m));
-  RecordProperty("worst_forward_relative_difference_above_10km", testing::scientific(worst_high_rel));
+  EXPECT_WORST_WITHIN(worst_low_m, kForwardTol_m);
+  EXPECT_WORST_WITHIN(worst_high_rel, kForwardRelTol);
+  RecordProperty("worst_forward_difference_up_to_10km_m", testing::scientific(worst_low_m.value()));
+  RecordProperty("worst_forward_relative_difference_above_10km", testing::scientific(worst_high_rel.value()));
 }
 
 TEST_P(GeocentricVsProj, InverseAgreesWithProjNearTheSurface) {
@@ -105,21 +107,23 @@ TEST(Geocentric, InverseAgreesWithGeographicLibEverywhere) {
 
 TEST(Geocentric, RoundTripClosesTo1e8mFromMinus1kmTo40000km) {
   const GeocentricConverter conv(Ellipsoid::grs80());
-  double worst_low_m = 0.0, worst_high_rel = 0.0;
+  testing::WorstCase worst_low_m, worst_high_rel;
   for (const auto& p : testing::worldwide_points(10000, -1000.0, 4.0e7, 13)) {
     const EcefPosition x = conv.ecef_from_geodetic(p);
     const EcefPosition again = conv.ecef_from_geodetic(conv.geodetic_from_ecef(x));
     const double d = (again.m - x.m).norm();
     if (p.h.m <= 10000.0) {
-      worst_low_m = std::max(worst_low_m, d);
+      worst_low_m.add(d);
     } else {
-      worst_high_rel = std::max(worst_high_rel, d / x.m.norm());
+      worst_high_rel.add(d / x.m.norm());
     }
     const double tol = p.h.m <= 10000.0 ? kRoundTripTol_m : kRoundTripRelTol * x.m.norm();
     ASSERT_LE(d, tol) << "lat " << p.lat.deg() << " lon " << p.lon.deg() << " h " << p.h.m;
   }
-  RecordProperty("worst_round_trip_up_to_10km_m", testing::scientific(worst_low_m));
-  RecordProperty("worst_round_trip_relative_above_10km", testing::scientific(worst_high_rel));
+  EXPECT_WORST_WITHIN(worst_low_m, kRoundTripTol_m);
+  EXPECT_WORST_WITHIN(worst_high_rel, kRoundTripRelTol);
+  RecordProperty("worst_round_trip_up_to_10km_m", testing::scientific(worst_low_m.value()));
+  RecordProperty("worst_round_trip_relative_above_10km", testing::scientific(worst_high_rel.value()));
 }
 
 TEST(Geocentric, PolesAndAntimeridianAreExact) {

@@ -15,6 +15,7 @@
 #include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/gui/workbench_model.hpp"
 #include "geoanchor/io/control_csv.hpp"
+#include "temp_folder.hpp"
 
 namespace geoanchor::gui {
 namespace {
@@ -145,10 +146,10 @@ nlohmann::json read_json(const std::filesystem::path& p) {
   return nlohmann::json::parse(in);
 }
 
+// issue 12, tests that can fail, item 6: a folder of the test's own.
 TEST(WorkbenchModel, SaveTransformWritesWhatGeoanchorFitWrites) {
-  const auto dir = std::filesystem::path(::testing::TempDir()) / "geoanchor_workbench_save";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const testing::TempFolder folder;
+  const auto& dir = folder.path();
   const auto by_fit = dir / "fit.json", by_gui = dir / "gui.json";
   const std::string cmd = std::string(GEOANCHOR_EXE) + " fit " + kControl + " --model helmert7 --convention position_vector -o " +
                           by_fit.string() + " > /dev/null 2>&1";
@@ -163,9 +164,9 @@ TEST(WorkbenchModel, SaveTransformWritesWhatGeoanchorFitWrites) {
   // An existing file is refused unless overwrite is asked for.
   EXPECT_THROW(model.save_transform(by_gui.string(), false, "geoanchor test"), Error);
   EXPECT_NO_THROW(model.save_transform(by_gui.string(), true, "geoanchor test"));
-  std::filesystem::remove_all(dir);
 }
 
+// issue 12, tests that can fail, item 6: a folder of the test's own.
 TEST(WorkbenchModel, ASavedTransformReopensWithItsModelConventionAndLeftOutPoints) {
   const geodesy::ControlSet set = io::read_control_set(kControl, io::ControlReadOptions{});
   solver::FitOptions o = helmert7_pv();
@@ -175,7 +176,8 @@ TEST(WorkbenchModel, ASavedTransformReopensWithItsModelConventionAndLeftOutPoint
   WorkbenchModel model(set, o);
   model.set_left_out("P05", true);
   ASSERT_TRUE(model.fit().has_value()) << model.error();
-  const auto path = std::filesystem::path(::testing::TempDir()) / "geoanchor_workbench_reopen.json";
+  const testing::TempFolder folder;
+  const auto path = folder / "reopen.json";
   model.save_transform(path.string(), true, "geoanchor test");
   const FitChoices c = fit_choices_from_transform(io::read_transform_file(path));
   EXPECT_EQ(c.options.model, solver::FitModel::molodensky_badekas);
@@ -188,7 +190,6 @@ TEST(WorkbenchModel, ASavedTransformReopensWithItsModelConventionAndLeftOutPoint
   for (std::size_t i = 0; i < model.parameters().size(); ++i) {
     EXPECT_EQ(reopened.parameters()[i].value, model.parameters()[i].value) << model.parameters()[i].name;
   }
-  std::filesystem::remove(path);
 }
 
 // issue 12 point 14

@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <random>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -13,6 +14,7 @@
 #include "geoanchor/io/tile_apply.hpp"
 #include "las_builder.hpp"
 #include "proj_reference.hpp"
+#include "temp_folder.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor::io {
@@ -57,14 +59,12 @@ ArrayFrame enu_frame(const geodesy::LocalOrigin& o) {
 
 class LasTileTest : public ::testing::Test {
  protected:
+  // issue 12, tests that can fail, item 6: a folder of the test's own
+  // (mkdtemp; a fixed name per test was shared by two runs of the suite),
+  // removed unless the test failed.
   void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("geoanchor_las_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
+    folder_.emplace("geoanchor_las");
+    dir_ = folder_->path();
   }
   fs::path write(const std::string& name, const LasBuild& b) const {
     write_bytes(dir_ / name, build_las(b));
@@ -93,6 +93,7 @@ class LasTileTest : public ::testing::Test {
     }
     return xyz;
   }
+  std::optional<testing::TempFolder> folder_;
   fs::path dir_;
 };
 
@@ -216,19 +217,20 @@ TEST_F(LasTileTest, EveryOutputKindAgreesWithProjToHalfTheQuantizationStep) {
     ASSERT_EQ(xout.size(), n);
     const ProjPipeline proj("+proj=pipeline +step +inv " + topocentric(kArpA).substr(0) + " +step " + kProjHelmert + " " +
                             c.proj_tail);
-    std::array<double, 3> worst{};
+    std::array<testing::WorstCase, 3> worst;
     for (std::size_t i = 0; i < n; ++i) {
       Eigen::Vector3d e = proj.forward(Eigen::Vector3d(xin[i][0], xin[i][1], xin[i][2]));
       if (c.geodetic) e = Eigen::Vector3d(testing::proj_degrees(e.x()), testing::proj_degrees(e.y()), e.z());  // lon, lat
       for (std::size_t k = 0; k < 3; ++k) {
         const bool degrees = c.geodetic && k < 2;
         const double tol = 0.5 * r.scale[k] + (degrees ? kVsProjTol_m / kMetresPerDegree : kVsProjTol_m);
-        worst[k] = std::max(worst[k], std::abs(xout[i][k] - e(static_cast<Eigen::Index>(k))) / tol);
+        worst[k].add(std::abs(xout[i][k] - e(static_cast<Eigen::Index>(k))) / tol, i);
       }
     }
-    for (std::size_t k = 0; k < 3; ++k) EXPECT_LE(worst[k], 1.0) << "axis " << k << " (1 = half a step + 1 µm)";
-    ::testing::Test::RecordProperty(std::string("worst_fraction_of_half_step_plus_1um ") + c.name,
-                                    testing::scientific(std::max({worst[0], worst[1], worst[2]})));
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_WORST_WITHIN(worst[k], 1.0) << "axis " << k << " (1 = half a step + 1 µm)";
+    ::testing::Test::RecordProperty(
+        std::string("worst_fraction_of_half_step_plus_1um ") + c.name,
+        testing::scientific(testing::nan_max(worst[0].value(), testing::nan_max(worst[1].value(), worst[2].value()))));
   }
 }
 
@@ -287,16 +289,16 @@ TEST_F(LasTileTest, EveryInputKindAgreesWithProjToHalfTheQuantizationStep) {
     const auto xin = decode(in), xout = decode(dir_ / "out.las");
     ASSERT_EQ(xout.size(), n);
     const ProjPipeline proj("+proj=pipeline " + c.from_kind + " +step " + kProjHelmert + " +step " + topocentric(kArpB));
-    double worst = 0;
+    testing::WorstCase worst;
     for (std::size_t i = 0; i < n; ++i) {
       Eigen::Vector3d x(xin[i][0], xin[i][1], xin[i][2]);
       if (c.geodetic) x = Eigen::Vector3d(testing::proj_radians(x.x()), testing::proj_radians(x.y()), x.z());
       const Eigen::Vector3d e = proj.forward(x);
       for (std::size_t k = 0; k < 3; ++k) {
-        worst = std::max(worst, std::abs(xout[i][k] - e(static_cast<Eigen::Index>(k))) / (0.5 * r.scale[k] + kVsProjTol_m));
+        worst.add(std::abs(xout[i][k] - e(static_cast<Eigen::Index>(k))) / (0.5 * r.scale[k] + kVsProjTol_m), i);
       }
     }
-    EXPECT_LE(worst, 1.0) << "(1 = half a step + 1 µm)";
+    EXPECT_WORST_WITHIN(worst, 1.0) << "(1 = half a step + 1 µm)";
   }
 }
 

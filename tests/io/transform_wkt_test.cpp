@@ -2,11 +2,11 @@
 // lands where geoanchor's own application of the transform does.
 
 #include <gtest/gtest.h>
-#include <proj.h>
 
 #include <memory>
 
 #include "geoanchor/io/transform_file.hpp"
+#include "proj_reference.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor::io {
@@ -14,18 +14,10 @@ namespace {
 
 constexpr double kVsProjTol_m = 1e-6;  // issue acceptance for PROJ agreement
 
+// PROJ applying `definition` (WKT2 or PROJJSON) through the reference
+// helper: an error PROJ reports for the point fails the test.
 Eigen::Vector3d proj_apply(const std::string& definition, const Eigen::Vector3d& x, double t) {
-  PJ_CONTEXT* ctx = proj_context_create();
-  PJ* op = proj_create(ctx, definition.c_str());
-  EXPECT_NE(op, nullptr) << definition.substr(0, 200);
-  Eigen::Vector3d out = Eigen::Vector3d::Constant(std::nan(""));
-  if (op) {
-    const PJ_COORD c = proj_trans(op, PJ_FWD, proj_coord(x.x(), x.y(), x.z(), t));
-    out = Eigen::Vector3d(c.xyzt.x, c.xyzt.y, c.xyzt.z);
-    proj_destroy(op);
-  }
-  proj_context_destroy(ctx);
-  return out;
+  return testing::ProjPipeline(definition).forward(x, t);
 }
 
 const char* kFiles[] = {

@@ -11,15 +11,16 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "temp_folder.hpp"
 
 namespace geoanchor::testing {
 
@@ -38,17 +39,8 @@ inline std::string slurp(const std::filesystem::path& p) {
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    std::string name = std::string("geoanchor_cli_") + ::testing::UnitTest::GetInstance()->current_test_suite()->name() +
-                       "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    for (char& c : name) {
-      if (c == '/') c = '_';  // parameterised test names
-    }
-    std::string templ = (std::filesystem::path(::testing::TempDir()) / (name + "_XXXXXX")).string();
-    ASSERT_NE(::mkdtemp(templ.data()), nullptr) << "cannot create a temporary folder from " << templ;
-    dir_ = templ;
-  }
-  void TearDown() override {
-    if (!HasFailure()) std::filesystem::remove_all(dir_);
+    folder_.emplace("geoanchor_cli");  // the one helper every test's folder comes from
+    dir_ = folder_->path();
   }
 
   std::filesystem::path path(const std::string& name) const { return dir_ / name; }
@@ -102,6 +94,7 @@ class CliTest : public ::testing::Test {
     return out;
   }
 
+  std::optional<TempFolder> folder_;
   std::filesystem::path dir_;
 };
 

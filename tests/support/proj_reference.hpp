@@ -25,13 +25,30 @@ class ProjPipeline {
   ProjPipeline& operator=(const ProjPipeline&) = delete;
 
   // Forward and inverse of (x, y, z) at time t (decimal year; ignored by
-  // operations that are not time-dependent). NaN if PROJ reports an error;
-  // a NaN that PROJ does not report as an error fails the current test.
+  // operations that are not time-dependent). A reference that cannot give
+  // a value must not pass a comparison quietly, so when PROJ reports an
+  // error for the point (proj_errno != 0 or a HUGE_VAL result) the current
+  // test fails, naming the pipeline, the point and PROJ's error string, and
+  // the result is NaN; a NaN that PROJ does not report as an error for
+  // finite input fails the test too. A test that probes PROJ's own
+  // failures asks for them with try_forward / try_inverse.
   Eigen::Vector3d forward(const Eigen::Vector3d& xyz, double t = 0.0) const;
   Eigen::Vector3d inverse(const Eigen::Vector3d& xyz, double t = 0.0) const;
 
+  // The explicit form, for points where PROJ is expected (or allowed) to
+  // fail: PROJ's result, or its error, without failing the test.
+  struct Result {
+    Eigen::Vector3d xyz;  // NaN when PROJ reported an error
+    int proj_errno = 0;   // 0: no error
+    std::string error;    // PROJ's error string, empty when none
+    bool ok() const { return proj_errno == 0; }
+  };
+  Result try_forward(const Eigen::Vector3d& xyz, double t = 0.0) const;
+  Result try_inverse(const Eigen::Vector3d& xyz, double t = 0.0) const;
+
  private:
-  Eigen::Vector3d trans(const Eigen::Vector3d& xyz, double t, int direction) const;
+  Result trans(const Eigen::Vector3d& xyz, double t, int direction) const;
+  Eigen::Vector3d checked(const Eigen::Vector3d& xyz, double t, int direction) const;
   ProjPipeline(pj_ctx* ctx, PJconsts* pj, std::string definition);
   std::string definition_;
   pj_ctx* ctx_;

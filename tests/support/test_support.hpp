@@ -1,7 +1,7 @@
 #pragma once
 // Shared test helpers: named tolerances live in each test; here are the
-// random point generators (with the special cases every geodesy test needs)
-// and domain matchers.
+// random point generators (with the special cases every geodesy test needs),
+// domain matchers and the NaN-proof worst-case assertion.
 
 #include <gmock/gmock.h>
 
@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "accuracy.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 
 namespace geoanchor::testing {
@@ -57,6 +58,30 @@ MATCHER_P2(IsNearVector, expected, tol_m,
   *result_listener << "distance " << d << " m";
   return std::isfinite(d) && d <= tol_m;
 }
+
+// EXPECT_WORST_WITHIN(worst, tol) / ASSERT_WORST_WITHIN: `worst` (a
+// WorstCase, or a double from nan_max) is a number and at most `tol`. Fails
+// on a NaN anywhere in the comparison and on a comparison of no point,
+// saying which, where the worst was and how many were NaN.
+inline std::string short_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+inline ::testing::AssertionResult WorstWithin(const char* worst_expr, const char* tol_expr, const WorstCase& worst,
+                                              double tol) {
+  if (worst.within(tol)) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "worst case " << worst_expr << " = " << worst.describe() << "; expected at most "
+                                       << tol_expr << " = " << short_number(tol);
+}
+inline ::testing::AssertionResult WorstWithin(const char* worst_expr, const char* tol_expr, double worst, double tol) {
+  if (worst <= tol) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "worst case " << worst_expr << " = " << short_number(worst)
+                                       << (std::isnan(worst) ? " (a NaN in the comparison)" : "") << "; expected at most "
+                                       << tol_expr << " = " << short_number(tol);
+}
+#define EXPECT_WORST_WITHIN(worst, tol) EXPECT_PRED_FORMAT2(::geoanchor::testing::WorstWithin, worst, tol)
+#define ASSERT_WORST_WITHIN(worst, tol) ASSERT_PRED_FORMAT2(::geoanchor::testing::WorstWithin, worst, tol)
 
 // Difference of two angles in degrees, wrapped to [-180, 180].
 inline double angle_difference_deg(double a, double b) {
