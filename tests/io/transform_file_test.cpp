@@ -272,63 +272,6 @@ TEST(TransformFile, Point9_SigmasNeedACorrelationMatrixOrTheWordNone) {
             std::string::npos);
 }
 
-// issue 12 point 9: the propagated covariance against J Σ Jᵀ worked out by hand.
-constexpr double kPropagatedCovTol_m2 = 1e-9;  // central differences of a model linear in each parameter are exact up to
-                                               // float64 rounding of ECEF coordinates (9.3e-10 m) over a 2σ step
-TEST(TransformFile, Point9_PropagatedCovarianceIsJSigmaJtByHand) {
-  const geodesy::EcefPosition x(4271315.696, 641096.356, 4678048.542);
-  // Translation only: J = σ per axis, so Σ = D R D.
-  const double s[3] = {0.01, 0.02, 0.03};
-  const double r[3][3] = {{1, 0.5, -0.2}, {0.5, 1, 0.1}, {-0.2, 0.1, 1}};
-  const std::string t3 = R"({"model": "translation3", "parameters": {"tx_m": 1, "ty_m": 2, "tz_m": 3},
-    "sigmas": {"tx_m": 0.01, "ty_m": 0.02, "tz_m": 0.03},
-    "correlation_parameters": ["tx_m", "ty_m", "tz_m"],
-    "correlation": [[1, 0.5, -0.2], [0.5, 1, 0.1], [-0.2, 0.1, 1]]})";
-  const auto c = propagated_covariance_m2(parse_transform_json(t3, "T.json"), x, std::nullopt, false);
-  ASSERT_TRUE(c);
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) EXPECT_NEAR((*c)(i, j), s[i] * s[j] * r[i][j], kPropagatedCovTol_m2) << i << "," << j;
-  }
-  // The rows and columns in another order read the same matrix.
-  const std::string reordered = replace(replace(t3, R"(["tx_m", "ty_m", "tz_m"])", R"(["tz_m", "tx_m", "ty_m"])"),
-                                        R"([[1, 0.5, -0.2], [0.5, 1, 0.1], [-0.2, 0.1, 1]])",
-                                        R"([[1, -0.2, 0.1], [-0.2, 1, 0.5], [0.1, 0.5, 1]])");
-  const auto c2 = propagated_covariance_m2(parse_transform_json(reordered, "T.json"), x, std::nullopt, false);
-  ASSERT_TRUE(c2);
-  EXPECT_LE(((*c2) - (*c)).cwiseAbs().maxCoeff(), kPropagatedCovTol_m2);
-
-  // Sigmas stated per parameter as published sets do, "correlation": "none":
-  // position vector, small angle (EPSG 1033), X' = T + (1 + ds)(I + S(r)) X with
-  // S(r) = [[0, −rz, ry], [rz, 0, −rx], [−ry, rx, 0]]; the columns of J by hand.
-  const auto t7 = parse_transform_json(helmert7_with(std::string(kSigmas7) + R"(, "correlation": "none")"), "T.json");
-  ASSERT_TRUE(t7.fit);
-  EXPECT_TRUE(t7.fit->uncorrelated);
-  const double k = M_PI / 648000.0, ds = 0.219e-6, rz = 0.554 * k;
-  const Eigen::Vector3d p = x.m;
-  Eigen::Matrix3d rot;
-  rot << 1, -rz, 0, rz, 1, 0, 0, 0, 1;
-  Eigen::Matrix<double, 3, 7> j;
-  j.col(0) = Eigen::Vector3d(0.05, 0, 0);
-  j.col(1) = Eigen::Vector3d(0, 0.05, 0);
-  j.col(2) = Eigen::Vector3d(0, 0, 0.05);
-  j.col(3) = (1 + ds) * Eigen::Vector3d(0, -p.z(), p.y()) * 0.002 * k;
-  j.col(4) = (1 + ds) * Eigen::Vector3d(p.z(), 0, -p.x()) * 0.002 * k;
-  j.col(5) = (1 + ds) * Eigen::Vector3d(-p.y(), p.x(), 0) * 0.002 * k;
-  j.col(6) = rot * p * 0.005e-6;
-  const Eigen::Matrix3d expected = j * j.transpose();
-  const auto c7 = propagated_covariance_m2(t7, x, std::nullopt, false);
-  ASSERT_TRUE(c7);
-  for (int a = 0; a < 3; ++a) {
-    for (int b = 0; b < 3; ++b) EXPECT_NEAR((*c7)(a, b), expected(a, b), kPropagatedCovTol_m2) << a << "," << b;
-  }
-  // A record built in code whose correlation misses a sigma'd parameter gives NaN, not the identity.
-  TransformFile partial = t7;
-  partial.fit->uncorrelated = false;
-  const auto nan = propagated_covariance_m2(partial, x, std::nullopt, false);
-  ASSERT_TRUE(nan);
-  EXPECT_TRUE(std::isnan((*nan)(0, 0)));
-}
-
 // issue 12 point 9: a fit record written is read back as it was.
 TEST(TransformFile, Point9_FitRecordReadsBackWhatItWrites) {
   const std::string text = helmert7_with(std::string(kSigmas7) + R"(, "correlation": "none",

@@ -23,6 +23,7 @@
 #include "geoanchor/io/tile_metadata.hpp"
 #include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/workflow/tile_plan.hpp"
+#include "geoanchor/workflow/uncertainty.hpp"
 
 namespace geoanchor::workflow {
 namespace {
@@ -309,7 +310,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
       if (!at && res.epoch_range) at = DecimalYear{0.5 * ((*res.epoch_range)[0] + (*res.epoch_range)[1])};
       std::optional<Eigen::Matrix3d> worst;
       for (std::size_t k : usable) {
-        const auto cov = io::propagated_covariance_m2(*t_, geodesy::EcefPosition(a[k], b[k], c[k]), at, o_.inverse);
+        const auto cov = propagated_covariance_m2(*t_, geodesy::EcefPosition(a[k], b[k], c[k]), at, o_.inverse);
         if (!cov) continue;
         if (!cov->allFinite()) {
           throw Error(ErrorKind::input, "E_TRANSFORM_SIGMAS",

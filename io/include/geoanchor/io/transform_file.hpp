@@ -151,16 +151,6 @@ struct TransformFile {
                                         std::string_view where) const;
 };
 
-// The covariance (ECEF, m²) that the fitted parameters' uncertainty gives
-// the transformed position of `x` (J Σθ Jᵀ, J by central differences of
-// width σ on each parameter, Σθ from the file's sigmas and correlation; the
-// identity correlation only when the record says `uncorrelated`).
-// std::nullopt when the file carries no sigmas; NaN in every entry for a
-// record whose correlation does not cover a sigma'd parameter (only a record
-// built in code can be so: the reader refuses it).
-std::optional<Eigen::Matrix3d> propagated_covariance_m2(const TransformFile& t, const geodesy::EcefPosition& x,
-                                                        std::optional<geodesy::DecimalYear> epoch, bool inverse);
-
 // Throws geoanchor::Error (io for an unreadable file, input for the rest).
 TransformFile read_transform_file(const std::filesystem::path& path);
 TransformFile parse_transform_json(std::string_view text, std::string_view source_name);
