@@ -46,6 +46,9 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   cmd->add_option("--alpha-point", o.alpha_point, "Significance of point tests and data snooping (default 0.001)")
       ->check(finite_range(1e-9, 0.5));
   cmd->add_flag("--no-snooping", o.no_snooping, "Report outliers but remove none");
+  cmd->add_option("--max-outlier-share", o.max_outlier_share,
+                  "Refuse the fit when data snooping would remove more than this share of the marks (default 0.10)")
+      ->check(finite_range(0.0, 0.5));
   cmd->add_flag("--scale-by-sigma0", o.scale_by_sigma0, "Scale parameter sigmas by the a-posteriori σ0");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test,
                 "Write the transform even if the global test fails high");
@@ -148,6 +151,7 @@ int run_fit(const FitCommandOptions& o) {
   fo.alpha = o.alpha;
   fo.alpha_point = o.alpha_point;
   fo.data_snooping = !o.no_snooping;
+  fo.max_outlier_share = o.max_outlier_share;
   fo.scale_by_sigma0 = o.scale_by_sigma0;
 
   // Refuse an existing output before any work.
@@ -201,7 +205,7 @@ int run_fit(const FitCommandOptions& o) {
   if (out) {
     std::string cmd;
     for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
-    out->stream() << io::to_json_text(workflow::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
+    io::write_json(out->stream(), workflow::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
     out->commit();
     std::cout << "\nwrote " << o.output << "\n";
   }

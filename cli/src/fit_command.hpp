@@ -34,6 +34,7 @@ struct FitCommandOptions {
   double alpha = 0.05;
   double alpha_point = 0.001;
   bool no_snooping = false;
+  double max_outlier_share = 0.10;
   bool scale_by_sigma0 = false;
   bool accept_failed_global_test = false;
   std::string output;

@@ -2,7 +2,11 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
+#include <optional>
+#include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
@@ -81,18 +85,41 @@ void RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const 
   cov_m2 = local_to_ecef * local * local_to_ecef.transpose();
 }
 
-void add_point(geodesy::ControlSet& set, geodesy::ControlPoint p, std::map<std::pair<std::string, double>, std::size_t>& seen,
-               const std::string& where, const std::function<std::string(const geodesy::ControlPoint&)>& where_of) {
-  const auto key = std::make_pair(p.id, p.epoch ? p.epoch->year : -1.0);
-  if (const auto it = seen.find(key); it != seen.end()) {
-    const geodesy::ControlPoint& first = set.points[it->second];
-    const double d = std::max((first.source.m - p.source.m).norm(), (first.target.m - p.target.m).norm());
-    throw Error(ErrorKind::input, "E_DUPLICATE_ID",
-                where + ": id=" + p.id + ": duplicate of " + where_of(first) + (p.epoch ? " at the same epoch" : "") +
-                    " (coordinates differ by " + format_shortest(d) + " m); ids must be unique per epoch");
+void refuse_duplicate_ids(const geodesy::ControlSet& set,
+                          const std::function<std::string(const geodesy::ControlPoint&)>& where_new,
+                          const std::function<std::string(const geodesy::ControlPoint&)>& where_of) {
+  const auto& pts = set.points;
+  const auto epoch_of = [](const geodesy::ControlPoint& p) { return p.epoch ? p.epoch->year : -1.0; };
+  const auto same = [&](std::size_t a, std::size_t b) { return pts[a].id == pts[b].id && epoch_of(pts[a]) == epoch_of(pts[b]); };
+  // Sorted by a hash of (id, epoch), 16 bytes a point, so that 10⁶ points
+  // sort in cache; equal keys have equal hashes, and within a run of equal
+  // hashes the points are compared themselves.
+  std::vector<std::pair<std::size_t, std::size_t>> keyed(pts.size());  // (hash, index)
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    keyed[i] = {std::hash<std::string>{}(pts[i].id) ^ (std::hash<double>{}(epoch_of(pts[i])) * 0x9e3779b97f4a7c15ULL), i};
   }
-  seen.emplace(key, set.points.size());
-  set.points.push_back(std::move(p));
+  std::sort(keyed.begin(), keyed.end());
+  std::optional<std::pair<std::size_t, std::size_t>> first_repeat;  // (earlier, repeat), the repeat first in the file
+  for (std::size_t k = 0; k < keyed.size();) {
+    std::size_t end = k + 1;
+    while (end < keyed.size() && keyed[end].first == keyed[k].first) ++end;
+    // Indices ascend within the run: each point's earliest equal is its first.
+    for (std::size_t b = k + 1; b < end; ++b) {
+      for (std::size_t a = k; a < b; ++a) {
+        if (!same(keyed[a].second, keyed[b].second)) continue;
+        if (!first_repeat || keyed[b].second < first_repeat->second) first_repeat = std::make_pair(keyed[a].second, keyed[b].second);
+        break;
+      }
+    }
+    k = end;
+  }
+  if (!first_repeat) return;
+  const geodesy::ControlPoint& first = pts[first_repeat->first];
+  const geodesy::ControlPoint& p = pts[first_repeat->second];
+  const double d = std::max((first.source.m - p.source.m).norm(), (first.target.m - p.target.m).norm());
+  throw Error(ErrorKind::input, "E_DUPLICATE_ID",
+              where_new(p) + ": id=" + p.id + ": duplicate of " + where_of(first) + (p.epoch ? " at the same epoch" : "") +
+                  " (coordinates differ by " + format_shortest(d) + " m); ids must be unique per epoch");
 }
 
 }  // namespace geoanchor::io::detail

@@ -358,7 +358,6 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     converter.convert(v, set.has_a_priori_sigmas, fail, p, cov);
   };
 
-  std::map<std::pair<std::string, double>, std::size_t> seen;  // (id, epoch) -> index
   CsvRecord r;
   while (reader.next(r)) {
     if (r.is_comment) continue;
@@ -397,9 +396,11 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
         rows.fail(r, *use_col, "expected 1/0, true/false or yes/no");
       }
     }
-    detail::add_point(set, std::move(p), seen, source_name + ":" + std::to_string(r.line),
-                      [](const ControlPoint& q) { return "line " + std::to_string(q.line); });
+    set.points.push_back(std::move(p));
   }
+  detail::refuse_duplicate_ids(
+      set, [&](const ControlPoint& q) { return source_name + ":" + std::to_string(q.line); },
+      [](const ControlPoint& q) { return "line " + std::to_string(q.line); });
   return set;
 }
 

@@ -128,7 +128,6 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
   // recorded as ECEF (as_read then holds the ECEF positions).
   std::optional<CoordinateKind> src_kind, dst_kind;
   bool mixed_src = false, mixed_dst = false;
-  std::map<std::pair<std::string, double>, std::size_t> seen;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const std::string where = source_name + ": points[" + std::to_string(i) + "]";
     const json& jp = points[i];
@@ -172,9 +171,11 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
       if (!jp.at("use").is_boolean()) fail(where + ".use", "expected true or false");
       p.use = jp.at("use").get<bool>();
     }
-    detail::add_point(set, std::move(p), seen, where,
-                      [&](const geodesy::ControlPoint& q) { return "points[" + std::to_string(q.line) + "]"; });
+    set.points.push_back(std::move(p));
   }
+  detail::refuse_duplicate_ids(
+      set, [&](const geodesy::ControlPoint& q) { return source_name + ": points[" + std::to_string(q.line) + "]"; },
+      [&](const geodesy::ControlPoint& q) { return "points[" + std::to_string(q.line) + "]"; });
   set.source_input = detail::input_form(mixed_src || !src_kind ? CoordinateKind::ecef : *src_kind, std::nullopt);
   set.target_input = detail::input_form(mixed_dst || !dst_kind ? CoordinateKind::ecef : *dst_kind, std::nullopt);
   for (auto& p : set.points) {

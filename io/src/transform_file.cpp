@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -13,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -1211,7 +1213,7 @@ std::string proj_pipeline(const TransformFile& t) {
   return out;
 }
 
-std::string to_json_text(const TransformFile& t) {
+void write_json(std::ostream& out, const TransformFile& t) {
   json doc;
   doc["format_version"] = 1;
   doc["model"] = std::string(to_string(t.model));
@@ -1309,22 +1311,7 @@ std::string to_json_text(const TransformFile& t) {
       doc["statistics"]["variance_factors"] = {{"source", number(f.variance_factors->first)},
                                                {"target", number(f.variance_factors->second)}};
     }
-    json pts = json::array();
-    for (const auto& p : f.points) {
-      json jp = {{"id", p.id},
-                 {"residual_enu_m", {number(p.residual_enu_m[0]), number(p.residual_enu_m[1]), number(p.residual_enu_m[2])}},
-                 {"w_test", json_number_or_null(p.w_test)},
-                 {"w_enu", {json_number_or_null(p.w_enu[0]), json_number_or_null(p.w_enu[1]), json_number_or_null(p.w_enu[2])}},
-                 {"redundancy_enu", {number(p.redundancy_enu[0]), number(p.redundancy_enu[1]), number(p.redundancy_enu[2])}},
-                 {"mdb_m", json_number_or_null(p.mdb_m)},
-                 {"point_test", {{"statistic", number(p.point_test)}, {"dof", p.point_test_dof}, {"p_value", number(p.point_test_p)}}},
-                 {"outlier", p.outlier},
-                 {"used", p.used}};
-      if (!p.note.empty()) jp["note"] = p.note;
-      if (p.robust_weight < 1.0) jp["robust_weight"] = number(p.robust_weight);
-      pts.push_back(jp);
-    }
-    doc["points"] = pts;
+    doc["points"] = nullptr;  // placeholder: the records are streamed below, one a line
   }
   if (t.fit && !t.enu_origin && !t.site_calibration) {
     TransformFile other = swapped_convention(t);
@@ -1336,7 +1323,92 @@ std::string to_json_text(const TransformFile& t) {
     if (const auto wkt = to_wkt2(other)) doc["alternatives"][0]["wkt2"] = *wkt;
     if (const auto pj = to_projjson(other)) doc["alternatives"][0]["projjson"] = json::parse(*pj);
   }
-  return doc.dump(2) + "\n";
+  std::string text = doc.dump(2);
+  if (t.fit) {
+    // The per-point records, one JSON object a line: a fit of 10⁶ marks
+    // writes them in a second instead of building a DOM of 10⁷ values.
+    constexpr std::string_view kPlaceholder = "\n  \"points\": null";
+    const auto at = text.find(kPlaceholder);
+    if (at == std::string::npos) throw std::logic_error("transform file: the points placeholder is missing");
+    out.write(text.data(), static_cast<std::streamsize>(at));
+    // Written a megabyte at a time: the records of 10⁶ marks (about 400 MB)
+    // are never held whole.
+    constexpr std::size_t kFlushBytes = 1 << 20;
+    std::string points = "\n  \"points\": [";
+    points.reserve(kFlushBytes + 4096);
+    const auto num = [&](double v) {
+      if (!std::isfinite(v)) {
+        points += "null";
+        return;
+      }
+      char buf[32];
+      const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+      points.append(buf, ec == std::errc() ? end : buf);
+    };
+    const auto triple = [&](const std::array<double, 3>& v) {
+      points += '[';
+      num(v[0]);
+      points += ", ";
+      num(v[1]);
+      points += ", ";
+      num(v[2]);
+      points += ']';
+    };
+    const auto flag = [&](bool b) { points += b ? "true" : "false"; };
+    bool first = true;
+    for (const auto& p : t.fit->points) {
+      points += first ? "\n    {" : ",\n    {";
+      first = false;
+      points += "\"id\": ";
+      points += json(p.id).dump();
+      points += ", \"mdb_m\": ";
+      num(p.mdb_m);
+      if (!p.note.empty()) {
+        points += ", \"note\": ";
+        points += json(p.note).dump();
+      }
+      points += ", \"outlier\": ";
+      flag(p.outlier);
+      points += ", \"point_test\": {\"dof\": ";
+      points += std::to_string(p.point_test_dof);
+      points += ", \"p_value\": ";
+      num(p.point_test_p);
+      points += ", \"statistic\": ";
+      num(p.point_test);
+      points += "}, \"redundancy_enu\": ";
+      triple(p.redundancy_enu);
+      points += ", \"residual_enu_m\": ";
+      triple(p.residual_enu_m);
+      if (p.robust_weight < 1.0) {
+        points += ", \"robust_weight\": ";
+        num(p.robust_weight);
+      }
+      points += ", \"used\": ";
+      flag(p.used);
+      points += ", \"w_enu\": ";
+      triple(p.w_enu);
+      points += ", \"w_test\": ";
+      num(p.w_test);
+      points += '}';
+      if (points.size() > kFlushBytes) {
+        out.write(points.data(), static_cast<std::streamsize>(points.size()));
+        points.clear();
+      }
+    }
+    points += first ? "]" : "\n  ]";
+    out.write(points.data(), static_cast<std::streamsize>(points.size()));
+    const std::size_t rest = at + kPlaceholder.size();
+    out.write(text.data() + rest, static_cast<std::streamsize>(text.size() - rest));
+  } else {
+    out << text;
+  }
+  out << '\n';
+}
+
+std::string to_json_text(const TransformFile& t) {
+  std::ostringstream text;
+  write_json(text, t);
+  return std::move(text).str();
 }
 
 }  // namespace geoanchor::io

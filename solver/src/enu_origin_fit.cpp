@@ -274,7 +274,7 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
                                 std::string(o.enu_scale ? "yaw and scale" : "yaw") + " " + fmt(gd.dilution, 3) +
                                 " times less precisely than the shift");
     }
-    add_statistics_warnings(result);
+    add_statistics_warnings(result, options);
     result.ceres_iterations = static_cast<int>(summary.iterations.size());
     result.ceres_report = summary.BriefReport();
     return result;

@@ -527,6 +527,20 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     throw Error(ErrorKind::usage, "E_OPTION", "--vce: needs a-priori sigmas in both frames (sigma_src_m, sigma_dst_m or covariances)");
   }
 
+  // Each mark's local east, north, up (rows, in ECEF) at its target
+  // position: the axes of its residuals and w-tests, the same in every pass.
+  std::vector<Eigen::Matrix3d> axes(control.points.size());
+  std::vector<bool> have_axes(control.points.size(), false);
+  const geodesy::GeocentricConverter geocentric(geodesy::Ellipsoid::wgs84());
+  auto local_axes = [&](std::size_t i) -> const Eigen::Matrix3d& {
+    if (!have_axes[i]) {
+      const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(control.points[i].target);
+      axes[i] = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
+      have_axes[i] = true;
+    }
+    return axes[i];
+  };
+
   while (true) {
     const int n = static_cast<int>(active.size());
     // --- refuse ill-posed problems -------------------------------------
@@ -816,16 +830,12 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       for (int c = 0; c < u; ++c) a.col(c) = ob.w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
       return Eigen::Matrix3d(Eigen::Matrix3d::Identity() + sign * (a * n_inv * a.transpose()));
     };
-    const geodesy::GeocentricConverter geocentric(geodesy::Ellipsoid::wgs84());
     std::vector<Eigen::Matrix3d> qvs(active.size());  // whitened Q_vv per point, kept for --vce
     for (std::size_t k = 0; k < active.size(); ++k) {
-      const auto& p = control.points[active[k]];
       const Eigen::Matrix3d& qv = qvs[k] = cofactor(obs[k], -1.0);
-      const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(p.target);
-      const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
       PointResult& pr = result.points[active[k]];
       pr.used = true;
-      test_point(PointTestInput{v[k], obs[k].w, qv, enu, true}, tau, levels.lambda0, pr);
+      test_point(PointTestInput{v[k], obs[k].w, qv, local_axes(active[k]), true}, tau, levels.lambda0, pr);
     }
 
     // --- variance components (--vce) -----------------------------------------
@@ -887,9 +897,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       ob.w = whitening(p, linear_part(sol.theta, ob.dt));
       const Eigen::Vector3d vi = p.target.m - apply_fit(result, p.source, td ? p.epoch : std::nullopt).m;
       const Eigen::Matrix3d q = cofactor(ob, +1.0);
-      const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(p.target);
-      const Eigen::Matrix3d enu = geodesy::enu_from_ecef_rotation(at.lat, at.lon);
-      test_point(PointTestInput{vi, ob.w, q, enu, false}, tau, levels.lambda0, result.points[i]);
+      test_point(PointTestInput{vi, ob.w, q, local_axes(i), false}, tau, levels.lambda0, result.points[i]);
     }
 
     // --- report -------------------------------------------------------------
@@ -988,7 +996,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       }
       for (auto& w : geodesy::implausible_parameter_warnings(as_reported)) result.warnings.push_back(std::move(w));
     }
-    add_statistics_warnings(result);
+    add_statistics_warnings(result, options);
     result.ceres_iterations = sol.iterations;
     result.ceres_report = sol.report;
     result.rotation_model = o.rotation_model;

@@ -105,30 +105,32 @@ std::size_t max_snooped(std::size_t n, const FitOptions& o) {
 
 SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions& o, int u, int min_points) {
   if (!o.data_snooping || r.dof <= 0) return SnoopStep::none;
-  double worst_p = 1.0;
-  std::optional<std::size_t> worst;
+  // The failing points, worst (smallest p-value) first.
+  std::vector<std::size_t> failing;  // positions in `active`
   for (std::size_t k = 0; k < active.size(); ++k) {
     const auto& p = r.points[active[k]];
-    if (p.point_dof > 0 && p.point_p_value < worst_p) {
-      worst_p = p.point_p_value;
-      worst = k;
-    }
+    if (p.point_dof > 0 && p.point_p_value < o.alpha_point) failing.push_back(k);
   }
-  if (!worst || !(worst_p < o.alpha_point)) return SnoopStep::none;
-  PointResult& pr = r.points[active[*worst]];
-  const std::string why = "point test " + fmt(pr.point_statistic, 4) + " (χ²(" + std::to_string(pr.point_dof) +
-                          "), p = " + fmt(pr.point_p_value, 2) + " < " + fmt(o.alpha_point) + "); max |w| " +
-                          fmt(pr.w_max) + "; residual E/N/U " + fmt(pr.residual_enu_m.x()) + ", " +
-                          fmt(pr.residual_enu_m.y()) + ", " + fmt(pr.residual_enu_m.z()) + " m";
+  if (failing.empty()) return SnoopStep::none;
+  std::stable_sort(failing.begin(), failing.end(), [&](std::size_t a, std::size_t b) {
+    return r.points[active[a]].point_p_value < r.points[active[b]].point_p_value;
+  });
+  const auto why_of = [&](const PointResult& pr) {
+    return "point test " + fmt(pr.point_statistic, 4) + " (χ²(" + std::to_string(pr.point_dof) + "), p = " +
+           fmt(pr.point_p_value, 2) + " < " + fmt(o.alpha_point) + "); max |w| " + fmt(pr.w_max) + "; residual E/N/U " +
+           fmt(pr.residual_enu_m.x()) + ", " + fmt(pr.residual_enu_m.y()) + ", " + fmt(pr.residual_enu_m.z()) + " m";
+  };
+  const PointResult& worst = r.points[active[failing.front()]];
   const int n = static_cast<int>(active.size());
   if (n - 1 < min_points || 3 * (n - 1) - u <= 0) {
-    r.warnings.push_back("point " + pr.id + " fails the " + why + ", but too few points remain to remove it");
+    r.warnings.push_back("point " + worst.id + " fails the " + why_of(worst) + ", but too few points remain to remove it");
     return SnoopStep::stopped;
   }
   const std::size_t marks = r.points.size();
   const std::size_t removed = static_cast<std::size_t>(std::count_if(r.points.begin(), r.points.end(),
                                                                      [](const PointResult& p) { return p.outlier; }));
-  if (removed + 1 > max_snooped(marks, o)) {
+  const std::size_t limit = max_snooped(marks, o);
+  if (removed + 1 > limit) {
     const auto& g = r.global_test;
     std::string global;
     if (g.applicable) {
@@ -136,18 +138,41 @@ SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions
                " (" + fmt(g.statistic, 4) + " vs [" + fmt(g.critical_lower, 4) + ", " + fmt(g.critical_upper, 4) +
                "], σ0 = " + fmt(r.sigma0.value_or(0.0), 4) + ")";
     }
-    r.refused_because = "data snooping stopped after removing " + std::to_string(removed) + " of " +
-                        std::to_string(marks) + " marks (the limit is " + fmt(100.0 * o.max_outlier_share, 3) +
-                        " %, --max-outlier-share): " + pr.id + " still fails its " + why + global +
-                        ". So many failing marks mean the data or the model is wrong (frames, units, height types, "
-                        "quantized coordinates), not a few blunders";
+    r.refused_because = "data snooping stopped after removing " + std::to_string(removed) + " of " + std::to_string(marks) +
+                        " marks (the limit is " + fmt(100.0 * o.max_outlier_share, 3) + " %, --max-outlier-share): " +
+                        worst.id + " still fails its " + why_of(worst) + global + "; " + std::to_string(failing.size()) +
+                        " marks fail now. So many failing marks mean the data or the model is wrong (frames, units, "
+                        "height types, quantized coordinates), not a few blunders";
     r.warnings.push_back(r.refused_because);
     return SnoopStep::stopped;
   }
-  pr.outlier = true;
-  pr.used = false;
-  pr.removed_because = "data snooping: " + why;
-  active.erase(active.begin() + static_cast<std::ptrdiff_t>(*worst));
+  // The worst point goes; with it, further failing points while their
+  // leverages (1 − mean redundancy) add up to at most kSnoopLeverageBudget:
+  // then removing them together moves the parameters, and the others'
+  // tests, as removing them one at a time would, to within a few per cent.
+  // In a small network one point's leverage exceeds the budget, and this is
+  // Baarda's one-at-a-time data snooping; in a network of 10⁵ marks the
+  // chance failures at alpha_point go in a few passes instead of one each.
+  double leverage = 0.0;
+  std::vector<std::size_t> take;
+  for (std::size_t k : failing) {
+    const PointResult& p = r.points[active[k]];
+    const double h = 1.0 - p.redundancy_enu.sum() / 3.0;
+    if (!take.empty() && (leverage + h > kSnoopLeverageBudget || removed + take.size() + 1 > limit ||
+                          n - static_cast<int>(take.size()) - 1 < min_points || 3 * (n - static_cast<int>(take.size()) - 1) - u <= 0)) {
+      break;
+    }
+    leverage += h;
+    take.push_back(k);
+  }
+  for (std::size_t k : take) {
+    PointResult& pr = r.points[active[k]];
+    pr.outlier = true;
+    pr.used = false;
+    pr.removed_because = "data snooping: " + why_of(pr);
+  }
+  std::sort(take.begin(), take.end());
+  for (auto it = take.rbegin(); it != take.rend(); ++it) active.erase(active.begin() + static_cast<std::ptrdiff_t>(*it));
   return SnoopStep::removed;
 }
 
@@ -162,7 +187,7 @@ GeometryDilution geometry_dilution(const Eigen::MatrixXd& scaled_cov, const std:
   return g;
 }
 
-void add_statistics_warnings(FitResult& r) {
+void add_statistics_warnings(FitResult& r, const FitOptions& o) {
   if (r.dof <= 0) {
     r.warnings.push_back("no redundancy (dof = " + std::to_string(r.dof) +
                          "): σ0, the global test and the point tests are undefined; the residuals are zero by "
@@ -172,12 +197,36 @@ void add_statistics_warnings(FitResult& r) {
                          "): the global test and the w-tests have little power");
   }
   const auto& g = r.global_test;
+  const std::size_t removed = static_cast<std::size_t>(
+      std::count_if(r.points.begin(), r.points.end(), [](const PointResult& p) { return p.outlier; }));
+  int k = 0;  // the point tests' degrees of freedom (3 for a 3-D mark)
+  for (const auto& p : r.points) k = std::max(k, p.point_dof);
+  std::string chance;
+  if (removed > 0 && k > 0 && o.data_snooping) {
+    // A mark of pure noise fails its χ²(k) point test with probability
+    // alpha_point; removing every mark above the critical value c takes away
+    // the share P(χ²(k+2) > c) of the expected sum of squares (the identity
+    // E[X·1(X > c)] = k·P(χ²(k+2) > c) for X ~ χ²(k)).
+    const double c = chi_squared_quantile(k, 1.0 - o.alpha_point);
+    const double share = chi_squared_upper_tail(k + 2, c);
+    const double sigma0_after = std::sqrt((1.0 - share) / (1.0 - o.alpha_point));
+    chance = "data snooping removed " + std::to_string(removed) + " of " + std::to_string(r.points.size()) +
+             " marks; at alpha_point = " + fmt(o.alpha_point) + " about " +
+             fmt(o.alpha_point * static_cast<double>(r.points.size()), 3) +
+             " of them fail by chance alone with no blunder at all, and removing those lowers σ0 to about " +
+             fmt(sigma0_after, 4) + " of its true value";
+    r.warnings.push_back(chance);
+  }
   if (g.applicable && !g.passed) {
     r.warnings.push_back(std::string("global test ") +
                          (g.statistic > g.critical_upper ? "FAILED high: residuals are larger than the a-priori sigmas allow"
                                                          : "low: residuals are smaller than the a-priori sigmas suggest "
                                                            "(sigmas too pessimistic?)") +
-                         " (σ0 = " + fmt(r.sigma0.value_or(0.0), 4) + ")");
+                         " (σ0 = " + fmt(r.sigma0.value_or(0.0), 4) + ")" +
+                         (!chance.empty() && g.statistic < g.critical_lower
+                              ? "; with this many degrees of freedom the chance removals alone can explain it (see "
+                                "the data snooping warning)"
+                              : ""));
   }
 }
 

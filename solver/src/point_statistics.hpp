@@ -53,13 +53,18 @@ Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov);
 // One step of data snooping after the points in `active` were tested in
 // the fit: the point with the smallest point-test p-value below
 // alpha_point is removed from `active` (marked in `r`) and `removed` is
-// returned, so that the caller refits. A failing point is never kept
+// returned, so that the caller refits; in large networks further failing
+// points go in the same step while their leverage is small (see
+// kSnoopLeverageBudget). A failing point is never kept
 // silently: when too few points would remain (fewer than `min_points`, or no
 // redundancy), or when removing it would take data snooping past the
 // options' max_outlier_share of the marks, it stays in the fit, a warning
 // names it, and past the share `r.refused_because` says the data or the
 // model is wrong and which test failed.
 enum class SnoopStep { none, removed, stopped };
+// How much leverage (Σ over removed points of 1 − mean redundancy) one
+// snooping pass may remove at once; see snoop().
+inline constexpr double kSnoopLeverageBudget = 0.01;
 SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions& o, int u, int min_points);
 
 // The largest number of marks data snooping may remove from `n` marks.
@@ -87,7 +92,10 @@ GeometryDilution geometry_dilution(const Eigen::MatrixXd& scaled_cov, const std:
 inline constexpr double kRefuseDilution = 1000.0;
 inline constexpr double kWarnDilution = 10.0;
 
-// The common closing warnings: low redundancy, the global test's verdict.
-void add_statistics_warnings(FitResult& r);
+// The common closing warnings: low redundancy, the global test's verdict,
+// and, when data snooping removed marks, how many fail by chance alone at
+// alpha_point and how much that lowers σ0 (so that a global test failing low
+// after snooping a large set is read for what it is).
+void add_statistics_warnings(FitResult& r, const FitOptions& o);
 
 }  // namespace geoanchor::solver

@@ -248,7 +248,7 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
     result.parameters.push_back(Parameter{"grid_lat0_deg", grid.tm.lat0.deg(), 0.0, false});
     result.parameters.push_back(Parameter{"grid_lon0_deg", grid.tm.lon0.deg(), 0.0, false});
     if (!geometry_warning.empty()) result.warnings.push_back(geometry_warning);
-    add_statistics_warnings(result);
+    add_statistics_warnings(result, options);
     return result;
   }
 }

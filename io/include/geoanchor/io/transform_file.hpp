@@ -23,6 +23,7 @@
 
 #include <array>
 #include <filesystem>
+#include <iosfwd>
 #include <vector>
 #include <optional>
 #include <string>
@@ -158,8 +159,10 @@ TransformFile parse_transform_json(std::string_view text, std::string_view sourc
 // The file's JSON text (parameters in m, arcsec, ppm and their rates). With
 // a fit record it also carries: sigmas, correlation, statistics, points,
 // proj_pipeline, epsg_method, and `alternatives` (the same transform in the
-// other rotation convention, with its EPSG method).
+// other rotation convention, with its EPSG method). write_json streams the
+// same text (the per-point records a megabyte at a time).
 std::string to_json_text(const TransformFile& t);
+void write_json(std::ostream& out, const TransformFile& t);
 
 // The transform as a PROJ pipeline string, ECEF in and ECEF out:
 // "+proj=pipeline +step +proj=helmert ... +convention=...". For helmert14
