@@ -186,7 +186,9 @@ int run_fit(const FitCommandOptions& o) {
   const std::vector<std::string> set_warnings = workflow::control_set_warnings(set);
   if (o.compare) {
     for (const auto& w : set_warnings) std::cerr << "geoanchor: warning: " << w << '\n';
-    return run_compare(set, fo);
+    const int code = run_compare(set, fo);
+    io::finish_standard_output("the comparison");
+    return code;
   }
 
   solver::FitResult r = solver::fit_helmert(set, fo);
@@ -198,12 +200,15 @@ int run_fit(const FitCommandOptions& o) {
     std::cerr << "geoanchor: error[" << refusal->code << "]: " << refusal->message << '\n';
     return exit_code(ErrorKind::rejected);
   }
+  // A report nobody could read: the transform it describes is not written.
+  io::finish_standard_output("the fit report", out ? "; " + o.output + " was not written" : std::string());
   if (out) {
     std::string cmd;
     for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
     out->stream() << io::to_json_text(workflow::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
     out->commit();
     std::cout << "\nwrote " << o.output << "\n";
+    io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
   }
   return 0;
 }
