@@ -141,7 +141,7 @@ int run_apply(const ApplyOptions& o) {
   });
   progress.stop();
   for (const auto& t : r.stale_temporaries_removed) {
-    std::cerr << "geoanchor: warning: " << t << ": removed, a temporary output left by a run that was killed\n";
+    std::cerr << "geoanchor: warning: " << io::stale_temporary_warning(t) << '\n';
   }
   if (o.json) {
     std::cout << r.summary_json;

@@ -235,6 +235,7 @@ void run_convert(const ConvertOptions& o) {
   // Points a forced UTM zone does not contain (--zone, --from-zone, utm_zone column).
   for (auto& w : decoder.warnings()) warnings.push_back(std::move(w));
   for (auto& w : encoder.warnings()) warnings.push_back(std::move(w));
+  for (const auto& t : io::take_removed_stale_temporaries()) warnings.push_back(io::stale_temporary_warning(t));
   for (const auto& w : warnings) std::cerr << "geoanchor: warning: " << w << '\n';
   if (output.is_standard_output()) {
     output.commit("the converted rows");

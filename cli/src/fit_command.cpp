@@ -207,6 +207,9 @@ int run_fit(const FitCommandOptions& o) {
     for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
     out->stream() << io::to_json_text(workflow::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
     out->commit();
+    for (const auto& t : io::take_removed_stale_temporaries()) {
+      std::cerr << "geoanchor: warning: " << io::stale_temporary_warning(t) << '\n';
+    }
     std::cout << "\nwrote " << o.output << "\n";
     io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
   }

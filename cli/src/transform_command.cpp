@@ -5,6 +5,7 @@
 
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
@@ -190,6 +191,9 @@ void run_transform(const TransformOptions& o) {
     io::write_csv_line(out, fields);
     ++rows;
   }
+  std::vector<std::string> housekeeping;  // stale temporaries of killed runs removed beside the output
+  for (const auto& t : io::take_removed_stale_temporaries()) housekeeping.push_back(io::stale_temporary_warning(t));
+  for (const auto& w : housekeeping) std::cerr << "geoanchor: warning: " << w << '\n';
   if (output.is_standard_output()) {
     output.commit("the transformed rows");
     return;
@@ -222,6 +226,7 @@ void run_transform(const TransformOptions& o) {
                                              : json{{"by", "plate_motion_model"}, {"plate", plate->plate},
                                                     {"frame", plate->frame}, {"source", plate->source}};
   }
+  if (!housekeeping.empty()) side["warnings"] = housekeeping;
   output.sidecar() << side.dump(2) << '\n';
   output.commit("the transformed rows");  // the sidecar and the data: both written, then published
 }

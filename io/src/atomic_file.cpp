@@ -118,6 +118,7 @@ void unlink_if_same(const fs::path& p, dev_t dev, ino_t ino) {
 // The folders already cleaned of stale temporaries by this process.
 std::mutex g_cleaned_mutex;          // NOLINT: one process-wide record, like the signal registry
 std::set<std::string> g_cleaned;     // NOLINT
+std::vector<fs::path> g_removed_automatically;  // NOLINT: what remove_stale_temporaries_once removed, not yet taken
 
 std::string folder_key(const fs::path& folder) {
   std::error_code ec;
@@ -130,7 +131,9 @@ void remove_stale_temporaries_once(const fs::path& folder) {
     const std::lock_guard<std::mutex> lock(g_cleaned_mutex);
     if (g_cleaned.count(folder_key(folder)) != 0) return;
   }
-  remove_stale_temporaries(folder);
+  const std::vector<fs::path> removed = remove_stale_temporaries(folder);
+  const std::lock_guard<std::mutex> lock(g_cleaned_mutex);
+  g_removed_automatically.insert(g_removed_automatically.end(), removed.begin(), removed.end());
 }
 
 // A filebuf that keeps the errno of its first failed write, so that the
@@ -263,6 +266,17 @@ std::vector<std::filesystem::path> remove_stale_temporaries(const std::filesyste
     ::close(fd);
   }
   return removed;
+}
+
+std::vector<std::filesystem::path> take_removed_stale_temporaries() {
+  const std::lock_guard<std::mutex> lock(g_cleaned_mutex);
+  std::vector<fs::path> out;
+  out.swap(g_removed_automatically);
+  return out;
+}
+
+std::string stale_temporary_warning(const std::filesystem::path& path) {
+  return path.string() + ": removed, a temporary output left by a run that was killed";
 }
 
 bool remove_unless_held(const std::filesystem::path& path) {

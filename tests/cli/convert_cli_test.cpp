@@ -602,5 +602,26 @@ TEST_F(ConvertCli, Issue12Point11_ConvertFitAndDiagnoseOntoAFullStandardOutputEx
   EXPECT_NOTHING_LEFT("in.csv");
 }
 
+// issue 12 point 11
+TEST_F(ConvertCli, Issue12Point11_ConvertRemovesAKilledRunsTemporaryBesideItsOutputAndSaysSo) {
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nA,47,8,400\n");
+  // What a convert killed by SIGKILL leaves: its temporary, held by no process.
+  const fs::path stale = write("out/.out.csv.tmp-0123456789abcdef", "x_m,y_m,z_m\n4300000");
+  const fs::path recent = write("out/.out.csv.tmp-00000000000000ff", "being written");  // not 10 s old
+  const fs::path other = write("out/.out.csv.tmp-123", "not our pattern");
+  const struct timespec old[2] = {{1000000000, 0}, {1000000000, 0}};  // 2001-09-09
+  ASSERT_EQ(::utimensat(AT_FDCWD, stale.c_str(), old, AT_SYMLINK_NOFOLLOW), 0);
+  ASSERT_EQ(::utimensat(AT_FDCWD, other.c_str(), old, AT_SYMLINK_NOFOLLOW), 0);
+  const RunResult r = run("convert " + path("in.csv").string() + " --to ecef -o " + path("out/out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_TRUE(fs::exists(recent));
+  EXPECT_TRUE(fs::exists(other));
+  const std::string warning = stale.string() + ": removed, a temporary output left by a run that was killed";
+  EXPECT_NE(r.err.find("geoanchor: warning: " + warning), std::string::npos) << r.err;
+  const nlohmann::json side = nlohmann::json::parse(slurp(path("out/out.csv.geoanchor.json")));
+  EXPECT_EQ(side["warnings"], nlohmann::json::array({warning})) << side.dump(2);
+}
+
 }  // namespace
 }  // namespace geoanchor

@@ -113,6 +113,16 @@ bool is_temporary_name(std::string_view file_name);
 // temporary there.
 std::vector<std::filesystem::path> remove_stale_temporaries(const std::filesystem::path& folder);
 
+// The stale temporaries AtomicOutputFile removed by itself (its once-per-
+// folder call above) since the last call, each once; a command reports them
+// with stale_temporary_warning() on stderr and in its output's metadata.
+// (Those a caller removes by calling remove_stale_temporaries() itself are
+// the caller's to report.)
+std::vector<std::filesystem::path> take_removed_stale_temporaries();
+
+// "PATH: removed, a temporary output left by a run that was killed".
+std::string stale_temporary_warning(const std::filesystem::path& path);
+
 // Removes `path` (not following a link) unless a process holds it locked:
 // publish_together() holds each output it published until the whole group
 // is published, so a sidecar found without its tile is either being
