@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/workflow/apply.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
@@ -139,14 +140,20 @@ int run_apply(const ApplyOptions& o) {
     }
   });
   progress.stop();
+  for (const auto& t : r.stale_temporaries_removed) {
+    std::cerr << "geoanchor: warning: " << io::stale_temporary_warning(t) << '\n';
+  }
   if (o.json) {
     std::cout << r.summary_json;
   } else if (!o.quiet) {
     std::cout << "apply: " << r.done << " tiles done, " << r.skipped << " up to date, " << r.failed << " failed; "
               << r.processed << " points in " << format_fixed(r.seconds, 2) << " s ("
               << format_fixed(r.seconds > 0 ? static_cast<double>(r.processed) / r.seconds / 1e6 : 0.0, 1)
-              << " M points/s); summary in " << r.summary_path.string() << '\n';
+              << " M points/s); summary in " << r.summary_path.string() << " (this run's own: "
+              << r.run_summary_path.filename().string() << ")\n";
   }
+  io::finish_standard_output(o.json ? "the run summary" : "the list of tiles",
+                             "; the outputs and the summary " + r.run_summary_path.string() + " were written");
   return r.exit_code;
 }
 

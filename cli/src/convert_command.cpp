@@ -201,14 +201,9 @@ void run_convert(const ConvertOptions& o) {
   // Output: a temporary file renamed at the end, or standard output.
   // Both the output and its provenance sidecar are opened before any row is
   // read, so an existing file is refused up front.
-  std::unique_ptr<io::AtomicOutputFile> out_file, sidecar;
-  const io::Overwrite overwrite = o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
-  if (!o.output.empty()) {
-    if (!from_stdin) io::refuse_same_file(o.input, o.output);
-    out_file = std::make_unique<io::AtomicOutputFile>(o.output, overwrite);
-    sidecar = std::make_unique<io::AtomicOutputFile>(o.output + ".geoanchor.json", overwrite);
-  }
-  std::ostream& out = out_file ? out_file->stream() : std::cout;
+  if (!o.output.empty() && !from_stdin) io::refuse_same_file(o.input, o.output);
+  io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+  std::ostream& out = output.stream();
   for (const auto& c : reader.leading_comments()) out << c << '\n';
   io::write_csv_line(out, out_header);
 
@@ -240,10 +235,10 @@ void run_convert(const ConvertOptions& o) {
   // Points a forced UTM zone does not contain (--zone, --from-zone, utm_zone column).
   for (auto& w : decoder.warnings()) warnings.push_back(std::move(w));
   for (auto& w : encoder.warnings()) warnings.push_back(std::move(w));
+  for (const auto& t : io::take_removed_stale_temporaries()) warnings.push_back(io::stale_temporary_warning(t));
   for (const auto& w : warnings) std::cerr << "geoanchor: warning: " << w << '\n';
-  if (!out_file) {
-    out.flush();
-    if (!out) throw Error(ErrorKind::io, "E_WRITE", "<stdout>: write failed");
+  if (output.is_standard_output()) {
+    output.commit("the converted rows");
     return;
   }
 
@@ -289,9 +284,8 @@ void run_convert(const ConvertOptions& o) {
     side["transform"] = t;
   }
   side["warnings"] = warnings;
-  sidecar->stream() << side.dump(2) << '\n';
-  out_file->commit();
-  sidecar->commit();
+  output.sidecar() << side.dump(2) << '\n';
+  output.commit("the converted rows");  // the sidecar and the data: both written, then published
 }
 
 }  // namespace geoanchor::cli

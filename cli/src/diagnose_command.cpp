@@ -10,6 +10,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/control_csv.hpp"
 #include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/solver/diagnosis.hpp"
@@ -143,6 +144,7 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
   const solver::Diagnosis r = solver::diagnose(set, d);
   if (!o.json) {
     print_text(r, o.control);
+    io::finish_standard_output("the diagnosis");
     return;
   }
   nlohmann::ordered_json j;
@@ -166,6 +168,7 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
   j["noise_rms_m"] = r.noise_rms_m;
   j["points_used"] = r.points_used;
   std::cout << j.dump(2) << '\n';
+  io::finish_standard_output("the diagnosis");
 }
 
 }  // namespace geoanchor::cli

@@ -190,7 +190,9 @@ int run_fit(const FitCommandOptions& o) {
   const std::vector<std::string> set_warnings = workflow::control_set_warnings(set);
   if (o.compare) {
     for (const auto& w : set_warnings) std::cerr << "geoanchor: warning: " << w << '\n';
-    return run_compare(set, fo);
+    const int code = run_compare(set, fo);
+    io::finish_standard_output("the comparison");
+    return code;
   }
 
   solver::FitResult r = solver::fit_helmert(set, fo);
@@ -202,12 +204,18 @@ int run_fit(const FitCommandOptions& o) {
     std::cerr << "geoanchor: error[" << refusal->code << "]: " << refusal->message << '\n';
     return exit_code(ErrorKind::rejected);
   }
+  // A report nobody could read: the transform it describes is not written.
+  io::finish_standard_output("the fit report", out ? "; " + o.output + " was not written" : std::string());
   if (out) {
     std::string cmd;
     for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
     io::write_json(out->stream(), workflow::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
     out->commit();
+    for (const auto& t : io::take_removed_stale_temporaries()) {
+      std::cerr << "geoanchor: warning: " << io::stale_temporary_warning(t) << '\n';
+    }
     std::cout << "\nwrote " << o.output << "\n";
+    io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
   }
   return 0;
 }

@@ -78,7 +78,8 @@ int run_snapshot(const SnapshotOptions& o) {
     throw Error(ErrorKind::usage, "E_OPTION", "-o " + o.output + ": expected a file name ending in .png");
   }
   io::refuse_same_file(o.workbench.control, o.output);
-  if (!o.overwrite && fs::exists(o.output)) {
+  io::check_output_path(o.output, io::Overwrite::allow);  // a FIFO, a device or a folder is refused even with --overwrite
+  if (!o.overwrite && fs::exists(fs::symlink_status(o.output))) {
     throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", o.output + ": exists (use --overwrite to replace it)");
   }
   WorkbenchSession s = open_workbench(o.workbench);
@@ -94,6 +95,7 @@ int run_snapshot(const SnapshotOptions& o) {
               << " of " << t.total << ": `geoanchor report` pages them all";
   }
   std::cout << ")\n";
+  io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
   return 0;
 }
 
@@ -117,7 +119,8 @@ int run_report(const ReportOptions& o) {
     std::sort(earlier_pages.begin(), earlier_pages.end());
   }
   for (const auto& n : names) {
-    if (!o.overwrite && fs::exists(dir / n)) {
+    io::check_output_path(dir / n, io::Overwrite::allow);  // a FIFO, a device or a folder is refused even with --overwrite
+    if (!o.overwrite && fs::exists(fs::symlink_status(dir / n))) {
       throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", (dir / n).string() + ": exists (use --overwrite to replace the report)");
     }
   }
@@ -260,6 +263,7 @@ int run_report(const ReportOptions& o) {
   std::cout << "wrote " << o.output << (o.output.ends_with('/') ? "" : "/") << ": report.txt and " << images.size()
             << " PNG views (the table on " << pages
             << (pages == 1 ? " page" : " pages") << ")\n";
+  io::finish_standard_output("the line \"wrote " + o.output + "\"", "; the report was written");
   return 0;
 }
 

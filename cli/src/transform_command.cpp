@@ -5,6 +5,7 @@
 
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
@@ -128,14 +129,9 @@ void run_transform(const TransformOptions& o) {
   std::size_t first_coordinate = 0;
   const auto out_header = io::output_header(header, columns, encoder.column_names(), source_name, first_coordinate);
 
-  std::unique_ptr<io::AtomicOutputFile> out_file, sidecar;
-  if (!o.output.empty()) {
-    if (!from_stdin) io::refuse_same_file(o.input, o.output);
-    const io::Overwrite overwrite = o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
-    out_file = std::make_unique<io::AtomicOutputFile>(o.output, overwrite);
-    sidecar = std::make_unique<io::AtomicOutputFile>(o.output + ".geoanchor.json", overwrite);
-  }
-  std::ostream& out = out_file ? out_file->stream() : std::cout;
+  if (!o.output.empty() && !from_stdin) io::refuse_same_file(o.input, o.output);
+  io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+  std::ostream& out = output.stream();
   // The path, each step's source and the stated accuracy: on standard
   // error (standard output may be the CSV), and in the sidecar.
   std::ostream& report = std::cerr;
@@ -195,9 +191,11 @@ void run_transform(const TransformOptions& o) {
     io::write_csv_line(out, fields);
     ++rows;
   }
-  if (!out_file) {
-    out.flush();
-    if (!out) throw Error(ErrorKind::io, "E_WRITE", "<stdout>: write failed");
+  std::vector<std::string> housekeeping;  // stale temporaries of killed runs removed beside the output
+  for (const auto& t : io::take_removed_stale_temporaries()) housekeeping.push_back(io::stale_temporary_warning(t));
+  for (const auto& w : housekeeping) std::cerr << "geoanchor: warning: " << w << '\n';
+  if (output.is_standard_output()) {
+    output.commit("the transformed rows");
     return;
   }
   json steps = json::array();
@@ -228,9 +226,9 @@ void run_transform(const TransformOptions& o) {
                                              : json{{"by", "plate_motion_model"}, {"plate", plate->plate},
                                                     {"frame", plate->frame}, {"source", plate->source}};
   }
-  sidecar->stream() << side.dump(2) << '\n';
-  out_file->commit();
-  sidecar->commit();
+  if (!housekeeping.empty()) side["warnings"] = housekeeping;
+  output.sidecar() << side.dump(2) << '\n';
+  output.commit("the transformed rows");  // the sidecar and the data: both written, then published
 }
 
 }  // namespace geoanchor::cli

@@ -1,18 +1,30 @@
 #include "geoanchor/io/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
+#include <ctime>
+#include <fstream>
+#include <iostream>
+#include <mutex>
 #include <random>
+#include <set>
+#include <stdexcept>
 
 #include "geoanchor/geodesy/error.hpp"
 
 namespace geoanchor::io {
 namespace {
+
+namespace fs = std::filesystem;
 
 // A fixed table of temporary paths that a signal handler may read. A slot is
 // claimed, its path copied, and only then published as ready; the handler
@@ -26,7 +38,7 @@ struct Slot {
 };
 std::array<Slot, kSlots> g_temp_registry;  // NOLINT: signal handlers need a global
 
-int register_temp(const std::filesystem::path& p) {
+int register_temp(const fs::path& p) {
   const std::string s = p.string();
   if (s.size() >= kPathMax) return -1;
   for (int i = 0; i < kSlots; ++i) {
@@ -55,15 +67,133 @@ extern "C" void cleanup_and_reraise(int sig) {
   std::raise(sig);
 }
 
+constexpr std::size_t kSuffixDigits = 16;
+constexpr std::string_view kTempInfix = ".tmp-";
+
 std::string random_suffix() {
   std::random_device rd;
   const auto v = (static_cast<unsigned long long>(rd()) << 32) ^ rd();
-  char buf[17];
+  char buf[kSuffixDigits + 1];
   std::snprintf(buf, sizeof buf, "%016llx", v);
   return buf;
 }
 
+std::string reason(int err) { return err != 0 ? std::string(std::strerror(err)) : std::string("unknown error"); }
+
+// What a non-regular file is, in words.
+std::string kind_of(const struct stat& st) {
+  if (S_ISDIR(st.st_mode)) return "a folder";
+  if (S_ISCHR(st.st_mode)) return "a character device";
+  if (S_ISBLK(st.st_mode)) return "a block device";
+  if (S_ISFIFO(st.st_mode)) return "a FIFO (named pipe)";
+  if (S_ISSOCK(st.st_mode)) return "a socket";
+  if (S_ISLNK(st.st_mode)) return "a symbolic link";
+  return "not a regular file";
+}
+
+// Empty when `p` is absent, a regular file or a link to one; else what it is.
+// `exists` says whether anything is there.
+std::string not_regular(const fs::path& p, bool& exists) {
+  struct stat st {};
+  exists = false;
+  if (::lstat(p.c_str(), &st) != 0) return {};  // absent (or unreachable: creating the temporary will say why)
+  exists = true;
+  if (S_ISREG(st.st_mode)) return {};
+  if (!S_ISLNK(st.st_mode)) return kind_of(st);
+  struct stat target {};
+  if (::stat(p.c_str(), &target) != 0) {
+    const int err = errno;
+    return err == ENOENT ? std::string("a dangling symbolic link") : "a symbolic link that cannot be followed (" + reason(err) + ")";
+  }
+  if (S_ISREG(target.st_mode)) return {};
+  return "a symbolic link to " + kind_of(target);
+}
+
+// Unlinks `p` if it is still the file (device, inode) this process published there.
+void unlink_if_same(const fs::path& p, dev_t dev, ino_t ino) {
+  struct stat st {};
+  if (::lstat(p.c_str(), &st) == 0 && st.st_dev == dev && st.st_ino == ino) ::unlink(p.c_str());
+}
+
+// The folders already cleaned of stale temporaries by this process.
+std::mutex g_cleaned_mutex;          // NOLINT: one process-wide record, like the signal registry
+std::set<std::string> g_cleaned;     // NOLINT
+std::vector<fs::path> g_removed_automatically;  // NOLINT: what remove_stale_temporaries_once removed, not yet taken
+
+std::string folder_key(const fs::path& folder) {
+  std::error_code ec;
+  const fs::path canonical = fs::weakly_canonical(folder, ec);
+  return (ec ? folder : canonical).string();
+}
+
+void remove_stale_temporaries_once(const fs::path& folder) {
+  {
+    const std::lock_guard<std::mutex> lock(g_cleaned_mutex);
+    if (g_cleaned.count(folder_key(folder)) != 0) return;
+  }
+  const std::vector<fs::path> removed = remove_stale_temporaries(folder);
+  const std::lock_guard<std::mutex> lock(g_cleaned_mutex);
+  g_removed_automatically.insert(g_removed_automatically.end(), removed.begin(), removed.end());
+}
+
+// A filebuf that keeps the errno of its first failed write, so that the
+// error names the cause (disk full, file too large, ...) and not whatever
+// a later call left in errno.
+class CheckedFileBuf : public std::filebuf {
+ public:
+  int first_error() const { return first_errno_; }
+
+ protected:
+  int_type overflow(int_type c) override {
+    errno = 0;
+    const int_type r = std::filebuf::overflow(c);
+    if (traits_type::eq_int_type(r, traits_type::eof()) && !traits_type::eq_int_type(c, traits_type::eof())) note();
+    return r;
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    errno = 0;
+    const std::streamsize r = std::filebuf::xsputn(s, n);
+    if (r < n) note();
+    return r;
+  }
+  int sync() override {
+    errno = 0;
+    const int r = std::filebuf::sync();
+    if (r != 0) note();
+    return r;
+  }
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override {
+    errno = 0;
+    const pos_type r = std::filebuf::seekoff(off, dir, which);
+    if (r == pos_type(off_type(-1))) note();
+    return r;
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+    errno = 0;
+    const pos_type r = std::filebuf::seekpos(pos, which);
+    if (r == pos_type(off_type(-1))) note();
+    return r;
+  }
+
+ private:
+  void note() {
+    if (first_errno_ == 0) first_errno_ = errno != 0 ? errno : EIO;
+  }
+  int first_errno_ = 0;
+};
+
 }  // namespace
+
+struct AtomicOutputFile::State {
+  CheckedFileBuf buf;
+  std::ostream out{&buf};
+  int lock_fd = -1;  // O_WRONLY on the temporary, flock'ed: the claim that it is alive; also what fsync uses
+  dev_t dev = 0;
+  ino_t ino = 0;
+  bool written = false;    // flushed, closed and fsync'ed
+  bool published = false;  // at its final path
+  bool removed = false;    // temporary gone
+};
 
 void install_signal_cleanup() {
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, cleanup_and_reraise);
@@ -78,63 +208,305 @@ void refuse_same_file(const std::filesystem::path& input, const std::filesystem:
   }
 }
 
-AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path, Overwrite overwrite)
-    : final_path_(std::move(final_path)) {
-  std::error_code ec;
-  if (overwrite == Overwrite::refuse && std::filesystem::exists(final_path_, ec)) {
-    throw Error(ErrorKind::io, "E_OUTPUT_EXISTS",
-                final_path_.string() + ": output already exists; pass --overwrite to replace it");
+void check_output_path(const std::filesystem::path& path, Overwrite overwrite) {
+  bool exists = false;
+  const std::string what = not_regular(path, exists);
+  if (!what.empty()) {
+    throw Error(ErrorKind::io, "E_OUTPUT_NOT_REGULAR",
+                path.string() + ": is " + what + ", not a regular file; an output only ever replaces a regular file, " +
+                    "with or without --overwrite: choose another output path");
   }
+  if (exists && overwrite == Overwrite::refuse) {
+    throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", path.string() + ": output already exists; pass --overwrite to replace it");
+  }
+}
+
+bool is_temporary_name(std::string_view name) {
+  const std::size_t tail = kTempInfix.size() + kSuffixDigits;
+  if (name.size() < 2 + tail || name.front() != '.') return false;
+  if (name.substr(name.size() - tail, kTempInfix.size()) != kTempInfix) return false;
+  for (char c : name.substr(name.size() - kSuffixDigits)) {
+    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return false;
+  }
+  return true;
+}
+
+std::vector<std::filesystem::path> remove_stale_temporaries(const std::filesystem::path& folder) {
+  {
+    const std::lock_guard<std::mutex> lock(g_cleaned_mutex);
+    g_cleaned.insert(folder_key(folder));
+  }
+  std::vector<fs::path> removed;
+  std::error_code ec;
+  fs::directory_iterator it(folder.empty() ? fs::path(".") : folder, ec);
+  if (ec) return removed;
+  std::timespec now{};
+  std::timespec_get(&now, TIME_UTC);
+  for (; it != fs::directory_iterator(); it.increment(ec)) {
+    if (ec) break;
+    const fs::path p = it->path();
+    if (!is_temporary_name(p.filename().string())) continue;
+    struct stat st {};
+    if (::lstat(p.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || st.st_uid != ::geteuid()) continue;
+    const double age_s = static_cast<double>(now.tv_sec - st.st_mtim.tv_sec) +
+                         1e-9 * static_cast<double>(now.tv_nsec - st.st_mtim.tv_nsec);
+    if (!(age_s >= static_cast<double>(kStaleTemporaryAge.count()))) continue;  // recent, or dated in the future
+    const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+    if (fd < 0) continue;
+    struct stat opened {};
+    // Its writer holds LOCK_EX while it lives: taking the lock means none does.
+    if (::fstat(fd, &opened) == 0 && opened.st_dev == st.st_dev && opened.st_ino == st.st_ino &&
+        ::flock(fd, LOCK_EX | LOCK_NB) == 0) {
+      struct stat again {};
+      if (::lstat(p.c_str(), &again) == 0 && again.st_dev == st.st_dev && again.st_ino == st.st_ino &&
+          ::unlink(p.c_str()) == 0) {
+        removed.push_back(p);
+      }
+    }
+    ::close(fd);
+  }
+  return removed;
+}
+
+std::vector<std::filesystem::path> take_removed_stale_temporaries() {
+  const std::lock_guard<std::mutex> lock(g_cleaned_mutex);
+  std::vector<fs::path> out;
+  out.swap(g_removed_automatically);
+  return out;
+}
+
+std::string stale_temporary_warning(const std::filesystem::path& path) {
+  return path.string() + ": removed, a temporary output left by a run that was killed";
+}
+
+bool remove_unless_held(const std::filesystem::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+  if (fd < 0) return errno == ENOENT;
+  bool removed = false;
+  struct stat opened {};
+  if (::fstat(fd, &opened) == 0 && ::flock(fd, LOCK_EX | LOCK_NB) == 0) {
+    struct stat st {};
+    removed = ::lstat(path.c_str(), &st) != 0 ||
+              (st.st_dev == opened.st_dev && st.st_ino == opened.st_ino && ::unlink(path.c_str()) == 0);
+  }
+  ::close(fd);
+  return removed;
+}
+
+AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path, Overwrite overwrite)
+    : final_path_(std::move(final_path)), overwrite_(overwrite), s_(std::make_unique<State>()) {
+  check_output_path(final_path_, overwrite_);
+  std::error_code ec;
   const auto dir = final_path_.has_parent_path() ? final_path_.parent_path() : std::filesystem::path(".");
   if (!std::filesystem::is_directory(dir, ec)) {
     throw Error(ErrorKind::io, "E_OUTPUT_DIR", final_path_.string() + ": folder " + dir.string() + " does not exist");
   }
+  remove_stale_temporaries_once(dir);
   std::string temp_name = ".";
-  temp_name.append(final_path_.filename().string()).append(".tmp-").append(random_suffix());
+  temp_name.append(final_path_.filename().string()).append(kTempInfix).append(random_suffix());
   temp_path_ = dir / temp_name;
   registry_slot_ = register_temp(temp_path_);
-  out_.open(temp_path_, std::ios::binary | std::ios::trunc);
-  if (!out_) {
+  const int fd = ::open(temp_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    const int err = errno;
     unregister_temp(registry_slot_);
-    throw Error(ErrorKind::io, "E_OUTPUT_OPEN",
-                temp_path_.string() + ": cannot create temporary output: " + std::strerror(errno));
+    s_->removed = true;
+    throw Error(ErrorKind::io, "E_OUTPUT_OPEN", temp_path_.string() + ": cannot create temporary output: " + reason(err));
+  }
+  s_->lock_fd = fd;
+  // Where the filesystem has no locks the temporary is simply never taken
+  // for stale by remove_stale_temporaries().
+  (void)::flock(fd, LOCK_EX | LOCK_NB);
+  struct stat st {};
+  if (::fstat(fd, &st) == 0) {
+    s_->dev = st.st_dev;
+    s_->ino = st.st_ino;
+  }
+  if (s_->buf.open(temp_path_, std::ios::out | std::ios::binary | std::ios::trunc) == nullptr) {
+    const int err = errno;
+    ::close(fd);
+    s_->lock_fd = -1;
+    ::unlink(temp_path_.c_str());
+    s_->removed = true;
+    unregister_temp(registry_slot_);
+    throw Error(ErrorKind::io, "E_OUTPUT_OPEN", temp_path_.string() + ": cannot open temporary output: " + reason(err));
   }
 }
 
 AtomicOutputFile::~AtomicOutputFile() {
   if (!committed_) {
-    out_.close();
-    std::error_code ec;
-    std::filesystem::remove(temp_path_, ec);
+    s_->buf.close();
+    if (!s_->published && !s_->removed) ::unlink(temp_path_.c_str());
   }
+  if (s_->lock_fd >= 0) ::close(s_->lock_fd);
   unregister_temp(registry_slot_);
 }
 
-void AtomicOutputFile::commit() {
-  out_.flush();
-  const bool write_ok = static_cast<bool>(out_);
-  out_.close();
-  bool sync_ok = false;
-  if (write_ok) {
-    const int fd = ::open(temp_path_.c_str(), O_RDONLY);
-    if (fd >= 0) {
-      sync_ok = ::fsync(fd) == 0;
-      ::close(fd);
+std::ostream& AtomicOutputFile::stream() { return s_->out; }
+
+void AtomicOutputFile::commit() { publish_together({this}); }
+
+void publish_together(std::initializer_list<AtomicOutputFile*> outputs) {
+  std::vector<AtomicOutputFile*> v(outputs);
+  for (const auto* f : v) {
+    if (f->committed_ || f->s_->published || f->s_->removed) throw std::logic_error("publish_together: an output was already committed");
+  }
+  std::string names;
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    names += (k == 0 ? "" : k + 1 == v.size() ? " nor " : ", ") + v[k]->final_path_.string();
+  }
+  const std::string none_left = v.size() > 1 ? "neither " + names + " was written" : "no output was left";
+  // Temporaries removed and published outputs taken back: nothing of this group remains.
+  auto roll_back = [&] {
+    for (auto* f : v) {
+      f->s_->buf.close();
+      if (f->s_->published) {
+        unlink_if_same(f->final_path_, f->s_->dev, f->s_->ino);
+        f->s_->published = false;
+      }
+      if (!f->s_->removed) ::unlink(f->temp_path_.c_str());
+      f->s_->removed = true;
+    }
+  };
+
+  // 1. Every output written completely and on disk before any is published.
+  for (auto* f : v) {
+    auto& s = *f->s_;
+    s.out.flush();
+    bool ok = static_cast<bool>(s.out);
+    int err = s.buf.first_error();
+    if (s.buf.close() == nullptr) ok = false;
+    if (err == 0 && !ok) err = s.buf.first_error() != 0 ? s.buf.first_error() : errno;
+    if (ok && ::fsync(s.lock_fd) != 0) {
+      ok = false;
+      err = errno;
+    }
+    if (!ok) {
+      roll_back();
+      throw Error(ErrorKind::io, "E_WRITE",
+                  f->final_path_.string() + ": writing failed (" + reason(err) + "); " + none_left);
+    }
+    s.written = true;
+  }
+  // 2. With --overwrite: the final paths still hold regular files (or nothing).
+  for (auto* f : v) {
+    if (f->overwrite_ != Overwrite::allow) continue;
+    try {
+      check_output_path(f->final_path_, Overwrite::allow);
+    } catch (const Error& e) {
+      roll_back();
+      throw Error(e.kind(), e.code(), std::string(e.what()) + "; " + none_left);
     }
   }
-  std::error_code ec;
-  if (!write_ok || !sync_ok) {
-    std::filesystem::remove(temp_path_, ec);
+  // 3. No old last output beside new earlier ones.
+  if (v.size() > 1 && v.back()->overwrite_ == Overwrite::allow) {
+    if (::unlink(v.back()->final_path_.c_str()) != 0 && errno != ENOENT) {
+      const int err = errno;
+      roll_back();
+      throw Error(ErrorKind::io, "E_RENAME",
+                  v.back()->final_path_.string() + ": cannot remove the old output before replacing it: " + reason(err) +
+                      "; " + none_left);
+    }
+  }
+  // 4. Published in order.
+  for (auto* f : v) {
+    auto& s = *f->s_;
+    const char* from = f->temp_path_.c_str();
+    const char* to = f->final_path_.c_str();
+    int err = 0;
+    if (f->overwrite_ == Overwrite::allow) {
+      if (::rename(from, to) != 0) err = errno;
+    } else if (::renameat2(AT_FDCWD, from, AT_FDCWD, to, RENAME_NOREPLACE) != 0) {
+      err = errno;
+      if (err == EINVAL || err == ENOSYS || err == ENOTSUP) {
+        // No RENAME_NOREPLACE here (NFS, some FUSE filesystems): link(2)
+        // fails with EEXIST just as atomically.
+        err = ::link(from, to) == 0 ? 0 : errno;
+        if (err == 0) ::unlink(from);
+      }
+    }
+    if (err != 0) {
+      roll_back();
+      if (err == EEXIST) {
+        throw Error(ErrorKind::io, "E_OUTPUT_EXISTS",
+                    f->final_path_.string() + ": another process put a file at this path while this run was writing it "
+                                              "(another run into the same folder?); it was left as it is and this run's "
+                                              "output discarded: " + none_left);
+      }
+      throw Error(ErrorKind::io, "E_RENAME",
+                  f->final_path_.string() + ": cannot move the finished output into place: " + reason(err) + "; " + none_left);
+    }
+    s.published = true;
+  }
+  for (auto* f : v) {
+    f->committed_ = true;
+    unregister_temp(f->registry_slot_);
+    f->registry_slot_ = -1;
+  }
+  // 5. The renames on disk: each folder fsync'ed once.
+  std::set<std::string> folders;
+  for (auto* f : v) folders.insert(f->final_path_.has_parent_path() ? f->final_path_.parent_path().string() : ".");
+  std::string sync_error;
+  for (const auto& d : folders) {
+    const int fd = ::open(d.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) {
+      sync_error = d + ": " + reason(errno);
+      continue;
+    }
+    if (::fsync(fd) != 0 && errno != EINVAL) sync_error = d + ": " + reason(errno);  // EINVAL: cannot sync folders there
+    ::close(fd);
+  }
+  // The locks go only now: until here a sidecar published first is still
+  // claimed by this process while its tile is being published.
+  for (auto* f : v) {
+    if (f->s_->lock_fd >= 0) ::close(f->s_->lock_fd);
+    f->s_->lock_fd = -1;
+  }
+  if (!sync_error.empty()) {
     throw Error(ErrorKind::io, "E_WRITE",
-                final_path_.string() + ": writing failed (disk full or I/O error); no output was left");
+                names + ": published, but the folder could not be synced (" + sync_error +
+                    "): the output may not survive a power cut");
   }
-  std::filesystem::rename(temp_path_, final_path_, ec);
-  if (ec) {
-    std::filesystem::remove(temp_path_, ec);
-    throw Error(ErrorKind::io, "E_RENAME", final_path_.string() + ": cannot move the finished output into place: " +
-                                               ec.message());
+}
+
+DataOutput::DataOutput(const std::string& path, Overwrite overwrite) {
+  if (path.empty()) return;
+  data_ = std::make_unique<AtomicOutputFile>(path, overwrite);
+  sidecar_ = std::make_unique<AtomicOutputFile>(path + ".geoanchor.json", overwrite);
+}
+
+DataOutput::~DataOutput() = default;
+
+std::ostream& DataOutput::stream() { return data_ ? data_->stream() : std::cout; }
+
+std::ostream& DataOutput::sidecar() {
+  if (!sidecar_) throw std::logic_error("DataOutput::sidecar: standard output has no sidecar");
+  return sidecar_->stream();
+}
+
+void DataOutput::commit(std::string_view what_for_standard_output) {
+  if (!data_) {
+    finish_standard_output(what_for_standard_output);
+    return;
   }
-  committed_ = true;
+  publish_together({sidecar_.get(), data_.get()});
+}
+
+void finish_standard_output(std::string_view what, std::string_view consequence) {
+  errno = 0;
+  std::cout.flush();
+  bool ok = static_cast<bool>(std::cout);
+  int err = errno;
+  if (std::fflush(stdout) != 0) {
+    ok = false;
+    if (err == 0) err = errno;
+  }
+  if (std::ferror(stdout) != 0) ok = false;
+  if (!ok) {
+    throw Error(ErrorKind::io, "E_WRITE",
+                "standard output: " + std::string(what) + " could not be written" +
+                    (err != 0 ? " (" + reason(err) + ")" : std::string()) + std::string(consequence));
+  }
 }
 
 }  // namespace geoanchor::io

@@ -523,5 +523,105 @@ TEST_F(ConvertCli, Issue12Point1_ANonFiniteOutputIsRefusedNeverWritten) {
   EXPECT_NOTHING_LEFT("in.csv", "T.json");
 }
 
+// ---------------------------------------------------------------- issue 12 point 11: outputs
+
+// issue 12 point 11
+TEST_F(ConvertCli, Issue12Point11_ConvertOverwriteOntoAFifoOrAFolderIsRefusedAndNothingIsCreated) {
+  // The baseline renamed its temporary over the FIFO (a device, as root) and exited 0.
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nA,47,8,400\n");
+  const std::string cmd = "convert " + path("in.csv").string() + " --to ecef --overwrite -o ";
+  ASSERT_EQ(::mkfifo(path("fifo.csv").c_str(), 0644), 0);
+  const RunResult fifo = run(cmd + path("fifo.csv").string());
+  EXPECT_EQ(fifo.exit_code, 5) << fifo.err;
+  EXPECT_NE(fifo.err.find("error[E_OUTPUT_NOT_REGULAR]: " + path("fifo.csv").string() +
+                          ": is a FIFO (named pipe), not a regular file; an output only ever replaces a regular file, "
+                          "with or without --overwrite"),
+            std::string::npos)
+      << fifo.err;
+  EXPECT_TRUE(fs::is_fifo(path("fifo.csv"))) << "the FIFO was replaced";
+  fs::create_directory(path("folder.csv"));
+  const RunResult folder = run(cmd + path("folder.csv").string());
+  EXPECT_EQ(folder.exit_code, 5) << folder.err;
+  EXPECT_NE(folder.err.find("error[E_OUTPUT_NOT_REGULAR]: " + path("folder.csv").string() + ": is a folder, not a regular file"),
+            std::string::npos)
+      << folder.err;
+  EXPECT_TRUE(fs::is_directory(path("folder.csv")) && fs::is_empty(path("folder.csv")));
+  // A FIFO where the sidecar goes: refused as well, the data not written either.
+  ASSERT_EQ(::mkfifo(path("side.csv.geoanchor.json").c_str(), 0644), 0);
+  const RunResult side = run(cmd + path("side.csv").string());
+  EXPECT_EQ(side.exit_code, 5) << side.err;
+  EXPECT_NE(side.err.find("error[E_OUTPUT_NOT_REGULAR]: " + path("side.csv.geoanchor.json").string() + ": is a FIFO"),
+            std::string::npos)
+      << side.err;
+  EXPECT_NOTHING_LEFT("in.csv", "fifo.csv", "folder.csv", "side.csv.geoanchor.json");
+}
+
+// issue 12 point 11
+TEST_F(ConvertCli, Issue12Point11_ConvertASidecarThatCannotBeWrittenLeavesNeitherFileAndARerunWritesBoth) {
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nA,47,8,400\n");
+  const std::string args = "convert " + path("in.csv").string() + " --to ecef -o " + path("out.csv").string();
+  // Files limited to 512 bytes (ulimit -f counts 512-byte blocks in sh): the
+  // one-row CSV (about 70 bytes) fits, its sidecar (over 600 bytes with this
+  // folder's name in it) does not; its write fails with EFBIG as on a full disk.
+  const RunResult full = shell("trap '' XFSZ; ulimit -f 1; exec " + exe() + " " + args);
+  EXPECT_EQ(full.exit_code, 5) << full.err;
+  EXPECT_NE(full.err.find("error[E_WRITE]: " + path("out.csv.geoanchor.json").string() +
+                          ": writing failed (File too large); neither " + path("out.csv.geoanchor.json").string() +
+                          " nor " + path("out.csv").string() + " was written"),
+            std::string::npos)
+      << full.err;
+  EXPECT_NOTHING_LEFT("in.csv");  // the baseline left out.csv, and the rerun below was refused
+  const RunResult rerun = run(args);
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
+  EXPECT_TRUE(fs::is_regular_file(path("out.csv")));
+  const nlohmann::json side = nlohmann::json::parse(slurp(path("out.csv.geoanchor.json")));
+  EXPECT_TRUE(side.is_object()) << side.dump(2);
+}
+
+// issue 12 point 11
+TEST_F(ConvertCli, Issue12Point11_ConvertFitAndDiagnoseOntoAFullStandardOutputExitNonZero) {
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nA,47,8,400\n");
+  // (in a subshell: shell() redirects the whole command's standard output to a file)
+  const RunResult convert = shell("(" + exe() + " convert " + path("in.csv").string() + " --to ecef > /dev/full)");
+  EXPECT_EQ(convert.exit_code, 5) << convert.err;
+  EXPECT_NE(convert.err.find("error[E_WRITE]: standard output: the converted rows could not be written (No space left on device)"),
+            std::string::npos)
+      << convert.err;
+  // The baseline printed the fit report into the void, wrote T.json and exited 0.
+  const std::string control = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv";
+  const RunResult fit = shell("(" + exe() + " fit " + control + " --model helmert7 --convention position_vector -o " +
+                              path("T.json").string() + " > /dev/full)");
+  EXPECT_EQ(fit.exit_code, 5) << fit.err;
+  EXPECT_NE(fit.err.find("error[E_WRITE]: standard output: the fit report could not be written"), std::string::npos) << fit.err;
+  EXPECT_NE(fit.err.find("; " + path("T.json").string() + " was not written"), std::string::npos) << fit.err;
+  EXPECT_FALSE(fs::exists(path("T.json")));
+  const RunResult diagnose = shell("(" + exe() + " diagnose " + control + " > /dev/full)");
+  EXPECT_EQ(diagnose.exit_code, 5) << diagnose.err;
+  EXPECT_NE(diagnose.err.find("error[E_WRITE]: standard output: the diagnosis could not be written"), std::string::npos)
+      << diagnose.err;
+  EXPECT_NOTHING_LEFT("in.csv");
+}
+
+// issue 12 point 11
+TEST_F(ConvertCli, Issue12Point11_ConvertRemovesAKilledRunsTemporaryBesideItsOutputAndSaysSo) {
+  write("in.csv", "id,lat_deg,lon_deg,h_m\nA,47,8,400\n");
+  // What a convert killed by SIGKILL leaves: its temporary, held by no process.
+  const fs::path stale = write("out/.out.csv.tmp-0123456789abcdef", "x_m,y_m,z_m\n4300000");
+  const fs::path recent = write("out/.out.csv.tmp-00000000000000ff", "being written");  // not 10 s old
+  const fs::path other = write("out/.out.csv.tmp-123", "not our pattern");
+  const struct timespec old[2] = {{1000000000, 0}, {1000000000, 0}};  // 2001-09-09
+  ASSERT_EQ(::utimensat(AT_FDCWD, stale.c_str(), old, AT_SYMLINK_NOFOLLOW), 0);
+  ASSERT_EQ(::utimensat(AT_FDCWD, other.c_str(), old, AT_SYMLINK_NOFOLLOW), 0);
+  const RunResult r = run("convert " + path("in.csv").string() + " --to ecef -o " + path("out/out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_TRUE(fs::exists(recent));
+  EXPECT_TRUE(fs::exists(other));
+  const std::string warning = stale.string() + ": removed, a temporary output left by a run that was killed";
+  EXPECT_NE(r.err.find("geoanchor: warning: " + warning), std::string::npos) << r.err;
+  const nlohmann::json side = nlohmann::json::parse(slurp(path("out/out.csv.geoanchor.json")));
+  EXPECT_EQ(side["warnings"], nlohmann::json::array({warning})) << side.dump(2);
+}
+
 }  // namespace
 }  // namespace geoanchor

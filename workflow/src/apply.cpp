@@ -2,9 +2,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -35,6 +38,7 @@ using io::TileMetadata;
 using nlohmann::json;
 
 constexpr char kSummarySchema[] = "geoanchor.apply-summary/1";
+constexpr int kRunSummaryAttempts = 100;  // run summaries of one name: same second, same pid, other hosts
 
 // ---------------------------------------------------------------- inputs
 
@@ -190,9 +194,12 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   const json request = request_json(o_);
 
   // Resumable: an output whose provenance names this input, transform and
-  // request is up to date.
+  // request is up to date. Only regular files (or links to them) are read: a
+  // FIFO or a device at either path is refused below, never opened.
   std::error_code ec;
-  if (!o_.overwrite && fs::exists(p.output, ec) && fs::exists(p.sidecar, ec)) {
+  const bool tile_there = fs::is_regular_file(p.output, ec);
+  const bool sidecar_there = fs::is_regular_file(p.sidecar, ec);
+  if (!o_.overwrite && tile_there && sidecar_there) {
     try {
       const TileMetadata done = io::read_tile_metadata(p.sidecar);
       if (!done.provenance_json.empty()) {
@@ -212,7 +219,36 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
       // An unreadable sidecar is not ours: fall through to the refusal.
     }
   }
+  // A sidecar is published before its tile (and, with --overwrite, the old
+  // tile removed first), so a tile never stands beside another run's
+  // sidecar. A sidecar of ours without its tile is either being published
+  // by another run right now (it holds it: this tile is left to that run) or
+  // was left by a run killed between the two renames: removed, and redone.
+  std::vector<std::string> housekeeping;
+  std::error_code no_tile;
+  if (!o_.overwrite && !fs::exists(fs::symlink_status(p.output, no_tile)) &&
+      fs::is_regular_file(fs::symlink_status(p.sidecar, ec))) {
+    bool ours = false;
+    try {
+      ours = !io::read_tile_metadata(p.sidecar).provenance_json.empty();
+    } catch (const Error&) {
+      // Not a sidecar geoanchor wrote: refused below as an existing output.
+    }
+    if (ours) {
+      if (!io::remove_unless_held(p.sidecar)) {
+        throw Error(ErrorKind::io, "E_OUTPUT_BUSY",
+                    p.sidecar.string() + ": a sidecar without its tile " + p.output.string() +
+                        " that another process holds (a run publishing this tile right now?) or that cannot be removed; "
+                        "this run left the tile alone");
+      }
+      housekeeping.push_back(p.sidecar.string() + ": removed a sidecar without its tile, left by an interrupted run; the "
+                                                  "tile is redone");
+    }
+  }
   const io::Overwrite overwrite = o_.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
+  // What is no regular file at either path is named first, with or without --overwrite.
+  io::check_output_path(p.output, io::Overwrite::allow);
+  io::check_output_path(p.sidecar, io::Overwrite::allow);
   io::AtomicOutputFile out(p.output, overwrite);
   io::AtomicOutputFile side(p.sidecar, overwrite);
 
@@ -246,7 +282,8 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
     case io::TileFormat::ply: res = io::apply_ply_tile(p.input, out.stream(), p.output.string(), chain, ao); break;
   }
   r.points = res.points;
-  std::vector<std::string> warnings = p.warnings;
+  std::vector<std::string> warnings = housekeeping;
+  warnings.insert(warnings.end(), p.warnings.begin(), p.warnings.end());
   warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
 
   // The tile's corners in the source frame's ECEF: extent and uncertainty.
@@ -331,7 +368,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
     }
   }
 
-  // Flush the tile to learn its size, then the sidecar, then commit both.
+  // Flush the tile to learn its size, then the sidecar, then publish both.
   out.stream().flush();
   const auto output_size = static_cast<std::uint64_t>(out.stream().tellp());
   nlohmann::ordered_json prov;
@@ -378,8 +415,9 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
                         (p.format == io::TileFormat::las ? " (WKT2 in the LAS file's LASF_Projection 2112 record)" : "");
   meta.provenance_json = prov.dump();
   side.stream() << io::to_json_text(meta);
-  out.commit();
-  side.commit();
+  // One output: both written and fsync'ed, then the sidecar published and
+  // the tile last; a failure to write either leaves neither.
+  io::publish_together({&side, &out});
   r.status = "done";
   r.warnings = warnings;
 }
@@ -391,9 +429,20 @@ struct ApplyRun::Impl {
   std::optional<io::TransformFile> transform;
   std::string transform_sha;
   std::vector<fs::path> tiles;
-  std::string shard_text, summary_name;
+  std::string shard_text, summary_base, run_id;
   std::uint64_t total_bytes = 0;
 };
+
+// This run's name among others into the same folder: its start in UTC and
+// its process id, e.g. 20250301T101500Z-4242.
+std::string make_run_id() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  ::gmtime_r(&now, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
+  return std::string(stamp) + "-" + std::to_string(::getpid());
+}
 
 ApplyRun::ApplyRun(ApplyRequest request) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
@@ -406,14 +455,15 @@ ApplyRun::ApplyRun(ApplyRequest request) : impl_(std::make_unique<Impl>()) {
   // The planner parses every value flag: a bad one fails before any output.
   const TilePlanner check(o, m.transform);
   m.tiles = expand_inputs(o.inputs);
-  m.summary_name = "geoanchor-apply-summary.json";
+  m.summary_base = "geoanchor-apply-summary";
+  m.run_id = make_run_id();
   if (o.shard) {
     const auto [i, n] = parse_shard(*o.shard);
     std::vector<fs::path> mine;
     for (std::size_t k = i; k < m.tiles.size(); k += n) mine.push_back(m.tiles[k]);
     m.tiles = std::move(mine);
     m.shard_text = std::to_string(i) + "/" + std::to_string(n);
-    m.summary_name = "geoanchor-apply-summary.shard-" + std::to_string(i) + "-of-" + std::to_string(n) + ".json";
+    m.summary_base = "geoanchor-apply-summary.shard-" + std::to_string(i) + "-of-" + std::to_string(n);
   }
   // Two inputs must not write the same output.
   std::map<std::string, std::string> by_name;
@@ -451,6 +501,8 @@ ApplyResult ApplyRun::run(ApplyProgress& progress, const std::function<void(cons
   const auto& tiles = m.tiles;
 
   ApplyResult result;
+  // Temporaries a killed run left in the output folder, before any tile.
+  for (const auto& t : io::remove_stale_temporaries(o.out_dir)) result.stale_temporaries_removed.push_back(t.string());
   const auto start = std::chrono::steady_clock::now();
   result.tiles.resize(tiles.size());
   std::atomic<std::size_t> next{0};
@@ -505,8 +557,28 @@ ApplyResult ApplyRun::run(ApplyProgress& progress, const std::function<void(cons
   summary["seconds"] = result.seconds;
   summary["points_per_second"] = result.seconds > 0 ? static_cast<double>(result.processed) / result.seconds : 0.0;
   summary["jobs"] = result.jobs;
-  result.summary_path = fs::path(o.out_dir) / m.summary_name;
-  result.summary_json = summary.dump(2) + "\n";
+  summary["stale_temporaries_removed"] = result.stale_temporaries_removed;
+  // This run's summary under its own name, never replaced (published with
+  // RENAME_NOREPLACE; a name another host took in the same second gets a
+  // suffix), then the same text as the latest run's summary under the
+  // name scripts read.
+  const fs::path dir(o.out_dir);
+  result.summary_path = dir / (m.summary_base + ".json");
+  for (int attempt = 1;; ++attempt) {
+    result.run_id = m.run_id + (attempt == 1 ? std::string() : "-" + std::to_string(attempt));
+    result.run_summary_path = dir / (m.summary_base + "." + result.run_id + ".json");
+    summary["run_id"] = result.run_id;
+    summary["run_summary"] = result.run_summary_path.filename().string();
+    result.summary_json = summary.dump(2) + "\n";
+    try {
+      io::AtomicOutputFile run_file(result.run_summary_path, io::Overwrite::refuse);
+      run_file.stream() << result.summary_json;
+      run_file.commit();
+      break;
+    } catch (const Error& e) {
+      if (e.code() != "E_OUTPUT_EXISTS" || attempt >= kRunSummaryAttempts) throw;
+    }
+  }
   io::AtomicOutputFile summary_file(result.summary_path, io::Overwrite::allow);
   summary_file.stream() << result.summary_json;
   summary_file.commit();

@@ -9,7 +9,9 @@
 //   3. check how far the tile reaches outside the control network
 //      (refused past max_extrapolation_m) and propagate the transform's
 //      uncertainty to its worst corner (uncertainty.hpp);
-//   4. write the tile and its sidecar atomically.
+//   4. write the tile and its sidecar, both completely, then publish them
+//      (sidecar first, tile last) without replacing what another run
+//      published meanwhile (io::publish_together).
 // The command line (cli/src/apply_command.cpp) fills an ApplyRequest, shows
 // ApplyProgress and prints what ApplyRun reports. See docs/commands/apply.md.
 
@@ -72,8 +74,14 @@ struct ApplyResult {
   std::uint64_t processed = 0;  // of the tiles done in this run
   double seconds = 0.0;
   unsigned jobs = 1;
-  std::filesystem::path summary_path;  // the run summary written beside the outputs
-  std::string summary_json;            // the same text
+  // The run summary, written beside the outputs twice: under this run's own
+  // name (geoanchor-apply-summary[.shard-I-of-N].RUN_ID.json, never
+  // replaced) and as the latest run's (geoanchor-apply-summary[.shard-I-of-N].json).
+  std::string run_id;                      // UTC start and pid: 20250301T101500Z-4242
+  std::filesystem::path run_summary_path;  // this run's own
+  std::filesystem::path summary_path;      // the latest run's
+  std::string summary_json;                // the text of both
+  std::vector<std::string> stale_temporaries_removed;  // left in --out-dir by killed runs
   int exit_code = 0;                   // 0, or the first failed tile's
 };
 
