@@ -15,7 +15,7 @@ class App;
 namespace geoanchor::cli {
 
 struct FitCommandOptions {
-  std::string control;
+  std::string control;  // a path, or "-" for standard input
   std::string model;
   std::optional<std::string> convention;
   std::string rotation_model = "small_angle";
@@ -36,8 +36,9 @@ struct FitCommandOptions {
   bool no_snooping = false;
   bool scale_by_sigma0 = false;
   bool accept_failed_global_test = false;
-  std::string output;
+  std::string output;  // empty: no file; "-": the transform file on standard output
   bool overwrite = false;
+  bool json = false;   // the report as JSON on standard output
   std::vector<std::string> argv;
 };
 
