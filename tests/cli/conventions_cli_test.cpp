@@ -164,6 +164,22 @@ TEST_F(Conventions, Point15_DashOutputWritesStandardOutput) {
 }
 
 // issue 12 point 15
+TEST_F(Conventions, Point15_DashForAFolderIsRefusedNotCreated) {
+  const RunResult fit = run("fit " + kControl + kFit + " -o " + path("t.json").string());
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  // report and apply write folders: `-` there would be a folder named '-'.
+  const RunResult report = shell("cd '" + path("").string() + "' && " + kNoDisplay + exe() + " report " + kControl +
+                                 " --transform t.json -o -");
+  EXPECT_EQ(report.exit_code, 2) << report.err;
+  EXPECT_NE(report.err.find("-o -: report writes a folder"), std::string::npos) << report.err;
+  const RunResult apply = shell("cd '" + path("").string() + "' && " + exe() + " apply " + std::string(GEOANCHOR_FIXTURES_DIR) +
+                                "/airport_tile.las --to ecef --out-dir -");
+  EXPECT_EQ(apply.exit_code, 2) << apply.err;
+  EXPECT_NE(apply.err.find("--out-dir -: apply writes each tile"), std::string::npos) << apply.err;
+  EXPECT_EQ(leftovers({"t.json"}), std::vector<std::string>{});
+}
+
+// issue 12 point 15
 TEST_F(Conventions, Point15_FitDiagnoseSnapshotReadTheControlSetFromStandardInput) {
   const RunResult file = run("fit " + kControl + kFit + " -o " + path("file.json").string());
   ASSERT_EQ(file.exit_code, 0) << file.err;
