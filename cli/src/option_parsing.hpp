@@ -44,7 +44,7 @@ inline constexpr const char* kExitCodeHelp =
     "  4  rejected: the computation ran but its result is refused (e.g. a failed global test); nothing is written\n"
     "  5  I/O: an input cannot be read, an output exists (without --overwrite) or cannot be written\n"
     "  1  internal error (a bug: please report it)\n"
-    "Errors print as 'geoanchor: error[CODE]: message' on standard error.";
+    "Errors print as 'geoanchor: error[CODE]: message' on standard error.\n";
 
 // --src-zone, --src-tm, --dst-zone, --dst-tm: the grids of a control set's
 // easting/northing columns.
