@@ -133,6 +133,21 @@ TEST_F(Conventions, Point12_Latin1TileNameInAFolderIsRefusedNotInternal) {
   EXPECT_FALSE(fs::exists(path("out")));
 }
 
+// issue 12 point 12
+TEST_F(Conventions, Point12_Latin1AttributeInACsvTileFailsThatTileAndTheSummaryNamesIt) {
+  write("in/t.csv", "x_m,y_m,z_m,name\n4271315.696,641096.356,4678048.542,P\xE9\n");
+  const RunResult r = run("apply " + path("in/t.csv").string() + " --from-frame ITRF2014@2024.5 --to geodetic --out-dir " +
+                          path("out").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("t.csv:2: name 'P\\xE9' is not valid UTF-8"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("E_INTERNAL"), std::string::npos) << r.err;
+  // No tile is written; the run summary (JSON, so UTF-8) holds the message with the byte as \xE9.
+  EXPECT_EQ(files(path("out")), std::vector<std::string>{"geoanchor-apply-summary.json"});
+  const std::string summary = slurp(path("out") / "geoanchor-apply-summary.json");
+  EXPECT_TRUE(json::accept(summary)) << summary;
+  EXPECT_NE(summary.find("E_CSV_NOT_UTF8"), std::string::npos) << summary;
+}
+
 // ---- point 15: `-` is standard input and standard output ----
 
 // issue 12 point 15
