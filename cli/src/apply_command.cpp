@@ -10,6 +10,7 @@
 #include <mutex>
 #include <thread>
 
+#include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/workflow/apply.hpp"
@@ -100,6 +101,11 @@ CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
 }
 
 int run_apply(const ApplyOptions& o) {
+  if (o.out_dir == "-") {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--out-dir -: apply writes each tile with its sidecar into a folder, which standard output cannot hold; "
+                "give a folder (--json prints the run summary on standard output)");
+  }
   workflow::ApplyRequest request;
   request.inputs = o.inputs;
   request.out_dir = o.out_dir;

@@ -1,14 +1,28 @@
 #pragma once
-// The input file a command names: a path, or "-" for standard input, opened
-// once with the name messages use ("<stdin>" or the path).
+// The files a command names, as PROJ's and GDAL's tools take them: an input
+// path, or "-" for standard input, opened once with the name messages use
+// ("<stdin>" or the path); an output path, written atomically, or "-" for
+// standard output; and a control set read from either (CSV or JSON by
+// content). Command-line arguments must be UTF-8: they are recorded in the
+// JSON outputs.
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <memory>
+#include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "geoanchor/geodesy/control_point.hpp"
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/utf8.hpp"
+#include "geoanchor/io/atomic_file.hpp"
+#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/hash.hpp"
 
 namespace geoanchor::cli {
 
@@ -30,5 +44,92 @@ class CommandInput {
   std::string name_;
   std::ifstream file_;
 };
+
+// "-" (or no -o at all, where a command allows that): standard output.
+inline bool is_standard_output(const std::string& path) { return path.empty() || path == "-"; }
+
+// Where a command's main output goes: a file written to a temporary beside
+// it and renamed by commit() (io::AtomicOutputFile: an existing file is
+// refused unless `overwrite`), or standard output for "-" (or empty).
+class CommandOutput {
+ public:
+  CommandOutput(const std::string& path, bool overwrite)
+      : name_(is_standard_output(path) ? "<stdout>" : path) {
+    if (!is_standard_output(path)) {
+      file_ = std::make_unique<io::AtomicOutputFile>(path, overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+    }
+  }
+
+  bool to_stdout() const { return !file_; }
+  std::ostream& stream() { return file_ ? file_->stream() : std::cout; }
+  const std::string& name() const { return name_; }  // "<stdout>" or the path
+
+  // Publishes the file; on standard output, flushes it. Throws
+  // geoanchor::Error (io, E_WRITE) when standard output could not be written.
+  void commit() {
+    if (file_) {
+      file_->commit();
+      return;
+    }
+    std::cout.flush();
+    if (!std::cout) throw Error(ErrorKind::io, "E_WRITE", "<stdout>: write failed");
+  }
+
+ private:
+  std::string name_;
+  std::unique_ptr<io::AtomicOutputFile> file_;
+};
+
+// A control set as a command reads it: from the path, or from standard
+// input for "-" (CSV or JSON, told apart by the first non-blank character
+// as io::read_control_set does), with the name messages use and, when
+// `hash` (reports; it costs a pass over the bytes), the SHA-256 of the
+// bytes read.
+struct ControlInput {
+  geodesy::ControlSet set;
+  std::string name;  // "<stdin>" or the path
+  bool from_stdin = false;
+  std::string sha256;  // empty unless asked for
+};
+
+inline ControlInput read_control_input(const std::string& path, const io::ControlReadOptions& options, bool hash = false) {
+  ControlInput c;
+  c.from_stdin = path == "-";
+  c.name = c.from_stdin ? "<stdin>" : path;
+  if (!c.from_stdin) {
+    c.set = io::read_control_set(path, options);
+    if (hash) c.sha256 = io::sha256_file_hex(path);
+    return c;
+  }
+  // Standard input can be read once: kept in memory, hashed, then parsed.
+  std::string text;
+  char block[1 << 16];
+  for (std::size_t n; (n = std::fread(block, 1, sizeof block, stdin)) > 0;) text.append(block, n);
+  if (std::ferror(stdin)) throw Error(ErrorKind::io, "E_READ", "<stdin>: read error: " + std::string(std::strerror(errno)));
+  if (hash) c.sha256 = io::sha256_hex(text);
+  const auto first = text.find_first_not_of(" \t\r\n");
+  const bool json = first != std::string::npos && text[first] == '{';
+  std::istringstream in(std::move(text));
+  c.set = json ? io::read_control_json(in, c.name, options) : io::read_control_csv(in, c.name, options);
+  return c;
+}
+
+// Throws geoanchor::Error (input, E_ARGUMENT_NOT_UTF8) for the first
+// command-line argument (argv[0] included) that is not UTF-8: geoanchor
+// records its command line and the paths it reads and writes in JSON
+// (sidecars, transform files, summaries), which holds UTF-8 text only, and
+// does not record a name other than the file's.
+inline void require_utf8_arguments(const std::vector<std::string>& argv) {
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    if (const auto problem = utf8_problem(argv[i])) {
+      throw Error(ErrorKind::input, "E_ARGUMENT_NOT_UTF8",
+                  std::string(i == 0 ? "the program's path" : "argument " + std::to_string(i)) + " '" + argv[i] +
+                      "' is not valid UTF-8 (" + *problem +
+                      "): geoanchor records its command line and the paths it reads and writes in JSON outputs, which "
+                      "hold UTF-8 only, and records no name other than the file's; rename the file (from Latin-1: "
+                      "convmv -f latin1 -t utf-8 --notest NAME), or give an input on standard input as -");
+    }
+  }
+}
 
 }  // namespace geoanchor::cli

@@ -86,7 +86,7 @@ class EcefStep {
 CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   auto* cmd = app.add_subcommand("convert", "Convert coordinates in a header-named CSV between kinds and frames");
   cmd->add_option("IN", o.input, "Input CSV, or - for standard input (default)");
-  cmd->add_option("-o,--output", o.output, "Output CSV (default: standard output); written atomically");
+  cmd->add_option("-o,--output", o.output, "Output CSV, written atomically with its sidecar OUT.geoanchor.json; - or none: standard output (no sidecar)");
   cmd->add_option("--to", o.to, "Output kind: geodetic|ecef|enu|ned|utm|tm")->required();
   cmd->add_option("--ellipsoid", o.ellipsoid, "WGS84|GRS80|a=A,rf=RF (default WGS84; input too unless --from-ellipsoid)");
   cmd->add_option("--from-ellipsoid", o.from_ellipsoid, "Ellipsoid of the input, when a transform links two");
@@ -104,10 +104,15 @@ CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   cmd->add_option("--geoid", o.geoid, "Geoid model for orthometric heights (H_m columns): EGM96");
   cmd->add_option("--output-heights", o.output_heights, "ellipsoidal (h_m, default) | orthometric (H_m, needs --geoid)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
+  cmd->add_flag("--json", o.json, "Print the provenance sidecar (schema geoanchor.convert-provenance/1) on standard output; needs -o FILE");
   return cmd;
 }
 
 void run_convert(const ConvertOptions& o) {
+  if (o.json && is_standard_output(o.output)) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--json: prints the sidecar on standard output, where the CSV goes without -o; give -o FILE");
+  }
   const io::OutputKind out_kind = parse_output_kind(o.to);
   if (o.inverse && !o.transform) {
     throw Error(ErrorKind::usage, "E_OPTION", "--inverse: needs --transform T.json");
@@ -198,10 +203,11 @@ void run_convert(const ConvertOptions& o) {
   std::size_t first_coordinate = 0;
   const auto out_header = io::output_header(header, columns, encoder.column_names(), source_name, first_coordinate);
 
-  // Output: a temporary file renamed at the end, or standard output.
-  // Both the output and its provenance sidecar are opened before any row is
-  // read, so an existing file is refused up front.
-  if (!o.output.empty() && !from_stdin) io::refuse_same_file(o.input, o.output);
+  // Output: a temporary file renamed at the end, or standard output (no -o,
+  // or -o -), which gets the rows and no sidecar. Both the output and its
+  // provenance sidecar are opened before any row is read, so an existing
+  // file is refused up front.
+  if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
   io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
   std::ostream& out = output.stream();
   for (const auto& c : reader.leading_comments()) out << c << '\n';
@@ -244,6 +250,7 @@ void run_convert(const ConvertOptions& o) {
 
   // Provenance sidecar beside the output.
   json side;
+  side["schema"] = "geoanchor.convert-provenance/1";
   side["geoanchor_version"] = GEOANCHOR_VERSION;
   side["command"] = o.argv;
   side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
@@ -284,8 +291,13 @@ void run_convert(const ConvertOptions& o) {
     side["transform"] = t;
   }
   side["warnings"] = warnings;
-  output.sidecar() << side.dump(2) << '\n';
+  const std::string side_text = side.dump(2) + "\n";
+  output.sidecar() << side_text;
   output.commit("the converted rows");  // the sidecar and the data: both written, then published
+  if (o.json) {
+    std::cout << side_text;
+    io::finish_standard_output("the provenance (--json)", "; " + o.output + " was written");
+  }
 }
 
 }  // namespace geoanchor::cli

@@ -15,7 +15,7 @@ namespace geoanchor::cli {
 
 struct ConvertOptions {
   std::string input = "-";
-  std::string output;  // empty: standard output
+  std::string output;  // empty or "-": standard output
   std::string to;
   std::string ellipsoid = "WGS84";
   std::optional<std::string> from_ellipsoid;
@@ -29,6 +29,7 @@ struct ConvertOptions {
   std::optional<std::string> geoid;  // EGM96: reads H_m input, and writes H_m with --output-heights orthometric
   std::string output_heights = "ellipsoidal";
   bool overwrite = false;
+  bool json = false;  // print the provenance sidecar on standard output
   std::vector<std::string> argv;  // for the provenance record
 };
 

@@ -14,15 +14,16 @@
 #include "geoanchor/io/control_csv.hpp"
 #include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/solver/diagnosis.hpp"
+#include "command_input.hpp"
 #include "option_parsing.hpp"
 
 namespace geoanchor::cli {
 
 CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& o) {
   auto* cmd = app.add_subcommand("diagnose", "Say which classic datum mistake explains a bad fit");
-  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON)")->required();
+  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON), or - for standard input")->required();
   cmd->add_option("--transform", o.transform, "Apply this transform file instead of fitting --model");
-  cmd->add_flag("--json", o.json, "Write the diagnosis as JSON on standard output");
+  cmd->add_flag("--json", o.json, "Write the diagnosis as JSON (schema geoanchor.diagnosis/1) on standard output");
   cmd->add_option("--model", o.model, "Model fitted without --transform (default helmert7)");
   cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame of the fitted model (residuals do not depend on it)");
   cmd->add_option("--origin", o.origin, "Nominal origin LAT,LON,H of ENU control coordinates");
@@ -117,7 +118,8 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
     tf = io::read_transform_file(*o.transform);
     if (has_rotations(*tf)) swapped = with_other_convention(*tf);
   }
-  geodesy::ControlSet set = io::read_control_set(o.control, ro);
+  ControlInput in = read_control_input(o.control, ro);
+  geodesy::ControlSet& set = in.set;
   if (tf) {
     if (!set.source_frame) set.source_frame = tf->source_frame;
     if (!set.target_frame) set.target_frame = tf->target_frame;
@@ -143,11 +145,12 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
 
   const solver::Diagnosis r = solver::diagnose(set, d);
   if (!o.json) {
-    print_text(r, o.control);
+    print_text(r, in.name);
     io::finish_standard_output("the diagnosis");
     return;
   }
   nlohmann::ordered_json j;
+  j["schema"] = "geoanchor.diagnosis/1";
   j["problem_found"] = r.problem_found;
   j["verdict"] = r.verdict;
   j["hypotheses"] = nlohmann::ordered_json::array();

@@ -1,6 +1,7 @@
 #include "fit_command.hpp"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 #include "geoanchor/solver/model_comparison.hpp"
+#include "command_input.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
 
@@ -24,7 +26,7 @@ using solver::FitModel;
 
 CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   auto* cmd = app.add_subcommand("fit", "Fit a datum transform to control points, with statistics");
-  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON)")->required();
+  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON), or - for standard input")->required();
   cmd->add_option("--model", o.model,
                   "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin|site-calibration");
   cmd->add_flag("--compare", o.compare, "Fit every applicable model on the same points and compare them");
@@ -52,21 +54,89 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   cmd->add_flag("--scale-by-sigma0", o.scale_by_sigma0, "Scale parameter sigmas by the a-posteriori σ0");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test,
                 "Write the transform even if the global test fails high");
-  cmd->add_option("-o,--output", o.output, "Transform file (JSON) to write");
+  cmd->add_option("-o,--output", o.output,
+                  "Transform file (JSON) to write; - writes it on standard output (the report then goes to standard error)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output");
+  cmd->add_flag("--json", o.json,
+                "Print the report as JSON (schema geoanchor.fit-report/1, with --compare geoanchor.fit-comparison/1) "
+                "on standard output instead of text");
   return cmd;
 }
 
 namespace {
 
+using nlohmann::ordered_json;
+
+std::string verdict_text(const solver::GlobalTest& g) {
+  return !g.applicable ? "n/a" : g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED high" : "FAILED low";
+}
+
+// The global test as JSON: "passed", "failed high", "failed low" or "not applicable".
+std::string verdict_json(const solver::GlobalTest& g) {
+  return !g.applicable ? "not applicable" : g.passed ? "passed" : g.statistic > g.critical_upper ? "failed high" : "failed low";
+}
+
+// "control" of the JSON reports: where the set came from.
+ordered_json control_json(const ControlInput& in) {
+  ordered_json c;
+  c["path"] = in.from_stdin ? ordered_json(nullptr) : ordered_json(in.name);
+  c["name"] = in.name;
+  c["sha256"] = in.sha256;
+  c["points"] = in.set.points.size();
+  return c;
+}
+
+void print_json(const ordered_json& j) {
+  std::cout << j.dump(2) << '\n';
+  io::finish_standard_output("the JSON report (--json)");
+}
+
+// The --compare table as JSON (geoanchor.fit-comparison/1, docs/commands/fit.md).
+void print_compare_json(const ControlInput& in, const std::vector<solver::ModelComparison>& rows,
+                        const std::vector<std::string>& warnings) {
+  ordered_json j;
+  j["schema"] = "geoanchor.fit-comparison/1";
+  j["control"] = control_json(in);
+  j["data_snooping"] = false;
+  ordered_json models = ordered_json::array();
+  for (const auto& c : rows) {
+    ordered_json m;
+    m["model"] = std::string(solver::to_string(c.model));
+    m["parameters"] = c.parameters;
+    if (!c.fit) {
+      m["refused"] = c.refused;
+    } else {
+      m["refused"] = nullptr;
+      m["dof"] = c.fit->dof;
+      m["sigma0"] = c.fit->sigma0 ? ordered_json(*c.fit->sigma0) : ordered_json(nullptr);
+      m["global_test"] = verdict_json(c.fit->global_test);
+      m["max_abs_w"] = c.max_w;
+      m["aic"] = c.aic;
+    }
+    m["note"] = c.note.empty() ? ordered_json(nullptr) : ordered_json(c.note);
+    models.push_back(std::move(m));
+  }
+  j["models"] = std::move(models);
+  ordered_json lowest = ordered_json::array();
+  for (const FitModel m : solver::lowest_aic(rows)) lowest.push_back(std::string(solver::to_string(m)));
+  j["lowest_aic"] = std::move(lowest);
+  j["warnings"] = warnings;
+  print_json(j);
+}
+
 // Fits every model the data allow on the same points (no data snooping, so
 // that the information criterion compares like with like) and prints them.
-int run_compare(const geodesy::ControlSet& set, const solver::FitOptions& base) {
+int run_compare(const ControlInput& in, const solver::FitOptions& base, bool json, const std::vector<std::string>& warnings) {
+  const geodesy::ControlSet& set = in.set;
+  const auto rows = solver::compare_models(set, base);
+  if (json) {
+    print_compare_json(in, rows, warnings);
+    return 0;
+  }
   std::cout << "geoanchor fit --compare: " << set.source_name << " (" << set.points.size()
             << " points; data snooping off so that every model sees the same points)\n";
   if (!base.convention) std::cout << "  (give --convention to include the models with rotations)\n";
   std::cout << "\n  model                u    dof      σ0   global test        max|w|        AIC\n";
-  const auto rows = solver::compare_models(set, base);
   const solver::ModelComparison* best = nullptr;
   for (const auto& c : rows) {
     char line[200];
@@ -76,8 +146,7 @@ int run_compare(const geodesy::ControlSet& set, const solver::FitOptions& base) 
       std::cout << line << c.refused << "\n";
       continue;
     }
-    const auto& g = c.fit->global_test;
-    const std::string verdict = !g.applicable ? "n/a" : g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED high" : "FAILED low";
+    const std::string verdict = verdict_text(c.fit->global_test);
     std::snprintf(line, sizeof line, "  %-18s %3d %6d %8s   %-12s %10.2f %10.1f\n", name.c_str(), c.parameters, c.fit->dof,
                   (c.fit->sigma0 ? format_fixed(*c.fit->sigma0, 3) : std::string("undef")).c_str(), verdict.c_str(), c.max_w, c.aic);
     std::cout << line;
@@ -108,6 +177,10 @@ int run_fit(const FitCommandOptions& o) {
   }
   if (o.compare && !o.output.empty()) {
     throw Error(ErrorKind::usage, "E_OPTION", "--compare writes no transform file: drop -o, then fit the chosen model");
+  }
+  if (o.json && o.output == "-") {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--json and -o -: both would go to standard output; give -o FILE (the JSON report holds the transform too)");
   }
   solver::FitOptions fo;
   fo.model = o.compare ? FitModel::helmert7 : parse_model(o.model, "--model");
@@ -154,12 +227,14 @@ int run_fit(const FitCommandOptions& o) {
   fo.max_outlier_share = o.max_outlier_share;
   fo.scale_by_sigma0 = o.scale_by_sigma0;
 
-  // Refuse an existing output before any work.
-  std::unique_ptr<io::AtomicOutputFile> out;
+  // Refuse an existing output before any work. With -o - the transform
+  // file goes to standard output and the report to standard error.
+  std::unique_ptr<CommandOutput> out;
   if (!o.output.empty()) {
-    io::refuse_same_file(o.control, o.output);
-    out = std::make_unique<io::AtomicOutputFile>(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+    if (o.control != "-" && o.output != "-") io::refuse_same_file(o.control, o.output);
+    out = std::make_unique<CommandOutput>(o.output, o.overwrite);
   }
+  std::ostream& report = out && out->to_stdout() ? std::cerr : std::cout;
 
   io::ControlReadOptions ro;
   ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
@@ -183,41 +258,68 @@ int run_fit(const FitCommandOptions& o) {
   } else if (o.fix_yaw || o.with_scale) {
     throw Error(ErrorKind::usage, "E_OPTION", "--fix-yaw/--with-scale: only for --model enu-origin");
   }
-  geodesy::ControlSet set = io::read_control_set(o.control, ro);
+  ControlInput in = read_control_input(o.control, ro, o.json);
+  geodesy::ControlSet& set = in.set;
   if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");
   if (const auto swap = workflow::likely_lat_lon_swap(set)) throw Error(ErrorKind::input, "E_AXIS_SWAP", *swap);
   const std::vector<std::string> set_warnings = workflow::control_set_warnings(set);
   if (o.compare) {
     for (const auto& w : set_warnings) std::cerr << "geoanchor: warning: " << w << '\n';
-    const int code = run_compare(set, fo);
+    const int code = run_compare(in, fo, o.json, set_warnings);
     io::finish_standard_output("the comparison");
     return code;
   }
 
   solver::FitResult r = solver::fit_helmert(set, fo);
   r.warnings.insert(r.warnings.begin(), set_warnings.begin(), set_warnings.end());
-  workflow::write_fit_report(std::cout, r, set, fo);
+  if (!o.json) workflow::write_fit_report(report, r, set, fo);
   for (const auto& w : r.warnings) std::cerr << "geoanchor: warning: " << w << '\n';
 
-  if (const auto refusal = workflow::fit_refusal(r, o.control, o.accept_failed_global_test)) {
-    std::cerr << "geoanchor: error[" << refusal->code << "]: " << refusal->message << '\n';
-    return exit_code(ErrorKind::rejected);
-  }
+  const auto refusal = workflow::fit_refusal(r, in.name, o.accept_failed_global_test);
+  if (refusal) std::cerr << "geoanchor: error[" << refusal->code << "]: " << refusal->message << '\n';
   // A report nobody could read: the transform it describes is not written.
-  io::finish_standard_output("the fit report", out ? "; " + o.output + " was not written" : std::string());
-  if (out) {
-    std::string cmd;
-    for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
-    io::write_json(out->stream(), workflow::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
+  if (!o.json) {
+    io::finish_standard_output("the fit report", out && !refusal && !out->to_stdout() ? "; " + o.output + " was not written"
+                                                                                      : std::string());
+  }
+  std::string cmd;
+  for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
+  const auto transform = [&] { return workflow::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd); };
+  // --json embeds the file's content; otherwise the file is streamed (10⁶
+  // marks' records are never held whole).
+  std::string transform_text;
+  if (o.json) transform_text = io::to_json_text(transform());
+  if (out && !refusal) {
+    if (o.json) {
+      out->stream() << transform_text;
+    } else {
+      io::write_json(out->stream(), transform());
+    }
     out->commit();
     for (const auto& t : io::take_removed_stale_temporaries()) {
       std::cerr << "geoanchor: warning: " << io::stale_temporary_warning(t) << '\n';
     }
-    std::cout << "\nwrote " << o.output << "\n";
-    io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
+    if (!o.json && !out->to_stdout()) {
+      std::cout << "\nwrote " << o.output << "\n";
+      io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
+    }
   }
-  return 0;
+  if (o.json) {
+    // The report as JSON (geoanchor.fit-report/1, docs/commands/fit.md):
+    // what happened, and the transform file's content, written or not.
+    ordered_json j;
+    j["schema"] = "geoanchor.fit-report/1";
+    j["control"] = control_json(in);
+    j["status"] = refusal ? "refused" : out ? "written" : "not written";
+    j["output"] = out && !refusal ? ordered_json(o.output) : ordered_json(nullptr);
+    j["refusal"] = refusal ? ordered_json{{"code", refusal->code}, {"message", refusal->message}} : ordered_json(nullptr);
+    j["global_test"] = verdict_json(r.global_test);
+    j["warnings"] = r.warnings;
+    j["transform"] = ordered_json::parse(transform_text);
+    print_json(j);
+  }
+  return refusal ? exit_code(ErrorKind::rejected) : 0;
 }
 
 }  // namespace geoanchor::cli

@@ -15,7 +15,7 @@ class App;
 namespace geoanchor::cli {
 
 struct FitCommandOptions {
-  std::string control;
+  std::string control;  // a path, or "-" for standard input
   std::string model;
   std::optional<std::string> convention;
   std::string rotation_model = "small_angle";
@@ -37,8 +37,9 @@ struct FitCommandOptions {
   double max_outlier_share = 0.10;
   bool scale_by_sigma0 = false;
   bool accept_failed_global_test = false;
-  std::string output;
+  std::string output;  // empty: no file; "-": the transform file on standard output
   bool overwrite = false;
+  bool json = false;   // the report as JSON on standard output
   std::vector<std::string> argv;
 };
 

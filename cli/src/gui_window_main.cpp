@@ -109,6 +109,7 @@ int run(const WindowOptions& o) {
 
 int main(int argc, char** argv) {
   CLI::App app{"geoanchor-gui " GEOANCHOR_VERSION ": the residual workbench window (docs/commands/gui.md)"};
+  app.footer(geoanchor::cli::kExitCodeHelp);
   WindowOptions o;
   o.workbench.argv.assign(argv, argv + argc);
   geoanchor::cli::add_workbench_options(&app, o.workbench);

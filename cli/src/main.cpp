@@ -1,16 +1,23 @@
 // The geoanchor executable: one subcommand per capability.
 // Errors print as `geoanchor: error[CODE]: message` and exit with a code
-// per kind: 2 usage, 3 bad input, 4 rejected result, 5 I/O.
+// per kind: 2 usage, 3 bad input, 4 rejected result, 5 I/O (listed in every
+// --help). `help [COMMAND]` and `version` answer as --help and --version.
 
 #include <CLI/CLI.hpp>
 
+#include <functional>
 #include <iostream>
+#include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "apply_command.hpp"
+#include "command_input.hpp"
 #include "convert_command.hpp"
 #include "diagnose_command.hpp"
 #include "fit_command.hpp"
+#include "option_parsing.hpp"
 #include "snapshot_command.hpp"
 #include "transform_command.hpp"
 #include "geoanchor/geodesy/error.hpp"
@@ -21,11 +28,37 @@ int main(int argc, char** argv) {
   using geoanchor::Error;
   using geoanchor::ErrorKind;
   geoanchor::io::install_signal_cleanup();
+  std::vector<std::string> words(argv, argv + argc);
+  try {
+    geoanchor::cli::require_utf8_arguments(words);
+  } catch (const Error& e) {
+    std::cerr << "geoanchor: error[" << e.code() << "]: " << e.what() << '\n';
+    return geoanchor::exit_code(e.kind());
+  }
+
+  // `geoanchor version`, `geoanchor help` and `geoanchor help COMMAND`, as
+  // git, gdal and proj users type them: the same as --version, --help and
+  // `geoanchor COMMAND --help`.
+  const bool help_topic = words.size() == 3 && words[1] == "help";
+  if (words.size() == 2 && words[1] == "version") {
+    words[1] = "--version";
+  } else if (words.size() == 2 && words[1] == "help") {
+    words[1] = "--help";
+  } else if (help_topic) {
+    words = {words[0], words[2], "--help"};
+  }
+  std::vector<char*> args;
+  for (auto& w : words) args.push_back(w.data());
+  args.push_back(nullptr);
+  argc = static_cast<int>(words.size());
+  argv = args.data();
+
   // The window is its own executable (libGL and libOSMesa cannot share one).
   if (argc > 1 && std::string_view(argv[1]) == "gui") return geoanchor::cli::exec_gui_window(argc, argv);
 
-  CLI::App app{"geoanchor " GEOANCHOR_VERSION ": anchor local maps to the Earth"};
-  app.set_version_flag("--version", GEOANCHOR_VERSION);
+  CLI::App app{"geoanchor " GEOANCHOR_VERSION ": anchor local maps to the Earth", "geoanchor"};
+  app.set_version_flag("--version", "geoanchor " GEOANCHOR_VERSION);
+  app.footer(geoanchor::cli::kExitCodeHelp);  // inherited by every subcommand added below
   app.require_subcommand(1);
   geoanchor::cli::ConvertOptions convert;
   convert.argv.assign(argv, argv + argc);
@@ -49,6 +82,22 @@ int main(int argc, char** argv) {
   auto* report_cmd = geoanchor::cli::add_report_command(app, report);
   // Listed for --help; `geoanchor gui ...` is handed to geoanchor-gui above.
   app.add_subcommand("gui", "Open the residual workbench window (geoanchor-gui; same options as snapshot, no -o)");
+  // Listed for --help; rewritten to --help and --version above.
+  app.add_subcommand("help", "Print this help, or a command's: geoanchor help fit (= geoanchor fit --help)");
+  app.add_subcommand("version", "Print geoanchor's version (= geoanchor --version)");
+  if (help_topic && std::string_view(argv[1]) != "gui") {
+    bool known = false;
+    std::string names;
+    for (const CLI::App* sub : std::as_const(app).get_subcommands(std::function<bool(const CLI::App*)>())) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "geoanchor: error[E_USAGE]: help " << argv[1] << ": no such command; expected one of " << names
+                << "\n(run 'geoanchor --help')\n";
+      return geoanchor::exit_code(ErrorKind::usage);
+    }
+  }
 
   try {
     app.parse(argc, argv);

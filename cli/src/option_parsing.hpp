@@ -34,6 +34,18 @@ CLI::Validator finite_range(double lo, double hi);          // [lo, hi]
 CLI::Validator finite_positive();                           // > 0, finite
 CLI::Validator integer_range(long long lo, long long hi);   // an integer in [lo, hi]
 
+// The exit codes (ErrorKind, geoanchor/geodesy/error.hpp), the footer of
+// `geoanchor --help`, of every subcommand's --help and of geoanchor-gui's.
+inline constexpr const char* kExitCodeHelp =
+    "Exit codes:\n"
+    "  0  success\n"
+    "  2  usage: the command line is wrong (an unknown option, a bad flag value)\n"
+    "  3  bad input: a file or value is invalid (named with file:line, field and value)\n"
+    "  4  rejected: the computation ran but its result is refused (e.g. a failed global test); nothing is written\n"
+    "  5  I/O: an input cannot be read, an output exists (without --overwrite) or cannot be written\n"
+    "  1  internal error (a bug: please report it)\n"
+    "Errors print as 'geoanchor: error[CODE]: message' on standard error.\n";
+
 // --src-zone, --src-tm, --dst-zone, --dst-tm: the grids of a control set's
 // easting/northing columns.
 void add_control_grid_options(CLI::App& cmd, ControlGridOptions& o);

@@ -1,6 +1,7 @@
 #include "snapshot_command.hpp"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include "geoanchor/gui/offscreen.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/hash.hpp"
+#include "command_input.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
 
@@ -23,6 +25,19 @@ namespace geoanchor::cli {
 namespace fs = std::filesystem;
 
 namespace {
+
+using nlohmann::ordered_json;
+
+// The notes and warnings print_notes() shows, for --json.
+std::vector<std::string> session_warnings(const WorkbenchSession& s) {
+  if (!s.model->fit()) return {"no fit: " + s.model->error()};
+  return gui::shown_warnings(*s.model->fit());
+}
+
+void print_json(const ordered_json& j) {
+  std::cout << j.dump(2) << '\n';
+  io::finish_standard_output("the JSON report (--json)");
+}
 
 void print_notes(const WorkbenchSession& s) {
   for (const auto& n : s.notes) std::cerr << "geoanchor: note: " << n << '\n';
@@ -56,8 +71,9 @@ CLI::App* add_snapshot_command(CLI::App& app, SnapshotOptions& o) {
   add_workbench_options(cmd, o.workbench);
   cmd->add_option("--view", o.view, "workbench|plan|histogram|table|parameters|comparison (default workbench)");
   cmd->add_option("--size", o.size, "WIDTHxHEIGHT in pixels (default 1600x1000)");
-  cmd->add_option("-o,--output", o.output, "PNG to write")->required();
+  cmd->add_option("-o,--output", o.output, "PNG to write, or - for standard output")->required();
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output");
+  cmd->add_flag("--json", o.json, "Print what was written as JSON (schema geoanchor.snapshot/1) on standard output");
   return cmd;
 }
 
@@ -68,38 +84,77 @@ CLI::App* add_report_command(CLI::App& app, ReportOptions& o) {
   cmd->add_option("-o,--output", o.output, "Folder to write (created; refused if it holds report files, unless --overwrite)")
       ->required();
   cmd->add_flag("--overwrite", o.overwrite, "Replace report files already in the folder");
+  cmd->add_flag("--json", o.json, "Print what was written as JSON (schema geoanchor.report/1) on standard output");
   return cmd;
 }
 
 int run_snapshot(const SnapshotOptions& o) {
   const gui::View view = parse_view(o.view, "--view");
   const auto [w, h] = parse_size(o.size, "--size");
-  if (fs::path(o.output).extension() != ".png") {
-    throw Error(ErrorKind::usage, "E_OPTION", "-o " + o.output + ": expected a file name ending in .png");
+  // -o -: the PNG on standard output, what was written on standard error.
+  const bool to_stdout = o.output == "-";
+  if (to_stdout && o.json) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--json and -o -: both would go to standard output; give -o FILE.png");
   }
-  io::refuse_same_file(o.workbench.control, o.output);
-  io::check_output_path(o.output, io::Overwrite::allow);  // a FIFO, a device or a folder is refused even with --overwrite
-  if (!o.overwrite && fs::exists(fs::symlink_status(o.output))) {
+  if (!to_stdout && fs::path(o.output).extension() != ".png") {
+    throw Error(ErrorKind::usage, "E_OPTION", "-o " + o.output + ": expected a file name ending in .png, or - for standard output");
+  }
+  if (!to_stdout && o.workbench.control != "-") io::refuse_same_file(o.workbench.control, o.output);
+  // A FIFO, a device or a folder is refused even with --overwrite.
+  if (!to_stdout) io::check_output_path(o.output, io::Overwrite::allow);
+  if (!to_stdout && !o.overwrite && fs::exists(fs::symlink_status(o.output))) {
     throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", o.output + ": exists (use --overwrite to replace it)");
   }
   WorkbenchSession s = open_workbench(o.workbench);
   print_notes(s);
   gui::OffscreenRenderer renderer(w, h);
   gui::WorkbenchUi ui(*s.model, {s.save_path, s.generator});
-  gui::write_png(renderer.render(ui, view), o.output, o.overwrite);
-  std::cout << "wrote " << o.output << " (" << w << "x" << h << ", view " << gui::to_string(view);
-  const gui::TableGeometry& t = ui.table();
-  if (t.drawn && t.total > 0 && t.shown_ids.size() < t.total) {
-    std::cout << "; the table shows " << (t.shown_ids.empty() ? "no whole row" : "marks " + std::to_string(t.first + 1) + "–" +
-                                                                    std::to_string(t.first + t.shown_ids.size()))
-              << " of " << t.total << ": `geoanchor report` pages them all";
+  std::size_t bytes = 0;
+  {
+    const std::string png = gui::encode_png(renderer.render(ui, view), to_stdout ? "<stdout>" : o.output);
+    bytes = png.size();
+    CommandOutput out(o.output, o.overwrite);
+    out.stream().write(png.data(), static_cast<std::streamsize>(png.size()));
+    out.commit();
   }
-  std::cout << ")\n";
-  io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
+  const gui::TableGeometry& t = ui.table();
+  const bool partial_table = t.drawn && t.total > 0 && t.shown_ids.size() < t.total;
+  if (o.json) {
+    ordered_json j;
+    j["schema"] = "geoanchor.snapshot/1";
+    j["control"] = s.control_name;
+    j["output"] = o.output;
+    j["bytes"] = bytes;
+    j["view"] = std::string(gui::to_string(view));
+    j["width_px"] = w;
+    j["height_px"] = h;
+    j["table"] = t.drawn ? ordered_json{{"first", t.total > 0 && !t.shown_ids.empty() ? t.first + 1 : 0},
+                                        {"shown", t.shown_ids.size()},
+                                        {"total", t.total}}
+                         : ordered_json(nullptr);
+    j["notes"] = s.notes;
+    j["warnings"] = session_warnings(s);
+    print_json(j);
+    return 0;
+  }
+  std::ostream& said = to_stdout ? std::cerr : std::cout;
+  said << "wrote " << (to_stdout ? "<stdout>" : o.output) << " (" << w << "x" << h << ", view " << gui::to_string(view);
+  if (partial_table) {
+    said << "; the table shows " << (t.shown_ids.empty() ? "no whole row" : "marks " + std::to_string(t.first + 1) + "–" +
+                                                             std::to_string(t.first + t.shown_ids.size()))
+         << " of " << t.total << ": `geoanchor report` pages them all";
+  }
+  said << ")\n";
+  if (!to_stdout) io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
   return 0;
 }
 
 int run_report(const ReportOptions& o) {
+  if (o.output == "-") {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "-o -: report writes a folder (report.txt and a PNG per view), which standard output cannot hold; give "
+                "a folder (snapshot -o - writes one view's PNG on standard output)");
+  }
   const auto [w, h] = parse_size(o.size, "--size");
   if (o.workbench.transform.empty()) {
     throw Error(ErrorKind::usage, "E_OPTION", "--transform: required (the transform file the report is about)");
@@ -127,7 +182,9 @@ int run_report(const ReportOptions& o) {
   if (!o.overwrite && !earlier_pages.empty()) {
     throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", earlier_pages.front().string() + ": exists (use --overwrite to replace the report)");
   }
-  WorkbenchSession s = open_workbench(o.workbench);
+  WorkbenchOptions wo = o.workbench;
+  wo.hash_control = true;
+  WorkbenchSession s = open_workbench(wo);
   print_notes(s);
 
   // Everything is made in memory first, then written file by file
@@ -135,7 +192,7 @@ int run_report(const ReportOptions& o) {
   std::ostringstream text;
   text << "geoanchor report\n"
        << "  generator: " << s.generator << "\n"
-       << "  control:   " << o.workbench.control << " (sha256 " << io::sha256_file_hex(o.workbench.control) << ")\n"
+       << "  control:   " << s.control_name << " (sha256 " << s.control_sha256 << ")\n"
        << "  transform: " << o.workbench.transform << " (sha256 " << io::sha256_file_hex(o.workbench.transform) << ")\n";
   for (const auto& n : s.notes) text << "  note: " << n << "\n";
   text << "\n";
@@ -260,6 +317,23 @@ int run_report(const ReportOptions& o) {
   }
   std::size_t pages = 0;
   for (const auto& i : images) pages += i.first.starts_with("table") ? 1u : 0u;
+  if (o.json) {
+    ordered_json j;
+    j["schema"] = "geoanchor.report/1";
+    j["control"] = s.control_name;
+    j["transform"] = o.workbench.transform;
+    j["folder"] = o.output;
+    ordered_json files = ordered_json::array();
+    files.push_back({{"name", "report.txt"}, {"bytes", text.str().size()}});
+    for (const auto& [name, png] : images) files.push_back({{"name", name}, {"bytes", png.size()}});
+    j["files"] = std::move(files);
+    j["table_pages"] = pages;
+    j["fit"] = s.model->fit().has_value();
+    j["notes"] = s.notes;
+    j["warnings"] = session_warnings(s);
+    print_json(j);
+    return 0;
+  }
   std::cout << "wrote " << o.output << (o.output.ends_with('/') ? "" : "/") << ": report.txt and " << images.size()
             << " PNG views (the table on " << pages
             << (pages == 1 ? " page" : " pages") << ")\n";

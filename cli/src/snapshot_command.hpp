@@ -18,15 +18,17 @@ struct SnapshotOptions {
   WorkbenchOptions workbench;
   std::string view = "workbench";
   std::string size = "1600x1000";
-  std::string output;
+  std::string output;  // a .png path, or "-" for standard output
   bool overwrite = false;
+  bool json = false;   // what was written, as JSON on standard output
 };
 
 struct ReportOptions {
   WorkbenchOptions workbench;
   std::string size = "1600x1000";
-  std::string output;
+  std::string output;  // a folder
   bool overwrite = false;
+  bool json = false;   // what was written, as JSON on standard output
 };
 
 CLI::App* add_snapshot_command(CLI::App& app, SnapshotOptions& o);

@@ -32,7 +32,7 @@ constexpr const char* kVelocityColumns[3] = {"vx_m_per_year", "vy_m_per_year", "
 CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
   auto* cmd = app.add_subcommand("transform", "Move coordinates between reference frames and epochs (frame catalog)");
   cmd->add_option("IN", o.input, "Input CSV (x_m,y_m,z_m or lat_deg,lon_deg,h_m; optional vx/vy/vz_m_per_year), - for stdin");
-  cmd->add_option("-o,--output", o.output, "Output CSV (default: standard output); written atomically");
+  cmd->add_option("-o,--output", o.output, "Output CSV, written atomically with its sidecar OUT.geoanchor.json; - or none: standard output (no sidecar)");
   cmd->add_option("--from", o.from, "Frame and epoch of the input, e.g. ITRF2014@2010.0")->required();
   cmd->add_option("--to", o.to, "Frame and epoch of the output, e.g. ITRF2020@2024.5 (epoch default: --from's)")->required();
   cmd->add_option("--plate", o.plate, "Plate whose motion carries the epoch change when there are no velocity columns (EURA, NOAM, AUST, ...)");
@@ -41,10 +41,15 @@ CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")->check(integer_range(0, 15));
   cmd->add_option("--geoid", o.geoid, "Geoid model of H_m (orthometric height) columns: EGM96; H_m is written back on it");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
+  cmd->add_flag("--json", o.json, "Print the provenance sidecar (schema geoanchor.transform-provenance/1) on standard output; needs -o FILE");
   return cmd;
 }
 
 void run_transform(const TransformOptions& o) {
+  if (o.json && is_standard_output(o.output)) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--json: prints the sidecar on standard output, where the CSV goes without -o; give -o FILE");
+  }
   const geodesy::Frame from = geodesy::Frame::parse(o.from, "--from");
   const geodesy::Frame to = geodesy::Frame::parse(o.to, "--to");
   const geodesy::FramePath path = geodesy::find_frame_path(from.name(), to.name(), "--from/--to");
@@ -129,7 +134,8 @@ void run_transform(const TransformOptions& o) {
   std::size_t first_coordinate = 0;
   const auto out_header = io::output_header(header, columns, encoder.column_names(), source_name, first_coordinate);
 
-  if (!o.output.empty() && !from_stdin) io::refuse_same_file(o.input, o.output);
+  // Standard output (no -o, or -o -) gets the rows and no sidecar.
+  if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
   io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
   std::ostream& out = output.stream();
   // The path, each step's source and the stated accuracy: on standard
@@ -209,6 +215,7 @@ void run_transform(const TransformOptions& o) {
                      {"epsg_reversed", st.edge->epsg_reversed}});
   }
   json side;
+  side["schema"] = "geoanchor.transform-provenance/1";
   side["geoanchor_version"] = GEOANCHOR_VERSION;
   side["command"] = o.argv;
   side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
@@ -227,8 +234,13 @@ void run_transform(const TransformOptions& o) {
                                                     {"frame", plate->frame}, {"source", plate->source}};
   }
   if (!housekeeping.empty()) side["warnings"] = housekeeping;
-  output.sidecar() << side.dump(2) << '\n';
+  const std::string side_text = side.dump(2) + "\n";
+  output.sidecar() << side_text;
   output.commit("the transformed rows");  // the sidecar and the data: both written, then published
+  if (o.json) {
+    std::cout << side_text;
+    io::finish_standard_output("the provenance (--json)", "; " + o.output + " was written");
+  }
 }
 
 }  // namespace geoanchor::cli

@@ -15,7 +15,7 @@ namespace geoanchor::cli {
 
 struct TransformOptions {
   std::string input = "-";
-  std::string output;
+  std::string output;  // empty or "-": standard output
   std::string from, to;
   std::optional<std::string> plate;
   std::string plate_model = "ITRF2020";
@@ -23,6 +23,7 @@ struct TransformOptions {
   std::optional<int> precision;
   std::optional<std::string> geoid;  // for H_m columns (read and written on the same model)
   bool overwrite = false;
+  bool json = false;  // print the provenance sidecar on standard output
   std::vector<std::string> argv;
 };
 

@@ -9,13 +9,14 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/io/control_csv.hpp"
+#include "command_input.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
 
 namespace geoanchor::cli {
 
 void add_workbench_options(CLI::App* cmd, WorkbenchOptions& o) {
-  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON)")->required();
+  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON), or - for standard input")->required();
   cmd->add_option("--transform", o.transform,
                   "Transform file: its model, convention and recorded choices (and the points left out) start the fit");
   cmd->add_option("--model", o.model, "Model to fit (overrides the transform file's; default helmert7)");
@@ -66,6 +67,7 @@ std::pair<int, int> parse_size(const std::string& text, std::string_view flag) {
 }
 
 WorkbenchSession open_workbench(const WorkbenchOptions& o) {
+  require_utf8_arguments(o.argv);
   WorkbenchSession s;
   workflow::FitChoices choices;
   choices.options.model = solver::FitModel::helmert7;
@@ -96,11 +98,14 @@ WorkbenchSession open_workbench(const WorkbenchOptions& o) {
                 "--origin: the " + std::string(solver::to_string(fo.model)) +
                     " model needs the origin LAT,LON,H of the ENU (local) source coordinates");
   }
-  geodesy::ControlSet set = io::read_control_set(o.control, ro);
+  ControlInput in = read_control_input(o.control, ro, o.hash_control);
+  geodesy::ControlSet& set = in.set;
+  s.control_name = in.name;
+  s.control_sha256 = in.sha256;
   std::string cmd;
   for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
   s.generator = "geoanchor " GEOANCHOR_VERSION ": " + cmd;
-  const std::filesystem::path control_path(o.control);
+  const std::filesystem::path control_path(in.from_stdin ? std::string("stdin") : o.control);
   s.save_path = (control_path.parent_path() / (control_path.stem().string() + ".transform.json")).string();
   // Small sets fit on this thread; large ones on the worker, awaited here.
   // The points the file says were left out in the workbench are left out again.
@@ -114,7 +119,7 @@ WorkbenchSession open_workbench(const WorkbenchOptions& o) {
       s.notes.push_back(o.transform + " could not be compared with the refit at the control marks (a time-dependent "
                         "transform needs each mark's epoch)");
     } else {
-      s.notes.push_back(o.transform + " and the refit of " + o.control + " differ by at most " + format_fixed(1e3 * d, 3) +
+      s.notes.push_back(o.transform + " and the refit of " + in.name + " differ by at most " + format_fixed(1e3 * d, 3) +
                         " mm at the control marks" +
                         (d > 1e-4 && s.transform->fit ? " (the control set or the choices changed since the fit)" : ""));
     }

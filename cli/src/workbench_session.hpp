@@ -21,11 +21,12 @@ class App;
 namespace geoanchor::cli {
 
 struct WorkbenchOptions {
-  std::string control;
+  std::string control;    // a path, or "-" for standard input
   std::string transform;  // empty: none
   std::optional<std::string> model, convention, origin;
   std::string ellipsoid = "WGS84";
   std::vector<std::string> argv;
+  bool hash_control = false;  // fill WorkbenchSession::control_sha256 (report)
 };
 
 // CONTROL, --transform, --model, --convention, --origin, --ellipsoid.
@@ -39,6 +40,8 @@ struct WorkbenchSession {
   std::vector<std::string> notes;
   std::string save_path;  // proposed by Save transform…
   std::string generator;
+  std::string control_name;    // "<stdin>" or the path
+  std::string control_sha256;  // with WorkbenchOptions::hash_control
 };
 
 // "--view NAME" and "--size WIDTHxHEIGHT" (pixels, gui::kMinimumWidth_px ×
@@ -50,7 +53,8 @@ std::pair<int, int> parse_size(const std::string& text, std::string_view flag);
 // Choices: --model/--convention, else the transform file's, else helmert7 in
 // the position-vector convention (the workbench shows it and lets the user
 // switch). The fit runs at once (waits for large sets). Throws
-// geoanchor::Error naming the file or flag.
+// geoanchor::Error naming the file or flag, and for a command line that is
+// not UTF-8 (it is recorded as the generator of a saved transform).
 WorkbenchSession open_workbench(const WorkbenchOptions& o);
 
 }  // namespace geoanchor::cli

@@ -470,7 +470,7 @@ void publish_together(std::initializer_list<AtomicOutputFile*> outputs) {
 }
 
 DataOutput::DataOutput(const std::string& path, Overwrite overwrite) {
-  if (path.empty()) return;
+  if (path.empty() || path == "-") return;
   data_ = std::make_unique<AtomicOutputFile>(path, overwrite);
   sidecar_ = std::make_unique<AtomicOutputFile>(path + ".geoanchor.json", overwrite);
 }

@@ -177,12 +177,22 @@ CoordinateColumns classify_coordinate_header(const std::vector<std::string>& hea
   }
   const auto names = [&](CoordinateKind k) { return coordinate_column_names(k, role); };
   if (kinds.empty()) {
+    // Tabs or semicolons inside the names: another separator, which the CSV
+    // reader refuses when the header has no comma at all.
+    std::string separator;
+    for (const auto& name : header) {
+      if (separator.empty() && name.find('\t') != std::string::npos) separator = "tabs";
+      if (separator.empty() && name.find(';') != std::string::npos) separator = "semicolons (';')";
+    }
     throw Error(ErrorKind::input, "E_COLUMN",
                 std::string(source) + ": header names no coordinates; expected lat" + role_infix + "_deg,lon" +
                     role_infix + "_deg[,h" + role_infix + "_m] | x" + role_infix + "_m,y" + role_infix + "_m,z" +
                     role_infix + "_m | e" + role_infix + "_m,n" + role_infix + "_m,u" + role_infix + "_m | n" +
                     role_infix + "_m,e" + role_infix + "_m,d" + role_infix + "_m | easting" + role_infix +
-                    "_m,northing" + role_infix + "_m[,h" + role_infix + "_m]");
+                    "_m,northing" + role_infix + "_m[,h" + role_infix + "_m]" +
+                    (separator.empty() ? std::string()
+                                       : " (its names hold " + separator +
+                                             ": geoanchor reads comma-separated files; only commas separate columns)"));
   }
   if (kinds.size() > 1) {
     throw Error(ErrorKind::input, "E_COLUMN_MIX",

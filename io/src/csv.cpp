@@ -2,8 +2,40 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/utf8.hpp"
 
 namespace geoanchor::io {
+namespace {
+
+// The 0-based index of the field of `line` that holds byte `at` (commas
+// inside double quotes do not separate fields).
+std::size_t field_at(std::string_view line, std::size_t at) {
+  std::size_t field = 0;
+  bool quoted = false;
+  for (std::size_t i = 0; i < at && i < line.size(); ++i) {
+    if (line[i] == '"') quoted = !quoted;
+    if (line[i] == ',' && !quoted) ++field;
+  }
+  return field;
+}
+
+// The text of field `field` of `line`, as written (quotes kept).
+std::string_view field_text(std::string_view line, std::size_t field) {
+  std::size_t start = 0, k = 0;
+  bool quoted = false;
+  for (std::size_t i = 0; i <= line.size(); ++i) {
+    if (i == line.size() || (line[i] == ',' && !quoted)) {
+      if (k == field) return line.substr(start, i - start);
+      ++k;
+      start = i + 1;
+    } else if (line[i] == '"') {
+      quoted = !quoted;
+    }
+  }
+  return {};
+}
+
+}  // namespace
 
 void split_csv_line(std::string_view line, std::vector<std::string>& raw, std::vector<std::string>& values,
                     std::string_view where) {
@@ -91,17 +123,78 @@ CsvReader::CsvReader(std::istream& in, std::string source_name) : in_(in), sourc
       while (!name.empty() && name.front() == ' ') name.erase(name.begin());
       while (!name.empty() && name.back() == ' ') name.pop_back();
     }
+    // A header without commas that holds tabs or semicolons is a TSV or a
+    // ';'-separated export: say so rather than read it as one column.
+    if (header_.size() == 1) {
+      const bool tabs = line.find('\t') != std::string::npos, semicolons = line.find(';') != std::string::npos;
+      if (tabs || semicolons) {
+        const std::string separator = tabs ? "tabs" : "semicolons (';')";
+        throw Error(ErrorKind::input, "E_CSV_SEPARATOR",
+                    source_name_ + ":" + std::to_string(line_) + ": the header is separated by " + separator +
+                        ", not commas: geoanchor reads comma-separated files (RFC 4180) and never guesses the "
+                        "separator; convert the file" +
+                        (tabs ? " (e.g. tr '\\t' ',')"
+                              : " (a ';' file often writes decimal commas too: those must become '.')"));
+      }
+    }
     return;
   }
   throw Error(ErrorKind::input, "E_CSV_EMPTY", source_name_ + ": no header line; expected a CSV header naming each column");
 }
 
 bool CsvReader::read_line(std::string& line) {
-  if (!std::getline(in_, line)) return false;
+  if (has_pending_) {
+    // The next CR-terminated piece of the last line read.
+    const auto cr = pending_.find('\r', pending_at_);
+    if (cr == std::string::npos) {
+      line.assign(pending_, pending_at_);
+      has_pending_ = false;
+    } else {
+      line.assign(pending_, pending_at_, cr - pending_at_);
+      pending_at_ = cr + 1;
+    }
+  } else {
+    if (!std::getline(in_, line)) return false;
+    if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF (or a CR at the very end)
+    // CR line ends inside: this line ends at the first, the rest is pending.
+    const auto cr = line.find('\r');
+    if (cr != std::string::npos) {
+      pending_.assign(line, cr + 1);
+      pending_at_ = 0;
+      has_pending_ = true;
+      line.resize(cr);
+    }
+  }
   ++line_;
-  if (!line.empty() && line.back() == '\r') line.pop_back();
   if (line_ == 1 && line.size() >= 3 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 BOM
+  require_utf8(line);
   return true;
+}
+
+void CsvReader::require_utf8(const std::string& line) const {
+  const auto at = first_invalid_utf8(line);
+  if (!at) return;
+  const std::string where = source_name_ + ":" + std::to_string(line_);
+  const std::string byte = "0x" + hex_byte(static_cast<unsigned char>(line[*at]));
+  std::string what;
+  if (line.front() == '#') {
+    what = "comment line";
+  } else {
+    const std::size_t field = field_at(line, *at);
+    const std::string text = "'" + printable_utf8(field_text(line, field)) + "'";
+    if (header_line_ == 0) {
+      what = "header field " + std::to_string(field + 1) + " " + text;
+    } else if (field < header_.size()) {
+      what = header_[field] + " " + text;
+    } else {
+      what = "field " + std::to_string(field + 1) + " " + text;
+    }
+  }
+  throw Error(ErrorKind::input, "E_CSV_NOT_UTF8",
+              where + ": " + what + " is not valid UTF-8 (byte " + std::to_string(*at + 1) + " of the line is " + byte +
+                  "): geoanchor reads CSV as UTF-8, since ids and attributes go into JSON outputs, which hold UTF-8 "
+                  "only, and rewriting the bytes would record another id; convert the file (from Latin-1: iconv -f "
+                  "LATIN1 -t UTF-8)");
 }
 
 bool CsvReader::next(CsvRecord& record) {

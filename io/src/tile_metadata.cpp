@@ -9,6 +9,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/utf8.hpp"
 #include "geoanchor/io/json_input.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
 
@@ -284,7 +285,16 @@ std::string to_json_text(const TileMetadata& m) {
                            {"false_northing_m", p.tm.false_northing_m}}}};
     }
   }
-  if (!m.horizontal_crs.empty()) j["horizontal_crs"] = m.horizontal_crs;
+  if (!m.horizontal_crs.empty()) {
+    // The name may come from a tile's WKT, bytes of any encoding: JSON holds
+    // UTF-8 only, and a rewritten name would be another CRS's.
+    if (const auto problem = utf8_problem(m.horizontal_crs)) {
+      throw Error(ErrorKind::input, "E_CRS_NOT_UTF8",
+                  "horizontal_crs '" + m.horizontal_crs + "' (the tile's CRS name) is not valid UTF-8 (" + *problem +
+                      "): a sidecar holds UTF-8 only");
+    }
+    j["horizontal_crs"] = m.horizontal_crs;
+  }
   nlohmann::ordered_json v = nlohmann::ordered_json::object();
   if (!m.vertical_datum.empty()) v["datum"] = m.vertical_datum;
   if (!m.height_type.empty()) v["height_type"] = m.height_type;

@@ -58,6 +58,83 @@ TEST(Csv, ReaderKeepsCommentsAndChecksFieldCounts) {
   }
 }
 
+// issue 12 point 12
+TEST(Csv, Point12_CrOnlyAndMixedLineEndsAreLinesAsLf) {
+  const std::string lf = "# first\nid,x_m\n\n# mid\nP1,1\nP2,2\nP3,3,4\n";
+  for (const std::string ends : {"\r", "\r\n", "mixed"}) {
+    std::string text;
+    int k = 0;
+    for (const char c : lf) {
+      if (c != '\n') {
+        text += c;
+      } else if (ends == "mixed") {
+        static const char* const kEnds[] = {"\r", "\r\n", "\n"};  // never a CR just before an LF end
+        text += kEnds[k++ % 3];
+      } else {
+        text += ends;
+      }
+    }
+    std::istringstream in(text);
+    CsvReader reader(in, "f.csv");
+    EXPECT_EQ(reader.leading_comments(), std::vector<std::string>{"# first"}) << ends;
+    EXPECT_EQ(reader.header(), (std::vector<std::string>{"id", "x_m"})) << ends;
+    CsvRecord r;
+    ASSERT_TRUE(reader.next(r)) << ends;
+    EXPECT_TRUE(r.is_comment);
+    EXPECT_EQ(r.comment, "# mid");
+    ASSERT_TRUE(reader.next(r)) << ends;
+    EXPECT_EQ(r.values, (std::vector<std::string>{"P1", "1"})) << ends;
+    EXPECT_EQ(r.line, 5u) << ends;
+    ASSERT_TRUE(reader.next(r)) << ends;
+    EXPECT_EQ(r.values, (std::vector<std::string>{"P2", "2"})) << ends;
+    EXPECT_EQ(r.line, 6u) << ends;
+    try {
+      reader.next(r);
+      ADD_FAILURE() << ends << ": the 3-field line was read";
+    } catch (const Error& e) {
+      EXPECT_STREQ(e.what(), "f.csv:7: 3 fields; expected 2 as in the header (line 2)") << ends;
+    }
+  }
+}
+
+// issue 12 point 12
+TEST(Csv, Point12_TextThatIsNotUtf8IsRefusedNamingLineFieldAndByte) {
+  std::istringstream in("id,x_m\nP1,1\nP\xE9,2\n");
+  CsvReader reader(in, "f.csv");
+  CsvRecord r;
+  ASSERT_TRUE(reader.next(r));
+  try {
+    reader.next(r);
+    ADD_FAILURE() << "the Latin-1 id was read";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "E_CSV_NOT_UTF8");
+    EXPECT_NE(std::string(e.what()).find("f.csv:3: id 'P\\xE9' is not valid UTF-8 (byte 2 of the line is 0xE9)"),
+              std::string::npos)
+        << e.what();
+  }
+  // UTF-8 "Pé" is read as it is.
+  std::istringstream ok("id,x_m\nP\xC3\xA9,2\n");
+  CsvReader utf8(ok, "g.csv");
+  ASSERT_TRUE(utf8.next(r));
+  EXPECT_EQ(r.values[0], "P\xC3\xA9");
+}
+
+// issue 12 point 15
+TEST(Csv, Point15_TabOrSemicolonHeaderIsRefusedNamingTheSeparator) {
+  for (const auto& [text, seen] : {std::pair<std::string, std::string>{"id\tx_m\ty_m\n", "tabs"},
+                                   std::pair<std::string, std::string>{"id;x_m;y_m\n", "semicolons (';')"}}) {
+    std::istringstream in(text);
+    try {
+      CsvReader reader(in, "f.csv");
+      ADD_FAILURE() << seen << ": the header was read";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), "E_CSV_SEPARATOR");
+      EXPECT_NE(std::string(e.what()).find("f.csv:1: the header is separated by " + seen + ", not commas"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(CoordinateColumns, RecognisesEachKindAndPassesAttributesThrough) {
   const auto g = classify_coordinate_header(split("id,lon_deg,lat_deg,h_m,n_returns,epoch"), "f");
   EXPECT_EQ(g.kind, CoordinateKind::geodetic);

@@ -55,6 +55,20 @@ TEST(TileMetadata, SidecarReadsBackWhatItWrites) {
   EXPECT_EQ(again.survey_method, "mobile LiDAR");
 }
 
+// issue 12 point 12
+TEST(TileMetadata, Point12_ACrsNameThatIsNotUtf8IsRefusedNotDumpedAsInternal) {
+  TileMetadata m = parse_tile_metadata(kSidecar, "t.json");
+  m.horizontal_crs = "CH1903+ / LV95 (Z\xFCrich)";  // Latin-1, as a tile's WKT may hold it
+  try {
+    (void)to_json_text(m);
+    ADD_FAILURE() << "written";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "E_CRS_NOT_UTF8");
+    EXPECT_NE(std::string(e.what()).find("'CH1903+ / LV95 (Z\\xFCrich)'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("byte 18 is 0xFC"), std::string::npos) << e.what();
+  }
+}
+
 TEST(TileMetadata, SidecarErrorsNameTheKey) {
   auto error_of = [](std::string text) {
     try {

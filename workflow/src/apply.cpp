@@ -18,6 +18,7 @@
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/utf8.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/io/json_input.hpp"
@@ -60,6 +61,14 @@ std::vector<fs::path> expand_inputs(const std::vector<std::string>& inputs) {
   std::vector<fs::path> tiles;
   std::set<std::string> seen;
   auto add = [&](const fs::path& p, const std::string& where) {
+    // A tile's path goes into its sidecar and the run summary (JSON, UTF-8
+    // only); geoanchor records no name other than the file's.
+    if (const auto problem = utf8_problem(p.string())) {
+      throw Error(ErrorKind::input, "E_PATH_NOT_UTF8",
+                  where + ": " + p.string() + ": the file name is not valid UTF-8 (" + *problem +
+                      "): tile paths are recorded in the sidecars and the run summary, which hold UTF-8 only; rename "
+                      "it (from Latin-1: convmv -f latin1 -t utf-8 --notest NAME)");
+    }
     if (!is_tile(p)) {
       throw Error(ErrorKind::usage, "E_INPUT", where + ": " + p.string() + ": not a tile; expected .las, .csv or .ply");
     }

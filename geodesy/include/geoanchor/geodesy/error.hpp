@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "geoanchor/geodesy/utf8.hpp"
+
 namespace geoanchor {
 
 // What went wrong, which decides the CLI's exit code.
@@ -19,10 +21,13 @@ int exit_code(ErrorKind kind);
 
 // `code` is a stable symbolic name (E_LATITUDE_RANGE, ...); `message` says
 // where (file:line, column or flag), which value, and what was expected.
+// Bytes of the message that are not UTF-8 (a Latin-1 value or file name
+// quoted in it) are kept as \xHH, so that what() is always UTF-8 text that
+// a JSON summary can hold (utf8.hpp).
 class Error : public std::runtime_error {
  public:
   Error(ErrorKind kind, std::string code, const std::string& message)
-      : std::runtime_error(message), kind_(kind), code_(std::move(code)) {}
+      : std::runtime_error(printable_utf8(message)), kind_(kind), code_(std::move(code)) {}
   ErrorKind kind() const { return kind_; }
   const std::string& code() const { return code_; }
 

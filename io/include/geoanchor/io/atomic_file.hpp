@@ -132,7 +132,7 @@ bool remove_unless_held(const std::filesystem::path& path);
 
 // A command's data output: a file published together with its provenance
 // sidecar `PATH.geoanchor.json` (the sidecar first, then the data), or
-// standard output, without sidecar, when `path` is empty. The one place
+// standard output, without sidecar, when `path` is empty or "-". The one place
 // that decides what an output path means.
 class DataOutput {
  public:

@@ -1,11 +1,22 @@
 #pragma once
 // Streaming CSV: one record at a time, so memory does not grow with the file.
 //
-// RFC 4180 fields (commas, double quotes with "" escapes); CRLF or LF line
-// ends; lines whose first character is '#' are comments and are handed back
-// as such so that writers can keep them in place, as PROJ's tools do. Blank
-// lines are skipped. A record whose field count differs from the header's is
-// an error naming file and line.
+// RFC 4180 fields (commas, double quotes with "" escapes); LF, CRLF or CR
+// line ends (old Mac files), also mixed in one file, each counted as one
+// line in messages; lines whose first character is '#' are comments and are
+// handed back as such so that writers can keep them in place, as PROJ's
+// tools do. Blank lines are skipped. A record whose field count differs from
+// the header's is an error naming file and line. Memory holds one line at a
+// time, except in a file whose line ends are all CR: with no LF in it, it is
+// read in one piece and split at the CRs.
+//
+// Text is UTF-8 (a UTF-8 byte-order mark on the first line is dropped): ids
+// and attributes end up in JSON outputs (transform files, sidecars,
+// summaries), which hold UTF-8 only, and rewriting the bytes would record
+// another id. A line with bytes that are not UTF-8 (Latin-1 "P\xE9") is an
+// error naming file:line, the field (or the header, or a comment) and the
+// byte. A header with no comma but tabs or semicolons is an error saying
+// which separator was seen: only commas separate fields.
 
 #include <cstddef>
 #include <istream>
@@ -29,7 +40,8 @@ class CsvReader {
   // `source_name` is used in messages ("points.csv", "<stdin>").
   // Reads up to and including the header line; comment lines before it are
   // available through leading_comments(). Throws geoanchor::Error (input)
-  // for an empty input or a malformed header.
+  // for an empty input or a malformed header (E_CSV_SEPARATOR: separated by
+  // tabs or ';'), and for text that is not UTF-8 (E_CSV_NOT_UTF8).
   CsvReader(std::istream& in, std::string source_name);
 
   const std::vector<std::string>& header() const { return header_; }
@@ -42,8 +54,13 @@ class CsvReader {
 
  private:
   bool read_line(std::string& line);
+  void require_utf8(const std::string& line) const;
   std::istream& in_;
   std::string source_name_;
+  // The rest of a line read up to LF that holds CR line ends.
+  std::string pending_;
+  std::size_t pending_at_ = 0;
+  bool has_pending_ = false;
   std::size_t line_ = 0;
   std::size_t header_line_ = 0;
   std::vector<std::string> header_;
