@@ -29,6 +29,9 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& o) {
   add_control_grid_options(*cmd, o.grids);
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
+  cmd->add_option("--geoid", o.geoid,
+                  "Geoid model of orthometric heights (H_src_m, H_dst_m; JSON H_m) and of the height_type test: EGM96 "
+                  "(default for the test) or EGM96-NGA");
   cmd->add_option("--sigma", o.sigma, "Noise per coordinate and frame (m, 1σ) assumed when the set gives none (default 0.01)")
       ->check(finite_positive());
   return cmd;
@@ -116,6 +119,8 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
     tf = io::read_transform_file(*o.transform);
     if (has_rotations(*tf)) swapped = with_other_convention(*tf);
   }
+  const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
+  ro.src_geoid = ro.dst_geoid = geoid;
   geodesy::ControlSet set = io::read_control_set(o.control, ro);
   if (tf) {
     if (!set.source_frame) set.source_frame = tf->source_frame;
@@ -138,7 +143,7 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
                     (has_rotations(*tf) ? ", " + std::string(tf->convention_name()) : std::string()) + ")";
     d.transform = std::move(g);
   }
-  d.geoid = &geodesy::GeoidGrid::egm96();
+  d.geoid = geoid ? geoid : &geodesy::GeoidGrid::egm96();
 
   const solver::Diagnosis r = solver::diagnose(set, d);
   if (!o.json) {
