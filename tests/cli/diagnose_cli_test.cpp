@@ -360,5 +360,28 @@ TEST_F(DiagnoseCli, TextReportAndRefusals) {
   EXPECT_NE(no_epoch.err.find("epoch"), std::string::npos) << no_epoch.err;
 }
 
+// issue 12 point 2: orthometric heights named as such (H_dst_m) are read
+// through --geoid, and then no mistake is left; without it they are refused.
+TEST_F(DiagnoseCli, Point2_OrthometricHeightsNamedAsSuchAreReadThroughTheGeoidOrRefused) {
+  const ProjPipeline minus_n("+proj=vgridshift +grids=egm96_15.gtx +multiplier=-1");
+  SetText s;
+  s.header_comments = kSameFrame;
+  s.target_columns = "lat_dst_deg,lon_dst_deg,H_dst_m";
+  s.target_decimals = 10;
+  s.target = [&](const Eigen::Vector3d& x) {
+    double lat = 0, lon = 0, h = 0;
+    geodetic(x, lat, lon, h);
+    return std::array<double, 3>{lat, lon, minus_n.forward(Eigen::Vector3d(proj_radians(lon), proj_radians(lat), h)).z()};
+  };
+  const auto control = write("control.csv", control_csv(s));
+  const RunResult refused = run("diagnose '" + control.string() + "'");
+  EXPECT_EQ(refused.exit_code, 3) << refused.err;
+  EXPECT_NE(refused.err.find("control.csv: column 'H_dst_m': orthometric height"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("give --geoid EGM96"), std::string::npos) << refused.err;
+  const auto j = diagnose(s, "--geoid EGM96");
+  expect_schema(j);
+  EXPECT_FALSE(j["problem_found"].get<bool>()) << j.dump(2);
+}
+
 }  // namespace
 }  // namespace geoanchor::testing
