@@ -121,6 +121,8 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
   }
   const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
   ro.src_geoid = ro.dst_geoid = geoid;
+  ro.source_frame_overridden = o.source_frame.has_value();
+  ro.target_frame_overridden = o.target_frame.has_value();
   geodesy::ControlSet set = io::read_control_set(o.control, ro);
   if (tf) {
     if (!set.source_frame) set.source_frame = tf->source_frame;

@@ -184,6 +184,8 @@ int run_fit(const FitCommandOptions& o) {
   }
   const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
   ro.src_geoid = ro.dst_geoid = geoid;
+  ro.source_frame_overridden = o.source_frame.has_value();
+  ro.target_frame_overridden = o.target_frame.has_value();
   geodesy::ControlSet set = io::read_control_set(o.control, ro);
   // A dynamic frame given on the command line needs its epoch as one in the
   // file does (the reader refuses those), unless every point has one.

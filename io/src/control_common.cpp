@@ -42,13 +42,18 @@ void refuse_orthometric_without_geoid(const std::string& where) {
                       "needs takes the geoid model: give --geoid EGM96 (h = H + N), or give ellipsoidal heights as h");
 }
 
-void check_frame_epochs(const geodesy::ControlSet& set, const std::string& source_where, const std::string& target_where) {
+void check_frame_epochs(const geodesy::ControlSet& set, const ControlReadOptions& o, const std::string& source_where,
+                        const std::string& target_where) {
   const bool every_point_dated =
       !set.points.empty() && std::all_of(set.points.begin(), set.points.end(), [](const auto& p) { return p.epoch.has_value(); });
   if (every_point_dated) return;
   const std::string other_way = ", or an epoch for every point";
-  if (set.source_frame) geodesy::require_epoch_if_dynamic(*set.source_frame, source_where, ErrorKind::input, other_way);
-  if (set.target_frame) geodesy::require_epoch_if_dynamic(*set.target_frame, target_where, ErrorKind::input, other_way);
+  if (set.source_frame && !o.source_frame_overridden) {
+    geodesy::require_epoch_if_dynamic(*set.source_frame, source_where, ErrorKind::input, other_way);
+  }
+  if (set.target_frame && !o.target_frame_overridden) {
+    geodesy::require_epoch_if_dynamic(*set.target_frame, target_where, ErrorKind::input, other_way);
+  }
 }
 
 double RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const RoleFail& fail,

@@ -62,7 +62,9 @@ geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<ge
 // Refuses a dynamic frame of `set` that names no coordinate epoch while a
 // point has none either (geodesy::require_epoch_if_dynamic), naming where
 // each frame was declared (empty: not declared in the file).
-void check_frame_epochs(const geodesy::ControlSet& set, const std::string& source_where, const std::string& target_where);
+// A frame the caller overrides (ControlReadOptions) is not checked.
+void check_frame_epochs(const geodesy::ControlSet& set, const ControlReadOptions& o, const std::string& source_where,
+                        const std::string& target_where);
 
 // Adds `p` to `set`, refusing a duplicate id at the same epoch; `where` names
 // the new point (file:line or JSON path), `where_of` an earlier one.

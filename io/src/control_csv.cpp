@@ -415,7 +415,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     detail::add_point(set, std::move(p), seen, source_name + ":" + std::to_string(r.line),
                       [](const ControlPoint& q) { return "line " + std::to_string(q.line); });
   }
-  detail::check_frame_epochs(set, source_frame_where, target_frame_where);
+  detail::check_frame_epochs(set, o, source_frame_where, target_frame_where);
   return set;
 }
 

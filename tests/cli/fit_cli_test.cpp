@@ -797,6 +797,10 @@ TEST_F(FitCli, Point5_ADynamicFrameWithoutItsEpochInTheControlSetOrAFlagIsRefuse
   EXPECT_NE(r.err.find("frame ITRF2014 is dynamic"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("give ITRF2014@YYYY.Y"), std::string::npos) << r.err;
   EXPECT_EQ(leftovers({"c.csv"}), std::vector<std::string>{});
+  // The flag that names the epoch replaces the file's frame.
+  const RunResult given = run("fit " + path("c.csv").string() + " --source-frame ITRF2014@2024.5 --model helmert7 "
+                              "--convention position_vector");
+  EXPECT_EQ(given.exit_code, 0) << given.err;
   const RunResult f = run("fit " + kControl + " --target-frame 'WGS84(G2139)'" + args);
   EXPECT_EQ(f.exit_code, 2) << f.err;
   EXPECT_NE(f.err.find("--target-frame: frame WGS84(G2139) is dynamic"), std::string::npos) << f.err;

@@ -53,6 +53,11 @@ struct ControlReadOptions {
   // must outlive the read.
   const geodesy::GeoidGrid* src_geoid = nullptr;
   const geodesy::GeoidGrid* dst_geoid = nullptr;
+  // The caller replaces the file's source (target) frame with its own (fit
+  // --source-frame): a dynamic frame the file names without an epoch is
+  // then not refused here; the caller checks the one it gives.
+  bool source_frame_overridden = false;
+  bool target_frame_overridden = false;
 };
 
 geodesy::ControlSet read_control_csv(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
