@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -130,6 +131,16 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
   }
   if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");
+  // A dynamic frame given here needs its epoch, as in the file, unless every point has one.
+  const bool every_point_dated = !set.points.empty() && std::all_of(set.points.begin(), set.points.end(),
+                                                                    [](const auto& p) { return p.epoch.has_value(); });
+  const std::string other_way = ", or an epoch for every point";
+  if (!every_point_dated && o.source_frame) {
+    geodesy::require_epoch_if_dynamic(*set.source_frame, "--source-frame", ErrorKind::usage, other_way);
+  }
+  if (!every_point_dated && o.target_frame) {
+    geodesy::require_epoch_if_dynamic(*set.target_frame, "--target-frame", ErrorKind::usage, other_way);
+  }
   if (tf) {
     const std::string where = *o.transform;
     solver::GivenTransform g;

@@ -383,5 +383,26 @@ TEST_F(DiagnoseCli, Point2_OrthometricHeightsNamedAsSuchAreReadThroughTheGeoidOr
   EXPECT_FALSE(j["problem_found"].get<bool>()) << j.dump(2);
 }
 
+// issue 12 point 5: a dynamic frame without its epoch, in the set or on the
+// command line, is refused naming where it was given.
+TEST_F(DiagnoseCli, Point5_ADynamicFrameWithoutItsEpochIsRefusedNamingTheCommentOrTheFlag) {
+  SetText s;
+  s.header_comments = "# source_frame = ITRF2014\n# target_frame = ITRF2014\n";
+  const auto control = write("control.csv", control_csv(s));
+  const RunResult file = run("diagnose '" + control.string() + "'");
+  EXPECT_EQ(file.exit_code, 3) << file.err;
+  EXPECT_NE(file.err.find("control.csv: comment '# source_frame = ITRF2014'"), std::string::npos) << file.err;
+  EXPECT_NE(file.err.find("give ITRF2014@YYYY.Y"), std::string::npos) << file.err;
+  s.header_comments = kSameFrame;
+  const auto dated = write("dated.csv", control_csv(s));
+  const RunResult flag = run("diagnose '" + dated.string() + "' --target-frame ITRF2020");
+  EXPECT_EQ(flag.exit_code, 2) << flag.err;
+  EXPECT_NE(flag.err.find("--target-frame: frame ITRF2020 is dynamic"), std::string::npos) << flag.err;
+  // The flags with their epochs replace the file's frames.
+  const RunResult given =
+      run("diagnose '" + control.string() + "' --source-frame ITRF2014@2020.0 --target-frame ITRF2014@2020.0");
+  EXPECT_EQ(given.exit_code, 0) << given.err;
+}
+
 }  // namespace
 }  // namespace geoanchor::testing
