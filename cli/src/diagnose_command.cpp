@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -31,6 +32,9 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& o) {
   add_control_grid_options(*cmd, o.grids);
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
+  cmd->add_option("--geoid", o.geoid,
+                  "Geoid model of orthometric heights (H_src_m, H_dst_m; JSON H_m) and of the height_type test: EGM96 "
+                  "(default for the test) or EGM96-NGA");
   cmd->add_option("--sigma", o.sigma, "Noise per coordinate and frame (m, 1σ) assumed when the set gives none (default 0.01)")
       ->check(finite_positive());
   return cmd;
@@ -118,6 +122,10 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
     tf = io::read_transform_file(*o.transform);
     if (has_rotations(*tf)) swapped = with_other_convention(*tf);
   }
+  const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
+  ro.src_geoid = ro.dst_geoid = geoid;
+  ro.source_frame_overridden = o.source_frame.has_value();
+  ro.target_frame_overridden = o.target_frame.has_value();
   ControlInput in = read_control_input(o.control, ro);
   geodesy::ControlSet& set = in.set;
   if (tf) {
@@ -126,6 +134,16 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
   }
   if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");
+  // A dynamic frame given here needs its epoch, as in the file, unless every point has one.
+  const bool every_point_dated = !set.points.empty() && std::all_of(set.points.begin(), set.points.end(),
+                                                                    [](const auto& p) { return p.epoch.has_value(); });
+  const std::string other_way = ", or an epoch for every point";
+  if (!every_point_dated && o.source_frame) {
+    geodesy::require_epoch_if_dynamic(*set.source_frame, "--source-frame", ErrorKind::usage, other_way);
+  }
+  if (!every_point_dated && o.target_frame) {
+    geodesy::require_epoch_if_dynamic(*set.target_frame, "--target-frame", ErrorKind::usage, other_way);
+  }
   if (tf) {
     const std::string where = *o.transform;
     solver::GivenTransform g;
@@ -141,7 +159,7 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
                     (has_rotations(*tf) ? ", " + std::string(tf->convention_name()) : std::string()) + ")";
     d.transform = std::move(g);
   }
-  d.geoid = &geodesy::GeoidGrid::egm96();
+  d.geoid = geoid ? geoid : &geodesy::GeoidGrid::egm96();
 
   const solver::Diagnosis r = solver::diagnose(set, d);
   if (!o.json) {

@@ -24,6 +24,7 @@ struct DiagnoseCommandOptions {
   std::string ellipsoid = "WGS84";
   ControlGridOptions grids;  // easting/northing columns
   std::optional<std::string> source_frame, target_frame;
+  std::optional<std::string> geoid;  // EGM96 | EGM96-NGA: reads H columns, and the height_type hypothesis uses it
   std::optional<double> sigma;
 };
 

@@ -3,10 +3,12 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <numeric>
+#include <tuple>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
@@ -44,6 +46,7 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   add_control_grid_options(*cmd, o.grids);
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
+  cmd->add_option("--geoid", o.geoid, "Geoid model of orthometric heights (H_src_m, H_dst_m; JSON H_m): EGM96 or EGM96-NGA");
   cmd->add_option("--alpha", o.alpha, "Significance of the global test (default 0.05)")->check(finite_range(1e-6, 0.5));
   cmd->add_option("--alpha-point", o.alpha_point, "Significance of point tests and data snooping (default 0.001)")
       ->check(finite_range(1e-9, 0.5));
@@ -258,10 +261,30 @@ int run_fit(const FitCommandOptions& o) {
   } else if (o.fix_yaw || o.with_scale) {
     throw Error(ErrorKind::usage, "E_OPTION", "--fix-yaw/--with-scale: only for --model enu-origin");
   }
+  const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
+  ro.src_geoid = ro.dst_geoid = geoid;
+  ro.source_frame_overridden = o.source_frame.has_value();
+  ro.target_frame_overridden = o.target_frame.has_value();
   ControlInput in = read_control_input(o.control, ro, o.json);
   geodesy::ControlSet& set = in.set;
-  if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
-  if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");
+  // A dynamic frame given on the command line needs its epoch as one in the
+  // file does (the reader refuses those), unless every point has one.
+  const bool every_point_dated = !set.points.empty() && std::all_of(set.points.begin(), set.points.end(),
+                                                                    [](const auto& p) { return p.epoch.has_value(); });
+  for (const auto& [flag, text, frame] : {std::tuple{"--source-frame", &o.source_frame, &set.source_frame},
+                                          std::tuple{"--target-frame", &o.target_frame, &set.target_frame}}) {
+    if (!*text) continue;
+    *frame = geodesy::Frame::parse(**text, flag);
+    if (!every_point_dated) geodesy::require_epoch_if_dynamic(**frame, flag, ErrorKind::usage, ", or an epoch for every point");
+  }
+  std::vector<std::string> heights;  // what the report says about orthometric input
+  for (const auto* form : {&set.source_input, &set.target_input}) {
+    if (form->height_type != geodesy::HeightKind::orthometric) continue;
+    heights.push_back(form->height_column + " orthometric, read as h = H + N on " + form->geoid_model);
+  }
+  if (geoid && heights.empty()) {
+    std::cerr << "geoanchor: warning: --geoid " << *o.geoid << " unused: the control set gives ellipsoidal heights (h)\n";
+  }
   if (const auto swap = workflow::likely_lat_lon_swap(set)) throw Error(ErrorKind::input, "E_AXIS_SWAP", *swap);
   const std::vector<std::string> set_warnings = workflow::control_set_warnings(set);
   if (o.compare) {
@@ -273,7 +296,13 @@ int run_fit(const FitCommandOptions& o) {
 
   solver::FitResult r = solver::fit_helmert(set, fo);
   r.warnings.insert(r.warnings.begin(), set_warnings.begin(), set_warnings.end());
-  if (!o.json) workflow::write_fit_report(report, r, set, fo);
+  if (const auto w = workflow::orthometric_height_warning(r, set, geoid ? *geoid : geodesy::GeoidGrid::egm96())) {
+    r.warnings.push_back(*w);
+  }
+  if (!o.json) {
+    for (const auto& h : heights) report << "heights: " << h << "\n";
+    workflow::write_fit_report(report, r, set, fo);
+  }
   for (const auto& w : r.warnings) std::cerr << "geoanchor: warning: " << w << '\n';
 
   const auto refusal = workflow::fit_refusal(r, in.name, o.accept_failed_global_test);

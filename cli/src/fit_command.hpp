@@ -31,6 +31,7 @@ struct FitCommandOptions {
   ControlGridOptions grids;  // easting/northing columns
   std::string ellipsoid = "WGS84";
   std::optional<std::string> source_frame, target_frame;
+  std::optional<std::string> geoid;  // EGM96 | EGM96-NGA: reads H_src_m/H_dst_m (JSON H_m) as h = H + N
   double alpha = 0.05;
   double alpha_point = 0.001;
   bool no_snooping = false;

@@ -123,6 +123,23 @@ Frame Frame::parse(std::string_view text, std::string_view where) {
   return f;
 }
 
+bool is_dynamic(const Frame& f) {
+  const std::string& d = f.datum();
+  // The terrestrial reference frames of the ITRS and their IGS and national
+  // densifications aligned with it at each epoch (EPSG: dynamic).
+  if (d == "ITRF" || d == "IGS" || d == "IGb" || d == "ATRF") return true;
+  // WGS 84's realizations are dynamic, its ensemble (no realization) is not.
+  return d == "WGS84" && !f.realization().empty();
+}
+
+void require_epoch_if_dynamic(const Frame& f, std::string_view where, ErrorKind kind, std::string_view other_way) {
+  if (f.epoch() || !is_dynamic(f)) return;
+  throw Error(kind, "E_EPOCH_MISSING",
+              std::string(where) + ": frame " + f.name() + " is dynamic (its coordinates change with time, by centimetres a "
+                  "year) and names no coordinate epoch: give " + f.name() + "@YYYY.Y, the epoch the coordinates refer to" +
+                  std::string(other_way) + "; no epoch is assumed (the reference epoch is never substituted)");
+}
+
 std::string Frame::name() const {
   if (realization_.empty()) return datum_;
   return parenthesised_ ? datum_ + "(" + realization_ + ")" : datum_ + realization_;

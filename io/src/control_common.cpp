@@ -19,8 +19,14 @@ RoleConverter::RoleConverter(const ControlReadOptions& options) : options_(optio
   if (options_.dst_projection) dst_grid_.emplace(*options_.dst_projection);
 }
 
-geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<geodesy::ProjectionDef>& projection) {
+geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<geodesy::ProjectionDef>& projection,
+                                     const std::string& height_column, const geodesy::GeoidGrid* geoid) {
   geodesy::ControlInputForm f;
+  if (!height_column.empty() && geoid) {
+    f.height_type = geodesy::HeightKind::orthometric;
+    f.height_column = height_column;
+    f.geoid_model = geoid->model_name();
+  }
   switch (kind) {
     case CoordinateKind::geodetic: f.form = geodesy::CoordinateForm::geodetic; break;
     case CoordinateKind::enu: f.form = geodesy::CoordinateForm::enu; break;
@@ -33,16 +39,47 @@ geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<ge
   return f;
 }
 
-void RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const RoleFail& fail,
-                            geodesy::EcefPosition& position, Eigen::Matrix3d& cov_m2) const {
+void refuse_orthometric_without_geoid(const std::string& where) {
+  throw Error(ErrorKind::input, "E_HEIGHT_TYPE",
+              where + ": orthometric height (H, above the geoid): reading it as the ellipsoidal height a control point "
+                      "needs takes the geoid model: give --geoid EGM96 (h = H + N), or give ellipsoidal heights as h");
+}
+
+void check_frame_epochs(const geodesy::ControlSet& set, const ControlReadOptions& o, const std::string& source_where,
+                        const std::string& target_where) {
+  const bool every_point_dated =
+      !set.points.empty() && std::all_of(set.points.begin(), set.points.end(), [](const auto& p) { return p.epoch.has_value(); });
+  if (every_point_dated) return;
+  const std::string other_way = ", or an epoch for every point";
+  if (set.source_frame && !o.source_frame_overridden) {
+    geodesy::require_epoch_if_dynamic(*set.source_frame, source_where, ErrorKind::input, other_way);
+  }
+  if (set.target_frame && !o.target_frame_overridden) {
+    geodesy::require_epoch_if_dynamic(*set.target_frame, target_where, ErrorKind::input, other_way);
+  }
+}
+
+double RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const RoleFail& fail,
+                              geodesy::EcefPosition& position, Eigen::Matrix3d& cov_m2) const {
   Eigen::Matrix3d local_to_ecef = Eigen::Matrix3d::Identity();  // axes of the covariance -> ECEF
+  const geodesy::GeoidGrid* geoid = v.source ? options_.src_geoid : options_.dst_geoid;
+  double undulation_m = 0.0;
+  // h = H + N at the point's latitude and longitude, for orthometric input.
+  const auto to_ellipsoidal = [&](geodesy::GeodeticPosition& g) {
+    if (!v.orthometric) return;
+    if (!geoid) fail(RoleField::third, "orthometric height without a geoid model: give --geoid EGM96 (h = H + N)");
+    undulation_m = geoid->undulation_m(g.lat, g.lon);
+    if (!std::isfinite(undulation_m)) fail(RoleField::third, "the point lies outside the grid of " + geoid->model_name());
+    g.h.m += undulation_m;
+  };
   switch (v.kind) {
     case CoordinateKind::ecef: position = geodesy::EcefPosition(v.a, v.b, v.c); break;
     case CoordinateKind::geodetic: {
       if (std::fabs(v.a) > 90.0) fail(RoleField::first, "latitude not in [-90, 90] degrees");
       if (std::fabs(v.b) > 180.0) fail(RoleField::second, "longitude not in [-180, 180] degrees");
-      const geodesy::GeodeticPosition g{geodesy::Angle::degrees(v.a), geodesy::Angle::degrees(v.b),
-                                        geodesy::EllipsoidalHeight{v.c}};
+      geodesy::GeodeticPosition g{geodesy::Angle::degrees(v.a), geodesy::Angle::degrees(v.b),
+                                  geodesy::EllipsoidalHeight{v.c}};
+      to_ellipsoidal(g);
       position = geocentric_.ecef_from_geodetic(g);
       local_to_ecef = geodesy::enu_from_ecef_rotation(g.lat, g.lon).transpose();
       break;
@@ -62,7 +99,8 @@ void RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const 
       const auto inverse =
           grid->try_inverse(geodesy::ProjectedPosition{v.a, v.b, geodesy::EllipsoidalHeight{v.c}, grid->definition()}, &how);
       if (!inverse) fail(RoleField::first, "not a position on the declared grid: " + grid->explain(how));
-      const geodesy::GeodeticPosition g = *inverse;
+      geodesy::GeodeticPosition g = *inverse;
+      to_ellipsoidal(g);
       position = geocentric_.ecef_from_geodetic(g);
       local_to_ecef = geodesy::enu_from_ecef_rotation(g.lat, g.lon).transpose();
       break;
@@ -83,6 +121,7 @@ void RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, const 
     local.setZero();  // the other frame carries the uncertainty
   }
   cov_m2 = local_to_ecef * local * local_to_ecef.transpose();
+  return undulation_m;
 }
 
 void refuse_duplicate_ids(const geodesy::ControlSet& set,

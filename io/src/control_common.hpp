@@ -25,7 +25,8 @@ struct RoleValues {
   double a = 0.0, b = 0.0, c = 0.0;              // x,y,z | lat,lon,h | e,n,u
   std::optional<double> sigma_m;                 // isotropic
   std::optional<std::array<double, 6>> cov_m2;   // xx, xy, xz, yy, yz, zz in the coordinates' axes
-  bool source = true;                            // which frame (for its projection)
+  bool source = true;                            // which frame (for its projection and geoid)
+  bool orthometric = false;                      // geodetic, projected: c is H, read as h = H + N
 };
 
 // Which value a failure is about: the three coordinates, the sigma, the covariance.
@@ -36,9 +37,11 @@ class RoleConverter {
  public:
   explicit RoleConverter(const ControlReadOptions& options);
   // Position and ECEF covariance; `others_have_sigmas`: the set gives sigmas
-  // somewhere, so a frame without them carries no uncertainty.
-  void convert(const RoleValues& v, bool others_have_sigmas, const RoleFail& fail, geodesy::EcefPosition& position,
-               Eigen::Matrix3d& cov_m2) const;
+  // somewhere, so a frame without them carries no uncertainty. Returns the
+  // geoid undulation N added to an orthometric height (0 otherwise); a
+  // point outside the geoid's grid fails on the third value.
+  double convert(const RoleValues& v, bool others_have_sigmas, const RoleFail& fail, geodesy::EcefPosition& position,
+                 Eigen::Matrix3d& cov_m2) const;
 
  private:
   ControlReadOptions options_;
@@ -47,8 +50,21 @@ class RoleConverter {
   std::optional<geodesy::TransverseMercator> src_grid_, dst_grid_;
 };
 
-// The form of one frame's coordinates as the set records it.
-geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<geodesy::ProjectionDef>& projection);
+// The form of one frame's coordinates as the set records it; `height_column`
+// non-empty: its heights were orthometric, read on `geoid`.
+geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<geodesy::ProjectionDef>& projection,
+                                     const std::string& height_column = {}, const geodesy::GeoidGrid* geoid = nullptr);
+
+// The refusal of an orthometric height without its geoid, naming `where`
+// (the column or JSON key).
+[[noreturn]] void refuse_orthometric_without_geoid(const std::string& where);
+
+// Refuses a dynamic frame of `set` that names no coordinate epoch while a
+// point has none either (geodesy::require_epoch_if_dynamic), naming where
+// each frame was declared (empty: not declared in the file).
+// A frame the caller overrides (ControlReadOptions) is not checked.
+void check_frame_epochs(const geodesy::ControlSet& set, const ControlReadOptions& o, const std::string& source_where,
+                        const std::string& target_where);
 
 // Refuses a set in which an id occurs twice at the same epoch, naming the
 // first repeat in file order (`where_new`: file:line or JSON path) and the

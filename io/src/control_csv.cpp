@@ -35,6 +35,10 @@ std::optional<std::size_t> find_column(const std::vector<std::string>& header, c
   return std::nullopt;
 }
 
+[[noreturn]] void refuse_orthometric(const std::string& source, const std::string& column) {
+  detail::refuse_orthometric_without_geoid(source + ": column '" + column + "'");
+}
+
 // Columns of one role (src or dst): its coordinates and its uncertainty.
 struct RoleColumns {
   std::string role;
@@ -45,7 +49,7 @@ struct RoleColumns {
 };
 
 RoleColumns role_columns(const std::vector<std::string>& header, const std::string& source, const std::string& role,
-                         bool has_grid) {
+                         bool has_grid, bool has_geoid) {
   // Classify with only this role's coordinate columns visible, so that the
   // other role's columns do not read as a mix of kinds.
   std::vector<std::string> visible;
@@ -84,6 +88,7 @@ RoleColumns role_columns(const std::vector<std::string>& header, const std::stri
                                                                                 : "easting_" + role + "_m,northing_" + role + "_m") +
                     " but no h_" + role + "_m; a control point needs its ellipsoidal height");
   }
+  if (c.orthometric && !has_geoid) refuse_orthometric(source, visible[*c.third]);
   c.first = index[c.first];
   c.second = index[c.second];
   c.third = index[*c.third];
@@ -230,8 +235,8 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
       }
     }
   }
-  const RoleColumns src = role_columns(header, source_name, "src", o.src_projection.has_value());
-  const RoleColumns dst = role_columns(header, source_name, "dst", o.dst_projection.has_value());
+  const RoleColumns src = role_columns(header, source_name, "src", o.src_projection.has_value(), o.src_geoid != nullptr);
+  const RoleColumns dst = role_columns(header, source_name, "dst", o.dst_projection.has_value(), o.dst_geoid != nullptr);
   const auto epoch_col = find_column(header, "epoch");
   // Velocities: ECEF components per frame, with a required isotropic sigma.
   struct VelocityColumns {
@@ -314,6 +319,9 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   ControlSet set;
   set.source_name = source_name;
   // Frames may be declared in leading comments: "# source_frame = ITRF2014@2024.5".
+  // (Blank lines before the header are skipped, so a comment's own line is
+  // not known; the header's is.)
+  std::string source_frame_where, target_frame_where;
   for (std::size_t i = 0; i < reader.leading_comments().size(); ++i) {
     const std::string& c = reader.leading_comments()[i];
     for (const char* key : {"source_frame", "target_frame"}) {
@@ -321,13 +329,19 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
       if (at == std::string::npos) continue;
       const auto eq = c.find('=', at);
       if (eq == std::string::npos) continue;
-      auto frame = geodesy::Frame::parse(c.substr(eq + 1), source_name + ": comment '" + c + "'");
-      (std::string_view(key) == "source_frame" ? set.source_frame : set.target_frame) = std::move(frame);
+      const std::string where =
+          source_name + ": comment '" + c + "' (above the header on line " + std::to_string(reader.header_line()) + ")";
+      auto frame = geodesy::Frame::parse(c.substr(eq + 1), where);
+      const bool source = std::string_view(key) == "source_frame";
+      (source ? set.source_frame : set.target_frame) = std::move(frame);
+      (source ? source_frame_where : target_frame_where) = where;
     }
   }
   set.has_a_priori_sigmas = src.sigma || src.has_cov || dst.sigma || dst.has_cov;
-  set.source_input = detail::input_form(src.coords.kind, o.src_projection);
-  set.target_input = detail::input_form(dst.coords.kind, o.dst_projection);
+  set.source_input = detail::input_form(src.coords.kind, o.src_projection,
+                                        src.coords.orthometric ? header[*src.coords.third] : std::string(), o.src_geoid);
+  set.target_input = detail::input_form(dst.coords.kind, o.dst_projection,
+                                        dst.coords.orthometric ? header[*dst.coords.third] : std::string(), o.dst_geoid);
   set.ellipsoid = o.ellipsoid;
   set.origin = o.origin;
 
@@ -337,6 +351,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     detail::RoleValues v;
     v.kind = rc.coords.kind;
     v.source = rc.role == "src";
+    v.orthometric = rc.coords.orthometric;
     v.a = rows.number(r, rc.coords.first);
     v.b = rows.number(r, rc.coords.second);
     v.c = rows.number(r, *rc.coords.third);
@@ -355,7 +370,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
       rows.fail(r, col, f == detail::RoleField::covariance ? "covariance of " + rc.role + ": " + message : message);
     };
     as_read = Eigen::Vector3d(v.a, v.b, v.c);
-    converter.convert(v, set.has_a_priori_sigmas, fail, p, cov);
+    as_read.z() += converter.convert(v, set.has_a_priori_sigmas, fail, p, cov);
   };
 
   CsvRecord r;
@@ -401,6 +416,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   detail::refuse_duplicate_ids(
       set, [&](const ControlPoint& q) { return source_name + ":" + std::to_string(q.line); },
       [](const ControlPoint& q) { return "line " + std::to_string(q.line); });
+  detail::check_frame_epochs(set, o, source_frame_where, target_frame_where);
   return set;
 }
 

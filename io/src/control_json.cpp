@@ -32,8 +32,10 @@ double number_at(const json& obj, const std::string& key, const std::string& whe
   return d;
 }
 
-// One frame of one point: {"x_m","y_m","z_m"} | {"lat_deg","lon_deg","h_m"} | {"e_m","n_m","u_m"}.
-detail::RoleValues role_values(const json& point, const std::string& role, const std::string& where) {
+// One frame of one point: {"x_m","y_m","z_m"} | {"lat_deg","lon_deg","h_m"} | {"e_m","n_m","u_m"}, with
+// "H_m" (orthometric) in place of "h_m" when `geoid` reads it.
+detail::RoleValues role_values(const json& point, const std::string& role, const std::string& where,
+                               const geodesy::GeoidGrid* geoid) {
   const std::string frame = role == "src" ? "source" : "target";
   if (!point.contains(frame) || !point.at(frame).is_object()) fail(where + "." + frame, "missing; expected an object of coordinates");
   const json& c = point.at(frame);
@@ -50,17 +52,25 @@ detail::RoleValues role_values(const json& point, const std::string& role, const
     }
   }
   if (found < 0) fail(at, "no coordinates; expected x_m,y_m,z_m | lat_deg,lon_deg,h_m | e_m,n_m,u_m");
+  // Geodetic heights: h_m (ellipsoidal) or H_m (orthometric, h = H + N).
+  const bool geodetic = found == 1;
+  v.orthometric = geodetic && c.contains("H_m");
+  if (v.orthometric && c.contains("h_m")) {
+    fail(at + ".H_m", "an ellipsoidal (h_m) and an orthometric (H_m) height for one mark; give one");
+  }
+  if (v.orthometric && !geoid) detail::refuse_orthometric_without_geoid(at + ".H_m");
   for (const auto& [key, value] : c.items()) {
     const auto* row = kinds[found];
-    if (key != row[0] && key != row[1] && key != row[2]) {
+    if (key != row[0] && key != row[1] && key != row[2] && !(v.orthometric && key == "H_m")) {
       fail(at + "." + key, std::string("unknown key for these coordinates; expected ") + row[0] + ", " + row[1] + ", " + row[2] +
-                               " (heights ellipsoidal, in metres)");
+                               (geodetic ? " (h_m ellipsoidal, or H_m orthometric with --geoid; metres)"
+                                         : " (heights ellipsoidal, in metres)"));
     }
   }
   v.kind = kind_of[found];
   v.a = number_at(c, kinds[found][0], at);
   v.b = number_at(c, kinds[found][1], at);
-  v.c = number_at(c, kinds[found][2], at);
+  v.c = number_at(c, v.orthometric ? "H_m" : kinds[found][2], at);
   const std::string sigma_key = "sigma_" + role + "_m", cov_key = "cov_" + role + "_m2";
   if (point.contains(sigma_key)) v.sigma_m = number_at(point, sigma_key, where);
   if (point.contains(cov_key)) {
@@ -106,11 +116,14 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
   }
   geodesy::ControlSet set;
   set.source_name = source_name;
+  std::string source_frame_where, target_frame_where;
   for (const char* key : {"source_frame", "target_frame"}) {
     if (!doc.contains(key)) continue;
     if (!doc.at(key).is_string()) fail(source_name + ": " + key, "expected a string such as ITRF2014@2024.5");
     auto f = geodesy::Frame::parse(doc.at(key).get<std::string>(), source_name + ": " + key);
-    (std::string_view(key) == "source_frame" ? set.source_frame : set.target_frame) = std::move(f);
+    const bool source = std::string_view(key) == "source_frame";
+    (source ? set.source_frame : set.target_frame) = std::move(f);
+    (source ? source_frame_where : target_frame_where) = source_name + ": " + key;
   }
   if (!doc.contains("points") || !doc.at("points").is_array()) fail(source_name + ": points", "missing; expected an array");
   const json& points = doc.at("points");
@@ -128,6 +141,10 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
   // recorded as ECEF (as_read then holds the ECEF positions).
   std::optional<CoordinateKind> src_kind, dst_kind;
   bool mixed_src = false, mixed_dst = false;
+  // Each frame's height type, from its first geodetic point: one frame's
+  // heights are all ellipsoidal or all orthometric.
+  std::optional<bool> src_orthometric, dst_orthometric;
+  std::string src_height_where, dst_height_where;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const std::string where = source_name + ": points[" + std::to_string(i) + "]";
     const json& jp = points[i];
@@ -145,7 +162,20 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     p.id = jp.at("id").get<std::string>();
     p.line = i;
     for (const char* role : {"src", "dst"}) {
-      const detail::RoleValues v = role_values(jp, role, where);
+      const bool src_role = std::string(role) == "src";
+      const detail::RoleValues v = role_values(jp, role, where, src_role ? o.src_geoid : o.dst_geoid);
+      if (v.kind == CoordinateKind::geodetic) {
+        auto& ortho = src_role ? src_orthometric : dst_orthometric;
+        auto& first = src_role ? src_height_where : dst_height_where;
+        const std::string here = where + "." + (src_role ? "source" : "target") + (v.orthometric ? ".H_m" : ".h_m");
+        if (!ortho) {
+          ortho = v.orthometric;
+          first = here.substr(source_name.size() + 2);  // the path alone, without "c.json: "
+        } else if (*ortho != v.orthometric) {
+          fail(here, std::string(v.orthometric ? "an orthometric" : "an ellipsoidal") + " height, but " + first + " is " +
+                         (*ortho ? "orthometric" : "ellipsoidal") + "; one frame's heights are of one type");
+        }
+      }
       const std::string frame = std::string(role) == "src" ? "source" : "target";
       const auto on_fail = [&](detail::RoleField f, const std::string& message) {
         const char* field = f == detail::RoleField::sigma ? (std::string(role) == "src" ? "sigma_src_m" : "sigma_dst_m")
@@ -157,11 +187,12 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
       auto& kind = src ? src_kind : dst_kind;
       if (!kind) kind = v.kind;
       (src ? mixed_src : mixed_dst) |= *kind != v.kind;
-      (src ? p.source_as_read : p.target_as_read) = Eigen::Vector3d(v.a, v.b, v.c);
+      Eigen::Vector3d& as_read = src ? p.source_as_read : p.target_as_read;
+      as_read = Eigen::Vector3d(v.a, v.b, v.c);
       if (src) {
-        converter.convert(v, set.has_a_priori_sigmas, on_fail, p.source, p.source_cov_m2);
+        as_read.z() += converter.convert(v, set.has_a_priori_sigmas, on_fail, p.source, p.source_cov_m2);
       } else {
-        converter.convert(v, set.has_a_priori_sigmas, on_fail, p.target, p.target_cov_m2);
+        as_read.z() += converter.convert(v, set.has_a_priori_sigmas, on_fail, p.target, p.target_cov_m2);
       }
     }
     if (jp.contains("epoch")) {
@@ -176,12 +207,15 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
   detail::refuse_duplicate_ids(
       set, [&](const geodesy::ControlPoint& q) { return source_name + ": points[" + std::to_string(q.line) + "]"; },
       [&](const geodesy::ControlPoint& q) { return "points[" + std::to_string(q.line) + "]"; });
-  set.source_input = detail::input_form(mixed_src || !src_kind ? CoordinateKind::ecef : *src_kind, std::nullopt);
-  set.target_input = detail::input_form(mixed_dst || !dst_kind ? CoordinateKind::ecef : *dst_kind, std::nullopt);
+  set.source_input = detail::input_form(mixed_src || !src_kind ? CoordinateKind::ecef : *src_kind, std::nullopt,
+                                        src_orthometric.value_or(false) ? "H_m" : "", o.src_geoid);
+  set.target_input = detail::input_form(mixed_dst || !dst_kind ? CoordinateKind::ecef : *dst_kind, std::nullopt,
+                                        dst_orthometric.value_or(false) ? "H_m" : "", o.dst_geoid);
   for (auto& p : set.points) {
     if (mixed_src) p.source_as_read = p.source.m;
     if (mixed_dst) p.target_as_read = p.target.m;
   }
+  detail::check_frame_epochs(set, o, source_frame_where, target_frame_where);
   return set;
 }
 

@@ -548,10 +548,8 @@ HypothesisResult height_type(const Engine& e, const Expectation& x, double rms_b
   double mean_n = 0.0;
   for (std::size_t i : e.used) {
     const auto& p = e.set.points[i];
-    const auto geo = e.geocentric.geodetic_from_ecef(p.target);
-    const double n = e.options.geoid->undulation_m(geo.lat, geo.lon);
+    const auto [n, up] = geodesy::geoid_along_up(*e.options.geoid, e.geocentric, p.target);
     if (!std::isfinite(n)) return not_applicable(Hypothesis::height_type, rms_base, "a point lies outside the geoid grid");
-    const Eigen::Vector3d up = geodesy::enu_from_ecef_rotation(geo.lat, geo.lon).row(2).transpose();
     up_n.push_back(up * n);
     g.push_back(up);
     mean_n += n / static_cast<double>(e.used.size());

@@ -893,6 +893,58 @@ TEST_F(ApplyOutputs, Issue12Point11_ApplyJsonOntoAFullStandardOutputExitsNonZero
             std::string::npos)
       << r.err;
   expect_pair(out / "t.csv");  // as the message says
+
+// issue 12 point 5: a tile in a dynamic frame without its coordinate epoch
+// is refused, whether the sidecar or --from-frame names the frame, before
+// anything is written; the baseline moved it with a static transform.
+TEST_F(ApplyCli, Point5_ATileInADynamicFrameWithoutItsEpochIsRefusedNamingTheSidecarOrTheFlag) {
+  write("T.json", R"({"model": "translation3", "source_frame": "ITRF2014", "target_frame": "ETRF2000",
+  "parameters": {"tx_m": 0.05, "ty_m": 0.05, "tz_m": -0.07}})");
+  const fs::path in = tile("in/tile.las", [](std::string& s) { replace(s, "\"ITRF2014@2024.5\"", "\"ITRF2014\""); });
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + in.string() + " --transform " + path("T.json").string() + " --out-dir " + out.string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("error[E_EPOCH_MISSING]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(in.string() + ": sidecar " + in.string() + ".geoanchor.json: frame: frame ITRF2014 is dynamic"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("give ITRF2014@YYYY.Y"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "tile.las"));  // (the batch's summary records the refusal)
+  EXPECT_FALSE(fs::exists(out / "tile.las.geoanchor.json"));
+
+  fs::create_directories(path("bare"));
+  fs::copy_file(kTile, path("bare/tile.las"));
+  const std::string flags = " --from-origin 47.464722,8.549167,480 --ellipsoid GRS80 --to ecef --out-dir " + out.string();
+  const RunResult f = run("apply " + path("bare/tile.las").string() + " --from-frame ITRF2014" + flags);
+  EXPECT_EQ(f.exit_code, 2) << f.err;
+  EXPECT_NE(f.err.find("--from-frame: frame ITRF2014 is dynamic"), std::string::npos) << f.err;
+  EXPECT_NE(f.err.find("give ITRF2014@YYYY.Y"), std::string::npos) << f.err;
+  EXPECT_FALSE(fs::exists(out / "tile.las"));  // (the batch's summary records the refusal)
+  EXPECT_FALSE(fs::exists(out / "tile.las.geoanchor.json"));
+  // A plate-fixed frame needs no epoch; a dynamic one with its epoch is accepted.
+  const RunResult etrf = run("apply " + path("bare/tile.las").string() + " --from-frame ETRF2000" + flags);
+  EXPECT_EQ(etrf.exit_code, 0) << etrf.err;
+  const RunResult dated = run("apply " + path("bare/tile.las").string() + " --from-frame ITRF2014@2024.5 --overwrite" + flags);
+  EXPECT_EQ(dated.exit_code, 0) << dated.err;
+
+  // A LAS WKT naming the realization by its EPSG datum name, without an epoch.
+  const std::string wkt =
+      "GEODCRS[\"ITRF2014\",DATUM[\"International Terrestrial Reference Frame 2014\",ELLIPSOID[\"GRS 1980\",6378137,"
+      "298.257222101]],CS[Cartesian,3],AXIS[\"(X)\",geocentricX,LENGTHUNIT[\"metre\",1]],AXIS[\"(Y)\",geocentricY,"
+      "LENGTHUNIT[\"metre\",1]],AXIS[\"(Z)\",geocentricZ,LENGTHUNIT[\"metre\",1]]]";
+  testing::LasBuild b;
+  b.offset = {4277000.0, 639000.0, 4672000.0};
+  b.xyz = {{686016, 405550, 438669}, {687016, 406550, 439669}};
+  b.vlrs.push_back({"LASF_Projection", 2112, "", std::vector<std::uint8_t>(wkt.begin(), wkt.end())});
+  fs::create_directories(path("wkt"));
+  testing::write_bytes(path("wkt/itrf.las"), testing::build_las(b));
+  const fs::path out2 = out_dir("out2");
+  const RunResult w = run("apply " + path("wkt/itrf.las").string() + " --to geodetic --out-dir " + out2.string());
+  EXPECT_EQ(w.exit_code, 3) << w.err;
+  EXPECT_NE(w.err.find("itrf.las: LAS WKT: frame ITRF2014 is dynamic"), std::string::npos) << w.err;
+  EXPECT_NE(w.err.find("give ITRF2014@YYYY.Y"), std::string::npos) << w.err;
+  EXPECT_FALSE(fs::exists(out2 / "itrf.las"));
+  EXPECT_FALSE(fs::exists(out2 / "itrf.las.geoanchor.json"));
 }
 
 }  // namespace

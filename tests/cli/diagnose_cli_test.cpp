@@ -360,5 +360,49 @@ TEST_F(DiagnoseCli, TextReportAndRefusals) {
   EXPECT_NE(no_epoch.err.find("epoch"), std::string::npos) << no_epoch.err;
 }
 
+// issue 12 point 2: orthometric heights named as such (H_dst_m) are read
+// through --geoid, and then no mistake is left; without it they are refused.
+TEST_F(DiagnoseCli, Point2_OrthometricHeightsNamedAsSuchAreReadThroughTheGeoidOrRefused) {
+  const ProjPipeline minus_n("+proj=vgridshift +grids=egm96_15.gtx +multiplier=-1");
+  SetText s;
+  s.header_comments = kSameFrame;
+  s.target_columns = "lat_dst_deg,lon_dst_deg,H_dst_m";
+  s.target_decimals = 10;
+  s.target = [&](const Eigen::Vector3d& x) {
+    double lat = 0, lon = 0, h = 0;
+    geodetic(x, lat, lon, h);
+    return std::array<double, 3>{lat, lon, minus_n.forward(Eigen::Vector3d(proj_radians(lon), proj_radians(lat), h)).z()};
+  };
+  const auto control = write("control.csv", control_csv(s));
+  const RunResult refused = run("diagnose '" + control.string() + "'");
+  EXPECT_EQ(refused.exit_code, 3) << refused.err;
+  EXPECT_NE(refused.err.find("control.csv: column 'H_dst_m': orthometric height"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("give --geoid EGM96"), std::string::npos) << refused.err;
+  const auto j = diagnose(s, "--geoid EGM96");
+  expect_schema(j);
+  EXPECT_FALSE(j["problem_found"].get<bool>()) << j.dump(2);
+}
+
+// issue 12 point 5: a dynamic frame without its epoch, in the set or on the
+// command line, is refused naming where it was given.
+TEST_F(DiagnoseCli, Point5_ADynamicFrameWithoutItsEpochIsRefusedNamingTheCommentOrTheFlag) {
+  SetText s;
+  s.header_comments = "# source_frame = ITRF2014\n# target_frame = ITRF2014\n";
+  const auto control = write("control.csv", control_csv(s));
+  const RunResult file = run("diagnose '" + control.string() + "'");
+  EXPECT_EQ(file.exit_code, 3) << file.err;
+  EXPECT_NE(file.err.find("control.csv: comment '# source_frame = ITRF2014'"), std::string::npos) << file.err;
+  EXPECT_NE(file.err.find("give ITRF2014@YYYY.Y"), std::string::npos) << file.err;
+  s.header_comments = kSameFrame;
+  const auto dated = write("dated.csv", control_csv(s));
+  const RunResult flag = run("diagnose '" + dated.string() + "' --target-frame ITRF2020");
+  EXPECT_EQ(flag.exit_code, 2) << flag.err;
+  EXPECT_NE(flag.err.find("--target-frame: frame ITRF2020 is dynamic"), std::string::npos) << flag.err;
+  // The flags with their epochs replace the file's frames.
+  const RunResult given =
+      run("diagnose '" + control.string() + "' --source-frame ITRF2014@2020.0 --target-frame ITRF2014@2020.0");
+  EXPECT_EQ(given.exit_code, 0) << given.err;
+}
+
 }  // namespace
 }  // namespace geoanchor::testing

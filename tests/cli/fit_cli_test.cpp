@@ -706,5 +706,109 @@ TEST_F(FitCli, Point14_CompareIncludesMolodenskyBadekasAndSaysItIsHelmert7AboutA
   EXPECT_EQ(files(), std::vector<std::string>{});
 }
 
+const std::string kOrthometricControl = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control_orthometric.csv";
+
+// `text` with the header's `from` renamed `to` (the first match after "id,").
+std::string rename_column(std::string text, const std::string& from, const std::string& to) {
+  const auto header_at = text.find("\nid,");
+  const auto at = text.find(from, header_at);
+  if (header_at == std::string::npos || at == std::string::npos) return text;
+  return text.replace(at, from.size(), to);
+}
+
+// issue 12 point 2
+TEST_F(FitCli, Point2_AnOrthometricHeightColumnWithoutAGeoidIsRefusedNamingItAndNothingIsWritten) {
+  write("c.csv", rename_column(slurp(kControl), "h_dst_m", "H_dst_m"));
+  const RunResult r = run("fit " + path("c.csv").string() + " --model helmert7 --convention position_vector -o " +
+                          path("T.json").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("error[E_HEIGHT_TYPE]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("c.csv: column 'H_dst_m': orthometric height"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("give --geoid EGM96"), std::string::npos) << r.err;
+  EXPECT_EQ(leftovers({"c.csv"}), std::vector<std::string>{});
+}
+
+// issue 12 point 2: the planted orthometric heights, named as such and read
+// through EGM96, give the fit of the ellipsoidal set they were made from.
+// The fixture's H = h − N came from PROJ's vgridshift on egm96_15.gtx, which
+// interpolates bilinearly as `--geoid EGM96` does on the same grid (they
+// agree to 1e-6 m, tests/io/control_set_test.cpp); H is printed to 0.1 mm,
+// so each target height differs from the original by at most 0.05 mm. In a
+// weighted least-squares fit a perturbation δ of the observations moves
+// parameter i by at most σ_i · sqrt(Σ δ_k² / σ_k²) (Cauchy–Schwarz in the
+// metric of the weights): with 36 marks, δ ≤ 0.051 mm and σ ≥ 4 mm that is
+// 0.077 σ_i.
+constexpr double kGeoidReadTol_sigmas = 0.1;
+TEST_F(FitCli, Point2_OrthometricTargetHeightsReadThroughEgm96FitAsTheEllipsoidalSetTheyWereMadeFrom) {
+  write("ortho.csv", rename_column(slurp(kOrthometricControl), "h_dst_m", "H_dst_m"));
+  const std::string args = " --model helmert7 --convention position_vector -o ";
+  const RunResult h = run("fit " + kControl + args + path("T_h.json").string());
+  ASSERT_EQ(h.exit_code, 0) << h.err;
+  const RunResult o = run("fit " + path("ortho.csv").string() + " --geoid EGM96" + args + path("T_H.json").string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("heights: H_dst_m orthometric, read as h = H + N on EGM96"), std::string::npos) << o.out;
+  EXPECT_EQ(o.err.find("vertical offset"), std::string::npos) << o.err;  // no height-type warning once read right
+  const auto dh = nlohmann::json::parse(slurp(path("T_h.json"))), dH = nlohmann::json::parse(slurp(path("T_H.json")));
+  EXPECT_NE(dH.at("generator").get<std::string>().find("--geoid EGM96"), std::string::npos);
+  for (const auto& [name, truth] : kFixtureTruthPv) {
+    const double sigma = dH.at("sigmas").at(name).get<double>();
+    const double estimate = dH.at("parameters").at(name).get<double>();
+    // Against the fixture's generating Helmert (independent of our code), as the ellipsoidal fit is checked.
+    EXPECT_LT(std::abs(estimate - truth), kTruthSigmas * sigma) << name << ": " << estimate << " vs " << truth;
+    EXPECT_LE(std::abs(estimate - dh.at("parameters").at(name).get<double>()), kGeoidReadTol_sigmas * sigma) << name;
+  }
+}
+
+// issue 12 point 2: orthometric heights under an h name, the classic
+// mistake: the fit absorbs −N into its vertical offset, and is warned.
+TEST_F(FitCli, Point2_AVerticalOffsetOfTheGeoidUndulationIsWarnedNamingIt) {
+  const RunResult r = run("fit " + kOrthometricControl + " --model helmert7 --convention position_vector "
+                          "--accept-failed-global-test -o " + path("T.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string expected = "undulation N = 47.3";  // ≈ 47.3 m here, per the fixture's header
+  EXPECT_NE(r.err.find("geoanchor: warning: the transform's vertical offset -47."), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("of the EGM96 "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(expected), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("one frame's heights look orthometric (H = h − N), by its sign the target's"), std::string::npos)
+      << r.err;
+  bool recorded = false;
+  const auto doc = nlohmann::json::parse(slurp(path("T.json")));
+  for (const auto& w : doc.at("statistics").at("warnings")) {
+    recorded = recorded || w.get<std::string>().find(expected) != std::string::npos;
+  }
+  EXPECT_TRUE(recorded);
+  // The honest set is not warned.
+  const RunResult ok = run("fit " + kControl + " --model helmert7 --convention position_vector");
+  EXPECT_EQ(ok.err.find("vertical offset"), std::string::npos) << ok.err;
+}
+
+// issue 12 point 5
+TEST_F(FitCli, Point5_ADynamicFrameWithoutItsEpochInTheControlSetOrAFlagIsRefused) {
+  std::string csv = slurp(kControl);
+  const auto at = csv.find("# source_frame = ITRF2014@2024.5");
+  ASSERT_NE(at, std::string::npos);
+  csv.replace(at, std::string("# source_frame = ITRF2014@2024.5").size(), "# source_frame = ITRF2014");
+  write("c.csv", csv);
+  const std::string args = " --model helmert7 --convention position_vector -o " + path("T.json").string();
+  const RunResult r = run("fit " + path("c.csv").string() + args);
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("error[E_EPOCH_MISSING]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("c.csv: comment '# source_frame = ITRF2014' (above the header on line"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("frame ITRF2014 is dynamic"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("give ITRF2014@YYYY.Y"), std::string::npos) << r.err;
+  EXPECT_EQ(leftovers({"c.csv"}), std::vector<std::string>{});
+  // The flag that names the epoch replaces the file's frame.
+  const RunResult given = run("fit " + path("c.csv").string() + " --source-frame ITRF2014@2024.5 --model helmert7 "
+                              "--convention position_vector");
+  EXPECT_EQ(given.exit_code, 0) << given.err;
+  const RunResult f = run("fit " + kControl + " --target-frame 'WGS84(G2139)'" + args);
+  EXPECT_EQ(f.exit_code, 2) << f.err;
+  EXPECT_NE(f.err.find("--target-frame: frame WGS84(G2139) is dynamic"), std::string::npos) << f.err;
+  EXPECT_NE(f.err.find("give WGS84(G2139)@YYYY.Y"), std::string::npos) << f.err;
+  EXPECT_EQ(leftovers({"c.csv"}), std::vector<std::string>{});
+  const RunResult dated = run("fit " + kControl + " --target-frame 'WGS84(G2139)@2024.5'" + args);
+  EXPECT_EQ(dated.exit_code, 0) << dated.err;
+}
+
 }  // namespace
 }  // namespace geoanchor

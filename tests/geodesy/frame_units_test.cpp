@@ -2,12 +2,19 @@
 
 #include <gtest/gtest.h>
 
+#include <proj.h>
+
 #include <chrono>
 #include <cmath>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "geoanchor/geodesy/ellipsoid.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/units.hpp"
 
 namespace geoanchor::geodesy {
@@ -109,3 +116,96 @@ TEST(GpsTime, DecimalYearAgreesWithTheCalendar) {
 }  // namespace
 }  // namespace geoanchor::geodesy
 
+
+namespace geoanchor::geodesy {
+namespace {
+
+// The EPSG spelling of a frame as Frame::name() prints it, for PROJ's
+// name and alias search: "WGS84(G2139)" is "WGS 84 (G2139)",
+// "NAD83(CSRSv7)" is "NAD83(CSRS)v7"; the other catalog names are EPSG
+// aliases as they stand ("ITRF2014", "ETRF2000", "NAD83(2011)", "GDA94").
+std::string epsg_spelling(const std::string& name) {
+  if (name.rfind("WGS84", 0) == 0) return "WGS 84" + (name.size() > 5 ? " " + name.substr(5) : std::string());
+  if (name.rfind("NAD83(CSRSv", 0) == 0) return "NAD83(CSRS)v" + name.substr(11, name.size() - 12);
+  return name;
+}
+
+// issue 12 point 5: which frames are dynamic is the EPSG dataset's answer,
+// read from PROJ 9.1.1's proj.db (a datum is a DynamicGeodeticReferenceFrame
+// exactly when geodetic_datum.frame_reference_epoch is set), for every frame
+// geoanchor's catalog knows and the other families Frame::parse names.
+TEST(Frame, Point5_IsDynamicAgreesWithProjDbForEveryCatalogFrame) {
+  std::vector<std::string> names = catalog_frame_names();
+  for (const char* other : {"IGS97", "IGS00", "IGS05", "IGS08", "IGS14", "IGb00", "IGb08", "IGb14", "ATRF2014",
+                            "WGS84(Transit)", "WGS84", "NAD83(PA11)", "NAD83(MA11)"}) {
+    names.emplace_back(other);
+  }
+  // Newer than PROJ 9.1.1's EPSG v10.076, so not in its proj.db: ETRF2020
+  // (EUREF TN1, 2023: plate-fixed like every ETRF), NAD83(CSRS) v8 (NRCan
+  // 2022: plate-fixed like v6, v7) and WGS 84 (G2296) (NGA 2024: aligned
+  // with ITRF2020, dynamic like every WGS 84 realization; EPSG CRS 10604
+  // has a frame epoch in later datasets).
+  const std::map<std::string, bool> newer = {{"ETRF2020", false}, {"NAD83(CSRSv8)", false}, {"WGS84(G2296)", true}};
+  PJ_CONTEXT* ctx = proj_context_create();
+  proj_log_level(ctx, PJ_LOG_NONE);
+  const PJ_TYPE types[] = {PJ_TYPE_GEODETIC_REFERENCE_FRAME, PJ_TYPE_DYNAMIC_GEODETIC_REFERENCE_FRAME,
+                           PJ_TYPE_DATUM_ENSEMBLE};
+  int from_proj_db = 0, dynamic_count = 0;
+  std::set<std::string> missing;
+  for (const auto& name : names) {
+    const std::string epsg = epsg_spelling(name);
+    PJ_OBJ_LIST* found = proj_create_from_name(ctx, "EPSG", epsg.c_str(), types, 3, 0, 0, nullptr);
+    const int count = found ? proj_list_get_count(found) : 0;
+    bool dynamic = false;
+    if (count == 0) {
+      missing.insert(name);
+      ASSERT_EQ(newer.count(name), 1u) << name << " (" << epsg << ") is not in proj.db and not listed as newer";
+      dynamic = newer.at(name);
+    } else {
+      ASSERT_EQ(count, 1) << name << " (" << epsg << "): several EPSG datums";
+      PJ* datum = proj_list_get(ctx, found, 0);
+      dynamic = proj_get_type(datum) == PJ_TYPE_DYNAMIC_GEODETIC_REFERENCE_FRAME;
+      // The same fact as the frame reference epoch proj.db stores (−1: none).
+      EXPECT_EQ(dynamic, proj_dynamic_datum_get_frame_reference_epoch(ctx, datum) > 0.0) << name;
+      proj_destroy(datum);
+      ++from_proj_db;
+    }
+    if (found) proj_list_destroy(found);
+    EXPECT_EQ(is_dynamic(Frame::parse(name, "test")), dynamic) << name << " (" << epsg << ")";
+    dynamic_count += dynamic ? 1 : 0;
+  }
+  proj_context_destroy(ctx);
+  // Every listed newer frame really is missing (else proj.db would decide it).
+  for (const auto& [name, dynamic] : newer) EXPECT_EQ(missing.count(name), 1u) << name << " is in proj.db now";
+  // The check saw the whole catalog: ITRF88…ITRF2020, ETRF89…ETRF2020,
+  // NAD83, GDA and WGS 84 frames, both answers many times.
+  EXPECT_EQ(from_proj_db, static_cast<int>(names.size() - newer.size()));
+  EXPECT_GE(from_proj_db, 45);
+  EXPECT_GE(dynamic_count, 20);
+  EXPECT_GE(static_cast<int>(names.size()) - dynamic_count, 20);
+  RecordProperty("frames_checked_against_proj_db", from_proj_db);
+}
+
+// issue 12 point 5: the refusal names where the frame was read, the frame,
+// and the form that would be accepted.
+TEST(Frame, Point5_DynamicFrameWithoutEpochIsRefusedNamingWhereAndTheForm) {
+  try {
+    require_epoch_if_dynamic(Frame::parse("ITRF2014", "c.csv"), "c.csv: comment 'source_frame = ITRF2014'");
+    FAIL() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::input);
+    EXPECT_EQ(e.code(), "E_EPOCH_MISSING");
+    EXPECT_NE(std::string(e.what()).find("c.csv: comment 'source_frame = ITRF2014': frame ITRF2014 is dynamic"),
+              std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("give ITRF2014@YYYY.Y"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(require_epoch_if_dynamic(Frame::parse("WGS84(G2139)", "x"), "--from-frame", ErrorKind::usage), Error);
+  // With the epoch, or a frame whose coordinates do not move, nothing to say.
+  EXPECT_NO_THROW(require_epoch_if_dynamic(Frame::parse("ITRF2014@2024.5", "x"), "x"));
+  for (const char* fixed : {"ETRF2000", "GDA2020", "GDA94", "NAD83(2011)", "WGS84", "LOCAL1998"}) {
+    EXPECT_NO_THROW(require_epoch_if_dynamic(Frame::parse(fixed, "x"), "x")) << fixed;
+  }
+}
+
+}  // namespace
+}  // namespace geoanchor::geodesy

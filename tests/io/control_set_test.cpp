@@ -197,5 +197,166 @@ TEST(ControlSet, Point10_JsonKeysAreReadOrRefusedWithTheirPath) {
             std::string::npos);
 }
 
+// `s` with the first `from` replaced by `to`.
+void replace_first(std::string& s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  ASSERT_NE(at, std::string::npos) << from;
+  s.replace(at, from.size(), to);
+}
+
+// The error a reader throws for `text`, with `o`: its code and message.
+std::pair<std::string, std::string> read_error(const std::string& text, const std::string& name, const ControlReadOptions& o) {
+  std::istringstream in(text);
+  try {
+    if (name.find(".json") != std::string::npos) {
+      read_control_json(in, name, o);
+    } else {
+      read_control_csv(in, name, o);
+    }
+  } catch (const Error& e) {
+    return {e.code(), e.what()};
+  }
+  return {"accepted", ""};
+}
+
+// Marks near LSZH (N ≈ 47.3 m) with orthometric heights in one or both
+// frames: H_src_m/H_dst_m, one of them on a UTM 32N grid.
+const char* kOrthometricCsv =
+    "id,lat_src_deg,lon_src_deg,H_src_m,easting_dst_m,northing_dst_m,H_dst_m,sigma_src_m,sigma_dst_m\n"
+    "P1,47.4834644617,8.5283688582,443.8311,464998.123,5258862.456,443.8300,0.003,0.004\n"
+    "P2,-33.86,151.2,40.0,465312.5,5257321.25,432.25,0.003,0.004\n";
+
+// issue 12 point 2: an orthometric height column is never read as an
+// ellipsoidal one: without a geoid it is refused, naming the column (CSV)
+// or the key's path (JSON).
+TEST(ControlSet, Point2_OrthometricHeightsWithoutAGeoidAreRefusedNamingTheColumn) {
+  ControlReadOptions o;
+  o.dst_projection = geodesy::utm_projection(geodesy::Ellipsoid::wgs84(), geodesy::UtmZone{32, geodesy::Hemisphere::north});
+  const auto [code, message] = read_error(kOrthometricCsv, "c.csv", o);
+  EXPECT_EQ(code, "E_HEIGHT_TYPE");
+  EXPECT_NE(message.find("c.csv: column 'H_src_m': orthometric height"), std::string::npos) << message;
+  EXPECT_NE(message.find("give --geoid EGM96 (h = H + N)"), std::string::npos) << message;
+  // A geoid for the source only: the projected target's H_dst_m is refused.
+  o.src_geoid = &geodesy::GeoidGrid::egm96();
+  const auto [code_dst, message_dst] = read_error(kOrthometricCsv, "c.csv", o);
+  EXPECT_EQ(code_dst, "E_HEIGHT_TYPE");
+  EXPECT_NE(message_dst.find("c.csv: column 'H_dst_m': orthometric height"), std::string::npos) << message_dst;
+
+  std::string json = kJson;
+  replace_first(json, "\"h_m\": 480.1", "\"H_m\": 432.8");
+  const auto [jcode, jmessage] = read_error(json, "c.json", {});
+  EXPECT_EQ(jcode, "E_HEIGHT_TYPE");
+  EXPECT_NE(jmessage.find("c.json: points[0].source.H_m: orthometric height"), std::string::npos) << jmessage;
+  EXPECT_NE(jmessage.find("give --geoid EGM96"), std::string::npos) << jmessage;
+  // With a geoid: both heights for one mark, or both types in one frame, are refused.
+  ControlReadOptions g;
+  g.src_geoid = g.dst_geoid = &geodesy::GeoidGrid::egm96();
+  std::string both = kJson;
+  replace_first(both, "\"h_m\": 480.1", "\"h_m\": 480.1, \"H_m\": 432.8");
+  EXPECT_NE(read_error(both, "c.json", g).second.find("points[0].source.H_m: an ellipsoidal (h_m) and an orthometric (H_m)"),
+            std::string::npos)
+      << read_error(both, "c.json", g).second;
+  EXPECT_NE(read_error(json, "c.json", g).second.find("points[1].source.h_m: an ellipsoidal height, but points[0].source.H_m is "
+                                                     "orthometric"),
+            std::string::npos)
+      << read_error(json, "c.json", g).second;
+}
+
+// issue 12 point 2: with the geoid, h = H + N as PROJ's vgridshift on the
+// same egm96_15.gtx gives it, for geodetic and projected columns and for
+// JSON; the set records the height type, the column and the model.
+TEST(ControlSet, Point2_OrthometricHeightsAreReadThroughTheGeoidAsProjsVgridshift) {
+  constexpr double kVsProjTol_m = 1e-6;  // both interpolate the same float32 grid bilinearly in float64
+  // vgridshift: z_out = z_in + multiplier × N, so +1 turns H into h.
+  const testing::ProjPipeline geodetic(
+      "+proj=pipeline +step +proj=vgridshift +grids=egm96_15.gtx +multiplier=1 +step +proj=cart +ellps=WGS84");
+  const testing::ProjPipeline projected(
+      "+proj=pipeline +step +inv +proj=utm +zone=32 +ellps=WGS84 +step +proj=vgridshift +grids=egm96_15.gtx "
+      "+multiplier=1 +step +proj=cart +ellps=WGS84");
+  const testing::ProjPipeline undulation("+proj=vgridshift +grids=egm96_15.gtx +multiplier=1");
+  ControlReadOptions o;
+  o.dst_projection = geodesy::utm_projection(geodesy::Ellipsoid::wgs84(), geodesy::UtmZone{32, geodesy::Hemisphere::north});
+  o.src_geoid = o.dst_geoid = &geodesy::GeoidGrid::egm96();
+  std::istringstream in(kOrthometricCsv);
+  const auto set = read_control_csv(in, "c.csv", o);
+  ASSERT_EQ(set.points.size(), 2u);
+  const double src[2][3] = {{47.4834644617, 8.5283688582, 443.8311}, {-33.86, 151.2, 40.0}};
+  const double dst[2][3] = {{464998.123, 5258862.456, 443.8300}, {465312.5, 5257321.25, 432.25}};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const Eigen::Vector3d s(testing::proj_radians(src[i][1]), testing::proj_radians(src[i][0]), src[i][2]);
+    EXPECT_LT((set.points[i].source.m - geodetic.forward(s)).norm(), kVsProjTol_m) << i;
+    EXPECT_LT((set.points[i].target.m - projected.forward(Eigen::Vector3d(dst[i][0], dst[i][1], dst[i][2]))).norm(),
+              kVsProjTol_m)
+        << i;
+    // As read: the ellipsoidal height the reader derived (h = H + N).
+    EXPECT_NEAR(set.points[i].source_as_read.z(), undulation.forward(s).z(), kVsProjTol_m) << i;
+  }
+  EXPECT_GT(set.points[0].source_as_read.z() - src[0][2], 47.0);  // N ≈ 47.3 m at LSZH
+  EXPECT_EQ(set.source_input.height_type, geodesy::HeightKind::orthometric);
+  EXPECT_EQ(set.source_input.height_column, "H_src_m");
+  EXPECT_EQ(set.target_input.height_column, "H_dst_m");
+  EXPECT_EQ(set.target_input.geoid_model, geodesy::GeoidGrid::egm96().model_name());
+
+  std::string json = kJson;
+  replace_first(json, "\"h_m\": 480.1", "\"H_m\": 443.8311");
+  replace_first(json, "\"lat_deg\": 47.46", "\"lat_deg\": 47.4834644617");
+  replace_first(json, "\"lon_deg\": 8.55", "\"lon_deg\": 8.5283688582");
+  replace_first(json, "\"h_m\": 481.2", "\"H_m\": 433.9");
+  std::istringstream jin(json);
+  const auto j = read_control_json(jin, "c.json", o);
+  EXPECT_LE((j.points[0].source.m - set.points[0].source.m).norm(), kSameValue_m);
+  EXPECT_EQ(j.source_input.height_type, geodesy::HeightKind::orthometric);
+  EXPECT_EQ(j.source_input.height_column, "H_m");
+  EXPECT_EQ(j.target_input.height_type, geodesy::HeightKind::ellipsoidal);  // ECEF
+  // Ellipsoidal sets say so.
+  std::istringstream plain(kCsv);
+  EXPECT_EQ(read_control_csv(plain, "c.csv", {}).source_input.height_type, geodesy::HeightKind::ellipsoidal);
+}
+
+// issue 12 point 5: a dynamic frame's coordinates mean nothing without
+// their epoch: the frame must name it (or every point must have one), else
+// the set is refused naming the comment or key and the frame.
+TEST(ControlSet, Point5_DynamicFrameWithoutEpochIsRefusedNamingTheCommentOrKey) {
+  auto csv = [](const std::string& comments, const std::string& epochs) {
+    return comments +
+           "id,lat_src_deg,lon_src_deg,h_src_m,lat_dst_deg,lon_dst_deg,h_dst_m,epoch\n"
+           "P1,47.46,8.55,480.1,47.46,8.55,480.2," + epochs.substr(0, epochs.find(',')) + "\n"
+           "P2,47.47,8.56,481.2,47.47,8.56,481.3," + epochs.substr(epochs.find(',') + 1) + "\n";
+  };
+  const auto [code, message] = read_error(csv("# source_frame = ITRF2014\n# target_frame = ETRF2000\n", ","), "c.csv", {});
+  EXPECT_EQ(code, "E_EPOCH_MISSING");
+  EXPECT_NE(message.find("c.csv: comment '# source_frame = ITRF2014' (above the header on line 3): frame ITRF2014 is dynamic"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("give ITRF2014@YYYY.Y"), std::string::npos) << message;
+  const auto wgs = read_error(csv("# source_frame = ETRF2000\n# target_frame = WGS84(G2139)\n", ","), "c.csv", {});
+  EXPECT_EQ(wgs.first, "E_EPOCH_MISSING");
+  EXPECT_NE(wgs.second.find("'# target_frame = WGS84(G2139)' (above the header on line 3): frame WGS84(G2139) is dynamic"),
+            std::string::npos)
+      << wgs.second;
+  // One point without its epoch is enough to refuse.
+  EXPECT_EQ(read_error(csv("# source_frame = ITRF2014\n", "2024.5,"), "c.csv", {}).first, "E_EPOCH_MISSING");
+  // Accepted: the frame's epoch, every point's epoch, a plate-fixed frame.
+  EXPECT_EQ(read_error(csv("# source_frame = ITRF2014@2024.5\n# target_frame = ETRF2000\n", ","), "c.csv", {}).first,
+            "accepted");
+  EXPECT_EQ(read_error(csv("# source_frame = ITRF2014\n", "2010.0,2015.0"), "c.csv", {}).first, "accepted");
+  EXPECT_EQ(read_error(csv("# source_frame = GDA94\n# target_frame = GDA2020\n", ","), "c.csv", {}).first, "accepted");
+
+  std::string json = kJson;
+  replace_first(json, "\"ITRF2014@2024.5\"", "\"IGS14\"");
+  replace_first(json, "\"epoch\": 2024.5, \"use\": false", "\"use\": false");
+  const auto [jcode, jmessage] = read_error(json, "c.json", {});
+  EXPECT_EQ(jcode, "E_EPOCH_MISSING");
+  EXPECT_NE(jmessage.find("c.json: source_frame: frame IGS14 is dynamic"), std::string::npos) << jmessage;
+  EXPECT_NE(jmessage.find("give IGS14@YYYY.Y"), std::string::npos) << jmessage;
+  std::string dated = kJson;  // every point has its epoch
+  replace_first(dated, "\"ITRF2014@2024.5\"", "\"ITRF2014\"");
+  EXPECT_EQ(read_error(dated, "c.json", {}).first, "accepted");
+  // The bundled sets name their epochs.
+  for (const char* f : {"airport_control.csv", "airport_control_orthometric.csv"}) {
+    EXPECT_NO_THROW(read_control_set(std::string(GEOANCHOR_FIXTURES_DIR) + "/" + f, {})) << f;
+  }
+}
+
 }  // namespace
 }  // namespace geoanchor::io

@@ -92,6 +92,40 @@ std::optional<std::string> likely_lat_lon_swap(const geodesy::ControlSet& set) {
   return std::nullopt;
 }
 
+std::optional<std::string> orthometric_height_warning(const solver::FitResult& r, const geodesy::ControlSet& set,
+                                                      const geodesy::GeoidGrid& geoid) {
+  if (r.model == solver::FitModel::enu_origin || r.model == solver::FitModel::site_calibration) return std::nullopt;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < r.points.size() && i < set.points.size(); ++i) {
+    if (!r.points[i].used) continue;
+    sum += set.points[i].source.m;
+    ++n;
+  }
+  if (n == 0) return std::nullopt;
+  const geodesy::EcefPosition centroid(Eigen::Vector3d(sum / static_cast<double>(n)));
+  const std::optional<geodesy::DecimalYear> epoch =
+      r.model == solver::FitModel::helmert14 ? r.reference_epoch : std::optional<geodesy::DecimalYear>{};
+  if (r.model == solver::FitModel::helmert14 && !epoch) return std::nullopt;
+  const geodesy::GeocentricConverter geocentric(set.ellipsoid);
+  const auto [n_m, up] = geodesy::geoid_along_up(geoid, geocentric, centroid);
+  const double offset_m = (solver::apply_fit(r, centroid, epoch).m - centroid.m).dot(up);
+  if (!std::isfinite(n_m) || !std::isfinite(offset_m) || !(std::fabs(offset_m) > kHeightTypeMinOffset_m)) return std::nullopt;
+  const double tolerance_m = std::max(kHeightTypeTolerance_m, kHeightTypeTolerance * std::fabs(n_m));
+  for (const bool source : {true, false}) {
+    // Source heights H = h − N put the source N too low: target − source = +N.
+    const double expected_m = source ? n_m : -n_m;
+    const double off_m = std::fabs(offset_m - expected_m);
+    if (!(off_m < tolerance_m)) continue;
+    return "the transform's vertical offset " + format_fixed(offset_m, 3) + " m is within " + format_fixed(off_m, 3) +
+           " m of the " + geoid.model_name() + " undulation N = " + format_fixed(n_m, 3) +
+           " m here: one frame's heights look orthometric (H = h − N), by its sign the " + (source ? "source" : "target") +
+           "'s; give them as H_" + (source ? "src" : "dst") +
+           "_m with --geoid EGM96, or ellipsoidal heights h (geoanchor diagnose tests this hypothesis)";
+  }
+  return std::nullopt;
+}
+
 std::optional<FitRefusal> fit_refusal(const solver::FitResult& r, const std::string& source_name,
                                       bool accept_failed_global_test) {
   if (!r.refused_because.empty()) {

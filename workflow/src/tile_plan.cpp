@@ -63,7 +63,15 @@ TilePlanner::TilePlanner(const ApplyRequest& o, const std::optional<io::Transfor
     throw Error(ErrorKind::usage, "E_OPTION", "--to tm with --zone: use --to utm");
   }
   if (o.ellipsoid) out_.ellipsoid = parse_ellipsoid(*o.ellipsoid, "--ellipsoid");
-  if (o.from_frame) from_frame_ = Frame::parse(*o.from_frame, "--from-frame");
+  if (o.from_frame) {
+    from_frame_ = Frame::parse(*o.from_frame, "--from-frame");
+    // Coordinates in a dynamic frame need their epoch: the frame's, or each
+    // LAS point's GPS time.
+    if (!o.epoch_from_gps_time) {
+      geodesy::require_epoch_if_dynamic(*from_frame_, "--from-frame", ErrorKind::usage,
+                                        ", or --epoch-from-gps-time for LAS tiles");
+    }
+  }
   if (o.inverse && !t) throw Error(ErrorKind::usage, "E_OPTION", "--inverse: needs --transform T.json");
   // Parse the value flags once, so that a bad one fails before any tile.
   const auto e = out_.ellipsoid.value_or(geodesy::Ellipsoid::wgs84());
@@ -223,6 +231,15 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
   const std::string tile = input.string();
   const TileMetadata& in = p.in;
   if (!in.frame) throw Error(ErrorKind::input, "E_FRAME_UNKNOWN", tile + ": the " + p.in_frame_source + " names no frame");
+  // A tile in a dynamic frame without its coordinate epoch: its coordinates
+  // are ambiguous by centimetres a year, whatever the transform (the
+  // sidecar's "frame", or the LAS WKT's datum), unless each LAS point's GPS
+  // time gives its epoch.
+  if (!(o_.epoch_from_gps_time && p.format == io::TileFormat::las)) {
+    geodesy::require_epoch_if_dynamic(*in.frame, tile + ": " + p.in_frame_source + (p.in_frame_source.rfind("sidecar", 0) == 0 ? ": frame" : ""),
+                                      ErrorKind::input,
+                                      p.format == io::TileFormat::las ? ", or --epoch-from-gps-time" : "");
+  }
   if (in.height_type == "orthometric") {
     throw Error(ErrorKind::input, "E_HEIGHT_TYPE",
                 tile + ": heights are orthometric (" + in.geoid_model.value_or("geoid not named") +

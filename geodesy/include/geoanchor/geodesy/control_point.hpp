@@ -23,9 +23,17 @@ namespace geoanchor::geodesy {
 // another projection).
 enum class CoordinateForm { ecef, geodetic, enu, projected };
 
+// What a geodetic or projected frame's height column held: ellipsoidal
+// heights h (h_src_m, h_m) or orthometric heights H (H_src_m, H_m), which
+// the reader turned into h = H + N on a geoid model.
+enum class HeightKind { ellipsoidal, orthometric };
+
 struct ControlInputForm {
   CoordinateForm form = CoordinateForm::ecef;
   std::optional<ProjectionDef> projection;  // projected: the declared grid
+  HeightKind height_type = HeightKind::ellipsoidal;  // ECEF and ENU: ellipsoidal by construction
+  std::string height_column;  // orthometric: the column or key read ("H_dst_m", "H_m")
+  std::string geoid_model;    // orthometric: the model N came from ("EGM96", "EGM96-NGA")
 };
 
 struct ControlPoint {
@@ -45,7 +53,9 @@ struct ControlPoint {
   Eigen::Matrix3d source_velocity_cov = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d target_velocity_cov = Eigen::Matrix3d::Zero();
   // The three numbers of each frame as written (x, y, z | lat, lon, h in
-  // degrees and metres | e, n, u | easting, northing, h).
+  // degrees and metres | e, n, u | easting, northing, h). For orthometric
+  // input the third is the ellipsoidal height read from it (h = H + N), so
+  // that reading the first two another way keeps the mark's height.
   Eigen::Vector3d source_as_read = Eigen::Vector3d::Zero();
   Eigen::Vector3d target_as_read = Eigen::Vector3d::Zero();
 };

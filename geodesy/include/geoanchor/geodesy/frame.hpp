@@ -11,6 +11,7 @@
 #include <string>
 #include <string_view>
 
+#include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/units.hpp"
 
 namespace geoanchor::geodesy {
@@ -37,6 +38,30 @@ class Frame {
   bool parenthesised_ = false;
   std::optional<DecimalYear> epoch_;
 };
+
+// Whether `f` is a dynamic frame: one whose realization gives its stations
+// velocities, so that a coordinate in it means nothing without the epoch it
+// refers to (a mark on the Eurasian plate moves about 2.5 cm a year in
+// ITRF2014). The rule is the EPSG dataset's, as PROJ 9.1.1's proj.db holds it:
+// there geodetic_datum.frame_reference_epoch is set exactly for the dynamic
+// datums. Dynamic: every ITRF realization (ITRF88 … ITRF2020), the IGS frames
+// (IGS97, IGS00, IGS05, IGS08, IGS14, IGb00, IGb08, IGb14 and any later
+// IGSyy/IGbyy), ATRF2014, and the WGS 84 realizations (G730 … G2139, Transit;
+// G2296, newer than that database, by the same rule: it is aligned with
+// ITRF2020). Not dynamic: the plate-fixed and national frames (ETRF89 …
+// ETRF2020, NAD83 and its realizations, GDA94, GDA2020), the WGS 84 ensemble
+// (plain "WGS84": EPSG gives it an ensemble accuracy, not a frame epoch) and
+// any name geoanchor does not know. tests/geodesy/frame_units_test.cpp
+// checks the rule against proj.db for every frame the catalog knows.
+bool is_dynamic(const Frame& f);
+
+// Throws geoanchor::Error (`kind`, E_EPOCH_MISSING) when `f` is dynamic and
+// names no coordinate epoch: "WHERE: frame ITRF2014 is dynamic …; give
+// ITRF2014@YYYY.Y …". `where` names the flag, file:line or key the frame
+// was read from; `other_way` (", or an epoch for every point") is offered
+// after the NAME@EPOCH form when the caller has one.
+void require_epoch_if_dynamic(const Frame& f, std::string_view where, ErrorKind kind = ErrorKind::input,
+                              std::string_view other_way = {});
 
 // Parses a decimal year (e.g. "2024.5"); throws geoanchor::Error (input)
 // naming `where` for anything else or a year outside [1900, 2200].

@@ -23,6 +23,10 @@
 #include <string_view>
 #include <vector>
 
+#include <Eigen/Core>
+
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/units.hpp"
 
 namespace geoanchor::geodesy {
@@ -63,5 +67,20 @@ class GeoidGrid {
   double spline_m(double row, double col) const;
   std::vector<float> values_m_;  // rows_ × cols_, south row first, west to east
 };
+
+// The geoid at an ECEF position: N there and the local up (unit vector in
+// ECEF). Heights of one frame taken as orthometric where they should be
+// ellipsoidal sit N too low along this up: the one computation behind
+// `diagnose`'s height_type hypothesis and the fit check that a fitted
+// vertical offset looks like N (workflow::orthometric_height_warning).
+// n_m is NaN outside the grid.
+struct GeoidAlongUp {
+  double n_m = 0.0;
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+};
+inline GeoidAlongUp geoid_along_up(const GeoidGrid& geoid, const GeocentricConverter& geocentric, const EcefPosition& at) {
+  const GeodeticPosition g = geocentric.geodetic_from_ecef(at);
+  return {geoid.undulation_m(g.lat, g.lon), enu_from_ecef_rotation(g.lat, g.lon).row(2).transpose()};
+}
 
 }  // namespace geoanchor::geodesy

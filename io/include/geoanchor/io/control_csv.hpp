@@ -4,7 +4,9 @@
 //
 //   id                                       required, unique per epoch
 //   source: x_src_m,y_src_m,z_src_m | lat_src_deg,lon_src_deg,h_src_m | e_src_m,n_src_m,u_src_m
-//           | easting_src_m,northing_src_m,h_src_m (on the grid given as src_projection)
+//           | easting_src_m,northing_src_m,h_src_m (on the grid given as src_projection);
+//           H_src_m in place of h_src_m: orthometric heights, read as h = H + N on src_geoid
+//           (refused, naming the column, without one)
 //   target: the same with _dst
 //   sigma_src_m, sigma_dst_m                 isotropic standard deviations (m), optional
 //   cov_src_xx_m2, cov_src_xy_m2, cov_src_xz_m2, cov_src_yy_m2, cov_src_yz_m2, cov_src_zz_m2
@@ -17,6 +19,9 @@
 // Frames may be declared in comment lines before the header:
 //   # source_frame = ITRF2014@2024.5
 //   # target_frame = ETRF2000@2024.5
+// A dynamic frame (geodesy::is_dynamic: ITRF, IGS, WGS 84 realizations) must
+// name its coordinate epoch there unless every point has an `epoch`;
+// otherwise the set is refused naming the comment and the frame.
 //
 // ENU coordinates need the nominal origin (`origin`). Refusals (geoanchor::
 // Error, input): sigma <= 0, NaN/inf, empty or unparsable fields, a
@@ -30,6 +35,7 @@
 #include <string>
 
 #include "geoanchor/geodesy/control_point.hpp"
+#include "geoanchor/geodesy/geoid.hpp"
 
 namespace geoanchor::io {
 
@@ -41,6 +47,17 @@ struct ControlReadOptions {
   // beside them is ellipsoidal. Projected columns without one are refused.
   std::optional<geodesy::ProjectionDef> src_projection;
   std::optional<geodesy::ProjectionDef> dst_projection;
+  // The geoid of orthometric heights (H_src_m, H_dst_m; JSON H_m) in each
+  // frame: h = H + N. Without one such a column is refused (E_HEIGHT_TYPE,
+  // naming it). `fit --geoid` and `diagnose --geoid` set both. Not owned;
+  // must outlive the read.
+  const geodesy::GeoidGrid* src_geoid = nullptr;
+  const geodesy::GeoidGrid* dst_geoid = nullptr;
+  // The caller replaces the file's source (target) frame with its own (fit
+  // --source-frame): a dynamic frame the file names without an epoch is
+  // then not refused here; the caller checks the one it gives.
+  bool source_frame_overridden = false;
+  bool target_frame_overridden = false;
 };
 
 geodesy::ControlSet read_control_csv(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
@@ -49,11 +66,14 @@ geodesy::ControlSet read_control_csv(const std::filesystem::path& path, const Co
 // The same in JSON:
 //   {"source_frame": "ITRF2014@2024.5", "target_frame": "ETRF2000@2024.5",
 //    "points": [{"id": "P01",
-//                "source": {"lat_deg": …, "lon_deg": …, "h_m": …},   (or x_m/y_m/z_m, or e_m/n_m/u_m)
+//                "source": {"lat_deg": …, "lon_deg": …, "h_m": …},   (or x_m/y_m/z_m, or e_m/n_m/u_m;
+//                                                                      H_m for orthometric heights)
 //                "target": {"x_m": …, "y_m": …, "z_m": …},
 //                "sigma_src_m": 0.003, "sigma_dst_m": 0.004,          (or "cov_src_m2": [[…],[…],[…]])
 //                "epoch": 2024.5, "use": true}, …]}
-// Messages name the JSON path (points[3].source.lat_deg).
+// Messages name the JSON path (points[3].source.lat_deg). The frames follow
+// the CSV rules (an epoch for a dynamic frame, unless every point has one);
+// one frame's heights are all h_m or all H_m.
 geodesy::ControlSet read_control_json(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
 
 // CSV or JSON, by content (a file whose first non-blank character is '{' is JSON).

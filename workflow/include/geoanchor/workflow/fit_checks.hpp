@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/control_point.hpp"
+#include "geoanchor/geodesy/geoid.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 
 namespace geoanchor::workflow {
@@ -26,6 +27,23 @@ std::vector<std::string> control_set_warnings(const geodesy::ControlSet& set);
 // and reading one frame's columns the other way round brings them within a
 // kilometre of each other. The message names the frame and the columns.
 std::optional<std::string> likely_lat_lon_swap(const geodesy::ControlSet& set);
+
+// When the fitted transform's vertical offset looks like the geoid
+// undulation: at the centroid of the marks the fit used, the displacement
+// target − source along the local up (from the fitted parameters) is larger
+// than kHeightTypeMinOffset_m and within max(kHeightTypeTolerance_m,
+// kHeightTypeTolerance × |N|) of +N (source heights orthometric) or −N
+// (target heights orthometric), N from `geoid` there
+// (geodesy::geoid_along_up, as diagnose's height_type hypothesis). No datum
+// shift between terrestrial frames moves heights by metres, and EGM96's N
+// lies between −107 m and +85 m, so an offset of N's size and sign is a
+// height type, not a datum. The message names the offset, N and the frame.
+// Models whose source is ENU (enu-origin, site-calibration) are not checked.
+inline constexpr double kHeightTypeMinOffset_m = 5.0;  // datum shifts: decimetres at most
+inline constexpr double kHeightTypeTolerance_m = 1.0;  // a geoid model other than EGM96 differs by ≲ 1 m
+inline constexpr double kHeightTypeTolerance = 0.1;    // and by ≲ 10 % of N where N is large
+std::optional<std::string> orthometric_height_warning(const solver::FitResult& fit, const geodesy::ControlSet& set,
+                                                      const geodesy::GeoidGrid& geoid);
 
 // Why a fit must not be written, if it must not: the solver's own refusal
 // (data snooping at its limit), else a global test that fails high unless
