@@ -1,0 +1,190 @@
+// The whole `geoanchor fit` command against its solve (issue 12 point 13):
+// for N control marks, the median wall time and the peak memory of the
+// executable reading a CSV, fitting, reporting and writing the transform
+// file, and the median time of solver::fit_helmert on the same set with the
+// same options in this process (the solver benchmark's call). The target is
+// a ratio of at most 2. Never part of the test run's pass/fail.
+//
+//   geoanchor_fit_command_bench [--sizes 100000,1000000] [--repetitions 3]
+//
+// GEOANCHOR_BENCH_EXE overrides the geoanchor executable measured.
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/helmert.hpp"
+#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/solver/helmert_fit.hpp"
+
+namespace {
+
+using namespace geoanchor;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// The solver benchmark's set (bench/fit_bench.cpp): marks over 45–50°N,
+// 5–12°E, 0–2000 m; a 7-parameter truth of cm/mas size; 3 mm noise in each
+// frame, 3 mm sigmas in the file.
+void write_control_csv(const fs::path& path, std::size_t n) {
+  std::mt19937_64 rng(n);
+  std::uniform_real_distribution<double> lat(45.0, 50.0), lon(5.0, 12.0), h(0.0, 2000.0);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  geodesy::Helmert7<geodesy::PositionVector> truth;
+  truth.t_m = Eigen::Vector3d(0.05, 0.05, -0.07);
+  truth.rx = geodesy::Angle::milliarcseconds(2.0);
+  truth.ry = geodesy::Angle::milliarcseconds(14.0);
+  truth.rz = geodesy::Angle::milliarcseconds(-21.0);
+  truth.ds = geodesy::ScaleDifference::ppb(2.0);
+  const geodesy::GeocentricConverter conv(geodesy::Ellipsoid::grs80());
+  std::ofstream out(path);
+  out << "# source_frame = ITRF2014@2024.5\n# target_frame = ETRF2000@2024.5\n"
+      << "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n";
+  char line[256];
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto src = conv.ecef_from_geodetic(
+        {geodesy::Angle::degrees(lat(rng)), geodesy::Angle::degrees(lon(rng)), geodesy::EllipsoidalHeight{h(rng)}});
+    const auto dst = geodesy::apply(truth, geodesy::RotationModel::small_angle, src);
+    std::snprintf(line, sizeof line, "P%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,0.003,0.003\n", i, src.m.x() + noise(rng),
+                  src.m.y() + noise(rng), src.m.z() + noise(rng), dst.m.x() + noise(rng), dst.m.y() + noise(rng),
+                  dst.m.z() + noise(rng));
+    out << line;
+  }
+  if (!out) {
+    std::fprintf(stderr, "cannot write %s\n", path.c_str());
+    std::exit(1);
+  }
+}
+
+struct Run {
+  double seconds = 0.0;
+  double peak_mb = 0.0;
+  int status = -1;
+};
+
+// Runs the command with stdout and stderr to files; wall time and the
+// child's peak resident set (wait4's ru_maxrss, kB).
+Run run_command(const std::vector<std::string>& args, const fs::path& folder) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, (folder / "report.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 2, (folder / "stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  const auto t0 = Clock::now();
+  pid_t pid = 0;
+  Run r;
+  if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) {
+    std::fprintf(stderr, "cannot start %s\n", argv[0]);
+    std::exit(1);
+  }
+  struct rusage usage {};
+  int status = 0;
+  wait4(pid, &status, 0, &usage);
+  r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  r.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  posix_spawn_file_actions_destroy(&actions);
+  return r;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t m = v.size() / 2;
+  return v.size() % 2 == 1 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+std::vector<std::size_t> parse_sizes(const std::string& text) {
+  std::vector<std::size_t> sizes;
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t comma = text.find(',', at);
+    sizes.push_back(static_cast<std::size_t>(std::stod(text.substr(at, comma - at))));
+    if (comma == std::string::npos) break;
+    at = comma + 1;
+  }
+  return sizes;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::size_t> sizes{100000, 1000000};
+  int repetitions = 3;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string flag = argv[i];
+    if (flag == "--sizes") {
+      sizes = parse_sizes(argv[i + 1]);
+    } else if (flag == "--repetitions") {
+      repetitions = std::max(1, std::atoi(argv[i + 1]));
+    } else {
+      std::fprintf(stderr, "usage: %s [--sizes N,N...] [--repetitions R]\n", argv[0]);
+      return 2;
+    }
+  }
+  const char* override_exe = std::getenv("GEOANCHOR_BENCH_EXE");
+  const std::string exe = override_exe ? override_exe : GEOANCHOR_EXE;
+  char folder_template[] = "/tmp/geoanchor_fit_command_bench_XXXXXX";
+  if (!mkdtemp(folder_template)) return 1;
+  const fs::path folder = folder_template;
+
+  std::printf("geoanchor fit (whole command: read CSV, fit, report, write the transform file) vs its solve\n"
+              "(solver::fit_helmert on the same set and options), helmert7, median of %d\n\n",
+              repetitions);
+  std::printf("%-9s %-9s %12s %12s %7s %14s %8s\n", "marks", "snooping", "command s", "solve s", "ratio", "command peak MB",
+              "removed");
+  for (const std::size_t n : sizes) {
+    const fs::path csv = folder / ("control_" + std::to_string(n) + ".csv");
+    write_control_csv(csv, n);
+    io::ControlReadOptions ro;
+    const geodesy::ControlSet set = io::read_control_set(csv, ro);
+    for (const bool snooping : {false, true}) {
+      std::vector<std::string> args{exe, "fit", csv.string(), "--model", "helmert7", "--convention", "position_vector",
+                                    "-o", (folder / "T.json").string(), "--overwrite"};
+      if (!snooping) args.push_back("--no-snooping");
+      std::vector<double> command_s, solve_s;
+      double peak_mb = 0.0;
+      std::size_t removed = 0;
+      for (int k = 0; k < repetitions; ++k) {
+        const Run r = run_command(args, folder);
+        if (r.status != 0) {
+          std::fprintf(stderr, "%s exited %d; see %s\n", exe.c_str(), r.status, (folder / "stderr.txt").c_str());
+          return 1;
+        }
+        command_s.push_back(r.seconds);
+        if (!(r.peak_mb <= peak_mb)) peak_mb = r.peak_mb;
+
+        solver::FitOptions o;
+        o.model = solver::FitModel::helmert7;
+        o.convention = solver::Convention::position_vector;
+        o.data_snooping = snooping;
+        const auto t0 = Clock::now();
+        const solver::FitResult fit = solver::fit_helmert(set, o);
+        solve_s.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+        removed = static_cast<std::size_t>(std::count_if(fit.points.begin(), fit.points.end(), [](const auto& p) { return p.outlier; }));
+      }
+      const double c = median(command_s), s = median(solve_s);
+      std::printf("%-9zu %-9s %12.3f %12.3f %7.2f %14.0f %8zu\n", n, snooping ? "on" : "off", c, s, c / s, peak_mb, removed);
+      std::fflush(stdout);
+    }
+    fs::remove(csv);
+  }
+  fs::remove_all(folder);
+  std::printf("\ntarget: ratio <= 2 (issue 12 point 13)\n");
+  return 0;
+}
