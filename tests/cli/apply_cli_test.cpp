@@ -893,6 +893,7 @@ TEST_F(ApplyOutputs, Issue12Point11_ApplyJsonOntoAFullStandardOutputExitsNonZero
             std::string::npos)
       << r.err;
   expect_pair(out / "t.csv");  // as the message says
+}
 
 // issue 12 point 5: a tile in a dynamic frame without its coordinate epoch
 // is refused, whether the sidecar or --from-frame names the frame, before

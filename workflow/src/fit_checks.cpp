@@ -6,6 +6,7 @@
 
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/projection.hpp"
 #include "geoanchor/geodesy/quantization.hpp"
 
 namespace geoanchor::workflow {
@@ -56,6 +57,38 @@ std::vector<std::string> control_set_warnings(const geodesy::ControlSet& set) {
                     "Export the coordinates in double precision");
     }
   }
+  // Grid coordinates on a forced UTM zone: marks beyond the zone's band plus
+  // its margin are warned as convert warns a forced zone (issue 12 point 1);
+  // the reader already refused those where the projection loses accuracy.
+  for (const bool source : {true, false}) {
+    const geodesy::ControlInputForm& form = source ? set.source_input : set.target_input;
+    if (form.form != geodesy::CoordinateForm::projected || !form.projection || !form.projection->utm) continue;
+    const geodesy::UtmZone& zone = *form.projection->utm;
+    const geodesy::GeocentricConverter conv(form.projection->ellipsoid);
+    std::size_t outside = 0;
+    const geodesy::ControlPoint* worst = nullptr;
+    double worst_deg = 0.0;
+    for (const auto& p : set.points) {
+      const geodesy::GeodeticPosition g = conv.geodetic_from_ecef(source ? p.source : p.target);
+      const geodesy::UtmBandCheck c = geodesy::utm_band_check(zone, g);
+      if (!geodesy::outside_band_margin(c)) continue;
+      ++outside;
+      const double excess = c.band_exists ? c.excess.deg() : std::numeric_limits<double>::infinity();
+      if (!worst || excess > worst_deg) {
+        worst = &p;
+        worst_deg = excess;
+      }
+    }
+    if (outside == 0) continue;
+    const geodesy::GeodeticPosition g = conv.geodetic_from_ecef(source ? worst->source : worst->target);
+    out.push_back(std::string(source ? "source" : "target") + " grid coordinates on UTM zone " + zone.to_string() + ": " +
+                  std::to_string(outside) + " of " + std::to_string(set.points.size()) +
+                  " marks lie beyond the zone's band (" + geodesy::utm_band_text(zone, g.lat) + ") by more than " +
+                  format_shortest(geodesy::kUtmBandMargin.deg()) + "°" +
+                  (std::isfinite(worst_deg) ? ", the farthest " + worst->id + " by " + format_fixed(worst_deg, 2) + "°"
+                                            : ", e.g. " + worst->id) +
+                  ": is the zone right? Grid scale and convergence grow fast away from the central meridian");
+  }
   return out;
 }
 
@@ -79,6 +112,16 @@ std::optional<std::string> likely_lat_lon_swap(const geodesy::ControlSet& set) {
   }
   const double apart = median(as_read);
   if (!(apart > kFarApart_m)) return std::nullopt;
+  // Read either frame the other way round and the frames agree alike when
+  // both swapped readings are positions on the Earth: the data cannot tell
+  // which header is wrong, so the message names both.
+  const double close_src = median(src_swapped), close_dst = median(dst_swapped);
+  if (close_src < kSwappedClose_m && close_dst < kSwappedClose_m) {
+    return set.source_name + ": the marks lie " + format_fixed(apart / 1e3, 1) + " km apart between the frames (median), but " +
+           format_fixed(std::min(close_src, close_dst), 3) +
+           " m apart when one frame's latitude and longitude are read the other way round: the columns lat_src_deg/lon_src_deg "
+           "or lat_dst_deg/lon_dst_deg look swapped (the data cannot tell which); check both headers against the data";
+  }
   for (const bool source : {true, false}) {
     const double close = median(source ? src_swapped : dst_swapped);
     if (close < kSwappedClose_m) {
