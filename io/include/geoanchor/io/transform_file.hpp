@@ -134,6 +134,8 @@ struct TransformFile {
   // site-calibration: the calibration (not an affine map); `helmert` is unused.
   std::optional<geodesy::SiteCalibration> site_calibration;
 
+  // (A member added here must be added to swapped_convention() in
+  // transform_file.cpp too: it copies every member by name but fit.)
   std::optional<FitRecord> fit;  // only when written by `geoanchor fit`
 
   bool time_dependent() const { return model == TransformModel::helmert14; }
