@@ -146,6 +146,7 @@ int run_apply(const ApplyOptions& o) {
     }
   });
   progress.stop();
+  for (const auto& w : r.warnings) std::cerr << "geoanchor: warning: " << w << '\n';
   for (const auto& t : r.stale_temporaries_removed) {
     std::cerr << "geoanchor: warning: " << io::stale_temporary_warning(t) << '\n';
   }

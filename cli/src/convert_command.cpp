@@ -14,6 +14,7 @@
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/workflow/transform_checks.hpp"
 #include "command_input.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
@@ -215,6 +216,7 @@ void run_convert(const ConvertOptions& o) {
 
   io::CsvRecord record;
   std::size_t rows = 0;
+  std::optional<workflow::EpochSpan> epochs_used;  // of a 14-parameter transform, over the rows
   std::vector<std::string> fields;
   while (reader.next(record)) {
     if (record.is_comment) {
@@ -228,6 +230,12 @@ void run_convert(const ConvertOptions& o) {
     }
     const geodesy::EcefPosition source = decoder.decode(record);
     const geodesy::EcefPosition target(step.apply(source.m, row_epoch, where));
+    if (step.needs_row_epoch()) {
+      const DecimalYear used = row_epoch ? *row_epoch : *flag_epoch;  // step.apply threw if neither
+      if (!epochs_used) epochs_used = workflow::EpochSpan{used, used};
+      if (used.year < epochs_used->first.year) epochs_used->first = used;
+      if (used.year > epochs_used->last.year) epochs_used->last = used;
+    }
     const auto coords = encoder.encode(target, where);
     fields.clear();
     for (std::size_t i = 0; i < header.size(); ++i) {
@@ -238,6 +246,14 @@ void run_convert(const ConvertOptions& o) {
     ++rows;
   }
 
+  // Parameters beyond fit's plausibility limits (issue 12 point 7), once per
+  // run; a 14-parameter set at the first and last epoch the rows used.
+  if (transform) {
+    if (!epochs_used && flag_epoch && transform->time_dependent()) epochs_used = workflow::EpochSpan{*flag_epoch, *flag_epoch};
+    for (auto& w : workflow::implausible_transform_warnings(*transform, *o.transform, epochs_used)) {
+      warnings.push_back(std::move(w));
+    }
+  }
   // Points a forced UTM zone does not contain (--zone, --from-zone, utm_zone column).
   for (auto& w : decoder.warnings()) warnings.push_back(std::move(w));
   for (auto& w : encoder.warnings()) warnings.push_back(std::move(w));

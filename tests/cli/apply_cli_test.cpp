@@ -948,5 +948,112 @@ TEST_F(ApplyCli, Point5_ATileInADynamicFrameWithoutItsEpochIsRefusedNamingTheSid
   EXPECT_FALSE(fs::exists(out2 / "itrf.las.geoanchor.json"));
 }
 
+
+// ---------------------------------------------------------------- issue 12 point 7: implausible parameters
+
+// Two ECEF CSV tiles in ITRF2014 at `epoch_a` and `epoch_b`: in/a.csv and in/b.csv with their sidecars (name, text).
+std::vector<std::pair<std::string, std::string>> two_ecef_tiles(const std::string& epoch_a, const std::string& epoch_b) {
+  const std::string csv = "id,x_m,y_m,z_m\nP0,4277000,639000,4672000\nP1,4277100,639050,4671900\n";
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const auto& [name, epoch] : {std::pair{"a", epoch_a}, std::pair{"b", epoch_b}}) {
+    files.emplace_back(std::string("in/") + name + ".csv", csv);
+    files.emplace_back(std::string("in/") + name + ".csv.geoanchor.json",
+                       R"({"schema": "geoanchor.tile/1", "frame": "ITRF2014@)" + epoch + R"(",
+      "coordinates": {"kind": "ecef", "storage": "float64"}})");
+  }
+  return files;
+}
+
+// How many of `warnings` (a JSON array) start with `expected`.
+int count_starting(const json& warnings, const std::string& expected) {
+  int n = 0;
+  for (const auto& w : warnings) n += w.get<std::string>().rfind(expected, 0) == 0 ? 1 : 0;
+  return n;
+}
+
+// How many times `needle` occurs in `hay`.
+int occurrences(const std::string& hay, const std::string& needle) {
+  int n = 0;
+  for (auto at = hay.find(needle); at != std::string::npos; at = hay.find(needle, at + 1)) ++n;
+  return n;
+}
+
+// issue 12 point 7
+TEST_F(ApplyCli, Issue12Point7_ImplausibleTransformParametersWarnOnceAndAreInEveryTileSidecarAndTheSummary) {
+  // fit's limits (geodesy/helmert.hpp, RELIABILITY #15): |t| <= 1 km, |r| <= 10″, |ds| <= 100 ppm.
+  // The baseline applied each of these silently (exit 0, no warning).
+  struct Case {
+    const char* name;
+    std::string parameters;
+    std::string expected;  // after the transform's path; empty: no implausibility warning
+  };
+  const std::vector<Case> cases = {
+      // 20″ at the Earth's mean radius: 20 / 206264.806 × 6371 km = 618 m.
+      {"rx", R"("tx_m": 0, "ty_m": 0, "tz_m": 0, "rx_arcsec": 20, "ry_arcsec": 0, "rz_arcsec": 0, "ds_ppm": 0)",
+       ": rx = 20″ is implausible for a datum transform (> 10″, 618 m at the Earth's surface)"},
+      {"ds", R"("tx_m": 0, "ty_m": 0, "tz_m": 0, "rx_arcsec": 0, "ry_arcsec": 0, "rz_arcsec": 0, "ds_ppm": 200)",
+       ": ds = 200 ppm is implausible for a datum transform (> 100 ppm"},
+      {"tx", R"("tx_m": 1e300, "ty_m": 0, "tz_m": 0, "rx_arcsec": 0, "ry_arcsec": 0, "rz_arcsec": 0, "ds_ppm": 0)",
+       ": tx = 1e+300 m is implausible for a datum transform (> 1e+03 m)"},
+      {"plausible", R"("tx_m": 0.05, "ty_m": 0.05, "tz_m": -0.07, "rx_arcsec": 0.002, "ry_arcsec": 0.012, )"
+                    R"("rz_arcsec": -0.02, "ds_ppm": 0.003)",
+       ""},
+  };
+  for (const auto& [name, text] : two_ecef_tiles("2024.5", "2024.5")) write(name, text);
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string t = std::string(c.name) + ".json";
+    write(t, R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014",
+      "target_frame": "ETRF2000", "parameters": {)" + c.parameters + "}}");
+    const fs::path out = out_dir(std::string("out_") + c.name);
+    const RunResult r = run("apply " + path("in/a.csv").string() + " " + path("in/b.csv").string() + " --transform " +
+                            path(t).string() + " --out-dir " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json summary = json::parse(slurp(out / "geoanchor-apply-summary.json"));
+    ASSERT_TRUE(summary["warnings"].is_array()) << summary.dump(2);
+    if (c.expected.empty()) {
+      EXPECT_EQ(r.err.find("implausible"), std::string::npos) << r.err;
+      EXPECT_TRUE(summary["warnings"].empty()) << summary.dump(2);
+      for (const char* tile : {"a.csv", "b.csv"}) {
+        const json prov = json::parse(slurp(out / (std::string(tile) + ".geoanchor.json")))["provenance"];
+        EXPECT_EQ(prov["warnings"].dump().find("implausible"), std::string::npos) << prov.dump(2);
+      }
+      continue;
+    }
+    const std::string expected = path(t).string() + c.expected;
+    EXPECT_EQ(occurrences(r.err, "geoanchor: warning: " + expected), 1) << r.err;  // once per run, not per tile
+    EXPECT_EQ(count_starting(summary["warnings"], expected), 1) << summary.dump(2);
+    for (const char* tile : {"a.csv", "b.csv"}) {
+      const json prov = json::parse(slurp(out / (std::string(tile) + ".geoanchor.json")))["provenance"];
+      EXPECT_EQ(count_starting(prov["warnings"], expected), 1) << tile << "\n" << prov.dump(2);
+    }
+  }
+}
+
+// issue 12 point 7
+TEST_F(ApplyCli, Issue12Point7_AFourteenParameterSetIsCheckedAtEachTilesEpochAndTheRunsLatest) {
+  // rz = 5″ + 1″/yr × (t − 2020): 6″ for the tile at 2021 (plausible), 15″ for the one at 2030.
+  write("T14.json", R"({"model": "helmert14", "convention": "position_vector", "source_frame": "ITRF2014",
+    "target_frame": "GDA2020", "reference_epoch": 2020.0,
+    "parameters": {"tx_m": 0, "ty_m": 0, "tz_m": 0, "rx_arcsec": 0, "ry_arcsec": 0, "rz_arcsec": 5, "ds_ppm": 0,
+                   "dtx_m_per_year": 0, "dty_m_per_year": 0, "dtz_m_per_year": 0, "drx_arcsec_per_year": 0,
+                   "dry_arcsec_per_year": 0, "drz_arcsec_per_year": 1, "dds_ppm_per_year": 0}})");
+  for (const auto& [name, text] : two_ecef_tiles("2021.0", "2030.0")) write(name, text);
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + path("in/a.csv").string() + " " + path("in/b.csv").string() + " --transform " +
+                          path("T14.json").string() + " --out-dir " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string expected =
+      path("T14.json").string() + " at epoch 2030: rz = 15″ is implausible for a datum transform (> 10″";
+  EXPECT_EQ(occurrences(r.err, "geoanchor: warning: " + expected), 1) << r.err;
+  EXPECT_EQ(r.err.find("at epoch 2021"), std::string::npos) << r.err;
+  const json summary = json::parse(slurp(out / "geoanchor-apply-summary.json"));
+  EXPECT_EQ(count_starting(summary["warnings"], expected), 1) << summary.dump(2);
+  const json early = json::parse(slurp(out / "a.csv.geoanchor.json"))["provenance"];
+  EXPECT_EQ(early["warnings"].dump().find("implausible"), std::string::npos) << early.dump(2);
+  const json late = json::parse(slurp(out / "b.csv.geoanchor.json"))["provenance"];
+  EXPECT_EQ(count_starting(late["warnings"], expected), 1) << late.dump(2);
+}
+
 }  // namespace
 }  // namespace geoanchor

@@ -623,5 +623,86 @@ TEST_F(ConvertCli, Issue12Point11_ConvertRemovesAKilledRunsTemporaryBesideItsOut
   EXPECT_EQ(side["warnings"], nlohmann::json::array({warning})) << side.dump(2);
 }
 
+
+// ---------------------------------------------------------------- issue 12 point 7: implausible parameters
+
+// fit's limits (geodesy/helmert.hpp, RELIABILITY #15): |t| <= 1 km, |r| <= 10″, |ds| <= 100 ppm.
+struct ImplausibleCase {
+  const char* name;
+  const char* transform;
+  std::string expected;  // the warning's start after "geoanchor: warning: T.json"; empty: no implausibility warning
+};
+
+// issue 12 point 7
+TEST_F(ConvertCli, Issue12Point7_ImplausibleTransformParametersWarnOnStderrAndInTheSidecar) {
+  // The baseline applied each of these silently (exit 0, no warning).
+  const std::vector<ImplausibleCase> cases = {
+      // 20″ at the Earth's mean radius: 20 / 206264.806 × 6371 km = 618 m.
+      {"rx", R"({"model": "helmert7", "convention": "position_vector", "parameters": {"tx_m": 0, "ty_m": 0, "tz_m": 0,
+        "rx_arcsec": 20, "ry_arcsec": 0, "rz_arcsec": 0, "ds_ppm": 0}})",
+       ": rx = 20″ is implausible for a datum transform (> 10″, 618 m at the Earth's surface)"},
+      {"ds", R"({"model": "helmert7", "convention": "position_vector", "parameters": {"tx_m": 0, "ty_m": 0, "tz_m": 0,
+        "rx_arcsec": 0, "ry_arcsec": 0, "rz_arcsec": 0, "ds_ppm": 200}})",
+       ": ds = 200 ppm is implausible for a datum transform (> 100 ppm"},
+      {"tx", R"({"model": "translation3", "parameters": {"tx_m": 1e300, "ty_m": 0, "tz_m": 0}})",
+       ": tx = 1e+300 m is implausible for a datum transform (> 1e+03 m)"},
+      {"plausible", R"({"model": "helmert7", "convention": "position_vector", "parameters": {"tx_m": 100, "ty_m": -50,
+        "tz_m": 20, "rx_arcsec": 0.5, "ry_arcsec": -0.2, "rz_arcsec": 1, "ds_ppm": 2}})",
+       ""},
+  };
+  write("in.csv", "id,x_m,y_m,z_m\nA,4277000,639000,4672000\nB,4277100,639050,4671900\n");
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string t = std::string(c.name) + ".json";
+    write(t, c.transform);
+    const std::string out = std::string(c.name) + ".csv";
+    const RunResult r = run("convert " + path("in.csv").string() + " --to ecef --transform " + path(t).string() + " -o " +
+                            path(out).string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json side = nlohmann::json::parse(slurp(path(out + ".geoanchor.json")));
+    if (c.expected.empty()) {
+      EXPECT_EQ(r.err.find("implausible"), std::string::npos) << r.err;
+      EXPECT_EQ(side["warnings"].dump().find("implausible"), std::string::npos) << side.dump(2);
+      continue;
+    }
+    const std::string expected = path(t).string() + c.expected;
+    // Once per run, not once per row.
+    const std::string line = "geoanchor: warning: " + expected;
+    const auto first = r.err.find(line);
+    EXPECT_NE(first, std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find(line, first + 1), std::string::npos) << r.err;
+    int recorded = 0;
+    for (const auto& w : side["warnings"]) recorded += w.get<std::string>().rfind(expected, 0) == 0 ? 1 : 0;
+    EXPECT_EQ(recorded, 1) << side.dump(2);
+  }
+}
+
+// issue 12 point 7
+TEST_F(ConvertCli, Issue12Point7_AFourteenParameterSetIsCheckedAtTheFirstAndLastEpochOfTheRows) {
+  // rz = 5″ + 1″/yr × (t − 2020): 6″ at 2021 (plausible), 15″ at 2030 (beyond 10″).
+  write("T14.json", R"({"model": "helmert14", "convention": "position_vector", "reference_epoch": 2020.0,
+    "parameters": {"tx_m": 0, "ty_m": 0, "tz_m": 0, "rx_arcsec": 0, "ry_arcsec": 0, "rz_arcsec": 5, "ds_ppm": 0,
+                   "dtx_m_per_year": 0, "dty_m_per_year": 0, "dtz_m_per_year": 0, "drx_arcsec_per_year": 0,
+                   "dry_arcsec_per_year": 0, "drz_arcsec_per_year": 1, "dds_ppm_per_year": 0}})");
+  write("in.csv", "id,x_m,y_m,z_m,epoch\nA,4277000,639000,4672000,2021.0\nB,4277100,639050,4671900,2030.0\n"
+                  "C,4277100,639050,4671900,2025.0\n");
+  const RunResult r = run("convert " + path("in.csv").string() + " --to ecef --transform " + path("T14.json").string() +
+                          " -o " + path("out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string expected = path("T14.json").string() + " at epoch 2030: rz = 15″ is implausible for a datum transform (> 10″";
+  EXPECT_NE(r.err.find("geoanchor: warning: " + expected), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("at epoch 2021"), std::string::npos) << r.err;
+  const nlohmann::json side = nlohmann::json::parse(slurp(path("out.csv.geoanchor.json")));
+  int recorded = 0;
+  for (const auto& w : side["warnings"]) recorded += w.get<std::string>().rfind(expected, 0) == 0 ? 1 : 0;
+  EXPECT_EQ(recorded, 1) << side.dump(2);
+  // Every row at 2021 (by --epoch): nothing to warn about.
+  write("in2.csv", "id,x_m,y_m,z_m\nA,4277000,639000,4672000\n");
+  const RunResult early = run("convert " + path("in2.csv").string() + " --to ecef --epoch 2021 --transform " +
+                              path("T14.json").string() + " -o " + path("early.csv").string());
+  ASSERT_EQ(early.exit_code, 0) << early.err;
+  EXPECT_EQ(early.err.find("implausible"), std::string::npos) << early.err;
+}
+
 }  // namespace
 }  // namespace geoanchor

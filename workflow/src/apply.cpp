@@ -26,6 +26,7 @@
 #include "geoanchor/io/tile_apply.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
 #include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/workflow/transform_checks.hpp"
 #include "geoanchor/workflow/tile_plan.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"
 
@@ -294,6 +295,19 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   std::vector<std::string> warnings = housekeeping;
   warnings.insert(warnings.end(), p.warnings.begin(), p.warnings.end());
   warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
+  // The transform's implausible parameters (issue 12 point 7): in the
+  // sidecar, and printed once for the run (ApplyResult::warnings), not here.
+  std::vector<std::string> transform_warnings;
+  if (t_) {
+    std::optional<EpochSpan> span;
+    if (t_->time_dependent() && res.epoch_range) {
+      span = EpochSpan{DecimalYear{(*res.epoch_range)[0]}, DecimalYear{(*res.epoch_range)[1]}};
+    } else if (t_->time_dependent() && p.epoch) {
+      span = EpochSpan{*p.epoch, *p.epoch};
+    }
+    if (span) r.transform_epochs_year = std::make_pair(span->first.year, span->last.year);
+    transform_warnings = implausible_transform_warnings(*t_, *o_.transform, span);
+  }
 
   // The tile's corners in the source frame's ECEF: extent and uncertainty.
   json extrapolation = nullptr, uncertainty = nullptr;
@@ -418,7 +432,9 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   prov["bounds"] = {{"min", res.min}, {"max", res.max}};
   if (p.format == io::TileFormat::las) prov["las"] = {{"scale", res.scale}, {"offset", res.offset}};
   prov["output_size_bytes"] = output_size;
-  prov["warnings"] = warnings;
+  json all_warnings = warnings;
+  for (const auto& w : transform_warnings) all_warnings.push_back(w);
+  prov["warnings"] = all_warnings;
   TileMetadata meta = p.out;
   meta.horizontal_crs = meta.frame->to_string() + " " + io::kind_name(meta.coordinates) +
                         (p.format == io::TileFormat::las ? " (WKT2 in the LAS file's LASF_Projection 2112 record)" : "");
@@ -559,6 +575,20 @@ ApplyResult ApplyRun::run(ApplyProgress& progress, const std::function<void(cons
     list.push_back(t);
   }
   summary["tiles"] = list;
+  // The transform's implausible parameters, once for the run: a 14-parameter
+  // set at the first and last epoch of the tiles done.
+  if (m.transform) {
+    std::optional<EpochSpan> span;
+    for (const auto& r : result.tiles) {
+      if (r.status != "done" || !r.transform_epochs_year) continue;
+      const auto [first, last] = *r.transform_epochs_year;
+      if (!span) span = EpochSpan{DecimalYear{first}, DecimalYear{last}};
+      if (first < span->first.year) span->first = DecimalYear{first};
+      if (last > span->last.year) span->last = DecimalYear{last};
+    }
+    result.warnings = implausible_transform_warnings(*m.transform, *o.transform, span);
+  }
+  summary["warnings"] = result.warnings;
   summary["tiles_done"] = result.done;
   summary["tiles_skipped"] = result.skipped;
   summary["tiles_failed"] = result.failed;

@@ -22,6 +22,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace geoanchor::workflow {
@@ -63,7 +64,10 @@ struct TileOutcome {
   double seconds = 0.0;
   std::string error, error_code;
   int exit_code = 0;
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings;  // this tile's own, printed as it finishes
+  // The first and last epoch (decimal years) a 14-parameter transform was
+  // evaluated at for this tile, when one was.
+  std::optional<std::pair<double, double>> transform_epochs_year;
   std::uint64_t bytes_accounted = 0;  // of this tile's size, already counted as progress
 };
 
@@ -82,6 +86,11 @@ struct ApplyResult {
   std::filesystem::path summary_path;      // the latest run's
   std::string summary_json;                // the text of both
   std::vector<std::string> stale_temporaries_removed;  // left in --out-dir by killed runs
+  // About the whole run, to print once: the transform's parameters beyond
+  // fit's plausibility limits (workflow/transform_checks.hpp; a 14-parameter
+  // set at the first and last epoch any tile done in this run used). Also in
+  // the summary's `warnings` and in every tile sidecar this run writes.
+  std::vector<std::string> warnings;
   int exit_code = 0;                   // 0, or the first failed tile's
 };
 
