@@ -373,6 +373,21 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     as_read.z() += converter.convert(v, set.has_a_priori_sigmas, fail, p, cov);
   };
 
+  // Room for the rows up front when the stream can tell its size: a data
+  // row is about as long as the header, and growing a vector of 10⁶ points
+  // by doubling would touch twice their memory. (An estimate only: a
+  // reservation never read is never touched.)
+  if (const std::streampos here = in.tellg(); here != std::streampos(-1)) {
+    in.seekg(0, std::ios::end);
+    const std::streampos end = in.tellg();
+    in.seekg(here);
+    std::size_t header_bytes = header.size();
+    for (const auto& h : header) header_bytes += h.size();
+    if (in && end != std::streampos(-1) && end > here) {
+      set.points.reserve(static_cast<std::size_t>(end - here) / std::max<std::size_t>(header_bytes, 32) + 1);
+    }
+    in.clear();
+  }
   CsvRecord r;
   while (reader.next(r)) {
     if (r.is_comment) continue;

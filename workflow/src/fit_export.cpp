@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 #include <ostream>
+#include <utility>
 
 #include "geoanchor/geodesy/number_text.hpp"
 
@@ -182,6 +183,7 @@ io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geod
   f.global_critical_upper = r.global_test.critical_upper;
   f.global_passed = r.global_test.passed;
   f.global_applicable = r.global_test.applicable;
+  f.points.reserve(r.points.size());
   for (const auto& p : r.points) {
     io::FitPointRecord q;
     q.id = p.id;
@@ -204,7 +206,7 @@ io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geod
     q.note = p.removed_because;
     if (std::find(left_out.begin(), left_out.end(), p.id) != left_out.end()) q.note = kLeftOutInWorkbench;
     q.robust_weight = p.robust_weight;
-    f.points.push_back(q);
+    f.points.push_back(std::move(q));
   }
   f.warnings = r.warnings;
   f.variance_factors = r.variance_factors;
@@ -217,7 +219,7 @@ io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geod
   }
   if (!used_marks.empty()) f.extent = io::ControlExtent::of(used_marks);
   f.generator = generator;
-  t.fit = f;
+  t.fit = std::move(f);
   return t;
 }
 
