@@ -37,14 +37,23 @@ std::string_view field_text(std::string_view line, std::size_t field) {
 
 }  // namespace
 
-void split_csv_line(std::string_view line, std::vector<std::string>& raw, std::vector<std::string>& values,
-                    std::string_view where) {
-  raw.clear();
-  values.clear();
+namespace {
+
+// split_csv_line, with `where` formed only for a message: a file of 10⁶
+// rows must not build a file:line string for each. The fields' strings are
+// reused from the previous row (assign, not a new string each).
+template <class Where>
+void split_fields(std::string_view line, std::vector<std::string>& raw, std::vector<std::string>& values, const Where& where) {
+  std::size_t n = 0;  // fields so far
+  const auto field = [&](std::vector<std::string>& v) -> std::string& {
+    if (n < v.size()) return v[n];
+    return v.emplace_back();
+  };
   std::size_t i = 0;
   while (true) {
     const std::size_t start = i;
-    std::string value;
+    std::string& value = field(values);
+    value.clear();
     if (i < line.size() && line[i] == '"') {
       ++i;
       bool closed = false;
@@ -63,22 +72,34 @@ void split_csv_line(std::string_view line, std::vector<std::string>& raw, std::v
       }
       if (!closed) {
         throw Error(ErrorKind::input, "E_CSV_QUOTE",
-                    std::string(where) + ": field " + std::to_string(raw.size() + 1) +
+                    std::string(where()) + ": field " + std::to_string(n + 1) +
                         ": unterminated double quote; expected a closing \" on the same line");
       }
       if (i < line.size() && line[i] != ',') {
         throw Error(ErrorKind::input, "E_CSV_QUOTE",
-                    std::string(where) + ": field " + std::to_string(raw.size() + 1) +
+                    std::string(where()) + ": field " + std::to_string(n + 1) +
                         ": text after a closing quote; expected ',' or end of line");
       }
     } else {
-      while (i < line.size() && line[i] != ',') value += line[i++];
+      const std::size_t comma = line.find(',', i);
+      const std::size_t stop = comma == std::string_view::npos ? line.size() : comma;
+      value.assign(line.data() + i, stop - i);
+      i = stop;
     }
-    raw.emplace_back(line.substr(start, i - start));
-    values.push_back(std::move(value));
+    field(raw).assign(line.data() + start, i - start);
+    ++n;
     if (i >= line.size()) break;
     ++i;  // the comma
   }
+  raw.resize(n);
+  values.resize(n);
+}
+
+}  // namespace
+
+void split_csv_line(std::string_view line, std::vector<std::string>& raw, std::vector<std::string>& values,
+                    std::string_view where) {
+  split_fields(line, raw, values, [where] { return where; });
 }
 
 double number_cell(const CsvRecord& r, std::size_t column, const std::vector<std::string>& header,
@@ -198,7 +219,7 @@ void CsvReader::require_utf8(const std::string& line) const {
 }
 
 bool CsvReader::next(CsvRecord& record) {
-  std::string line;
+  std::string& line = line_buffer_;  // reused: no allocation a row
   while (read_line(line)) {
     if (line.empty()) continue;
     record.line = line_;
@@ -211,11 +232,11 @@ bool CsvReader::next(CsvRecord& record) {
     }
     record.is_comment = false;
     record.comment.clear();
-    const std::string where = source_name_ + ":" + std::to_string(line_);
-    split_csv_line(line, record.raw, record.values, where);
+    const auto where = [this] { return source_name_ + ":" + std::to_string(line_); };
+    split_fields(line, record.raw, record.values, where);
     if (record.values.size() != header_.size()) {
       throw Error(ErrorKind::input, "E_CSV_FIELDS",
-                  where + ": " + std::to_string(record.values.size()) + " fields; expected " +
+                  where() + ": " + std::to_string(record.values.size()) + " fields; expected " +
                       std::to_string(header_.size()) + " as in the header (line " + std::to_string(header_line_) + ")");
     }
     return true;

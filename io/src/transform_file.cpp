@@ -1364,17 +1364,31 @@ void write_json(std::ostream& out, const TransformFile& t) {
       points += ']';
     };
     const auto flag = [&](bool b) { points += b ? "true" : "false"; };
+    // A JSON string: as is when nothing in it needs escaping (the common id),
+    // else through the JSON library.
+    const auto text_value = [&](const std::string& v) {
+      const bool plain = std::all_of(v.begin(), v.end(), [](char c) {
+        return c != '"' && c != '\\' && static_cast<unsigned char>(c) >= 0x20 && c != 0x7f;
+      });
+      if (plain) {
+        points += '"';
+        points += v;
+        points += '"';
+      } else {
+        points += json(v).dump();
+      }
+    };
     bool first = true;
     for (const auto& p : t.fit->points) {
       points += first ? "\n    {" : ",\n    {";
       first = false;
       points += "\"id\": ";
-      points += json(p.id).dump();
+      text_value(p.id);
       points += ", \"mdb_m\": ";
       num(p.mdb_m);
       if (!p.note.empty()) {
         points += ", \"note\": ";
-        points += json(p.note).dump();
+        text_value(p.note);
       }
       points += ", \"outlier\": ";
       flag(p.outlier);

@@ -65,6 +65,7 @@ class CsvReader {
   std::size_t header_line_ = 0;
   std::vector<std::string> header_;
   std::vector<std::string> leading_comments_;
+  std::string line_buffer_;  // the line next() reads into, reused
 };
 
 // Splits one line into raw fields and unquoted values. Throws
