@@ -14,6 +14,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -44,6 +45,19 @@ class CommandInput {
   std::string name_;
   std::ifstream file_;
 };
+
+// Writes the provenance sidecar, publishes it with the data (both written,
+// then published: io::DataOutput), and with --json prints the same text on
+// standard output, failing (E_WRITE) if it could not be.
+inline void publish_with_provenance(io::DataOutput& output, const std::string& side_text, std::string_view rows, bool json,
+                                    const std::string& path) {
+  output.sidecar() << side_text;
+  output.commit(rows);
+  if (json) {
+    std::cout << side_text;
+    io::finish_standard_output("the provenance (--json)", "; " + path + " was written");
+  }
+}
 
 // "-" (or no -o at all, where a command allows that): standard output.
 inline bool is_standard_output(const std::string& path) { return path.empty() || path == "-"; }

@@ -307,13 +307,7 @@ void run_convert(const ConvertOptions& o) {
     side["transform"] = t;
   }
   side["warnings"] = warnings;
-  const std::string side_text = side.dump(2) + "\n";
-  output.sidecar() << side_text;
-  output.commit("the converted rows");  // the sidecar and the data: both written, then published
-  if (o.json) {
-    std::cout << side_text;
-    io::finish_standard_output("the provenance (--json)", "; " + o.output + " was written");
-  }
+  publish_with_provenance(output, side.dump(2) + "\n", "the converted rows", o.json, o.output);
 }
 
 }  // namespace geoanchor::cli

@@ -234,13 +234,7 @@ void run_transform(const TransformOptions& o) {
                                                     {"frame", plate->frame}, {"source", plate->source}};
   }
   if (!housekeeping.empty()) side["warnings"] = housekeeping;
-  const std::string side_text = side.dump(2) + "\n";
-  output.sidecar() << side_text;
-  output.commit("the transformed rows");  // the sidecar and the data: both written, then published
-  if (o.json) {
-    std::cout << side_text;
-    io::finish_standard_output("the provenance (--json)", "; " + o.output + " was written");
-  }
+  publish_with_provenance(output, side.dump(2) + "\n", "the transformed rows", o.json, o.output);
 }
 
 }  // namespace geoanchor::cli
