@@ -313,10 +313,19 @@ void only_keys(const json& obj, const std::string& where, std::string_view sourc
   }
 }
 
-std::array<double, 3> triple_at(const json& v, const std::string& path, std::string_view source) {
+// A statistic that may be undefined: null (what the writer gives a NaN,
+// e.g. the w-test of an axis without redundancy) is read back as NaN.
+double number_or_null_at(const json& v, const std::string& path, std::string_view source) {
+  return v.is_null() ? std::numeric_limits<double>::quiet_NaN() : number_at(v, path, source);
+}
+
+std::array<double, 3> triple_at(const json& v, const std::string& path, std::string_view source, bool null_is_nan = false) {
   if (!v.is_array() || v.size() != 3) fail(source, path, "value " + v.dump() + " is not [e, n, u]");
   std::array<double, 3> out{};
-  for (std::size_t k = 0; k < 3; ++k) out[k] = number_at(v[k], path + "[" + std::to_string(k) + "]", source);
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::string at = path + "[" + std::to_string(k) + "]";
+    out[k] = null_is_nan ? number_or_null_at(v[k], at, source) : number_at(v[k], at, source);
+  }
   return out;
 }
 
@@ -953,15 +962,14 @@ void parse_points(const json& pts, FitRecord& f, std::string_view source) {
     if (!jp.contains("id")) fail(source, where + ".id", "missing; every point record names its mark");
     q.id = string_at(jp.at("id"), where + ".id", source);
     if (const json* v = member(jp, "residual_enu_m")) q.residual_enu_m = triple_at(*v, where + ".residual_enu_m", source);
-    if (const json* v = member(jp, "w_test")) q.w_test = number_at(*v, where + ".w_test", source);
-    if (const json* v = member(jp, "w_enu")) q.w_enu = triple_at(*v, where + ".w_enu", source);
+    // Untestable (no redundancy on the axis): written null, read as NaN.
+    if (const json* v = member(jp, "w_test")) q.w_test = number_or_null_at(*v, where + ".w_test", source);
+    if (const json* v = member(jp, "w_enu")) q.w_enu = triple_at(*v, where + ".w_enu", source, true);
     if (const json* v = member(jp, "redundancy_enu")) q.redundancy_enu = triple_at(*v, where + ".redundancy_enu", source);
-    if (const json* v = member(jp, "mdb_m")) {
-      q.mdb_m = v->is_null() ? std::numeric_limits<double>::quiet_NaN() : number_at(*v, where + ".mdb_m", source);
-    }
+    if (const json* v = member(jp, "mdb_m")) q.mdb_m = number_or_null_at(*v, where + ".mdb_m", source);
     if (const json* v = member(jp, "point_test")) {
       only_keys(*v, where + ".point_test", source, {"statistic", "dof", "p_value"});
-      if (const json* s = member(*v, "statistic")) q.point_test = number_at(*s, where + ".point_test.statistic", source);
+      if (const json* s = member(*v, "statistic")) q.point_test = number_or_null_at(*s, where + ".point_test.statistic", source);
       if (const json* d = member(*v, "dof")) q.point_test_dof = count_at(*d, where + ".point_test.dof", source);
       if (const json* p = member(*v, "p_value")) {
         q.point_test_p = number_at(*p, where + ".point_test.p_value", source);

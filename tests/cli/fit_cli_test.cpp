@@ -995,6 +995,33 @@ TEST_F(FitCli, Issue12Point13_ALargeSetsReportListsWhatMattersAndTheFileHoldsEve
 }
 
 
+// issue 12 point 9: the statistics a fit cannot define (no redundancy: the
+// w-tests and MDB of every axis) are written null, and every reader of the
+// transform file takes them back as undefined. Before, fit wrote a file
+// that convert and apply refused ("points[0].w_test: value null is not a
+// number").
+TEST_F(FitCli, Issue12Point9_AFitWithoutRedundancyWritesAFileEveryReaderTakes) {
+  std::string one_mark;
+  std::istringstream in(slurp(kControl));
+  for (std::string l; std::getline(in, l);) {
+    one_mark += l + "\n";
+    if (l.rfind("P01,", 0) == 0) break;
+  }
+  write("one.csv", one_mark);
+  const RunResult f = run("fit " + path("one.csv").string() + " --model translation3 -o " + path("T.json").string());
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  const auto doc = nlohmann::json::parse(slurp(path("T.json")));
+  ASSERT_EQ(doc.at("points").size(), 1u);
+  EXPECT_TRUE(doc.at("points")[0].at("w_test").is_null()) << doc.at("points")[0].dump();
+  EXPECT_TRUE(doc.at("points")[0].at("w_enu")[2].is_null()) << doc.at("points")[0].dump();
+  const RunResult c = run("convert " + std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_points.csv --to ecef --transform " +
+                          path("T.json").string() + " -o " + path("moved.csv").string());
+  EXPECT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_TRUE(fs::exists(path("moved.csv")));
+  const RunResult d = run("diagnose " + path("one.csv").string() + " --transform " + path("T.json").string());
+  EXPECT_EQ(d.err.find("is not a number"), std::string::npos) << d.err;
+}
+
 // issue 12 point 1 (control sets): grid coordinates on a forced UTM zone far
 // from the marks were read without a word at b045a22; convert warns of the
 // same. The bundled marks (8.5°E) on zone 31N (0°–6°E): 2.5° beyond the band.
