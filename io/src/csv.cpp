@@ -218,33 +218,43 @@ void CsvReader::require_utf8(const std::string& line) const {
                   "LATIN1 -t UTF-8)");
 }
 
-bool CsvReader::next(CsvRecord& record) {
-  std::string& line = line_buffer_;  // reused: no allocation a row
-  while (read_line(line)) {
-    if (line.empty()) continue;
-    record.line = line_;
-    if (line.front() == '#') {
-      record.is_comment = true;
-      record.comment = line;
-      record.raw.clear();
-      record.values.clear();
-      return true;
-    }
-    record.is_comment = false;
-    record.comment.clear();
-    const auto where = [this] { return source_name_ + ":" + std::to_string(line_); };
-    split_fields(line, record.raw, record.values, where);
-    if (record.values.size() != header_.size()) {
-      throw Error(ErrorKind::input, "E_CSV_FIELDS",
-                  where() + ": " + std::to_string(record.values.size()) + " fields; expected " +
-                      std::to_string(header_.size()) + " as in the header (line " + std::to_string(header_line_) + ")");
-    }
+bool CsvReader::next_line(std::string& text, std::size_t& line) {
+  while (read_line(text)) {
+    if (text.empty()) continue;
+    line = line_;
     return true;
   }
   if (in_.bad()) {
     throw Error(ErrorKind::io, "E_READ", source_name_ + ": read error after line " + std::to_string(line_));
   }
   return false;
+}
+
+void CsvReader::parse(std::string_view text, std::size_t line, CsvRecord& record) const {
+  record.line = line;
+  if (text.front() == '#') {
+    record.is_comment = true;
+    record.comment.assign(text);
+    record.raw.clear();
+    record.values.clear();
+    return;
+  }
+  record.is_comment = false;
+  record.comment.clear();
+  const auto where = [&] { return source_name_ + ":" + std::to_string(line); };
+  split_fields(text, record.raw, record.values, where);
+  if (record.values.size() != header_.size()) {
+    throw Error(ErrorKind::input, "E_CSV_FIELDS",
+                where() + ": " + std::to_string(record.values.size()) + " fields; expected " +
+                    std::to_string(header_.size()) + " as in the header (line " + std::to_string(header_line_) + ")");
+  }
+}
+
+bool CsvReader::next(CsvRecord& record) {
+  std::size_t line = 0;
+  if (!next_line(line_buffer_, line)) return false;  // the buffer is reused: no allocation a row
+  parse(line_buffer_, line, record);
+  return true;
 }
 
 void write_csv_line(std::ostream& out, const std::vector<std::string>& fields) {

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <sstream>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -355,6 +356,61 @@ TEST(ControlSet, Point5_DynamicFrameWithoutEpochIsRefusedNamingTheCommentOrKey) 
   // The bundled sets name their epochs.
   for (const char* f : {"airport_control.csv", "airport_control_orthometric.csv"}) {
     EXPECT_NO_THROW(read_control_set(std::string(GEOANCHOR_FIXTURES_DIR) + "/" + f, {})) << f;
+  }
+}
+
+// The rows are parsed a batch at a time on several threads (issue 12 point
+// 13): a file of many batches reads every mark in file order with its line,
+// and of several bad rows the error named is the earliest line's, whichever
+// kind it is, as a row-by-row read meets them.
+TEST(ControlSet, ManyRowsKeepTheirOrderAndTheEarliestErrorIsNamed) {
+  constexpr std::size_t kRows = 50000;  // several batches of lines
+  const auto file = [&](const std::map<std::size_t, std::string>& bad_rows) {
+    std::string text = "# source_frame = ITRF2014@2024.5\n# target_frame = ETRF2000@2024.5\n"
+                       "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n";
+    for (std::size_t i = 0; i < kRows; ++i) {
+      if (const auto b = bad_rows.find(i); b != bad_rows.end()) {
+        text += b->second + "\n";
+        continue;
+      }
+      if (i % 1000 == 7) text += "# a comment between rows\n";
+      const double x = 4271315.0 + static_cast<double>(i) * 0.25;
+      text += "M" + std::to_string(i) + "," + std::to_string(x) + ",641096.4,4678048.5," + std::to_string(x + 0.5) +
+              ",641096.9,4678048.1,0.003,0.003\n";
+    }
+    return text;
+  };
+  std::istringstream in(file({}));
+  const auto set = read_control_csv(in, "big.csv", {});
+  ASSERT_EQ(set.points.size(), kRows);
+  std::size_t line = 3;  // two comments and the header come first
+  for (std::size_t i = 0; i < kRows; ++i) {
+    if (i % 1000 == 7) ++line;
+    ++line;
+    ASSERT_EQ(set.points[i].id, "M" + std::to_string(i)) << i;
+    ASSERT_EQ(set.points[i].line, line) << i;
+    ASSERT_EQ(set.points[i].source.m.x(), 4271315.0 + static_cast<double>(i) * 0.25) << i;
+  }
+  // The line of row i when no row is replaced: the header is line 3, a
+  // comment precedes rows 7, 1007, ...
+  const auto line_of = [](std::size_t i) { return std::to_string(4 + i + (i + 993) / 1000); };
+  const std::string bad_number = "B,4271315.0,x,4678048.5,4271315.5,641096.9,4678048.1,0.003,0.003";
+  const std::string bad_count = "B,4271315.0,641096.4";
+  const std::string not_utf8 = "B\xE9,4271315.0,641096.4,4678048.5,4271315.5,641096.9,4678048.1,0.003,0.003";
+  struct Case {
+    std::map<std::size_t, std::string> rows;
+    std::string code;
+    std::size_t first;
+  };
+  for (const Case& c : {Case{{{30000, bad_number}, {41000, not_utf8}}, "E_VALUE", 30000},
+                        Case{{{30000, not_utf8}, {41000, bad_number}}, "E_CSV_NOT_UTF8", 30000},
+                        Case{{{9000, bad_count}, {9001, bad_number}}, "E_CSV_FIELDS", 9000},
+                        Case{{{9001, bad_count}, {9000, not_utf8}}, "E_CSV_NOT_UTF8", 9000},
+                        Case{{{20000, bad_number}, {1000, not_utf8}, {40000, bad_count}}, "E_CSV_NOT_UTF8", 1000},
+                        Case{{{kRows - 1, bad_number}, {kRows - 2, bad_count}}, "E_CSV_FIELDS", kRows - 2}}) {
+    const auto [code, message] = read_error(file(c.rows), "big.csv", {});
+    EXPECT_EQ(code, c.code) << message;
+    EXPECT_EQ(message.rfind("big.csv:" + line_of(c.first) + ": ", 0), 0u) << "row " << c.first << ": " << message;
   }
 }
 

@@ -52,6 +52,13 @@ class CsvReader {
   // The next record or comment; false at end of input.
   bool next(CsvRecord& record);
 
+  // next() in two steps, so that lines can be read in order and parsed on
+  // several threads: next_line() reads the next line that is not blank into
+  // `text` (UTF-8 checked, line end dropped) with its 1-based number; parse()
+  // splits such a line into `record` (const: safe to call concurrently).
+  bool next_line(std::string& text, std::size_t& line);
+  void parse(std::string_view text, std::size_t line, CsvRecord& record) const;
+
  private:
   bool read_line(std::string& line);
   void require_utf8(const std::string& line) const;
