@@ -9,12 +9,15 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <future>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
+#include <thread>
 #include <tuple>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -1230,6 +1233,139 @@ std::string proj_pipeline(const TransformFile& t) {
   return out;
 }
 
+namespace {
+
+// One point record, one JSON object a line, appended to `out` (`first`: the
+// array's first element, written without the comma). The record is formed
+// in a stack buffer (numbers formatted in place, keys copied with their
+// lengths known) and appended once: most of its cost is the 13 shortest
+// round-trip numbers.
+void append_point_record(std::string& out, const FitPointRecord& p, bool first) {
+  // 13 numbers of at most 24 characters, an int, the keys: under 700 bytes.
+  char buf[1024];
+  char* at = buf;
+  const auto lit = [&](std::string_view v) {
+    std::memcpy(at, v.data(), v.size());
+    at += v.size();
+  };
+  const auto num = [&](double v) {
+    if (!std::isfinite(v)) {
+      lit("null");
+      return;
+    }
+    at = std::to_chars(at, at + 32, v).ptr;  // 32 > the longest double, "-2.2250738585072014e-308"
+  };
+  const auto triple = [&](const std::array<double, 3>& v) {
+    *at++ = '[';
+    num(v[0]);
+    lit(", ");
+    num(v[1]);
+    lit(", ");
+    num(v[2]);
+    *at++ = ']';
+  };
+  const auto flag = [&](bool b) { lit(b ? std::string_view("true") : std::string_view("false")); };
+  // A JSON string: as is when nothing in it needs escaping (the common id),
+  // else through the JSON library; the record is flushed first, since an id
+  // has no length limit.
+  const auto text_value = [&](const std::string& v) {
+    const bool plain = std::all_of(v.begin(), v.end(), [](char c) {
+      return c != '"' && c != '\\' && static_cast<unsigned char>(c) >= 0x20 && c != 0x7f;
+    });
+    out.append(buf, static_cast<std::size_t>(at - buf));
+    at = buf;
+    if (plain) {
+      out += '"';
+      out += v;
+      out += '"';
+    } else {
+      out += json(v).dump();
+    }
+  };
+  lit(first ? std::string_view("\n    {\"id\": ") : std::string_view(",\n    {\"id\": "));
+  text_value(p.id);
+  lit(", \"mdb_m\": ");
+  num(p.mdb_m);
+  if (!p.note.empty()) {
+    lit(", \"note\": ");
+    text_value(p.note);
+  }
+  lit(", \"outlier\": ");
+  flag(p.outlier);
+  lit(", \"point_test\": {\"dof\": ");
+  at = std::to_chars(at, at + 16, p.point_test_dof).ptr;
+  lit(", \"p_value\": ");
+  num(p.point_test_p);
+  lit(", \"statistic\": ");
+  num(p.point_test);
+  lit("}, \"redundancy_enu\": ");
+  triple(p.redundancy_enu);
+  lit(", \"residual_enu_m\": ");
+  triple(p.residual_enu_m);
+  if (p.robust_weight < 1.0) {
+    lit(", \"robust_weight\": ");
+    num(p.robust_weight);
+  }
+  lit(", \"used\": ");
+  flag(p.used);
+  lit(", \"w_enu\": ");
+  triple(p.w_enu);
+  lit(", \"w_test\": ");
+  num(p.w_test);
+  *at++ = '}';
+  out.append(buf, static_cast<std::size_t>(at - buf));
+}
+
+// The "points" array's elements, in order. Formatting the numbers is most of
+// a large fit's output time (10⁶ marks: about 450 MB of text), so blocks of
+// records are formatted on every core while the previous round of blocks is
+// written; the bytes are those of a one-thread loop, and no more than two
+// rounds (a few megabytes) are ever held.
+void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& points) {
+  constexpr std::size_t kBlock = 4096;  // records a task formats (about 1.8 MB)
+  const std::size_t blocks = (points.size() + kBlock - 1) / kBlock;
+  const std::size_t tasks = std::clamp<std::size_t>(std::thread::hardware_concurrency(), 1, 8);
+  const auto format_block = [&](std::size_t b, std::string& text) {
+    text.clear();
+    const std::size_t end = std::min(points.size(), (b + 1) * kBlock);
+    for (std::size_t i = b * kBlock; i < end; ++i) append_point_record(text, points[i], i == 0);
+  };
+  const auto write_all = [&](const std::vector<std::string>& texts) {
+    for (const auto& text : texts) out.write(text.data(), static_cast<std::streamsize>(text.size()));
+  };
+  if (blocks <= 1 || tasks == 1) {
+    std::string text;
+    for (std::size_t b = 0; b < blocks; ++b) {
+      format_block(b, text);
+      out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    }
+    return;
+  }
+  std::vector<std::string> ready, next(tasks);
+  for (std::size_t first = 0; first < blocks; first += tasks) {
+    const std::size_t count = std::min(tasks, blocks - first);
+    next.resize(count);
+    std::vector<std::future<void>> running;
+    running.reserve(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      running.push_back(std::async(std::launch::async, [&, k] { format_block(first + k, next[k]); }));
+    }
+    // The previous round goes out while this one is formatted; a failed
+    // task's exception (bad_alloc) reaches the caller through get().
+    try {
+      write_all(ready);
+    } catch (...) {
+      for (auto& r : running) r.wait();
+      throw;
+    }
+    for (auto& r : running) r.get();
+    std::swap(ready, next);
+  }
+  write_all(ready);
+}
+
+}  // namespace
+
 void write_json(std::ostream& out, const TransformFile& t) {
   json doc;
   doc["format_version"] = 1;
@@ -1348,86 +1484,9 @@ void write_json(std::ostream& out, const TransformFile& t) {
     const auto at = text.find(kPlaceholder);
     if (at == std::string::npos) throw std::logic_error("transform file: the points placeholder is missing");
     out.write(text.data(), static_cast<std::streamsize>(at));
-    // Written a megabyte at a time: the records of 10⁶ marks (about 400 MB)
-    // are never held whole.
-    constexpr std::size_t kFlushBytes = 1 << 20;
-    std::string points = "\n  \"points\": [";
-    points.reserve(kFlushBytes + 4096);
-    const auto num = [&](double v) {
-      if (!std::isfinite(v)) {
-        points += "null";
-        return;
-      }
-      char buf[32];
-      const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
-      points.append(buf, ec == std::errc() ? end : buf);
-    };
-    const auto triple = [&](const std::array<double, 3>& v) {
-      points += '[';
-      num(v[0]);
-      points += ", ";
-      num(v[1]);
-      points += ", ";
-      num(v[2]);
-      points += ']';
-    };
-    const auto flag = [&](bool b) { points += b ? "true" : "false"; };
-    // A JSON string: as is when nothing in it needs escaping (the common id),
-    // else through the JSON library.
-    const auto text_value = [&](const std::string& v) {
-      const bool plain = std::all_of(v.begin(), v.end(), [](char c) {
-        return c != '"' && c != '\\' && static_cast<unsigned char>(c) >= 0x20 && c != 0x7f;
-      });
-      if (plain) {
-        points += '"';
-        points += v;
-        points += '"';
-      } else {
-        points += json(v).dump();
-      }
-    };
-    bool first = true;
-    for (const auto& p : t.fit->points) {
-      points += first ? "\n    {" : ",\n    {";
-      first = false;
-      points += "\"id\": ";
-      text_value(p.id);
-      points += ", \"mdb_m\": ";
-      num(p.mdb_m);
-      if (!p.note.empty()) {
-        points += ", \"note\": ";
-        text_value(p.note);
-      }
-      points += ", \"outlier\": ";
-      flag(p.outlier);
-      points += ", \"point_test\": {\"dof\": ";
-      points += std::to_string(p.point_test_dof);
-      points += ", \"p_value\": ";
-      num(p.point_test_p);
-      points += ", \"statistic\": ";
-      num(p.point_test);
-      points += "}, \"redundancy_enu\": ";
-      triple(p.redundancy_enu);
-      points += ", \"residual_enu_m\": ";
-      triple(p.residual_enu_m);
-      if (p.robust_weight < 1.0) {
-        points += ", \"robust_weight\": ";
-        num(p.robust_weight);
-      }
-      points += ", \"used\": ";
-      flag(p.used);
-      points += ", \"w_enu\": ";
-      triple(p.w_enu);
-      points += ", \"w_test\": ";
-      num(p.w_test);
-      points += '}';
-      if (points.size() > kFlushBytes) {
-        out.write(points.data(), static_cast<std::streamsize>(points.size()));
-        points.clear();
-      }
-    }
-    points += first ? "]" : "\n  ]";
-    out.write(points.data(), static_cast<std::streamsize>(points.size()));
+    out << "\n  \"points\": [";
+    write_point_records(out, t.fit->points);
+    out << (t.fit->points.empty() ? "]" : "\n  ]");
     const std::size_t rest = at + kPlaceholder.size();
     out.write(text.data() + rest, static_cast<std::streamsize>(text.size() - rest));
   } else {

@@ -3,8 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <random>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/io/transform_file.hpp"
@@ -270,6 +273,58 @@ TEST(TransformFile, Point9_SigmasNeedACorrelationMatrixOrTheWordNone) {
   EXPECT_NE(error_of(replace(t3, R"([[1, 0.5, -0.2], [0.5, 1, 0.1], [-0.2, 0.1, 1]])", R"("identity")"))
                 .find("correlation: value \"identity\" unknown"),
             std::string::npos);
+}
+
+// issue 12 point 13: the point records of a large fit are formatted in
+// blocks on several threads; written and read back, every record comes back
+// exactly, in order, one a line.
+TEST(TransformFile, Point13_ManyPointRecordsReadBackExactlyInOrder) {
+  const std::string text = helmert7_with(std::string(kSigmas7) + R"(, "correlation": "none",
+      "statistics": {"sigma0": 0.9, "dof": 12, "sigmas_scaled_by_sigma0": false, "alpha": 0.05, "alpha_point": 0.001,
+                     "global_test": {"statistic": 10.8, "critical": 21.0, "critical_lower": 4.4, "passed": true, "applicable": true},
+                     "warnings": []})");
+  TransformFile t = parse_transform_json(text, "T.json");
+  ASSERT_TRUE(t.fit);
+  constexpr std::size_t kMarks = 30011;  // several blocks, the last one short
+  std::mt19937_64 rng(13);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (std::size_t i = 0; i < kMarks; ++i) {
+    FitPointRecord p;
+    p.id = i % 997 == 0 ? "quote\"d " + std::to_string(i) : "P" + std::to_string(i);
+    p.residual_enu_m = {g(rng) * 0.003, g(rng) * 0.003, g(rng) * 0.005};
+    p.w_enu = {g(rng), g(rng), i % 101 == 0 ? std::numeric_limits<double>::quiet_NaN() : g(rng)};
+    p.w_test = p.w_enu[0];
+    p.redundancy_enu = {0.99, 0.98, 0.97};
+    p.mdb_m = 0.01 + static_cast<double>(i) * 1e-9;
+    p.point_test = std::fabs(g(rng));
+    p.point_test_dof = 3;
+    p.point_test_p = 0.5;
+    p.outlier = i % 503 == 0;
+    p.used = !p.outlier;
+    if (p.outlier) p.note = "w-test";
+    t.fit->points.push_back(p);
+  }
+  const std::string written = to_json_text(t);
+  const TransformFile back = parse_transform_json(written, "written");
+  ASSERT_TRUE(back.fit);
+  ASSERT_EQ(back.fit->points.size(), kMarks);
+  const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+  for (std::size_t i = 0; i < kMarks; ++i) {
+    const FitPointRecord &a = t.fit->points[i], &b = back.fit->points[i];
+    ASSERT_EQ(b.id, a.id) << i;
+    for (std::size_t k = 0; k < 3; ++k) {
+      ASSERT_TRUE(same(b.residual_enu_m[k], a.residual_enu_m[k]) && same(b.w_enu[k], a.w_enu[k]) &&
+                  same(b.redundancy_enu[k], a.redundancy_enu[k]))
+          << i;
+    }
+    ASSERT_TRUE(same(b.mdb_m, a.mdb_m) && same(b.point_test, a.point_test) && same(b.w_test, a.w_test)) << i;
+    ASSERT_EQ(b.outlier, a.outlier) << i;
+    ASSERT_EQ(b.note, a.note) << i;
+  }
+  // One record a line: the line after "points" holds the first mark.
+  const auto at = written.find("\"points\": [\n    {\"id\": \"quote\\\"d 0\"");
+  EXPECT_NE(at, std::string::npos);
+  EXPECT_GT(std::count(written.begin(), written.end(), '\n'), static_cast<std::ptrdiff_t>(kMarks));
 }
 
 // issue 12 point 9: a fit record written is read back as it was.
