@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -359,6 +361,50 @@ TEST(ControlExtentTest, DistanceIsZeroInsideAndGrowsOutside) {
   EXPECT_EQ(e.distance_m(plane.ecef_from_enu({Eigen::Vector3d(500, 500, 30), o})), 0.0);
   EXPECT_NEAR(e.distance_m(plane.ecef_from_enu({Eigen::Vector3d(4000, 0, 0), o})), 3000.0, kPlanesTol_m);
   EXPECT_NEAR(e.distance_m(plane.ecef_from_enu({Eigen::Vector3d(4000, 5000, 0), o})), 5000.0, kPlanesTol_m);
+}
+
+// The hull of many marks (the candidates are thinned before the sort)
+// against its definition: a strictly convex counter-clockwise polygon whose
+// vertices are marks and that holds every mark is the convex hull. The
+// marks fill a disc, then a square with many marks on one of its edges.
+TEST(ControlExtentTest, HullOfManyMarksIsTheirConvexHull) {
+  const geodesy::LocalOrigin o = origin(47.464722, 8.549167, 480.0);
+  const geodesy::LocalTangentPlane plane(o);
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const bool disc : {true, false}) {
+    std::vector<geodesy::EcefPosition> marks;
+    std::vector<std::array<double, 2>> local;
+    while (local.size() < 20000) {
+      double e = u(rng) * 3000.0, n = u(rng) * 3000.0;
+      if (disc && std::hypot(e, n) > 3000.0) continue;
+      if (!disc && local.size() % 50 == 0) e = 3000.0;  // an edge with many marks on it
+      local.push_back({e, n});
+      marks.push_back(plane.ecef_from_enu({Eigen::Vector3d(e, n, 0), o}));
+    }
+    const ControlExtent x = ControlExtent::of(marks);
+    const auto& h = x.hull_en_m;
+    ASSERT_GE(h.size(), 3u);
+    const auto cross = [](const std::array<double, 2>& a, const std::array<double, 2>& b, const std::array<double, 2>& c) {
+      return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    };
+    for (std::size_t i = 0; i < h.size(); ++i) {
+      EXPECT_GT(cross(h[i], h[(i + 1) % h.size()], h[(i + 2) % h.size()]), 0.0) << "vertex " << i << " not strictly convex";
+    }
+    // Vertices are marks (in the centroid's plane: compare through ECEF).
+    const geodesy::LocalTangentPlane hull_plane(x.centroid);
+    std::vector<std::array<double, 2>> in_hull_plane;
+    for (const auto& m : marks) {
+      const Eigen::Vector3d v = hull_plane.enu_from_ecef(m).enu_m;
+      in_hull_plane.push_back({v.x(), v.y()});
+    }
+    for (const auto& v : h) {
+      EXPECT_NE(std::find(in_hull_plane.begin(), in_hull_plane.end(), v), in_hull_plane.end()) << v[0] << "," << v[1];
+    }
+    std::size_t outside = 0;
+    for (const auto& m : marks) outside += x.distance_m(m) == 0.0 ? 0u : 1u;
+    EXPECT_EQ(outside, 0u) << (disc ? "disc" : "square");
+  }
 }
 
 std::string sidecar_error(const std::string& text) {
