@@ -58,35 +58,43 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
     out << "  global test: not applicable (no a-priori sigmas, or no redundancy)\n";
   }
   // Removed marks first, then unused ones, then by decreasing max |w| (an
-  // untestable mark's NaN last); the keys are gathered first so that sorting
-  // 10⁶ marks reads 16 bytes a mark, not a whole PointResult.
+  // untestable mark's NaN last; equal keys in file order). Large sets show
+  // every mark that is not "ok" and the largest |w| of the rest; the
+  // transform file's points hold every mark. Only the rows shown are sorted
+  // (10⁶ marks: the 50 largest are selected, not all of them sorted), on
+  // keys of 24 bytes a mark, not whole PointResults.
   struct Key {
     int rank;
     double w;
     std::size_t i;
   };
-  std::vector<Key> keys(r.points.size());
+  const auto before = [](const Key& a, const Key& b) {
+    return a.rank != b.rank ? a.rank < b.rank : a.w != b.w ? a.w > b.w : a.i < b.i;
+  };
+  const auto is_ok = [&](const solver::PointResult& p) {
+    return !p.outlier && p.used && p.point_dof > 0 && !(p.point_p_value < o.alpha_point) && !(p.robust_weight < 1.0);
+  };
+  constexpr std::size_t kAllRowsUpTo = 1000, kOkRowsOfLargeSets = 50;
+  const bool large = r.points.size() > kAllRowsUpTo;
+  std::vector<Key> shown, ok_keys;
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     const auto& p = r.points[i];
-    keys[i] = {p.outlier ? 0 : !p.used ? 1 : 2, std::isnan(p.w_max) ? -std::numeric_limits<double>::infinity() : p.w_max, i};
+    const Key k{p.outlier ? 0 : !p.used ? 1 : 2, std::isnan(p.w_max) ? -std::numeric_limits<double>::infinity() : p.w_max, i};
+    (large && is_ok(p) ? ok_keys : shown).push_back(k);
   }
-  std::stable_sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) { return a.rank != b.rank ? a.rank < b.rank : a.w > b.w; });
-  std::vector<std::size_t> order(keys.size());
-  for (std::size_t k = 0; k < keys.size(); ++k) order[k] = keys[k].i;
+  std::size_t ok_hidden = 0;
+  if (ok_keys.size() > kOkRowsOfLargeSets) {
+    const auto cut = ok_keys.begin() + static_cast<std::ptrdiff_t>(kOkRowsOfLargeSets);
+    std::nth_element(ok_keys.begin(), cut, ok_keys.end(), before);
+    ok_hidden = ok_keys.size() - kOkRowsOfLargeSets;
+    ok_keys.erase(cut, ok_keys.end());
+  }
+  shown.insert(shown.end(), ok_keys.begin(), ok_keys.end());
+  std::sort(shown.begin(), shown.end(), before);
   out << "\nResiduals (target − transformed source, local E/N/U, mm); w-tests critical |w| = " << format_fixed(r.w_critical, 2)
       << "\n  id            dE       dN       dU      wE     wN     wU    MDB mm  status\n";
-  // Large sets: every mark that is not "ok", then the largest |w| of the
-  // rest; the transform file's points hold every mark.
-  constexpr std::size_t kAllRowsUpTo = 1000, kOkRowsOfLargeSets = 50;
-  std::size_t ok_shown = 0, ok_hidden = 0;
-  for (std::size_t i : order) {
-    const auto& p = r.points[i];
-    const bool ok = !p.outlier && p.used && p.point_dof > 0 && !(p.point_p_value < o.alpha_point) && !(p.robust_weight < 1.0);
-    if (ok && r.points.size() > kAllRowsUpTo && ok_shown >= kOkRowsOfLargeSets) {
-      ++ok_hidden;
-      continue;
-    }
-    if (ok) ++ok_shown;
+  for (const Key& k : shown) {
+    const auto& p = r.points[k.i];
     char line[200];
     const std::string mdb = std::isfinite(p.mdb_m) ? format_fixed(1e3 * p.mdb_m, 1) : "-";
     const std::string status = p.outlier                        ? "OUTLIER (removed)"
