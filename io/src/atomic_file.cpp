@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
@@ -139,21 +140,31 @@ void remove_stale_temporaries_once(const fs::path& folder) {
 // A filebuf that keeps the errno of its first failed write, so that the
 // error names the cause (disk full, file too large, ...) and not whatever
 // a later call left in errno.
+//
+// It also starts the disk writes of a large output while it is still being
+// written: every kWritebackBytes it asks the kernel to begin writing what
+// it holds (sync_file_range, which does not wait), so that the fsync before
+// publishing waits for the last stretch only, not for the whole file (a fit
+// of 10⁶ marks writes 450 MB).
 class CheckedFileBuf : public std::filebuf {
  public:
   int first_error() const { return first_errno_; }
+  // The descriptor writeback is started on (the same file); -1: none.
+  void start_writeback_on(int fd) { writeback_fd_ = fd; }
 
  protected:
   int_type overflow(int_type c) override {
     errno = 0;
     const int_type r = std::filebuf::overflow(c);
     if (traits_type::eq_int_type(r, traits_type::eof()) && !traits_type::eq_int_type(c, traits_type::eof())) note();
+    wrote(1);
     return r;
   }
   std::streamsize xsputn(const char* s, std::streamsize n) override {
     errno = 0;
     const std::streamsize r = std::filebuf::xsputn(s, n);
     if (r < n) note();
+    wrote(r);
     return r;
   }
   int sync() override {
@@ -176,10 +187,24 @@ class CheckedFileBuf : public std::filebuf {
   }
 
  private:
+  static constexpr std::streamsize kWritebackBytes = 16 << 20;
   void note() {
     if (first_errno_ == 0) first_errno_ = errno != 0 ? errno : EIO;
   }
+  void wrote(std::streamsize n) {
+    since_writeback_ += std::max<std::streamsize>(n, 0);
+    if (writeback_fd_ < 0 || since_writeback_ < kWritebackBytes) return;
+    since_writeback_ = 0;
+    // Only a hint: where it fails (a filesystem without it) the fsync does
+    // all the work, as without it; errors of the writes themselves surface
+    // there and in first_error().
+    const int saved = errno;
+    (void)::sync_file_range(writeback_fd_, 0, 0, SYNC_FILE_RANGE_WRITE);
+    errno = saved;
+  }
   int first_errno_ = 0;
+  int writeback_fd_ = -1;
+  std::streamsize since_writeback_ = 0;
 };
 
 }  // namespace
@@ -331,6 +356,7 @@ AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path, Overwrite o
     unregister_temp(registry_slot_);
     throw Error(ErrorKind::io, "E_OUTPUT_OPEN", temp_path_.string() + ": cannot open temporary output: " + reason(err));
   }
+  s_->buf.start_writeback_on(fd);
 }
 
 AtomicOutputFile::~AtomicOutputFile() {
@@ -338,6 +364,7 @@ AtomicOutputFile::~AtomicOutputFile() {
     s_->buf.close();
     if (!s_->published && !s_->removed) ::unlink(temp_path_.c_str());
   }
+  s_->buf.start_writeback_on(-1);
   if (s_->lock_fd >= 0) ::close(s_->lock_fd);
   unregister_temp(registry_slot_);
 }
@@ -459,6 +486,7 @@ void publish_together(std::initializer_list<AtomicOutputFile*> outputs) {
   // The locks go only now: until here a sidecar published first is still
   // claimed by this process while its tile is being published.
   for (auto* f : v) {
+    f->s_->buf.start_writeback_on(-1);
     if (f->s_->lock_fd >= 0) ::close(f->s_->lock_fd);
     f->s_->lock_fd = -1;
   }
