@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -813,33 +814,47 @@ TEST_F(FitCli, Point5_ADynamicFrameWithoutItsEpochInTheControlSetOrAFlagIsRefuse
 
 // ---------------------------------------------------------------- issue 12 points 4, 8, 12, 13
 
+// The bundled control set with its comments kept (the frames among them),
+// its header line replaced by `header` (empty: kept) and each data row's
+// fields (split at commas) turned by `row` into its new line, or dropped
+// where `row` gives nullopt.
+template <class F>
+std::string rewritten_bundled_control(const std::string& header, F row) {
+  std::ifstream in(kControl);
+  std::string out;
+  bool seen_header = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') {
+      out += line + "\n";
+    } else if (!seen_header) {  // id,lat_src_deg,lon_src_deg,h_src_m,lat_dst_deg,lon_dst_deg,h_dst_m,sigma_src_m,sigma_dst_m,kind
+      seen_header = true;
+      out += (header.empty() ? line : header) + "\n";
+    } else {
+      std::vector<std::string> f;
+      std::stringstream cells(line);
+      for (std::string c; std::getline(cells, c, ',');) f.push_back(c);
+      if (const std::optional<std::string> r = row(f)) out += *r + "\n";
+    }
+  }
+  return out;
+}
+
 // The bundled marks (geodetic, GRS 80) as ECEF through PROJ's cart, each
 // value passed through `transform` and written with 17 significant digits.
 template <class F>
 std::string bundled_marks_as_ecef(F transform) {
   const ProjPipeline cart("+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=cart +ellps=GRS80");
-  std::ifstream in(kControl);
-  std::string line, out = "# source_frame = ITRF2014@2024.5\n# target_frame = ETRF2000@2024.5\n"
-                          "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n";
-  bool header = false;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    if (!header) {  // id,lat_src_deg,lon_src_deg,h_src_m,lat_dst_deg,lon_dst_deg,h_dst_m,sigma_src_m,sigma_dst_m,kind
-      header = true;
-      continue;
-    }
-    std::vector<std::string> f;
-    std::stringstream cells(line);
-    for (std::string c; std::getline(cells, c, ',');) f.push_back(c);
-    const Eigen::Vector3d src = cart.forward({std::stod(f[2]), std::stod(f[1]), std::stod(f[3])});
-    const Eigen::Vector3d dst = cart.forward({std::stod(f[5]), std::stod(f[4]), std::stod(f[6])});
-    out += f[0];
-    for (const Eigen::Vector3d* v : {&src, &dst}) {
-      for (int k = 0; k < 3; ++k) out += "," + format_shortest(transform((*v)[k]));
-    }
-    out += "," + f[7] + "," + f[8] + "\n";
-  }
-  return out;
+  return rewritten_bundled_control(
+      "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m",
+      [&](const std::vector<std::string>& f) -> std::optional<std::string> {
+        const Eigen::Vector3d src = cart.forward({std::stod(f[2]), std::stod(f[1]), std::stod(f[3])});
+        const Eigen::Vector3d dst = cart.forward({std::stod(f[5]), std::stod(f[4]), std::stod(f[6])});
+        std::string out = f[0];
+        for (const Eigen::Vector3d* v : {&src, &dst}) {
+          for (int k = 0; k < 3; ++k) out += "," + format_shortest(transform((*v)[k]));
+        }
+        return out + "," + f[7] + "," + f[8];
+      });
 }
 
 // issue 12 point 4: at b045a22 the quantized set fitted without a word,
@@ -912,23 +927,12 @@ TEST_F(FitCli, Issue12Point8_MarksNearlyOnALineAreRefusedNamingTheUndeterminedRo
 // issue 12 point 12: at b045a22 a lat/lon swap ended in a bare Ceres
 // failure, with Ceres' own log lines before geoanchor's message.
 TEST_F(FitCli, Issue12Point12_ALatLonSwapIsNamedAndGeoanchorSpeaksFirst) {
-  std::ifstream in(kControl);
-  std::string line, csv;
-  bool header = false;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#' || !header) {
-      if (!line.empty() && line[0] != '#') header = true;
-      csv += line + "\n";
-      continue;
-    }
-    std::vector<std::string> f;
-    std::stringstream cells(line);
-    for (std::string c; std::getline(cells, c, ',');) f.push_back(c);
-    std::swap(f[4], f[5]);  // the target's latitude and longitude swapped
-    for (std::size_t k = 0; k < f.size(); ++k) csv += (k ? "," : "") + f[k];
-    csv += "\n";
-  }
-  write("swapped.csv", csv);
+  write("swapped.csv", rewritten_bundled_control("", [](std::vector<std::string> f) -> std::optional<std::string> {
+          std::swap(f[4], f[5]);  // the target's latitude and longitude swapped
+          std::string row;
+          for (std::size_t k = 0; k < f.size(); ++k) row += (k ? "," : "") + f[k];
+          return row;
+        }));
   const RunResult r = run("fit " + path("swapped.csv").string() + " --model helmert7 --convention position_vector -o " +
                           path("T.json").string());
   EXPECT_EQ(r.exit_code, 3) << r.err;
@@ -1001,13 +1005,12 @@ TEST_F(FitCli, Issue12Point13_ALargeSetsReportListsWhatMattersAndTheFileHoldsEve
 // that convert and apply refused ("points[0].w_test: value null is not a
 // number").
 TEST_F(FitCli, Issue12Point9_AFitWithoutRedundancyWritesAFileEveryReaderTakes) {
-  std::string one_mark;
-  std::istringstream in(slurp(kControl));
-  for (std::string l; std::getline(in, l);) {
-    one_mark += l + "\n";
-    if (l.rfind("P01,", 0) == 0) break;
-  }
-  write("one.csv", one_mark);
+  write("one.csv", rewritten_bundled_control("", [](const std::vector<std::string>& f) -> std::optional<std::string> {
+          if (f[0] != "P01") return std::nullopt;
+          std::string row;
+          for (std::size_t k = 0; k < f.size(); ++k) row += (k ? "," : "") + f[k];
+          return row;
+        }));
   const RunResult f = run("fit " + path("one.csv").string() + " --model translation3 -o " + path("T.json").string());
   ASSERT_EQ(f.exit_code, 0) << f.err;
   const auto doc = nlohmann::json::parse(slurp(path("T.json")));
@@ -1027,29 +1030,16 @@ TEST_F(FitCli, Issue12Point9_AFitWithoutRedundancyWritesAFileEveryReaderTakes) {
 // same. The bundled marks (8.5°E) on zone 31N (0°–6°E): 2.5° beyond the band.
 TEST_F(FitCli, Issue12Point1_ControlOnAForcedUtmZoneBeyondItsBandIsWarnedAndRecorded) {
   const ProjPipeline utm31("+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=utm +zone=31 +ellps=GRS80");
-  std::ifstream in(kControl);
-  std::string line, csv;
-  bool header = false;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') {
-      csv += line + "\n";
-      continue;
-    }
-    std::vector<std::string> f;
-    std::stringstream cells(line);
-    for (std::string c; std::getline(cells, c, ',');) f.push_back(c);
-    if (!header) {
-      header = true;
-      csv += "id,lat_src_deg,lon_src_deg,h_src_m,easting_dst_m,northing_dst_m,h_dst_m,sigma_src_m,sigma_dst_m\n";
-      continue;
-    }
-    const Eigen::Vector3d en = utm31.forward({std::stod(f[5]), std::stod(f[4]), std::stod(f[6])});
-    char row[256];
-    std::snprintf(row, sizeof row, "%s,%s,%s,%s,%.4f,%.4f,%s,%s,%s\n", f[0].c_str(), f[1].c_str(), f[2].c_str(), f[3].c_str(),
-                  en.x(), en.y(), f[6].c_str(), f[7].c_str(), f[8].c_str());
-    csv += row;
-  }
-  write("grid.csv", csv);
+  write("grid.csv",
+        rewritten_bundled_control("id,lat_src_deg,lon_src_deg,h_src_m,easting_dst_m,northing_dst_m,h_dst_m,sigma_src_m,sigma_dst_m",
+                                  [&](const std::vector<std::string>& f) -> std::optional<std::string> {
+                                    const Eigen::Vector3d en = utm31.forward({std::stod(f[5]), std::stod(f[4]), std::stod(f[6])});
+                                    char row[256];
+                                    std::snprintf(row, sizeof row, "%s,%s,%s,%s,%.4f,%.4f,%s,%s,%s", f[0].c_str(), f[1].c_str(),
+                                                  f[2].c_str(), f[3].c_str(), en.x(), en.y(), f[6].c_str(), f[7].c_str(),
+                                                  f[8].c_str());
+                                    return std::string(row);
+                                  }));
   const RunResult r = run("fit " + path("grid.csv").string() + " --dst-zone 31N --ellipsoid GRS80 --model helmert7 "
                           "--convention position_vector -o " + path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
