@@ -255,7 +255,7 @@ void read_rows_in_parallel(CsvReader& reader, std::vector<ControlPoint>& points,
     CsvRecord r;
     try {
       for (std::size_t i = first; i < last; ++i) {
-        reader.parse(b.text[i], b.line[i], r);
+        reader.parse(b.text[i], b.line[i], r, false);  // the values only
         if (r.is_comment) continue;
         point_of(r, out.marks.emplace_back());
       }
@@ -263,35 +263,51 @@ void read_rows_in_parallel(CsvReader& reader, std::vector<ControlPoint>& points,
       out.error = std::current_exception();
     }
   };
-  Batch current, next;
-  std::vector<Part> parts(tasks);
-  read_batch(current);
-  while (true) {
-    const std::size_t per = (current.size + tasks - 1) / tasks;
+  // Two batches and their parts: one is parsed while the other is read and
+  // its marks moved into `points` (a task refers to its batch by address,
+  // so neither is ever swapped).
+  std::array<Batch, 2> batches;
+  std::array<std::vector<Part>, 2> parts{std::vector<Part>(tasks), std::vector<Part>(tasks)};
+  const auto launch = [&](std::size_t i) {
     std::vector<std::future<void>> running;
+    const Batch& b = batches[i];
+    const std::size_t per = (b.size + tasks - 1) / tasks;
     for (std::size_t k = 0; k < tasks; ++k) {
-      const std::size_t first = std::min(current.size, k * per), last = std::min(current.size, first + per);
-      parts[k].marks.clear();
-      parts[k].error = nullptr;
+      Part& part = parts[i][k];
+      const std::size_t first = std::min(b.size, k * per), last = std::min(b.size, first + per);
+      part.marks.clear();
+      part.error = nullptr;
       if (first == last) continue;
       if (tasks == 1) {
-        parse_part(current, first, last, parts[k]);
+        parse_part(b, first, last, part);
       } else {
-        running.push_back(std::async(std::launch::async, [&, first, last, k] { parse_part(current, first, last, parts[k]); }));
+        running.push_back(std::async(std::launch::async, [&, first, last] { parse_part(b, first, last, part); }));
       }
     }
+    return running;
+  };
+  std::size_t cur = 0;
+  read_batch(batches[cur]);
+  std::vector<std::future<void>> running = launch(cur);
+  while (true) {
+    const Batch& b = batches[cur];
     // The next lines are read while this batch is parsed (unless this one
     // ended the input).
-    const bool more = current.size == kBatch && !current.read_error;
-    if (more) read_batch(next);
+    const bool more = b.size == kBatch && !b.read_error;
+    if (more) read_batch(batches[1 - cur]);
     for (auto& r : running) r.get();
-    for (auto& part : parts) {
+    running.clear();
+    for (const auto& part : parts[cur]) {
       if (part.error) std::rethrow_exception(part.error);
+    }
+    if (b.read_error) std::rethrow_exception(b.read_error);
+    // The next batch is parsed while this one's marks are moved.
+    if (more) running = launch(1 - cur);
+    for (auto& part : parts[cur]) {
       for (auto& m : part.marks) points.push_back(std::move(m));
     }
-    if (current.read_error) std::rethrow_exception(current.read_error);
     if (!more) return;
-    std::swap(current, next);
+    cur = 1 - cur;
   }
 }
 

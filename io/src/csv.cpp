@@ -43,7 +43,7 @@ namespace {
 // rows must not build a file:line string for each. The fields' strings are
 // reused from the previous row (assign, not a new string each).
 template <class Where>
-void split_fields(std::string_view line, std::vector<std::string>& raw, std::vector<std::string>& values, const Where& where) {
+void split_fields(std::string_view line, std::vector<std::string>* raw, std::vector<std::string>& values, const Where& where) {
   std::size_t n = 0;  // fields so far
   const auto field = [&](std::vector<std::string>& v) -> std::string& {
     if (n < v.size()) return v[n];
@@ -86,12 +86,12 @@ void split_fields(std::string_view line, std::vector<std::string>& raw, std::vec
       value.assign(line.data() + i, stop - i);
       i = stop;
     }
-    field(raw).assign(line.data() + start, i - start);
+    if (raw) field(*raw).assign(line.data() + start, i - start);
     ++n;
     if (i >= line.size()) break;
     ++i;  // the comma
   }
-  raw.resize(n);
+  if (raw) raw->resize(n);
   values.resize(n);
 }
 
@@ -99,7 +99,7 @@ void split_fields(std::string_view line, std::vector<std::string>& raw, std::vec
 
 void split_csv_line(std::string_view line, std::vector<std::string>& raw, std::vector<std::string>& values,
                     std::string_view where) {
-  split_fields(line, raw, values, [where] { return where; });
+  split_fields(line, &raw, values, [where] { return where; });
 }
 
 double number_cell(const CsvRecord& r, std::size_t column, const std::vector<std::string>& header,
@@ -230,7 +230,7 @@ bool CsvReader::next_line(std::string& text, std::size_t& line) {
   return false;
 }
 
-void CsvReader::parse(std::string_view text, std::size_t line, CsvRecord& record) const {
+void CsvReader::parse(std::string_view text, std::size_t line, CsvRecord& record, bool keep_raw) const {
   record.line = line;
   if (text.front() == '#') {
     record.is_comment = true;
@@ -242,7 +242,8 @@ void CsvReader::parse(std::string_view text, std::size_t line, CsvRecord& record
   record.is_comment = false;
   record.comment.clear();
   const auto where = [&] { return source_name_ + ":" + std::to_string(line); };
-  split_fields(text, record.raw, record.values, where);
+  if (!keep_raw) record.raw.clear();
+  split_fields(text, keep_raw ? &record.raw : nullptr, record.values, where);
   if (record.values.size() != header_.size()) {
     throw Error(ErrorKind::input, "E_CSV_FIELDS",
                 where() + ": " + std::to_string(record.values.size()) + " fields; expected " +

@@ -55,9 +55,11 @@ class CsvReader {
   // next() in two steps, so that lines can be read in order and parsed on
   // several threads: next_line() reads the next line that is not blank into
   // `text` (UTF-8 checked, line end dropped) with its 1-based number; parse()
-  // splits such a line into `record` (const: safe to call concurrently).
+  // splits such a line into `record` (const: safe to call concurrently);
+  // without `keep_raw` the record's `raw` is left empty (a reader that uses
+  // the unquoted values only).
   bool next_line(std::string& text, std::size_t& line);
-  void parse(std::string_view text, std::size_t line, CsvRecord& record) const;
+  void parse(std::string_view text, std::size_t line, CsvRecord& record, bool keep_raw = true) const;
 
  private:
   bool read_line(std::string& line);
