@@ -840,7 +840,8 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
 
     // --- variance components (--vce) -----------------------------------------
     // θ_k ← θ_k · (vᵀ P Q_k P v) / tr(P Q_k P Q_vv), Q_k the group's current
-    // covariance; with one group this is θ ← θ σ̂0².
+    // covariance (the source's as J C Jᵀ, as the weights hold it); with one
+    // group this is θ ← θ σ̂0².
     if (o.vce && dof > 0) {
       double num_src = 0.0, num_dst = 0.0, den_src = 0.0, den_dst = 0.0;
       double s11 = 0.0, s12 = 0.0, s22 = 0.0;  // the VCE normal matrix: Σ tr(B_k B_l), B_k = Q_k P Q_vv P
@@ -848,7 +849,10 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
         const auto& p = control.points[active[k]];
         const Eigen::Matrix3d pqp = obs[k].w.transpose() * qvs[k] * obs[k].w;
         const Eigen::Vector3d pv = obs[k].w.transpose() * vw[k];
-        const Eigen::Matrix3d q_src = f_src * p.source_cov_m2, q_dst = f_dst * p.target_cov_m2;
+        // The source group's covariance as the weights carry it: turned and
+        // scaled by J of the estimate, as in whitening().
+        const Eigen::Matrix3d j = linear_part(sol.theta, obs[k].dt);
+        const Eigen::Matrix3d q_src = f_src * (j * p.source_cov_m2 * j.transpose()), q_dst = f_dst * p.target_cov_m2;
         num_src += pv.dot(q_src * pv);
         num_dst += pv.dot(q_dst * pv);
         den_src += (q_src * pqp).trace();
