@@ -232,7 +232,7 @@ bool CsvReader::next_line(std::string& text, std::size_t& line) {
 
 void CsvReader::parse(std::string_view text, std::size_t line, CsvRecord& record, bool keep_raw) const {
   record.line = line;
-  if (text.front() == '#') {
+  if (!text.empty() && text.front() == '#') {
     record.is_comment = true;
     record.comment.assign(text);
     record.raw.clear();
