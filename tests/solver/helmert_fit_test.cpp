@@ -501,6 +501,18 @@ TEST(EnuOriginFit, WithOneCentimetreNoiseTheTruthIsWithinTwoSigma) {
 }
 
 
+// helmert7 (position vector) with variance components estimated and every
+// point kept (no data snooping), as the variance-component tests fit.
+FitOptions vce_helmert7(geodesy::RotationModel rotation) {
+  FitOptions o;
+  o.model = FitModel::helmert7;
+  o.convention = Convention::position_vector;
+  o.rotation_model = rotation;
+  o.vce = true;
+  o.data_snooping = false;
+  return o;
+}
+
 TEST(VarianceComponents, RecoverASourceNoiseStatedTwiceTooSmall) {
   // Source noise is really twice what is stated (stated 1 mm at half the
   // points, 10 mm at the others); target 4 mm stated right. Expected
@@ -523,11 +535,7 @@ TEST(VarianceComponents, RecoverASourceNoiseStatedTwiceTooSmall) {
     p.source_cov_m2 = Eigen::Matrix3d::Identity() * stated_src * stated_src;
     p.target_cov_m2 = Eigen::Matrix3d::Identity() * 0.004 * 0.004;
   }
-  FitOptions o;
-  o.model = FitModel::helmert7;
-  o.convention = Convention::position_vector;
-  o.vce = true;
-  o.data_snooping = false;
+  const FitOptions o = vce_helmert7(geodesy::RotationModel::small_angle);
   const FitResult r = fit_helmert(set, o);
   ASSERT_TRUE(r.variance_factors.has_value());
   EXPECT_NEAR(r.variance_factors->first, 4.0, kSourceFactorTol);
@@ -567,13 +575,7 @@ TEST(VarianceComponents, ASourceCovarianceTurnedByALargeRotationIsEstimatedAsThe
     p.source_cov_m2 = stated_src.cwiseAbs2().asDiagonal();
     p.target_cov_m2 = Eigen::Matrix3d::Identity() * 0.004 * 0.004;
   }
-  FitOptions o;
-  o.model = FitModel::helmert7;
-  o.convention = Convention::position_vector;
-  o.rotation_model = geodesy::RotationModel::exact;
-  o.vce = true;
-  o.data_snooping = false;
-  const FitResult r = fit_helmert(set, o);
+  const FitResult r = fit_helmert(set, vce_helmert7(geodesy::RotationModel::exact));
   ASSERT_TRUE(r.variance_factors.has_value());
   EXPECT_NEAR(r.variance_factors->first, 4.0, kSourceFactorTol);
   EXPECT_NEAR(r.variance_factors->second, 1.0, kTargetFactorTol);
