@@ -10,6 +10,7 @@
 #include <fstream>
 #include <future>
 #include <map>
+#include <memory>
 #include <optional>
 #include <thread>
 #include <vector>
@@ -495,22 +496,21 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     if (epoch_col && !r.values[*epoch_col].empty()) {
       p.epoch = geodesy::parse_decimal_year(r.values[*epoch_col], source_name + ":" + std::to_string(r.line) + ": epoch");
     }
+    geodesy::MarkVelocities velocities;
+    int frames_with_velocity = 0;
     for (const auto* vc : {&vel_src, &vel_dst}) {
       if (!vc->v[0] || r.values[*vc->v[0]].empty()) continue;
       const Eigen::Vector3d v(rows.number(r, *vc->v[0]), rows.number(r, *vc->v[1]), rows.number(r, *vc->v[2]));
       const double sv = rows.number(r, *vc->sigma);
       if (!(sv > 0.0)) rows.fail(r, *vc->sigma, "must be > 0 (a standard deviation in metres per year)");
-      if (vc == &vel_src) {
-        p.source_velocity_m_per_year = v;
-        p.source_velocity_cov = Eigen::Matrix3d::Identity() * sv * sv;
-      } else {
-        p.target_velocity_m_per_year = v;
-        p.target_velocity_cov = Eigen::Matrix3d::Identity() * sv * sv;
-      }
+      (vc == &vel_src ? velocities.source_m_per_year : velocities.target_m_per_year) = v;
+      (vc == &vel_src ? velocities.source_cov : velocities.target_cov) = Eigen::Matrix3d::Identity() * sv * sv;
+      ++frames_with_velocity;
     }
-    if (p.source_velocity_m_per_year.has_value() != p.target_velocity_m_per_year.has_value()) {
-      rows.fail(r, *vel_src.v[0], "velocities must be given in both frames or in neither");
+    if (frames_with_velocity == 1) {
+      rows.fail(r, vel_src.v[0] ? *vel_src.v[0] : *vel_dst.v[0], "velocities must be given in both frames or in neither");
     }
+    if (frames_with_velocity == 2) p.velocities = std::make_shared<const geodesy::MarkVelocities>(velocities);
     if (use_col) {
       const std::string& u = r.values[*use_col];
       if (u == "1" || u == "true" || u == "yes") {

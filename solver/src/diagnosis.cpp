@@ -599,10 +599,10 @@ HypothesisResult epoch_hypothesis(const Engine& e, const Expectation& x, double 
   };
   std::vector<Candidate> candidates;
   bool velocities = !e.used.empty();
-  for (std::size_t i : e.used) velocities = velocities && e.set.points[i].target_velocity_m_per_year.has_value();
+  for (std::size_t i : e.used) velocities = velocities && e.set.points[i].velocities != nullptr;
   if (velocities) {
     Candidate c{"the points' own velocities", {}};
-    for (std::size_t i : e.used) c.g.push_back(Eigen::MatrixXd(*e.set.points[i].target_velocity_m_per_year));
+    for (std::size_t i : e.used) c.g.push_back(Eigen::MatrixXd(e.set.points[i].velocities->target_m_per_year));
     candidates.push_back(std::move(c));
   } else {
     for (const auto& pm : geodesy::plate_motion_models()) {

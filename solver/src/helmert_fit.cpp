@@ -114,8 +114,13 @@ struct Observation {
   Eigen::Vector3d y;   // target − target centroid
   Eigen::Matrix3d w;   // W with Wᵀ W = C⁻¹
   double dt = 0.0;     // years from the reference epoch
-  // Velocities (helmert14): ẏ − ẋ = ṫ' + Ṁ x + (M − I) ẋ observes the rates.
-  bool has_velocity = false;
+};
+
+// A mark's velocities (helmert14): ẏ − ẋ = ṫ' + Ṁ x + (M − I) ẋ observes the
+// rates. Apart from the positions, which most fits have alone (in them they
+// were half of each observation's memory).
+struct VelocityObservation {
+  std::size_t k = 0;  // the mark's position observation
   Eigen::Vector3d xdot = Eigen::Vector3d::Zero(), ydot = Eigen::Vector3d::Zero();
   Eigen::Matrix3d wv = Eigen::Matrix3d::Identity();  // whitening of the velocity difference
 };
@@ -251,7 +256,8 @@ std::array<double, static_cast<std::size_t>(K)> basis(const Observation& o, cons
 }
 
 template <int K>
-Reduced<K> reduce(const std::vector<Observation>& obs, const Scales& sc) {
+Reduced<K> reduce(const std::vector<Observation>& obs, const std::vector<VelocityObservation>& velocities,
+                  const Scales& sc) {
   constexpr int kDim = 3 * K;
   Eigen::Matrix<double, kDim, kDim> h = Eigen::Matrix<double, kDim, kDim>::Zero();
   Eigen::Matrix<double, kDim, 1> g = Eigen::Matrix<double, kDim, 1>::Zero();
@@ -268,17 +274,17 @@ Reduced<K> reduce(const std::vector<Observation>& obs, const Scales& sc) {
   }
   if constexpr (K == 11) {
     // Velocity rows: ẏ − ẋ = ṫ' + (M1 + 2 M2 Δt) x + ((M0 − I) + M1 Δt + M2 Δt²) ẋ.
-    for (const Observation& o : obs) {
-      if (!o.has_velocity) continue;
-      const Eigen::Matrix3d p = o.wv.transpose() * o.wv;
-      const Eigen::Vector3d py = p * (o.ydot - o.xdot);
+    for (const VelocityObservation& ov : velocities) {
+      const Observation& o = obs[ov.k];
+      const Eigen::Matrix3d p = ov.wv.transpose() * ov.wv;
+      const Eigen::Vector3d py = p * (ov.ydot - ov.xdot);
       const double t = o.dt, l = sc.l, d = sc.d;
       std::array<double, 11> psi{};
       psi[1] = 1.0 / d;
       for (int c = 0; c < 3; ++c) {
-        psi[static_cast<std::size_t>(2 + c)] = o.xdot(c) / l;
-        psi[static_cast<std::size_t>(5 + c)] = (o.x(c) + t * o.xdot(c)) / (l * d);
-        psi[static_cast<std::size_t>(8 + c)] = (2.0 * t * o.x(c) + t * t * o.xdot(c)) / (l * d * d);
+        psi[static_cast<std::size_t>(2 + c)] = ov.xdot(c) / l;
+        psi[static_cast<std::size_t>(5 + c)] = (o.x(c) + t * ov.xdot(c)) / (l * d);
+        psi[static_cast<std::size_t>(8 + c)] = (2.0 * t * o.x(c) + t * t * ov.xdot(c)) / (l * d * d);
       }
       for (int a = 0; a < K; ++a) {
         g.template segment<3>(3 * a) += psi[static_cast<std::size_t>(a)] * py;
@@ -363,11 +369,12 @@ struct ReducedCost {
 };
 
 template <int K>
-Solution solve_reduced(const std::vector<Observation>& obs, const FitOptions& o) {
+Solution solve_reduced(const std::vector<Observation>& obs, const std::vector<VelocityObservation>& velocities,
+                       const FitOptions& o) {
   constexpr bool td = K == 11;
   Solution sol;
   const Scales scales = parameter_scale(obs);
-  const Reduced<K> reduced = reduce<K>(obs, scales);
+  const Reduced<K> reduced = reduce<K>(obs, velocities, scales);
   std::array<double, kMaxParams> scaled{};  // what Ceres sees
   double* t = scaled.data();
   double* r = t + 3;
@@ -422,8 +429,9 @@ Solution solve_reduced(const std::vector<Observation>& obs, const FitOptions& o)
   return sol;
 }
 
-Solution solve(const std::vector<Observation>& obs, const FitOptions& o, bool td) {
-  return td ? solve_reduced<11>(obs, o) : solve_reduced<4>(obs, o);
+Solution solve(const std::vector<Observation>& obs, const std::vector<VelocityObservation>& velocities,
+               const FitOptions& o, bool td) {
+  return td ? solve_reduced<11>(obs, velocities, o) : solve_reduced<4>(obs, {}, o);
 }
 
 }  // namespace
@@ -571,7 +579,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
         sum += p.epoch->year;
       }
       const bool velocities = std::any_of(active.begin(), active.end(), [&](std::size_t i) {
-        return control.points[i].source_velocity_m_per_year && control.points[i].target_velocity_m_per_year;
+        return control.points[i].velocities != nullptr;
       });
       if (!(hi > lo) && !velocities) {
         reject("E_FIT_ONE_EPOCH", "model helmert14: all " + std::to_string(n) + " " + unit + " are at epoch " +
@@ -581,7 +589,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       }
       if (!o.reference_epoch) o.reference_epoch = DecimalYear{sum / n};
       const auto with_velocity = std::count_if(active.begin(), active.end(), [&](std::size_t i) {
-        return control.points[i].source_velocity_m_per_year.has_value();
+        return control.points[i].velocities != nullptr;
       });
       if (3 * (n + with_velocity) < 14) {
         reject("E_FIT_TOO_FEW_POINTS", "model helmert14: 14 parameters need >= 14 observations (5 point-epochs), got " +
@@ -638,6 +646,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       return Eigen::Matrix3d((1.0 + s) * rotation_pv(r, o.rotation_model));
     };
     std::vector<Observation> obs;
+    std::vector<VelocityObservation> velocities;
     obs.reserve(active.size());
     for (std::size_t i : active) {
       const auto& p = control.points[i];
@@ -646,36 +655,39 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       ob.y = p.target.m - cy;
       ob.w = whitening(p, Eigen::Matrix3d::Identity());
       ob.dt = td ? p.epoch->year - o.reference_epoch->year : 0.0;
-      if (td && p.source_velocity_m_per_year && p.target_velocity_m_per_year) {
-        const Eigen::LLT<Eigen::Matrix3d> vllt(p.source_velocity_cov + p.target_velocity_cov);
+      if (td && p.velocities) {
+        const Eigen::LLT<Eigen::Matrix3d> vllt(p.velocities->source_cov + p.velocities->target_cov);
         if (vllt.info() == Eigen::Success) {
-          ob.has_velocity = true;
-          ob.xdot = *p.source_velocity_m_per_year;
-          ob.ydot = *p.target_velocity_m_per_year;
-          ob.wv = vllt.matrixL().solve(Eigen::Matrix3d::Identity());
+          VelocityObservation& ov = velocities.emplace_back();
+          ov.k = obs.size();
+          ov.xdot = p.velocities->source_m_per_year;
+          ov.ydot = p.velocities->target_m_per_year;
+          ov.wv = vllt.matrixL().solve(Eigen::Matrix3d::Identity());
         }
       }
       obs.push_back(ob);
     }
 
-    Solution sol = solve(obs, o, td);
+    Solution sol = solve(obs, velocities, o, td);
     // Re-weight with J from the estimate until it settles (the source
     // covariance turned and scaled as the transform turns and scales it).
     constexpr int kMaxWeightPasses = 5;
     constexpr double kWeightChange = 1e-12;  // relative change of J between passes
     if (control.has_a_priori_sigmas) {
-      std::vector<Eigen::Matrix3d> used(obs.size(), Eigen::Matrix3d::Identity());
+      // J depends on a mark's epoch alone (helmert14): one for every mark
+      // in the other models.
+      std::vector<Eigen::Matrix3d> used(td ? obs.size() : 1, Eigen::Matrix3d::Identity());
       for (int pass = 0; pass < kMaxWeightPasses; ++pass) {
         double change = 0.0;
-        for (std::size_t k = 0; k < obs.size(); ++k) {
+        for (std::size_t k = 0; k < used.size(); ++k) {
           const Eigen::Matrix3d j = linear_part(sol.theta, obs[k].dt);
           const double d = (j - used[k]).cwiseAbs().maxCoeff();
           if (!(d <= change)) change = d;
           used[k] = j;
         }
         if (change <= kWeightChange) break;
-        for (std::size_t k = 0; k < obs.size(); ++k) obs[k].w = whitening(control.points[active[k]], used[k]);
-        sol = solve(obs, o, td);
+        for (std::size_t k = 0; k < obs.size(); ++k) obs[k].w = whitening(control.points[active[k]], used[td ? k : 0]);
+        sol = solve(obs, velocities, o, td);
       }
     }
     const int u = static_cast<int>(sol.estimated.size());
@@ -803,11 +815,11 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       const Eigen::Matrix3d m1 = th[13] * rot + (1.0 + th[6]) * rdot;
       const Eigen::Matrix3d m2 = th[13] * rdot + 0.5 * (1.0 + th[6]) * racc;
       const Eigen::Vector3d tdot(th[7], th[8], th[9]);
-      for (const Observation& ob : obs) {
-        if (!ob.has_velocity) continue;
+      for (const VelocityObservation& ov : velocities) {
+        const Observation& ob = obs[ov.k];
         const double t = ob.dt;
-        const Eigen::Vector3d pred = tdot + (m1 + 2.0 * t * m2) * ob.x + (m0 + t * m1 + t * t * m2) * ob.xdot;
-        omega += (ob.wv * (ob.ydot - ob.xdot - pred)).squaredNorm();
+        const Eigen::Vector3d pred = tdot + (m1 + 2.0 * t * m2) * ob.x + (m0 + t * m1 + t * t * m2) * ov.xdot;
+        omega += (ov.wv * (ov.ydot - ov.xdot - pred)).squaredNorm();
         ++velocity_observations;
       }
     }
@@ -830,9 +842,10 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
       for (int c = 0; c < u; ++c) a.col(c) = ob.w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
       return Eigen::Matrix3d(Eigen::Matrix3d::Identity() + sign * (a * n_inv * a.transpose()));
     };
-    std::vector<Eigen::Matrix3d> qvs(active.size());  // whitened Q_vv per point, kept for --vce
+    std::vector<Eigen::Matrix3d> qvs(o.vce ? active.size() : 0);  // whitened Q_vv per point, kept for --vce
     for (std::size_t k = 0; k < active.size(); ++k) {
-      const Eigen::Matrix3d& qv = qvs[k] = cofactor(obs[k], -1.0);
+      const Eigen::Matrix3d qv = cofactor(obs[k], -1.0);
+      if (o.vce) qvs[k] = qv;
       PointResult& pr = result.points[active[k]];
       pr.used = true;
       test_point(PointTestInput{v[k], obs[k].w, qv, local_axes(active[k]), true}, tau, levels.lambda0, pr);

@@ -695,10 +695,12 @@ TEST(HelmertFit, FourteenParametersFromPositionsAndVelocitiesAtOneEpoch) {
     p.source = src[i];
     const Eigen::Vector3d v(vel(rng), vel(rng), vel(rng));
     p.target = EcefPosition(truth.forward(src[i].m, 2020.0));
-    p.source_velocity_m_per_year = v;
-    p.target_velocity_m_per_year = truth.forward(src[i].m + 0.5 * v, 2020.5) - truth.forward(src[i].m - 0.5 * v, 2019.5);
+    geodesy::MarkVelocities mv;
+    mv.source_m_per_year = v;
+    mv.target_m_per_year = truth.forward(src[i].m + 0.5 * v, 2020.5) - truth.forward(src[i].m - 0.5 * v, 2019.5);
+    mv.source_cov = mv.target_cov = Eigen::Matrix3d::Identity() * 1e-8;
+    p.velocities = std::make_shared<const geodesy::MarkVelocities>(mv);
     p.source_cov_m2 = p.target_cov_m2 = Eigen::Matrix3d::Identity() * 1e-6;
-    p.source_velocity_cov = p.target_velocity_cov = Eigen::Matrix3d::Identity() * 1e-8;
     set.points.push_back(p);
   }
   FitOptions o;
@@ -826,9 +828,10 @@ TEST(HelmertFit, AParameterNoObservationDeterminesIsRefusedByTheCovarianceCheck)
   // velocity components cannot fix seven rates.
   ControlSet set = tiny({{0, 0, 0}, {1000, 0, 0}, {0, 1000, 0}, {500, 500, 300}});
   for (auto& p : set.points) p.epoch = DecimalYear{2020.0};
-  set.points[0].source_velocity_m_per_year = Eigen::Vector3d(0.01, 0.0, 0.0);
-  set.points[0].target_velocity_m_per_year = Eigen::Vector3d(0.01, 0.0, 0.0);
-  set.points[0].source_velocity_cov = set.points[0].target_velocity_cov = Eigen::Matrix3d::Identity() * 1e-6;
+  geodesy::MarkVelocities mv;
+  mv.source_m_per_year = mv.target_m_per_year = Eigen::Vector3d(0.01, 0.0, 0.0);
+  mv.source_cov = mv.target_cov = Eigen::Matrix3d::Identity() * 1e-6;
+  set.points[0].velocities = std::make_shared<const geodesy::MarkVelocities>(mv);
   FitOptions o;
   o.model = FitModel::helmert14;
   o.convention = Convention::position_vector;
