@@ -175,13 +175,14 @@ int run_compare(const ControlInput& in, const solver::FitOptions& base, bool jso
 
 int run_fit(const FitCommandOptions& o) {
   // A fit's memory is a few large arrays (10⁶ marks: the set, the solver's
-  // observations, the per-point results and records, 1.3 GB in all), most
-  // of them built once; glibc would map each large one afresh and unmap it
+  // observations and the per-point results, 0.9 GB at the peak), most of
+  // them built once; glibc would map each large one afresh and unmap it
   // when freed, so that every phase pays the kernel to zero new pages again
-  // (450 000 page faults, a third of the command's CPU at 10⁶ marks). Here
-  // they come from the heap and freed memory is kept for the next phase:
-  // 30 % fewer page faults, about 0.4 s less at 10⁶ marks, 20 MB more at the
-  // peak. The process ends with the command, so nothing is held for longer.
+  // (when the peak was 1.3 GB: 450 000 page faults, a third of the
+  // command's CPU). Here they come from the heap and freed memory is kept
+  // for the next phase (then 30 % fewer page faults, about 0.4 s less), and
+  // given back before the file is written (below). The process ends with
+  // the command, so nothing is held for longer.
   (void)mallopt(M_MMAP_MAX, 0);
   (void)mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
   if (o.model.empty() && !o.compare) {
@@ -335,7 +336,16 @@ int run_fit(const FitCommandOptions& o) {
     if (o.json) {
       out->stream() << transform_text;
     } else {
-      io::write_json(out->stream(), transform());
+      const workflow::StreamedTransformFile file =
+          workflow::streamed_transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd);
+      // The marks are not read again: they and the solver's freed memory
+      // go back to the system before the file is written (10⁶ marks:
+      // 550 MB), where the file's cache pages can reuse them (on this
+      // platform a fresh page costs as much as the bytes written into it)
+      // and the exit has less to free.
+      std::vector<geodesy::ControlPoint>().swap(set.points);
+      (void)malloc_trim(0);
+      io::write_json(out->stream(), file.file, file.points);
     }
     out->commit();
     for (const auto& t : io::take_removed_stale_temporaries()) {

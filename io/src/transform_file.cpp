@@ -3,6 +3,8 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -267,6 +269,7 @@ namespace {
 // Defined with the writer below.
 template <class H>
 json parameters_json(const H& h);
+TransformFile without_fit_record(const TransformFile& t);
 TransformFile swapped_convention(const TransformFile& t);
 
 }  // namespace
@@ -1097,19 +1100,26 @@ json parameters_json(const H& h) {
   return params;
 }
 
-// The same transform in the other rotation convention.
-TransformFile swapped_convention(const TransformFile& t) {
-  // Member by member, never the fit record: a fit of 10⁶ marks holds 10⁶
-  // point records, and copying them only to drop them cost a second.
+// The transform without its fit record, member by member: a fit of 10⁶
+// marks holds 10⁶ point records, and copying them only to drop them cost a
+// second.
+TransformFile without_fit_record(const TransformFile& t) {
   TransformFile out;
   out.model = t.model;
   out.rotation_model = t.rotation_model;
+  out.helmert = t.helmert;
   out.source_frame = t.source_frame;
   out.target_frame = t.target_frame;
   out.reference_epoch = t.reference_epoch;
   out.pivot_m = t.pivot_m;
   out.enu_origin = t.enu_origin;
   out.site_calibration = t.site_calibration;
+  return out;
+}
+
+// The same transform in the other rotation convention (no fit record).
+TransformFile swapped_convention(const TransformFile& t) {
+  TransformFile out = without_fit_record(t);
   std::visit([&](const auto& h) {
     using H = std::decay_t<decltype(h)>;
     if constexpr (std::is_same_v<H, geodesy::Helmert7<PositionVector>> || std::is_same_v<H, geodesy::Helmert14<PositionVector>>) {
@@ -1182,7 +1192,7 @@ std::string proj_pipeline(const TransformFile& t) {
   }
   if (t.pivot_m && t.rotation_model == geodesy::RotationModel::exact) {
     // PROJ's molobadekas has no exact form: write the geocentric equivalent.
-    TransformFile g = t;
+    TransformFile g = without_fit_record(t);
     const geodesy::AffineMap m = t.target_from_source(std::nullopt, "");
     std::visit([&](auto& h) {
       using H = std::decay_t<decltype(h)>;
@@ -1308,10 +1318,26 @@ void append_point_record(std::string& out, const FitPointRecord& p, bool first) 
   }
   lit(", \"used\": ");
   flag(p.used);
-  lit(", \"w_enu\": ");
-  triple(p.w_enu);
-  lit(", \"w_test\": ");
-  num(p.w_test);
+  // w_test is one of w_enu (the largest in magnitude): its text is copied
+  // from there, not formed again.
+  lit(", \"w_enu\": [");
+  std::array<std::pair<const char*, const char*>, 3> w_text{};
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (k) lit(", ");
+    w_text[k].first = at;
+    num(p.w_enu[k]);
+    w_text[k].second = at;
+  }
+  lit("], \"w_test\": ");
+  const auto same = std::find_if(w_text.begin(), w_text.end(), [&](const auto& t) {
+    return std::bit_cast<std::uint64_t>(p.w_enu[static_cast<std::size_t>(&t - w_text.data())]) ==
+           std::bit_cast<std::uint64_t>(p.w_test);
+  });
+  if (same != w_text.end()) {
+    lit(std::string_view(same->first, static_cast<std::size_t>(same->second - same->first)));
+  } else {
+    num(p.w_test);
+  }
   *at++ = '}';
   out.append(buf, static_cast<std::size_t>(at - buf));
 }
@@ -1321,14 +1347,18 @@ void append_point_record(std::string& out, const FitPointRecord& p, bool first) 
 // records are formatted on every core while the previous round of blocks is
 // written; the bytes are those of a one-thread loop, and no more than two
 // rounds (a few megabytes) are ever held.
-void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& points) {
+void write_point_records(std::ostream& out, const PointRecordSource& points) {
   constexpr std::size_t kBlock = 4096;  // records a task formats (about 1.8 MB)
-  const std::size_t blocks = (points.size() + kBlock - 1) / kBlock;
+  const std::size_t blocks = (points.count + kBlock - 1) / kBlock;
   const std::size_t tasks = std::clamp<std::size_t>(std::thread::hardware_concurrency(), 1, 8);
   const auto format_block = [&](std::size_t b, std::string& text) {
     text.clear();
-    const std::size_t end = std::min(points.size(), (b + 1) * kBlock);
-    for (std::size_t i = b * kBlock; i < end; ++i) append_point_record(text, points[i], i == 0);
+    FitPointRecord record;
+    const std::size_t end = std::min(points.count, (b + 1) * kBlock);
+    for (std::size_t i = b * kBlock; i < end; ++i) {
+      points.record(i, record);
+      append_point_record(text, record, i == 0);
+    }
   };
   const auto write_all = [&](const std::vector<std::string>& texts) {
     for (const auto& text : texts) out.write(text.data(), static_cast<std::streamsize>(text.size()));
@@ -1366,7 +1396,9 @@ void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& p
 
 }  // namespace
 
-void write_json(std::ostream& out, const TransformFile& t) {
+namespace {
+
+void write_json_with(std::ostream& out, const TransformFile& t, const PointRecordSource& points) {
   json doc;
   doc["format_version"] = 1;
   doc["model"] = std::string(to_string(t.model));
@@ -1467,8 +1499,9 @@ void write_json(std::ostream& out, const TransformFile& t) {
     doc["points"] = nullptr;  // placeholder: the records are streamed below, one a line
   }
   if (t.fit && !t.enu_origin && !t.site_calibration) {
-    TransformFile other = swapped_convention(t);
-    other.fit = t.fit;  // for the exports below
+    // The exports read the parameters and frames alone: no fit record (a
+    // copy of 10⁶ marks' records was 200 MB and a fifth of a second).
+    const TransformFile other = swapped_convention(t);
     doc["alternatives"] = json::array({json{{"convention", std::string(other.convention_name())},
                                             {"epsg_method", epsg_method(other)},
                                             {"parameters", with_pivot(std::visit([](const auto& h) { return parameters_json(h); }, other.helmert))},
@@ -1485,14 +1518,29 @@ void write_json(std::ostream& out, const TransformFile& t) {
     if (at == std::string::npos) throw std::logic_error("transform file: the points placeholder is missing");
     out.write(text.data(), static_cast<std::streamsize>(at));
     out << "\n  \"points\": [";
-    write_point_records(out, t.fit->points);
-    out << (t.fit->points.empty() ? "]" : "\n  ]");
+    write_point_records(out, points);
+    out << (points.count == 0 ? "]" : "\n  ]");
     const std::size_t rest = at + kPlaceholder.size();
     out.write(text.data() + rest, static_cast<std::streamsize>(text.size() - rest));
   } else {
     out << text;
   }
   out << '\n';
+}
+
+}  // namespace
+
+void write_json(std::ostream& out, const TransformFile& t) {
+  const PointRecordSource held{t.fit ? t.fit->points.size() : 0,
+                               [&](std::size_t i, FitPointRecord& r) { r = t.fit->points[i]; }};
+  write_json_with(out, t, held);
+}
+
+void write_json(std::ostream& out, const TransformFile& t, const PointRecordSource& points) {
+  if (!t.fit || !t.fit->points.empty()) {
+    throw std::logic_error("write_json: streamed point records need a fit record without points of its own");
+  }
+  write_json_with(out, t, points);
 }
 
 std::string to_json_text(const TransformFile& t) {

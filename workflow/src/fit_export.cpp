@@ -120,10 +120,50 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
   if (!r.warnings.empty()) out << "\n" << r.warnings.size() << " warning(s): see standard error and the transform file\n";
 }
 
+namespace {
+
+// The per-point record of `p` in a transform file.
+void point_record(const solver::PointResult& p, const std::vector<std::string>& left_out, io::FitPointRecord& q) {
+  q.id = p.id;
+  for (int k = 0; k < 3; ++k) {
+    q.residual_enu_m[static_cast<std::size_t>(k)] = p.residual_enu_m(k);
+    q.w_enu[static_cast<std::size_t>(k)] = p.w_enu(k);
+    q.redundancy_enu[static_cast<std::size_t>(k)] = p.redundancy_enu(k);
+  }
+  // The w-test of largest magnitude among the testable axes (NaN: none is).
+  q.w_test = std::numeric_limits<double>::quiet_NaN();
+  for (int k = 0; k < 3; ++k) {
+    if (std::isfinite(p.w_enu(k)) && !(std::fabs(p.w_enu(k)) <= std::fabs(q.w_test))) q.w_test = p.w_enu(k);
+  }
+  q.mdb_m = p.mdb_m;
+  q.point_test = p.point_statistic;
+  q.point_test_dof = p.point_dof;
+  q.point_test_p = p.point_p_value;
+  q.outlier = p.outlier;
+  q.used = p.used;
+  q.note = p.removed_because;
+  if (std::find(left_out.begin(), left_out.end(), p.id) != left_out.end()) q.note = kLeftOutInWorkbench;
+  q.robust_weight = p.robust_weight;
+}
+
+}  // namespace
+
 io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geodesy::ControlSet& set,
                                           const solver::FitOptions& o, const std::vector<std::string>& left_out,
                                           const std::string& generator) {
-  io::TransformFile t;
+  StreamedTransformFile streamed = streamed_transform_file_from_fit(r, set, o, left_out, generator);
+  io::TransformFile& t = streamed.file;
+  t.fit->points.resize(streamed.points.count);
+  for (std::size_t i = 0; i < streamed.points.count; ++i) streamed.points.record(i, t.fit->points[i]);
+  return std::move(t);
+}
+
+StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& r, const geodesy::ControlSet& set,
+                                                       const solver::FitOptions& o,
+                                                       const std::vector<std::string>& left_out,
+                                                       const std::string& generator) {
+  StreamedTransformFile streamed;
+  io::TransformFile& t = streamed.file;
   switch (r.model) {
     case FitModel::translation3: t.model = io::TransformModel::translation3; break;
     case FitModel::helmert6: t.model = io::TransformModel::helmert6; break;
@@ -191,31 +231,6 @@ io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geod
   f.global_critical_upper = r.global_test.critical_upper;
   f.global_passed = r.global_test.passed;
   f.global_applicable = r.global_test.applicable;
-  f.points.reserve(r.points.size());
-  for (const auto& p : r.points) {
-    io::FitPointRecord q;
-    q.id = p.id;
-    for (int k = 0; k < 3; ++k) {
-      q.residual_enu_m[static_cast<std::size_t>(k)] = p.residual_enu_m(k);
-      q.w_enu[static_cast<std::size_t>(k)] = p.w_enu(k);
-      q.redundancy_enu[static_cast<std::size_t>(k)] = p.redundancy_enu(k);
-    }
-    // The w-test of largest magnitude among the testable axes (NaN: none is).
-    q.w_test = std::numeric_limits<double>::quiet_NaN();
-    for (int k = 0; k < 3; ++k) {
-      if (std::isfinite(p.w_enu(k)) && !(std::fabs(p.w_enu(k)) <= std::fabs(q.w_test))) q.w_test = p.w_enu(k);
-    }
-    q.mdb_m = p.mdb_m;
-    q.point_test = p.point_statistic;
-    q.point_test_dof = p.point_dof;
-    q.point_test_p = p.point_p_value;
-    q.outlier = p.outlier;
-    q.used = p.used;
-    q.note = p.removed_because;
-    if (std::find(left_out.begin(), left_out.end(), p.id) != left_out.end()) q.note = kLeftOutInWorkbench;
-    q.robust_weight = p.robust_weight;
-    f.points.push_back(std::move(q));
-  }
   f.warnings = r.warnings;
   f.variance_factors = r.variance_factors;
   // The network's extent (source frame): the marks the fit used.
@@ -228,7 +243,9 @@ io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geod
   if (!used_marks.empty()) f.extent = io::ControlExtent::of(used_marks);
   f.generator = generator;
   t.fit = std::move(f);
-  return t;
+  streamed.points.count = r.points.size();
+  streamed.points.record = [&r, left_out](std::size_t i, io::FitPointRecord& q) { point_record(r.points[i], left_out, q); };
+  return streamed;
 }
 
 

@@ -23,6 +23,7 @@
 
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <iosfwd>
 #include <vector>
 #include <optional>
@@ -134,7 +135,7 @@ struct TransformFile {
   // site-calibration: the calibration (not an affine map); `helmert` is unused.
   std::optional<geodesy::SiteCalibration> site_calibration;
 
-  // (A member added here must be added to swapped_convention() in
+  // (A member added here must be added to without_fit_record() in
   // transform_file.cpp too: it copies every member by name but fit.)
   std::optional<FitRecord> fit;  // only when written by `geoanchor fit`
 
@@ -165,6 +166,17 @@ TransformFile parse_transform_json(std::string_view text, std::string_view sourc
 // same text (the per-point records a megabyte at a time).
 std::string to_json_text(const TransformFile& t);
 void write_json(std::ostream& out, const TransformFile& t);
+
+// Point records formed as they are written, so that a fit of 10⁶ marks is
+// written without first holding 10⁶ records (200 MB): `record(i, out)`
+// fills record i of `count`. It is called from several threads at once.
+struct PointRecordSource {
+  std::size_t count = 0;
+  std::function<void(std::size_t, FitPointRecord&)> record;
+};
+// The same text as write_json(out, t) with t.fit->points taken from
+// `points` (t.fit must be present and hold no points of its own).
+void write_json(std::ostream& out, const TransformFile& t, const PointRecordSource& points);
 
 // The transform as a PROJ pipeline string, ECEF in and ECEF out:
 // "+proj=pipeline +step +proj=helmert ... +convention=...". For helmert14

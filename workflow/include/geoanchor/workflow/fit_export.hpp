@@ -26,6 +26,19 @@ io::TransformFile transform_file_from_fit(const solver::FitResult& fit, const ge
                                           const solver::FitOptions& options, const std::vector<std::string>& left_out,
                                           const std::string& generator);
 
+// The same file with its per-point records formed from `fit` as
+// io::write_json(out, file, points) writes them: `geoanchor fit` on 10⁶
+// marks never holds them all. `fit` must outlive `points`; `control` is
+// read here only.
+struct StreamedTransformFile {
+  io::TransformFile file;  // its fit record holds no points
+  io::PointRecordSource points;
+};
+StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& fit, const geodesy::ControlSet& control,
+                                                       const solver::FitOptions& options,
+                                                       const std::vector<std::string>& left_out,
+                                                       const std::string& generator);
+
 // The report `geoanchor fit` prints: parameters with σ, σ0, the global test
 // with its verdict, and the residual table, flagged points first.
 void write_fit_report(std::ostream& out, const solver::FitResult& fit, const geodesy::ControlSet& control,
