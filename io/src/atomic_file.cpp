@@ -145,7 +145,12 @@ void remove_stale_temporaries_once(const fs::path& folder) {
 // written: every kWritebackBytes it asks the kernel to begin writing what
 // it holds (sync_file_range, which does not wait), so that the fsync before
 // publishing waits for the last stretch only, not for the whole file (a fit
-// of 10⁶ marks writes 450 MB).
+// of 10⁶ marks writes 450 MB), and it drops the stretch before that from
+// the page cache once it is on disk (posix_fadvise), so that a large output
+// keeps reusing the same few stretches of memory (`geoanchor fit` on 10⁶
+// marks: the whole command 3.0–3.5 s before, 2.4 s after; the write itself
+// 0.85–1.35 s before, 0.55–0.65 s after). Both are hints: a filesystem
+// without them (tmpfs ignores the second) is written as without them.
 class CheckedFileBuf : public std::filebuf {
  public:
   int first_error() const { return first_errno_; }
@@ -192,19 +197,33 @@ class CheckedFileBuf : public std::filebuf {
     if (first_errno_ == 0) first_errno_ = errno != 0 ? errno : EIO;
   }
   void wrote(std::streamsize n) {
-    since_writeback_ += std::max<std::streamsize>(n, 0);
-    if (writeback_fd_ < 0 || since_writeback_ < kWritebackBytes) return;
-    since_writeback_ = 0;
-    // Only a hint: where it fails (a filesystem without it) the fsync does
-    // all the work, as without it; errors of the writes themselves surface
-    // there and in first_error().
+    written_ += std::max<std::streamsize>(n, 0);
+    if (writeback_fd_ < 0 || written_ - marked_ < kWritebackBytes) return;
+    // Only hints: where they fail (a filesystem without them) the fsync does
+    // all the work, as without them; errors of the writes themselves
+    // surface there and in first_error().
     const int saved = errno;
     (void)::sync_file_range(writeback_fd_, 0, 0, SYNC_FILE_RANGE_WRITE);
+    // The stretch before the last one is on disk by now (or soon): its
+    // pages leave the cache, and the next stretches' pages are those just
+    // freed. A large output thus holds a few stretches of the cache, not
+    // the whole file (on this platform fresh pages cost more than the
+    // bytes copied into them; the file is read back from disk if at all).
+    if (marked_ > dropped_) {
+      (void)::sync_file_range(writeback_fd_, dropped_, marked_ - dropped_,
+                              SYNC_FILE_RANGE_WAIT_BEFORE | SYNC_FILE_RANGE_WRITE | SYNC_FILE_RANGE_WAIT_AFTER);
+      (void)::posix_fadvise(writeback_fd_, dropped_, marked_ - dropped_, POSIX_FADV_DONTNEED);
+      dropped_ = marked_;
+    }
+    marked_ = written_;
     errno = saved;
   }
   int first_errno_ = 0;
   int writeback_fd_ = -1;
-  std::streamsize since_writeback_ = 0;
+  // Bytes written, the count at the last writeback hint, and the bytes
+  // (from the start) whose pages were dropped from the cache; offsets as
+  // far as the writer writes in order (a seek only makes a hint miss).
+  off_t written_ = 0, marked_ = 0, dropped_ = 0;
 };
 
 }  // namespace

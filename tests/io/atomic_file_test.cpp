@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -354,6 +355,42 @@ TEST(AtomicOutputFile, Issue12Point11_AFailedWriteToStandardOutputIsAnError) {
   EXPECT_EQ(t.code, "E_WRITE");
   EXPECT_EQ(t.message, "standard output: the report could not be written (No space left on device); nothing else was written");
   EXPECT_NO_THROW(io::finish_standard_output("nothing"));
+}
+
+// issue 12 point 13: a large output leaves the page cache stretch by
+// stretch as it is written; what is published is every byte, in place,
+// including a stretch rewritten after a seek back (as the LAS writer
+// rewrites its header).
+TEST(AtomicOutputFile, Issue12Point13_ALargeOutputIsPublishedByteForByte) {
+  TempFolder dir;
+  constexpr std::size_t kBytes = 70u << 20;  // past four of the writer's 16 MB stretches
+  std::string expected(kBytes, '\0');
+  std::uint64_t x = 88172645463325252ull;  // xorshift64: no stretch repeats another
+  for (char& c : expected) {
+    x ^= x << 13;
+    x ^= x >> 7;
+    x ^= x << 17;
+    c = static_cast<char>(x >> 56);
+  }
+  const std::string header = "a header written last";
+  std::copy(header.begin(), header.end(), expected.begin() + 1000);
+  {
+    io::AtomicOutputFile out(dir / "big.bin", io::Overwrite::refuse);
+    std::size_t at = 0, chunk = 1;
+    while (at < kBytes) {  // writes of every size from 1 byte to 8 MB
+      const std::size_t n = std::min(chunk, kBytes - at);
+      out.stream().write(expected.data() + at, static_cast<std::streamsize>(n));
+      at += n;
+      chunk = chunk >= (8u << 20) ? 1 : chunk * 3 + 1;
+    }
+    out.stream().seekp(1000);
+    out.stream().write(header.data(), static_cast<std::streamsize>(header.size()));
+    out.commit();
+  }
+  const std::string read = slurp(dir / "big.bin");
+  ASSERT_EQ(read.size(), kBytes);
+  EXPECT_TRUE(read == expected) << "first difference at byte "
+                                << std::mismatch(read.begin(), read.end(), expected.begin()).first - read.begin();
 }
 
 }  // namespace
