@@ -414,5 +414,39 @@ TEST(ControlSet, ManyRowsKeepTheirOrderAndTheEarliestErrorIsNamed) {
   }
 }
 
+TEST(ControlSet, ADuplicateIdAmongManyRowsIsNamedAtItsFirstRepeat) {
+  // Enough rows that the ids are checked in two halves at once: a repeat of
+  // a first-half id in the second half, and a later pair within the second
+  // half; the message names the repeat that comes first in the file.
+  constexpr std::size_t kRows = 100000;
+  const auto file = [&](const std::map<std::size_t, std::size_t>& repeats) {  // row -> the row whose id it repeats
+    std::string text = "# source_frame = ITRF2014@2024.5\n# target_frame = ETRF2000@2024.5\n"
+                       "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n";
+    for (std::size_t i = 0; i < kRows; ++i) {
+      const auto r = repeats.find(i);
+      const double x = 4271315.0 + static_cast<double>(i) * 0.25;
+      text += "M" + std::to_string(r == repeats.end() ? i : r->second) + "," + std::to_string(x) + ",641096.4,4678048.5," +
+              std::to_string(x + 0.5) + ",641096.9,4678048.1,0.003,0.003\n";
+    }
+    return text;
+  };
+  const auto line_of = [](std::size_t i) { return std::to_string(4 + i); };  // the header is line 3
+  struct Case {
+    std::map<std::size_t, std::size_t> repeats;
+    std::size_t repeat, first;
+  };
+  for (const Case& c : {Case{{{90000, 12}, {70000, 60000}}, 70000, 60000},
+                        Case{{{60001, 3}, {99999, 60002}}, 60001, 3},
+                        Case{{{49999, 7}, {50000, 49998}}, 49999, 7}}) {
+    const auto [code, message] = read_error(file(c.repeats), "big.csv", {});
+    EXPECT_EQ(code, "E_DUPLICATE_ID") << message;
+    EXPECT_EQ(message.rfind("big.csv:" + line_of(c.repeat) + ": id=M" + std::to_string(c.first) + ": duplicate of line " +
+                                line_of(c.first),
+                            0),
+              0u)
+        << message;
+  }
+}
+
 }  // namespace
 }  // namespace geoanchor::io
