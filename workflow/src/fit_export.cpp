@@ -61,8 +61,9 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
   // untestable mark's NaN last; equal keys in file order). Large sets show
   // every mark that is not "ok" and the largest |w| of the rest; the
   // transform file's points hold every mark. Only the rows shown are sorted
-  // (10⁶ marks: the 50 largest are selected, not all of them sorted), on
-  // keys of 24 bytes a mark, not whole PointResults.
+  // (10⁶ marks: the 50 largest are kept in a heap as the marks go by, not
+  // all of them sorted or even held), on keys of 24 bytes, not whole
+  // PointResults.
   struct Key {
     int rank;
     double w;
@@ -76,18 +77,25 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
   };
   constexpr std::size_t kAllRowsUpTo = 1000, kOkRowsOfLargeSets = 50;
   const bool large = r.points.size() > kAllRowsUpTo;
-  std::vector<Key> shown, ok_keys;
+  std::vector<Key> shown, ok_keys;  // ok_keys: a heap whose top is the last of them in `before` order
+  std::size_t ok_hidden = 0;
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     const auto& p = r.points[i];
     const Key k{p.outlier ? 0 : !p.used ? 1 : 2, std::isnan(p.w_max) ? -std::numeric_limits<double>::infinity() : p.w_max, i};
-    (large && is_ok(p) ? ok_keys : shown).push_back(k);
-  }
-  std::size_t ok_hidden = 0;
-  if (ok_keys.size() > kOkRowsOfLargeSets) {
-    const auto cut = ok_keys.begin() + static_cast<std::ptrdiff_t>(kOkRowsOfLargeSets);
-    std::nth_element(ok_keys.begin(), cut, ok_keys.end(), before);
-    ok_hidden = ok_keys.size() - kOkRowsOfLargeSets;
-    ok_keys.erase(cut, ok_keys.end());
+    if (!large || !is_ok(p)) {
+      shown.push_back(k);
+      continue;
+    }
+    if (ok_keys.size() < kOkRowsOfLargeSets) {
+      ok_keys.push_back(k);
+      std::push_heap(ok_keys.begin(), ok_keys.end(), before);
+      continue;
+    }
+    ++ok_hidden;
+    if (!before(k, ok_keys.front())) continue;  // most marks: one comparison
+    std::pop_heap(ok_keys.begin(), ok_keys.end(), before);
+    ok_keys.back() = k;
+    std::push_heap(ok_keys.begin(), ok_keys.end(), before);
   }
   shown.insert(shown.end(), ok_keys.begin(), ok_keys.end());
   std::sort(shown.begin(), shown.end(), before);
@@ -237,6 +245,7 @@ StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& 
   // r.points[i] is set.points[i] (the solver keeps the input order; an id
   // may repeat at other epochs, so the index, not the id, names the mark).
   std::vector<geodesy::EcefPosition> used_marks;
+  used_marks.reserve(r.points.size());
   for (std::size_t i = 0; i < r.points.size() && i < set.points.size(); ++i) {
     if (r.points[i].used) used_marks.push_back(set.points[i].source);
   }
