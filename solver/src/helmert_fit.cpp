@@ -117,8 +117,8 @@ struct Observation {
 };
 
 // A mark's velocities (helmert14): ẏ − ẋ = ṫ' + Ṁ x + (M − I) ẋ observes the
-// rates. Apart from the positions, which most fits have alone (in them they
-// were half of each observation's memory).
+// rates. Kept apart from the positions: most fits have none, and inside
+// each observation they were half of its memory.
 struct VelocityObservation {
   std::size_t k = 0;  // the mark's position observation
   Eigen::Vector3d xdot = Eigen::Vector3d::Zero(), ydot = Eigen::Vector3d::Zero();
