@@ -143,14 +143,17 @@ void remove_stale_temporaries_once(const fs::path& folder) {
 //
 // It also starts the disk writes of a large output while it is still being
 // written: every kWritebackBytes it asks the kernel to begin writing what
-// it holds (sync_file_range, which does not wait), so that the fsync before
-// publishing waits for the last stretch only, not for the whole file (a fit
-// of 10⁶ marks writes 450 MB), and it drops the stretch before that from
-// the page cache once it is on disk (posix_fadvise), so that a large output
-// keeps reusing the same few stretches of memory (`geoanchor fit` on 10⁶
-// marks: the whole command 3.0–3.5 s before, 2.4 s after; the write itself
-// 0.85–1.35 s before, 0.55–0.65 s after). Both are hints: a filesystem
-// without them (tmpfs ignores the second) is written as without them.
+// it holds (sync_file_range without waiting), so that the fsync before
+// publishing waits for the last stretches only, not for the whole file (a
+// fit of 10⁶ marks writes 450 MB), and it waits for the stretch before the
+// last and drops it from the page cache (posix_fadvise), so that a large
+// output keeps reusing the same few stretches of memory (the benchmark's
+// runs of `geoanchor fit` on 10⁶ marks: the write 0.84–1.13 s before,
+// 0.54–0.63 s after; the whole command 2.8–3.1 s before, 2.3–2.6 s after).
+// Both are hints: a filesystem without them (tmpfs ignores the second) is
+// written as without them. A write error they meet is kept like any other
+// (the wait reports it here, and the fsync on the same descriptor would
+// then no longer see it).
 class CheckedFileBuf : public std::filebuf {
  public:
   int first_error() const { return first_errno_; }
@@ -199,19 +202,21 @@ class CheckedFileBuf : public std::filebuf {
   void wrote(std::streamsize n) {
     written_ += std::max<std::streamsize>(n, 0);
     if (writeback_fd_ < 0 || written_ - marked_ < kWritebackBytes) return;
-    // Only hints: where they fail (a filesystem without them) the fsync does
-    // all the work, as without them; errors of the writes themselves
-    // surface there and in first_error().
+    // Hints: where they are not supported the fsync does all the work, as
+    // without them. The disk's errors are the write's.
     const int saved = errno;
-    (void)::sync_file_range(writeback_fd_, 0, 0, SYNC_FILE_RANGE_WRITE);
+    const auto keep_write_error = [&](int r) {
+      if (r != 0 && (errno == EIO || errno == ENOSPC || errno == EDQUOT || errno == EFBIG)) note();
+    };
+    keep_write_error(::sync_file_range(writeback_fd_, 0, 0, SYNC_FILE_RANGE_WRITE));
     // The stretch before the last one is on disk by now (or soon): its
     // pages leave the cache, and the next stretches' pages are those just
     // freed. A large output thus holds a few stretches of the cache, not
     // the whole file (on this platform fresh pages cost more than the
     // bytes copied into them; the file is read back from disk if at all).
     if (marked_ > dropped_) {
-      (void)::sync_file_range(writeback_fd_, dropped_, marked_ - dropped_,
-                              SYNC_FILE_RANGE_WAIT_BEFORE | SYNC_FILE_RANGE_WRITE | SYNC_FILE_RANGE_WAIT_AFTER);
+      keep_write_error(::sync_file_range(writeback_fd_, dropped_, marked_ - dropped_,
+                                         SYNC_FILE_RANGE_WAIT_BEFORE | SYNC_FILE_RANGE_WRITE | SYNC_FILE_RANGE_WAIT_AFTER));
       (void)::posix_fadvise(writeback_fd_, dropped_, marked_ - dropped_, POSIX_FADV_DONTNEED);
       dropped_ = marked_;
     }
@@ -220,9 +225,11 @@ class CheckedFileBuf : public std::filebuf {
   }
   int first_errno_ = 0;
   int writeback_fd_ = -1;
-  // Bytes written, the count at the last writeback hint, and the bytes
-  // (from the start) whose pages were dropped from the cache; offsets as
-  // far as the writer writes in order (a seek only makes a hint miss).
+  // Bytes written (a lower bound: characters put straight into the buffer
+  // are not counted), the count at the last writeback hint, and
+  // the bytes from the start whose pages were dropped from the cache;
+  // offsets as far as the writer writes in order (a seek only makes a hint
+  // miss).
   off_t written_ = 0, marked_ = 0, dropped_ = 0;
 };
 
@@ -419,8 +426,8 @@ void publish_together(std::initializer_list<AtomicOutputFile*> outputs) {
   for (auto* f : v) {
     auto& s = *f->s_;
     s.out.flush();
-    bool ok = static_cast<bool>(s.out);
     int err = s.buf.first_error();
+    bool ok = static_cast<bool>(s.out) && err == 0;
     if (s.buf.close() == nullptr) ok = false;
     if (err == 0 && !ok) err = s.buf.first_error() != 0 ? s.buf.first_error() : errno;
     if (ok && ::fsync(s.lock_fd) != 0) {
