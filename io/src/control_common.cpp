@@ -7,6 +7,7 @@
 #include <functional>
 #include <future>
 #include <optional>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -148,7 +149,12 @@ void refuse_duplicate_ids(const geodesy::ControlSet& set,
   if (pts.size() < kParallelFrom || std::thread::hardware_concurrency() < 2) {
     sort_range(0, pts.size());
   } else {
-    auto upper = std::async(std::launch::async, sort_range, half, pts.size());
+    std::future<void> upper;
+    try {
+      upper = std::async(std::launch::async, sort_range, half, pts.size());
+    } catch (const std::system_error&) {  // no thread to be had: this one sorts both halves
+      upper = std::async(std::launch::deferred, sort_range, half, pts.size());
+    }
     sort_range(0, half);
     upper.get();
     std::inplace_merge(keyed.begin(), keyed.begin() + static_cast<std::ptrdiff_t>(half), keyed.end());

@@ -169,7 +169,8 @@ void write_json(std::ostream& out, const TransformFile& t);
 
 // Point records formed as they are written, so that a fit of 10⁶ marks is
 // written without first holding 10⁶ records (200 MB): `record(i, out)`
-// fills record i of `count`. It is called from several threads at once.
+// fills record i of `count`, every field of it (`out` is reused from one
+// record to the next). It is called from several threads at once.
 struct PointRecordSource {
   std::size_t count = 0;
   std::function<void(std::size_t, FitPointRecord&)> record;

@@ -38,6 +38,11 @@ StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& 
                                                        const solver::FitOptions& options,
                                                        const std::vector<std::string>& left_out,
                                                        const std::string& generator);
+// (A temporary fit would be gone before its records are written.)
+StreamedTransformFile streamed_transform_file_from_fit(solver::FitResult&& fit, const geodesy::ControlSet& control,
+                                                       const solver::FitOptions& options,
+                                                       const std::vector<std::string>& left_out,
+                                                       const std::string& generator) = delete;
 
 // The report `geoanchor fit` prints: parameters with σ, σ0, the global test
 // with its verdict, and the residual table, flagged points first.
