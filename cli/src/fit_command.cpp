@@ -327,17 +327,17 @@ int run_fit(const FitCommandOptions& o) {
   }
   std::string cmd;
   for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
-  const auto transform = [&] { return workflow::transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd); };
+  const std::string generator = "geoanchor " GEOANCHOR_VERSION ": " + cmd;
   // --json embeds the file's content; otherwise the file is streamed (10⁶
   // marks' records are never held whole).
   std::string transform_text;
-  if (o.json) transform_text = io::to_json_text(transform());
+  if (o.json) transform_text = io::to_json_text(workflow::transform_file_from_fit(r, set, fo, {}, generator));
   if (out && !refusal) {
     if (o.json) {
       out->stream() << transform_text;
     } else {
       const workflow::StreamedTransformFile file =
-          workflow::streamed_transform_file_from_fit(r, set, fo, {}, "geoanchor " GEOANCHOR_VERSION ": " + cmd);
+          workflow::streamed_transform_file_from_fit(r, set, fo, {}, generator);
       // The marks are not read again: they and the solver's freed memory
       // go back to the system before the file is written (10⁶ marks:
       // 550 MB), where the file's cache pages can reuse them (on this

@@ -1346,18 +1346,20 @@ void append_point_record(std::string& out, const FitPointRecord& p, bool first) 
 // a large fit's output time (10⁶ marks: about 450 MB of text), so blocks of
 // records are formatted on every core while the previous round of blocks is
 // written; the bytes are those of a one-thread loop, and no more than two
-// rounds (a few megabytes) are ever held.
-void write_point_records(std::ostream& out, const PointRecordSource& points) {
+// rounds (a few megabytes) are ever held. The records are `held` (count
+// of them), or else formed by `streamed`.
+void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& held, const PointRecordSource* streamed) {
   constexpr std::size_t kBlock = 4096;  // records a task formats (about 1.8 MB)
-  const std::size_t blocks = (points.count + kBlock - 1) / kBlock;
+  const std::size_t records = streamed ? streamed->count : held.size();
+  const std::size_t blocks = (records + kBlock - 1) / kBlock;
   const std::size_t tasks = std::clamp<std::size_t>(std::thread::hardware_concurrency(), 1, 8);
   const auto format_block = [&](std::size_t b, std::string& text) {
     text.clear();
-    FitPointRecord record;
-    const std::size_t end = std::min(points.count, (b + 1) * kBlock);
+    FitPointRecord formed;
+    const std::size_t end = std::min(records, (b + 1) * kBlock);
     for (std::size_t i = b * kBlock; i < end; ++i) {
-      points.record(i, record);
-      append_point_record(text, record, i == 0);
+      if (streamed) streamed->record(i, formed);
+      append_point_record(text, streamed ? formed : held[i], i == 0);
     }
   };
   const auto write_all = [&](const std::vector<std::string>& texts) {
@@ -1398,7 +1400,8 @@ void write_point_records(std::ostream& out, const PointRecordSource& points) {
 
 namespace {
 
-void write_json_with(std::ostream& out, const TransformFile& t, const PointRecordSource& points) {
+// The file's text; its point records those of t.fit, or else `streamed`'s.
+void write_json_with(std::ostream& out, const TransformFile& t, const PointRecordSource* streamed) {
   json doc;
   doc["format_version"] = 1;
   doc["model"] = std::string(to_string(t.model));
@@ -1518,8 +1521,8 @@ void write_json_with(std::ostream& out, const TransformFile& t, const PointRecor
     if (at == std::string::npos) throw std::logic_error("transform file: the points placeholder is missing");
     out.write(text.data(), static_cast<std::streamsize>(at));
     out << "\n  \"points\": [";
-    write_point_records(out, points);
-    out << (points.count == 0 ? "]" : "\n  ]");
+    write_point_records(out, t.fit->points, streamed);
+    out << ((streamed ? streamed->count : t.fit->points.size()) == 0 ? "]" : "\n  ]");
     const std::size_t rest = at + kPlaceholder.size();
     out.write(text.data() + rest, static_cast<std::streamsize>(text.size() - rest));
   } else {
@@ -1530,17 +1533,13 @@ void write_json_with(std::ostream& out, const TransformFile& t, const PointRecor
 
 }  // namespace
 
-void write_json(std::ostream& out, const TransformFile& t) {
-  const PointRecordSource held{t.fit ? t.fit->points.size() : 0,
-                               [&](std::size_t i, FitPointRecord& r) { r = t.fit->points[i]; }};
-  write_json_with(out, t, held);
-}
+void write_json(std::ostream& out, const TransformFile& t) { write_json_with(out, t, nullptr); }
 
 void write_json(std::ostream& out, const TransformFile& t, const PointRecordSource& points) {
   if (!t.fit || !t.fit->points.empty()) {
     throw std::logic_error("write_json: streamed point records need a fit record without points of its own");
   }
-  write_json_with(out, t, points);
+  write_json_with(out, t, &points);
 }
 
 std::string to_json_text(const TransformFile& t) {
