@@ -11,7 +11,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <future>
+#include <condition_variable>
+#include <mutex>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -1343,16 +1344,19 @@ void append_point_record(std::string& out, const FitPointRecord& p, bool first) 
 }
 
 // The "points" array's elements, in order. Formatting the numbers is most of
-// a large fit's output time (10⁶ marks: about 450 MB of text), so blocks of
-// records are formatted on every core while the previous round of blocks is
-// written; the bytes are those of a one-thread loop, and no more than two
-// rounds (a few megabytes) are ever held. The records are `held` (count
-// of them), or else formed by `streamed`.
+// a large fit's output time (10⁶ marks: about 450 MB of text, 0.5 s of CPU),
+// so blocks of records are formatted by one worker a core, each taking the
+// next block as it finishes one, while this thread writes the blocks in
+// order; the bytes are those of a one-thread loop. The workers run ahead of
+// the writer by at most kSlots blocks (about 14 MB), so that a wait for the
+// disk (the output's writeback) does not stop them, and no more is held.
+// The records are `held`, or else formed by `streamed`.
 void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& held, const PointRecordSource* streamed) {
-  constexpr std::size_t kBlock = 4096;  // records a task formats (about 1.8 MB)
+  constexpr std::size_t kBlock = 2048;  // records a worker formats at once (about 0.9 MB)
+  constexpr std::size_t kSlots = 16;    // blocks formed and not yet written, at most
   const std::size_t records = streamed ? streamed->count : held.size();
   const std::size_t blocks = (records + kBlock - 1) / kBlock;
-  const std::size_t tasks = std::clamp<std::size_t>(std::thread::hardware_concurrency(), 1, 8);
+  const std::size_t workers = std::min(std::clamp<std::size_t>(std::thread::hardware_concurrency(), 1, 8), blocks);
   const auto format_block = [&](std::size_t b, std::string& text) {
     text.clear();
     FitPointRecord formed;
@@ -1362,10 +1366,7 @@ void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& h
       append_point_record(text, streamed ? formed : held[i], i == 0);
     }
   };
-  const auto write_all = [&](const std::vector<std::string>& texts) {
-    for (const auto& text : texts) out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  };
-  if (blocks <= 1 || tasks == 1) {
+  if (workers <= 1) {
     std::string text;
     for (std::size_t b = 0; b < blocks; ++b) {
       format_block(b, text);
@@ -1373,27 +1374,69 @@ void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& h
     }
     return;
   }
-  std::vector<std::string> ready, next(tasks);
-  for (std::size_t first = 0; first < blocks; first += tasks) {
-    const std::size_t count = std::min(tasks, blocks - first);
-    next.resize(count);
-    std::vector<std::future<void>> running;
-    running.reserve(count);
-    for (std::size_t k = 0; k < count; ++k) {
-      running.push_back(std::async(std::launch::async, [&, k] { format_block(first + k, next[k]); }));
+  struct Slot {
+    std::string text;
+    std::size_t block = SIZE_MAX;  // the block `text` holds, once formed
+    std::exception_ptr error;      // its formatting's failure (bad_alloc)
+  };
+  std::array<Slot, kSlots> slots;
+  std::mutex mutex;
+  std::condition_variable formed, written;
+  std::size_t next_block = 0;  // the next block a worker takes
+  std::size_t done = 0;        // blocks written (their slots free again)
+  bool stop = false;           // the writer has failed: the workers end
+  const auto work = [&] {
+    std::unique_lock lock(mutex);
+    while (true) {
+      written.wait(lock, [&] { return stop || next_block >= blocks || next_block < done + kSlots; });
+      if (stop || next_block >= blocks) return;
+      const std::size_t b = next_block++;
+      Slot& slot = slots[b % kSlots];
+      lock.unlock();
+      std::exception_ptr error;
+      try {
+        format_block(b, slot.text);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      lock.lock();
+      slot.error = error;
+      slot.block = b;
+      formed.notify_all();
     }
-    // The previous round goes out while this one is formatted; a failed
-    // task's exception (bad_alloc) reaches the caller through get().
-    try {
-      write_all(ready);
-    } catch (...) {
-      for (auto& r : running) r.wait();
-      throw;
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(workers);
+  // The workers end before this frame does, whatever is thrown.
+  struct Join {
+    std::vector<std::thread>& pool;
+    std::mutex& mutex;
+    std::condition_variable& written;
+    bool& stop;
+    ~Join() {
+      {
+        const std::lock_guard lock(mutex);
+        stop = true;
+      }
+      written.notify_all();
+      for (auto& t : pool) t.join();
     }
-    for (auto& r : running) r.get();
-    std::swap(ready, next);
+  } join{pool, mutex, written, stop};
+  for (std::size_t k = 0; k < workers; ++k) pool.emplace_back(work);
+  for (std::size_t b = 0; b < blocks; ++b) {
+    Slot& slot = slots[b % kSlots];
+    {
+      std::unique_lock lock(mutex);
+      formed.wait(lock, [&] { return slot.block == b; });
+      if (slot.error) std::rethrow_exception(slot.error);
+    }
+    out.write(slot.text.data(), static_cast<std::streamsize>(slot.text.size()));
+    {
+      const std::lock_guard lock(mutex);
+      done = b + 1;
+    }
+    written.notify_all();
   }
-  write_all(ready);
 }
 
 }  // namespace
