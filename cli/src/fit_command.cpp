@@ -307,7 +307,8 @@ int run_fit(const FitCommandOptions& o) {
     return code;
   }
 
-  solver::FitResult r = solver::fit_helmert(set, fo);
+  workflow::FitForExport fitted = workflow::fit_for_export(set, fo);
+  solver::FitResult& r = fitted.fit;
   r.warnings.insert(r.warnings.begin(), set_warnings.begin(), set_warnings.end());
   if (const auto w = workflow::orthometric_height_warning(r, set, geoid ? *geoid : geodesy::GeoidGrid::egm96())) {
     r.warnings.push_back(*w);
@@ -337,7 +338,7 @@ int run_fit(const FitCommandOptions& o) {
       out->stream() << transform_text;
     } else {
       const workflow::StreamedTransformFile file =
-          workflow::streamed_transform_file_from_fit(r, set, fo, {}, generator);
+          workflow::streamed_transform_file_from_fit(fitted, set, fo, {}, generator);
       // The marks are not read again: they and the solver's freed memory
       // go back to the system before the file is written (10⁶ marks:
       // 550 MB), where the file's cache pages can reuse them (on this

@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "accuracy.hpp"
 #include "generated_control.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
 #include "geoanchor/io/transform_file.hpp"
@@ -20,13 +22,19 @@
 namespace geoanchor::workflow {
 namespace {
 
-// issue 12 point 13
-TEST(FitExport, Issue12Point13_TheStreamedFileIsTheHeldFileByteForByte) {
-  // More marks than two of the writer's blocks (4096 records), one blunder
-  // that data snooping removes (a note), one mark left out by the user (the
-  // other note), and 3 mm noise, so that every statistic has digits.
-  constexpr std::size_t kMarks = 9000;
-  const auto src = testing::region(kMarks, 47.0, 8.0, 1.5, 11);
+// How far east of the marks' centroid the hull reaches without and with the
+// blunder placed 3° east of the region (about 230 km at 47° N; the region's
+// marks lie within 1.5°, 115 km, of 8° E).
+constexpr double kRegionEast_m = 130e3;
+constexpr double kBlunderEast_m = 180e3;
+
+// `marks` marks within 1.5° of (47° N, 8° E) related by a small Helmert
+// transform, 3 mm noise in the target (every statistic has digits), and
+// the target of mark `blunder` 0.25 m off. When `outside` the blunder is a
+// mark 3° east of the others (a vertex of their hull), else the region's.
+geodesy::ControlSet generated_set(std::size_t marks, std::size_t blunder, bool outside = false) {
+  auto src = testing::region(marks, 47.0, 8.0, 1.5, 11);
+  if (outside) src[blunder] = testing::region(1, 47.0, 11.0, 0.0, 3).front();
   geodesy::Helmert7<geodesy::PositionVector> truth;
   truth.t_m = Eigen::Vector3d(0.2, -0.1, 0.3);
   truth.rz = geodesy::Angle::milliarcseconds(15.0);
@@ -35,19 +43,29 @@ TEST(FitExport, Issue12Point13_TheStreamedFileIsTheHeldFileByteForByte) {
   std::normal_distribution<double> noise(0.0, 0.003);
   geodesy::ControlSet set;
   set.source_name = "generated";
-  for (std::size_t i = 0; i < kMarks; ++i) {
+  for (std::size_t i = 0; i < marks; ++i) {
     geodesy::ControlPoint p;
     p.id = "M" + std::to_string(i);
     p.line = i + 2;
     p.source = src[i];
     p.target = geodesy::apply(truth, geodesy::RotationModel::small_angle, src[i]);
     p.target.m += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
-    if (i == 4500) p.target.m.x() += 0.25;  // the blunder
+    if (i == blunder) p.target.m.x() += 0.25;
     p.source_cov_m2 = p.target_cov_m2 = Eigen::Matrix3d::Identity() * (0.003 * 0.003 / 2.0);
     p.source_as_read = p.source.m;
     p.target_as_read = p.target.m;
     set.points.push_back(p);
   }
+  return set;
+}
+
+// issue 12 point 13
+TEST(FitExport, Issue12Point13_TheStreamedFileIsTheHeldFileByteForByte) {
+  // More marks than two of the writer's blocks (2048 records), one blunder
+  // that data snooping removes (a note), one mark left out by the user (the
+  // other note).
+  constexpr std::size_t kMarks = 9000;
+  const geodesy::ControlSet set = generated_set(kMarks, 4500);
   solver::FitOptions o;
   o.model = solver::FitModel::helmert7;
   o.convention = solver::Convention::position_vector;
@@ -77,6 +95,44 @@ TEST(FitExport, Issue12Point13_TheStreamedFileIsTheHeldFileByteForByte) {
   std::ostringstream refused;
   EXPECT_THROW(io::write_json(refused, transform_file_from_fit(r, set, o, left_out, generator), streamed.points),
                std::logic_error);
+}
+
+// issue 12 point 13: fit_for_export forms the extent during the solve from
+// the marks to be used; its file is the one formed from the fit's own used
+// marks, also where data snooping removed a mark of the hull.
+TEST(FitExport, Issue12Point13_AFitForExportWritesTheFileOfItsFit) {
+  constexpr std::size_t kMarks = 3000, kBlunder = 1234;
+  const geodesy::ControlSet set = generated_set(kMarks, kBlunder, true);
+  const std::string generator = "geoanchor test";
+  const auto text_of = [&](const StreamedTransformFile& f) {
+    std::ostringstream out;
+    io::write_json(out, f.file, f.points);
+    return out.str();
+  };
+  for (const bool snooping : {false, true}) {
+    SCOPED_TRACE(snooping ? "data snooping" : "no data snooping");
+    solver::FitOptions o;
+    o.model = solver::FitModel::helmert7;
+    o.convention = solver::Convention::position_vector;
+    o.data_snooping = snooping;
+    const FitForExport fitted = fit_for_export(set, o);
+    ASSERT_EQ(fitted.fit.points[kBlunder].used, !snooping) << "the blunder was meant to be removed by snooping alone";
+    ASSERT_TRUE(fitted.extent);
+    const std::string planned = text_of(streamed_transform_file_from_fit(fitted, set, o, {}, generator));
+    const std::string formed = text_of(streamed_transform_file_from_fit(fitted.fit, set, o, {}, generator));
+    EXPECT_TRUE(planned == formed) << "first difference at byte "
+                                   << std::mismatch(planned.begin(), planned.end(), formed.begin()).first - planned.begin();
+    // The blunder 3° east is a vertex of the hull when used: the hull
+    // reaches past 200 km east of the centroid then, and stays within the
+    // region's 1.5° (115 km) when it is removed.
+    double east_m = -std::numeric_limits<double>::infinity();
+    for (const auto& v : fitted.extent->hull_en_m) east_m = testing::nan_max(east_m, v[0]);
+    if (snooping) {
+      EXPECT_LT(east_m, kRegionEast_m);
+    } else {
+      EXPECT_GT(east_m, kBlunderEast_m);
+    }
+  }
 }
 
 }  // namespace

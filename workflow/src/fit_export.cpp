@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <future>
 #include <limits>
 #include <numeric>
 #include <ostream>
@@ -78,9 +79,11 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
   constexpr std::size_t kAllRowsUpTo = 1000, kOkRowsOfLargeSets = 50;
   const bool large = r.points.size() > kAllRowsUpTo;
   std::vector<Key> shown, ok_keys;  // ok_keys: a heap whose top is the last of them in `before` order
+  std::vector<std::size_t> removed;  // the outliers, in file order (one pass over the marks: 10⁶ are 270 MB)
   std::size_t ok_hidden = 0;
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     const auto& p = r.points[i];
+    if (p.outlier) removed.push_back(i);
     const Key k{p.outlier ? 0 : !p.used ? 1 : 2, std::isnan(p.w_max) ? -std::numeric_limits<double>::infinity() : p.w_max, i};
     if (!large || !is_ok(p)) {
       shown.push_back(k);
@@ -121,9 +124,7 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
     out << "  ... and " << ok_hidden << " more marks, all ok, with smaller |w| (every mark is in the transform file's "
         << "points)\n";
   }
-  for (const auto& p : r.points) {
-    if (p.outlier) out << "  " << p.id << ": " << p.removed_because << "\n";
-  }
+  for (const std::size_t i : removed) out << "  " << r.points[i].id << ": " << r.points[i].removed_because << "\n";
   out << "  (points not used are tested against the final fit: residuals at full size, prediction w-tests)\n";
   if (!r.warnings.empty()) out << "\n" << r.warnings.size() << " warning(s): see standard error and the transform file\n";
 }
@@ -166,10 +167,30 @@ io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geod
   return std::move(t);
 }
 
-StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& r, const geodesy::ControlSet& set,
-                                                       const solver::FitOptions& o,
-                                                       const std::vector<std::string>& left_out,
-                                                       const std::string& generator) {
+namespace {
+
+// The extent of the marks set.points[i] for which used(i) holds.
+template <class Used>
+std::optional<io::ControlExtent> extent_of(const geodesy::ControlSet& set, std::size_t count, const Used& used) {
+  std::vector<geodesy::EcefPosition> marks;
+  marks.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    if (used(i)) marks.push_back(set.points[i].source);
+  }
+  if (marks.empty()) return std::nullopt;
+  return io::ControlExtent::of(marks);
+}
+
+// The extent of the marks `r` used. r.points[i] is set.points[i] (the
+// solver keeps the input order; an id may repeat at other epochs, so the
+// index, not the id, names the mark).
+std::optional<io::ControlExtent> used_marks_extent(const solver::FitResult& r, const geodesy::ControlSet& set) {
+  return extent_of(set, std::min(r.points.size(), set.points.size()), [&](std::size_t i) { return r.points[i].used; });
+}
+
+StreamedTransformFile streamed_file(const solver::FitResult& r, const geodesy::ControlSet& set, const solver::FitOptions& o,
+                                    const std::vector<std::string>& left_out, const std::string& generator,
+                                    std::optional<io::ControlExtent> extent) {
   StreamedTransformFile streamed;
   io::TransformFile& t = streamed.file;
   switch (r.model) {
@@ -241,20 +262,43 @@ StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& 
   f.global_applicable = r.global_test.applicable;
   f.warnings = r.warnings;
   f.variance_factors = r.variance_factors;
-  // The network's extent (source frame): the marks the fit used.
-  // r.points[i] is set.points[i] (the solver keeps the input order; an id
-  // may repeat at other epochs, so the index, not the id, names the mark).
-  std::vector<geodesy::EcefPosition> used_marks;
-  used_marks.reserve(r.points.size());
-  for (std::size_t i = 0; i < r.points.size() && i < set.points.size(); ++i) {
-    if (r.points[i].used) used_marks.push_back(set.points[i].source);
-  }
-  if (!used_marks.empty()) f.extent = io::ControlExtent::of(used_marks);
+  f.extent = std::move(extent);  // the network's, source frame: the marks the fit used
   f.generator = generator;
   t.fit = std::move(f);
   streamed.points.count = r.points.size();
   streamed.points.record = [&r, left_out](std::size_t i, io::FitPointRecord& q) { point_record(r.points[i], left_out, q); };
   return streamed;
+}
+
+}  // namespace
+
+StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& r, const geodesy::ControlSet& set,
+                                                       const solver::FitOptions& o,
+                                                       const std::vector<std::string>& left_out,
+                                                       const std::string& generator) {
+  return streamed_file(r, set, o, left_out, generator, used_marks_extent(r, set));
+}
+
+StreamedTransformFile streamed_transform_file_from_fit(const FitForExport& fitted, const geodesy::ControlSet& set,
+                                                       const solver::FitOptions& o,
+                                                       const std::vector<std::string>& left_out,
+                                                       const std::string& generator) {
+  return streamed_file(fitted.fit, set, o, left_out, generator, fitted.extent);
+}
+
+FitForExport fit_for_export(const geodesy::ControlSet& set, const solver::FitOptions& o) {
+  // The set is only read, here and by the solver. Should the solve throw,
+  // the future's destructor waits for the extent before the set can go.
+  auto planned = std::async(std::launch::async, [&set] {
+    return extent_of(set, set.points.size(), [&](std::size_t i) { return set.points[i].use; });
+  });
+  FitForExport fitted{solver::fit_helmert(set, o), std::nullopt};
+  std::optional<io::ControlExtent> extent = planned.get();
+  const auto& points = fitted.fit.points;
+  bool same_marks = points.size() == set.points.size();
+  for (std::size_t i = 0; same_marks && i < points.size(); ++i) same_marks = points[i].used == set.points[i].use;
+  fitted.extent = same_marks ? std::move(extent) : used_marks_extent(fitted.fit, set);
+  return fitted;
 }
 
 

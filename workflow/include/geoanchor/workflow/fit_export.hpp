@@ -6,6 +6,7 @@
 // records, so that the workbench can reopen a saved fit.
 
 #include <iosfwd>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,28 @@ StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& 
                                                        const std::string& generator);
 // (A temporary fit would be gone before its records are written.)
 StreamedTransformFile streamed_transform_file_from_fit(solver::FitResult&& fit, const geodesy::ControlSet& control,
+                                                       const solver::FitOptions& options,
+                                                       const std::vector<std::string>& left_out,
+                                                       const std::string& generator) = delete;
+
+// A fit with the control network's extent its transform file records (the
+// hull, in the source frame, of the marks the fit used): fit_helmert(control,
+// options), the extent of the marks to be used formed meanwhile on another
+// core (the solve runs on one; at 10⁶ marks the extent is 0.1 s of the
+// command). Where the fit used other marks than those (data snooping removed
+// some), the extent is formed again from the marks it used: it is always the
+// one streamed_transform_file_from_fit(fit, ...) forms.
+struct FitForExport {
+  solver::FitResult fit;
+  std::optional<io::ControlExtent> extent;  // none when the fit used no mark
+};
+FitForExport fit_for_export(const geodesy::ControlSet& control, const solver::FitOptions& options);
+// streamed_transform_file_from_fit(fitted.fit, ...) with fitted.extent.
+StreamedTransformFile streamed_transform_file_from_fit(const FitForExport& fitted, const geodesy::ControlSet& control,
+                                                       const solver::FitOptions& options,
+                                                       const std::vector<std::string>& left_out,
+                                                       const std::string& generator);
+StreamedTransformFile streamed_transform_file_from_fit(FitForExport&& fitted, const geodesy::ControlSet& control,
                                                        const solver::FitOptions& options,
                                                        const std::vector<std::string>& left_out,
                                                        const std::string& generator) = delete;
