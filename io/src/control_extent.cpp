@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/io/transform_file.hpp"
@@ -84,7 +85,7 @@ ControlExtent ControlExtent::of(const std::vector<geodesy::EcefPosition>& marks)
     const Eigen::Vector3d v = plane.enu_from_ecef(m).enu_m;
     en.push_back({v.x(), v.y()});
   }
-  e.hull_en_m = convex_hull(en);
+  e.hull_en_m = convex_hull(std::move(en));
   return e;
 }
 

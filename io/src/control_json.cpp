@@ -2,6 +2,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <vector>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -220,7 +221,12 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
 }
 
 geodesy::ControlSet read_control_set(const std::filesystem::path& path, const ControlReadOptions& o) {
-  std::ifstream in(path, std::ios::binary);
+  // Read a megabyte at a time, not the stream's 8 KB (10⁶ marks: 96 MB,
+  // 12 000 reads on the thread that hands lines to the parsers).
+  std::vector<char> buffer(std::size_t{1} << 20);
+  std::ifstream in;
+  in.rdbuf()->pubsetbuf(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+  in.open(path, std::ios::binary);
   if (!in) throw Error(ErrorKind::io, "E_READ", path.string() + ": cannot open control set: " + std::strerror(errno));
   // JSON when the first non-blank character opens an object; CSV otherwise.
   char c = 0;

@@ -20,6 +20,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
+#include <system_error>
 #include <thread>
 #include <tuple>
 
@@ -1366,12 +1367,15 @@ void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& h
       append_point_record(text, streamed ? formed : held[i], i == 0);
     }
   };
-  if (workers <= 1) {
+  const auto on_this_thread = [&] {
     std::string text;
     for (std::size_t b = 0; b < blocks; ++b) {
       format_block(b, text);
       out.write(text.data(), static_cast<std::streamsize>(text.size()));
     }
+  };
+  if (workers <= 1) {
+    on_this_thread();
     return;
   }
   struct Slot {
@@ -1422,7 +1426,17 @@ void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& h
       for (auto& t : pool) t.join();
     }
   } join{pool, mutex, written, stop};
-  for (std::size_t k = 0; k < workers; ++k) pool.emplace_back(work);
+  for (std::size_t k = 0; k < workers; ++k) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {  // no more threads to be had: those started do the work
+      break;
+    }
+  }
+  if (pool.empty()) {
+    on_this_thread();
+    return;
+  }
   for (std::size_t b = 0; b < blocks; ++b) {
     Slot& slot = slots[b % kSlots];
     {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <future>
+#include <system_error>
 #include <limits>
 #include <numeric>
 #include <ostream>
@@ -289,9 +290,15 @@ StreamedTransformFile streamed_transform_file_from_fit(const FitForExport& fitte
 FitForExport fit_for_export(const geodesy::ControlSet& set, const solver::FitOptions& o) {
   // The set is only read, here and by the solver. Should the solve throw,
   // the future's destructor waits for the extent before the set can go.
-  auto planned = std::async(std::launch::async, [&set] {
+  const auto extent_to_be_used = [&set] {
     return extent_of(set, set.points.size(), [&](std::size_t i) { return set.points[i].use; });
-  });
+  };
+  std::future<std::optional<io::ControlExtent>> planned;
+  try {
+    planned = std::async(std::launch::async, extent_to_be_used);
+  } catch (const std::system_error&) {  // no thread to be had: formed after the solve, on this one
+    planned = std::async(std::launch::deferred, extent_to_be_used);
+  }
   FitForExport fitted{solver::fit_helmert(set, o), std::nullopt};
   std::optional<io::ControlExtent> extent = planned.get();
   const auto& points = fitted.fit.points;
