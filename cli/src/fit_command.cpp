@@ -10,6 +10,7 @@
 #include <iostream>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <tuple>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -307,8 +308,12 @@ int run_fit(const FitCommandOptions& o) {
     return code;
   }
 
-  workflow::FitForExport fitted = workflow::fit_for_export(set, fo);
-  solver::FitResult& r = fitted.fit;
+  // Only a streamed transform file takes the extent formed during the
+  // solve (--json forms the file whole, after it).
+  const bool streamed_output = out && !o.json;
+  workflow::FitForExport fitted = streamed_output ? workflow::fit_for_export(set, fo)
+                                                  : workflow::FitForExport{solver::fit_helmert(set, fo), std::nullopt};
+  solver::FitResult& r = fitted.fit;  // warnings are added below; the marks used stay as they are
   r.warnings.insert(r.warnings.begin(), set_warnings.begin(), set_warnings.end());
   if (const auto w = workflow::orthometric_height_warning(r, set, geoid ? *geoid : geodesy::GeoidGrid::egm96())) {
     r.warnings.push_back(*w);

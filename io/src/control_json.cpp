@@ -1,13 +1,13 @@
 // Control sets in JSON (schema: docs/commands/fit.md).
 
+#include <cctype>
+#include <cmath>
 #include <cstring>
 #include <fstream>
-#include <vector>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
-#include <cctype>
-#include <cmath>
+#include <vector>
 
 #include "control_common.hpp"
 #include "geoanchor/geodesy/error.hpp"

@@ -3,18 +3,19 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
-#include <bit>
-#include <cstdint>
 #include <array>
+#include <bit>
 #include <charconv>
 #include <cmath>
+#include <condition_variable>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <fstream>
-#include <condition_variable>
-#include <mutex>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -1346,7 +1347,7 @@ void append_point_record(std::string& out, const FitPointRecord& p, bool first) 
 
 // The "points" array's elements, in order. Formatting the numbers is most of
 // a large fit's output time (10⁶ marks: about 450 MB of text, 0.5 s of CPU),
-// so blocks of records are formatted by one worker a core, each taking the
+// so blocks of records are formatted by one worker a core (at most 8), each taking the
 // next block as it finishes one, while this thread writes the blocks in
 // order; the bytes are those of a one-thread loop. The workers run ahead of
 // the writer by at most kSlots blocks (about 14 MB), so that a wait for the

@@ -22,9 +22,10 @@
 namespace geoanchor::workflow {
 namespace {
 
-// How far east of the marks' centroid the hull reaches without and with the
-// blunder placed 3° east of the region (about 230 km at 47° N; the region's
-// marks lie within 1.5°, 115 km, of 8° E).
+// Bounds on how far east (west) of the marks' centroid the hull reaches
+// without and with a mark placed 3° east (west) of the region: such a mark
+// is about 228 km away at 47° N; the region's marks lie within 1.5° of
+// 8° E, at most about 117 km (at its southern edge, 45.5° N).
 constexpr double kRegionEast_m = 130e3;
 constexpr double kBlunderEast_m = 180e3;
 
@@ -35,6 +36,7 @@ constexpr double kBlunderEast_m = 180e3;
 geodesy::ControlSet generated_set(std::size_t marks, std::size_t blunder, bool outside = false) {
   auto src = testing::region(marks, 47.0, 8.0, 1.5, 11);
   if (outside) src[blunder] = testing::region(1, 47.0, 11.0, 0.0, 3).front();
+  if (outside) src[blunder + 1] = testing::region(1, 47.0, 5.0, 0.0, 3).front();  // left out: see the test
   geodesy::Helmert7<geodesy::PositionVector> truth;
   truth.t_m = Eigen::Vector3d(0.2, -0.1, 0.3);
   truth.rz = geodesy::Angle::milliarcseconds(15.0);
@@ -99,10 +101,12 @@ TEST(FitExport, Issue12Point13_TheStreamedFileIsTheHeldFileByteForByte) {
 
 // issue 12 point 13: fit_for_export forms the extent during the solve from
 // the marks to be used; its file is the one formed from the fit's own used
-// marks, also where data snooping removed a mark of the hull.
+// marks, also where data snooping removed a mark of the hull. A mark 3° west
+// that the set leaves out (use = false) is never in the hull.
 TEST(FitExport, Issue12Point13_AFitForExportWritesTheFileOfItsFit) {
   constexpr std::size_t kMarks = 3000, kBlunder = 1234;
-  const geodesy::ControlSet set = generated_set(kMarks, kBlunder, true);
+  geodesy::ControlSet set = generated_set(kMarks, kBlunder, true);
+  set.points[kBlunder + 1].use = false;
   const std::string generator = "geoanchor test";
   const auto text_of = [&](const StreamedTransformFile& f) {
     std::ostringstream out;
@@ -125,8 +129,12 @@ TEST(FitExport, Issue12Point13_AFitForExportWritesTheFileOfItsFit) {
     // The blunder 3° east is a vertex of the hull when used: the hull
     // reaches past 200 km east of the centroid then, and stays within the
     // region's 1.5° (115 km) when it is removed.
-    double east_m = -std::numeric_limits<double>::infinity();
-    for (const auto& v : fitted.extent->hull_en_m) east_m = testing::nan_max(east_m, v[0]);
+    double east_m = -std::numeric_limits<double>::infinity(), west_m = east_m;
+    for (const auto& v : fitted.extent->hull_en_m) {
+      east_m = testing::nan_max(east_m, v[0]);
+      west_m = testing::nan_max(west_m, -v[0]);
+    }
+    EXPECT_LT(west_m, kRegionEast_m) << "the mark left out is in the hull";
     if (snooping) {
       EXPECT_LT(east_m, kRegionEast_m);
     } else {

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <future>
-#include <system_error>
 #include <limits>
 #include <numeric>
 #include <ostream>
+#include <system_error>
 #include <utility>
 
 #include "geoanchor/geodesy/number_text.hpp"

@@ -51,7 +51,9 @@ StreamedTransformFile streamed_transform_file_from_fit(solver::FitResult&& fit, 
 // core (the solve runs on one; at 10⁶ marks the extent is 0.1 s of the
 // command). Where the fit used other marks than those (data snooping removed
 // some), the extent is formed again from the marks it used: it is always the
-// one streamed_transform_file_from_fit(fit, ...) forms.
+// one streamed_transform_file_from_fit(fit, ...) forms. The extent holds
+// for `control` as given and for the marks fit.points[i].used names: neither
+// may change before the file is formed.
 struct FitForExport {
   solver::FitResult fit;
   std::optional<io::ControlExtent> extent;  // none when the fit used no mark
