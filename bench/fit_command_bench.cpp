@@ -3,7 +3,7 @@
 // executable reading a CSV, fitting, reporting and writing the transform
 // file, and the median time of solver::fit_helmert on the same set with the
 // same options in this process (the solver benchmark's call). The target is
-// a ratio of at most 2. Never part of the test run's pass/fail.
+// a ratio of at most 2 at 10⁶ marks. Never part of the test run's pass/fail.
 //
 //   geoanchor_fit_command_bench [--sizes 100000,1000000] [--repetitions 3]
 //
@@ -204,6 +204,7 @@ int main(int argc, char** argv) {
     fs::remove(csv);
   }
   fs::remove_all(folder);
-  std::printf("\ntarget: ratio <= 2 (issue 12 point 13)\n");
+  std::printf("\ntarget: ratio <= 2 at 10^6 marks (issue 12 point 13, fit at scale; at 10^5 the process's start,\n"
+              "read and write, about 0.1 s, are more than the 0.08 s solve)\n");
   return 0;
 }
