@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <memory>
 #include <regex>
 
@@ -92,6 +93,55 @@ struct CtxDeleter {
 
 [[noreturn]] void fail(std::string_view source, const std::string& problem) {
   throw Error(ErrorKind::input, "E_TILE_CRS", std::string(source) + ": LAS WKT: " + problem);
+}
+
+// Refuses a coordinate system whose axes geoanchor would misread: it takes
+// a tile's X, Y, Z as the CRS kind's axes in `directions`, in order, each in
+// metres or (geographic) degrees. Any other order, direction or unit (a
+// State Plane CRS in US survey feet, a grad, a southing) is named; so is a
+// prime meridian other than Greenwich. (Issue 13 reads them through PROJ.)
+void require_understood_axes(PJ_CONTEXT* ctx, PJ* crs, std::string_view crs_name, std::initializer_list<const char*> directions,
+                             bool geographic, std::string_view source) {
+  constexpr double kUnitMatch = 1e-12;  // relative, of a unit's conversion factor
+  Pj cs(proj_crs_get_coordinate_system(ctx, crs));
+  const int axes = cs ? proj_cs_get_axis_count(ctx, cs.get()) : -1;
+  const std::string what = "'" + std::string(crs_name) + "'";
+  if (axes < 0) fail(source, what + ": cannot read its coordinate system");
+  std::size_t k = 0;
+  for (const char* expected : directions) {
+    if (static_cast<int>(k) >= axes) break;
+    const char* name = nullptr;
+    const char* direction = nullptr;
+    const char* unit = nullptr;
+    double factor = 0.0;
+    if (!proj_cs_get_axis_info(ctx, cs.get(), static_cast<int>(k), &name, nullptr, &direction, &factor, &unit, nullptr,
+                               nullptr)) {
+      fail(source, what + ": cannot read axis " + std::to_string(k + 1));
+    }
+    const std::string dir = direction ? direction : "?";
+    const bool in_degrees = geographic && k < 2;  // latitude and longitude; the height in metres
+    const double expected_factor = in_degrees ? kDegree_rad : 1.0;
+    const std::string axis = "axis " + std::to_string(k + 1) + " ('" + (name ? name : "?") + "', " + dir + ", " +
+                             (unit ? unit : "?") + ")";
+    if (dir != expected) {
+      fail(source, what + ": " + axis + ": geoanchor reads this axis as " + expected +
+                       "; other axis orders and directions are not read yet");
+    }
+    if (!(std::abs(factor - expected_factor) <= kUnitMatch * expected_factor)) {
+      fail(source, what + ": " + axis + ": the unit is not " + (in_degrees ? "the degree" : "the metre") +
+                       " (conversion factor " + format_shortest(factor) + "); geoanchor would read its numbers as " +
+                       (in_degrees ? "degrees" : "metres") + ", so the tile is refused, not moved");
+    }
+    ++k;
+  }
+  Pj pm(proj_get_prime_meridian(ctx, crs));
+  double longitude = 0.0, pm_factor = 0.0;
+  const char* pm_unit = nullptr;
+  if (pm && proj_prime_meridian_get_parameters(ctx, pm.get(), &longitude, &pm_factor, &pm_unit) && longitude != 0.0) {
+    const char* pm_name = proj_get_name(pm.get());
+    fail(source, what + ": prime meridian '" + (pm_name ? pm_name : "?") + "' at " + format_shortest(longitude) + " " +
+                     (pm_unit ? pm_unit : "?") + " from Greenwich; geoanchor reads longitudes from Greenwich only");
+  }
 }
 
 // A conversion parameter in degrees (angles), metres (lengths) or unity,
@@ -201,6 +251,8 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
     if (!horizontal || !vertical) fail(source, "a compound CRS without its two parts");
     h = horizontal.get();
     type = proj_get_type(h);
+    const char* vertical_name = proj_get_name(vertical.get());
+    require_understood_axes(ctx.get(), vertical.get(), vertical_name ? vertical_name : "?", {"up"}, false, source);
     m.height_type = "orthometric";
     const char* vname = proj_get_name(vertical.get());
     m.vertical_datum = vname ? vname : "";
@@ -210,6 +262,20 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
 
   Pj cs(proj_crs_get_coordinate_system(ctx.get(), h));
   const int axes = cs ? proj_cs_get_axis_count(ctx.get(), cs.get()) : 0;
+  switch (type) {
+    case PJ_TYPE_GEOCENTRIC_CRS:
+      require_understood_axes(ctx.get(), h, m.horizontal_crs, {"geocentricX", "geocentricY", "geocentricZ"}, false, source);
+      break;
+    case PJ_TYPE_GEOGRAPHIC_3D_CRS:
+    case PJ_TYPE_GEOGRAPHIC_2D_CRS:
+      require_understood_axes(ctx.get(), h, m.horizontal_crs, {"north", "east", "up"}, true, source);
+      break;
+    case PJ_TYPE_PROJECTED_CRS:
+      require_understood_axes(ctx.get(), h, m.horizontal_crs, {"east", "north", "up"}, false, source);
+      break;
+    default:
+      break;  // refused below
+  }
   switch (type) {
     case PJ_TYPE_GEOCENTRIC_CRS: m.coordinates.kind = CoordinateKind::ecef; break;
     case PJ_TYPE_GEOGRAPHIC_3D_CRS:

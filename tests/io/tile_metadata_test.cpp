@@ -3,6 +3,8 @@
 // tiles against PROJ, the propagated uncertainty and the control extent.
 
 #include <gtest/gtest.h>
+#include <proj.h>
+#include <proj_experimental.h>
 
 #include <algorithm>
 #include <cmath>
@@ -173,6 +175,62 @@ TEST(TileMetadata, WktOfEachKindParsesBackAndMeansWhatProjMakesOfIt) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("heights (Z) are unlabelled"), std::string::npos) << e.what();
   }
+}
+
+// PROJ's WKT2:2019 of `crs` (an EPSG code), promoted to 3D when `to_3d`.
+std::string projs_wkt(const char* crs, bool to_3d) {
+  PJ_CONTEXT* ctx = proj_context_create();
+  PJ* p = proj_create(ctx, crs);
+  PJ* q = p && to_3d ? proj_crs_promote_to_3D(ctx, nullptr, p) : nullptr;
+  const char* wkt = (q ? q : p) ? proj_as_wkt(ctx, q ? q : p, PJ_WKT2_2019, nullptr) : nullptr;
+  std::string out = wkt ? wkt : "";
+  proj_destroy(q);
+  proj_destroy(p);
+  proj_context_destroy(ctx);
+  return out;
+}
+
+std::string wkt_error(const std::string& wkt) {
+  try {
+    (void)tile_metadata_from_wkt(wkt, "t.las");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// issue 13 (its first defect): a tile CRS in US survey feet, in grads or
+// from another prime meridian was read as metres, degrees and Greenwich
+// (EPSG:2236 moved a tile 700 km); now each is refused, naming what it is.
+TEST(TileMetadata, Issue13_AxesInOtherUnitsOrFromAnotherMeridianAreRefusedByName) {
+  const std::string florida = projs_wkt("EPSG:2236", true);  // NAD83 / Florida East (ftUS), TM
+  ASSERT_FALSE(florida.empty()) << "PROJ has no EPSG:2236";
+  const std::string e1 = wkt_error(florida);
+  EXPECT_NE(e1.find("t.las: LAS WKT: 'NAD83 / Florida East (ftUS)': axis 1"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("US survey foot"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("refused, not moved"), std::string::npos) << e1;
+
+  const std::string ntf = projs_wkt("EPSG:4807", true);  // NTF (Paris): grads from Paris
+  ASSERT_FALSE(ntf.empty()) << "PROJ has no EPSG:4807";
+  EXPECT_NE(wkt_error(ntf).find("grad"), std::string::npos) << wkt_error(ntf);
+
+  // Degrees, but longitudes from Paris.
+  const std::string paris =
+      "GEOGCRS[\"x\",DATUM[\"Nouvelle Triangulation Francaise (Paris)\",ELLIPSOID[\"Clarke 1880 (IGN)\",6378249.2,"
+      "293.466021293627]],PRIMEM[\"Paris\",2.33722917,ANGLEUNIT[\"degree\",0.0174532925199433]],CS[ellipsoidal,3],"
+      "AXIS[\"lat\",north,ANGLEUNIT[\"degree\",0.0174532925199433]],AXIS[\"lon\",east,ANGLEUNIT[\"degree\","
+      "0.0174532925199433]],AXIS[\"h\",up,LENGTHUNIT[\"metre\",1]]]";
+  const std::string e3 = wkt_error(paris);
+  EXPECT_NE(e3.find("prime meridian 'Paris' at 2.33722917 degree from Greenwich"), std::string::npos) << e3;
+
+  // A southing (UPS South, promoted to 3D) is not read as a northing.
+  const std::string ups = projs_wkt("EPSG:32761", true);
+  ASSERT_FALSE(ups.empty()) << "PROJ has no EPSG:32761";
+  EXPECT_NE(wkt_error(ups).find("axis 1 ('Northing', north, metre): geoanchor reads this axis as east"), std::string::npos)
+      << wkt_error(ups);
+
+  // The metre and the degree from Greenwich still read (UTM 32N in 3D).
+  EXPECT_EQ(wkt_error(projs_wkt("EPSG:25832", true)), "");
 }
 
 const char* kHelmert = R"J({"model": "helmert7", "convention": "coordinate_frame",
