@@ -254,8 +254,7 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
     const char* vertical_name = proj_get_name(vertical.get());
     require_understood_axes(ctx.get(), vertical.get(), vertical_name ? vertical_name : "?", {"up"}, false, source);
     m.height_type = "orthometric";
-    const char* vname = proj_get_name(vertical.get());
-    m.vertical_datum = vname ? vname : "";
+    m.vertical_datum = vertical_name ? vertical_name : "";
     m.geoid_model = m.vertical_datum;
   }
   m.horizontal_crs = proj_get_name(h) ? proj_get_name(h) : "";
