@@ -100,7 +100,8 @@ struct CtxDeleter {
 // metres or (geographic) degrees. Any other order, direction or unit (a
 // State Plane CRS in US survey feet, a grad, a southing) is named; so is a
 // prime meridian other than Greenwich. (Issue 13 reads them through PROJ.)
-void require_understood_axes(PJ_CONTEXT* ctx, PJ* crs, std::string_view crs_name, std::initializer_list<const char*> directions,
+// Returns the number of axes.
+int require_understood_axes(PJ_CONTEXT* ctx, PJ* crs, std::string_view crs_name, std::initializer_list<const char*> directions,
                              bool geographic, std::string_view source) {
   constexpr double kUnitMatch = 1e-12;  // relative, of a unit's conversion factor
   Pj cs(proj_crs_get_coordinate_system(ctx, crs));
@@ -142,6 +143,7 @@ void require_understood_axes(PJ_CONTEXT* ctx, PJ* crs, std::string_view crs_name
     fail(source, what + ": prime meridian '" + (pm_name ? pm_name : "?") + "' at " + format_shortest(longitude) + " " +
                      (pm_unit ? pm_unit : "?") + " from Greenwich; geoanchor reads longitudes from Greenwich only");
   }
+  return axes;
 }
 
 // A conversion parameter in degrees (angles), metres (lengths) or unity,
@@ -252,25 +254,24 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
     h = horizontal.get();
     type = proj_get_type(h);
     const char* vertical_name = proj_get_name(vertical.get());
-    require_understood_axes(ctx.get(), vertical.get(), vertical_name ? vertical_name : "?", {"up"}, false, source);
+    (void)require_understood_axes(ctx.get(), vertical.get(), vertical_name ? vertical_name : "?", {"up"}, false, source);
     m.height_type = "orthometric";
     m.vertical_datum = vertical_name ? vertical_name : "";
     m.geoid_model = m.vertical_datum;
   }
   m.horizontal_crs = proj_get_name(h) ? proj_get_name(h) : "";
 
-  Pj cs(proj_crs_get_coordinate_system(ctx.get(), h));
-  const int axes = cs ? proj_cs_get_axis_count(ctx.get(), cs.get()) : 0;
+  int axes = 0;
   switch (type) {
     case PJ_TYPE_GEOCENTRIC_CRS:
-      require_understood_axes(ctx.get(), h, m.horizontal_crs, {"geocentricX", "geocentricY", "geocentricZ"}, false, source);
+      axes = require_understood_axes(ctx.get(), h, m.horizontal_crs, {"geocentricX", "geocentricY", "geocentricZ"}, false, source);
       break;
     case PJ_TYPE_GEOGRAPHIC_3D_CRS:
     case PJ_TYPE_GEOGRAPHIC_2D_CRS:
-      require_understood_axes(ctx.get(), h, m.horizontal_crs, {"north", "east", "up"}, true, source);
+      axes = require_understood_axes(ctx.get(), h, m.horizontal_crs, {"north", "east", "up"}, true, source);
       break;
     case PJ_TYPE_PROJECTED_CRS:
-      require_understood_axes(ctx.get(), h, m.horizontal_crs, {"east", "north", "up"}, false, source);
+      axes = require_understood_axes(ctx.get(), h, m.horizontal_crs, {"east", "north", "up"}, false, source);
       break;
     default:
       break;  // refused below

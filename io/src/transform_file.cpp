@@ -1389,7 +1389,7 @@ void write_point_records(std::ostream& out, const std::vector<FitPointRecord>& h
   std::condition_variable formed, written;
   std::size_t next_block = 0;  // the next block a worker takes
   std::size_t done = 0;        // blocks written (their slots free again)
-  bool stop = false;           // the writer has failed: the workers end
+  bool stop = false;           // the writer is done or has failed: the workers end
   const auto work = [&] {
     std::unique_lock lock(mutex);
     while (true) {

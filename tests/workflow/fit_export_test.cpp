@@ -32,11 +32,12 @@ constexpr double kBlunderEast_m = 180e3;
 // `marks` marks within 1.5° of (47° N, 8° E) related by a small Helmert
 // transform, 3 mm noise in the target (every statistic has digits), and
 // the target of mark `blunder` 0.25 m off. When `outside` the blunder is a
-// mark 3° east of the others (a vertex of their hull), else the region's.
+// mark 3° east of the others (a vertex of their hull), and mark blunder + 1
+// one 3° west; else both are the region's.
 geodesy::ControlSet generated_set(std::size_t marks, std::size_t blunder, bool outside = false) {
   auto src = testing::region(marks, 47.0, 8.0, 1.5, 11);
   if (outside) src[blunder] = testing::region(1, 47.0, 11.0, 0.0, 3).front();
-  if (outside) src[blunder + 1] = testing::region(1, 47.0, 5.0, 0.0, 3).front();  // left out: see the test
+  if (outside) src[blunder + 1] = testing::region(1, 47.0, 5.0, 0.0, 3).front();
   geodesy::Helmert7<geodesy::PositionVector> truth;
   truth.t_m = Eigen::Vector3d(0.2, -0.1, 0.3);
   truth.rz = geodesy::Angle::milliarcseconds(15.0);
