@@ -6,6 +6,7 @@
 #include <cctype>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::geodesy {
@@ -29,6 +30,45 @@ bool all_digits(std::string_view s) {
     if (!std::isdigit(static_cast<unsigned char>(c))) return false;
   }
   return true;
+}
+
+std::string upper(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return out;
+}
+
+// The names frames are known by besides the catalog's: the ensembles and the
+// national datums whose realization a name leaves open.
+constexpr std::array<std::string_view, 4> kOtherKnownNames = {"WGS84", "ETRS89", "NAD83", "NAD83(CSRS)"};
+
+// A frame name as geodesists also write it, in the catalog's spelling:
+// letters in any case, spaces anywhere ("WGS 84 (G2139)", "nad83 (2011)"),
+// and a terrestrial frame's year in two or four digits ("ITRF14" is
+// ITRF2014; "ITRF1997" is ITRF97, as the catalog writes the 1990s). A name
+// that is none of those is returned as typed (a datum name with spaces
+// stays one, and is refused by Frame::parse).
+std::string canonical_spelling(std::string_view typed) {
+  std::string name;
+  for (char c : typed) {
+    if (!std::isspace(static_cast<unsigned char>(c))) name += c;
+  }
+  std::string key = upper(name);
+  for (std::string_view family : {std::string_view("ITRF"), std::string_view("ETRF")}) {
+    if (key.size() > family.size() && key.compare(0, family.size(), family) == 0 &&
+        all_digits(std::string_view(key).substr(family.size()))) {
+      const std::string year = key.substr(family.size());
+      if (year.size() == 2 && year < "88") key = std::string(family) + "20" + year;
+      if (year.size() == 4 && year < "2000" && year.compare(0, 2, "19") == 0) key = std::string(family) + year.substr(2);
+    }
+  }
+  for (const std::string& known : catalog_frame_names()) {
+    if (upper(known) == key) return known;
+  }
+  for (std::string_view known : kOtherKnownNames) {
+    if (known == key) return std::string(known);
+  }
+  return std::string(typed);
 }
 
 }  // namespace
@@ -89,6 +129,8 @@ Frame Frame::parse(std::string_view text, std::string_view where) {
     f.epoch_ = parse_decimal_year(name.substr(at + 1), where);
     name = trim(name.substr(0, at));
   }
+  const std::string spelled = canonical_spelling(name);
+  name = spelled;
   auto fail = [&](const std::string& why) {
     return Error(ErrorKind::input, "E_FRAME",
                  std::string(where) + ": frame=" + std::string(text) + ": " + why +

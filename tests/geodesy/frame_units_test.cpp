@@ -47,9 +47,23 @@ TEST(Frame, ParsesTheWaysGeodesistsWriteFrames) {
   EXPECT_EQ(Frame::parse("ETRF2000", "x").name(), "ETRF2000");
 }
 
+// Issue 13: frame names as geodesists also write them, kept in the
+// catalog's spelling.
+TEST(Frame, ReadsFrameNamesInAnyCaseWithSpacesAndShortYears) {
+  EXPECT_EQ(Frame::parse("itrf2014@2024.5", "x").to_string(), "ITRF2014@2024.5");
+  EXPECT_EQ(Frame::parse("ITRF14", "x").name(), "ITRF2014");
+  EXPECT_EQ(Frame::parse("ITRF 2014", "x").name(), "ITRF2014");
+  EXPECT_EQ(Frame::parse("ITRF1997", "x").name(), "ITRF97");
+  EXPECT_EQ(Frame::parse("etrf00", "x").name(), "ETRF2000");
+  EXPECT_EQ(Frame::parse("WGS 84 (G2139)", "x").name(), "WGS84(G2139)");
+  EXPECT_EQ(Frame::parse("nad83(csrsv6)", "x").name(), "NAD83(CSRSv6)");
+  EXPECT_EQ(Frame::parse("gda2020", "x").name(), "GDA2020");
+  EXPECT_EQ(Frame::parse("wgs84", "x").name(), "WGS84");
+}
+
 TEST(Frame, RejectsMalformedFramesAndEpochsNamingTheValue) {
   for (const char* bad : {"", "@2020", "ITRF2014@yyyy", "ITRF2014@2024,5", "ITRF2014@1850", "NAD83(2011",
-                          "NAD83)2011(", "ITRF 2014", "ITRF2014@nan", "ITRF2014@"}) {
+                          "NAD83)2011(", "Airport local datum 1998", "ITRF2014@nan", "ITRF2014@"}) {
     try {
       Frame::parse(bad, "--from");
       ADD_FAILURE() << "accepted '" << bad << "'";

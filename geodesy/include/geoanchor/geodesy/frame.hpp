@@ -5,7 +5,10 @@
 // "GDA2020", "ETRF2000", "WGS84(G2296)". Realizations are split from the
 // datum as geodesists write them: a parenthesised suffix ("NAD83(2011)",
 // "WGS84(G2296)") or the year of a terrestrial frame family ("ITRF2014",
-// "ETRF2000", "IGS14"). Spaces around '@' are allowed.
+// "ETRF2000", "IGS14"). Names are read as geodesists also write them and
+// kept in the catalog's spelling: any letter case, spaces anywhere ("WGS 84
+// (G2139)", "itrf2014"), a terrestrial frame's year in two or four digits
+// ("ITRF14" is ITRF2014, "ITRF1997" is ITRF97).
 
 #include <optional>
 #include <string>
