@@ -11,6 +11,10 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/coordinate_codec.hpp"
+#include "geoanchor/io/crs.hpp"
+#include "geoanchor/io/crs_columns.hpp"
+#include "geoanchor/io/crs_csv.hpp"
+#include "geoanchor/io/crs_operation.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/io/transform_file.hpp"
@@ -82,13 +86,132 @@ class EcefStep {
   std::optional<AffineMap> fixed_;
 };
 
+// Prints the run's warnings (and the stale temporaries removed) on standard
+// error; commits standard output, which gets no sidecar. True when it did.
+bool warn_and_commit_standard_output(std::vector<std::string>& warnings, io::DataOutput& output) {
+  for (const auto& t : io::take_removed_stale_temporaries()) warnings.push_back(io::stale_temporary_warning(t));
+  for (const auto& w : warnings) std::cerr << "geoanchor: warning: " << w << '\n';
+  if (!output.is_standard_output()) return false;
+  output.commit("the converted rows");
+  return true;
+}
+
+// The sidecar's first keys: schema, version, command line, the input's path and hash.
+json sidecar_start(const ConvertOptions& o, bool from_stdin) {
+  json side;
+  side["schema"] = "geoanchor.convert-provenance/1";
+  side["geoanchor_version"] = GEOANCHOR_VERSION;
+  side["command"] = o.argv;
+  side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
+                   {"sha256", from_stdin ? json(nullptr) : json(io::sha256_file_hex(o.input))}};
+  return side;
+}
+
+json crs_record(const io::Crs& crs, const io::CrsColumns& columns) {
+  json names = json::array();
+  for (std::size_t i : columns.write_order) names.push_back(columns.names[i]);
+  const auto& d = crs.description();
+  return json{{"crs", crs.text()},
+              {"name", d.name},
+              {"identifier", d.identifier.empty() ? json(nullptr) : json(d.identifier)},
+              {"coordinate_epoch", crs.epoch() ? json(crs.epoch()->year) : json(nullptr)},
+              {"columns", names},
+              {"height_type", !columns.has_height() ? json(nullptr) : json(columns.orthometric ? "orthometric" : "ellipsoidal")},
+              {"wkt2", columns.crs.wkt2()}};
+}
+
+// --crs SRC --to-crs DST: the coordinates through PROJ's operation for the
+// pair, the columns named by each CRS's axes.
+void run_convert_crs(const ConvertOptions& o) {
+  if (!o.crs || !o.to_crs) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                std::string(o.crs ? "--crs" : "--to-crs") + ": give both --crs SRC (the input's CRS) and --to-crs DST "
+                "(the output's)");
+  }
+  // What the CRSs say, nothing else: flags that would say it again are refused.
+  const std::pair<bool, const char*> unused[] = {
+      {o.ellipsoid.has_value(), "--ellipsoid"}, {o.from_ellipsoid.has_value(), "--from-ellipsoid"},
+      {o.origin.has_value(), "--origin"},       {o.from_origin.has_value(), "--from-origin"},
+      {o.zone.has_value(), "--zone"},           {o.from_zone.has_value(), "--from-zone"},
+      {o.tm.has_value(), "--tm"},               {o.from_tm.has_value(), "--from-tm"},
+      {o.transform.has_value(), "--transform"}, {o.inverse, "--inverse"},
+      {o.epoch.has_value(), "--epoch"},         {o.geoid.has_value(), "--geoid"},
+      {o.output_heights != "ellipsoidal", "--output-heights"}};
+  for (const auto& [given, flag] : unused) {
+    if (given) {
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  std::string(flag) + " with --crs/--to-crs: the CRSs say the ellipsoid, projection, epoch and "
+                  "heights (a coordinate epoch as CRS@YYYY.Y, orthometric heights as a compound CRS EPSG:h+v)");
+    }
+  }
+  if (o.to && *o.to != "ecef") {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--to " + *o.to + " with --to-crs: the CRS says the output's kind; --to ecef alone is read with it "
+                "(the CRS's geocentric form)");
+  }
+  const io::Crs source_crs = io::Crs::parse(*o.crs, "--crs");
+  const io::Crs target_crs = io::Crs::parse(*o.to_crs, "--to-crs");
+
+  CommandInput input(o.input);
+  const bool from_stdin = input.from_stdin();
+  const std::string& source_name = input.name();
+  io::CsvReader reader(input.stream(), source_name);
+  const io::CrsColumns in_columns = io::crs_input_columns(source_crs, reader.header(), source_name, "--crs");
+  const io::CrsColumns out_columns =
+      io::crs_output_columns(target_crs, in_columns.has_height(), o.to && *o.to == "ecef", "--to-crs");
+  io::CrsOperation op(in_columns.crs, out_columns.crs, "convert", io::CrsOperationOptions{o.allow_fallback});
+  io::CrsCsvConverter converter(reader, in_columns, out_columns, io::NumberFormat{o.precision});
+
+  if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
+  io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+  std::ostream& out = output.stream();
+  for (const auto& c : reader.leading_comments()) out << c << '\n';
+  io::write_csv_line(out, converter.output_header());
+  const std::size_t rows = converter.run(reader, op, out);
+
+  std::vector<std::string> warnings = op.warnings();
+  if (warn_and_commit_standard_output(warnings, output)) return;
+  json side = sidecar_start(o, from_stdin);
+  side["input"]["kind"] = "crs";
+  side["input"].update(crs_record(source_crs, in_columns));
+  side["output"] = {{"path", o.output}, {"kind", "crs"}, {"rows", rows}};
+  side["output"].update(crs_record(target_crs, out_columns));
+  json candidates = json::array();
+  for (const auto& c : op.candidates()) {
+    json grids = json::array();
+    for (const auto& g : c.grids) {
+      grids.push_back({{"name", g.name}, {"path", g.available ? json(g.path) : json(nullptr)},
+                       {"sha256", g.available ? json(g.sha256) : json(nullptr)}, {"on_this_machine", g.available}});
+    }
+    candidates.push_back({{"name", c.name},
+                          {"identifier", c.identifier.empty() ? json(nullptr) : json(c.identifier)},
+                          {"accuracy_m", c.accuracy_m ? json(*c.accuracy_m) : json(nullptr)},
+                          {"grids", grids},
+                          {"proj_pipeline", c.proj_string.empty() ? json(nullptr) : json(c.proj_string)},
+                          {"time_dependent", c.time_dependent},
+                          {"points", c.points}});
+  }
+  side["operation"] = {{"authority", "PROJ " + std::string(io::proj_version_text())},
+                       {"epoch", op.epoch() ? json(*op.epoch()) : json(nullptr)},
+                       {"candidates", candidates}};
+  side["warnings"] = warnings;
+  publish_with_provenance(output, side.dump(2) + "\n", "the converted rows", o.json, o.output);
+}
+
 }  // namespace
 
 CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   auto* cmd = app.add_subcommand("convert", "Convert coordinates in a header-named CSV between kinds and frames");
   cmd->add_option("IN", o.input, "Input CSV, or - for standard input (default)");
   cmd->add_option("-o,--output", o.output, "Output CSV, written atomically with its sidecar OUT.geoanchor.json; - or none: standard output (no sidecar)");
-  cmd->add_option("--to", o.to, "Output kind: geodetic|ecef|enu|ned|utm|tm")->required();
+  cmd->add_option("--to", o.to, "Output kind: geodetic|ecef|enu|ned|utm|tm (required unless --to-crs; with it: ecef)");
+  cmd->add_option("--crs", o.crs,
+                  "CRS of the input (with --to-crs): EPSG:n, EPSG:h+v, WKT, PROJJSON, PROJ string, @FILE or a frame "
+                  "name; CRS@EPOCH");
+  cmd->add_option("--to-crs", o.to_crs, "CRS of the output, read through PROJ (with --crs); CRS@EPOCH");
+  cmd->add_flag("--allow-fallback", o.allow_fallback,
+                "With --crs/--to-crs: where PROJ's best operation's grid is missing or does not hold a point, use the "
+                "next operation (recorded as a warning) instead of refusing");
   cmd->add_option("--ellipsoid", o.ellipsoid, "WGS84|GRS80|a=A,rf=RF (default WGS84; input too unless --from-ellipsoid)");
   cmd->add_option("--from-ellipsoid", o.from_ellipsoid, "Ellipsoid of the input, when a transform links two");
   cmd->add_option("--origin", o.origin, "Local ENU/NED origin LAT,LON,H (deg, deg, ellipsoidal m)");
@@ -114,12 +237,18 @@ void run_convert(const ConvertOptions& o) {
     throw Error(ErrorKind::usage, "E_OPTION",
                 "--json: prints the sidecar on standard output, where the CSV goes without -o; give -o FILE");
   }
-  const io::OutputKind out_kind = parse_output_kind(o.to);
+  if (o.crs || o.to_crs) {
+    run_convert_crs(o);
+    return;
+  }
+  if (!o.to) throw Error(ErrorKind::usage, "E_OPTION", "--to is required (or --crs SRC --to-crs DST)");
+  if (o.allow_fallback) throw Error(ErrorKind::usage, "E_OPTION", "--allow-fallback: only with --crs and --to-crs");
+  const io::OutputKind out_kind = parse_output_kind(*o.to);
   if (o.inverse && !o.transform) {
     throw Error(ErrorKind::usage, "E_OPTION", "--inverse: needs --transform T.json");
   }
   // Ellipsoids, origins and projections: --from-X for the input, else --X for both.
-  const geodesy::Ellipsoid out_ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
+  const geodesy::Ellipsoid out_ellipsoid = parse_ellipsoid(o.ellipsoid.value_or("WGS84"), "--ellipsoid");
   const geodesy::Ellipsoid in_ellipsoid =
       o.from_ellipsoid ? parse_ellipsoid(*o.from_ellipsoid, "--from-ellipsoid") : out_ellipsoid;
 
@@ -257,22 +386,12 @@ void run_convert(const ConvertOptions& o) {
   // Points a forced UTM zone does not contain (--zone, --from-zone, utm_zone column).
   for (auto& w : decoder.warnings()) warnings.push_back(std::move(w));
   for (auto& w : encoder.warnings()) warnings.push_back(std::move(w));
-  for (const auto& t : io::take_removed_stale_temporaries()) warnings.push_back(io::stale_temporary_warning(t));
-  for (const auto& w : warnings) std::cerr << "geoanchor: warning: " << w << '\n';
-  if (output.is_standard_output()) {
-    output.commit("the converted rows");
-    return;
-  }
+  if (warn_and_commit_standard_output(warnings, output)) return;
 
   // Provenance sidecar beside the output.
-  json side;
-  side["schema"] = "geoanchor.convert-provenance/1";
-  side["geoanchor_version"] = GEOANCHOR_VERSION;
-  side["command"] = o.argv;
-  side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
-                   {"sha256", from_stdin ? json(nullptr) : json(io::sha256_file_hex(o.input))},
-                   {"kind", std::string(io::to_string(columns.kind))},
-                   {"ellipsoid", in_ellipsoid.name()}};
+  json side = sidecar_start(o, from_stdin);
+  side["input"]["kind"] = std::string(io::to_string(columns.kind));
+  side["input"]["ellipsoid"] = in_ellipsoid.name();
   if (columns.kind == io::CoordinateKind::geodetic || columns.kind == io::CoordinateKind::projected) {
     side["input"]["height_type"] = columns.orthometric ? "orthometric" : "ellipsoidal";
     if (columns.orthometric) side["input"]["geoid_model"] = geoid->model_name();

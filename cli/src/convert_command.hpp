@@ -16,8 +16,10 @@ namespace geoanchor::cli {
 struct ConvertOptions {
   std::string input = "-";
   std::string output;  // empty or "-": standard output
-  std::string to;
-  std::string ellipsoid = "WGS84";
+  std::optional<std::string> to;         // required unless --to-crs
+  std::optional<std::string> ellipsoid;  // default WGS84 (not with --crs/--to-crs: the CRS names it)
+  std::optional<std::string> crs, to_crs;  // the input's and the output's CRS, read through PROJ
+  bool allow_fallback = false;             // a worse PROJ operation where a grid is missing or does not cover
   std::optional<std::string> from_ellipsoid;
   std::optional<std::string> origin, from_origin;
   std::optional<std::string> zone, from_zone;

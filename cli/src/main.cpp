@@ -15,6 +15,7 @@
 #include "apply_command.hpp"
 #include "command_input.hpp"
 #include "convert_command.hpp"
+#include "crs_command.hpp"
 #include "diagnose_command.hpp"
 #include "fit_command.hpp"
 #include "option_parsing.hpp"
@@ -72,6 +73,8 @@ int main(int argc, char** argv) {
   geoanchor::cli::TransformOptions transform;
   transform.argv.assign(argv, argv + argc);
   auto* transform_cmd = geoanchor::cli::add_transform_command(app, transform);
+  geoanchor::cli::CrsCommandOptions crs;
+  auto* crs_cmd = geoanchor::cli::add_crs_command(app, crs);
   geoanchor::cli::DiagnoseCommandOptions diagnose;
   auto* diagnose_cmd = geoanchor::cli::add_diagnose_command(app, diagnose);
   geoanchor::cli::SnapshotOptions snapshot;
@@ -117,6 +120,7 @@ int main(int argc, char** argv) {
     if (fit_cmd->parsed()) return geoanchor::cli::run_fit(fit);
     if (apply_cmd->parsed()) return geoanchor::cli::run_apply(apply);
     if (transform_cmd->parsed()) geoanchor::cli::run_transform(transform);
+    if (crs_cmd->parsed()) geoanchor::cli::run_crs(crs);
     if (diagnose_cmd->parsed()) geoanchor::cli::run_diagnose(diagnose);
     if (snapshot_cmd->parsed()) return geoanchor::cli::run_snapshot(snapshot);
     if (report_cmd->parsed()) return geoanchor::cli::run_report(report);

@@ -97,6 +97,12 @@ std::vector<std::string> coordinate_column_names(CoordinateKind kind, std::strin
   return {};
 }
 
+bool is_coordinate_column_name(std::string_view name) {
+  if (name == "H" || name.rfind("H_", 0) == 0) return true;
+  const std::string low = lower(name);
+  return contains(kCoordinateStems, low.substr(0, low.find('_')));
+}
+
 CoordinateColumns classify_coordinate_header(const std::vector<std::string>& header, std::string_view source,
                                              std::string_view role) {
   std::map<std::string, std::size_t> found;  // stem -> column

@@ -11,6 +11,8 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
+#include "frame_datum_names.hpp"
+#include "proj_handles.hpp"
 #include "wkt_text.hpp"
 
 namespace geoanchor::io {
@@ -32,46 +34,6 @@ std::string quoted(const std::string& s) {
   return out + "\"";
 }
 
-// EPSG's datum names for the frames geoanchor spells NAME; the frame's own
-// name for the rest.
-std::string datum_name(const geodesy::Frame& f) {
-  const std::string& d = f.datum();
-  const std::string& r = f.realization();
-  auto year4 = [&](const std::string& y) { return y.size() == 2 ? (y[0] >= '8' ? "19" + y : "20" + y) : y; };
-  if (d == "ITRF" && !r.empty()) return "International Terrestrial Reference Frame " + year4(r);
-  if (d == "ETRF" && !r.empty()) return "European Terrestrial Reference Frame " + year4(r);
-  if (d == "ETRS" && r == "89") return "European Terrestrial Reference System 1989 ensemble";
-  if (d == "WGS84" && r.empty()) return "World Geodetic System 1984 ensemble";
-  if (d == "WGS84") return "World Geodetic System 1984 (" + r + ")";
-  if (d == "NAD83" && r == "2011") return "NAD83 (National Spatial Reference System 2011)";
-  if (d == "NAD83" && r == "CSRS") return "NAD83 Canadian Spatial Reference System";
-  if (d == "NAD83" && r.empty()) return "North American Datum 1983";
-  if (f.name() == "GDA94") return "Geocentric Datum of Australia 1994";
-  if (f.name() == "GDA2020") return "Geocentric Datum of Australia 2020";
-  return f.name();
-}
-
-// The inverse of datum_name: a frame name geoanchor can parse, or "".
-std::string frame_name_of_datum(const std::string& datum) {
-  std::smatch m;
-  auto short_year = [](const std::string& y) { return y < "2000" ? y.substr(2) : y; };
-  if (std::regex_match(datum, m, std::regex(R"(International Terrestrial Reference Frame (\d{4}))"))) {
-    return "ITRF" + short_year(m[1]);
-  }
-  if (std::regex_match(datum, m, std::regex(R"(European Terrestrial Reference Frame (\d{4}))"))) {
-    return "ETRF" + short_year(m[1]);
-  }
-  if (std::regex_match(datum, m, std::regex(R"(World Geodetic System 1984 \((\w+)\))"))) return "WGS84(" + m[1].str() + ")";
-  if (datum == "World Geodetic System 1984 ensemble" || datum == "World Geodetic System 1984") return "WGS84";
-  if (datum == "European Terrestrial Reference System 1989 ensemble") return "ETRS89";
-  if (datum == "NAD83 (National Spatial Reference System 2011)") return "NAD83(2011)";
-  if (datum == "NAD83 Canadian Spatial Reference System") return "NAD83(CSRS)";
-  if (datum == "North American Datum 1983") return "NAD83";
-  if (datum == "Geocentric Datum of Australia 1994") return "GDA94";
-  if (datum == "Geocentric Datum of Australia 2020") return "GDA2020";
-  return "";
-}
-
 std::string ellipsoid_wkt(const geodesy::Ellipsoid& e) {
   const std::string name = e == geodesy::Ellipsoid::wgs84()   ? "WGS 84"
                            : e == geodesy::Ellipsoid::grs80() ? "GRS 1980"
@@ -83,13 +45,8 @@ const std::string kDegree = "ANGLEUNIT[\"degree\",0.0174532925199433]";
 const std::string& kMetre = detail::kWktMetre;
 using detail::wkt_parameter;
 
-struct PjDeleter {
-  void operator()(PJ* p) const { proj_destroy(p); }
-};
-using Pj = std::unique_ptr<PJ, PjDeleter>;
-struct CtxDeleter {
-  void operator()(PJ_CONTEXT* c) const { proj_context_destroy(c); }
-};
+using detail::CtxDeleter;
+using detail::Pj;
 
 [[noreturn]] void fail(std::string_view source, const std::string& problem) {
   throw Error(ErrorKind::input, "E_TILE_CRS", std::string(source) + ": LAS WKT: " + problem);
@@ -181,7 +138,7 @@ std::string tile_crs_wkt(const TileMetadata& m) {
   }
   const ArrayFrame& c = m.coordinates;
   const std::string frame = m.frame->to_string();
-  const std::string datum = "DATUM[" + quoted(datum_name(*m.frame)) + "," + ellipsoid_wkt(c.ellipsoid) + "]," +
+  const std::string datum = "DATUM[" + quoted(detail::epsg_datum_name(*m.frame)) + "," + ellipsoid_wkt(c.ellipsoid) + "]," +
                             "PRIMEM[\"Greenwich\",0," + kDegree + "]";
   const std::string remark = ",REMARK[" + quoted(kRemarkPrefix + frame + "; coordinate epoch " +
                                                  (m.frame->epoch() ? geodesy::format_decimal_year(*m.frame->epoch())
@@ -373,7 +330,7 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
   const char* remarks = proj_get_remarks(crs.get());
   const std::string remark = remarks ? remarks : "";
   const auto at = remark.find(kRemarkPrefix);
-  const std::string from_datum = frame_name_of_datum(datum_text);
+  const std::string from_datum = detail::frame_name_of_epsg_datum(datum_text);
   if (at != std::string::npos) {
     const auto start = at + sizeof kRemarkPrefix - 1;
     const auto end = remark.find(';', start);

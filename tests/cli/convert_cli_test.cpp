@@ -46,38 +46,11 @@ using testing::slurp;
 class ConvertCli : public CliTest {};
 
 // A parsed CSV: header and rows of fields, comments dropped.
-struct Table {
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
-  std::size_t col(const std::string& name) const {
-    const auto it = std::find(header.begin(), header.end(), name);
-    if (it == header.end()) throw std::runtime_error("no column " + name);
-    return static_cast<std::size_t>(it - header.begin());
-  }
+struct Table : testing::CsvTable {
   double num(std::size_t row, const std::string& name) const { return *parse_finite_double(rows[row][col(name)]); }
 };
 
-Table parse_table(const std::string& text) {
-  Table t;
-  std::istringstream in(text);
-  std::string line;
-  auto split = [](const std::string& l) {
-    std::vector<std::string> f;
-    std::stringstream ss(l);
-    std::string x;
-    while (std::getline(ss, x, ',')) f.push_back(x);
-    return f;
-  };
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    if (t.header.empty()) {
-      t.header = split(line);
-    } else {
-      t.rows.push_back(split(line));
-    }
-  }
-  return t;
-}
+Table parse_table(const std::string& text) { return Table{testing::parse_csv_table(text)}; }
 
 const std::string kFixture = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_points.csv";
 

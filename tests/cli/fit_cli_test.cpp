@@ -49,22 +49,9 @@ using testing::slurp;
 class FitCli : public CliTest {};
 
 std::vector<std::vector<std::string>> csv_rows(const std::string& text, std::vector<std::string>* header) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::vector<std::string> f;
-    std::stringstream ss(line);
-    std::string x;
-    while (std::getline(ss, x, ',')) f.push_back(x);
-    if (header->empty()) {
-      *header = f;
-    } else {
-      rows.push_back(f);
-    }
-  }
-  return rows;
+  testing::CsvTable t = testing::parse_csv_table(text);
+  *header = std::move(t.header);
+  return std::move(t.rows);
 }
 
 std::size_t col(const std::vector<std::string>& header, const std::string& name) {

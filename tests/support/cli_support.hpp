@@ -17,6 +17,7 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,34 @@ inline std::string slurp(const std::filesystem::path& p) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+// A CSV as the commands write it (no quoted commas): header and rows of
+// fields, comment and blank lines dropped.
+struct CsvTable {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  // The index of column `name`; throws when there is none.
+  std::size_t col(const std::string& name) const {
+    const auto it = std::find(header.begin(), header.end(), name);
+    if (it == header.end()) throw std::runtime_error("no column " + name);
+    return static_cast<std::size_t>(it - header.begin());
+  }
+};
+
+inline CsvTable parse_csv_table(const std::string& text) {
+  CsvTable t;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    std::string x;
+    while (std::getline(ss, x, ',')) f.push_back(x);
+    (t.header.empty() ? t.header : t.rows.emplace_back()) = f;
+  }
+  return t;
 }
 
 class CliTest : public ::testing::Test {

@@ -62,6 +62,11 @@ std::vector<std::string> output_header(const std::vector<std::string>& header, c
 // Throws geoanchor::Error (input) naming `source`, the column number and
 // name: for a header that mixes kinds, lacks a required column, repeats one,
 // or has a coordinate-like column of unknown unit.
+// Whether a column name speaks of a coordinate (lat, lon_deg, h_ft, x,
+// easting_ftus, H_m, …), whatever its unit: such a column is never passed
+// through as an attribute.
+bool is_coordinate_column_name(std::string_view name);
+
 CoordinateColumns classify_coordinate_header(const std::vector<std::string>& header, std::string_view source,
                                              std::string_view role = {});
 

@@ -1,0 +1,501 @@
+// A CRS as the user typed it, read through PROJ.
+
+#include "geoanchor/io/crs.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <proj_experimental.h>
+
+#include "crs_impl.hpp"
+#include "frame_datum_names.hpp"
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/frame_catalog.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::io {
+
+using detail::Pj;
+using detail::text_or;
+
+namespace {
+
+constexpr double kUnitMatch = 1e-12;  // relative, of a unit's conversion factor
+constexpr std::size_t kEchoChars = 80;  // of a text quoted back in an error
+
+std::string echo(std::string_view text) {
+  std::string t(text.substr(0, kEchoChars));
+  for (char& c : t) {
+    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+  }
+  return "'" + t + (text.size() > kEchoChars ? "…'" : "'");
+}
+
+[[noreturn]] void fail(std::string_view where, std::string_view text, const std::string& problem,
+                       const char* code = "E_CRS") {
+  throw Error(ErrorKind::input, code, std::string(where) + ": CRS " + echo(text) + ": " + problem);
+}
+
+std::string trim(std::string_view s) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+  return std::string(s);
+}
+
+std::string type_name(PJ_TYPE t) {
+  switch (t) {
+    case PJ_TYPE_GEOGRAPHIC_2D_CRS: return "geographic 2D";
+    case PJ_TYPE_GEOGRAPHIC_3D_CRS: return "geographic 3D";
+    case PJ_TYPE_GEOCENTRIC_CRS: return "geocentric";
+    case PJ_TYPE_PROJECTED_CRS: return "projected";
+    case PJ_TYPE_COMPOUND_CRS: return "compound";
+    case PJ_TYPE_VERTICAL_CRS: return "vertical";
+    case PJ_TYPE_ENGINEERING_CRS: return "engineering";
+    case PJ_TYPE_BOUND_CRS: return "bound";
+    case PJ_TYPE_TEMPORAL_CRS: return "temporal";
+    case PJ_TYPE_GEODETIC_CRS: return "geodetic";
+    default: return "not a CRS";
+  }
+}
+
+std::string last_error(PJ_CONTEXT* ctx) {
+  const int e = proj_context_errno(ctx);
+  return e ? text_or(proj_context_errno_string(ctx, e)) : std::string();
+}
+
+// The realizations a frame name leaves open, from the catalog: "ETRS89" is
+// ETRF89 … ETRF2020; "WGS84" is G730 … G2296; "NAD83(CSRS)" is CSRSv6 ….
+std::vector<std::string> catalog_realizations_of(const std::string& name) {
+  std::string prefix;
+  if (name == "WGS84") prefix = "WGS84(";
+  if (name == "ETRS89") prefix = "ETRF";
+  if (name == "NAD83(CSRS)") prefix = "NAD83(CSRSv";
+  std::vector<std::string> out;
+  if (prefix.empty()) return out;
+  for (const auto& f : geodesy::catalog_frame_names()) {
+    if (f.compare(0, prefix.size(), prefix) == 0) out.push_back(f);
+  }
+  return out;
+}
+
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+// A CRS PROJ can build from the text: EPSG:n (and h+v), WKT, PROJJSON, a
+// PROJ string (with +type=crs), a URN. Null when PROJ cannot.
+Pj create_from_text(PJ_CONTEXT* ctx, const std::string& text, std::string& problem) {
+  const bool wkt = text.find('[') != std::string::npos && std::isalpha(static_cast<unsigned char>(text[0]));
+  if (wkt) {
+    const char* options[] = {"STRICT=NO", nullptr};
+    PROJ_STRING_LIST warnings = nullptr;
+    PROJ_STRING_LIST errors = nullptr;
+    Pj crs(proj_create_from_wkt(ctx, text.c_str(), options, &warnings, &errors));
+    problem = errors && errors[0] ? errors[0] : "";
+    proj_string_list_destroy(warnings);
+    proj_string_list_destroy(errors);
+    if (!crs && problem.empty()) problem = "PROJ cannot parse this WKT";
+    return crs;
+  }
+  Pj crs(proj_create(ctx, text.c_str()));
+  if (!crs) problem = last_error(ctx);
+  return crs;
+}
+
+// The geographic 3D CRS of a catalog frame in PROJ's database, found by
+// the frame's EPSG datum name.
+Pj create_from_frame(PJ_CONTEXT* ctx, const geodesy::Frame& frame, std::string_view where, std::string_view text) {
+  const std::string datum = detail::epsg_datum_name(frame);
+  const PJ_TYPE types[] = {PJ_TYPE_GEODETIC_REFERENCE_FRAME, PJ_TYPE_DYNAMIC_GEODETIC_REFERENCE_FRAME,
+                           PJ_TYPE_DATUM_ENSEMBLE};
+  PJ_OBJ_LIST* found = proj_create_from_name(ctx, "EPSG", datum.c_str(), types, 3, 0, 1, nullptr);
+  Pj datum_obj(found && proj_list_get_count(found) > 0 ? proj_list_get(ctx, found, 0) : nullptr);
+  proj_list_destroy(found);
+  if (!datum_obj) {
+    fail(where, text,
+         "frame " + frame.name() + " has no datum in PROJ's database (looked for '" + datum +
+             "'); give the CRS as EPSG:n, WKT or PROJJSON");
+  }
+  const char* code = proj_get_id_code(datum_obj.get(), 0);
+  PJ_OBJ_LIST* crss = proj_query_geodetic_crs_from_datum(ctx, "EPSG", "EPSG", code, "geographic 3D");
+  Pj crs(crss && proj_list_get_count(crss) > 0 ? proj_list_get(ctx, crss, 0) : nullptr);
+  proj_list_destroy(crss);
+  if (!crs) fail(where, text, "frame " + frame.name() + ": PROJ's database has no geographic 3D CRS on datum EPSG:" + text_or(code));
+  return crs;
+}
+
+bool same_factor(double a, double b) { return std::abs(a - b) <= kUnitMatch * std::abs(b); }
+
+CrsAxis read_axis(PJ_CONTEXT* ctx, PJ* cs, int i) {
+  const char* name = nullptr;
+  const char* abbrev = nullptr;
+  const char* direction = nullptr;
+  const char* unit = nullptr;
+  double factor = 0.0;
+  CrsAxis a;
+  if (proj_cs_get_axis_info(ctx, cs, i, &name, &abbrev, &direction, &factor, &unit, nullptr, nullptr)) {
+    a.name = text_or(name);
+    a.abbreviation = text_or(abbrev);
+    a.direction = text_or(direction);
+    a.unit_name = text_or(unit);
+    a.unit_to_si = factor;
+  }
+  const int type = proj_cs_get_type(ctx, cs);
+  a.unit_type = type == PJ_CS_TYPE_ELLIPSOIDAL && i < 2 ? "angular" : "linear";
+  return a;
+}
+
+void read_axes(PJ_CONTEXT* ctx, PJ* crs, std::vector<CrsAxis>& out) {
+  Pj cs(proj_crs_get_coordinate_system(ctx, crs));
+  if (!cs) return;
+  const int n = proj_cs_get_axis_count(ctx, cs.get());
+  for (int i = 0; i < n; ++i) out.push_back(read_axis(ctx, cs.get(), i));
+}
+
+// The datum (or ensemble) of a geodetic CRS, and what the catalog calls it.
+void read_datum(PJ_CONTEXT* ctx, PJ* geodetic, CrsDescription& d) {
+  Pj datum(proj_crs_get_datum(ctx, geodetic));
+  if (datum) {
+    d.datum = text_or(proj_get_name(datum.get()));
+    if (proj_get_type(datum.get()) == PJ_TYPE_DYNAMIC_GEODETIC_REFERENCE_FRAME) {
+      d.dynamic = true;
+      d.frame_reference_epoch = proj_dynamic_datum_get_frame_reference_epoch(ctx, datum.get());
+    }
+  } else if (Pj ensemble(proj_crs_get_datum_ensemble(ctx, geodetic)); ensemble) {
+    d.datum = text_or(proj_get_name(ensemble.get()));
+    d.ensemble = true;
+    const int n = proj_datum_ensemble_get_member_count(ctx, ensemble.get());
+    for (int i = 0; i < n; ++i) {
+      Pj member(proj_datum_ensemble_get_member(ctx, ensemble.get(), i));
+      if (member) d.ensemble_members.push_back(text_or(proj_get_name(member.get())));
+    }
+    const double accuracy = proj_datum_ensemble_get_accuracy(ctx, ensemble.get());
+    if (accuracy > 0.0) d.ensemble_accuracy_m = accuracy;
+  }
+  const std::string frame = detail::frame_name_of_epsg_datum(d.datum);
+  const auto catalog = geodesy::catalog_frame_names();
+  if (std::find(catalog.begin(), catalog.end(), frame) != catalog.end()) d.catalog_frame = frame;
+  Pj ell(proj_get_ellipsoid(ctx, geodetic));
+  double a = 0.0, b = 0.0, rf = 0.0;
+  int computed = 0;
+  if (ell && proj_ellipsoid_get_parameters(ctx, ell.get(), &a, &b, &computed, &rf)) {
+    d.ellipsoid = CrsEllipsoid{text_or(proj_get_name(ell.get())), a, rf};
+  }
+  Pj pm(proj_get_prime_meridian(ctx, geodetic));
+  double longitude = 0.0, factor = 0.0;
+  const char* unit = nullptr;
+  if (pm && proj_prime_meridian_get_parameters(ctx, pm.get(), &longitude, &factor, &unit)) {
+    d.prime_meridian = text_or(proj_get_name(pm.get()));
+    constexpr double kRadPerDeg = 0.017453292519943295;
+    d.prime_meridian_deg = factor > 0.0 ? longitude * factor / kRadPerDeg : longitude;
+  }
+}
+
+void read_projection(PJ_CONTEXT* ctx, PJ* projected, CrsDescription& d) {
+  Pj op(proj_crs_get_coordoperation(ctx, projected));
+  if (!op) return;
+  const char* method = nullptr;
+  const char* auth = nullptr;
+  const char* code = nullptr;
+  if (proj_coordoperation_get_method_info(ctx, op.get(), &method, &auth, &code)) {
+    d.projection_method = text_or(method);
+    d.projection_method_code = auth && code ? std::string(auth) + ":" + code : "";
+  }
+  const int n = proj_coordoperation_get_param_count(ctx, op.get());
+  for (int i = 0; i < n; ++i) {
+    const char* name = nullptr;
+    const char* pauth = nullptr;
+    const char* pcode = nullptr;
+    const char* unit = nullptr;
+    double value = 0.0;
+    if (!proj_coordoperation_get_param(ctx, op.get(), i, &name, &pauth, &pcode, &value, nullptr, nullptr, &unit,
+                                       nullptr, nullptr, nullptr)) {
+      continue;
+    }
+    d.projection_parameters.push_back(CrsParameter{text_or(name),
+                                                   pauth && pcode && std::string(pauth) == "EPSG" ? pcode : "", value,
+                                                   text_or(unit)});
+  }
+}
+
+// The geoid of a compound CRS: the grid of PROJ's best operation from the
+// horizontal part's ellipsoidal heights (its geographic 3D CRS) to it.
+void read_geoid(PJ_CONTEXT* ctx, PJ* horizontal, PJ* compound, CrsDescription& d) {
+  Pj geodetic(proj_crs_get_geodetic_crs(ctx, horizontal));
+  Pj geographic3d(geodetic ? proj_crs_promote_to_3D(ctx, nullptr, geodetic.get()) : nullptr);
+  if (!geographic3d) return;
+  PJ_OPERATION_FACTORY_CONTEXT* fc = proj_create_operation_factory_context(ctx, nullptr);
+  proj_operation_factory_context_set_allow_ballpark_transformations(ctx, fc, 0);
+  proj_operation_factory_context_set_grid_availability_use(ctx, fc, PROJ_GRID_AVAILABILITY_IGNORED);
+  proj_operation_factory_context_set_spatial_criterion(ctx, fc, PROJ_SPATIAL_CRITERION_PARTIAL_INTERSECTION);
+  PJ_OBJ_LIST* ops = proj_create_operations(ctx, geographic3d.get(), compound, fc);
+  proj_operation_factory_context_destroy(fc);
+  const int n = ops ? proj_list_get_count(ops) : 0;
+  for (int i = 0; i < n && d.geoid_model.empty(); ++i) {
+    Pj op(proj_list_get(ctx, ops, i));
+    if (!op || proj_coordoperation_has_ballpark_transformation(ctx, op.get())) continue;
+    const int grids = proj_coordoperation_get_grid_used_count(ctx, op.get());
+    for (int g = 0; g < grids; ++g) {
+      const char* short_name = nullptr;
+      int available = 0;
+      if (proj_coordoperation_get_grid_used(ctx, op.get(), g, &short_name, nullptr, nullptr, nullptr, nullptr, nullptr,
+                                            &available) &&
+          short_name) {
+        d.geoid_model = short_name;
+        d.geoid_available = available != 0;
+        break;
+      }
+    }
+  }
+  proj_list_destroy(ops);
+}
+
+CrsDescription describe(PJ_CONTEXT* ctx, PJ* crs) {
+  CrsDescription d;
+  d.name = text_or(proj_get_name(crs));
+  const char* auth = proj_get_id_auth_name(crs, 0);
+  const char* code = proj_get_id_code(crs, 0);
+  if (auth && code) d.identifier = std::string(auth) + ":" + code;
+  const PJ_TYPE type = proj_get_type(crs);
+  d.type = type_name(type);
+  Pj horizontal_owner, vertical_owner;
+  PJ* horizontal = crs;
+  PJ* vertical = nullptr;
+  if (type == PJ_TYPE_COMPOUND_CRS) {
+    horizontal_owner.reset(proj_crs_get_sub_crs(ctx, crs, 0));
+    vertical_owner.reset(proj_crs_get_sub_crs(ctx, crs, 1));
+    horizontal = horizontal_owner.get();
+    vertical = vertical_owner.get();
+  } else if (type == PJ_TYPE_VERTICAL_CRS) {
+    vertical = crs;
+    horizontal = nullptr;
+  }
+  if (horizontal) {
+    d.horizontal_type = type_name(proj_get_type(horizontal));
+    Pj geodetic(proj_crs_get_geodetic_crs(ctx, horizontal));
+    if (geodetic) read_datum(ctx, geodetic.get(), d);
+    read_axes(ctx, horizontal, d.axes);
+    if (proj_get_type(horizontal) == PJ_TYPE_PROJECTED_CRS) read_projection(ctx, horizontal, d);
+  }
+  if (vertical) {
+    d.vertical_crs = text_or(proj_get_name(vertical));
+    Pj vdatum(proj_crs_get_datum(ctx, vertical));
+    if (vdatum) d.vertical_datum = text_or(proj_get_name(vdatum.get()));
+    read_axes(ctx, vertical, d.axes);
+    if (horizontal) read_geoid(ctx, horizontal, crs, d);
+  }
+  if (Pj normalized(proj_normalize_for_visualization(ctx, crs)); normalized) {
+    const PJ_TYPE ntype = proj_get_type(normalized.get());
+    if (ntype == PJ_TYPE_COMPOUND_CRS) {
+      Pj h(proj_crs_get_sub_crs(ctx, normalized.get(), 0));
+      Pj v(proj_crs_get_sub_crs(ctx, normalized.get(), 1));
+      if (h) read_axes(ctx, h.get(), d.visualization_axes);
+      if (v) read_axes(ctx, v.get(), d.visualization_axes);
+    } else {
+      read_axes(ctx, normalized.get(), d.visualization_axes);
+    }
+  }
+  double west = 0.0, south = 0.0, east = 0.0, north = 0.0;
+  const char* area_name = nullptr;
+  if (proj_get_area_of_use(ctx, crs, &west, &south, &east, &north, &area_name) && west > -1000.0) {
+    d.area = CrsArea{text_or(area_name), west, south, east, north};
+  } else if (horizontal && horizontal != crs &&
+             proj_get_area_of_use(ctx, horizontal, &west, &south, &east, &north, &area_name) && west > -1000.0) {
+    d.area = CrsArea{text_or(area_name), west, south, east, north};  // a compound CRS built from EPSG:h+v
+  }
+  if (d.identifier.empty() && horizontal && vertical && horizontal != crs) {
+    // EPSG:h+v: PROJ gives the compound no code of its own.
+    const char* ha = proj_get_id_auth_name(horizontal, 0);
+    const char* hc = proj_get_id_code(horizontal, 0);
+    const char* va = proj_get_id_auth_name(vertical, 0);
+    const char* vc = proj_get_id_code(vertical, 0);
+    if (ha && hc && va && vc && std::string(ha) == va) d.identifier = std::string(ha) + ":" + hc + "+" + vc;
+  }
+  return d;
+}
+
+}  // namespace
+
+bool CrsArea::contains(double lon_deg, double lat_deg) const {
+  if (!(lat_deg >= south_deg && lat_deg <= north_deg)) return false;
+  if (west_deg <= east_deg) return lon_deg >= west_deg && lon_deg <= east_deg;
+  return lon_deg >= west_deg || lon_deg <= east_deg;  // across the antimeridian
+}
+
+Crs::Crs(std::shared_ptr<Impl> impl, std::optional<geodesy::DecimalYear> epoch, std::string text)
+    : impl_(std::move(impl)), epoch_(epoch), text_(std::move(text)) {}
+
+Crs Crs::parse(std::string_view typed, std::string_view where) {
+  std::string text = trim(typed);
+  if (text.empty()) fail(where, typed, "empty; expected EPSG:n, EPSG:h+v, WKT, PROJJSON, a PROJ string, @FILE or a frame name");
+  std::string definition = text;
+  std::optional<geodesy::DecimalYear> epoch;
+  // CRS@EPOCH: the last '@' followed by a number (a file is @FILE, at 0).
+  if (const auto at = definition.rfind('@'); at != std::string::npos && at > 0) {
+    const std::string tail = trim(std::string_view(definition).substr(at + 1));
+    if (!tail.empty() && (std::isdigit(static_cast<unsigned char>(tail[0])) || tail[0] == '.' || tail[0] == '-')) {
+      epoch = geodesy::parse_decimal_year(tail, std::string(where) + ": coordinate epoch of CRS " + echo(text));
+      definition = trim(std::string_view(definition).substr(0, at));
+    }
+  }
+  if (!definition.empty() && definition[0] == '@') {
+    const std::string path = definition.substr(1);
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(ErrorKind::io, "E_CRS", std::string(where) + ": CRS file " + path + ": cannot be read");
+    std::ostringstream content;
+    content << in.rdbuf();
+    definition = trim(content.str());
+    if (definition.empty()) fail(where, text, "the file " + path + " is empty; expected a CRS definition in it");
+    if (definition[0] == '@') fail(where, text, "the file " + path + " names another file; give the CRS itself");
+  }
+
+  auto impl = std::make_shared<Impl>();
+  impl->ctx = detail::quiet_context();
+  PJ_CONTEXT* ctx = impl->ctx.get();
+  bool from_frame_name = false;
+  const bool looks_like_proj_text = definition.find(':') != std::string::npos || definition[0] == '{' ||
+                                    definition.find('[') != std::string::npos || definition.find('=') != std::string::npos;
+  if (looks_like_proj_text) {
+    std::string problem;
+    impl->crs = create_from_text(ctx, definition, problem);
+    if (!impl->crs) {
+      fail(where, text, "PROJ cannot read it" + (problem.empty() ? std::string() : " (" + problem + ")") +
+                            "; expected EPSG:n, EPSG:h+v, WKT, PROJJSON, a PROJ string with +type=crs, @FILE or a "
+                            "frame name");
+    }
+    if (!proj_is_crs(impl->crs.get())) {
+      fail(where, text, "PROJ reads it as a coordinate operation, not a CRS" +
+                            std::string(definition.find("+proj") != std::string::npos ? " (a PROJ string needs +type=crs)" : ""));
+    }
+  } else {
+    const geodesy::Frame frame = geodesy::Frame::parse(definition, where);
+    const auto realizations = catalog_realizations_of(frame.name());
+    if (!realizations.empty()) {
+      fail(where, text,
+           frame.name() + " names " + (frame.name() == "NAD83(CSRS)" ? "a datum with several realizations" : "an ensemble") +
+               ", not one realization; give one of " + joined(realizations) +
+               (frame.name() == "NAD83(CSRS)" ? "" : ", or its EPSG code where the realization cannot matter"),
+           "E_CRS_ENSEMBLE");
+    }
+    impl->crs = create_from_frame(ctx, frame, where, text);
+    from_frame_name = true;
+  }
+  impl->description = describe(ctx, impl->crs.get());
+  const CrsDescription& d = impl->description;
+  if (d.type == "bound") {
+    fail(where, text, "a bound CRS (WKT1 TOWGS84 or +towgs84): PROJ would apply its built-in datum shift; give the CRS "
+                      "without it");
+  }
+  if (d.type != "geographic 2D" && d.type != "geographic 3D" && d.type != "geocentric" && d.type != "projected" &&
+      d.type != "compound") {
+    fail(where, text, "'" + d.name + "' is a " + d.type +
+                          " CRS; expected a geographic, geocentric, projected or compound (horizontal + vertical) CRS");
+  }
+  if (d.type == "compound" && d.horizontal_type != "geographic 2D" && d.horizontal_type != "projected") {
+    fail(where, text, "'" + d.name + "': the horizontal part is a " + d.horizontal_type +
+                          " CRS; expected a geographic 2D or projected CRS");
+  }
+  if (epoch && !d.dynamic) {
+    fail(where, text, "'" + d.name + "' is on a static datum (" + d.datum +
+                          "): its coordinates need no epoch, and an epoch here would not be used; give it without @" +
+                          geodesy::format_decimal_year(*epoch),
+         "E_CRS_EPOCH");
+  }
+  Crs out(std::move(impl), epoch, text);
+  out.from_frame_name_ = from_frame_name;
+  return out;
+}
+
+const CrsDescription& Crs::description() const { return impl_->description; }
+
+std::string Crs::display_name() const {
+  const auto& d = impl_->description;
+  std::string s = d.identifier.empty() ? "'" + d.name + "'" : d.identifier + " (" + d.name + ")";
+  if (epoch_) s += "@" + geodesy::format_decimal_year(*epoch_);
+  return s;
+}
+
+std::string Crs::wkt2() const {
+  const char* options[] = {"MULTILINE=NO", nullptr};
+  const char* w = proj_as_wkt(impl_->ctx.get(), impl_->crs.get(), PJ_WKT2_2019, options);
+  return text_or(w);
+}
+
+std::string Crs::projjson() const {
+  const char* options[] = {"MULTILINE=NO", nullptr};
+  const char* j = proj_as_projjson(impl_->ctx.get(), impl_->crs.get(), options);
+  return text_or(j);
+}
+
+Crs Crs::promoted_to_3d(std::string_view where) const {
+  const auto& d = impl_->description;
+  if (d.axes.size() >= 3) return *this;
+  auto impl = std::make_shared<Impl>();
+  impl->ctx = detail::quiet_context();
+  // A PJ belongs to its context: rebuild it there from its PROJJSON.
+  Pj same(proj_create(impl->ctx.get(), projjson().c_str()));
+  Pj promoted(same ? proj_crs_promote_to_3D(impl->ctx.get(), nullptr, same.get()) : nullptr);
+  if (!promoted) fail(where, text_, "'" + d.name + "' cannot be given an ellipsoidal height axis");
+  impl->crs = std::move(promoted);
+  impl->description = describe(impl->ctx.get(), impl->crs.get());
+  Crs out(std::move(impl), epoch_, text_);
+  out.from_frame_name_ = from_frame_name_;
+  return out;
+}
+
+Crs Crs::geocentric(std::string_view where) const {
+  const auto& d = impl_->description;
+  if (d.type == "geocentric") return *this;
+  auto impl = std::make_shared<Impl>();
+  impl->ctx = detail::quiet_context();
+  PJ_CONTEXT* ctx = impl->ctx.get();
+  Pj same(proj_create(ctx, projjson().c_str()));
+  Pj geodetic(same ? proj_crs_get_geodetic_crs(ctx, same.get()) : nullptr);
+  Pj datum(geodetic ? proj_crs_get_datum_forced(ctx, geodetic.get()) : nullptr);
+  const char* auth = datum ? proj_get_id_auth_name(datum.get(), 0) : nullptr;
+  const char* code = datum ? proj_get_id_code(datum.get(), 0) : nullptr;
+  if (auth && code) {
+    PJ_OBJ_LIST* crss = proj_query_geodetic_crs_from_datum(ctx, auth, auth, code, "geocentric");
+    impl->crs.reset(crss && proj_list_get_count(crss) > 0 ? proj_list_get(ctx, crss, 0) : nullptr);
+    proj_list_destroy(crss);
+  }
+  if (!impl->crs) {
+    fail(where, text_, "'" + d.name + "': PROJ's database has no geocentric CRS on its datum (" + d.datum +
+                           "); give x_m, y_m, z_m in an EPSG geocentric CRS");
+  }
+  impl->description = describe(ctx, impl->crs.get());
+  Crs out(std::move(impl), epoch_, text_);
+  out.from_frame_name_ = from_frame_name_;
+  return out;
+}
+
+std::string proj_version_text() { return text_or(proj_info().version); }
+
+std::string column_unit_suffix(const CrsAxis& axis, std::string_view crs_name) {
+  constexpr double kRadPerDeg = 0.017453292519943295;
+  constexpr double kRadPerGrad = 0.015707963267948967;
+  constexpr double kFoot_m = 0.3048;
+  constexpr double kUsFoot_m = 1200.0 / 3937.0;
+  constexpr double kKilometre_m = 1000.0;
+  if (axis.unit_type == "angular") {
+    if (same_factor(axis.unit_to_si, kRadPerDeg)) return "deg";
+    if (same_factor(axis.unit_to_si, kRadPerGrad)) return "grad";
+  } else {
+    if (same_factor(axis.unit_to_si, 1.0)) return "m";
+    if (same_factor(axis.unit_to_si, kUsFoot_m)) return "ftus";
+    if (same_factor(axis.unit_to_si, kFoot_m)) return "ft";
+    if (same_factor(axis.unit_to_si, kKilometre_m)) return "km";
+  }
+  throw Error(ErrorKind::input, "E_CRS_UNIT",
+              "CRS '" + std::string(crs_name) + "': axis '" + axis.name + "' is in " + axis.unit_name +
+                  " (" + format_shortest(axis.unit_to_si) + (axis.unit_type == "angular" ? " rad" : " m") +
+                  "), a unit geoanchor has no column name for; columns are named in m, ft, ftus, km, deg or grad");
+}
+
+}  // namespace geoanchor::io

@@ -1,0 +1,116 @@
+// A header-named CSV's coordinates through a PROJ operation, in batches.
+
+#include "geoanchor/io/crs_csv.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::io {
+namespace {
+
+constexpr std::size_t kBatchRows = 4096;  // rows converted per proj_trans_generic call
+
+// The largest latitude and longitude in an angular unit (degrees or grads).
+struct AngleLimits {
+  double lat, lon;
+};
+AngleLimits limits_of(const std::string& column) {
+  const bool grads = column.size() > 5 && column.compare(column.size() - 5, 5, "_grad") == 0;
+  return grads ? AngleLimits{100.0, 200.0} : AngleLimits{90.0, 180.0};
+}
+
+}  // namespace
+
+CrsCsvConverter::CrsCsvConverter(const CsvReader& reader, const CrsColumns& input, const CrsColumns& output,
+                                 NumberFormat format)
+    : input_(input), output_(output), format_(format), header_(reader.header()), source_(reader.source_name()) {
+  in_index_ = column_indices(input, header_);
+  is_coordinate_.assign(header_.size(), false);
+  for (std::size_t i : in_index_) is_coordinate_[i] = true;
+  first_coordinate_ = *std::min_element(in_index_.begin(), in_index_.end());
+  std::vector<std::string> out_names;
+  for (std::size_t k : output.write_order) out_names.push_back(output.names[k]);
+  for (std::size_t i = 0; i < header_.size(); ++i) {
+    if (i == first_coordinate_) out_header_.insert(out_header_.end(), out_names.begin(), out_names.end());
+    if (is_coordinate_[i]) continue;
+    if (std::find(out_names.begin(), out_names.end(), header_[i]) != out_names.end()) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source_ + ": header column " + std::to_string(i + 1) + " '" + header_[i] +
+                      "' would appear twice in the output (it is an output coordinate); rename it");
+    }
+    out_header_.push_back(csv_quote(header_[i]));
+  }
+}
+
+std::size_t CrsCsvConverter::run(CsvReader& reader, CrsOperation& op, std::ostream& out) {
+  const std::size_t dims = input_.names.size();
+  std::vector<CsvRecord> batch(kBatchRows);
+  std::vector<double> a(kBatchRows), b(kBatchRows), c(kBatchRows);
+  std::vector<std::size_t> row_of;  // batch slot of each point
+  std::vector<std::string> fields;
+  std::size_t rows = 0;
+  bool more = true;
+  while (more) {
+    std::size_t used = 0;
+    row_of.clear();
+    while (used < kBatchRows) {
+      if (!reader.next(batch[used])) {
+        more = false;
+        break;
+      }
+      CsvRecord& r = batch[used];
+      if (!r.is_comment) {
+        const std::size_t k = row_of.size();
+        double* dst[3] = {&a[k], &b[k], &c[k]};
+        for (std::size_t d = 0; d < dims; ++d) {
+          const std::size_t col = in_index_[d];
+          const double v = number_cell(r, col, header_, source_);
+          if (input_.angular[d]) {
+            const AngleLimits lim = limits_of(header_[col]);
+            const double bound = d == 0 ? lim.lon : lim.lat;  // visualisation order: longitude first
+            if (std::fabs(v) > bound) {
+              throw Error(ErrorKind::input, d == 0 ? "E_LONGITUDE_RANGE" : "E_LATITUDE_RANGE",
+                          source_ + ":" + std::to_string(r.line) + ": " + header_[col] + "=" + r.values[col] + ": " +
+                              (d == 0 ? "longitude" : "latitude") + " not in [-" + format_shortest(bound) + ", " +
+                              format_shortest(bound) + "]");
+            }
+          }
+          *dst[d] = v;
+        }
+        row_of.push_back(used);
+      }
+      ++used;
+    }
+    const std::size_t n = row_of.size();
+    op.transform(a.data(), b.data(), dims == 3 ? c.data() : nullptr, n, [&](std::size_t i) {
+      return source_ + ":" + std::to_string(batch[row_of[i]].line);
+    });
+    std::size_t k = 0;
+    for (std::size_t s = 0; s < used; ++s) {
+      const CsvRecord& r = batch[s];
+      if (r.is_comment) {
+        out << r.comment << '\n';
+        continue;
+      }
+      const double values[3] = {a[k], b[k], c[k]};
+      ++k;
+      fields.clear();
+      for (std::size_t i = 0; i < header_.size(); ++i) {
+        if (i == first_coordinate_) {
+          for (std::size_t w : output_.write_order) {
+            fields.push_back(output_.angular[w] ? format_.degrees(values[w]) : format_.metres(values[w]));
+          }
+        }
+        if (!is_coordinate_[i]) fields.push_back(r.raw[i]);
+      }
+      write_csv_line(out, fields);
+      ++rows;
+    }
+  }
+  return rows;
+}
+
+}  // namespace geoanchor::io

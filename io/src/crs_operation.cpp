@@ -1,0 +1,427 @@
+// Coordinates between two CRSs through PROJ, over whole arrays.
+
+#include "geoanchor/io/crs_operation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "crs_impl.hpp"
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/hash.hpp"
+
+namespace geoanchor::io {
+
+using detail::Pj;
+using detail::text_or;
+
+namespace {
+
+struct Candidate {
+  CrsOperationCandidate info;
+  Pj op;  // normalized for visualization; null when a grid is missing
+  bool instantiable = false;
+};
+
+std::string joined(const std::vector<std::string>& v, const char* sep = ", ") {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : sep) + x;
+  return s;
+}
+
+std::string accuracy_text(const std::optional<double>& a) {
+  return a ? "±" + format_shortest(*a) + " m" : std::string("accuracy not stated");
+}
+
+// Whether an operation (or a step of a concatenated one) is evaluated at an
+// epoch: EPSG's time-dependent Helmert methods and point-motion (velocity
+// grid) methods.
+bool is_time_dependent(PJ_CONTEXT* ctx, PJ* op) {
+  const int steps = proj_concatoperation_get_step_count(ctx, op);
+  if (steps > 0) {
+    for (int i = 0; i < steps; ++i) {
+      Pj step(proj_concatoperation_get_step(ctx, op, i));
+      if (step && is_time_dependent(ctx, step.get())) return true;
+    }
+    return false;
+  }
+  const char* method = nullptr;
+  if (!proj_coordoperation_get_method_info(ctx, op, &method, nullptr, nullptr) || !method) return false;
+  std::string m(method);
+  for (char& c : m) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return m.find("time-dependent") != std::string::npos || m.find("point motion") != std::string::npos ||
+         m.find("velocity") != std::string::npos;
+}
+
+std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool allow_ballpark) {
+  PJ_OPERATION_FACTORY_CONTEXT* fc = proj_create_operation_factory_context(ctx, nullptr);
+  proj_operation_factory_context_set_allow_ballpark_transformations(ctx, fc, allow_ballpark ? 1 : 0);
+  proj_operation_factory_context_set_spatial_criterion(ctx, fc, PROJ_SPATIAL_CRITERION_PARTIAL_INTERSECTION);
+  proj_operation_factory_context_set_grid_availability_use(ctx, fc, PROJ_GRID_AVAILABILITY_IGNORED);
+  PJ_OBJ_LIST* list = proj_create_operations(ctx, src, dst, fc);
+  proj_operation_factory_context_destroy(fc);
+  std::vector<Candidate> out;
+  const int n = list ? proj_list_get_count(list) : 0;
+  for (int i = 0; i < n; ++i) {
+    Pj raw(proj_list_get(ctx, list, i));
+    if (!raw) continue;
+    if (!allow_ballpark && proj_coordoperation_has_ballpark_transformation(ctx, raw.get())) continue;
+    Candidate c;
+    c.info.name = text_or(proj_get_name(raw.get()));
+    const char* auth = proj_get_id_auth_name(raw.get(), 0);
+    const char* code = proj_get_id_code(raw.get(), 0);
+    if (auth && code) c.info.identifier = std::string(auth) + ":" + code;
+    const double accuracy = proj_coordoperation_get_accuracy(ctx, raw.get());
+    if (accuracy >= 0.0) c.info.accuracy_m = accuracy;
+    if (proj_get_type(raw.get()) == PJ_TYPE_CONVERSION) c.info.accuracy_m = 0.0;  // exact by definition
+    const int grids = proj_coordoperation_get_grid_used_count(ctx, raw.get());
+    for (int g = 0; g < grids; ++g) {
+      const char* short_name = nullptr;
+      const char* full_name = nullptr;
+      int available = 0;
+      if (!proj_coordoperation_get_grid_used(ctx, raw.get(), g, &short_name, &full_name, nullptr, nullptr, nullptr,
+                                             nullptr, &available)) {
+        continue;
+      }
+      CrsGridFile f;
+      f.name = text_or(short_name);
+      f.path = text_or(full_name);
+      f.available = available != 0 && !f.path.empty();
+      c.info.grids.push_back(std::move(f));
+    }
+    c.instantiable = proj_coordoperation_is_instantiable(ctx, raw.get()) != 0;
+    for (const auto& g : c.info.grids) c.instantiable = c.instantiable && g.available;
+    double west = 0, south = 0, east = 0, north = 0;
+    const char* area = nullptr;
+    if (proj_get_area_of_use(ctx, raw.get(), &west, &south, &east, &north, &area) && west > -1000.0) {
+      c.info.area = CrsArea{text_or(area), west, south, east, north};
+    }
+    c.info.time_dependent = is_time_dependent(ctx, raw.get());
+    if (c.instantiable) {
+      c.op.reset(proj_normalize_for_visualization(ctx, raw.get()));
+      if (!c.op) c.instantiable = false;
+    }
+    if (c.op) {
+      const char* proj_text = proj_as_proj_string(ctx, c.op.get(), PJ_PROJ_5, nullptr);
+      c.info.proj_string = text_or(proj_text);
+    }
+    out.push_back(std::move(c));
+  }
+  proj_list_destroy(list);
+  return out;
+}
+
+bool is_geographic_degrees(const CrsDescription& d) {
+  constexpr double kRadPerDeg = 0.017453292519943295;
+  constexpr double kRel = 1e-12;
+  if (d.horizontal_type != "geographic 2D" && d.horizontal_type != "geographic 3D") return false;
+  if (d.prime_meridian_deg != 0.0 || d.axes.size() < 2) return false;
+  return std::abs(d.axes[0].unit_to_si - kRadPerDeg) < kRel * kRadPerDeg;
+}
+
+// Points outside an area of use: counted, the first kept.
+struct AreaTally {
+  std::string crs;
+  std::optional<CrsArea> area;
+  std::size_t outside = 0, seen = 0;
+  std::string first;
+  void check(double lon, double lat, const std::function<std::string()>& name) {
+    ++seen;
+    if (!area || area->contains(lon, lat)) return;
+    if (outside++ == 0) first = name() + " (" + format_shortest(lon) + "°, " + format_shortest(lat) + "°)";
+  }
+  std::optional<std::string> warning() const {
+    if (outside == 0) return std::nullopt;
+    return std::to_string(outside) + " of " + std::to_string(seen) + " points lie outside the area of use of " + crs +
+           " (" + area->name + ": longitude " + format_shortest(area->west_deg) + "° to " +
+           format_shortest(area->east_deg) + "°, latitude " + format_shortest(area->south_deg) + "° to " +
+           format_shortest(area->north_deg) + "°); the first is " + first;
+  }
+};
+
+}  // namespace
+
+struct CrsOperation::Impl {
+  detail::PjContext ctx;
+  Pj src, dst;
+  std::string src_name, dst_name;
+  std::string where;
+  Options options;
+  std::vector<Candidate> all;  // PROJ's candidates, ballpark ones left out, in PROJ's order
+  std::vector<CrsOperationCandidate> infos;
+  std::optional<double> t;
+  std::vector<std::string> notes;
+  Pj to_lonlat;  // source → geographic longitude/latitude, degrees (for choices and areas)
+  bool source_is_lonlat = false, target_is_lonlat = false;
+  AreaTally source_area;
+  std::size_t fallbacks = 0;
+  std::string first_fallback;
+
+  // The candidate PROJ would use at (lon, lat), from index `from` on, and a
+  // better-ranked one whose grid is missing (when there is one).
+  struct Choice {
+    std::optional<std::size_t> use, missing_better;
+  };
+  Choice choose(double lon, double lat, std::size_t from) const;
+};
+
+CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_view where, Options options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.ctx = detail::quiet_context();
+  m.options = options;
+  m.where = std::string(where);
+  PJ_CONTEXT* ctx = m.ctx.get();
+  m.src.reset(proj_create(ctx, source.projjson().c_str()));
+  m.dst.reset(proj_create(ctx, target.projjson().c_str()));
+  m.src_name = source.display_name();
+  m.dst_name = target.display_name();
+  const std::string pair = m.src_name + " → " + m.dst_name;
+  if (!m.src || !m.dst) throw Error(ErrorKind::io, "E_CRS", m.where + ": " + pair + ": PROJ cannot rebuild a CRS");
+  const CrsDescription& sd = source.description();
+  const CrsDescription& td = target.description();
+
+  // The horizontal datum changes unless both sides are on the same one (a
+  // conversion, or a change of heights only).
+  const bool same_datum =
+      sd.datum == td.datum && sd.ellipsoid.a_m == td.ellipsoid.a_m && sd.ellipsoid.rf == td.ellipsoid.rf;
+  // The epoch PROJ evaluates a time-dependent operation at: the dynamic
+  // side's coordinate epoch (for a static → dynamic change, the target
+  // epoch, as EPSG and the agencies publish it).
+  const bool src_dynamic = sd.dynamic, dst_dynamic = td.dynamic;
+  if (src_dynamic && dst_dynamic && source.epoch() && target.epoch() && source.epoch()->year != target.epoch()->year) {
+    throw Error(ErrorKind::input, "E_CRS_EPOCH",
+                m.where + ": " + pair + ": two coordinate epochs; PROJ moves coordinates between frames at one epoch, "
+                "not in time (geoanchor transform moves them with velocities or a plate motion model)");
+  }
+  if (source.epoch()) m.t = source.epoch()->year;
+  else if (target.epoch()) m.t = target.epoch()->year;
+  if (!same_datum) {
+    for (const auto* c : {&source, &target}) {
+      if (c->description().dynamic && !c->epoch() && !m.t) {
+        throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                    m.where + ": " + pair + ": " + c->display_name() + " is on a dynamic datum (" +
+                        c->description().datum + "): its coordinates change with time, so this datum change needs "
+                        "their epoch; give it as CRS@YYYY.Y, e.g. " + c->text() + "@2024.5");
+      }
+    }
+  }
+
+  m.all = list_operations(ctx, m.src.get(), m.dst.get(), false);
+  if (m.all.empty()) {
+    const bool ballpark = !list_operations(ctx, m.src.get(), m.dst.get(), true).empty();
+    throw Error(ErrorKind::input, "E_CRS_NO_OPERATION",
+                m.where + ": " + pair + ": " +
+                    (ballpark ? "PROJ knows only a ballpark operation between them (a datum change of unknown "
+                                "accuracy, often metres to hundreds of metres); geoanchor does not use it"
+                              : "PROJ knows no operation between them"));
+  }
+  // An ensemble: its members differ by up to its accuracy. A conversion
+  // keeps the datum, and an operation no better than that accuracy cannot
+  // tell the members apart: both are warned. A finer datum change would
+  // depend on the member the coordinates are in: refused.
+  std::optional<double> finest;
+  for (const auto& c : m.all) {
+    if (c.instantiable && c.info.accuracy_m && (!finest || *c.info.accuracy_m < *finest)) finest = c.info.accuracy_m;
+  }
+  for (const auto* d : {&sd, &td}) {
+    if (!d->ensemble) continue;
+    const std::string name = d == &sd ? m.src_name : m.dst_name;
+    const std::string accuracy = d->ensemble_accuracy_m ? format_shortest(*d->ensemble_accuracy_m) + " m" : "not stated";
+    if (same_datum) {
+      m.notes.push_back(name + " is on the datum ensemble '" + d->datum + "' (accuracy " + accuracy +
+                        "): the conversion to " + (d == &sd ? m.dst_name : m.src_name) +
+                        " keeps the datum, so the realization does not change it; the coordinates stay in whichever "
+                        "realization they were");
+    } else if (finest && d->ensemble_accuracy_m && *finest >= *d->ensemble_accuracy_m) {
+      m.notes.push_back(name + " is on the datum ensemble '" + d->datum + "' (accuracy " + accuracy +
+                        "); PROJ's operations between " + m.src_name + " and " + m.dst_name + " are no better than ±" +
+                        format_shortest(*finest) + " m, so which member the coordinates are in cannot matter at "
+                        "that accuracy");
+    } else {
+      throw Error(ErrorKind::input, "E_CRS_ENSEMBLE",
+                  m.where + ": " + pair + ": " + name + " is on the datum ensemble '" + d->datum + "' (accuracy " +
+                      accuracy + "), and this datum change (PROJ's best operation: " +
+                      (finest ? "±" + format_shortest(*finest) + " m" : std::string("accuracy not stated")) +
+                      ") depends on which member the coordinates are in; give the CRS of one of its members: " +
+                      joined(d->ensemble_members));
+    }
+  }
+  const bool any_instantiable =
+      std::any_of(m.all.begin(), m.all.end(), [](const Candidate& c) { return c.instantiable; });
+  if (!any_instantiable) {
+    const Candidate& best = m.all.front();
+    std::vector<std::string> missing;
+    for (const auto& g : best.info.grids) {
+      if (!g.available) missing.push_back(g.name);
+    }
+    throw Error(ErrorKind::input, "E_CRS_GRID_MISSING",
+                m.where + ": " + pair + ": PROJ's operation '" + best.info.name + "' (" + accuracy_text(best.info.accuracy_m) +
+                    ") needs the grid " + joined(missing) + ", which is not on this machine; PROJ looked in " +
+                    joined(detail::proj_search_paths()) + " (network access off)" +
+                    (any_instantiable ? "" : "; no other operation is known but a ballpark one"));
+  }
+  for (const auto& c : m.all) {
+    if (c.info.time_dependent && !m.t) {
+      throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                  m.where + ": " + pair + ": PROJ's operation '" + c.info.name +
+                      "' is time-dependent and neither CRS states a coordinate epoch; give it as CRS@YYYY.Y on the "
+                      "dynamic side");
+    }
+  }
+  // Grids in use: hashed once, as they are on this machine.
+  for (auto& c : m.all) {
+    for (auto& g : c.info.grids) {
+      if (g.available) g.sha256 = sha256_file_hex(g.path);
+    }
+    m.infos.push_back(c.info);
+  }
+
+  m.source_is_lonlat = is_geographic_degrees(sd);
+  m.target_is_lonlat = is_geographic_degrees(td);
+  const bool need_lonlat = m.all.size() > 1 || (!m.source_is_lonlat && !m.target_is_lonlat && sd.area);
+  if (need_lonlat && !m.source_is_lonlat) {
+    Pj geog(proj_create(ctx, "OGC:CRS84"));
+    const char* opts[] = {"ALLOW_BALLPARK=YES", nullptr};  // for areas only: metres do not matter
+    Pj raw(proj_create_crs_to_crs_from_pj(ctx, m.src.get(), geog.get(), nullptr, opts));
+    if (raw) m.to_lonlat.reset(proj_normalize_for_visualization(ctx, raw.get()));
+  }
+  m.source_area.crs = m.src_name;
+  m.source_area.area = sd.area;
+}
+
+CrsOperation::~CrsOperation() = default;
+
+// Of the candidates whose area holds the point, the one with the best
+// stated accuracy (earlier on ties); a missing-grid candidate that holds the
+// point and would have been better is reported.
+CrsOperation::Impl::Choice CrsOperation::Impl::choose(double lon, double lat, std::size_t from) const {
+  auto better = [](const std::optional<double>& x, const std::optional<double>& y) { return x && (!y || *x < *y); };
+  auto holds = [&](const Candidate& c) { return !c.info.area || c.info.area->contains(lon, lat); };
+  Choice choice;
+  for (std::size_t i = from; i < all.size(); ++i) {
+    if (!all[i].instantiable || !holds(all[i])) continue;
+    if (!choice.use || better(all[i].info.accuracy_m, all[*choice.use].info.accuracy_m)) choice.use = i;
+  }
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (all[i].instantiable || !holds(all[i])) continue;
+    if (!choice.use || better(all[i].info.accuracy_m, all[*choice.use].info.accuracy_m)) {
+      choice.missing_better = i;
+      break;
+    }
+  }
+  return choice;
+}
+
+void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
+                             const std::function<std::string(std::size_t)>& point_name) {
+  Impl& m = *impl_;
+  if (n == 0) return;
+  const std::size_t z_stride = c ? sizeof(double) : 0;
+  const std::size_t z_count = c ? n : 0;
+  double t_value = m.t.value_or(0.0);
+  const std::vector<double> in_a(a, a + n), in_b(b, b + n);
+  std::vector<double> in_c;
+  if (c) in_c.assign(c, c + n);
+
+  // Longitude and latitude of each point where choices or areas need them.
+  std::vector<double> lon, lat;
+  if (m.source_is_lonlat) {
+    lon = in_a;
+    lat = in_b;
+  } else if (m.to_lonlat) {
+    lon = in_a;
+    lat = in_b;
+    proj_trans_generic(m.to_lonlat.get(), PJ_FWD, lon.data(), sizeof(double), n, lat.data(), sizeof(double), n,
+                       nullptr, 0, 0, nullptr, 0, 0);
+  }
+  if (!lon.empty()) {
+    for (std::size_t i = 0; i < n; ++i) m.source_area.check(lon[i], lat[i], [&] { return point_name(i); });
+  }
+
+  auto fail_point = [&](std::size_t i, const Candidate& op, const std::string& why) {
+    std::string coords = format_shortest(in_a[i]) + ", " + format_shortest(in_b[i]);
+    if (c) coords += ", " + format_shortest(in_c[i]);
+    std::vector<std::string> grids;
+    for (const auto& g : op.info.grids) grids.push_back(g.name);
+    throw Error(ErrorKind::input, "E_CRS_TRANSFORM",
+                m.where + ": " + point_name(i) + ": (" + coords + ") in " + m.src_name + ": " + why + " '" +
+                    op.info.name + "'" + (grids.empty() ? "" : " (grid " + joined(grids) + ")") + " to " + m.dst_name +
+                    (grids.empty() ? "" : "; the point is outside the grid's extent") +
+                    (m.options.allow_fallback ? "" : "; no other operation is used for it without --allow-fallback"));
+  };
+  auto run = [&](const Candidate& op, double* x, double* y, double* z, std::size_t count) {
+    proj_trans_generic(op.op.get(), PJ_FWD, x, sizeof(double), count, y, sizeof(double), count, z, z ? sizeof(double) : 0,
+                       z ? count : 0, m.t ? &t_value : nullptr, 0, m.t ? 1 : 0);
+  };
+  auto finite = [&](std::size_t i) {
+    return std::isfinite(a[i]) && std::isfinite(b[i]) && (!c || std::isfinite(c[i]));
+  };
+
+  if (m.all.size() == 1) {
+    Candidate& op = m.all.front();
+    proj_trans_generic(op.op.get(), PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, z_stride, z_count,
+                       m.t ? &t_value : nullptr, 0, m.t ? 1 : 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!finite(i)) fail_point(i, op, "PROJ cannot move it with");
+    }
+    op.info.points += n;
+    m.infos.front().points += n;
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double plon = lon.empty() ? 0.0 : lon[i], plat = lat.empty() ? 0.0 : lat[i];
+      Impl::Choice choice = m.choose(plon, plat, 0);
+      if (choice.missing_better && !m.options.allow_fallback) {
+        const auto& op = m.all[*choice.missing_better];
+        std::vector<std::string> grids;
+        for (const auto& g : op.info.grids) {
+          if (!g.available) grids.push_back(g.name);
+        }
+        throw Error(ErrorKind::input, "E_CRS_GRID_MISSING",
+                    m.where + ": " + point_name(i) + ": " + m.src_name + " → " + m.dst_name + ": PROJ's operation '" +
+                        op.info.name + "' (" + accuracy_text(op.info.accuracy_m) + ") for this point needs the grid " +
+                        joined(grids) + ", which is not on this machine; PROJ looked in " +
+                        joined(detail::proj_search_paths()) +
+                        " (network access off); --allow-fallback uses the next operation instead");
+      }
+      if (!choice.use) fail_point(i, m.all.front(), "no operation's area of use holds it; the best-ranked is");
+      while (true) {
+        const std::size_t k = *choice.use;
+        a[i] = in_a[i];
+        b[i] = in_b[i];
+        if (c) c[i] = in_c[i];
+        run(m.all[k], a + i, b + i, c ? c + i : nullptr, 1);
+        if (finite(i)) {
+          m.all[k].info.points += 1;
+          m.infos[k].points += 1;
+          break;
+        }
+        if (!m.options.allow_fallback) fail_point(i, m.all[k], "PROJ cannot move it with");
+        if (m.fallbacks++ == 0) m.first_fallback = point_name(i);
+        choice = m.choose(plon, plat, k + 1);
+        if (!choice.use) fail_point(i, m.all[k], "PROJ cannot move it with");
+      }
+    }
+  }
+  if (m.target_is_lonlat && !m.source_is_lonlat && lon.empty()) {
+    for (std::size_t i = 0; i < n; ++i) m.source_area.check(a[i], b[i], [&] { return point_name(i); });
+  }
+}
+
+const std::vector<CrsOperationCandidate>& CrsOperation::candidates() const { return impl_->infos; }
+
+std::optional<double> CrsOperation::epoch() const { return impl_->t; }
+
+std::vector<std::string> CrsOperation::warnings() const {
+  std::vector<std::string> out = impl_->notes;
+  if (auto w = impl_->source_area.warning()) out.push_back(*w);
+  if (impl_->fallbacks > 0) {
+    out.push_back(std::to_string(impl_->fallbacks) + " points were moved by a worse operation than PROJ's first "
+                  "choice for them (--allow-fallback); the first is " + impl_->first_fallback);
+  }
+  return out;
+}
+
+}  // namespace geoanchor::io

@@ -1,0 +1,533 @@
+// `geoanchor convert --crs SRC --to-crs DST` and `geoanchor crs` end to end
+// (issue 13): the real executable on CSV files, against PROJ's C API on the
+// same pair (proj_create_crs_to_crs, normalised for visualisation), at
+// random points inside each CRS's area of use; the columns' names are
+// derived here from PROJ's axes, independently of geoanchor's rule; every
+// bad-input case is checked for its message, its exit code and the absence
+// of any output.
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <proj.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <sstream>
+
+#include "accuracy.hpp"
+#include "cli_support.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "test_support.hpp"
+
+namespace geoanchor {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CliTest;
+using testing::RunResult;
+using testing::slurp;
+using testing::WorstCase;
+
+// Issue 13's acceptance: PROJ's own result on the same operation.
+constexpr double kVsProjTol_m = 1e-6;
+constexpr double kVsProjTol_deg = 1e-9;
+constexpr std::size_t kPointsPerCrs = 100;
+constexpr double kAreaMargin = 0.1;  // points stay this fraction of the area's span inside its bounding box
+constexpr double kRadPerDeg = 0.017453292519943295;
+constexpr double kRadPerGrad = 0.015707963267948967;
+
+struct PjDel {
+  void operator()(PJ* p) const { proj_destroy(p); }
+};
+using Pj = std::unique_ptr<PJ, PjDel>;
+
+// A PROJ context of the test's own, independent of geoanchor's.
+class Proj {
+ public:
+  Proj() : ctx_(proj_context_create()) {
+    proj_log_level(ctx_, PJ_LOG_NONE);
+    proj_context_set_enable_network(ctx_, 0);
+  }
+  ~Proj() { proj_context_destroy(ctx_); }
+  Proj(const Proj&) = delete;
+  Proj& operator=(const Proj&) = delete;
+  PJ_CONTEXT* ctx() const { return ctx_; }
+  Pj crs(const std::string& def) const { return Pj(proj_create(ctx_, def.c_str())); }
+  // proj_create_crs_to_crs, normalised for visualisation; ballpark allowed
+  // only for making test points.
+  Pj op(const std::string& a, const std::string& b, bool ballpark = false) const {
+    const char* opts[] = {ballpark ? "ALLOW_BALLPARK=YES" : "ALLOW_BALLPARK=NO", nullptr};
+    Pj sa = crs(a), sb = crs(b);
+    Pj raw(proj_create_crs_to_crs_from_pj(ctx_, sa.get(), sb.get(), nullptr, opts));
+    return raw ? Pj(proj_normalize_for_visualization(ctx_, raw.get())) : Pj();
+  }
+
+ private:
+  PJ_CONTEXT* ctx_;
+};
+
+// The column suffix of an axis unit, from the table in the issue (m, ft,
+// ftus) and the angular units (deg, grad).
+std::string unit_suffix(double factor, bool angular) {
+  auto near = [](double a, double b) { return std::abs(a - b) <= 1e-12 * b; };
+  if (angular) return near(factor, kRadPerDeg) ? "deg" : near(factor, kRadPerGrad) ? "grad" : "?";
+  return near(factor, 1.0) ? "m" : near(factor, 0.3048) ? "ft" : near(factor, 1200.0 / 3937.0) ? "ftus" : "?";
+}
+
+struct Axes {
+  std::vector<std::string> names;  // the CSV columns, visualisation order
+  std::vector<double> to_si;       // per axis: metres or radians per unit
+  bool geographic = false;
+};
+
+// The columns of a CRS as issue 13 defines them, from PROJ's normalised axes.
+Axes columns_of(const Proj& p, const std::string& def) {
+  Pj c = p.crs(def);
+  Pj n(proj_normalize_for_visualization(p.ctx(), c.get()));
+  Axes out;
+  std::vector<Pj> parts;
+  if (proj_get_type(n.get()) == PJ_TYPE_COMPOUND_CRS) {
+    parts.emplace_back(proj_crs_get_sub_crs(p.ctx(), n.get(), 0));
+    parts.emplace_back(proj_crs_get_sub_crs(p.ctx(), n.get(), 1));
+  } else {
+    parts.emplace_back(proj_clone(p.ctx(), n.get()));
+  }
+  const PJ_TYPE t = proj_get_type(parts[0].get());
+  out.geographic = t == PJ_TYPE_GEOGRAPHIC_2D_CRS || t == PJ_TYPE_GEOGRAPHIC_3D_CRS;
+  int k = 0;
+  for (std::size_t part = 0; part < parts.size(); ++part) {
+    Pj cs(proj_crs_get_coordinate_system(p.ctx(), parts[part].get()));
+    for (int i = 0; i < proj_cs_get_axis_count(p.ctx(), cs.get()); ++i, ++k) {
+      double f = 0;
+      proj_cs_get_axis_info(p.ctx(), cs.get(), i, nullptr, nullptr, nullptr, &f, nullptr, nullptr, nullptr);
+      const bool angular = out.geographic && k < 2;
+      std::string stem = k == 0 ? (out.geographic ? "lon" : "easting") : k == 1 ? (out.geographic ? "lat" : "northing")
+                                                                                 : (part == 1 ? "H" : "h");
+      out.names.push_back(stem + "_" + unit_suffix(f, angular));
+      out.to_si.push_back(f);
+    }
+  }
+  return out;
+}
+
+std::string fmt(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+using Csv = testing::CsvTable;
+Csv parse_csv(const std::string& text) { return testing::parse_csv_table(text); }
+
+// A row of the table written to docs/crs-acceptance.md.
+struct TableRow {
+  std::string code, name, method, units;
+  double forward_m = 0, inverse_deg = 0;
+  std::size_t points = 0;
+};
+
+class CrsCli : public CliTest {
+ protected:
+  // Random points inside the area of use of `code`, in `base` coordinates
+  // (visualisation order), made with PROJ from longitude/latitude.
+  std::vector<std::array<double, 3>> points_in_area(const std::string& code, const std::string& base, std::uint32_t seed) {
+    Pj c = proj_.crs(code);
+    double w = 0, s = 0, e = 0, n = 0;
+    EXPECT_TRUE(proj_get_area_of_use(proj_.ctx(), c.get(), &w, &s, &e, &n, nullptr)) << code;
+    if (e < w) e += 360.0;
+    const double dw = (e - w) * kAreaMargin, dn = (n - s) * kAreaMargin;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> lon(w + dw, e - dw), lat(s + dn, n - dn), h(-50.0, 3000.0);
+    Pj to_base = proj_.op("OGC:CRS84", base, true);
+    std::vector<std::array<double, 3>> out;
+    for (std::size_t i = 0; i < kPointsPerCrs; ++i) {
+      double x = lon(rng);
+      if (x > 180.0) x -= 360.0;
+      PJ_COORD cd = proj_coord(x, lat(rng), 0, 0);
+      cd = proj_trans(to_base.get(), PJ_FWD, cd);
+      out.push_back({cd.xyz.x, cd.xyz.y, h(rng)});
+    }
+    return out;
+  }
+
+  // geoanchor convert IN --crs A --to-crs B -o out.csv; the output table.
+  Csv convert(const std::string& in_name, const std::string& a, const std::string& b, const std::string& extra = "") {
+    const auto out = path("out_" + in_name);
+    fs::remove(out);
+    fs::remove(out.string() + ".geoanchor.json");
+    const RunResult r = run("convert '" + path(in_name).string() + "' --crs '" + a + "' --to-crs '" + b + "' -o '" +
+                            out.string() + "' " + extra);
+    EXPECT_EQ(r.exit_code, 0) << a << " -> " << b << ": " << r.err;
+    return parse_csv(slurp(out));
+  }
+
+  // Forward (geographic base → CRS, metres) and inverse (CRS → base,
+  // degrees) worst differences from PROJ at random points.
+  TableRow compare_conversion(const std::string& code, std::uint32_t seed) {
+    Pj c = proj_.crs(code);
+    Pj geodetic(proj_crs_get_geodetic_crs(proj_.ctx(), c.get()));
+    const std::string base = std::string(proj_get_id_auth_name(geodetic.get(), 0)) + ":" + proj_get_id_code(geodetic.get(), 0);
+    const Axes base_axes = columns_of(proj_, base), crs_axes = columns_of(proj_, code);
+    auto pts = points_in_area(code, base, seed);
+
+    std::ostringstream in;
+    in << "id," << base_axes.names[0] << "," << base_axes.names[1] << "\n";
+    for (std::size_t i = 0; i < pts.size(); ++i) in << "P" << i << "," << fmt(pts[i][0]) << "," << fmt(pts[i][1]) << "\n";
+    write("fwd.csv", in.str());
+    const Csv fwd = convert("fwd.csv", base, code);
+    Pj op = proj_.op(base, code);
+    TableRow row;
+    row.code = code;
+    row.name = proj_get_name(c.get());
+    row.units = crs_axes.names[0] + ", " + crs_axes.names[1];
+    Pj conv(proj_crs_get_coordoperation(proj_.ctx(), c.get()));
+    const char* method = nullptr;
+    proj_coordoperation_get_method_info(proj_.ctx(), conv.get(), &method, nullptr, nullptr);
+    row.method = method ? method : "?";
+    WorstCase forward, inverse;
+    std::ostringstream back;
+    back << "id," << crs_axes.names[0] << "," << crs_axes.names[1] << "\n";
+    std::vector<std::array<double, 2>> projected;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      PJ_COORD r = proj_trans(op.get(), PJ_FWD, proj_coord(pts[i][0], pts[i][1], 0, 0));
+      double de = std::numeric_limits<double>::quiet_NaN(), dn = de;
+      if (i < fwd.rows.size()) {
+        const auto got_e = parse_finite_double(fwd.rows[i][fwd.col(crs_axes.names[0])]);
+        const auto got_n = parse_finite_double(fwd.rows[i][fwd.col(crs_axes.names[1])]);
+        if (got_e && got_n) {
+          de = std::abs(*got_e - r.xy.x) * crs_axes.to_si[0];
+          dn = std::abs(*got_n - r.xy.y) * crs_axes.to_si[1];
+        }
+      }
+      forward.add(testing::nan_max(de, dn), i);
+      back << "P" << i << "," << fmt(r.xy.x) << "," << fmt(r.xy.y) << "\n";
+      projected.push_back({r.xy.x, r.xy.y});
+    }
+    write("inv.csv", back.str());
+    const Csv inv = convert("inv.csv", code, base);
+    Pj iop = proj_.op(code, base);
+    const double deg_per_unit = base_axes.to_si[0] / kRadPerDeg;
+    for (std::size_t i = 0; i < projected.size(); ++i) {
+      PJ_COORD r = proj_trans(iop.get(), PJ_FWD, proj_coord(projected[i][0], projected[i][1], 0, 0));
+      double d = std::numeric_limits<double>::quiet_NaN();
+      if (i < inv.rows.size()) {
+        const auto lon = parse_finite_double(inv.rows[i][inv.col(base_axes.names[0])]);
+        const auto lat = parse_finite_double(inv.rows[i][inv.col(base_axes.names[1])]);
+        if (lon && lat) d = testing::nan_max(std::abs(*lon - r.lp.lam), std::abs(*lat - r.lp.phi)) * deg_per_unit;
+      }
+      inverse.add(d, i);
+    }
+    EXPECT_WORST_WITHIN(forward, kVsProjTol_m) << code << " forward";
+    EXPECT_WORST_WITHIN(inverse, kVsProjTol_deg) << code << " inverse";
+    row.forward_m = forward.value();
+    row.inverse_deg = inverse.value();
+    row.points = pts.size();
+    return row;
+  }
+
+  Proj proj_;
+};
+
+// At least 40 projected CRSs from every continent, with the methods and
+// units the issue names (State Plane TM and LCC in US survey feet, Lambert-93,
+// RD New, LV95, Krovak, UPS, MGA2020, NZTM2000, a JGD2011 plane zone, a
+// SIRGAS UTM zone, the British National Grid) and axis orders other than
+// east/north (LAEA Europe, Gauss-Krüger, Japan, UPS, South Africa's Lo).
+const std::vector<std::string> kProjectedCrs = {
+    // North America
+    "EPSG:2236", "EPSG:2227", "EPSG:2263", "EPSG:2252", "EPSG:26915", "EPSG:3978", "EPSG:2953", "EPSG:6350",
+    "EPSG:3338", "EPSG:32145",
+    // South America
+    "EPSG:31983", "EPSG:5641", "EPSG:22185", "EPSG:32719",
+    // Europe
+    "EPSG:2154", "EPSG:28992", "EPSG:2056", "EPSG:5514", "EPSG:27700", "EPSG:25832", "EPSG:3035", "EPSG:31468",
+    "EPSG:2180", "EPSG:3067", "EPSG:2100", "EPSG:3763", "EPSG:2157", "EPSG:3346", "EPSG:27572",
+    // Africa
+    "EPSG:2053", "EPSG:22391", "EPSG:21037", "EPSG:26331",
+    // Asia
+    "EPSG:6677", "EPSG:2326", "EPSG:3414", "EPSG:4547", "EPSG:5186", "EPSG:2039",
+    // Oceania
+    "EPSG:7856", "EPSG:7855", "EPSG:2193", "EPSG:3112",
+    // Polar
+    "EPSG:5042", "EPSG:32661", "EPSG:3031"};
+
+TEST_F(CrsCli, Issue13_ConversionsAgreeWithProjAtRandomPointsInFortyPlusCrs) {
+  ASSERT_GE(kProjectedCrs.size(), 40u);
+  std::vector<TableRow> table;
+  std::uint32_t seed = 13;
+  for (const auto& code : kProjectedCrs) table.push_back(compare_conversion(code, seed++));
+
+  // The table in docs/crs-acceptance.md is this test's output; it lists
+  // every CRS the test checks (GEOANCHOR_CRS_TABLE=PATH rewrites it).
+  std::ostringstream md;
+  md << "| CRS | name | method | columns | points | worst forward (m) | worst inverse (°) |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& r : table) {
+    char f[32], i[32];
+    std::snprintf(f, sizeof f, "%.1e", r.forward_m);
+    std::snprintf(i, sizeof i, "%.1e", r.inverse_deg);
+    md << "| " << r.code << " | " << r.name << " | " << r.method << " | " << r.units << " | " << r.points << " | " << f
+       << " | " << i << " |\n";
+  }
+  if (const char* out = std::getenv("GEOANCHOR_CRS_TABLE")) std::ofstream(out) << md.str();
+  const std::string doc = slurp(fs::path(GEOANCHOR_SOURCE_DIR) / "docs" / "crs-acceptance.md");
+  for (const auto& r : table) EXPECT_NE(doc.find("| " + r.code + " |"), std::string::npos) << r.code << " not in docs";
+}
+
+// Datum changes: the operation PROJ chooses for the pair, applied by
+// geoanchor, agrees with PROJ's own application of it.
+TEST_F(CrsCli, Issue13_DatumChangesAndCompoundHeightsAgreeWithProj) {
+  struct Case {
+    std::string from, to;
+    double lon, lat;  // a point inside both areas, degrees
+    bool height;
+  };
+  const std::vector<Case> cases = {
+      {"EPSG:4283", "EPSG:7844", 151.2, -33.9, false},            // GDA94 → GDA2020 (Helmert)
+      {"EPSG:4979", "EPSG:4326+5773", 8.6, 50.1, true},           // WGS 84 → EGM96 heights (geoid grid)
+      {"EPSG:4979", "EPSG:32632+5773", 9.2, 47.4, true},          // and projected
+      {"EPSG:7843", "EPSG:7912@2024.3", 151.2, -33.9, true},      // GDA2020 → ITRF2014 at the target epoch
+  };
+  for (const auto& c : cases) {
+    const std::string to_def = c.to.substr(0, c.to.find('@'));
+    const Axes in = columns_of(proj_, c.from), out = columns_of(proj_, to_def);
+    std::ostringstream csv;
+    csv << "id";
+    for (const auto& n : in.names) csv << "," << n;
+    csv << "\n";
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> jitter(-0.2, 0.2), hh(0.0, 500.0);
+    std::vector<std::array<double, 3>> pts;
+    for (int i = 0; i < 50; ++i) {
+      pts.push_back({c.lon + jitter(rng), c.lat + jitter(rng), hh(rng)});
+      csv << "P" << i;
+      for (std::size_t k = 0; k < in.names.size(); ++k) csv << "," << fmt(pts.back()[k]);
+      csv << "\n";
+    }
+    write("d.csv", csv.str());
+    const Csv got = convert("d.csv", c.from, c.to);
+    Pj op = proj_.op(c.from, to_def);
+    ASSERT_TRUE(op) << c.from << " -> " << c.to;
+    const double t = c.to.find('@') != std::string::npos ? std::stod(c.to.substr(c.to.find('@') + 1)) : HUGE_VAL;
+    WorstCase worst;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      PJ_COORD r = proj_trans(op.get(), PJ_FWD, proj_coord(pts[i][0], pts[i][1], in.names.size() > 2 ? pts[i][2] : 0, t));
+      double d = std::numeric_limits<double>::quiet_NaN();
+      if (i < got.rows.size()) {
+        d = 0;
+        const double ref[3] = {r.xyz.x, r.xyz.y, r.xyz.z};
+        for (std::size_t k = 0; k < out.names.size(); ++k) {
+          const auto v = parse_finite_double(got.rows[i][got.col(out.names[k])]);
+          const bool angular = out.geographic && k < 2;
+          // Angles in degrees are held to 1e-9°, lengths to 1e-6 m: both as a ratio to the tolerance.
+          const double diff = v ? std::abs(*v - ref[k]) * (angular ? 1.0 / kVsProjTol_deg : out.to_si[k] / kVsProjTol_m)
+                                : std::numeric_limits<double>::quiet_NaN();
+          d = testing::nan_max(d, diff);
+        }
+      }
+      worst.add(d, i);
+    }
+    EXPECT_WORST_WITHIN(worst, 1.0) << c.from << " -> " << c.to << " (ratio to the tolerance)";
+  }
+}
+
+// The four NTv2 grids of Debian's proj-data, through the CRS pairs whose
+// EPSG operation uses them, against PROJ's hgridshift on the grid file
+// itself (CHENYX06a.gsb is found although PROJ's database spells it
+// CHENyx06a.gsb).
+TEST_F(CrsCli, Issue13_NtV2GridsAgreeWithProjHgridshift) {
+  struct Case {
+    std::string from, to, grid;
+    double lon, lat, spread;  // degrees
+  };
+  const std::vector<Case> cases = {
+      {"EPSG:4272", "EPSG:4167", "nzgd2kgrid0005.gsb", 174.8, -41.3, 1.0},  // NZGD49 → NZGD2000
+      {"EPSG:4275", "EPSG:4171", "ntf_r93.gsb", 2.35, 48.85, 1.0},          // NTF → RGF93 v1
+      {"EPSG:4314", "EPSG:4258", "BETA2007.gsb", 9.7, 52.8, 0.5},           // DHDN → ETRS89, Niedersachsen
+  };
+  for (const auto& c : cases) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> j(-c.spread, c.spread);
+    std::ostringstream csv;
+    csv << "id,lat_deg,lon_deg\n";
+    std::vector<std::array<double, 2>> pts;
+    for (int i = 0; i < 50; ++i) {
+      pts.push_back({c.lon + j(rng), c.lat + j(rng)});
+      csv << "P" << i << "," << fmt(pts.back()[1]) << "," << fmt(pts.back()[0]) << "\n";
+    }
+    write("g.csv", csv.str());
+    const Csv got = convert("g.csv", c.from, c.to);
+    const std::string pipeline = "+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=hgridshift "
+                                 "+grids=/usr/share/proj/" + c.grid + " +step +proj=unitconvert +xy_in=rad +xy_out=deg";
+    Pj op(proj_create(proj_.ctx(), pipeline.c_str()));
+    ASSERT_TRUE(op) << pipeline;
+    WorstCase worst;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      PJ_COORD r = proj_trans(op.get(), PJ_FWD, proj_coord(pts[i][0], pts[i][1], 0, 0));
+      double d = std::numeric_limits<double>::quiet_NaN();
+      if (i < got.rows.size()) {
+        const auto lat = parse_finite_double(got.rows[i][got.col("lat_deg")]);
+        const auto lon = parse_finite_double(got.rows[i][got.col("lon_deg")]);
+        // Degrees to metres on the ground (1° of latitude ≈ 111 km: an upper bound for both).
+        if (lat && lon) d = testing::nan_max(std::abs(*lat - r.lp.phi), std::abs(*lon - r.lp.lam)) * 111320.0;
+      }
+      worst.add(d, i);
+    }
+    EXPECT_WORST_WITHIN(worst, kVsProjTol_m) << c.grid;
+  }
+  // LV03 → LV95: somerc, CHENYX06a, somerc.
+  write("ch.csv", "id,easting_m,northing_m\nBE,600000,200000\nZH,683000,247000\n");
+  const Csv got = convert("ch.csv", "EPSG:21781", "EPSG:2056");
+  Pj op(proj_create(proj_.ctx(),
+                    "+proj=pipeline +step +inv +proj=somerc +lat_0=46.9524055555556 +lon_0=7.43958333333333 +k_0=1 "
+                    "+x_0=600000 +y_0=200000 +ellps=bessel +step +proj=hgridshift +grids=/usr/share/proj/CHENYX06a.gsb "
+                    "+step +proj=somerc +lat_0=46.9524055555556 +lon_0=7.43958333333333 +k_0=1 +x_0=2600000 "
+                    "+y_0=1200000 +ellps=bessel"));
+  ASSERT_TRUE(op);
+  const double in[2][2] = {{600000, 200000}, {683000, 247000}};
+  WorstCase worst;
+  for (std::size_t i = 0; i < 2; ++i) {
+    PJ_COORD r = proj_trans(op.get(), PJ_FWD, proj_coord(in[i][0], in[i][1], 0, 0));
+    double d = std::numeric_limits<double>::quiet_NaN();
+    if (i < got.rows.size()) {
+      const auto e = parse_finite_double(got.rows[i][got.col("easting_m")]);
+      const auto n = parse_finite_double(got.rows[i][got.col("northing_m")]);
+      if (e && n) d = testing::nan_max(std::abs(*e - r.xy.x), std::abs(*n - r.xy.y));
+    }
+    worst.add(d, i);
+  }
+  EXPECT_WORST_WITHIN(worst, kVsProjTol_m) << "CHENYX06a";
+  const auto side = nlohmann::json::parse(slurp(path("out_ch.csv.geoanchor.json")));
+  const auto& grids = side["operation"]["candidates"][0]["grids"];
+  ASSERT_EQ(grids.size(), 1u);
+  EXPECT_EQ(grids[0]["path"], "/usr/share/proj/CHENYX06a.gsb");
+  EXPECT_EQ(grids[0]["sha256"].get<std::string>().size(), 64u);
+}
+
+// Outside a grid: refused, naming the grid and the point; nothing written.
+TEST_F(CrsCli, Issue13_PointOutsideItsGridIsRefusedByName) {
+  write("far.csv", "id,lat_deg,lon_deg\nOK,-41.3,174.8\nFAR,-30.0,160.0\n");
+  const RunResult r = run("convert '" + path("far.csv").string() + "' --crs EPSG:4272 --to-crs EPSG:4167 -o '" +
+                          path("o.csv").string() + "'");
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("far.csv:3"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("nzgd2kgrid0005"), std::string::npos) << r.err;
+  EXPECT_EQ(leftovers({"far.csv"}), std::vector<std::string>{});
+}
+
+struct BadCase {
+  const char* name;
+  std::string header_and_rows;
+  std::string args;
+  int exit_code;
+  std::vector<std::string> message;  // every piece must be in the error
+};
+
+TEST_F(CrsCli, Issue13_BadInputIsRefusedByNameWithNoOutput) {
+  const std::vector<BadCase> cases = {
+      {"unknown code", "id,lat_deg,lon_deg\nA,1,2\n", "--crs EPSG:999999 --to-crs EPSG:4326", 3, {"--crs", "EPSG:999999"}},
+      {"unparsable WKT", "id,lat_deg,lon_deg\nA,1,2\n", "--crs 'GEOGCRS[\"x\",DATUM[' --to-crs EPSG:4326", 3,
+       {"--crs", "GEOGCRS"}},
+      {"feet header in metres", "id,easting_m,northing_m\nA,1,2\n", "--crs EPSG:2236 --to-crs EPSG:4269", 3,
+       {"easting_m", "easting_ftus", "EPSG:2236"}},
+      {"lat/lon for a projected CRS", "id,lat_deg,lon_deg\nA,1,2\n", "--crs EPSG:2236 --to-crs EPSG:4269", 3,
+       {"lat_deg", "EPSG:2236"}},
+      {"ensemble where the realization matters", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n",
+       "--crs EPSG:4937 --to-crs 'EPSG:7912@2024.5'", 3, {"E_CRS_ENSEMBLE", "ETRS89", "European Terrestrial Reference Frame 2000"}},
+      {"ambiguous frame name", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n", "--crs ETRS89 --to-crs EPSG:4979", 3,
+       {"E_CRS_ENSEMBLE", "ETRF2000"}},
+      {"missing grid", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n", "--crs EPSG:4979 --to-crs EPSG:4326+3855", 3,
+       {"E_CRS_GRID_MISSING", "us_nga_egm08_25.tif", "/usr/share/proj"}},
+      {"dynamic CRS without epoch", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n", "--crs ITRF2014 --to-crs EPSG:7843", 3,
+       {"E_EPOCH_MISSING", "ITRF2014@2024.5"}},
+      {"epoch on a static CRS", "id,lat_deg,lon_deg\nA,-33,151\n", "--crs EPSG:7844@2020.0 --to-crs EPSG:7856", 3,
+       {"E_CRS_EPOCH", "static"}},
+      {"only a ballpark operation", "id,lat_deg,lon_deg\nA,45,-100\n", "--crs EPSG:4267 --to-crs EPSG:4258", 3,
+       {"E_CRS_NO_OPERATION", "ballpark"}},
+      {"not a number", "id,lat_deg,lon_deg\nA,abc,2\n", "--crs EPSG:4326 --to-crs EPSG:32631", 3, {"bad.csv:2", "lat_deg", "abc"}},
+      {"3-D output without input heights", "id,lat_deg,lon_deg\nA,1,2\n", "--crs EPSG:4326 --to-crs EPSG:4979", 2,
+       {"EPSG:4979", "height"}},
+      {"orthometric heights without a vertical CRS", "id,lat_deg,lon_deg,H_m\nA,1,2,3\n", "--crs EPSG:4326 --to-crs EPSG:4979", 3,
+       {"H_m", "compound"}},
+      {"a flag the CRS already says", "id,lat_deg,lon_deg\nA,1,2\n", "--crs EPSG:4326 --to-crs EPSG:32631 --ellipsoid GRS80", 2,
+       {"--ellipsoid"}},
+      {"PROJ string without +type=crs", "id,lat_deg,lon_deg\nA,1,2\n", "--crs '+proj=utm +zone=31' --to-crs EPSG:4326", 3,
+       {"+type=crs"}},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    write("bad.csv", c.header_and_rows);
+    const RunResult r = run("convert '" + path("bad.csv").string() + "' " + c.args + " -o '" + path("o.csv").string() + "'");
+    EXPECT_EQ(r.exit_code, c.exit_code) << r.err;
+    for (const auto& piece : c.message) EXPECT_NE(r.err.find(piece), std::string::npos) << piece << " in: " << r.err;
+    EXPECT_EQ(leftovers({"bad.csv"}), std::vector<std::string>{});
+  }
+}
+
+// Frame names: case-insensitive, the usual aliases, mapped to PROJ's CRS of
+// the frame; the catalog frame of an EPSG CRS is named.
+TEST_F(CrsCli, Issue13_CrsCommandReportsWhatItUnderstood) {
+  const RunResult a = run("crs itrf14@2024.5 --json");
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const auto j = nlohmann::json::parse(a.out);
+  EXPECT_EQ(j["schema"], "geoanchor.crs/1");
+  EXPECT_EQ(j["identifier"], "EPSG:7912");
+  EXPECT_EQ(j["catalog_frame"], "ITRF2014");
+  EXPECT_EQ(j["needs_epoch"], true);
+  EXPECT_EQ(j["coordinate_epoch"], 2024.5);
+
+  const RunResult b = run("crs EPSG:7844 --json");
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  const auto k = nlohmann::json::parse(b.out);
+  EXPECT_EQ(k["catalog_frame"], "GDA2020");
+  EXPECT_EQ(k["needs_epoch"], false);
+  EXPECT_EQ(k["ellipsoid"]["name"], "GRS 1980");
+
+  const RunResult c = run("crs EPSG:2236 --json");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const auto f = nlohmann::json::parse(c.out);
+  EXPECT_EQ(f["columns"], nlohmann::json::array({"easting_ftus", "northing_ftus"}));
+  EXPECT_EQ(f["axes"][0]["unit"], "US survey foot");
+  EXPECT_EQ(f["projection"]["method"], "Transverse Mercator");
+  // The WKT2 it writes is read back by PROJ as the same CRS.
+  Pj original = proj_.crs("EPSG:2236");
+  Pj back(proj_create(proj_.ctx(), f["wkt2"].get<std::string>().c_str()));
+  ASSERT_TRUE(back);
+  EXPECT_TRUE(proj_is_equivalent_to(original.get(), back.get(), PJ_COMP_EQUIVALENT));
+
+  const RunResult d = run("crs 'WGS 84 (G2139)'");
+  EXPECT_EQ(d.exit_code, 0) << d.err;
+  EXPECT_NE(d.out.find("World Geodetic System 1984 (G2139)"), std::string::npos) << d.out;
+  const RunResult e = run("crs WGS84");
+  EXPECT_EQ(e.exit_code, 3);
+  EXPECT_NE(e.err.find("WGS84(G2139)"), std::string::npos) << e.err;
+  const RunResult g = run("crs 'NAD83(CSRS)'");
+  EXPECT_EQ(g.exit_code, 3);
+  EXPECT_NE(g.err.find("NAD83(CSRSv8)"), std::string::npos) << g.err;
+}
+
+// Japan's plane zones are X north, Y east: "easting" is the axis PROJ's
+// visualisation order puts first, with the CRS's own numbers.
+TEST_F(CrsCli, Issue13_AxisOrderFollowsProjsVisualisationOrder) {
+  write("jp.csv", "id,lat_deg,lon_deg\nTokyo,35.68,139.77\n");
+  const Csv got = convert("jp.csv", "EPSG:6668", "EPSG:6677");
+  ASSERT_EQ(got.header, (std::vector<std::string>{"id", "easting_m", "northing_m"}));
+  Pj op = proj_.op("EPSG:6668", "EPSG:6677");
+  PJ_COORD r = proj_trans(op.get(), PJ_FWD, proj_coord(139.77, 35.68, 0, 0));
+  ASSERT_EQ(got.rows.size(), 1u);
+  EXPECT_NEAR(*parse_finite_double(got.rows[0][1]), r.xy.x, kVsProjTol_m);
+  EXPECT_NEAR(*parse_finite_double(got.rows[0][2]), r.xy.y, kVsProjTol_m);
+  // The first axis of EPSG:6677 as written is X (north): the visualisation order is not the CRS's.
+  Pj c = proj_.crs("EPSG:6677");
+  Pj cs(proj_crs_get_coordinate_system(proj_.ctx(), c.get()));
+  const char* dir = nullptr;
+  proj_cs_get_axis_info(proj_.ctx(), cs.get(), 0, nullptr, nullptr, &dir, nullptr, nullptr, nullptr, nullptr);
+  EXPECT_STREQ(dir, "north");
+}
+
+}  // namespace
+}  // namespace geoanchor
