@@ -27,6 +27,16 @@ using nlohmann::json;
 
 constexpr const char* kVelocityColumns[3] = {"vx_m_per_year", "vy_m_per_year", "vz_m_per_year"};
 
+// The plates of a plate motion model, for messages: all of them, since
+// geoanchor does not know which plate the points are on.
+std::string plate_list(const std::string& model) {
+  std::string list;
+  for (const auto& m : geodesy::plate_motion_models()) {
+    if (m.frame == model) list += (list.empty() ? "" : ", ") + m.plate;
+  }
+  return (list.empty() ? std::string("none") : list) + " in the " + model + " model";
+}
+
 }  // namespace
 
 CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
@@ -37,7 +47,9 @@ CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
   cmd->add_option("--to", o.to, "Frame and epoch of the output, e.g. ITRF2020@2024.5 (epoch default: --from's)")->required();
   cmd->add_option("--plate", o.plate, "Plate whose motion carries the epoch change when there are no velocity columns (EURA, NOAM, AUST, ...)");
   cmd->add_option("--plate-model", o.plate_model, "ITRF2020 (ITRF2020-PMM, default) | ITRF2014 (ITRF2014-PMM)");
-  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic columns (default GRS80, the ITRF convention)");
+  cmd->add_option("--ellipsoid", o.ellipsoid,
+                  "Ellipsoid of geodetic columns (default: each frame's own, GRS80 for ITRF, ETRF, NAD83, GDA; WGS84 "
+                  "for WGS 84); one that contradicts a frame is refused");
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")->check(integer_range(0, 15));
   cmd->add_option("--geoid", o.geoid, "Geoid model of H_m (orthometric height) columns: EGM96; H_m is written back on it");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
@@ -53,38 +65,85 @@ void run_transform(const TransformOptions& o) {
   const geodesy::Frame from = geodesy::Frame::parse(o.from, "--from");
   const geodesy::Frame to = geodesy::Frame::parse(o.to, "--to");
   const geodesy::FramePath path = geodesy::find_frame_path(from.name(), to.name(), "--from/--to");
-  if (to.epoch() && !from.epoch()) {
+  // A static (plate-fixed) frame's coordinates do not move with its plate:
+  // between it and a dynamic frame at an epoch, the published time-dependent
+  // sets are evaluated at the dynamic side's epoch, as EPSG and PROJ do
+  // (issue 13 point 4), and the static side needs no epoch. An epoch given
+  // on the static side is recorded and not used.
+  const bool from_dynamic = geodesy::is_dynamic(from), to_dynamic = geodesy::is_dynamic(to);
+  std::vector<std::string> notes;
+  std::optional<DecimalYear> from_epoch = from.epoch(), to_epoch = to.epoch();
+  if (!from_dynamic && to_dynamic && to_epoch) {
+    if (from_epoch && from_epoch->year != to_epoch->year) {
+      notes.push_back("--from " + o.from + ": " + from.name() + " is a static (plate-fixed) frame: its coordinates do "
+                      "not move with the plate, so the path is evaluated at the target epoch " +
+                      geodesy::format_decimal_year(*to_epoch) + " (EPSG's convention); the epoch " +
+                      geodesy::format_decimal_year(*from_epoch) + " is recorded, not used");
+    }
+    from_epoch = to_epoch;
+  } else if (from_dynamic && !to_dynamic && from_epoch) {
+    if (to_epoch && to_epoch->year != from_epoch->year) {
+      notes.push_back("--to " + o.to + ": " + to.name() + " is a static (plate-fixed) frame: the path is evaluated at "
+                      "the input's epoch " + geodesy::format_decimal_year(*from_epoch) + "; the epoch " +
+                      geodesy::format_decimal_year(*to_epoch) + " is recorded, not used");
+    }
+    to_epoch = from_epoch;
+  }
+  if (to_epoch && !from_epoch) {
     throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
                 "--from " + o.from + ": --to names an epoch, so the input's epoch is needed too, e.g. " + from.name() + "@2010.0");
   }
-  if (path.time_dependent() && !from.epoch()) {
+  if (path.time_dependent() && !from_epoch) {
     throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
                 "--from " + o.from + ": the transformation " + from.name() + " → " + to.name() +
-                    " is time-dependent: give the coordinates' epoch, e.g. " + from.name() + "@2010.0");
+                    " is time-dependent: give the coordinates' epoch, e.g. " + from.name() + "@2010.0" +
+                    (from_dynamic || to_dynamic ? "" : ", or the epoch of a dynamic frame on the other side"));
   }
   // A static path needs no epoch; its steps ignore the one used here.
-  const DecimalYear t_from = from.epoch().value_or(DecimalYear{2000.0});
-  const DecimalYear t_to = to.epoch().value_or(t_from);
-  const bool epochs_given = from.epoch().has_value();
+  const DecimalYear t_from = from_epoch.value_or(DecimalYear{2000.0});
+  const DecimalYear t_to = to_epoch.value_or(t_from);
+  const bool epochs_given = from_epoch.has_value();
+  // A static frame is named without an epoch: its coordinates have none.
   const auto frame_text = [&](const geodesy::Frame& f, DecimalYear t) {
-    return epochs_given ? f.name() + "@" + geodesy::format_decimal_year(t) : f.name();
+    return epochs_given && geodesy::is_dynamic(f) ? f.name() + "@" + geodesy::format_decimal_year(t) : f.name();
   };
+  if (o.plate && t_from.year == t_to.year) {
+    notes.push_back("--plate " + *o.plate + " not used: the coordinates stay at epoch " + geodesy::format_decimal_year(t_from) +
+                    (from_dynamic != to_dynamic ? " (a static frame's coordinates do not move with its plate)" : ""));
+  }
   std::optional<geodesy::PlateMotionModel> plate;
-  if (o.plate) {
+  if (o.plate) {  // checked even when not used: an unknown plate is a typo
     if (o.plate_model != "ITRF2020" && o.plate_model != "ITRF2014") {
       throw Error(ErrorKind::usage, "E_OPTION", "--plate-model " + o.plate_model + ": expected ITRF2020 or ITRF2014");
     }
     plate = geodesy::find_plate_motion_model(o.plate_model, *o.plate);
     if (!plate) {
-      std::string list;
-      for (const auto& m : geodesy::plate_motion_models()) {
-        if (m.frame == o.plate_model) list += (list.empty() ? "" : ", ") + m.plate;
-      }
-      throw Error(ErrorKind::usage, "E_OPTION",
-                  "--plate " + *o.plate + ": expected a plate of the " + o.plate_model + " plate motion model: " + list);
+      throw Error(ErrorKind::usage, "E_OPTION", "--plate " + *o.plate + ": expected a plate: " + plate_list(o.plate_model));
+    }
+    if (t_from.year == t_to.year) plate.reset();
+  }
+  // Each frame's geodetic coordinates are on its own ellipsoid; --ellipsoid
+  // may only say the same (or name one for a frame geoanchor does not know).
+  const auto from_ellipsoid = geodesy::implied_ellipsoid(from), to_ellipsoid = geodesy::implied_ellipsoid(to);
+  std::optional<geodesy::Ellipsoid> given;
+  if (o.ellipsoid) given = parse_ellipsoid(*o.ellipsoid, "--ellipsoid");
+  for (const auto& [frame, implied] : {std::pair{from, from_ellipsoid}, std::pair{to, to_ellipsoid}}) {
+    if (given && implied && !(*given == *implied)) {
+      throw Error(ErrorKind::usage, "E_ELLIPSOID",
+                  "--ellipsoid " + *o.ellipsoid + " contradicts frame " + frame.name() + ", whose coordinates are on " +
+                      implied->name() + "; drop --ellipsoid (each frame's own is used)");
     }
   }
-  const geodesy::Ellipsoid ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
+  const auto ellipsoid_of = [&](const std::optional<geodesy::Ellipsoid>& implied, const geodesy::Frame& frame,
+                                bool columns_need_ellipsoid) {
+    if (implied) return *implied;
+    if (given) return *given;
+    if (columns_need_ellipsoid) {
+      throw Error(ErrorKind::usage, "E_ELLIPSOID",
+                  "frame " + frame.name() + ": geoanchor does not know its ellipsoid; give --ellipsoid for the geodetic columns");
+    }
+    return geodesy::Ellipsoid::grs80();  // ECEF columns: not used
+  };
 
   CommandInput input(o.input);
   const bool from_stdin = input.from_stdin();
@@ -111,7 +170,8 @@ void run_transform(const TransformOptions& o) {
     throw Error(ErrorKind::usage, "E_EPOCH_PROPAGATION",
                 "--to " + o.to + ": moving coordinates from " + geodesy::format_decimal_year(t_from) + " to " +
                     geodesy::format_decimal_year(t_to) +
-                    " needs velocities (columns vx_m_per_year, vy_m_per_year, vz_m_per_year) or a plate motion model (--plate, e.g. EURA)");
+                    " needs velocities (columns vx_m_per_year, vy_m_per_year, vz_m_per_year) or a plate motion model: "
+                    "--plate PLATE, the plate the points are on (" + plate_list(o.plate_model) + ")");
   }
   if (has_velocity && plate) {
     throw Error(ErrorKind::usage, "E_OPTION", "--plate: the input has velocity columns; give one or the other");
@@ -121,13 +181,16 @@ void run_transform(const TransformOptions& o) {
   }
 
   const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
+  const bool columns_need_ellipsoid = columns.kind == io::CoordinateKind::geodetic;
+  const geodesy::Ellipsoid in_ellipsoid = ellipsoid_of(from_ellipsoid, from, columns_need_ellipsoid);
+  const geodesy::Ellipsoid out_ellipsoid = ellipsoid_of(to_ellipsoid, to, columns_need_ellipsoid);
   io::InputCoordinateFrame in_frame;
-  in_frame.ellipsoid = ellipsoid;
+  in_frame.ellipsoid = in_ellipsoid;
   in_frame.geoid = geoid;
   const io::CoordinateDecoder decoder(columns, header, in_frame, source_name);
   io::OutputCoordinateFrame out_frame;
   out_frame.kind = columns.kind == io::CoordinateKind::ecef ? io::OutputKind::ecef : io::OutputKind::geodetic;
-  out_frame.ellipsoid = ellipsoid;
+  out_frame.ellipsoid = out_ellipsoid;
   if (columns.orthometric) out_frame.geoid = geoid;  // H_m in, H_m out
   const io::NumberFormat numbers{o.precision};
   const io::CoordinateEncoder encoder(out_frame, numbers);
@@ -141,18 +204,44 @@ void run_transform(const TransformOptions& o) {
   // The path, each step's source and the stated accuracy: on standard
   // error (standard output may be the CSV), and in the sidecar.
   std::ostream& report = std::cerr;
-  report << "geoanchor transform: " << frame_text(from, t_from) << " -> " << frame_text(to, t_to) << "\n";
+  report << "geoanchor transform: " << frame_text(from, t_from) << " -> " << frame_text(to, t_to);
+  if (epochs_given && from_dynamic != to_dynamic) {
+    report << " (the published sets evaluated at " << geodesy::format_decimal_year(from_dynamic ? t_from : t_to) << ")";
+  }
+  report << "\n";
   for (const auto& st : path.steps) {
-    report << "  step " << st.from() << " -> " << st.to() << (st.reverse ? " (reverse)" : "") << ", ±"
-           << format_shortest(st.edge->accuracy_m) << " m: " << st.edge->source;
+    report << "  step " << st.from() << " -> " << st.to() << (st.reverse ? " (reverse)" : "") << ", "
+           << (st.edge->accuracy_m == 0.0 ? std::string("exact by definition (EPSG states 0 m for this defining set)")
+                                         : "±" + format_shortest(st.edge->accuracy_m) + " m")
+           << ": " << st.edge->source;
     if (!st.edge->epsg.empty()) report << " = " << st.edge->epsg << (st.edge->epsg_reversed ? " reversed" : "");
     report << "\n";
   }
+  // The epoch change's own uncertainty: the plate model's published WRMS
+  // over the years it carries the points; velocities from the input carry
+  // theirs, which the input does not give.
+  const double years = t_to.year - t_from.year;
+  const double motion_m = plate ? plate->motion_uncertainty_m(years) : 0.0;
   if (t_to.year != t_from.year) {
     report << "  epoch " << geodesy::format_decimal_year(t_from) << " -> " << geodesy::format_decimal_year(t_to) << " by "
-           << (has_velocity ? std::string("the points' velocities") : "plate " + plate->plate + " of " + plate->source) << "\n";
+           << (has_velocity ? std::string("the points' velocities") : "plate " + plate->plate + " of " + plate->source);
+    if (plate) {
+      report << ", ±" << format_fixed(motion_m, 4) << " m over " << format_shortest(std::abs(years)) << " years (WRMS "
+             << format_shortest(plate->wrms_east_mm_per_year) << " mm/yr east, " << format_shortest(plate->wrms_north_mm_per_year)
+             << " mm/yr north: " << plate->wrms_source << ")";
+    } else {
+      report << "; their uncertainty is not given in the input, so the stated accuracy covers the frame steps only";
+    }
+    report << "\n";
   }
-  report << "  stated accuracy of the path: ±" << format_fixed(path.accuracy_m(), 3) << " m (steps combined as independent)\n";
+  const double stated_m = std::hypot(path.accuracy_m(), motion_m);
+  if (stated_m == 0.0) {
+    report << "  stated accuracy of the path: 0 m, every step being a defining set (EPSG states 0 m); the "
+              "coordinates' own uncertainty is not part of it\n";
+  } else {
+    report << "  stated accuracy of the path: ±" << format_fixed(stated_m, 4) << " m (steps"
+           << (plate && t_to.year != t_from.year ? " and the plate model" : "") << " combined as independent)\n";
+  }
 
   for (const auto& c : reader.leading_comments()) out << c << '\n';
   io::write_csv_line(out, out_header);
@@ -197,7 +286,7 @@ void run_transform(const TransformOptions& o) {
     io::write_csv_line(out, fields);
     ++rows;
   }
-  std::vector<std::string> housekeeping;  // stale temporaries of killed runs removed beside the output
+  std::vector<std::string> housekeeping = notes;  // and stale temporaries of killed runs removed beside the output
   for (const auto& t : io::take_removed_stale_temporaries()) housekeeping.push_back(io::stale_temporary_warning(t));
   for (const auto& w : housekeeping) std::cerr << "geoanchor: warning: " << w << '\n';
   if (output.is_standard_output()) {
@@ -223,15 +312,18 @@ void run_transform(const TransformOptions& o) {
                    {"frame", from.name()},
                    {"epoch", epochs_given ? json(t_from.year) : json(nullptr)},
                    {"kind", std::string(io::to_string(columns.kind))},
-                   {"ellipsoid", ellipsoid.name()}};
+                   {"ellipsoid", in_ellipsoid.name()}};
   side["output"] = {{"path", o.output}, {"frame", to.name()}, {"epoch", epochs_given ? json(t_to.year) : json(nullptr)}, {"rows", rows},
-                    {"height_type", columns.orthometric ? "orthometric" : "ellipsoidal"}, {"ellipsoid", ellipsoid.name()}};
+                    {"height_type", columns.orthometric ? "orthometric" : "ellipsoidal"}, {"ellipsoid", out_ellipsoid.name()}};
   if (columns.orthometric) side["output"]["geoid_model"] = geoid->model_name();
-  side["path"] = {{"steps", steps}, {"accuracy_m", path.accuracy_m()}};
+  side["path"] = {{"steps", steps}, {"accuracy_m", path.accuracy_m()}, {"stated_accuracy_m", stated_m}};
+  if (from.epoch() && from.epoch()->year != t_from.year) side["input"]["stated_epoch"] = from.epoch()->year;
+  if (to.epoch() && to.epoch()->year != t_to.year) side["output"]["stated_epoch"] = to.epoch()->year;
   if (t_to.year != t_from.year) {
-    side["epoch_propagation"] = has_velocity ? json{{"by", "velocities"}}
-                                             : json{{"by", "plate_motion_model"}, {"plate", plate->plate},
-                                                    {"frame", plate->frame}, {"source", plate->source}};
+    side["epoch_propagation"] =
+        has_velocity ? json{{"by", "velocities"}, {"accuracy_m", nullptr}}
+                     : json{{"by", "plate_motion_model"}, {"plate", plate->plate},     {"frame", plate->frame},
+                            {"source", plate->source},    {"accuracy_m", motion_m},    {"wrms_source", plate->wrms_source}};
   }
   if (!housekeeping.empty()) side["warnings"] = housekeeping;
   publish_with_provenance(output, side.dump(2) + "\n", "the transformed rows", o.json, o.output);

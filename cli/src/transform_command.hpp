@@ -19,7 +19,7 @@ struct TransformOptions {
   std::string from, to;
   std::optional<std::string> plate;
   std::string plate_model = "ITRF2020";
-  std::string ellipsoid = "GRS80";
+  std::optional<std::string> ellipsoid;  // default: each frame's own (issue 13 point 5)
   std::optional<int> precision;
   std::optional<std::string> geoid;  // for H_m columns (read and written on the same model)
   bool overwrite = false;

@@ -73,6 +73,15 @@ std::string canonical_spelling(std::string_view typed) {
 
 }  // namespace
 
+std::optional<Ellipsoid> implied_ellipsoid(const Frame& f) {
+  const std::string& d = f.datum();
+  if (d == "WGS84") return Ellipsoid::wgs84();
+  for (std::string_view grs80 : {"ITRF", "ETRF", "ETRS", "ETRS89", "IGS", "IGb", "ATRF", "NAD83", "GDA94", "GDA2020"}) {
+    if (d == grs80) return Ellipsoid::grs80();
+  }
+  return std::nullopt;
+}
+
 DecimalYear parse_decimal_year(std::string_view text, std::string_view where) {
   const std::string_view t = trim(text);
   const auto v = parse_finite_double(t);

@@ -138,7 +138,7 @@ TEST_F(TransformCli, RefusesWhatItCannotDoAndLeavesNothing) {
       {"in.csv --from ITRF2014 --to ITRF2020", "--from ITRF2014: the transformation ITRF2014 → ITRF2020 is time-dependent", 2},
       {"in.csv --from ITRF2014@2010 --to ITRF2020@2020", "moving coordinates from 2010.0 to 2020.0 needs velocities", 2},
       {"in.csv --from ITRF2030@2010 --to ITRF2020", "frame ITRF2030 is not in geoanchor's catalog", 3},
-      {"in.csv --from ITRF2014@2010 --to ITRF2020@2020 --plate MARS", "--plate MARS: expected a plate of the ITRF2020 plate motion model: AMUR", 2},
+      {"in.csv --from ITRF2014@2010 --to ITRF2020@2020 --plate MARS", "--plate MARS: expected a plate: AMUR", 2},
       {"in.csv --from ITRF2014@2010 --to ITRF2020@2020 --plate EURA --plate-model NNR", "--plate-model NNR: expected ITRF2020 or ITRF2014", 2},
       {"partial.csv --from ITRF2014@2010 --to ITRF2020", "velocities need all three columns", 3},
   };
@@ -149,6 +149,93 @@ TEST_F(TransformCli, RefusesWhatItCannotDoAndLeavesNothing) {
     EXPECT_EQ(leftovers({"in.csv", "partial.csv"}), std::vector<std::string>{}) << c.args;
   }
   (void)in;
+}
+
+}  // namespace
+}  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// Issue 13 point 4: a static (plate-fixed) frame needs no epoch to go to a
+// dynamic frame at an epoch; the published time-dependent sets are evaluated
+// at the target epoch, as EPSG and PROJ do. Compared with PROJ's
+// proj_create_crs_to_crs on the same pair (geocentric CRSs, t = the target
+// epoch) where PROJ 9.1.1's database has the operation, and with PROJ's
+// helmert on the published parameters where it is newer (EPSG:10334).
+TEST_F(TransformCli, Issue13_StaticFramesNeedNoEpochAndAgreeWithProj) {
+  struct Case {
+    const char* from;
+    const char* to;
+    double t;
+    Eigen::Vector3d mark;
+    std::string reference;  // PROJ: "crs:SRC:DST" or a pipeline
+  };
+  // NGS, HTDP user guide table 5: ITRF2020 to NAD83(2011), coordinate frame, epoch 2010.0 (EPSG:10334).
+  const std::string epsg10334 =
+      "+proj=helmert +x=1.00390 +y=-1.90961 +z=-0.54117 +rx=0.02678138 +ry=-0.00042027 +rz=0.01093206 "
+      "+s=-0.00005109 +dx=0.00079 +dy=-0.00070 +dz=-0.00124 +drx=0.00006667 +dry=-0.00075744 +drz=-0.00005133 "
+      "+ds=-0.00007201 +t_epoch=2010.0 +convention=coordinate_frame";
+  const std::vector<Case> cases = {
+      {"GDA94", "ITRF2014@2024.3", 2024.3, {-4052051.767, 4212836.215, -2545106.023}, "crs:EPSG:4938:EPSG:7789"},
+      {"ETRF2000", "ITRF2020@2024.5", 2024.5, {4331297.0, 567555.6, 4633133.7}, "crs:EPSG:7930:EPSG:9988"},
+      {"NAD83(2011)", "ITRF2020@2024.5", 2024.5, {-1283720.0, -4726030.0, 4074910.0}, epsg10334},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(std::string(c.from) + " -> " + c.to);
+    const auto in = write("in.csv", "id,x_m,y_m,z_m\nA," + format_shortest(c.mark.x()) + "," + format_shortest(c.mark.y()) +
+                                        "," + format_shortest(c.mark.z()) + "\n");
+    const auto r = run("transform " + in.string() + " --from '" + c.from + "' --to '" + c.to + "' -o " +
+                       path("out.csv").string() + " --overwrite");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto got = read_xyz(slurp(path("out.csv")));
+    ASSERT_EQ(got.size(), 1u);
+    Eigen::Vector3d expected;
+    if (c.reference.rfind("crs:", 0) == 0) {
+      const auto rest = c.reference.substr(4);
+      const auto mid = rest.find(":EPSG");
+      const auto pj = ProjPipeline::crs_to_crs(rest.substr(0, mid), rest.substr(mid + 1));
+      expected = pj.forward(c.mark, c.t);
+    } else {
+      expected = ProjPipeline(c.reference).inverse(c.mark, c.t);  // the set is published ITRF2020 → NAD83(2011)
+    }
+    EXPECT_LT((got[0] - expected).norm(), kProjAgreement_m) << r.err;
+  }
+}
+
+// The epoch change by a plate model carries the model's uncertainty (its
+// published WRMS over the years), never ±0; the plate is never guessed.
+TEST_F(TransformCli, Issue13_PlateMotionCarriesItsUncertaintyAndNoPlateIsGuessed) {
+  const auto in = write("in.csv", marks_csv(false));
+  const auto r = run("transform " + in.string() + " --from ITRF2014@2010.0 --to ITRF2020@2024.5 --plate EURA --plate-model ITRF2014 -o " +
+                     path("out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto side = nlohmann::json::parse(slurp(path("out.csv.geoanchor.json")));
+  // Altamimi et al. (2017) Table 1, EURA: WRMS 0.23 mm/yr east, 0.19 mm/yr north, over 14.5 years.
+  const double expected = std::hypot(0.23, 0.19) * 1e-3 * 14.5;
+  EXPECT_NEAR(side["epoch_propagation"]["accuracy_m"].get<double>(), expected, 1e-12);
+  EXPECT_GT(side["path"]["stated_accuracy_m"].get<double>(), expected);
+  const auto hint = run("transform " + in.string() + " --from ITRF2014@2010.0 --to ITRF2020@2024.5");
+  EXPECT_EQ(hint.exit_code, 2);
+  EXPECT_EQ(hint.err.find("e.g."), std::string::npos) << hint.err;
+  EXPECT_NE(hint.err.find("the plate the points are on"), std::string::npos) << hint.err;
+}
+
+// Issue 13 point 5: each frame's geodetic coordinates are on its ellipsoid;
+// --ellipsoid that contradicts a frame is refused.
+TEST_F(TransformCli, Issue13_TheEllipsoidComesFromEachFrame) {
+  const auto in = write("g.csv", "id,lat_deg,lon_deg,h_m\nA,47.0,8.0,500.0\n");
+  const auto r = run("transform " + in.string() + " --from ITRF2014@2024.5 --to 'WGS84(G2139)@2024.5' -o " +
+                     path("o.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto side = nlohmann::json::parse(slurp(path("o.csv.geoanchor.json")));
+  EXPECT_EQ(side["input"]["ellipsoid"], "GRS80");
+  EXPECT_EQ(side["output"]["ellipsoid"], "WGS84");
+  const auto bad = run("transform " + in.string() + " --from ITRF2014@2024.5 --to ITRF2020@2024.5 --ellipsoid WGS84 -o " +
+                       path("b.csv").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("contradicts frame ITRF2014"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(path("b.csv")));
 }
 
 }  // namespace

@@ -202,6 +202,47 @@ TEST(Frame, Point5_IsDynamicAgreesWithProjDbForEveryCatalogFrame) {
 
 // issue 12 point 5: the refusal names where the frame was read, the frame,
 // and the form that would be accepted.
+// Issue 13 point 5: a frame implies its ellipsoid, and that is the EPSG
+// dataset's ellipsoid of the frame's datum (proj.db), for every frame of the
+// catalog and the other families Frame::parse names.
+TEST(Frame, Issue13_ImpliedEllipsoidIsProjDbsForEveryCatalogFrame) {
+  std::vector<std::string> names = catalog_frame_names();
+  for (const char* other : {"IGS14", "IGb14", "ATRF2014", "WGS84", "NAD83(PA11)", "ETRS89"}) names.emplace_back(other);
+  PJ_CONTEXT* ctx = proj_context_create();
+  proj_log_level(ctx, PJ_LOG_NONE);
+  const PJ_TYPE types[] = {PJ_TYPE_GEODETIC_REFERENCE_FRAME, PJ_TYPE_DYNAMIC_GEODETIC_REFERENCE_FRAME,
+                           PJ_TYPE_DATUM_ENSEMBLE};
+  int checked = 0;
+  for (const auto& name : names) {
+    const auto implied = implied_ellipsoid(Frame::parse(name, "test"));
+    ASSERT_TRUE(implied.has_value()) << name;
+    std::string epsg = epsg_spelling(name);
+    if (name == "ETRS89") epsg = "European Terrestrial Reference System 1989 ensemble";
+    PJ_OBJ_LIST* found = proj_create_from_name(ctx, "EPSG", epsg.c_str(), types, 3, 0, 0, nullptr);
+    if (found && proj_list_get_count(found) == 1) {
+      PJ* datum = proj_list_get(ctx, found, 0);
+      if (proj_get_type(datum) == PJ_TYPE_DATUM_ENSEMBLE) {  // its members share one ellipsoid
+        PJ* member = proj_datum_ensemble_get_member(ctx, datum, 0);
+        proj_destroy(datum);
+        datum = member;
+      }
+      PJ* ell = proj_get_ellipsoid(ctx, datum);
+      double a = 0, b = 0, rf = 0;
+      int computed = 0;
+      ASSERT_TRUE(ell && proj_ellipsoid_get_parameters(ctx, ell, &a, &b, &computed, &rf)) << name;
+      EXPECT_EQ(a, implied->a_m()) << name;
+      EXPECT_EQ(rf, implied->rf()) << name;
+      proj_destroy(ell);
+      proj_destroy(datum);
+      ++checked;
+    }
+    if (found) proj_list_destroy(found);
+  }
+  proj_context_destroy(ctx);
+  EXPECT_GE(checked, 40);  // the rest are newer than PROJ 9.1.1's database (ETRF2020, NAD83(CSRS)v8, WGS 84 (G2296))
+  EXPECT_FALSE(implied_ellipsoid(Frame::parse("Tokyo", "test")).has_value());
+}
+
 TEST(Frame, Point5_DynamicFrameWithoutEpochIsRefusedNamingWhereAndTheForm) {
   try {
     require_epoch_if_dynamic(Frame::parse("ITRF2014", "c.csv"), "c.csv: comment 'source_frame = ITRF2014'");

@@ -14,6 +14,7 @@
 #include <string>
 #include <string_view>
 
+#include "geoanchor/geodesy/ellipsoid.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/units.hpp"
 
@@ -57,6 +58,14 @@ class Frame {
 // any name geoanchor does not know. tests/geodesy/frame_units_test.cpp
 // checks the rule against proj.db for every frame the catalog knows.
 bool is_dynamic(const Frame& f);
+
+// The ellipsoid a frame's geodetic coordinates are on, as its producer and
+// EPSG define it: WGS 84 for WGS84 and its realizations; GRS 80 for the ITRF
+// and IGS frames (the IERS convention), ETRS89 and the ETRFs, NAD83 and its
+// realizations, GDA94, GDA2020 and ATRF2014. nullopt for a frame geoanchor
+// does not know. tests/geodesy/frame_units_test.cpp checks it against
+// proj.db for every frame of the catalog.
+std::optional<Ellipsoid> implied_ellipsoid(const Frame& f);
 
 // Throws geoanchor::Error (`kind`, E_EPOCH_MISSING) when `f` is dynamic and
 // names no coordinate epoch: "WHERE: frame ITRF2014 is dynamic …; give

@@ -57,6 +57,17 @@ struct PlateMotionModel {
   Eigen::Vector3d omega_mas_per_year = Eigen::Vector3d::Zero();
   Eigen::Vector3d origin_rate_bias_m_per_year = Eigen::Vector3d::Zero();
   std::string source;
+  // How well the rigid rotation represents the plate's sites: the published
+  // WRMS of the residual horizontal velocities, east and north (mm/yr), and
+  // where it is published.
+  double wrms_east_mm_per_year = 0.0;
+  double wrms_north_mm_per_year = 0.0;
+  std::string wrms_source;
+
+  // The model's uncertainty for a point carried `years` by it: the
+  // horizontal WRMS over that time, metres (issue 13: an epoch change by a
+  // plate model is never stated as exact).
+  double motion_uncertainty_m(double years) const;
 
   // The plate's velocity at x, in m/yr.
   Eigen::Vector3d velocity_m_per_year(const EcefPosition& x) const;
