@@ -370,9 +370,11 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
     op.info.points += n;
     m.infos.front().points += n;
   } else {
+    // Each point's operation, then one batch per operation, then the points
+    // an operation could not move (outside its grid) one by one.
+    std::vector<std::size_t> use(n);
     for (std::size_t i = 0; i < n; ++i) {
-      const double plon = lon.empty() ? 0.0 : lon[i], plat = lat.empty() ? 0.0 : lat[i];
-      Impl::Choice choice = m.choose(plon, plat, 0);
+      const Impl::Choice choice = m.choose(lon.empty() ? 0.0 : lon[i], lat.empty() ? 0.0 : lat[i], 0);
       if (choice.missing_better && !m.options.allow_fallback) {
         const auto& op = m.all[*choice.missing_better];
         std::vector<std::string> grids;
@@ -387,22 +389,47 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
                         " (network access off); --allow-fallback uses the next operation instead");
       }
       if (!choice.use) fail_point(i, m.all.front(), "no operation's area of use holds it; the best-ranked is");
-      while (true) {
-        const std::size_t k = *choice.use;
+      use[i] = *choice.use;
+    }
+    std::vector<std::size_t> members;
+    std::vector<double> x, y, z;
+    for (std::size_t k = 0; k < m.all.size(); ++k) {
+      members.clear();
+      for (std::size_t i = 0; i < n; ++i) {
+        if (use[i] == k) members.push_back(i);
+      }
+      if (members.empty()) continue;
+      x.resize(members.size());
+      y.resize(members.size());
+      z.assign(members.size(), 0.0);
+      for (std::size_t j = 0; j < members.size(); ++j) {
+        x[j] = in_a[members[j]];
+        y[j] = in_b[members[j]];
+        if (c) z[j] = in_c[members[j]];
+      }
+      run(m.all[k], x.data(), y.data(), c ? z.data() : nullptr, members.size());
+      for (std::size_t j = 0; j < members.size(); ++j) {
+        a[members[j]] = x[j];
+        b[members[j]] = y[j];
+        if (c) c[members[j]] = z[j];
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      std::size_t k = use[i];
+      while (!finite(i)) {
+        if (!m.options.allow_fallback) fail_point(i, m.all[k], "PROJ cannot move it with");
+        if (m.fallbacks++ == 0) m.first_fallback = point_name(i);
+        const Impl::Choice next = m.choose(lon.empty() ? 0.0 : lon[i], lat.empty() ? 0.0 : lat[i], k + 1);
+        if (!next.use) fail_point(i, m.all[k], "PROJ cannot move it with");
+        k = *next.use;
         a[i] = in_a[i];
         b[i] = in_b[i];
         if (c) c[i] = in_c[i];
         run(m.all[k], a + i, b + i, c ? c + i : nullptr, 1);
-        if (finite(i)) {
-          m.all[k].info.points += 1;
-          m.infos[k].points += 1;
-          break;
-        }
-        if (!m.options.allow_fallback) fail_point(i, m.all[k], "PROJ cannot move it with");
-        if (m.fallbacks++ == 0) m.first_fallback = point_name(i);
-        choice = m.choose(plon, plat, k + 1);
-        if (!choice.use) fail_point(i, m.all[k], "PROJ cannot move it with");
       }
+      use[i] = k;
+      m.all[k].info.points += 1;
+      m.infos[k].points += 1;
     }
   }
   if (m.target_is_lonlat && !m.source_is_lonlat && lon.empty()) {
