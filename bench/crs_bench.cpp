@@ -61,15 +61,17 @@ struct Pair {
   const char* what;
 };
 
-// Points inside the target CRS's area of use (the smaller one here), in
+// Points inside both CRSs' areas of use (the smaller of the two boxes), in
 // the source CRS's coordinates, visualisation order.
-void make_points(const char* crs, const char* area_crs, std::vector<double>& a, std::vector<double>& b) {
+void make_points(const char* crs, const char* other_crs, std::vector<double>& a, std::vector<double>& b) {
   PJ_CONTEXT* ctx = proj_context_create();
   PJ* c = proj_create(ctx, crs);
-  PJ* area = proj_create(ctx, area_crs);
-  double w = 0, s = 0, e = 0, n = 0;
-  proj_get_area_of_use(ctx, area, &w, &s, &e, &n, nullptr);
-  proj_destroy(area);
+  PJ* other = proj_create(ctx, other_crs);
+  double w = 0, s = 0, e = 0, n = 0, w2 = 0, s2 = 0, e2 = 0, n2 = 0;
+  proj_get_area_of_use(ctx, c, &w, &s, &e, &n, nullptr);
+  proj_get_area_of_use(ctx, other, &w2, &s2, &e2, &n2, nullptr);
+  if ((e2 - w2) * (n2 - s2) < (e - w) * (n - s)) w = w2, s = s2, e = e2, n = n2;
+  proj_destroy(other);
   const char* opts[] = {"ALLOW_BALLPARK=YES", nullptr};
   PJ* geog = proj_create(ctx, "OGC:CRS84");
   PJ* raw = proj_create_crs_to_crs_from_pj(ctx, geog, c, nullptr, opts);

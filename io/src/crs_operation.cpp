@@ -165,6 +165,8 @@ struct CrsOperation::Impl {
     std::optional<std::size_t> use, missing_better;
   };
   Choice choose(double lon, double lat, std::size_t from) const;
+  bool batch_inside_area(const std::vector<double>& a, const std::vector<double>& b) const;
+  std::optional<std::size_t> uniform_choice(const std::vector<double>& lon, const std::vector<double>& lat) const;
 };
 
 CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_view where, Options options)
@@ -315,6 +317,68 @@ CrsOperation::Impl::Choice CrsOperation::Impl::choose(double lon, double lat, st
   return choice;
 }
 
+// Whether every point of a batch lies inside the source CRS's area of use,
+// decided from the boundary of the batch's bounding box in the source plane:
+// a projection maps the box's inside within the curve its boundary maps to,
+// so a boundary that maps inside the (convex) longitude/latitude box keeps
+// every point inside. The boundary is sampled densely and held a small
+// margin inside the box, for the curve between samples; a batch that fails
+// the test is checked point by point.
+bool CrsOperation::Impl::batch_inside_area(const std::vector<double>& a, const std::vector<double>& b) const {
+  const Impl& m = *this;
+  constexpr int kSamplesPerEdge = 32;
+  constexpr double kMargin = 1e-4;  // of the area's span, degrees
+  if (!m.source_area.area || a.empty()) return false;
+  const CrsArea& area = *m.source_area.area;
+  if (area.west_deg > area.east_deg) return false;  // across the antimeridian: point by point
+  double amin = a[0], amax = a[0], bmin = b[0], bmax = b[0];
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!std::isfinite(a[i]) || !std::isfinite(b[i])) return false;
+    amin = std::min(amin, a[i]), amax = std::max(amax, a[i]);
+    bmin = std::min(bmin, b[i]), bmax = std::max(bmax, b[i]);
+  }
+  std::vector<double> x, y;
+  for (int k = 0; k <= kSamplesPerEdge; ++k) {
+    const double f = static_cast<double>(k) / kSamplesPerEdge;
+    const double xa = amin + f * (amax - amin), yb = bmin + f * (bmax - bmin);
+    x.insert(x.end(), {xa, xa, amin, amax});
+    y.insert(y.end(), {bmin, bmax, yb, yb});
+  }
+  proj_trans_generic(m.to_lonlat.get(), PJ_FWD, x.data(), sizeof(double), x.size(), y.data(), sizeof(double), y.size(),
+                     nullptr, 0, 0, nullptr, 0, 0);
+  const double mw = kMargin * (area.east_deg - area.west_deg), mn = kMargin * (area.north_deg - area.south_deg);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (!(x[i] >= area.west_deg + mw && x[i] <= area.east_deg - mw && y[i] >= area.south_deg + mn &&
+          y[i] <= area.north_deg - mn)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// The one candidate every point of a batch takes, when each candidate's
+// area holds the batch's longitude/latitude box whole or not at all (and no
+// better candidate with a missing grid touches it); nullopt otherwise.
+std::optional<std::size_t> CrsOperation::Impl::uniform_choice(const std::vector<double>& lon,
+                                                                const std::vector<double>& lat) const {
+  double w = lon[0], e = lon[0], s = lat[0], nn = lat[0];
+  for (std::size_t i = 0; i < lon.size(); ++i) {
+    if (!std::isfinite(lon[i]) || !std::isfinite(lat[i])) return std::nullopt;
+    w = std::min(w, lon[i]), e = std::max(e, lon[i]), s = std::min(s, lat[i]), nn = std::max(nn, lat[i]);
+  }
+  for (const auto& c : all) {
+    if (!c.info.area) continue;
+    const CrsArea& a = *c.info.area;
+    if (a.west_deg > a.east_deg) return std::nullopt;  // across the antimeridian: point by point
+    const bool whole = w >= a.west_deg && e <= a.east_deg && s >= a.south_deg && nn <= a.north_deg;
+    const bool none = e < a.west_deg || w > a.east_deg || nn < a.south_deg || s > a.north_deg;
+    if (!whole && !none) return std::nullopt;
+  }
+  const Choice choice = choose(w, s, 0);
+  if (choice.missing_better && !options.allow_fallback) return std::nullopt;  // the per-point path names the point
+  return choice.use;
+}
+
 void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
                              const std::function<std::string(std::size_t)>& point_name) {
   Impl& m = *impl_;
@@ -331,6 +395,8 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   if (m.source_is_lonlat) {
     lon = in_a;
     lat = in_b;
+  } else if (m.to_lonlat && m.all.size() == 1 && m.batch_inside_area(in_a, in_b)) {
+    m.source_area.seen += n;  // the whole batch lies inside: no point needs its own inverse
   } else if (m.to_lonlat) {
     lon = in_a;
     lat = in_b;
@@ -373,7 +439,11 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
     // Each point's operation, then one batch per operation, then the points
     // an operation could not move (outside its grid) one by one.
     std::vector<std::size_t> use(n);
-    for (std::size_t i = 0; i < n; ++i) {
+    // A batch whose longitude/latitude box every candidate's area holds
+    // whole or misses whole has one choice for all its points.
+    const std::optional<std::size_t> uniform = lon.empty() ? std::nullopt : m.uniform_choice(lon, lat);
+    if (uniform) std::fill(use.begin(), use.end(), *uniform);
+    for (std::size_t i = 0; i < n && !uniform; ++i) {
       const Impl::Choice choice = m.choose(lon.empty() ? 0.0 : lon[i], lat.empty() ? 0.0 : lat[i], 0);
       if (choice.missing_better && !m.options.allow_fallback) {
         const auto& op = m.all[*choice.missing_better];
@@ -393,7 +463,8 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
     }
     std::vector<std::size_t> members;
     std::vector<double> x, y, z;
-    for (std::size_t k = 0; k < m.all.size(); ++k) {
+    if (uniform) run(m.all[*uniform], a, b, c, n);  // in place: a, b, c still hold the input
+    for (std::size_t k = 0; k < m.all.size() && !uniform; ++k) {
       members.clear();
       for (std::size_t i = 0; i < n; ++i) {
         if (use[i] == k) members.push_back(i);

@@ -531,3 +531,34 @@ TEST_F(CrsCli, Issue13_AxisOrderFollowsProjsVisualisationOrder) {
 
 }  // namespace
 }  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// Points outside the source CRS's area of use are converted with one
+// warning, counted and naming the first, in the sidecar too; points inside
+// give none (whether the batch is decided at once or point by point).
+TEST_F(CrsCli, Issue13_PointsOutsideTheAreaOfUseAreWarnedAndRecorded) {
+  // Lambert-93 covers France (longitude -9.86° to 10.38°, latitude 41.15° to 51.56°):
+  // (3000000, 6600000) lies near 15.6°E, outside.
+  write("l93.csv", "id,easting_m,northing_m\nPARIS,652000,6862000\nLYON,842000,6519000\nFAR,3000000,6600000\n");
+  const Csv got = convert("l93.csv", "EPSG:2154", "EPSG:3035");
+  EXPECT_EQ(got.rows.size(), 3u);
+  const auto side = nlohmann::json::parse(slurp(path("out_l93.csv.geoanchor.json")));
+  std::string warning;
+  for (const auto& w : side["warnings"]) {
+    if (w.get<std::string>().find("outside the area of use") != std::string::npos) warning = w;
+  }
+  EXPECT_NE(warning.find("1 of 3 points"), std::string::npos) << side["warnings"].dump();
+  EXPECT_NE(warning.find("l93.csv:4"), std::string::npos) << warning;
+
+  write("in.csv", "id,easting_m,northing_m\nPARIS,652000,6862000\nLYON,842000,6519000\n");
+  convert("in.csv", "EPSG:2154", "EPSG:3035");
+  const auto inside = nlohmann::json::parse(slurp(path("out_in.csv.geoanchor.json")));
+  for (const auto& w : inside["warnings"]) {
+    EXPECT_EQ(w.get<std::string>().find("outside the area of use"), std::string::npos) << w;
+  }
+}
+
+}  // namespace
+}  // namespace geoanchor
