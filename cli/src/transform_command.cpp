@@ -13,6 +13,9 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/coordinate_codec.hpp"
+#include "geoanchor/io/crs.hpp"
+#include "geoanchor/io/crs_columns.hpp"
+#include "geoanchor/io/crs_operation.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "command_input.hpp"
@@ -36,6 +39,83 @@ std::string plate_list(const std::string& model) {
   }
   return (list.empty() ? std::string("none") : list) + " in the " + model + " model";
 }
+
+// Whether a --from/--to text is a CRS for PROJ (EPSG:n, WKT, PROJJSON, a
+// PROJ string, @FILE) rather than a frame name of the catalog.
+bool is_crs_text(const std::string& text) {
+  return text.find_first_of(":[{=") != std::string::npos || (!text.empty() && text[0] == '@');
+}
+
+// The catalog frame a CRS is on, with the CRS's coordinate epoch.
+geodesy::Frame catalog_frame_of(const io::Crs& crs, const char* flag) {
+  const auto& d = crs.description();
+  if (d.catalog_frame.empty()) {
+    throw Error(ErrorKind::input, "E_FRAME",
+                std::string(flag) + " " + crs.display_name() + ": its datum (" + d.datum +
+                    ") is not a frame of geoanchor's catalog, whose published paths transform uses; convert --crs "
+                    "--to-crs applies PROJ's operation between any two CRSs");
+  }
+  return geodesy::Frame::parse(d.catalog_frame + (crs.epoch() ? "@" + geodesy::format_decimal_year(*crs.epoch()) : ""), flag);
+}
+
+// A row's coordinates in a CRS read through PROJ, to and from ECEF on the
+// CRS's datum: the columns the CRS names (docs/commands/convert.md), PROJ's
+// conversion to its geocentric CRS, and back on the output side.
+class CrsRows {
+ public:
+  CrsRows(const io::Crs& source, const io::Crs& target, const std::vector<std::string>& header,
+          const std::string& source_name, io::NumberFormat numbers)
+      : in_(io::crs_input_columns(source, header, source_name, "--from")),
+        out_(io::crs_output_columns(target, true, in_.crs.description().type == "geocentric" && target.from_frame_name(),
+                                    "--to")),
+        to_ecef_(in_.crs, in_.crs.geocentric("--from"), "--from"),
+        from_ecef_(out_.crs.geocentric("--to"), out_.crs, "--to"),
+        index_(io::column_indices(in_, header)),
+        numbers_(numbers) {
+    if (!in_.has_height()) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source_name + ": transform moves points in 3-D: beside " + in_.names[0] + " and " + in_.names[1] +
+                      " the header needs the height for --from " + source.display_name() +
+                      " (h_<unit> ellipsoidal, or H_<unit> with a compound CRS EPSG:h+v)");
+    }
+  }
+  bool is_coordinate(std::size_t column) const {
+    return std::find(index_.begin(), index_.end(), column) != index_.end();
+  }
+  std::size_t first_coordinate() const { return *std::min_element(index_.begin(), index_.end()); }
+  std::vector<std::string> names() const {
+    std::vector<std::string> n;
+    for (std::size_t k : out_.write_order) n.push_back(out_.names[k]);
+    return n;
+  }
+  geodesy::EcefPosition decode(const io::CsvRecord& r, const std::vector<std::string>& header, const std::string& source,
+                               const std::string& where) {
+    double v[3];
+    for (std::size_t k = 0; k < 3; ++k) v[k] = io::number_cell(r, index_[k], header, source);
+    to_ecef_.transform(&v[0], &v[1], &v[2], 1, [&](std::size_t) { return where; });
+    return geodesy::EcefPosition(v[0], v[1], v[2]);
+  }
+  std::vector<std::string> encode(const geodesy::EcefPosition& p, const std::string& where) {
+    double v[3] = {p.m.x(), p.m.y(), p.m.z()};
+    from_ecef_.transform(&v[0], &v[1], &v[2], 1, [&](std::size_t) { return where; });
+    std::vector<std::string> out;
+    for (std::size_t k : out_.write_order) out.push_back(out_.angular[k] ? numbers_.degrees(v[k]) : numbers_.metres(v[k]));
+    return out;
+  }
+  std::vector<std::string> warnings() const {
+    auto w = to_ecef_.warnings();
+    for (auto& x : from_ecef_.warnings()) w.push_back(std::move(x));
+    return w;
+  }
+  const io::CrsColumns& input() const { return in_; }
+  const io::CrsColumns& output() const { return out_; }
+
+ private:
+  io::CrsColumns in_, out_;
+  io::CrsOperation to_ecef_, from_ecef_;
+  std::vector<std::size_t> index_;
+  io::NumberFormat numbers_;
+};
 
 }  // namespace
 
@@ -62,8 +142,23 @@ void run_transform(const TransformOptions& o) {
     throw Error(ErrorKind::usage, "E_OPTION",
                 "--json: prints the sidecar on standard output, where the CSV goes without -o; give -o FILE");
   }
-  const geodesy::Frame from = geodesy::Frame::parse(o.from, "--from");
-  const geodesy::Frame to = geodesy::Frame::parse(o.to, "--to");
+  // Frame names, or CRSs read through PROJ whose datum is a catalog frame
+  // (EPSG:7844 is GDA2020): then the columns are the CRSs' (issue 13).
+  const bool crs_mode = is_crs_text(o.from) || is_crs_text(o.to);
+  std::optional<io::Crs> from_crs, to_crs;
+  if (crs_mode) {
+    from_crs = io::Crs::parse(o.from, "--from");
+    to_crs = io::Crs::parse(o.to, "--to");
+    for (const auto& [given, flag] : {std::pair{o.ellipsoid.has_value(), "--ellipsoid"}, std::pair{o.geoid.has_value(), "--geoid"}}) {
+      if (given) {
+        throw Error(ErrorKind::usage, "E_OPTION",
+                    std::string(flag) + " with a CRS in --from/--to: the CRS names its ellipsoid and heights (orthometric "
+                    "heights as a compound CRS EPSG:h+v)");
+      }
+    }
+  }
+  const geodesy::Frame from = crs_mode ? catalog_frame_of(*from_crs, "--from") : geodesy::Frame::parse(o.from, "--from");
+  const geodesy::Frame to = crs_mode ? catalog_frame_of(*to_crs, "--to") : geodesy::Frame::parse(o.to, "--to");
   const geodesy::FramePath path = geodesy::find_frame_path(from.name(), to.name(), "--from/--to");
   // A static (plate-fixed) frame's coordinates do not move with its plate:
   // between it and a dynamic frame at an epoch, the published time-dependent
@@ -150,8 +245,12 @@ void run_transform(const TransformOptions& o) {
   const std::string& source_name = input.name();
   io::CsvReader reader(input.stream(), source_name);
   const auto& header = reader.header();
-  const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
-  if (columns.kind != io::CoordinateKind::ecef && columns.kind != io::CoordinateKind::geodetic) {
+  std::optional<CrsRows> crs_rows;
+  if (crs_mode) crs_rows.emplace(*from_crs, *to_crs, header, source_name, io::NumberFormat{o.precision});
+  // Frame mode reads geoanchor's columns; CRS mode the CRSs' (checked above).
+  const io::CoordinateColumns columns =
+      crs_mode ? io::CoordinateColumns{} : io::classify_coordinate_header(header, source_name);
+  if (!crs_mode && columns.kind != io::CoordinateKind::ecef && columns.kind != io::CoordinateKind::geodetic) {
     throw Error(ErrorKind::input, "E_COLUMN",
                 source_name + ": transform reads ECEF (x_m,y_m,z_m) or geodetic (lat_deg,lon_deg,h_m) columns, not " +
                     std::string(io::to_string(columns.kind)) + " (use convert first)");
@@ -163,6 +262,11 @@ void run_transform(const TransformOptions& o) {
     }
   }
   const bool has_velocity = velocity[0] && velocity[1] && velocity[2];
+  if (crs_mode && (velocity[0] || velocity[1] || velocity[2])) {
+    throw Error(ErrorKind::input, "E_COLUMN",
+                source_name + ": velocity columns are read with frame names and ECEF coordinates (x_m, y_m, z_m), not "
+                "with a CRS in --from/--to");
+  }
   if (!has_velocity && (velocity[0] || velocity[1] || velocity[2])) {
     throw Error(ErrorKind::input, "E_COLUMN", source_name + ": velocities need all three columns vx_m_per_year, vy_m_per_year, vz_m_per_year");
   }
@@ -181,21 +285,40 @@ void run_transform(const TransformOptions& o) {
   }
 
   const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
-  const bool columns_need_ellipsoid = columns.kind == io::CoordinateKind::geodetic;
+  const bool columns_need_ellipsoid = !crs_mode && columns.kind == io::CoordinateKind::geodetic;
   const geodesy::Ellipsoid in_ellipsoid = ellipsoid_of(from_ellipsoid, from, columns_need_ellipsoid);
   const geodesy::Ellipsoid out_ellipsoid = ellipsoid_of(to_ellipsoid, to, columns_need_ellipsoid);
   io::InputCoordinateFrame in_frame;
   in_frame.ellipsoid = in_ellipsoid;
   in_frame.geoid = geoid;
-  const io::CoordinateDecoder decoder(columns, header, in_frame, source_name);
+  std::optional<io::CoordinateDecoder> decoder;
+  if (!crs_mode) decoder.emplace(columns, header, in_frame, source_name);
   io::OutputCoordinateFrame out_frame;
   out_frame.kind = columns.kind == io::CoordinateKind::ecef ? io::OutputKind::ecef : io::OutputKind::geodetic;
   out_frame.ellipsoid = out_ellipsoid;
   if (columns.orthometric) out_frame.geoid = geoid;  // H_m in, H_m out
   const io::NumberFormat numbers{o.precision};
-  const io::CoordinateEncoder encoder(out_frame, numbers);
+  std::optional<io::CoordinateEncoder> encoder;
+  if (!crs_mode) encoder.emplace(out_frame, numbers);
   std::size_t first_coordinate = 0;
-  const auto out_header = io::output_header(header, columns, encoder.column_names(), source_name, first_coordinate);
+  std::vector<std::string> out_header;
+  if (crs_mode) {
+    first_coordinate = crs_rows->first_coordinate();
+    const auto names = crs_rows->names();
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (i == first_coordinate) out_header.insert(out_header.end(), names.begin(), names.end());
+      if (crs_rows->is_coordinate(i)) continue;
+      if (std::find(names.begin(), names.end(), header[i]) != names.end()) {
+        throw Error(ErrorKind::input, "E_COLUMN",
+                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] +
+                        "' would appear twice in the output (it is an output coordinate); rename it");
+      }
+      out_header.push_back(io::csv_quote(header[i]));
+    }
+  } else {
+    out_header = io::output_header(header, columns, encoder->column_names(), source_name, first_coordinate);
+  }
+  const auto is_coordinate = [&](std::size_t i) { return crs_mode ? crs_rows->is_coordinate(i) : columns.is_coordinate(i); };
 
   // Standard output (no -o, or -o -) gets the rows and no sidecar.
   if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
@@ -255,7 +378,8 @@ void run_transform(const TransformOptions& o) {
       continue;
     }
     const std::string where = source_name + ":" + std::to_string(record.line);
-    geodesy::StateVector state{decoder.decode(record), std::nullopt};
+    geodesy::StateVector state{crs_mode ? crs_rows->decode(record, header, source_name, where) : decoder->decode(record),
+                               std::nullopt};
     if (has_velocity) {
       Eigen::Vector3d v;
       for (std::size_t k = 0; k < 3; ++k) {
@@ -269,11 +393,11 @@ void run_transform(const TransformOptions& o) {
       state.v_m_per_year = v;
     }
     const geodesy::StateVector moved = transformation.apply(state, where);
-    const auto coords = encoder.encode(moved.x, where);
+    const auto coords = crs_mode ? crs_rows->encode(moved.x, where) : encoder->encode(moved.x, where);
     fields.clear();
     for (std::size_t i = 0; i < header.size(); ++i) {
       if (i == first_coordinate) fields.insert(fields.end(), coords.begin(), coords.end());
-      if (columns.is_coordinate(i)) continue;
+      if (is_coordinate(i)) continue;
       bool replaced = false;
       for (std::size_t k = 0; k < 3 && has_velocity; ++k) {
         if (i == *velocity[k]) {
@@ -287,6 +411,9 @@ void run_transform(const TransformOptions& o) {
     ++rows;
   }
   std::vector<std::string> housekeeping = notes;  // and stale temporaries of killed runs removed beside the output
+  if (crs_mode) {
+    for (auto& w : crs_rows->warnings()) housekeeping.push_back(std::move(w));
+  }
   for (const auto& t : io::take_removed_stale_temporaries()) housekeeping.push_back(io::stale_temporary_warning(t));
   for (const auto& w : housekeeping) std::cerr << "geoanchor: warning: " << w << '\n';
   if (output.is_standard_output()) {
@@ -315,7 +442,24 @@ void run_transform(const TransformOptions& o) {
                    {"ellipsoid", in_ellipsoid.name()}};
   side["output"] = {{"path", o.output}, {"frame", to.name()}, {"epoch", epochs_given ? json(t_to.year) : json(nullptr)}, {"rows", rows},
                     {"height_type", columns.orthometric ? "orthometric" : "ellipsoidal"}, {"ellipsoid", out_ellipsoid.name()}};
-  if (columns.orthometric) side["output"]["geoid_model"] = geoid->model_name();
+  if (!crs_mode && columns.orthometric) side["output"]["geoid_model"] = geoid->model_name();
+  if (crs_mode) {
+    // The CRSs as given and as PROJ writes them, and the columns read and written.
+    const auto crs_record = [](const io::Crs& crs, const io::CrsColumns& c) {
+      json names = json::array();
+      for (std::size_t k : c.write_order) names.push_back(c.names[k]);
+      return json{{"crs", crs.text()}, {"name", crs.description().name},
+                  {"identifier", crs.description().identifier.empty() ? json(nullptr) : json(crs.description().identifier)},
+                  {"columns", names}, {"wkt2", c.crs.wkt2()},
+                  {"height_type", c.orthometric ? "orthometric" : "ellipsoidal"}};
+    };
+    side["input"].update(crs_record(*from_crs, crs_rows->input()));
+    side["input"]["kind"] = "crs";
+    side["output"].update(crs_record(*to_crs, crs_rows->output()));
+    side["output"]["kind"] = "crs";
+    side["input"].erase("ellipsoid");
+    side["output"].erase("ellipsoid");
+  }
   side["path"] = {{"steps", steps}, {"accuracy_m", path.accuracy_m()}, {"stated_accuracy_m", stated_m}};
   if (from.epoch() && from.epoch()->year != t_from.year) side["input"]["stated_epoch"] = from.epoch()->year;
   if (to.epoch() && to.epoch()->year != t_to.year) side["output"]["stated_epoch"] = to.epoch()->year;

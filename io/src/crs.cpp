@@ -457,13 +457,28 @@ Crs Crs::geocentric(std::string_view where) const {
   PJ_CONTEXT* ctx = impl->ctx.get();
   Pj same(proj_create(ctx, projjson().c_str()));
   Pj geodetic(same ? proj_crs_get_geodetic_crs(ctx, same.get()) : nullptr);
-  Pj datum(geodetic ? proj_crs_get_datum_forced(ctx, geodetic.get()) : nullptr);
-  const char* auth = datum ? proj_get_id_auth_name(datum.get(), 0) : nullptr;
-  const char* code = datum ? proj_get_id_code(datum.get(), 0) : nullptr;
-  if (auth && code) {
-    PJ_OBJ_LIST* crss = proj_query_geodetic_crs_from_datum(ctx, auth, auth, code, "geocentric");
-    impl->crs.reset(crss && proj_list_get_count(crss) > 0 ? proj_list_get(ctx, crss, 0) : nullptr);
-    proj_list_destroy(crss);
+  // The database's geocentric CRS of the datum (found by the datum's name:
+  // a CRS read from WKT or PROJJSON carries no code on its datum), else one
+  // built on the datum itself.
+  Pj datum(geodetic ? proj_crs_get_datum(ctx, geodetic.get()) : nullptr);
+  if (!datum && geodetic) datum.reset(proj_crs_get_datum_ensemble(ctx, geodetic.get()));
+  if (datum) {
+    const PJ_TYPE types[] = {PJ_TYPE_GEODETIC_REFERENCE_FRAME, PJ_TYPE_DYNAMIC_GEODETIC_REFERENCE_FRAME,
+                             PJ_TYPE_DATUM_ENSEMBLE};
+    const char* name = proj_get_name(datum.get());
+    PJ_OBJ_LIST* found = name ? proj_create_from_name(ctx, "EPSG", name, types, 3, 0, 1, nullptr) : nullptr;
+    Pj db_datum(found && proj_list_get_count(found) > 0 ? proj_list_get(ctx, found, 0) : nullptr);
+    proj_list_destroy(found);
+    const char* code = db_datum ? proj_get_id_code(db_datum.get(), 0) : nullptr;
+    if (code && proj_is_equivalent_to(db_datum.get(), datum.get(), PJ_COMP_EQUIVALENT)) {
+      PJ_OBJ_LIST* crss = proj_query_geodetic_crs_from_datum(ctx, "EPSG", "EPSG", code, "geocentric");
+      impl->crs.reset(crss && proj_list_get_count(crss) > 0 ? proj_list_get(ctx, crss, 0) : nullptr);
+      proj_list_destroy(crss);
+    }
+    if (!impl->crs) {
+      const std::string crs_name = d.datum + " (geocentric)";
+      impl->crs.reset(proj_create_geocentric_crs_from_datum(ctx, crs_name.c_str(), datum.get(), "metre", 1.0));
+    }
   }
   if (!impl->crs) {
     fail(where, text_, "'" + d.name + "': PROJ's database has no geocentric CRS on its datum (" + d.datum +

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <proj.h>
+#include <proj_experimental.h>
 
 #include <cmath>
 #include <cstdio>
@@ -558,6 +559,56 @@ TEST_F(CrsCli, Issue13_PointsOutsideTheAreaOfUseAreWarnedAndRecorded) {
   for (const auto& w : inside["warnings"]) {
     EXPECT_EQ(w.get<std::string>().find("outside the area of use"), std::string::npos) << w;
   }
+}
+
+}  // namespace
+}  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// transform --from/--to with CRSs: the catalog's frame path between the
+// CRSs' datums (EPSG:7856 is on GDA2020), PROJ's conversions at both ends,
+// against PROJ's own operation for the pair at the target epoch.
+TEST_F(CrsCli, Issue13_TransformReadsCrssWhoseDatumIsACatalogFrame) {
+  write("mga.csv", "id,easting_m,northing_m,h_m\nA,334368.634,6250948.345,50\nB,315290.169,6236040.861,10\n");
+  const RunResult r = run("transform '" + path("mga.csv").string() + "' --from EPSG:7856 --to 'EPSG:7912@2024.3' -o '" +
+                          path("t.csv").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv got = parse_csv(slurp(path("t.csv")));
+  ASSERT_EQ(got.header, (std::vector<std::string>{"id", "lat_deg", "lon_deg", "h_m"}));
+  Pj src2d = proj_.crs("EPSG:7856");
+  Pj src(proj_crs_promote_to_3D(proj_.ctx(), nullptr, src2d.get()));
+  Pj dst = proj_.crs("EPSG:7912");
+  Pj raw(proj_create_crs_to_crs_from_pj(proj_.ctx(), src.get(), dst.get(), nullptr, nullptr));
+  Pj op(proj_normalize_for_visualization(proj_.ctx(), raw.get()));
+  const double in[2][3] = {{334368.634, 6250948.345, 50}, {315290.169, 6236040.861, 10}};
+  WorstCase angle, height;
+  for (std::size_t i = 0; i < 2; ++i) {
+    PJ_COORD e = proj_trans(op.get(), PJ_FWD, proj_coord(in[i][0], in[i][1], in[i][2], 2024.3));
+    double da = std::numeric_limits<double>::quiet_NaN(), dh = da;
+    if (i < got.rows.size()) {
+      da = testing::nan_max(std::abs(*parse_finite_double(got.rows[i][1]) - e.lpz.phi),
+                            std::abs(*parse_finite_double(got.rows[i][2]) - e.lpz.lam));
+      dh = std::abs(*parse_finite_double(got.rows[i][3]) - e.lpz.z);
+    }
+    angle.add(da, i);
+    height.add(dh, i);
+  }
+  EXPECT_WORST_WITHIN(angle, kVsProjTol_deg);
+  EXPECT_WORST_WITHIN(height, kVsProjTol_m);
+
+  // Without a height, and on a datum the catalog does not hold: refused by name, nothing written.
+  write("two.csv", "id,easting_m,northing_m\nA,334368.634,6250948.345\n");
+  const RunResult flat = run("transform '" + path("two.csv").string() + "' --from EPSG:7856 --to 'EPSG:7912@2024.3' -o '" +
+                             path("x.csv").string() + "'");
+  EXPECT_EQ(flat.exit_code, 3);
+  EXPECT_NE(flat.err.find("height"), std::string::npos) << flat.err;
+  const RunResult osgb = run("transform '" + path("mga.csv").string() + "' --from EPSG:27700 --to 'ITRF2014@2024.3' -o '" +
+                             path("x.csv").string() + "'");
+  EXPECT_EQ(osgb.exit_code, 3);
+  EXPECT_NE(osgb.err.find("Ordnance Survey of Great Britain 1936"), std::string::npos) << osgb.err;
+  EXPECT_FALSE(fs::exists(path("x.csv")));
 }
 
 }  // namespace
