@@ -123,10 +123,8 @@ json crs_record(const io::Crs& crs, const io::CrsColumns& columns) {
 // --crs SRC --to-crs DST: the coordinates through PROJ's operation for the
 // pair, the columns named by each CRS's axes.
 void run_convert_crs(const ConvertOptions& o) {
-  if (!o.crs || !o.to_crs) {
-    throw Error(ErrorKind::usage, "E_OPTION",
-                std::string(o.crs ? "--crs" : "--to-crs") + ": give both --crs SRC (the input's CRS) and --to-crs DST "
-                "(the output's)");
+  if (!o.to_crs) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--crs: give --to-crs DST too (the output's CRS)");
   }
   // What the CRSs say, nothing else: flags that would say it again are refused.
   const std::pair<bool, const char*> unused[] = {
@@ -149,23 +147,51 @@ void run_convert_crs(const ConvertOptions& o) {
                 "--to " + *o.to + " with --to-crs: the CRS says the output's kind; --to ecef alone is read with it "
                 "(the CRS's geocentric form)");
   }
-  const io::Crs source_crs = io::Crs::parse(*o.crs, "--crs");
   const io::Crs target_crs = io::Crs::parse(*o.to_crs, "--to-crs");
 
   CommandInput input(o.input);
   const bool from_stdin = input.from_stdin();
   const std::string& source_name = input.name();
   io::CsvReader reader(input.stream(), source_name);
+  // The input's CRS: --crs, or the one the file states above its header
+  // (as convert writes it); both must say the same.
+  const std::optional<io::Crs> stated = io::crs_from_comments(reader.leading_comments(), source_name);
+  if (!o.crs && !stated) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--crs: give the input's CRS (" + source_name + " states none in a '# crs = …' comment above its header)");
+  }
+  const io::Crs source_crs = o.crs ? io::Crs::parse(*o.crs, "--crs") : *stated;
   const io::CrsColumns in_columns = io::crs_input_columns(source_crs, reader.header(), source_name, "--crs");
+  if (o.crs && stated) {
+    const io::CrsColumns stated_columns = io::crs_input_columns(*stated, reader.header(), source_name, "the '# crs' comment");
+    if (!stated_columns.crs.same_as(in_columns.crs)) {
+      throw Error(ErrorKind::input, "E_CRS_CONFLICT",
+                  "--crs " + source_crs.display_name() + " contradicts the CRS " + source_name + " states above its header (" +
+                      stated->display_name() + "); drop --crs, or fix the file's '# crs = …' comment");
+    }
+  }
   const io::CrsColumns out_columns =
       io::crs_output_columns(target_crs, in_columns.has_height(), o.to && *o.to == "ecef", "--to-crs");
   io::CrsOperation op(in_columns.crs, out_columns.crs, "convert", io::CrsOperationOptions{o.allow_fallback});
+  // A dynamic output CRS given without an epoch is at the epoch the
+  // operation was evaluated at (PROJ does not move points in time): the
+  // output states it.
+  const bool epoch_from_input = out_columns.crs.description().dynamic && !out_columns.crs.epoch() && op.epoch();
+  const io::CrsColumns written =
+      epoch_from_input ? io::CrsColumns{out_columns.crs.at_epoch(geodesy::DecimalYear{*op.epoch()}, "--to-crs"),
+                                        out_columns.names, out_columns.angular, out_columns.write_order,
+                                        out_columns.orthometric}
+                       : out_columns;
   io::CrsCsvConverter converter(reader, in_columns, out_columns, io::NumberFormat{o.precision});
 
   if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
   io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
   std::ostream& out = output.stream();
-  for (const auto& c : reader.leading_comments()) out << c << '\n';
+  // The output states its CRS above the header; the input's statement of its own is dropped.
+  for (const auto& c : io::crs_comments(written.crs)) out << c << '\n';
+  for (const auto& c : reader.leading_comments()) {
+    if (!io::is_crs_comment(c)) out << c << '\n';
+  }
   io::write_csv_line(out, converter.output_header());
   const std::size_t rows = converter.run(reader, op, out);
 
@@ -175,7 +201,7 @@ void run_convert_crs(const ConvertOptions& o) {
   side["input"]["kind"] = "crs";
   side["input"].update(crs_record(source_crs, in_columns));
   side["output"] = {{"path", o.output}, {"kind", "crs"}, {"rows", rows}};
-  side["output"].update(crs_record(target_crs, out_columns));
+  side["output"].update(crs_record(epoch_from_input ? written.crs : target_crs, written));
   json candidates = json::array();
   for (const auto& c : op.candidates()) {
     json grids = json::array();
@@ -206,8 +232,8 @@ CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   cmd->add_option("-o,--output", o.output, "Output CSV, written atomically with its sidecar OUT.geoanchor.json; - or none: standard output (no sidecar)");
   cmd->add_option("--to", o.to, "Output kind: geodetic|ecef|enu|ned|utm|tm (required unless --to-crs; with it: ecef)");
   cmd->add_option("--crs", o.crs,
-                  "CRS of the input (with --to-crs): EPSG:n, EPSG:h+v, WKT, PROJJSON, PROJ string, @FILE or a frame "
-                  "name; CRS@EPOCH");
+                  "CRS of the input (with --to-crs; default: the '# crs = …' comment above the header): EPSG:n, "
+                  "EPSG:h+v, WKT, PROJJSON, PROJ string, @FILE or a frame name; CRS@EPOCH");
   cmd->add_option("--to-crs", o.to_crs, "CRS of the output, read through PROJ (with --crs); CRS@EPOCH");
   cmd->add_flag("--allow-fallback", o.allow_fallback,
                 "With --crs/--to-crs: where PROJ's best operation's grid is missing or does not hold a point, use the "

@@ -433,6 +433,21 @@ std::string Crs::projjson() const {
   return text_or(j);
 }
 
+Crs Crs::at_epoch(geodesy::DecimalYear epoch, std::string_view where) const {
+  if (!impl_->description.dynamic) {
+    fail(where, text_, "'" + impl_->description.name + "' is on a static datum: its coordinates have no epoch",
+         "E_CRS_EPOCH");
+  }
+  Crs out = *this;
+  out.epoch_ = epoch;
+  return out;
+}
+
+bool Crs::same_as(const Crs& other) const {
+  if (epoch_.has_value() != other.epoch_.has_value() || (epoch_ && epoch_->year != other.epoch_->year)) return false;
+  return proj_is_equivalent_to_with_ctx(impl_->ctx.get(), impl_->crs.get(), other.impl_->crs.get(), PJ_COMP_EQUIVALENT) != 0;
+}
+
 Crs Crs::promoted_to_3d(std::string_view where) const {
   const auto& d = impl_->description;
   if (d.axes.size() >= 3) return *this;

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::io {
@@ -22,7 +23,61 @@ AngleLimits limits_of(const std::string& column) {
   return grads ? AngleLimits{100.0, 200.0} : AngleLimits{90.0, 180.0};
 }
 
+// "# key = value" → value, when the comment is that key's.
+std::optional<std::string> comment_value(std::string_view comment, std::string_view key) {
+  std::size_t i = 0;
+  if (i >= comment.size() || comment[i] != '#') return std::nullopt;
+  ++i;
+  while (i < comment.size() && comment[i] == ' ') ++i;
+  if (comment.compare(i, key.size(), key) != 0) return std::nullopt;
+  i += key.size();
+  while (i < comment.size() && comment[i] == ' ') ++i;
+  if (i >= comment.size() || comment[i] != '=') return std::nullopt;
+  ++i;
+  while (i < comment.size() && comment[i] == ' ') ++i;
+  std::string v(comment.substr(i));
+  while (!v.empty() && (v.back() == ' ' || v.back() == '\r')) v.pop_back();
+  return v;
+}
+
+constexpr std::string_view kCrsKey = "crs";
+constexpr std::string_view kEpochKey = "coordinate_epoch";
+
 }  // namespace
+
+std::optional<Crs> crs_from_comments(const std::vector<std::string>& comments, std::string_view source) {
+  std::optional<std::string> crs, epoch;
+  std::string crs_where, epoch_where;
+  for (const auto& c : comments) {
+    for (const auto key : {kCrsKey, kEpochKey}) {
+      const auto v = comment_value(c, key);
+      if (!v) continue;
+      auto& slot = key == kCrsKey ? crs : epoch;
+      const std::string where = std::string(source) + ": comment '# " + std::string(key) + " = …'";
+      if (slot) throw Error(ErrorKind::input, "E_CRS", where + ": given twice above the header");
+      slot = *v;
+      (key == kCrsKey ? crs_where : epoch_where) = where;
+    }
+  }
+  if (epoch && !crs) throw Error(ErrorKind::input, "E_CRS", epoch_where + ": a coordinate epoch without '# crs = …'");
+  if (!crs) return std::nullopt;
+  std::string text = *crs;
+  if (epoch) {
+    const auto year = geodesy::parse_decimal_year(*epoch, epoch_where);
+    text += "@" + geodesy::format_decimal_year(year);
+  }
+  return Crs::parse(text, crs_where);
+}
+
+std::vector<std::string> crs_comments(const Crs& crs) {
+  std::vector<std::string> out = {"# " + std::string(kCrsKey) + " = " + crs.wkt2()};
+  if (crs.epoch()) out.push_back("# " + std::string(kEpochKey) + " = " + geodesy::format_decimal_year(*crs.epoch()));
+  return out;
+}
+
+bool is_crs_comment(std::string_view comment) {
+  return comment_value(comment, kCrsKey).has_value() || comment_value(comment, kEpochKey).has_value();
+}
 
 CrsCsvConverter::CrsCsvConverter(const CsvReader& reader, const CrsColumns& input, const CrsColumns& output,
                                  NumberFormat format)

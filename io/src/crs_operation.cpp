@@ -206,7 +206,11 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
         throw Error(ErrorKind::input, "E_EPOCH_MISSING",
                     m.where + ": " + pair + ": " + c->display_name() + " is on a dynamic datum (" +
                         c->description().datum + "): its coordinates change with time, so this datum change needs "
-                        "their epoch; give it as CRS@YYYY.Y, e.g. " + c->text() + "@2024.5");
+                        "their epoch; give it as CRS@YYYY.Y, e.g. " +
+                        (c->text().size() <= 40 && c->text().find('[') == std::string::npos
+                             ? c->text()
+                             : c->description().identifier.empty() ? std::string("CRS") : c->description().identifier) +
+                        "@2024.5");
       }
     }
   }

@@ -613,3 +613,48 @@ TEST_F(CrsCli, Issue13_TransformReadsCrssWhoseDatumIsACatalogFrame) {
 
 }  // namespace
 }  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// Issue 13 point 7: the output CSV states its CRS above the header (PROJ's
+// WKT2, which PROJ reads back as the same CRS, and the coordinate epoch of
+// a dynamic CRS); convert reads that statement back without --crs, and
+// refuses a --crs that contradicts it.
+TEST_F(CrsCli, Issue13_TheCsvStatesItsCrsAndIsReadBackByIt) {
+  write("syd.csv", "# surveyed 2026-11-30\nid,lat_deg,lon_deg,h_m\nA,-33.8688,151.2093,50\n");
+  convert("syd.csv", "EPSG:7843", "EPSG:7856");
+  const std::string text = slurp(path("out_syd.csv"));
+  ASSERT_EQ(text.rfind("# crs = PROJCRS[", 0), 0u) << text.substr(0, 80);
+  const std::string wkt = text.substr(8, text.find('\n') - 8);
+  Pj stated(proj_create(proj_.ctx(), wkt.c_str()));
+  ASSERT_TRUE(stated) << wkt.substr(0, 80);
+  Pj mga = proj_.crs("EPSG:7856");
+  Pj mga3d(proj_crs_promote_to_3D(proj_.ctx(), nullptr, mga.get()));
+  EXPECT_TRUE(proj_is_equivalent_to(stated.get(), mga3d.get(), PJ_COMP_EQUIVALENT));
+  EXPECT_NE(text.find("# surveyed 2026-11-30\n"), std::string::npos);  // other comments stay
+
+  // Back without --crs: the statement is read, and replaced by the output's own.
+  const RunResult back = run("convert '" + path("out_syd.csv").string() + "' --to-crs EPSG:7843 -o '" + path("b.csv").string() + "'");
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  const std::string b = slurp(path("b.csv"));
+  EXPECT_EQ(b.rfind("# crs = GEOGCRS[\"GDA2020\"", 0), 0u) << b.substr(0, 80);
+  EXPECT_EQ(b.find("PROJCRS"), std::string::npos);
+  const Csv table = parse_csv(b);
+  ASSERT_EQ(table.rows.size(), 1u);
+  EXPECT_NEAR(*parse_finite_double(table.rows[0][table.col("lat_deg")]), -33.8688, kVsProjTol_deg);
+
+  // A --crs that contradicts it: refused, nothing written.
+  const RunResult clash = run("convert '" + path("out_syd.csv").string() + "' --crs EPSG:7855 --to-crs EPSG:7843 -o '" +
+                              path("c.csv").string() + "'");
+  EXPECT_EQ(clash.exit_code, 3);
+  EXPECT_NE(clash.err.find("E_CRS_CONFLICT"), std::string::npos) << clash.err;
+  EXPECT_FALSE(fs::exists(path("c.csv")));
+
+  // A dynamic output at the epoch the operation was evaluated at.
+  convert("syd.csv", "ITRF2014@2020.0", "ITRF2020");
+  EXPECT_NE(slurp(path("out_syd.csv")).find("\n# coordinate_epoch = 2020.0\n"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace geoanchor

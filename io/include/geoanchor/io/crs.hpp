@@ -108,6 +108,14 @@ class Crs {
   std::string wkt2() const;
   std::string projjson() const;
 
+  // The same CRS at coordinate epoch `epoch` (a dynamic CRS only; throws
+  // geoanchor::Error for a static one, as parse does).
+  Crs at_epoch(geodesy::DecimalYear epoch, std::string_view where) const;
+
+  // Whether PROJ holds the two for the same CRS (proj_is_equivalent_to,
+  // PJ_COMP_EQUIVALENT: names may differ) at the same coordinate epoch.
+  bool same_as(const Crs& other) const;
+
   // The same CRS with an ellipsoidal height axis added (a 2-D geographic or
   // projected CRS); itself when it has three axes already. Throws for a
   // type that cannot be promoted.

@@ -5,7 +5,9 @@
 // the first one; every other column and every comment line stays in place.
 
 #include <cstddef>
+#include <optional>
 #include <ostream>
+#include <string_view>
 #include <string>
 #include <vector>
 
@@ -15,6 +17,24 @@
 #include "geoanchor/io/csv.hpp"
 
 namespace geoanchor::io {
+
+// The CRS a CSV states in its leading comments, as geoanchor writes them:
+//
+//   # crs = <WKT2:2019 on one line>      (or any text Crs::parse reads)
+//   # coordinate_epoch = 2024.5           (a dynamic CRS's epoch)
+//
+// nullopt when it states none. Throws geoanchor::Error (input) naming the
+// file and the comment for a CRS or epoch that cannot be read, or a key
+// given twice.
+std::optional<Crs> crs_from_comments(const std::vector<std::string>& leading_comments, std::string_view source);
+
+// The comment lines that state `crs` (PROJ's WKT2:2019, which PROJ reads
+// back as the same CRS, and its coordinate epoch).
+std::vector<std::string> crs_comments(const Crs& crs);
+
+// Whether a leading comment is one of those: a rewritten file drops them
+// and states its own.
+bool is_crs_comment(std::string_view comment);
 
 class CrsCsvConverter {
  public:
