@@ -43,6 +43,11 @@ void add_control_grid_options(CLI::App& cmd, ControlGridOptions& o) {
   cmd.add_option("--src-tm", o.src_tm, "Transverse Mercator LAT0,LON0,K0,FE,FN of easting_src_m/northing_src_m");
   cmd.add_option("--dst-zone", o.dst_zone, "UTM zone of easting_dst_m/northing_dst_m");
   cmd.add_option("--dst-tm", o.dst_tm, "Transverse Mercator of easting_dst_m/northing_dst_m");
+  cmd.add_option("--src-crs", o.src_crs,
+                 "CRS of the source coordinates, read through PROJ (EPSG:n, EPSG:h+v, WKT, PROJJSON, @FILE, a frame "
+                 "name; CRS@EPOCH): columns easting_src_<unit>, lat_src_deg, h_src_<unit>… (default: the file's "
+                 "'# source_crs = …')");
+  cmd.add_option("--dst-crs", o.dst_crs, "CRS of the target coordinates (as --src-crs; the file's '# target_crs = …')");
 }
 
 }  // namespace geoanchor::cli

@@ -21,6 +21,9 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/coordinate_codec.hpp"
 #include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/io/crs_columns.hpp"
+#include "geoanchor/io/crs_csv.hpp"
+#include "geoanchor/io/crs_operation.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "control_common.hpp"
 
@@ -47,17 +50,18 @@ std::optional<std::size_t> find_column(const std::vector<std::string>& header, c
 struct RoleColumns {
   std::string role;
   CoordinateColumns coords;
+  std::optional<CrsColumns> crs;  // a frame in a CRS read through PROJ: its columns, in visualisation order
   std::optional<std::size_t> sigma;
   std::array<std::optional<std::size_t>, 6> cov;
   bool has_cov = false;
 };
 
-RoleColumns role_columns(const std::vector<std::string>& header, const std::string& source, const std::string& role,
-                         bool has_grid, bool has_geoid) {
-  // Classify with only this role's coordinate columns visible, so that the
-  // other role's columns do not read as a mix of kinds.
+// The header with only one role's coordinate columns visible, so that the
+// other role's columns do not read as a mix of kinds; `index` maps back.
+std::vector<std::string> visible_for_role(const std::vector<std::string>& header, const std::string& role,
+                                          std::vector<std::size_t>& index) {
   std::vector<std::string> visible;
-  std::vector<std::size_t> index;
+  index.clear();
   for (std::size_t i = 0; i < header.size(); ++i) {
     const std::string& n = header[i];
     const bool other_role = n.find(role == "src" ? "_dst_" : "_src_") != std::string::npos;
@@ -68,6 +72,45 @@ RoleColumns role_columns(const std::vector<std::string>& header, const std::stri
       index.push_back(i);
     }
   }
+  return visible;
+}
+
+// The sigma and covariance columns of a role, checked for completeness.
+void uncertainty_columns(const std::vector<std::string>& header, const std::string& source, RoleColumns& rc);
+
+// A role whose coordinates are in a CRS read through PROJ: the CRS's
+// columns with the role before the unit, and an isotropic sigma.
+RoleColumns crs_role_columns(const std::vector<std::string>& header, const std::string& source, const std::string& role,
+                             const Crs& crs, const std::string& flag) {
+  std::vector<std::size_t> index;
+  const std::vector<std::string> visible = visible_for_role(header, role, index);
+  RoleColumns rc;
+  rc.role = role;
+  rc.crs = crs_input_columns(crs, visible, source, flag, role);
+  if (!rc.crs->has_height()) {
+    throw Error(ErrorKind::input, "E_COLUMN_MISSING",
+                source + ": " + rc.crs->names[0] + ", " + rc.crs->names[1] + " but no height: a control point needs its "
+                "height (h_" + role + "_<unit> ellipsoidal, or H_" + role + "_<unit> with a compound CRS)");
+  }
+  const auto at = column_indices(*rc.crs, visible);
+  rc.coords.kind = CoordinateKind::ecef;  // read as three numbers; PROJ makes them ECEF after the rows are read
+  rc.coords.first = index[at[0]];
+  rc.coords.second = index[at[1]];
+  rc.coords.third = index[at[2]];
+  uncertainty_columns(header, source, rc);
+  if (rc.has_cov) {
+    throw Error(ErrorKind::input, "E_COLUMN",
+                source + ": covariance columns cov_" + role + "_.._m2 with a CRS (" + flag + " " + crs.display_name() +
+                    "): their axes would be the CRS's; give sigma_" + role + "_m, or ECEF coordinates x_" + role +
+                    "_m… with their covariance");
+  }
+  return rc;
+}
+
+RoleColumns role_columns(const std::vector<std::string>& header, const std::string& source, const std::string& role,
+                         bool has_grid, bool has_geoid) {
+  std::vector<std::size_t> index;
+  const std::vector<std::string> visible = visible_for_role(header, role, index);
   RoleColumns rc;
   rc.role = role;
   CoordinateColumns c = classify_coordinate_header(visible, source, role);
@@ -98,6 +141,12 @@ RoleColumns role_columns(const std::vector<std::string>& header, const std::stri
   c.third = index[*c.third];
   c.epoch.reset();
   rc.coords = c;
+  uncertainty_columns(header, source, rc);
+  return rc;
+}
+
+void uncertainty_columns(const std::vector<std::string>& header, const std::string& source, RoleColumns& rc) {
+  const std::string& role = rc.role;
   rc.sigma = find_column(header, "sigma_" + role + "_m");
   for (std::size_t k = 0; k < 6; ++k) {
     rc.cov[k] = find_column(header, std::string("cov_") + role + "_" + kCovComponents[k] + "_m2");
@@ -116,7 +165,6 @@ RoleColumns role_columns(const std::vector<std::string>& header, const std::stri
                   source + ": both sigma_" + role + "_m and cov_" + role + "_.._m2 columns; give one");
     }
   }
-  return rc;
 }
 
 // Every column name a control set reads, for the nearest-name hint.
@@ -321,10 +369,36 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   if (!id_col) {
     throw Error(ErrorKind::input, "E_COLUMN_MISSING", source_name + ": no 'id' column; every control point needs an id");
   }
+  // Each frame's CRS: the option, or the file's "# source_crs = …" comment;
+  // both must say the same.
+  std::optional<Crs> crs_of[2] = {o.src_crs, o.dst_crs};
+  const char* crs_keys[2] = {"source_crs", "target_crs"};
+  const char* crs_flags[2] = {"--src-crs", "--dst-crs"};
+  for (std::size_t k = 0; k < 2; ++k) {
+    for (const auto& c : reader.leading_comments()) {
+      const auto text = comment_value(c, crs_keys[k]);
+      if (!text) continue;
+      const std::string where = source_name + ": comment '# " + crs_keys[k] + " = …'";
+      const Crs stated = Crs::parse(*text, where);
+      if (crs_of[k] && !crs_of[k]->same_as(stated)) {
+        throw Error(ErrorKind::input, "E_CRS_CONFLICT",
+                    std::string(crs_flags[k]) + " " + crs_of[k]->display_name() + " contradicts " + where + " (" +
+                        stated.display_name() + "); drop the flag or fix the file");
+      }
+      if (!crs_of[k]) crs_of[k] = stated;
+    }
+  }
   // A column that looks like ours but is no name we read is refused before
   // the coordinates are classified, with what is read instead.
+  std::optional<RoleColumns> crs_roles[2];
+  for (std::size_t k = 0; k < 2; ++k) {
+    if (crs_of[k]) crs_roles[k] = crs_role_columns(header, source_name, k == 0 ? "src" : "dst", *crs_of[k], crs_flags[k]);
+  }
   {
-    const auto readable = readable_names();
+    auto readable = readable_names();
+    for (const auto& rc : crs_roles) {
+      if (rc) readable.insert(readable.end(), rc->crs->names.begin(), rc->crs->names.end());
+    }
     for (std::size_t i = 0; i < header.size(); ++i) {
       if (std::find(readable.begin(), readable.end(), header[i]) != readable.end()) continue;
       if (const auto problem = unread_column_problem(header[i], false)) {
@@ -333,8 +407,10 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
       }
     }
   }
-  const RoleColumns src = role_columns(header, source_name, "src", o.src_projection.has_value(), o.src_geoid != nullptr);
-  const RoleColumns dst = role_columns(header, source_name, "dst", o.dst_projection.has_value(), o.dst_geoid != nullptr);
+  const RoleColumns src = crs_roles[0] ? *crs_roles[0]
+                                        : role_columns(header, source_name, "src", o.src_projection.has_value(), o.src_geoid != nullptr);
+  const RoleColumns dst = crs_roles[1] ? *crs_roles[1]
+                                        : role_columns(header, source_name, "dst", o.dst_projection.has_value(), o.dst_geoid != nullptr);
   const auto epoch_col = find_column(header, "epoch");
   // Velocities: ECEF components per frame, with a required isotropic sigma.
   struct VelocityColumns {
@@ -440,6 +516,32 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
                                         src.coords.orthometric ? header[*src.coords.third] : std::string(), o.src_geoid);
   set.target_input = detail::input_form(dst.coords.kind, o.dst_projection,
                                         dst.coords.orthometric ? header[*dst.coords.third] : std::string(), o.dst_geoid);
+  for (const RoleColumns* rc : {&src, &dst}) {
+    if (!rc->crs) continue;
+    geodesy::ControlInputForm& form = rc == &src ? set.source_input : set.target_input;
+    form = geodesy::ControlInputForm{};
+    form.form = geodesy::CoordinateForm::crs;
+    form.crs_name = rc->crs->crs.display_name();
+    if (rc->crs->orthometric) {
+      form.height_type = geodesy::HeightKind::orthometric;
+      form.height_column = rc->crs->names[2];
+      form.geoid_model = rc->crs->crs.description().geoid_model;
+    }
+    // The frame is the CRS's catalog frame; a frame comment must agree.
+    const std::string& catalog = rc->crs->crs.description().catalog_frame;
+    auto& frame = rc == &src ? set.source_frame : set.target_frame;
+    if (!catalog.empty()) {
+      const auto& e = rc->crs->crs.epoch();
+      const geodesy::Frame of_crs = geodesy::Frame::parse(catalog + (e ? "@" + geodesy::format_decimal_year(*e) : ""),
+                                                          source_name + ": " + crs_flags[rc == &src ? 0 : 1]);
+      if (frame && frame->name() != of_crs.name()) {
+        throw Error(ErrorKind::input, "E_FRAME_CONFLICT",
+                    source_name + ": the " + (rc == &src ? "source" : "target") + " frame " + frame->to_string() +
+                        " contradicts its CRS " + rc->crs->crs.display_name() + ", which is on " + of_crs.name());
+      }
+      if (!frame) frame = of_crs;
+    }
+  }
   set.ellipsoid = o.ellipsoid;
   set.origin = o.origin;
 
@@ -523,6 +625,30 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     }
   };
   read_rows_in_parallel(reader, set.points, point_of);
+  // A frame in a CRS: its three numbers as read, to ECEF on its datum
+  // through PROJ, a batch at a time.
+  for (const RoleColumns* rc : {&src, &dst}) {
+    if (!rc->crs) continue;
+    const bool source = rc == &src;
+    const char* flag = crs_flags[source ? 0 : 1];
+    CrsOperation to_ecef(rc->crs->crs, rc->crs->crs.geocentric(flag), source_name + ": " + flag);
+    constexpr std::size_t kBatch = 4096;
+    std::vector<double> a, b, c;
+    for (std::size_t first = 0; first < set.points.size(); first += kBatch) {
+      const std::size_t n = std::min(kBatch, set.points.size() - first);
+      a.resize(n), b.resize(n), c.resize(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const Eigen::Vector3d& v = source ? set.points[first + i].source_as_read : set.points[first + i].target_as_read;
+        a[i] = v.x(), b[i] = v.y(), c[i] = v.z();
+      }
+      to_ecef.transform(a.data(), b.data(), c.data(), n, [&](std::size_t i) {
+        return source_name + ":" + std::to_string(set.points[first + i].line);
+      });
+      for (std::size_t i = 0; i < n; ++i) {
+        (source ? set.points[first + i].source : set.points[first + i].target) = geodesy::EcefPosition(a[i], b[i], c[i]);
+      }
+    }
+  }
   detail::refuse_duplicate_ids(
       set, [&](const ControlPoint& q) { return source_name + ":" + std::to_string(q.line); },
       [](const ControlPoint& q) { return "line " + std::to_string(q.line); });

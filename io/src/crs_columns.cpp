@@ -19,7 +19,8 @@ bool is_geographic(const CrsDescription& d) {
 }
 
 // The names of a CRS's columns in visualisation order, and which are angles.
-CrsColumns layout(const Crs& crs) {
+CrsColumns layout(const Crs& crs, std::string_view role) {
+  const std::string infix = role.empty() ? "_" : "_" + std::string(role) + "_";
   const CrsDescription& d = crs.description();
   const std::string name = crs.display_name();
   CrsColumns c{crs, {}, {}, {}, false};
@@ -27,7 +28,7 @@ CrsColumns layout(const Crs& crs) {
   if (d.horizontal_type == "geocentric") {
     const char* stems[] = {"x", "y", "z"};
     for (std::size_t i = 0; i < axes.size() && i < 3; ++i) {
-      c.names.push_back(std::string(stems[i]) + "_" + column_unit_suffix(axes[i], name));
+      c.names.push_back(std::string(stems[i]) + infix + column_unit_suffix(axes[i], name));
       c.angular.push_back(false);
     }
   } else {
@@ -35,12 +36,12 @@ CrsColumns layout(const Crs& crs) {
     const char* first = geographic ? "lon" : "easting";
     const char* second = geographic ? "lat" : "northing";
     if (axes.size() < 2) fail(name, "fewer than two horizontal axes");
-    c.names.push_back(std::string(first) + "_" + column_unit_suffix(axes[0], name));
-    c.names.push_back(std::string(second) + "_" + column_unit_suffix(axes[1], name));
+    c.names.push_back(std::string(first) + infix + column_unit_suffix(axes[0], name));
+    c.names.push_back(std::string(second) + infix + column_unit_suffix(axes[1], name));
     c.angular = {geographic, geographic};
     if (axes.size() >= 3) {
       c.orthometric = d.type == "compound";
-      c.names.push_back(std::string(c.orthometric ? "H" : "h") + "_" + column_unit_suffix(axes[2], name));
+      c.names.push_back(std::string(c.orthometric ? "H" : "h") + infix + column_unit_suffix(axes[2], name));
       c.angular.push_back(false);
     }
   }
@@ -64,14 +65,14 @@ std::string list(const std::vector<std::string>& v) {
 }  // namespace
 
 CrsColumns crs_input_columns(const Crs& given, const std::vector<std::string>& header, std::string_view source,
-                             std::string_view flag) {
+                             std::string_view flag, std::string_view role) {
   // What the header speaks of.
   std::vector<std::size_t> coordinate_like;
   bool xyz = false, ellipsoidal = false, orthometric = false;
   std::string orthometric_column;
   for (std::size_t i = 0; i < header.size(); ++i) {
     const std::string& h = header[i];
-    if (h == "epoch") {
+    if (h == "epoch" && role.empty()) {
       fail(source, "header column " + std::to_string(i + 1) + " 'epoch': with " + std::string(flag) +
                        " the coordinate epoch is the CRS's (CRS@YYYY.Y), one for the file; per-row epochs are not "
                        "read here");
@@ -107,7 +108,7 @@ CrsColumns crs_input_columns(const Crs& given, const std::vector<std::string>& h
     fail(source, "the header has an ellipsoidal height (h_…) but " + std::string(flag) + " " + crs.display_name() +
                      " is compound: its heights are orthometric (" + crs.description().vertical_crs + ")");
   }
-  CrsColumns c = layout(crs);
+  CrsColumns c = layout(crs, role);
   // A coordinate column of a quantity the CRS does not have (lat_deg for a
   // projected CRS), then a quantity in another unit (easting_m for feet),
   // then a missing or repeated one.
@@ -161,7 +162,7 @@ CrsColumns crs_output_columns(const Crs& given, bool with_height, bool geocentri
                 std::string(flag) + " " + crs.display_name() + " has a height axis but the input has no height; "
                 "geoanchor does not invent one: give the input's heights, or a 2-D CRS");
   }
-  return layout(crs);
+  return layout(crs, {});
 }
 
 std::vector<std::size_t> column_indices(const CrsColumns& columns, const std::vector<std::string>& header) {

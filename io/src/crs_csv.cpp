@@ -23,7 +23,11 @@ AngleLimits limits_of(const std::string& column) {
   return grads ? AngleLimits{100.0, 200.0} : AngleLimits{90.0, 180.0};
 }
 
-// "# key = value" → value, when the comment is that key's.
+constexpr std::string_view kCrsKey = "crs";
+constexpr std::string_view kEpochKey = "coordinate_epoch";
+
+}  // namespace
+
 std::optional<std::string> comment_value(std::string_view comment, std::string_view key) {
   std::size_t i = 0;
   if (i >= comment.size() || comment[i] != '#') return std::nullopt;
@@ -39,11 +43,6 @@ std::optional<std::string> comment_value(std::string_view comment, std::string_v
   while (!v.empty() && (v.back() == ' ' || v.back() == '\r')) v.pop_back();
   return v;
 }
-
-constexpr std::string_view kCrsKey = "crs";
-constexpr std::string_view kEpochKey = "coordinate_epoch";
-
-}  // namespace
 
 std::optional<Crs> crs_from_comments(const std::vector<std::string>& comments, std::string_view source) {
   std::optional<std::string> crs, epoch;

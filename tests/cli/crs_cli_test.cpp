@@ -658,3 +658,58 @@ TEST_F(CrsCli, Issue13_TheCsvStatesItsCrsAndIsReadBackByIt) {
 
 }  // namespace
 }  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// fit --src-crs / "# source_crs = …": control in State Plane feet (EPSG:2236)
+// against the same marks in NAD83 geographic coordinates made by PROJ: the
+// fitted Helmert is the identity (a unit or axis read wrongly would show as
+// metres of translation or a large scale).
+TEST_F(CrsCli, Issue13_FitReadsControlInAnyCrs) {
+  constexpr double kIdentity_m = 1e-4;    // translation, metres (PROJ's own round trip is ~1e-9 m)
+  constexpr double kIdentity_ppm = 1e-3;  // scale
+  Pj op = proj_.op("EPSG:4269", "EPSG:2236");
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> dlat(-0.1, 0.1), dlon(-0.1, 0.1), hh(0.0, 60.0);
+  std::ostringstream csv, stated;
+  const std::string header = "id,easting_src_ftus,northing_src_ftus,h_src_m,lat_dst_deg,lon_dst_deg,h_dst_m\n";
+  csv << header;
+  for (int i = 0; i < 12; ++i) {
+    const double lat = 28.4 + dlat(rng), lon = -81.3 + dlon(rng), h = hh(rng);
+    PJ_COORD p = proj_trans(op.get(), PJ_FWD, proj_coord(lon, lat, 0, 0));
+    csv << "P" << i << "," << fmt(p.xy.x) << "," << fmt(p.xy.y) << "," << fmt(h) << "," << fmt(lat) << "," << fmt(lon) << ","
+        << fmt(h) << "\n";
+  }
+  write("ctl.csv", csv.str());
+  const std::string common = " --model helmert7 --convention position_vector --dst-crs EPSG:4269 -o '" + path("t.json").string() + "' --overwrite";
+  const RunResult r = run("fit '" + path("ctl.csv").string() + "' --src-crs EPSG:2236" + common);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto params = nlohmann::json::parse(slurp(path("t.json")))["parameters"];
+  for (const char* t : {"tx_m", "ty_m", "tz_m"}) EXPECT_LT(std::abs(params[t].get<double>()), kIdentity_m) << t;
+  EXPECT_LT(std::abs(params["ds_ppm"].get<double>()), kIdentity_ppm);
+
+  // The same file stating its CRS above the header needs no --src-crs.
+  write("stated.csv", "# source_crs = EPSG:2236\n" + csv.str());
+  const RunResult s = run("fit '" + path("stated.csv").string() + "'" + common);
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  params = nlohmann::json::parse(slurp(path("t.json")))["parameters"];
+  EXPECT_LT(std::abs(params["tx_m"].get<double>()), kIdentity_m);
+
+  // Refused by name: a contradicting flag, metres where the CRS is in feet, a grid said twice.
+  const RunResult clash = run("fit '" + path("stated.csv").string() + "' --src-crs EPSG:2881" + common);
+  EXPECT_EQ(clash.exit_code, 3);
+  EXPECT_NE(clash.err.find("E_CRS_CONFLICT"), std::string::npos) << clash.err;
+  std::string metres = csv.str();
+  metres.replace(metres.find("easting_src_ftus"), 16, "easting_src_m");
+  write("metres.csv", metres);
+  const RunResult unit = run("fit '" + path("metres.csv").string() + "' --src-crs EPSG:2236" + common);
+  EXPECT_EQ(unit.exit_code, 3);
+  EXPECT_NE(unit.err.find("easting_src_ftus"), std::string::npos) << unit.err;
+  const RunResult twice = run("fit '" + path("ctl.csv").string() + "' --src-crs EPSG:2236 --src-zone 17N" + common);
+  EXPECT_EQ(twice.exit_code, 2);
+  EXPECT_NE(twice.err.find("--src-crs"), std::string::npos) << twice.err;
+}
+
+}  // namespace
+}  // namespace geoanchor

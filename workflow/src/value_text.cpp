@@ -1,5 +1,7 @@
 #include "geoanchor/workflow/value_text.hpp"
 
+#include <tuple>
+
 #include <cmath>
 #include <vector>
 
@@ -145,6 +147,16 @@ std::optional<geodesy::ProjectionDef> parse_grid(const std::optional<std::string
 void apply_control_grids(const ControlGridOptions& o, io::ControlReadOptions& read) {
   read.src_projection = parse_grid(o.src_zone, o.src_tm, read.ellipsoid, "src");
   read.dst_projection = parse_grid(o.dst_zone, o.dst_tm, read.ellipsoid, "dst");
+  for (const auto& [crs, grid, flag, role] :
+       {std::tuple{&o.src_crs, read.src_projection.has_value(), "--src-crs", "src"},
+        std::tuple{&o.dst_crs, read.dst_projection.has_value(), "--dst-crs", "dst"}}) {
+    if (!*crs) continue;
+    if (grid) {
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  std::string(flag) + " with --" + role + "-zone/--" + role + "-tm: the CRS names the grid; give one");
+    }
+    (std::string_view(role) == "src" ? read.src_crs : read.dst_crs) = io::Crs::parse(**crs, flag);
+  }
 }
 
 }  // namespace geoanchor::workflow

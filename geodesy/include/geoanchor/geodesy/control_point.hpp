@@ -22,7 +22,9 @@ namespace geoanchor::geodesy {
 // How one frame's coordinates were written in the control file, so that a
 // diagnosis can read them again another way (swapped, in other units, on
 // another projection).
-enum class CoordinateForm { ecef, geodetic, enu, projected };
+// `crs`: in a CRS read through PROJ (fit --src-crs, "# source_crs = …"),
+// whose name is in ControlInputForm::crs_name.
+enum class CoordinateForm { ecef, geodetic, enu, projected, crs };
 
 // What a geodetic or projected frame's height column held: ellipsoidal
 // heights h (h_src_m, h_m) or orthometric heights H (H_src_m, H_m), which
@@ -35,6 +37,7 @@ struct ControlInputForm {
   HeightKind height_type = HeightKind::ellipsoidal;  // ECEF and ENU: ellipsoidal by construction
   std::string height_column;  // orthometric: the column or key read ("H_dst_m", "H_m")
   std::string geoid_model;    // orthometric: the model N came from ("EGM96", "EGM96-NGA")
+  std::string crs_name;       // crs: "EPSG:2236 (NAD83 / Florida East (ftUS))"
 };
 
 // A mark's ECEF velocities (m/yr) in each frame at its epoch, with their

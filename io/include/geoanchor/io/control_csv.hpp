@@ -36,11 +36,22 @@
 
 #include "geoanchor/geodesy/control_point.hpp"
 #include "geoanchor/geodesy/geoid.hpp"
+#include "geoanchor/io/crs.hpp"
 
 namespace geoanchor::io {
 
 struct ControlReadOptions {
   geodesy::Ellipsoid ellipsoid = geodesy::Ellipsoid::wgs84();
+  // The CRS of each frame's coordinates, read through PROJ (fit and
+  // diagnose --src-crs/--dst-crs; a CSV may state them above its header as
+  // "# source_crs = EPSG:2236" / "# target_crs = …", and a flag that
+  // contradicts the file is refused). The columns are then the CRS's with
+  // the role before the unit (easting_src_ftus, lat_dst_deg, h_src_m,
+  // H_dst_m with a compound CRS), PROJ converts them to the datum's
+  // geocentric coordinates, and the frame is the CRS's catalog frame. A
+  // frame with a CRS takes sigma_<role>_m (isotropic, metres) but no
+  // covariance columns.
+  std::optional<Crs> src_crs, dst_crs;
   std::optional<geodesy::LocalOrigin> origin;  // for e_src_m/e_dst_m columns
   // The grids of easting_src_m/northing_src_m and easting_dst_m/northing_dst_m
   // columns (a UTM zone or a Transverse Mercator, on `ellipsoid`); h_src_m

@@ -41,8 +41,11 @@ struct CrsColumns {
 // missing, given twice, an orthometric height without a vertical CRS, an
 // ellipsoidal one for a compound CRS, a 3-D CRS without its height, or an
 // epoch or utm_zone column (the CRS@EPOCH and the CRS say those).
+// With a `role` ("src", "dst": a control set's two frames) the role goes
+// before the unit, as in every control-set column: easting_src_ftus,
+// lat_dst_deg, H_src_m; an epoch column is then the set's own, not refused.
 CrsColumns crs_input_columns(const Crs& crs, const std::vector<std::string>& header, std::string_view source,
-                             std::string_view flag);
+                             std::string_view flag, std::string_view role = {});
 
 // The columns `crs` is written to. `with_height`: the input carries a
 // height (a 2-D CRS is then promoted to 3-D); `geocentric`: --to ecef.

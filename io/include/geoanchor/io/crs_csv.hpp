@@ -18,6 +18,10 @@
 
 namespace geoanchor::io {
 
+// The value of a "# key = value" comment (spaces around '=' optional), or
+// nullopt when the comment is not that key's.
+std::optional<std::string> comment_value(std::string_view comment, std::string_view key);
+
 // The CRS a CSV states in its leading comments, as geoanchor writes them:
 //
 //   # crs = <WKT2:2019 on one line>      (or any text Crs::parse reads)

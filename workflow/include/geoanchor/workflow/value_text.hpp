@@ -33,8 +33,12 @@ geodesy::UtmZone parse_zone(std::string_view text, std::string_view flag);
 // or --src-tm, likewise dst, turned into the read options' projections (on
 // their ellipsoid) by apply_control_grids, which throws (usage) for a zone
 // and a TM given for one frame.
+// --src-crs/--dst-crs: a frame's coordinates in a CRS read through PROJ
+// (io::ControlReadOptions::src_crs); refused beside that frame's
+// --src-zone/--src-tm, which would say the grid again.
 struct ControlGridOptions {
   std::optional<std::string> src_zone, src_tm, dst_zone, dst_tm;
+  std::optional<std::string> src_crs, dst_crs;
 };
 void apply_control_grids(const ControlGridOptions& o, io::ControlReadOptions& read);
 
