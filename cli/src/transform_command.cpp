@@ -49,6 +49,13 @@ bool is_crs_text(const std::string& text) {
 // The catalog frame a CRS is on, with the CRS's coordinate epoch.
 geodesy::Frame catalog_frame_of(const io::Crs& crs, const char* flag) {
   const auto& d = crs.description();
+  if (d.catalog_frame.empty() && d.ensemble) {
+    std::string members;
+    for (const auto& m : d.ensemble_members) members += (members.empty() ? "" : ", ") + m;
+    throw Error(ErrorKind::input, "E_CRS_ENSEMBLE",
+                std::string(flag) + " " + crs.display_name() + " is on the datum ensemble '" + d.datum +
+                    "', not one frame; transform moves coordinates between realizations: give one of " + members);
+  }
   if (d.catalog_frame.empty()) {
     throw Error(ErrorKind::input, "E_FRAME",
                 std::string(flag) + " " + crs.display_name() + ": its datum (" + d.datum +

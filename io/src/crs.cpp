@@ -178,6 +178,26 @@ void read_datum(PJ_CONTEXT* ctx, PJ* geodetic, CrsDescription& d) {
     const double accuracy = proj_datum_ensemble_get_accuracy(ctx, ensemble.get());
     if (accuracy > 0.0) d.ensemble_accuracy_m = accuracy;
   }
+  // A PROJ string's +datum=WGS84 (or a WKT1 datum) names the datum without
+  // its ensemble: it is the ensemble all the same.
+  if (!d.ensemble && (d.datum == "World Geodetic System 1984" || d.datum == "European Terrestrial Reference System 1989")) {
+    const std::string name = d.datum + " ensemble";
+    const PJ_TYPE types[] = {PJ_TYPE_DATUM_ENSEMBLE};
+    PJ_OBJ_LIST* found = proj_create_from_name(ctx, "EPSG", name.c_str(), types, 1, 0, 1, nullptr);
+    Pj ensemble(found && proj_list_get_count(found) > 0 ? proj_list_get(ctx, found, 0) : nullptr);
+    proj_list_destroy(found);
+    if (ensemble) {
+      d.datum = name;
+      d.ensemble = true;
+      const int n = proj_datum_ensemble_get_member_count(ctx, ensemble.get());
+      for (int i = 0; i < n; ++i) {
+        Pj member(proj_datum_ensemble_get_member(ctx, ensemble.get(), i));
+        if (member) d.ensemble_members.push_back(text_or(proj_get_name(member.get())));
+      }
+      const double accuracy = proj_datum_ensemble_get_accuracy(ctx, ensemble.get());
+      if (accuracy > 0.0) d.ensemble_accuracy_m = accuracy;
+    }
+  }
   const std::string frame = detail::frame_name_of_epsg_datum(d.datum);
   const auto catalog = geodesy::catalog_frame_names();
   if (std::find(catalog.begin(), catalog.end(), frame) != catalog.end()) d.catalog_frame = frame;
@@ -339,7 +359,9 @@ Crs Crs::parse(std::string_view typed, std::string_view where) {
   // CRS@EPOCH: the last '@' followed by a number (a file is @FILE, at 0).
   if (const auto at = definition.rfind('@'); at != std::string::npos && at > 0) {
     const std::string tail = trim(std::string_view(definition).substr(at + 1));
-    if (!tail.empty() && (std::isdigit(static_cast<unsigned char>(tail[0])) || tail[0] == '.' || tail[0] == '-')) {
+    const bool wkt_or_json = definition.find_first_of("[{") != std::string::npos;
+    if (!tail.empty() && (std::isdigit(static_cast<unsigned char>(tail[0])) || tail[0] == '.' || tail[0] == '-' ||
+                          (!wkt_or_json && tail.find_first_of(" +=:") == std::string::npos))) {
       epoch = geodesy::parse_decimal_year(tail, std::string(where) + ": coordinate epoch of CRS " + echo(text));
       definition = trim(std::string_view(definition).substr(0, at));
     }
@@ -350,7 +372,9 @@ Crs Crs::parse(std::string_view typed, std::string_view where) {
     if (!in) throw Error(ErrorKind::io, "E_CRS", std::string(where) + ": CRS file " + path + ": cannot be read");
     std::ostringstream content;
     content << in.rdbuf();
-    definition = trim(content.str());
+    definition = content.str();
+    if (definition.rfind("\xEF\xBB\xBF", 0) == 0) definition.erase(0, 3);  // a UTF-8 byte-order mark
+    definition = trim(definition);
     if (definition.empty()) fail(where, text, "the file " + path + " is empty; expected a CRS definition in it");
     if (definition[0] == '@') fail(where, text, "the file " + path + " names another file; give the CRS itself");
   }
@@ -364,6 +388,15 @@ Crs Crs::parse(std::string_view typed, std::string_view where) {
   if (looks_like_proj_text) {
     std::string problem;
     impl->crs = create_from_text(ctx, definition, problem);
+    const auto colon = definition.find(':');
+    const bool code_form = colon != std::string::npos && colon > 0 &&
+                           definition.find_first_of("[{= ") == std::string::npos &&
+                           std::all_of(definition.begin(), definition.begin() + static_cast<std::ptrdiff_t>(colon),
+                                       [](unsigned char ch) { return std::isalpha(ch) != 0; });
+    if (!impl->crs && code_form) {
+      fail(where, text, "PROJ's database (" + text_or(proj_context_get_database_path(ctx)) + ") has no CRS " + definition +
+                            "; expected a code of a CRS, e.g. EPSG:4326, EPSG:7856+5711");
+    }
     if (!impl->crs) {
       fail(where, text, "PROJ cannot read it" + (problem.empty() ? std::string() : " (" + problem + ")") +
                             "; expected EPSG:n, EPSG:h+v, WKT, PROJJSON, a PROJ string with +type=crs, @FILE or a "
@@ -394,19 +427,16 @@ Crs Crs::parse(std::string_view typed, std::string_view where) {
   }
   if (d.type != "geographic 2D" && d.type != "geographic 3D" && d.type != "geocentric" && d.type != "projected" &&
       d.type != "compound") {
-    fail(where, text, "'" + d.name + "' is a " + d.type +
+    fail(where, text, "'" + d.name + "' is " + (d.type[0] == 'e' ? "an " : "a ") + d.type +
                           " CRS; expected a geographic, geocentric, projected or compound (horizontal + vertical) CRS");
   }
   if (d.type == "compound" && d.horizontal_type != "geographic 2D" && d.horizontal_type != "projected") {
     fail(where, text, "'" + d.name + "': the horizontal part is a " + d.horizontal_type +
                           " CRS; expected a geographic 2D or projected CRS");
   }
-  if (epoch && !d.dynamic) {
-    fail(where, text, "'" + d.name + "' is on a static datum (" + d.datum +
-                          "): its coordinates need no epoch, and an epoch here would not be used; give it without @" +
-                          geodesy::format_decimal_year(*epoch),
-         "E_CRS_EPOCH");
-  }
+  // An epoch on a static CRS is kept: a time-dependent operation between
+  // two static frames (ETRF2000 -> ETRF2014) is evaluated at it; where
+  // nothing uses it, CrsOperation refuses it.
   Crs out(std::move(impl), epoch, text);
   out.from_frame_name_ = from_frame_name;
   return out;
@@ -416,7 +446,9 @@ const CrsDescription& Crs::description() const { return impl_->description; }
 
 std::string Crs::display_name() const {
   const auto& d = impl_->description;
-  std::string s = d.identifier.empty() ? "'" + d.name + "'" : d.identifier + " (" + d.name + ")";
+  std::string s = !d.identifier.empty() ? d.identifier + " (" + d.name + ")"
+                  : d.name == "unknown" || d.name.empty() ? echo(text_.substr(0, text_.rfind('@') == std::string::npos || !epoch_ ? std::string::npos : text_.rfind('@')))
+                                                          : "'" + d.name + "'";
   if (epoch_) s += "@" + geodesy::format_decimal_year(*epoch_);
   return s;
 }

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include <proj_experimental.h>
+
 #include "crs_impl.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
@@ -55,11 +57,23 @@ bool is_time_dependent(PJ_CONTEXT* ctx, PJ* op) {
          m.find("velocity") != std::string::npos;
 }
 
-std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool allow_ballpark) {
+struct ListDeleter {
+  void operator()(PJ_OBJ_LIST* l) const { proj_list_destroy(l); }
+};
+using PjList = std::unique_ptr<PJ_OBJ_LIST, ListDeleter>;
+
+// PROJ's candidate operations for the pair. With `grids` =
+// PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID they are exactly
+// those proj_create_crs_to_crs chooses among (network access off), and
+// `keep` receives PROJ's list for proj_get_suggested_operation; with
+// PROJ_GRID_AVAILABILITY_IGNORED they include the operations whose grids
+// are not on the machine.
+std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool allow_ballpark,
+                                       PROJ_GRID_AVAILABILITY_USE grid_use, PjList* keep = nullptr) {
   PJ_OPERATION_FACTORY_CONTEXT* fc = proj_create_operation_factory_context(ctx, nullptr);
   proj_operation_factory_context_set_allow_ballpark_transformations(ctx, fc, allow_ballpark ? 1 : 0);
   proj_operation_factory_context_set_spatial_criterion(ctx, fc, PROJ_SPATIAL_CRITERION_PARTIAL_INTERSECTION);
-  proj_operation_factory_context_set_grid_availability_use(ctx, fc, PROJ_GRID_AVAILABILITY_IGNORED);
+  proj_operation_factory_context_set_grid_availability_use(ctx, fc, grid_use);
   PJ_OBJ_LIST* list = proj_create_operations(ctx, src, dst, fc);
   proj_operation_factory_context_destroy(fc);
   std::vector<Candidate> out;
@@ -67,7 +81,10 @@ std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool a
   for (int i = 0; i < n; ++i) {
     Pj raw(proj_list_get(ctx, list, i));
     if (!raw) continue;
-    if (!allow_ballpark && proj_coordoperation_has_ballpark_transformation(ctx, raw.get())) continue;
+    if (!allow_ballpark && proj_coordoperation_has_ballpark_transformation(ctx, raw.get())) {
+      if (keep) return {};  // a ballpark one in the list PROJ chooses from: not a list geoanchor uses
+      continue;
+    }
     Candidate c;
     c.info.name = text_or(proj_get_name(raw.get()));
     const char* auth = proj_get_id_auth_name(raw.get(), 0);
@@ -99,6 +116,12 @@ std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool a
       c.info.area = CrsArea{text_or(area), west, south, east, north};
     }
     c.info.time_dependent = is_time_dependent(ctx, raw.get());
+    if (const char* ps = proj_as_proj_string(ctx, raw.get(), PJ_PROJ_5, nullptr)) {
+      const std::string text(ps);  // methods PROJ writes as PROJ strings: deformation models, epoch-dependent sets
+      c.info.time_dependent = c.info.time_dependent || text.find("t_epoch") != std::string::npos ||
+                              text.find("proj=deformation") != std::string::npos ||
+                              text.find("proj=defmodel") != std::string::npos;
+    }
     if (c.instantiable) {
       c.op.reset(proj_normalize_for_visualization(ctx, raw.get()));
       if (!c.op) c.instantiable = false;
@@ -109,7 +132,11 @@ std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool a
     }
     out.push_back(std::move(c));
   }
-  proj_list_destroy(list);
+  if (keep) {
+    keep->reset(list);
+  } else {
+    proj_list_destroy(list);
+  }
   return out;
 }
 
@@ -141,15 +168,35 @@ struct AreaTally {
   }
 };
 
+// The geographic 3D CRS (latitude, longitude, ellipsoidal height; degrees,
+// metres) on a geocentric CRS's datum.
+Pj geographic_3d_on_datum(PJ_CONTEXT* ctx, PJ* geocentric) {
+  Pj datum(proj_crs_get_datum(ctx, geocentric));
+  if (!datum) datum.reset(proj_crs_get_datum_ensemble(ctx, geocentric));
+  if (!datum) return nullptr;
+  Pj cs(proj_create_ellipsoidal_3D_cs(ctx, PJ_ELLPS3D_LATITUDE_LONGITUDE_HEIGHT, "degree", 0.017453292519943295, "metre", 1.0));
+  const std::string name = text_or(proj_get_name(geocentric)) + " (geographic 3D)";
+  return Pj(cs ? proj_create_geographic_crs_from_datum(ctx, name.c_str(), datum.get(), cs.get()) : nullptr);
+}
+
 }  // namespace
 
 struct CrsOperation::Impl {
   detail::PjContext ctx;
+  PjList available;  // PROJ's list of the candidates it chooses among (the first `available_count` of `all`)
+  std::size_t available_count = 0;
   Pj src, dst;
+  // A geocentric source with several candidates is chosen for from its
+  // geographic 3D form (PROJ 9.1 chooses a geocentric point's operation as
+  // if it were at latitude 0): `pre` converts to it, exactly, first.
+  Pj pre;
   std::string src_name, dst_name;
   std::string where;
   Options options;
-  std::vector<Candidate> all;  // PROJ's candidates, ballpark ones left out, in PROJ's order
+  // PROJ's candidates with their grids on the machine, in PROJ's order,
+  // then those whose grids are missing (never used; named when better).
+  std::vector<Candidate> all;
+  bool source_swapped = false;  // the source's own axis order is not the visualisation order
   std::vector<CrsOperationCandidate> infos;
   std::optional<double> t;
   std::vector<std::string> notes;
@@ -164,9 +211,16 @@ struct CrsOperation::Impl {
   struct Choice {
     std::optional<std::size_t> use, missing_better;
   };
-  Choice choose(double lon, double lat, std::size_t from) const;
+  // PROJ's own choice for a point (proj_get_suggested_operation on its list,
+  // given the point in the source's own axis order), and a candidate with a
+  // missing grid whose area holds (lon, lat) and whose accuracy is better.
+  Choice choose(double a, double b, double c, double lon, double lat, bool lonlat_known) const;
+  // After a candidate failed at a point: the best other available one that
+  // holds it (--allow-fallback), skipping `tried`.
+  std::optional<std::size_t> fallback(double lon, double lat, const std::vector<std::size_t>& tried) const;
   bool batch_inside_area(const std::vector<double>& a, const std::vector<double>& b) const;
-  std::optional<std::size_t> uniform_choice(const std::vector<double>& lon, const std::vector<double>& lat) const;
+  std::optional<std::size_t> uniform_choice(const std::vector<double>& lon, const std::vector<double>& lat, double a0,
+                                            double b0, double c0) const;
 };
 
 CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_view where, Options options)
@@ -198,8 +252,23 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
                 m.where + ": " + pair + ": two coordinate epochs; PROJ moves coordinates between frames at one epoch, "
                 "not in time (geoanchor transform moves them with velocities or a plate motion model)");
   }
-  if (source.epoch()) m.t = source.epoch()->year;
-  else if (target.epoch()) m.t = target.epoch()->year;
+  // The dynamic side's epoch; between two static CRSs (ETRF2000 -> ETRF2014
+  // is time-dependent) the one given on either. A static CRS's epoch that
+  // contradicts the dynamic side's is refused: the operation has one.
+  for (const auto* c : {&source, &target}) {
+    if (c->description().dynamic && c->epoch()) m.t = c->epoch()->year;
+  }
+  for (const auto* c : {&source, &target}) {
+    if (c->description().dynamic || !c->epoch()) continue;
+    if (m.t && *m.t != c->epoch()->year) {
+      throw Error(ErrorKind::input, "E_CRS_EPOCH",
+                  m.where + ": " + pair + ": " + c->display_name() + " is on a static datum and names epoch " +
+                      geodesy::format_decimal_year(*c->epoch()) + ", the dynamic side " +
+                      geodesy::format_decimal_year(geodesy::DecimalYear{*m.t}) +
+                      "; the operation is evaluated at one epoch: drop the static CRS's");
+    }
+    m.t = c->epoch()->year;
+  }
   if (!same_datum) {
     for (const auto* c : {&source, &target}) {
       if (c->description().dynamic && !c->epoch() && !m.t) {
@@ -215,9 +284,31 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     }
   }
 
-  m.all = list_operations(ctx, m.src.get(), m.dst.get(), false);
+  m.all = list_operations(ctx, m.src.get(), m.dst.get(), false, PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID,
+                          &m.available);
+  CrsDescription chosen_from = sd;  // the source the candidates start from
+  if (sd.type == "geocentric" && m.all.size() > 1) {
+    Pj geographic = geographic_3d_on_datum(ctx, m.src.get());
+    Pj raw(geographic ? proj_create_crs_to_crs_from_pj(ctx, m.src.get(), geographic.get(), nullptr, nullptr) : nullptr);
+    if (!raw) throw Error(ErrorKind::io, "E_CRS", m.where + ": " + pair + ": PROJ cannot give the geocentric source's latitude");
+    m.pre.reset(proj_normalize_for_visualization(ctx, raw.get()));
+    m.src = std::move(geographic);
+    m.all = list_operations(ctx, m.src.get(), m.dst.get(), false,
+                            PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID, &m.available);
+    chosen_from.type = chosen_from.horizontal_type = "geographic 3D";
+    chosen_from.axes = {CrsAxis{"Geodetic latitude", "Lat", "north", "degree", 0.017453292519943295, "angular"},
+                        CrsAxis{"Geodetic longitude", "Lon", "east", "degree", 0.017453292519943295, "angular"},
+                        CrsAxis{"Ellipsoidal height", "h", "up", "metre", 1.0, "linear"}};
+    chosen_from.visualization_axes = {chosen_from.axes[1], chosen_from.axes[0], chosen_from.axes[2]};
+    chosen_from.prime_meridian_deg = 0.0;
+  }
+  m.available_count = m.all.size();
+  for (auto& c : list_operations(ctx, m.src.get(), m.dst.get(), false, PROJ_GRID_AVAILABILITY_IGNORED)) {
+    const bool listed = std::any_of(m.all.begin(), m.all.end(), [&](const Candidate& a) { return a.info.name == c.info.name; });
+    if (!listed && !c.instantiable) m.all.push_back(std::move(c));
+  }
   if (m.all.empty()) {
-    const bool ballpark = !list_operations(ctx, m.src.get(), m.dst.get(), true).empty();
+    const bool ballpark = !list_operations(ctx, m.src.get(), m.dst.get(), true, PROJ_GRID_AVAILABILITY_IGNORED).empty();
     throw Error(ErrorKind::input, "E_CRS_NO_OPERATION",
                 m.where + ": " + pair + ": " +
                     (ballpark ? "PROJ knows only a ballpark operation between them (a datum change of unknown "
@@ -255,26 +346,38 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
                       joined(d->ensemble_members));
     }
   }
-  const bool any_instantiable =
-      std::any_of(m.all.begin(), m.all.end(), [](const Candidate& c) { return c.instantiable; });
-  if (!any_instantiable) {
-    const Candidate& best = m.all.front();
-    std::vector<std::string> missing;
-    for (const auto& g : best.info.grids) {
-      if (!g.available) missing.push_back(g.name);
+  if (m.available_count == 0) {
+    // Every operation needs a grid that is not here: name them all.
+    std::vector<std::string> missing, operations;
+    for (const auto& c : m.all) {
+      operations.push_back("'" + c.info.name + "' (" + accuracy_text(c.info.accuracy_m) + ")");
+      for (const auto& g : c.info.grids) {
+        if (!g.available && std::find(missing.begin(), missing.end(), g.name) == missing.end()) missing.push_back(g.name);
+      }
     }
     throw Error(ErrorKind::input, "E_CRS_GRID_MISSING",
-                m.where + ": " + pair + ": PROJ's operation '" + best.info.name + "' (" + accuracy_text(best.info.accuracy_m) +
-                    ") needs the grid " + joined(missing) + ", which is not on this machine; PROJ looked in " +
-                    joined(detail::proj_search_paths()) + " (network access off)" +
-                    (any_instantiable ? "" : "; no other operation is known but a ballpark one"));
+                m.where + ": " + pair + ": PROJ's operations " + joined(operations, "; ") + " need the grids " +
+                    joined(missing) + ", none of which is on this machine; PROJ looked in " +
+                    joined(detail::proj_search_paths()) + " (network access off); no other operation is known but a "
+                    "ballpark one");
   }
-  for (const auto& c : m.all) {
+  bool any_time_dependent = false;
+  for (std::size_t i = 0; i < m.available_count; ++i) {
+    const auto& c = m.all[i];
+    any_time_dependent = any_time_dependent || c.info.time_dependent;
     if (c.info.time_dependent && !m.t) {
       throw Error(ErrorKind::input, "E_EPOCH_MISSING",
                   m.where + ": " + pair + ": PROJ's operation '" + c.info.name +
-                      "' is time-dependent and neither CRS states a coordinate epoch; give it as CRS@YYYY.Y on the "
-                      "dynamic side");
+                      "' is time-dependent and neither CRS states a coordinate epoch; give the epoch it is evaluated "
+                      "at as CRS@YYYY.Y (on the dynamic CRS; between two static CRSs, on either)");
+    }
+  }
+  for (const auto* c : {&source, &target}) {
+    if (!c->description().dynamic && c->epoch() && !any_time_dependent) {
+      throw Error(ErrorKind::input, "E_CRS_EPOCH",
+                  m.where + ": " + pair + ": " + c->display_name() + " is on a static datum (" + c->description().datum +
+                      ") and no operation PROJ uses between them depends on time: the epoch @" +
+                      geodesy::format_decimal_year(*c->epoch()) + " would not be used; give the CRS without it");
     }
   }
   // Grids in use: hashed once, as they are on this machine.
@@ -285,7 +388,9 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     m.infos.push_back(c.info);
   }
 
-  m.source_is_lonlat = is_geographic_degrees(sd);
+  m.source_swapped = chosen_from.axes.size() >= 2 && chosen_from.visualization_axes.size() >= 2 &&
+                     chosen_from.axes[0].name != chosen_from.visualization_axes[0].name;
+  m.source_is_lonlat = is_geographic_degrees(chosen_from);
   m.target_is_lonlat = is_geographic_degrees(td);
   const bool need_lonlat = m.all.size() > 1 || (!m.source_is_lonlat && !m.target_is_lonlat && sd.area);
   if (need_lonlat && !m.source_is_lonlat) {
@@ -293,6 +398,10 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     const char* opts[] = {"ALLOW_BALLPARK=YES", nullptr};  // for areas only: metres do not matter
     Pj raw(proj_create_crs_to_crs_from_pj(ctx, m.src.get(), geog.get(), nullptr, opts));
     if (raw) m.to_lonlat.reset(proj_normalize_for_visualization(ctx, raw.get()));
+    if (!m.to_lonlat && m.all.size() > 1) {
+      throw Error(ErrorKind::io, "E_CRS", m.where + ": " + pair + ": PROJ cannot give " + m.src_name +
+                                              "'s longitude and latitude, which choosing among its operations needs");
+    }
   }
   m.source_area.crs = m.src_name;
   m.source_area.area = sd.area;
@@ -300,25 +409,38 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
 
 CrsOperation::~CrsOperation() = default;
 
-// Of the candidates whose area holds the point, the one with the best
-// stated accuracy (earlier on ties); a missing-grid candidate that holds the
-// point and would have been better is reported.
-CrsOperation::Impl::Choice CrsOperation::Impl::choose(double lon, double lat, std::size_t from) const {
+CrsOperation::Impl::Choice CrsOperation::Impl::choose(double a, double b, double c, double lon, double lat,
+                                                      bool lonlat_known) const {
   auto better = [](const std::optional<double>& x, const std::optional<double>& y) { return x && (!y || *x < *y); };
-  auto holds = [&](const Candidate& c) { return !c.info.area || c.info.area->contains(lon, lat); };
   Choice choice;
-  for (std::size_t i = from; i < all.size(); ++i) {
-    if (!all[i].instantiable || !holds(all[i])) continue;
-    if (!choice.use || better(all[i].info.accuracy_m, all[*choice.use].info.accuracy_m)) choice.use = i;
+  if (available_count == 1) {
+    choice.use = 0;
+  } else if (available_count > 1) {
+    const PJ_COORD native = source_swapped ? proj_coord(b, a, c, t.value_or(0.0)) : proj_coord(a, b, c, t.value_or(0.0));
+    const int k = proj_get_suggested_operation(ctx.get(), available.get(), PJ_FWD, native);
+    if (k >= 0 && static_cast<std::size_t>(k) < available_count) choice.use = static_cast<std::size_t>(k);
   }
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    if (all[i].instantiable || !holds(all[i])) continue;
-    if (!choice.use || better(all[i].info.accuracy_m, all[*choice.use].info.accuracy_m)) {
+  if (!lonlat_known) return choice;
+  for (std::size_t i = available_count; i < all.size(); ++i) {
+    const auto& m = all[i];
+    if (m.info.area && !m.info.area->contains(lon, lat)) continue;
+    if (!choice.use || better(m.info.accuracy_m, all[*choice.use].info.accuracy_m)) {
       choice.missing_better = i;
       break;
     }
   }
   return choice;
+}
+
+std::optional<std::size_t> CrsOperation::Impl::fallback(double lon, double lat, const std::vector<std::size_t>& tried) const {
+  auto better = [](const std::optional<double>& x, const std::optional<double>& y) { return x && (!y || *x < *y); };
+  std::optional<std::size_t> use;
+  for (std::size_t i = 0; i < available_count; ++i) {
+    if (std::find(tried.begin(), tried.end(), i) != tried.end()) continue;
+    if (all[i].info.area && !all[i].info.area->contains(lon, lat)) continue;
+    if (!use || better(all[i].info.accuracy_m, all[*use].info.accuracy_m)) use = i;
+  }
+  return use;
 }
 
 // Whether every point of a batch lies inside the source CRS's area of use,
@@ -363,8 +485,8 @@ bool CrsOperation::Impl::batch_inside_area(const std::vector<double>& a, const s
 // The one candidate every point of a batch takes, when each candidate's
 // area holds the batch's longitude/latitude box whole or not at all (and no
 // better candidate with a missing grid touches it); nullopt otherwise.
-std::optional<std::size_t> CrsOperation::Impl::uniform_choice(const std::vector<double>& lon,
-                                                                const std::vector<double>& lat) const {
+std::optional<std::size_t> CrsOperation::Impl::uniform_choice(const std::vector<double>& lon, const std::vector<double>& lat,
+                                                                double a0, double b0, double c0) const {
   double w = lon[0], e = lon[0], s = lat[0], nn = lat[0];
   for (std::size_t i = 0; i < lon.size(); ++i) {
     if (!std::isfinite(lon[i]) || !std::isfinite(lat[i])) return std::nullopt;
@@ -378,8 +500,9 @@ std::optional<std::size_t> CrsOperation::Impl::uniform_choice(const std::vector<
     const bool none = e < a.west_deg || w > a.east_deg || nn < a.south_deg || s > a.north_deg;
     if (!whole && !none) return std::nullopt;
   }
-  const Choice choice = choose(w, s, 0);
-  if (choice.missing_better && !options.allow_fallback) return std::nullopt;  // the per-point path names the point
+  // Every point holds the same candidates: PROJ's choice for the first is every point's.
+  const Choice choice = choose(a0, b0, c0, lon[0], lat[0], true);
+  if (choice.missing_better) return std::nullopt;  // the per-point path names the point, or counts the fallback
   return choice.use;
 }
 
@@ -390,22 +513,32 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   const std::size_t z_stride = c ? sizeof(double) : 0;
   const std::size_t z_count = c ? n : 0;
   double t_value = m.t.value_or(0.0);
+  if (m.pre) {
+    // Geocentric x, y, z to longitude, latitude, height on their datum (a
+    // conversion), which the candidates start from. The points' own
+    // coordinates name them in errors below as converted.
+    proj_trans_generic(m.pre.get(), PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, z_stride, z_count, nullptr, 0,
+                       0);
+  }
   const std::vector<double> in_a(a, a + n), in_b(b, b + n);
   std::vector<double> in_c;
   if (c) in_c.assign(c, c + n);
 
-  // Longitude and latitude of each point where choices or areas need them.
+  // Longitude and latitude of each point where choices or areas need them
+  // (a geocentric source's with its z: x and y alone would be at 0°).
+  const bool single = m.available_count == 1 && m.all.size() == 1;
   std::vector<double> lon, lat;
   if (m.source_is_lonlat) {
     lon = in_a;
     lat = in_b;
-  } else if (m.to_lonlat && m.all.size() == 1 && m.batch_inside_area(in_a, in_b)) {
+  } else if (m.to_lonlat && single && m.batch_inside_area(in_a, in_b)) {
     m.source_area.seen += n;  // the whole batch lies inside: no point needs its own inverse
   } else if (m.to_lonlat) {
     lon = in_a;
     lat = in_b;
+    std::vector<double> z = c ? in_c : std::vector<double>();
     proj_trans_generic(m.to_lonlat.get(), PJ_FWD, lon.data(), sizeof(double), n, lat.data(), sizeof(double), n,
-                       nullptr, 0, 0, nullptr, 0, 0);
+                       c ? z.data() : nullptr, c ? sizeof(double) : 0, c ? n : 0, nullptr, 0, 0);
   }
   if (!lon.empty()) {
     for (std::size_t i = 0; i < n; ++i) m.source_area.check(lon[i], lat[i], [&] { return point_name(i); });
@@ -429,8 +562,11 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   auto finite = [&](std::size_t i) {
     return std::isfinite(a[i]) && std::isfinite(b[i]) && (!c || std::isfinite(c[i]));
   };
+  auto note_fallback = [&](std::size_t i) {
+    if (m.fallbacks++ == 0) m.first_fallback = point_name(i);
+  };
 
-  if (m.all.size() == 1) {
+  if (single) {
     Candidate& op = m.all.front();
     proj_trans_generic(op.op.get(), PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, z_stride, z_count,
                        m.t ? &t_value : nullptr, 0, m.t ? 1 : 0);
@@ -440,15 +576,18 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
     op.info.points += n;
     m.infos.front().points += n;
   } else {
-    // Each point's operation, then one batch per operation, then the points
-    // an operation could not move (outside its grid) one by one.
+    // Each point's operation (PROJ's own choice), then one batch per
+    // operation, then the points an operation could not move (outside its
+    // grid) one by one.
     std::vector<std::size_t> use(n);
     // A batch whose longitude/latitude box every candidate's area holds
     // whole or misses whole has one choice for all its points.
-    const std::optional<std::size_t> uniform = lon.empty() ? std::nullopt : m.uniform_choice(lon, lat);
+    const std::optional<std::size_t> uniform =
+        lon.empty() ? std::nullopt : m.uniform_choice(lon, lat, in_a[0], in_b[0], c ? in_c[0] : 0.0);
     if (uniform) std::fill(use.begin(), use.end(), *uniform);
     for (std::size_t i = 0; i < n && !uniform; ++i) {
-      const Impl::Choice choice = m.choose(lon.empty() ? 0.0 : lon[i], lat.empty() ? 0.0 : lat[i], 0);
+      const double plon = lon.empty() ? 0.0 : lon[i], plat = lat.empty() ? 0.0 : lat[i];
+      Impl::Choice choice = m.choose(in_a[i], in_b[i], c ? in_c[i] : 0.0, plon, plat, !lon.empty());
       if (choice.missing_better && !m.options.allow_fallback) {
         const auto& op = m.all[*choice.missing_better];
         std::vector<std::string> grids;
@@ -462,13 +601,15 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
                         joined(detail::proj_search_paths()) +
                         " (network access off); --allow-fallback uses the next operation instead");
       }
+      if (choice.missing_better) note_fallback(i);  // --allow-fallback: a worse operation than PROJ would use with its grid
+      if (!choice.use) choice.use = lon.empty() ? std::nullopt : m.fallback(plon, plat, {});
       if (!choice.use) fail_point(i, m.all.front(), "no operation's area of use holds it; the best-ranked is");
       use[i] = *choice.use;
     }
     std::vector<std::size_t> members;
     std::vector<double> x, y, z;
     if (uniform) run(m.all[*uniform], a, b, c, n);  // in place: a, b, c still hold the input
-    for (std::size_t k = 0; k < m.all.size() && !uniform; ++k) {
+    for (std::size_t k = 0; k < m.available_count && !uniform; ++k) {
       members.clear();
       for (std::size_t i = 0; i < n; ++i) {
         if (use[i] == k) members.push_back(i);
@@ -489,14 +630,18 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
         if (c) c[members[j]] = z[j];
       }
     }
+    std::vector<std::size_t> tried;
     for (std::size_t i = 0; i < n; ++i) {
       std::size_t k = use[i];
+      tried.assign(1, k);
       while (!finite(i)) {
         if (!m.options.allow_fallback) fail_point(i, m.all[k], "PROJ cannot move it with");
-        if (m.fallbacks++ == 0) m.first_fallback = point_name(i);
-        const Impl::Choice next = m.choose(lon.empty() ? 0.0 : lon[i], lat.empty() ? 0.0 : lat[i], k + 1);
-        if (!next.use) fail_point(i, m.all[k], "PROJ cannot move it with");
-        k = *next.use;
+        if (lon.empty()) fail_point(i, m.all[k], "PROJ cannot move it with");
+        note_fallback(i);
+        const auto next = m.fallback(lon[i], lat[i], tried);
+        if (!next) fail_point(i, m.all[k], "PROJ cannot move it with");
+        k = *next;
+        tried.push_back(k);
         a[i] = in_a[i];
         b[i] = in_b[i];
         if (c) c[i] = in_c[i];

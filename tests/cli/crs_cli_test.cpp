@@ -109,6 +109,7 @@ Axes columns_of(const Proj& p, const std::string& def) {
       const bool angular = out.geographic && k < 2;
       std::string stem = k == 0 ? (out.geographic ? "lon" : "easting") : k == 1 ? (out.geographic ? "lat" : "northing")
                                                                                  : (part == 1 ? "H" : "h");
+      if (t == PJ_TYPE_GEOCENTRIC_CRS) stem = k == 0 ? "x" : k == 1 ? "y" : "z";
       out.names.push_back(stem + "_" + unit_suffix(f, angular));
       out.to_si.push_back(f);
     }
@@ -437,8 +438,8 @@ TEST_F(CrsCli, Issue13_BadInputIsRefusedByNameWithNoOutput) {
        {"easting_m", "easting_ftus", "EPSG:2236"}},
       {"lat/lon for a projected CRS", "id,lat_deg,lon_deg\nA,1,2\n", "--crs EPSG:2236 --to-crs EPSG:4269", 3,
        {"lat_deg", "EPSG:2236"}},
-      {"ensemble where the realization matters", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n",
-       "--crs EPSG:4937 --to-crs 'EPSG:7912@2024.5'", 3, {"E_CRS_ENSEMBLE", "ETRS89", "European Terrestrial Reference Frame 2000"}},
+      {"an ensemble's name where a realization is needed", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n",
+       "--crs 'WGS 84' --to-crs 'EPSG:7912@2024.5'", 3, {"E_CRS_ENSEMBLE", "WGS84(G2139)"}},
       {"ambiguous frame name", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n", "--crs ETRS89 --to-crs EPSG:4979", 3,
        {"E_CRS_ENSEMBLE", "ETRF2000"}},
       {"missing grid", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n", "--crs EPSG:4979 --to-crs EPSG:4326+3855", 3,
@@ -709,6 +710,101 @@ TEST_F(CrsCli, Issue13_FitReadsControlInAnyCrs) {
   const RunResult twice = run("fit '" + path("ctl.csv").string() + "' --src-crs EPSG:2236 --src-zone 17N" + common);
   EXPECT_EQ(twice.exit_code, 2);
   EXPECT_NE(twice.err.find("--src-crs"), std::string::npos) << twice.err;
+}
+
+}  // namespace
+}  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// Where several operations compete, the one used for each point is PROJ's
+// own choice (proj_get_suggested_operation): against proj_trans of
+// proj_create_crs_to_crs on the same pair, at points chosen where a simpler
+// rule goes wrong (a geocentric source, whose latitude must come from x, y
+// and z; onshore Tunisia, where an offshore set has the better accuracy),
+// and for a pair whose best route PROJ finds only past a missing grid
+// (GDA94 -> ITRF2014).
+TEST_F(CrsCli, Issue13_TheOperationPerPointIsProjsOwnChoice) {
+  struct Case {
+    const char* what;
+    std::string from, to;
+    std::vector<std::array<double, 3>> points;  // in `from`, visualisation order
+    double t;
+    std::string reference_from;  // the source PROJ's reference starts from ("": `from`)
+  };
+  // Surface points in Dar es Salaam as WGS 84 ECEF (PROJ, from -6.8°, 39.28°, 0 m and -6.85°, 39.2°, 30 m).
+  Pj to_ecef = proj_.op("EPSG:4979", "EPSG:4978");
+  std::vector<std::array<double, 3>> dar, dar_geographic = {{39.28, -6.8, 0.0}, {39.2, -6.85, 30.0}};
+  for (const auto& g : dar_geographic) {
+    PJ_COORD e = proj_trans(to_ecef.get(), PJ_FWD, proj_coord(g[0], g[1], g[2], 0));
+    dar.push_back({e.xyz.x, e.xyz.y, e.xyz.z});
+  }
+  const std::vector<Case> cases = {
+      // PROJ 9.1.1 chooses a geocentric point's operation as if it were at
+      // latitude 0 (Kenya's set here, 3.6 m off); geoanchor chooses from the
+      // point's latitude: PROJ's choice for the same point given as latitude,
+      // longitude and height.
+      {"geocentric WGS 84 -> Arc 1960 in Dar es Salaam", "EPSG:4978", "EPSG:4210", dar, 0.0, "EPSG:4979"},
+      {"Carthage -> WGS 84 (G1762) onshore Tunis", "EPSG:4223", "EPSG:9057@2024.5", {{10.2, 36.8, 0.0}, {10.1, 36.7, 0.0}},
+       2024.5, ""},
+      {"GDA94 -> ITRF2014 at 2024.3", "EPSG:4939", "EPSG:7912@2024.3", {{151.2, -33.9, 10.0}, {115.86, -31.95, 20.0}},
+       2024.3, ""},
+      // Two static frames with a time-dependent operation between them: the epoch given on either.
+      {"ETRF2000@2020.0 -> ETRF2014", "EPSG:7931@2020.0", "EPSG:8403", {{8.0, 50.0, 100.0}, {15.0, 45.0, 300.0}}, 2020.0, ""},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    const std::string to_def = c.to.substr(0, c.to.find('@')), from_def = c.from.substr(0, c.from.find('@'));
+    Axes in = columns_of(proj_, from_def), out = columns_of(proj_, to_def);
+    std::ostringstream csv;
+    csv << "id," << in.names[0] << "," << in.names[1];
+    if (in.names.size() == 3) csv << "," << in.names[2];
+    csv << "\n";
+    for (std::size_t i = 0; i < c.points.size(); ++i) {
+      csv << "P" << i << "," << fmt(c.points[i][0]) << "," << fmt(c.points[i][1]);
+      if (in.names.size() == 3) csv << "," << fmt(c.points[i][2]);
+      csv << "\n";
+    }
+    write("p.csv", csv.str());
+    const Csv got = convert("p.csv", c.from, c.to);
+    const bool geographic_reference = !c.reference_from.empty();
+    Pj op = proj_.op(geographic_reference ? c.reference_from : from_def, to_def);
+    ASSERT_TRUE(op);
+    WorstCase worst;
+    for (std::size_t i = 0; i < c.points.size(); ++i) {
+      const auto& q = geographic_reference ? dar_geographic[i] : c.points[i];
+      PJ_COORD r = proj_trans(op.get(), PJ_FWD, proj_coord(q[0], q[1], q[2], c.t));
+      double d = std::numeric_limits<double>::quiet_NaN();
+      if (i < got.rows.size()) {
+        d = 0.0;
+        const double ref[3] = {r.xyz.x, r.xyz.y, r.xyz.z};
+        for (std::size_t k = 0; k < std::min<std::size_t>(out.names.size(), 3); ++k) {
+          const auto v = parse_finite_double(got.rows[i][got.col(out.names[k])]);
+          const bool angular = out.geographic && k < 2;
+          d = testing::nan_max(d, v ? std::abs(*v - ref[k]) * (angular ? 1.0 / kVsProjTol_deg : out.to_si[k] / kVsProjTol_m)
+                                    : std::numeric_limits<double>::quiet_NaN());
+        }
+      }
+      worst.add(d, i);
+    }
+    EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+  }
+}
+
+// A better operation whose grid is missing: refused naming it, or with
+// --allow-fallback the next one, counted in the warnings.
+TEST_F(CrsCli, Issue13_AFallbackPastAMissingGridIsRefusedOrCounted) {
+  write("es.csv", "id,lat_deg,lon_deg\nMAD,40.4,-3.7\nBCN,41.4,2.2\n");
+  const RunResult refused = run("convert '" + path("es.csv").string() + "' --crs EPSG:4230 --to-crs EPSG:4258 -o '" +
+                                path("o.csv").string() + "'");
+  EXPECT_EQ(refused.exit_code, 3);
+  EXPECT_NE(refused.err.find("E_CRS_GRID_MISSING"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(path("o.csv")));
+  const RunResult allowed = run("convert '" + path("es.csv").string() + "' --crs EPSG:4230 --to-crs EPSG:4258 -o '" +
+                                path("o.csv").string() + "' --allow-fallback");
+  ASSERT_EQ(allowed.exit_code, 0) << allowed.err;
+  EXPECT_NE(allowed.err.find("2 points were moved by a worse operation"), std::string::npos) << allowed.err;
 }
 
 }  // namespace

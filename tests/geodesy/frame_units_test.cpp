@@ -200,8 +200,6 @@ TEST(Frame, Point5_IsDynamicAgreesWithProjDbForEveryCatalogFrame) {
   RecordProperty("frames_checked_against_proj_db", from_proj_db);
 }
 
-// issue 12 point 5: the refusal names where the frame was read, the frame,
-// and the form that would be accepted.
 // Issue 13 point 5: a frame implies its ellipsoid, and that is the EPSG
 // dataset's ellipsoid of the frame's datum (proj.db), for every frame of the
 // catalog and the other families Frame::parse names.
@@ -243,6 +241,8 @@ TEST(Frame, Issue13_ImpliedEllipsoidIsProjDbsForEveryCatalogFrame) {
   EXPECT_FALSE(implied_ellipsoid(Frame::parse("Tokyo", "test")).has_value());
 }
 
+// issue 12 point 5: the refusal names where the frame was read, the frame,
+// and the form that would be accepted.
 TEST(Frame, Point5_DynamicFrameWithoutEpochIsRefusedNamingWhereAndTheForm) {
   try {
     require_epoch_if_dynamic(Frame::parse("ITRF2014", "c.csv"), "c.csv: comment 'source_frame = ITRF2014'");

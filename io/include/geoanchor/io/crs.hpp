@@ -83,15 +83,17 @@ struct CrsDescription {
 };
 
 // A CRS read through PROJ, with its optional coordinate epoch. Copies share
-// one PROJ object and are not safe to use from two threads at once; a
-// `CrsOperation` makes its own per thread.
+// one PROJ object and context and are not safe to use from two threads at
+// once; a `CrsOperation` builds its own PROJ objects in its own context
+// (one per CrsOperation; a thread needs its own CrsOperation).
 class Crs {
  public:
   // Throws geoanchor::Error (input, E_CRS) naming `where` (a flag or key)
   // and the text for a code PROJ does not know, text PROJ cannot parse, an
   // unreadable @FILE, an epoch that is not a decimal year, a frame name the
   // catalog does not know, or an ambiguous frame name (WGS84, ETRS89,
-  // NAD83(CSRS): E_CRS_ENSEMBLE lists the realizations).
+  // NAD83(CSRS): E_CRS_ENSEMBLE lists the realizations). An epoch on a
+  // static CRS is kept (CrsOperation refuses it where nothing uses it).
   static Crs parse(std::string_view text, std::string_view where);
 
   const CrsDescription& description() const;

@@ -1,9 +1,11 @@
 #pragma once
 // Coordinates from one CRS to another through PROJ, over whole arrays.
 //
-// The operation is PROJ's choice for the pair (the candidates of
-// proj_create_operations, in PROJ's order; per point the first whose area
-// of use holds it, as proj_create_crs_to_crs chooses), with three rules
+// The operation is PROJ's choice for the pair: the candidates
+// proj_create_crs_to_crs chooses among (proj_create_operations, grids
+// missing discarded) and, per point, the one proj_get_suggested_operation
+// names (a geocentric source is chosen for from its latitude, longitude and
+// height: PROJ 9.1.1 would choose as if at latitude 0), with three rules
 // that PROJ leaves to the caller:
 //  - an operation PROJ calls a ballpark one (a datum change of unknown
 //    accuracy) is never used: no operation is an error;
