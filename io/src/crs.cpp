@@ -158,6 +158,19 @@ void read_axes(PJ_CONTEXT* ctx, PJ* crs, std::vector<CrsAxis>& out) {
   for (int i = 0; i < n; ++i) out.push_back(read_axis(ctx, cs.get(), i));
 }
 
+// An ensemble's name, members and accuracy.
+void read_ensemble(PJ_CONTEXT* ctx, PJ* ensemble, CrsDescription& d) {
+  d.datum = text_or(proj_get_name(ensemble));
+  d.ensemble = true;
+  const int n = proj_datum_ensemble_get_member_count(ctx, ensemble);
+  for (int i = 0; i < n; ++i) {
+    Pj member(proj_datum_ensemble_get_member(ctx, ensemble, i));
+    if (member) d.ensemble_members.push_back(text_or(proj_get_name(member.get())));
+  }
+  const double accuracy = proj_datum_ensemble_get_accuracy(ctx, ensemble);
+  if (accuracy > 0.0) d.ensemble_accuracy_m = accuracy;
+}
+
 // The datum (or ensemble) of a geodetic CRS, and what the catalog calls it.
 void read_datum(PJ_CONTEXT* ctx, PJ* geodetic, CrsDescription& d) {
   Pj datum(proj_crs_get_datum(ctx, geodetic));
@@ -168,15 +181,7 @@ void read_datum(PJ_CONTEXT* ctx, PJ* geodetic, CrsDescription& d) {
       d.frame_reference_epoch = proj_dynamic_datum_get_frame_reference_epoch(ctx, datum.get());
     }
   } else if (Pj ensemble(proj_crs_get_datum_ensemble(ctx, geodetic)); ensemble) {
-    d.datum = text_or(proj_get_name(ensemble.get()));
-    d.ensemble = true;
-    const int n = proj_datum_ensemble_get_member_count(ctx, ensemble.get());
-    for (int i = 0; i < n; ++i) {
-      Pj member(proj_datum_ensemble_get_member(ctx, ensemble.get(), i));
-      if (member) d.ensemble_members.push_back(text_or(proj_get_name(member.get())));
-    }
-    const double accuracy = proj_datum_ensemble_get_accuracy(ctx, ensemble.get());
-    if (accuracy > 0.0) d.ensemble_accuracy_m = accuracy;
+    read_ensemble(ctx, ensemble.get(), d);
   }
   // A PROJ string's +datum=WGS84 (or a WKT1 datum) names the datum without
   // its ensemble: it is the ensemble all the same.
@@ -186,17 +191,7 @@ void read_datum(PJ_CONTEXT* ctx, PJ* geodetic, CrsDescription& d) {
     PJ_OBJ_LIST* found = proj_create_from_name(ctx, "EPSG", name.c_str(), types, 1, 0, 1, nullptr);
     Pj ensemble(found && proj_list_get_count(found) > 0 ? proj_list_get(ctx, found, 0) : nullptr);
     proj_list_destroy(found);
-    if (ensemble) {
-      d.datum = name;
-      d.ensemble = true;
-      const int n = proj_datum_ensemble_get_member_count(ctx, ensemble.get());
-      for (int i = 0; i < n; ++i) {
-        Pj member(proj_datum_ensemble_get_member(ctx, ensemble.get(), i));
-        if (member) d.ensemble_members.push_back(text_or(proj_get_name(member.get())));
-      }
-      const double accuracy = proj_datum_ensemble_get_accuracy(ctx, ensemble.get());
-      if (accuracy > 0.0) d.ensemble_accuracy_m = accuracy;
-    }
+    if (ensemble) read_ensemble(ctx, ensemble.get(), d);
   }
   const std::string frame = detail::frame_name_of_epsg_datum(d.datum);
   const auto catalog = geodesy::catalog_frame_names();
