@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cctype>
+#include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
@@ -62,7 +63,8 @@ std::string canonical_spelling(std::string_view typed) {
       if (year.size() == 4 && year < "2000" && year.compare(0, 2, "19") == 0) key = std::string(family) + year.substr(2);
     }
   }
-  for (const std::string& known : catalog_frame_names()) {
+  static const std::vector<std::string> catalog = catalog_frame_names();  // the catalog is fixed
+  for (const std::string& known : catalog) {
     if (upper(known) == key) return known;
   }
   for (std::string_view known : kOtherKnownNames) {
