@@ -202,6 +202,7 @@ struct CrsOperation::Impl {
   std::vector<std::string> notes;
   Pj to_lonlat;  // source → geographic longitude/latitude, degrees (for choices and areas)
   bool source_is_lonlat = false, target_is_lonlat = false;
+  bool source_is_planar = false;  // a projected source: a box in its plane bounds a batch (not so for x, y, z)
   AreaTally source_area;
   std::size_t fallbacks = 0;
   std::string first_fallback;
@@ -391,6 +392,7 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
   m.source_swapped = chosen_from.axes.size() >= 2 && chosen_from.visualization_axes.size() >= 2 &&
                      chosen_from.axes[0].name != chosen_from.visualization_axes[0].name;
   m.source_is_lonlat = is_geographic_degrees(chosen_from);
+  m.source_is_planar = chosen_from.horizontal_type == "projected";
   m.target_is_lonlat = is_geographic_degrees(td);
   const bool need_lonlat = m.all.size() > 1 || (!m.source_is_lonlat && !m.target_is_lonlat && sd.area);
   if (need_lonlat && !m.source_is_lonlat) {
@@ -531,7 +533,7 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   if (m.source_is_lonlat) {
     lon = in_a;
     lat = in_b;
-  } else if (m.to_lonlat && single && m.batch_inside_area(in_a, in_b)) {
+  } else if (m.to_lonlat && single && m.source_is_planar && m.batch_inside_area(in_a, in_b)) {
     m.source_area.seen += n;  // the whole batch lies inside: no point needs its own inverse
   } else if (m.to_lonlat) {
     lon = in_a;
