@@ -331,6 +331,8 @@ void run_convert(const ConvertOptions& o) {
   const bool from_stdin = input.from_stdin();
   const std::string& source_name = input.name();
   io::CsvReader reader(input.stream(), source_name);
+  io::refuse_stated_crs(reader.leading_comments(), source_name,
+                        "read it with --to-crs DST (with --to ecef for its geocentric coordinates)");
   const auto& header = reader.header();
   const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
   const io::CoordinateDecoder decoder(columns, header, in_frame, source_name);

@@ -15,6 +15,7 @@
 #include "geoanchor/io/coordinate_codec.hpp"
 #include "geoanchor/io/crs.hpp"
 #include "geoanchor/io/crs_columns.hpp"
+#include "geoanchor/io/crs_csv.hpp"
 #include "geoanchor/io/crs_operation.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
@@ -252,8 +253,23 @@ void run_transform(const TransformOptions& o) {
   const std::string& source_name = input.name();
   io::CsvReader reader(input.stream(), source_name);
   const auto& header = reader.header();
+  // A file that states its CRS: read with frame names, the statement would
+  // go unread; with a CRS in --from it must say the same.
+  if (!crs_mode) {
+    io::refuse_stated_crs(reader.leading_comments(), source_name, "give --from as a CRS (the statement is checked against it)");
+  }
   std::optional<CrsRows> crs_rows;
   if (crs_mode) crs_rows.emplace(*from_crs, *to_crs, header, source_name, io::NumberFormat{o.precision});
+  if (crs_mode) {
+    if (const auto stated = io::crs_from_comments(reader.leading_comments(), source_name)) {
+      const io::CrsColumns stated_columns = io::crs_input_columns(*stated, header, source_name, "the '# crs' comment");
+      if (!stated_columns.crs.same_as(crs_rows->input().crs)) {
+        throw Error(ErrorKind::input, "E_CRS_CONFLICT",
+                    "--from " + from_crs->display_name() + " contradicts the CRS " + source_name +
+                        " states above its header (" + stated->display_name() + "); fix one of them");
+      }
+    }
+  }
   // Frame mode reads geoanchor's columns; CRS mode the CRSs' (checked above).
   const io::CoordinateColumns columns =
       crs_mode ? io::CoordinateColumns{} : io::classify_coordinate_header(header, source_name);
@@ -373,7 +389,15 @@ void run_transform(const TransformOptions& o) {
            << (plate && t_to.year != t_from.year ? " and the plate model" : "") << " combined as independent)\n";
   }
 
-  for (const auto& c : reader.leading_comments()) out << c << '\n';
+  if (crs_mode) {
+    // The output states its CRS (at the output epoch when it is dynamic); the input's statement is dropped.
+    const io::Crs& out_crs = crs_rows->output().crs;
+    const bool dated = out_crs.description().dynamic && epochs_given;
+    for (const auto& c : io::crs_comments(dated ? out_crs.at_epoch(t_to, "--to") : out_crs)) out << c << '\n';
+  }
+  for (const auto& c : reader.leading_comments()) {
+    if (!crs_mode || !io::is_crs_comment(c)) out << c << '\n';
+  }
   io::write_csv_line(out, out_header);
   io::CsvRecord record;
   std::size_t rows = 0;

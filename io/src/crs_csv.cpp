@@ -74,6 +74,15 @@ std::vector<std::string> crs_comments(const Crs& crs) {
   return out;
 }
 
+void refuse_stated_crs(const std::vector<std::string>& comments, std::string_view source, std::string_view how) {
+  for (const auto& c : comments) {
+    if (!is_crs_comment(c)) continue;
+    throw Error(ErrorKind::input, "E_CRS_STATED",
+                std::string(source) + ": the file states its CRS above the header ('" + c.substr(0, 40) +
+                    (c.size() > 40 ? "…" : "") + "'), which this command does not read; " + std::string(how));
+  }
+}
+
 bool is_crs_comment(std::string_view comment) {
   return comment_value(comment, kCrsKey).has_value() || comment_value(comment, kEpochKey).has_value();
 }

@@ -6,6 +6,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/io/crs_csv.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "tile_common.hpp"
 
@@ -40,6 +41,9 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
 
   std::size_t first_coordinate = 0;
   const auto out_header = output_header(header, columns, out_names, source, first_coordinate);
+  refuse_stated_crs(reader.leading_comments(), source,
+                    "give the tile's frame in its sidecar or flags, without the '# crs' statement, or move it with "
+                    "geoanchor convert --to-crs");
   for (const auto& c : reader.leading_comments()) out << c << '\n';
   io::write_csv_line(out, out_header);
 

@@ -814,3 +814,40 @@ TEST_F(CrsCli, Issue13_AFallbackPastAMissingGridIsRefusedOrCounted) {
 
 }  // namespace
 }  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// A file that states its CRS is never read by a path that does not read
+// the statement (it would go on stating the input's CRS for the output):
+// refused, nothing written; transform with a CRS checks it and states its
+// own output's CRS and epoch.
+TEST_F(CrsCli, Issue13_AStatedCrsIsReadOrRefusedNeverCopied) {
+  write("g.csv", "id,lat_deg,lon_deg,h_m\nA,-33.8688,151.2093,50\n");
+  convert("g.csv", "EPSG:4939", "EPSG:7843");  // makes a file stating GDA2020 geographic 3D
+  const auto stated = path("out_g.csv");
+  fs::copy_file(stated, path("s.csv"));
+  const RunResult typed = run("convert '" + path("s.csv").string() + "' --to ecef -o '" + path("x.csv").string() + "'");
+  EXPECT_EQ(typed.exit_code, 3);
+  EXPECT_NE(typed.err.find("E_CRS_STATED"), std::string::npos) << typed.err;
+  const RunResult framed = run("transform '" + path("s.csv").string() + "' --from GDA2020 --to ITRF2014@2024.3 -o '" +
+                               path("x.csv").string() + "'");
+  EXPECT_EQ(framed.exit_code, 3);
+  EXPECT_NE(framed.err.find("E_CRS_STATED"), std::string::npos) << framed.err;
+  EXPECT_FALSE(fs::exists(path("x.csv")));
+
+  const RunResult moved = run("transform '" + path("s.csv").string() + "' --from EPSG:7843 --to 'EPSG:7912@2024.3' -o '" +
+                              path("t.csv").string() + "'");
+  ASSERT_EQ(moved.exit_code, 0) << moved.err;
+  const std::string t = slurp(path("t.csv"));
+  EXPECT_EQ(t.rfind("# crs = GEOGCRS[\"ITRF2014\"", 0), 0u) << t.substr(0, 60);
+  EXPECT_NE(t.find("\n# coordinate_epoch = 2024.3\n"), std::string::npos);
+  EXPECT_EQ(t.find("GDA2020"), std::string::npos);  // the input's statement is not copied
+  const RunResult clash = run("transform '" + path("s.csv").string() + "' --from EPSG:4939 --to 'EPSG:7912@2024.3' -o '" +
+                              path("c.csv").string() + "'");
+  EXPECT_EQ(clash.exit_code, 3);
+  EXPECT_NE(clash.err.find("E_CRS_CONFLICT"), std::string::npos) << clash.err;
+}
+
+}  // namespace
+}  // namespace geoanchor

@@ -40,6 +40,13 @@ std::vector<std::string> crs_comments(const Crs& crs);
 // and states its own.
 bool is_crs_comment(std::string_view comment);
 
+// Refuses (geoanchor::Error, input, E_CRS_STATED) a CSV that states its CRS
+// where the reader does not read that statement (apply's CSV tiles,
+// convert --to KIND, transform with frame names): copied, it would state
+// the wrong CRS of the output; ignored, the input could be read in another.
+// `how` says how to read it instead.
+void refuse_stated_crs(const std::vector<std::string>& leading_comments, std::string_view source, std::string_view how);
+
 class CrsCsvConverter {
  public:
   // Throws geoanchor::Error (input) as crs_input_columns, and when a kept
