@@ -675,20 +675,26 @@ namespace {
 TEST_F(CrsCli, Issue13_FitReadsControlInAnyCrs) {
   constexpr double kIdentity_m = 1e-4;    // translation, metres (PROJ's own round trip is ~1e-9 m)
   constexpr double kIdentity_ppm = 1e-3;  // scale
+  // The same marks: in State Plane feet (source, read through --src-crs) and
+  // as ECEF on NAD83's GRS 80 made by PROJ's cart (target, geoanchor's own
+  // x_dst_m columns), so the CRS path is checked against an independent one.
   Pj op = proj_.op("EPSG:4269", "EPSG:2236");
+  PJ* cart = proj_create(proj_.ctx(), "+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=cart +ellps=GRS80");
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> dlat(-0.1, 0.1), dlon(-0.1, 0.1), hh(0.0, 60.0);
   std::ostringstream csv, stated;
-  const std::string header = "id,easting_src_ftus,northing_src_ftus,h_src_m,lat_dst_deg,lon_dst_deg,h_dst_m\n";
+  const std::string header = "id,easting_src_ftus,northing_src_ftus,h_src_m,x_dst_m,y_dst_m,z_dst_m\n";
   csv << header;
   for (int i = 0; i < 12; ++i) {
     const double lat = 28.4 + dlat(rng), lon = -81.3 + dlon(rng), h = hh(rng);
     PJ_COORD p = proj_trans(op.get(), PJ_FWD, proj_coord(lon, lat, 0, 0));
-    csv << "P" << i << "," << fmt(p.xy.x) << "," << fmt(p.xy.y) << "," << fmt(h) << "," << fmt(lat) << "," << fmt(lon) << ","
-        << fmt(h) << "\n";
+    PJ_COORD x = proj_trans(cart, PJ_FWD, proj_coord(lon, lat, h, 0));
+    csv << "P" << i << "," << fmt(p.xy.x) << "," << fmt(p.xy.y) << "," << fmt(h) << "," << fmt(x.xyz.x) << ","
+        << fmt(x.xyz.y) << "," << fmt(x.xyz.z) << "\n";
   }
+  proj_destroy(cart);
   write("ctl.csv", csv.str());
-  const std::string common = " --model helmert7 --convention position_vector --dst-crs EPSG:4269 -o '" + path("t.json").string() + "' --overwrite";
+  const std::string common = " --model helmert7 --convention position_vector -o '" + path("t.json").string() + "' --overwrite";
   const RunResult r = run("fit '" + path("ctl.csv").string() + "' --src-crs EPSG:2236" + common);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto params = nlohmann::json::parse(slurp(path("t.json")))["parameters"];
