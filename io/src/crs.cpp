@@ -276,7 +276,22 @@ CrsDescription describe(PJ_CONTEXT* ctx, PJ* crs) {
   d.name = text_or(proj_get_name(crs));
   const char* auth = proj_get_id_auth_name(crs, 0);
   const char* code = proj_get_id_code(crs, 0);
-  if (auth && code) d.identifier = std::string(auth) + ":" + code;
+  if (auth && code) {
+    d.identifier = std::string(auth) + ":" + code;
+  } else if (proj_get_type(crs) != PJ_TYPE_COMPOUND_CRS) {
+    // A WKT or PROJ string without an ID: the EPSG CRS PROJ holds it to be,
+    // when it is sure (confidence 100).
+    int* confidence = nullptr;
+    PJ_OBJ_LIST* matches = proj_identify(ctx, crs, "EPSG", nullptr, &confidence);
+    if (matches && proj_list_get_count(matches) >= 1 && confidence && confidence[0] == 100) {
+      Pj match(proj_list_get(ctx, matches, 0));
+      const char* ma = match ? proj_get_id_auth_name(match.get(), 0) : nullptr;
+      const char* mc = match ? proj_get_id_code(match.get(), 0) : nullptr;
+      if (ma && mc) d.identifier = std::string(ma) + ":" + mc;
+    }
+    proj_int_list_destroy(confidence);
+    proj_list_destroy(matches);
+  }
   const PJ_TYPE type = proj_get_type(crs);
   d.type = type_name(type);
   Pj horizontal_owner, vertical_owner;
