@@ -108,8 +108,7 @@ json sidecar_start(const ConvertOptions& o, bool from_stdin) {
 }
 
 json crs_record(const io::Crs& crs, const io::CrsColumns& columns) {
-  json names = json::array();
-  for (std::size_t i : columns.write_order) names.push_back(columns.names[i]);
+  const json names = io::written_names(columns);
   const auto& d = crs.description();
   return json{{"crs", crs.text()},
               {"name", d.name},
@@ -177,11 +176,8 @@ void run_convert_crs(const ConvertOptions& o) {
   // operation was evaluated at (PROJ does not move points in time): the
   // output states it.
   const bool epoch_from_input = out_columns.crs.description().dynamic && !out_columns.crs.epoch() && op.epoch();
-  const io::CrsColumns written =
-      epoch_from_input ? io::CrsColumns{out_columns.crs.at_epoch(geodesy::DecimalYear{*op.epoch()}, "--to-crs"),
-                                        out_columns.names, out_columns.angular, out_columns.write_order,
-                                        out_columns.orthometric}
-                       : out_columns;
+  io::CrsColumns written = out_columns;
+  if (epoch_from_input) written.crs = out_columns.crs.at_epoch(geodesy::DecimalYear{*op.epoch()}, "--to-crs");
   io::CrsCsvConverter converter(reader, in_columns, out_columns, io::NumberFormat{o.precision});
 
   if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);

@@ -79,6 +79,7 @@ class CrsRows {
         to_ecef_(in_.crs, in_.crs.geocentric("--from"), "--from"),
         from_ecef_(out_.crs.geocentric("--to"), out_.crs, "--to"),
         index_(io::column_indices(in_, header)),
+        coordinates_(io::coordinate_columns_at(index_)),
         numbers_(numbers) {
     if (!in_.has_height()) {
       throw Error(ErrorKind::input, "E_COLUMN",
@@ -87,15 +88,7 @@ class CrsRows {
                       " (h_<unit> ellipsoidal, or H_<unit> with a compound CRS EPSG:h+v)");
     }
   }
-  bool is_coordinate(std::size_t column) const {
-    return std::find(index_.begin(), index_.end(), column) != index_.end();
-  }
-  std::size_t first_coordinate() const { return *std::min_element(index_.begin(), index_.end()); }
-  std::vector<std::string> names() const {
-    std::vector<std::string> n;
-    for (std::size_t k : out_.write_order) n.push_back(out_.names[k]);
-    return n;
-  }
+  const io::CoordinateColumns& coordinates() const { return coordinates_; }
   geodesy::EcefPosition decode(const io::CsvRecord& r, const std::vector<std::string>& header, const std::string& source,
                                const std::string& where) {
     double v[3];
@@ -122,6 +115,7 @@ class CrsRows {
   io::CrsColumns in_, out_;
   io::CrsOperation to_ecef_, from_ecef_;
   std::vector<std::size_t> index_;
+  io::CoordinateColumns coordinates_;
   io::NumberFormat numbers_;
 };
 
@@ -326,22 +320,12 @@ void run_transform(const TransformOptions& o) {
   std::size_t first_coordinate = 0;
   std::vector<std::string> out_header;
   if (crs_mode) {
-    first_coordinate = crs_rows->first_coordinate();
-    const auto names = crs_rows->names();
-    for (std::size_t i = 0; i < header.size(); ++i) {
-      if (i == first_coordinate) out_header.insert(out_header.end(), names.begin(), names.end());
-      if (crs_rows->is_coordinate(i)) continue;
-      if (std::find(names.begin(), names.end(), header[i]) != names.end()) {
-        throw Error(ErrorKind::input, "E_COLUMN",
-                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] +
-                        "' would appear twice in the output (it is an output coordinate); rename it");
-      }
-      out_header.push_back(io::csv_quote(header[i]));
-    }
+    out_header = io::output_header(header, crs_rows->coordinates(), io::written_names(crs_rows->output()), source_name,
+                                   first_coordinate);
   } else {
     out_header = io::output_header(header, columns, encoder->column_names(), source_name, first_coordinate);
   }
-  const auto is_coordinate = [&](std::size_t i) { return crs_mode ? crs_rows->is_coordinate(i) : columns.is_coordinate(i); };
+  const io::CoordinateColumns& coordinate_columns = crs_mode ? crs_rows->coordinates() : columns;
 
   // Standard output (no -o, or -o -) gets the rows and no sidecar.
   if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
@@ -428,7 +412,7 @@ void run_transform(const TransformOptions& o) {
     fields.clear();
     for (std::size_t i = 0; i < header.size(); ++i) {
       if (i == first_coordinate) fields.insert(fields.end(), coords.begin(), coords.end());
-      if (is_coordinate(i)) continue;
+      if (coordinate_columns.is_coordinate(i)) continue;
       bool replaced = false;
       for (std::size_t k = 0; k < 3 && has_velocity; ++k) {
         if (i == *velocity[k]) {
@@ -477,8 +461,7 @@ void run_transform(const TransformOptions& o) {
   if (crs_mode) {
     // The CRSs as given and as PROJ writes them, and the columns read and written.
     const auto crs_record = [](const io::Crs& crs, const io::CrsColumns& c) {
-      json names = json::array();
-      for (std::size_t k : c.write_order) names.push_back(c.names[k]);
+      const json names = io::written_names(c);
       return json{{"crs", crs.text()}, {"name", crs.description().name},
                   {"identifier", crs.description().identifier.empty() ? json(nullptr) : json(crs.description().identifier)},
                   {"columns", names}, {"wkt2", c.crs.wkt2()},

@@ -24,7 +24,6 @@ using detail::text_or;
 
 namespace {
 
-constexpr double kUnitMatch = 1e-12;  // relative, of a unit's conversion factor
 constexpr std::size_t kEchoChars = 80;  // of a text quoted back in an error
 
 std::string echo(std::string_view text) {
@@ -130,7 +129,6 @@ Pj create_from_frame(PJ_CONTEXT* ctx, const geodesy::Frame& frame, std::string_v
   return crs;
 }
 
-bool same_factor(double a, double b) { return std::abs(a - b) <= kUnitMatch * std::abs(b); }
 
 CrsAxis read_axis(PJ_CONTEXT* ctx, PJ* cs, int i) {
   const char* name = nullptr;
@@ -207,8 +205,7 @@ void read_datum(PJ_CONTEXT* ctx, PJ* geodetic, CrsDescription& d) {
   const char* unit = nullptr;
   if (pm && proj_prime_meridian_get_parameters(ctx, pm.get(), &longitude, &factor, &unit)) {
     d.prime_meridian = text_or(proj_get_name(pm.get()));
-    constexpr double kRadPerDeg = 0.017453292519943295;
-    d.prime_meridian_deg = factor > 0.0 ? longitude * factor / kRadPerDeg : longitude;
+    d.prime_meridian_deg = factor > 0.0 ? longitude * factor / detail::kRadiansPerDegree : longitude;
   }
 }
 
@@ -550,19 +547,17 @@ Crs Crs::geocentric(std::string_view where) const {
 std::string proj_version_text() { return text_or(proj_info().version); }
 
 std::string column_unit_suffix(const CrsAxis& axis, std::string_view crs_name) {
-  constexpr double kRadPerDeg = 0.017453292519943295;
-  constexpr double kRadPerGrad = 0.015707963267948967;
   constexpr double kFoot_m = 0.3048;
   constexpr double kUsFoot_m = 1200.0 / 3937.0;
   constexpr double kKilometre_m = 1000.0;
   if (axis.unit_type == "angular") {
-    if (same_factor(axis.unit_to_si, kRadPerDeg)) return "deg";
-    if (same_factor(axis.unit_to_si, kRadPerGrad)) return "grad";
+    if (detail::same_unit_factor(axis.unit_to_si, detail::kRadiansPerDegree)) return "deg";
+    if (detail::same_unit_factor(axis.unit_to_si, detail::kRadiansPerGrad)) return "grad";
   } else {
-    if (same_factor(axis.unit_to_si, 1.0)) return "m";
-    if (same_factor(axis.unit_to_si, kUsFoot_m)) return "ftus";
-    if (same_factor(axis.unit_to_si, kFoot_m)) return "ft";
-    if (same_factor(axis.unit_to_si, kKilometre_m)) return "km";
+    if (detail::same_unit_factor(axis.unit_to_si, 1.0)) return "m";
+    if (detail::same_unit_factor(axis.unit_to_si, kUsFoot_m)) return "ftus";
+    if (detail::same_unit_factor(axis.unit_to_si, kFoot_m)) return "ft";
+    if (detail::same_unit_factor(axis.unit_to_si, kKilometre_m)) return "km";
   }
   throw Error(ErrorKind::input, "E_CRS_UNIT",
               "CRS '" + std::string(crs_name) + "': axis '" + axis.name + "' is in " + axis.unit_name +

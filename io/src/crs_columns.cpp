@@ -174,3 +174,21 @@ std::vector<std::size_t> column_indices(const CrsColumns& columns, const std::ve
 }
 
 }  // namespace geoanchor::io
+
+namespace geoanchor::io {
+
+CoordinateColumns coordinate_columns_at(const std::vector<std::size_t>& indices) {
+  CoordinateColumns c;
+  c.first = indices.at(0);
+  c.second = indices.at(1);
+  if (indices.size() > 2) c.third = indices[2];
+  return c;
+}
+
+std::vector<std::string> written_names(const CrsColumns& columns) {
+  std::vector<std::string> names;
+  for (std::size_t k : columns.write_order) names.push_back(columns.names[k]);
+  return names;
+}
+
+}  // namespace geoanchor::io

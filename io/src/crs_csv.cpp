@@ -91,21 +91,8 @@ CrsCsvConverter::CrsCsvConverter(const CsvReader& reader, const CrsColumns& inpu
                                  NumberFormat format)
     : input_(input), output_(output), format_(format), header_(reader.header()), source_(reader.source_name()) {
   in_index_ = column_indices(input, header_);
-  is_coordinate_.assign(header_.size(), false);
-  for (std::size_t i : in_index_) is_coordinate_[i] = true;
-  first_coordinate_ = *std::min_element(in_index_.begin(), in_index_.end());
-  std::vector<std::string> out_names;
-  for (std::size_t k : output.write_order) out_names.push_back(output.names[k]);
-  for (std::size_t i = 0; i < header_.size(); ++i) {
-    if (i == first_coordinate_) out_header_.insert(out_header_.end(), out_names.begin(), out_names.end());
-    if (is_coordinate_[i]) continue;
-    if (std::find(out_names.begin(), out_names.end(), header_[i]) != out_names.end()) {
-      throw Error(ErrorKind::input, "E_COLUMN",
-                  source_ + ": header column " + std::to_string(i + 1) + " '" + header_[i] +
-                      "' would appear twice in the output (it is an output coordinate); rename it");
-    }
-    out_header_.push_back(csv_quote(header_[i]));
-  }
+  coordinates_ = coordinate_columns_at(in_index_);
+  out_header_ = io::output_header(header_, coordinates_, written_names(output), source_, first_coordinate_);
 }
 
 std::size_t CrsCsvConverter::run(CsvReader& reader, CrsOperation& op, std::ostream& out) {
@@ -167,7 +154,7 @@ std::size_t CrsCsvConverter::run(CsvReader& reader, CrsOperation& op, std::ostre
             fields.push_back(output_.angular[w] ? format_.degrees(values[w]) : format_.metres(values[w]));
           }
         }
-        if (!is_coordinate_[i]) fields.push_back(r.raw[i]);
+        if (!coordinates_.is_coordinate(i)) fields.push_back(r.raw[i]);
       }
       write_csv_line(out, fields);
       ++rows;

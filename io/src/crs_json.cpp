@@ -19,10 +19,7 @@ json axis_json(const CrsAxis& a) {
 
 json columns_json(const Crs& crs, bool with_height) {
   try {
-    const CrsColumns c = crs_output_columns(crs, with_height, false, "CRS");
-    json names = json::array();
-    for (std::size_t i : c.write_order) names.push_back(c.names[i]);
-    return names;
+    return json(written_names(crs_output_columns(crs, with_height, false, "CRS")));
   } catch (const Error& e) {
     return json(std::string("none: ") + e.what());
   }

@@ -141,11 +141,9 @@ std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool a
 }
 
 bool is_geographic_degrees(const CrsDescription& d) {
-  constexpr double kRadPerDeg = 0.017453292519943295;
-  constexpr double kRel = 1e-12;
   if (d.horizontal_type != "geographic 2D" && d.horizontal_type != "geographic 3D") return false;
   if (d.prime_meridian_deg != 0.0 || d.axes.size() < 2) return false;
-  return std::abs(d.axes[0].unit_to_si - kRadPerDeg) < kRel * kRadPerDeg;
+  return detail::same_unit_factor(d.axes[0].unit_to_si, detail::kRadiansPerDegree);
 }
 
 // Points outside an area of use: counted, the first kept.
@@ -174,7 +172,7 @@ Pj geographic_3d_on_datum(PJ_CONTEXT* ctx, PJ* geocentric) {
   Pj datum(proj_crs_get_datum(ctx, geocentric));
   if (!datum) datum.reset(proj_crs_get_datum_ensemble(ctx, geocentric));
   if (!datum) return nullptr;
-  Pj cs(proj_create_ellipsoidal_3D_cs(ctx, PJ_ELLPS3D_LATITUDE_LONGITUDE_HEIGHT, "degree", 0.017453292519943295, "metre", 1.0));
+  Pj cs(proj_create_ellipsoidal_3D_cs(ctx, PJ_ELLPS3D_LATITUDE_LONGITUDE_HEIGHT, "degree", detail::kRadiansPerDegree, "metre", 1.0));
   const std::string name = text_or(proj_get_name(geocentric)) + " (geographic 3D)";
   return Pj(cs ? proj_create_geographic_crs_from_datum(ctx, name.c_str(), datum.get(), cs.get()) : nullptr);
 }
@@ -197,7 +195,6 @@ struct CrsOperation::Impl {
   // then those whose grids are missing (never used; named when better).
   std::vector<Candidate> all;
   bool source_swapped = false;  // the source's own axis order is not the visualisation order
-  std::vector<CrsOperationCandidate> infos;
   std::optional<double> t;
   std::vector<std::string> notes;
   Pj to_lonlat;  // source → geographic longitude/latitude, degrees (for choices and areas)
@@ -297,8 +294,8 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     m.all = list_operations(ctx, m.src.get(), m.dst.get(), false,
                             PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID, &m.available);
     chosen_from.type = chosen_from.horizontal_type = "geographic 3D";
-    chosen_from.axes = {CrsAxis{"Geodetic latitude", "Lat", "north", "degree", 0.017453292519943295, "angular"},
-                        CrsAxis{"Geodetic longitude", "Lon", "east", "degree", 0.017453292519943295, "angular"},
+    chosen_from.axes = {CrsAxis{"Geodetic latitude", "Lat", "north", "degree", detail::kRadiansPerDegree, "angular"},
+                        CrsAxis{"Geodetic longitude", "Lon", "east", "degree", detail::kRadiansPerDegree, "angular"},
                         CrsAxis{"Ellipsoidal height", "h", "up", "metre", 1.0, "linear"}};
     chosen_from.visualization_axes = {chosen_from.axes[1], chosen_from.axes[0], chosen_from.axes[2]};
     chosen_from.prime_meridian_deg = 0.0;
@@ -386,7 +383,6 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     for (auto& g : c.info.grids) {
       if (g.available) g.sha256 = sha256_file_hex(g.path);
     }
-    m.infos.push_back(c.info);
   }
 
   m.source_swapped = chosen_from.axes.size() >= 2 && chosen_from.visualization_axes.size() >= 2 &&
@@ -576,7 +572,6 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
       if (!finite(i)) fail_point(i, op, "PROJ cannot move it with");
     }
     op.info.points += n;
-    m.infos.front().points += n;
   } else {
     // Each point's operation (PROJ's own choice), then one batch per
     // operation, then the points an operation could not move (outside its
@@ -651,7 +646,6 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
       }
       use[i] = k;
       m.all[k].info.points += 1;
-      m.infos[k].points += 1;
     }
   }
   if (m.target_is_lonlat && !m.source_is_lonlat && lon.empty()) {
@@ -659,7 +653,11 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   }
 }
 
-const std::vector<CrsOperationCandidate>& CrsOperation::candidates() const { return impl_->infos; }
+std::vector<CrsOperationCandidate> CrsOperation::candidates() const {
+  std::vector<CrsOperationCandidate> out;
+  for (const auto& c : impl_->all) out.push_back(c.info);
+  return out;
+}
 
 std::optional<double> CrsOperation::epoch() const { return impl_->t; }
 

@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "geoanchor/io/coordinate_columns.hpp"
 #include "geoanchor/io/crs.hpp"
 
 namespace geoanchor::io {
@@ -55,5 +56,12 @@ CrsColumns crs_output_columns(const Crs& crs, bool with_height, bool geocentric,
 
 // Header indices of `columns.names` in `header`, in the same order.
 std::vector<std::size_t> column_indices(const CrsColumns& columns, const std::vector<std::string>& header);
+
+// Those columns as CoordinateColumns (which header columns are coordinates),
+// for io::output_header.
+CoordinateColumns coordinate_columns_at(const std::vector<std::size_t>& indices);
+
+// The names `columns` are written under, in their write order.
+std::vector<std::string> written_names(const CrsColumns& columns);
 
 }  // namespace geoanchor::io

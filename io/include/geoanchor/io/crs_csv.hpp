@@ -70,7 +70,7 @@ class CrsCsvConverter {
   std::vector<std::string> header_;
   std::string source_;
   std::vector<std::size_t> in_index_;
-  std::vector<bool> is_coordinate_;
+  CoordinateColumns coordinates_;  // which input columns are the coordinates
   std::size_t first_coordinate_ = 0;
   std::vector<std::string> out_header_;
 };

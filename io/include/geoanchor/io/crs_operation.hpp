@@ -74,7 +74,7 @@ class CrsOperation {
   // projection's domain); nothing non-finite is ever returned.
   void transform(double* a, double* b, double* c, std::size_t n, const std::function<std::string(std::size_t)>& point_name);
 
-  const std::vector<CrsOperationCandidate>& candidates() const;
+  std::vector<CrsOperationCandidate> candidates() const;
   // The coordinate epoch the operation is evaluated at (PROJ's t), if any.
   std::optional<double> epoch() const;
   // Warnings gathered so far: an ensemble where the realization cannot
