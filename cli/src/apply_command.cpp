@@ -76,7 +76,7 @@ CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
   cmd->add_option("--out-dir", o.out_dir, "Folder for the outputs (same file names) and their sidecars")->required();
   cmd->add_option("--transform", o.transform, "Transform file (JSON) from geoanchor fit");
   cmd->add_flag("--inverse", o.inverse, "Apply the transform's exact inverse (target -> source)");
-  cmd->add_option("--to", o.to, "Output coordinates: ecef|geodetic|enu|utm|tm (default: the tile's)");
+  cmd->add_option("--to", o.to, "Output coordinates: ecef|geodetic|enu|utm|tm (default: the tile's; or --to-crs)");
   cmd->add_option("--origin", o.origin, "Output ENU origin LAT,LON,H (deg, deg, ellipsoidal m)");
   cmd->add_option("--zone", o.zone, "Output UTM zone, e.g. 32N");
   cmd->add_option("--tm", o.tm, "Output Transverse Mercator LAT0,LON0,K0,FE,FN");
@@ -85,6 +85,13 @@ CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
   cmd->add_option("--from-origin", o.from_origin, "Input ENU origin LAT,LON,H, when no sidecar or WKT states it");
   cmd->add_option("--from-zone", o.from_zone, "Input UTM zone, when no sidecar or WKT states it");
   cmd->add_option("--from-tm", o.from_tm, "Input Transverse Mercator, when no sidecar or WKT states it");
+  cmd->add_option("--crs", o.crs,
+                  "CRS of the tiles, when no sidecar, LAS WKT or '# crs = …' comment states it: EPSG:n, EPSG:h+v, "
+                  "WKT, PROJJSON, PROJ string, @FILE or a frame name; CRS@EPOCH");
+  cmd->add_option("--to-crs", o.to_crs, "CRS of the outputs, moved through PROJ (instead of --to); CRS@EPOCH");
+  cmd->add_flag("--allow-fallback", o.allow_fallback,
+                "With a CRS: where PROJ's best operation's grid is missing or does not hold a point, use the next "
+                "operation (recorded as a warning) instead of refusing");
   cmd->add_option("--resolution", o.resolution_m, "LAS quantization step in metres (default: the input's)")
       ->check(finite_range(1e-6, 10.0));
   cmd->add_flag("--epoch-from-gps-time", o.epoch_from_gps_time,
@@ -120,6 +127,9 @@ int run_apply(const ApplyOptions& o) {
   request.from_origin = o.from_origin;
   request.from_zone = o.from_zone;
   request.from_tm = o.from_tm;
+  request.crs = o.crs;
+  request.to_crs = o.to_crs;
+  request.allow_fallback = o.allow_fallback;
   request.resolution_m = o.resolution_m;
   request.epoch_from_gps_time = o.epoch_from_gps_time;
   request.max_extrapolation_m = o.max_extrapolation_m;

@@ -22,6 +22,8 @@ struct ApplyOptions {
   std::optional<std::string> to, origin, zone, tm, ellipsoid;
   // Input frame, when no sidecar or LAS WKT states it.
   std::optional<std::string> from_frame, from_origin, from_zone, from_tm;
+  std::optional<std::string> crs, to_crs;  // any CRS through PROJ
+  bool allow_fallback = false;
   std::optional<double> resolution_m;
   bool epoch_from_gps_time = false;  // LAS: a 14-parameter transform at each point's GPS time
   double max_extrapolation_m = 10000.0;

@@ -198,24 +198,7 @@ void run_convert_crs(const ConvertOptions& o) {
   side["input"].update(crs_record(source_crs, in_columns));
   side["output"] = {{"path", o.output}, {"kind", "crs"}, {"rows", rows}};
   side["output"].update(crs_record(epoch_from_input ? written.crs : target_crs, written));
-  json candidates = json::array();
-  for (const auto& c : op.candidates()) {
-    json grids = json::array();
-    for (const auto& g : c.grids) {
-      grids.push_back({{"name", g.name}, {"path", g.available ? json(g.path) : json(nullptr)},
-                       {"sha256", g.available ? json(g.sha256) : json(nullptr)}, {"on_this_machine", g.available}});
-    }
-    candidates.push_back({{"name", c.name},
-                          {"identifier", c.identifier.empty() ? json(nullptr) : json(c.identifier)},
-                          {"accuracy_m", c.accuracy_m ? json(*c.accuracy_m) : json(nullptr)},
-                          {"grids", grids},
-                          {"proj_pipeline", c.proj_string.empty() ? json(nullptr) : json(c.proj_string)},
-                          {"time_dependent", c.time_dependent},
-                          {"points", c.points}});
-  }
-  side["operation"] = {{"authority", "PROJ " + std::string(io::proj_version_text())},
-                       {"epoch", op.epoch() ? json(*op.epoch()) : json(nullptr)},
-                       {"candidates", candidates}};
+  side["operation"] = json::parse(io::operation_record_json(op));
   side["warnings"] = warnings;
   publish_with_provenance(output, side.dump(2) + "\n", "the converted rows", o.json, o.output);
 }

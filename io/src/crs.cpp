@@ -367,7 +367,10 @@ Crs Crs::parse(std::string_view typed, std::string_view where) {
   if (const auto at = definition.rfind('@'); at != std::string::npos && at > 0) {
     const std::string tail = trim(std::string_view(definition).substr(at + 1));
     const bool wkt_or_json = definition.find_first_of("[{") != std::string::npos;
-    if (!tail.empty() && (std::isdigit(static_cast<unsigned char>(tail[0])) || tail[0] == '.' || tail[0] == '-' ||
+    // In WKT or JSON the epoch follows the closing bracket: an '@' inside a
+    // quoted name or remark ("ITRF2014@2024.5") is the text's own.
+    const bool inside_text = wkt_or_json && tail.find_first_of("]}\"") != std::string::npos;
+    if (!tail.empty() && !inside_text && (std::isdigit(static_cast<unsigned char>(tail[0])) || tail[0] == '.' || tail[0] == '-' ||
                           (!wkt_or_json && tail.find_first_of(" +=:") == std::string::npos))) {
       epoch = geodesy::parse_decimal_year(tail, std::string(where) + ": coordinate epoch of CRS " + echo(text));
       definition = trim(std::string_view(definition).substr(0, at));

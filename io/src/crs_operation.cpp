@@ -3,6 +3,8 @@
 #include "geoanchor/io/crs_operation.hpp"
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
+
 #include <cmath>
 #include <limits>
 
@@ -659,6 +661,27 @@ std::vector<CrsOperationCandidate> CrsOperation::candidates() const {
   return out;
 }
 
+void CrsOperation::estimate(double* a, double* b, double* c, std::size_t n) const {
+  const Impl& m = *impl_;
+  if (n == 0 || m.all.empty()) return;
+  const std::size_t z_stride = c ? sizeof(double) : 0;
+  const std::size_t z_count = c ? n : 0;
+  double t_value = m.t.value_or(0.0);
+  if (m.pre) {
+    proj_trans_generic(m.pre.get(), PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, z_stride, z_count, nullptr, 0,
+                       0);
+  }
+  // PROJ's best-ranked available operation; a point it cannot move is NaN.
+  proj_trans_generic(m.all.front().op.get(), PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, z_stride, z_count,
+                     m.t ? &t_value : nullptr, 0, m.t ? 1 : 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(std::isfinite(a[i]) && std::isfinite(b[i]) && (!c || std::isfinite(c[i])))) {
+      a[i] = b[i] = std::numeric_limits<double>::quiet_NaN();
+      if (c) c[i] = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+}
+
 std::optional<double> CrsOperation::epoch() const { return impl_->t; }
 
 std::vector<std::string> CrsOperation::warnings() const {
@@ -669,6 +692,31 @@ std::vector<std::string> CrsOperation::warnings() const {
                   "choice for them (--allow-fallback); the first is " + impl_->first_fallback);
   }
   return out;
+}
+
+std::string operation_record_json(const CrsOperation& op) {
+  using nlohmann::ordered_json;
+  ordered_json candidates = ordered_json::array();
+  for (const auto& c : op.candidates()) {
+    ordered_json grids = ordered_json::array();
+    for (const auto& g : c.grids) {
+      grids.push_back({{"name", g.name},
+                       {"path", g.available ? ordered_json(g.path) : ordered_json(nullptr)},
+                       {"sha256", g.available ? ordered_json(g.sha256) : ordered_json(nullptr)},
+                       {"on_this_machine", g.available}});
+    }
+    candidates.push_back({{"name", c.name},
+                          {"identifier", c.identifier.empty() ? ordered_json(nullptr) : ordered_json(c.identifier)},
+                          {"accuracy_m", c.accuracy_m ? ordered_json(*c.accuracy_m) : ordered_json(nullptr)},
+                          {"grids", grids},
+                          {"proj_pipeline", c.proj_string.empty() ? ordered_json(nullptr) : ordered_json(c.proj_string)},
+                          {"time_dependent", c.time_dependent},
+                          {"points", c.points}});
+  }
+  const ordered_json record = {{"authority", "PROJ " + proj_version_text()},
+                               {"epoch", op.epoch() ? ordered_json(*op.epoch()) : ordered_json(nullptr)},
+                               {"candidates", candidates}};
+  return record.dump();
 }
 
 }  // namespace geoanchor::io

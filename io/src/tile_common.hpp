@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <span>
 #include <string>
@@ -63,5 +64,32 @@ inline void add_band_warnings(TileApplyResult& r, const std::string& source, con
 // Geodetic coordinates are (lat, lon, h) in a PointChain but (lon, lat, h)
 // as X, Y, Z in LAS and PLY, as GIS tools store them.
 inline bool lon_first_in_files(const ArrayFrame& f) { return f.kind == CoordinateKind::geodetic; }
+
+// Moves one chunk of points: the CRS stage before the chain, the chain
+// (at each point's epoch when `epochs` is given), the CRS stage after it.
+// A CRS stage throws (naming the point by `point_name`) for a point PROJ
+// cannot move; the chain leaves NaN and says why in its report.
+inline ChainReport move_points(const PointChain& chain, const TileApplyOptions& o, std::span<double> a, std::span<double> b,
+                               std::span<double> c, const std::vector<double>* epochs,
+                               const std::function<std::string(std::size_t)>& point_name) {
+  const bool z_in = !o.file_in || o.file_in->has_height;
+  const bool z_out = !o.file_out || o.file_out->has_height;
+  if (o.crs_before) o.crs_before->transform(a.data(), b.data(), z_in ? c.data() : nullptr, a.size(), point_name);
+  ChainReport report;
+  if (o.chain_used) report = epochs ? chain.apply_at_epochs(a, b, c, *epochs) : chain.apply(a, b, c);
+  if (o.crs_after) o.crs_after->transform(a.data(), b.data(), z_out ? c.data() : nullptr, a.size(), point_name);
+  return report;
+}
+
+// The same for a few points whose result is an estimate (a bounding box's
+// corners): nothing throws or is counted; what cannot be moved is NaN.
+inline void estimate_points(const PointChain& chain, const TileApplyOptions& o, std::span<double> a, std::span<double> b,
+                            std::span<double> c, const std::vector<double>* epochs) {
+  const bool z_in = !o.file_in || o.file_in->has_height;
+  const bool z_out = !o.file_out || o.file_out->has_height;
+  if (o.crs_before) o.crs_before->estimate(a.data(), b.data(), z_in ? c.data() : nullptr, a.size());
+  if (o.chain_used) epochs ? (void)chain.apply_at_epochs(a, b, c, *epochs) : (void)chain.apply(a, b, c);
+  if (o.crs_after) o.crs_after->estimate(a.data(), b.data(), z_out ? c.data() : nullptr, a.size());
+}
 
 }  // namespace geoanchor::io::detail

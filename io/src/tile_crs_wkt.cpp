@@ -19,6 +19,7 @@ namespace geoanchor::io {
 namespace {
 
 constexpr char kRemarkPrefix[] = "geoanchor frame ";
+constexpr char kEpochRemark[] = "coordinate epoch ";
 constexpr double kDegree_rad = 0.0174532925199433;
 // Parameters read back from WKT are compared with UTM's after unit
 // conversion: 1e-9 degrees and 1e-6 m are far below anything written.
@@ -52,6 +53,13 @@ using detail::Pj;
   throw Error(ErrorKind::input, "E_TILE_CRS", std::string(source) + ": LAS WKT: " + problem);
 }
 
+// A CRS that geoanchor's own coordinate kinds do not hold (why): the tile is
+// then read as a CRS that PROJ moves.
+struct NotTyped {
+  std::string why;
+};
+[[noreturn]] void not_typed(const std::string& why) { throw NotTyped{why}; }
+
 // Refuses a coordinate system whose axes geoanchor would misread: it takes
 // a tile's X, Y, Z as the CRS kind's axes in `directions`, in order, each in
 // metres or (geographic) degrees. Any other order, direction or unit (a
@@ -82,13 +90,10 @@ int require_understood_axes(PJ_CONTEXT* ctx, PJ* crs, std::string_view crs_name,
     const std::string axis = "axis " + std::to_string(k + 1) + " ('" + (name ? name : "?") + "', " + dir + ", " +
                              (unit ? unit : "?") + ")";
     if (dir != expected) {
-      fail(source, what + ": " + axis + ": geoanchor reads this axis as " + expected +
-                       "; other axis orders and directions are not read yet");
+      not_typed(what + ": " + axis + ": not the " + expected + " axis of geoanchor's own kinds");
     }
     if (!(std::abs(factor - expected_factor) <= kUnitMatch * expected_factor)) {
-      fail(source, what + ": " + axis + ": the unit is not " + (in_degrees ? "the degree" : "the metre") +
-                       " (conversion factor " + format_shortest(factor) + "); geoanchor would read its numbers as " +
-                       (in_degrees ? "degrees" : "metres") + ", so the tile is refused, not moved");
+      not_typed(what + ": " + axis + ": the unit is not " + (in_degrees ? "the degree" : "the metre"));
     }
     ++k;
   }
@@ -97,8 +102,8 @@ int require_understood_axes(PJ_CONTEXT* ctx, PJ* crs, std::string_view crs_name,
   const char* pm_unit = nullptr;
   if (pm && proj_prime_meridian_get_parameters(ctx, pm.get(), &longitude, &pm_factor, &pm_unit) && longitude != 0.0) {
     const char* pm_name = proj_get_name(pm.get());
-    fail(source, what + ": prime meridian '" + (pm_name ? pm_name : "?") + "' at " + format_shortest(longitude) + " " +
-                     (pm_unit ? pm_unit : "?") + " from Greenwich; geoanchor reads longitudes from Greenwich only");
+    not_typed(what + ": prime meridian '" + (pm_name ? pm_name : "?") + "' at " + format_shortest(longitude) + " " +
+              (pm_unit ? pm_unit : "?") + " from Greenwich");
   }
   return axes;
 }
@@ -130,6 +135,19 @@ double param(PJ_CONTEXT* ctx, PJ* op, int epsg_code, std::string_view source) {
 }  // namespace
 
 std::string tile_crs_wkt(const TileMetadata& m) {
+  if (m.crs) {
+    std::string wkt = m.crs->wkt2();
+    // PROJ 9.1 writes no coordinate metadata: the epoch goes in a remark,
+    // as in geoanchor's own WKTs, which the reader takes it from.
+    if (m.crs->epoch() && wkt.find("REMARK[") == std::string::npos && !wkt.empty() && wkt.back() == ']') {
+      const std::string epoch = geodesy::format_decimal_year(*m.crs->epoch());
+      const std::string& frame = m.crs->description().catalog_frame;
+      const std::string text = frame.empty() ? std::string(kEpochRemark) + epoch
+                                             : kRemarkPrefix + frame + "@" + epoch + "; " + kEpochRemark + epoch;
+      wkt.insert(wkt.size() - 1, ",REMARK[" + quoted(text) + "]");
+    }
+    return wkt;
+  }
   if (!m.frame) throw Error(ErrorKind::usage, "E_FRAME_MISSING", "a tile CRS needs the frame (NAME@EPOCH)");
   if (m.height_type == "orthometric") {
     throw Error(ErrorKind::usage, "E_TILE_CRS",
@@ -184,7 +202,21 @@ std::string tile_crs_wkt(const TileMetadata& m) {
   throw Error(ErrorKind::usage, "E_TILE_CRS", "NED tiles have no WKT here; write them as ENU");
 }
 
-TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view source) {
+namespace {
+
+// The frame geoanchor's remark names ("geoanchor frame ITRF2014@2024.5; …").
+std::optional<geodesy::Frame> remark_frame(PJ* crs, std::string_view source) {
+  const char* remarks = proj_get_remarks(crs);
+  const std::string remark = remarks ? remarks : "";
+  const auto at = remark.find(kRemarkPrefix);
+  if (at == std::string::npos) return std::nullopt;
+  const auto start = at + sizeof kRemarkPrefix - 1;
+  const auto end = remark.find(';', start);
+  return geodesy::Frame::parse(remark.substr(start, end == std::string::npos ? std::string::npos : end - start),
+                               std::string(source) + ": LAS WKT remark");
+}
+
+TileMetadata typed_tile_metadata(std::string_view wkt, std::string_view source) {
   std::unique_ptr<PJ_CONTEXT, CtxDeleter> ctx(proj_context_create());
   proj_log_level(ctx.get(), PJ_LOG_NONE);
   const std::string text(wkt);
@@ -202,20 +234,8 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
   TileMetadata m;
   m.storage = "int32_scaled";
   PJ_TYPE type = proj_get_type(crs.get());
-  Pj horizontal;
   PJ* h = crs.get();
-  if (type == PJ_TYPE_COMPOUND_CRS) {
-    horizontal.reset(proj_crs_get_sub_crs(ctx.get(), crs.get(), 0));
-    Pj vertical(proj_crs_get_sub_crs(ctx.get(), crs.get(), 1));
-    if (!horizontal || !vertical) fail(source, "a compound CRS without its two parts");
-    h = horizontal.get();
-    type = proj_get_type(h);
-    const char* vertical_name = proj_get_name(vertical.get());
-    (void)require_understood_axes(ctx.get(), vertical.get(), vertical_name ? vertical_name : "?", {"up"}, false, source);
-    m.height_type = "orthometric";
-    m.vertical_datum = vertical_name ? vertical_name : "";
-    m.geoid_model = m.vertical_datum;
-  }
+  if (type == PJ_TYPE_COMPOUND_CRS) not_typed("a compound CRS (orthometric heights through its vertical CRS)");
   m.horizontal_crs = proj_get_name(h) ? proj_get_name(h) : "";
 
   int axes = 0;
@@ -241,12 +261,7 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
       m.vertical_datum = "ellipsoid";
       break;
     case PJ_TYPE_GEOGRAPHIC_2D_CRS:
-      if (m.height_type.empty()) {
-        fail(source, "'" + m.horizontal_crs + "' is a 2D geographic CRS: the heights (Z) are unlabelled; give a "
-                     "sidecar <tile>.geoanchor.json with vertical.height_type");
-      }
-      m.coordinates.kind = CoordinateKind::geodetic;
-      break;
+      not_typed("a 2-D geographic CRS");
     case PJ_TYPE_PROJECTED_CRS: {
       Pj op(proj_crs_get_coordoperation(ctx.get(), h));
       const char* method = nullptr;
@@ -274,14 +289,9 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
         p.false_northing_m = param(ctx.get(), op.get(), 8807, source);
         m.coordinates.projection = geodesy::ProjectionDef{geodesy::Ellipsoid::wgs84(), p, std::nullopt};
       } else {
-        fail(source, "'" + m.horizontal_crs + "' uses projection method '" + (method ? method : "?") + "' (" +
-                         (auth ? auth : "?") + ":" + c +
-                         "); geoanchor reads Transverse Mercator (EPSG:9807) and topocentric (EPSG:9837) tiles");
+        not_typed("projection method '" + std::string(method ? method : "?") + "'");
       }
-      if (axes < 3 && m.height_type.empty()) {
-        fail(source, "'" + m.horizontal_crs + "' is a 2D projected CRS: the heights (Z) are unlabelled; give a "
-                     "sidecar <tile>.geoanchor.json with vertical.height_type");
-      }
+      if (axes < 3) not_typed("a 2-D projected CRS");
       if (m.coordinates.kind == CoordinateKind::projected && m.height_type.empty()) {
         m.height_type = "ellipsoidal";
         m.vertical_datum = "ellipsoid";
@@ -289,7 +299,7 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
       break;
     }
     default:
-      fail(source, "'" + m.horizontal_crs + "' is not a geocentric, geographic 3D, projected or compound CRS");
+      not_typed("not a geocentric, geographic 3D or projected CRS");
   }
 
   // Datum and ellipsoid.
@@ -327,15 +337,9 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
   }
 
   // The frame: geoanchor's remark (with the coordinate epoch), else the datum.
-  const char* remarks = proj_get_remarks(crs.get());
-  const std::string remark = remarks ? remarks : "";
-  const auto at = remark.find(kRemarkPrefix);
   const std::string from_datum = detail::frame_name_of_epsg_datum(datum_text);
-  if (at != std::string::npos) {
-    const auto start = at + sizeof kRemarkPrefix - 1;
-    const auto end = remark.find(';', start);
-    m.frame = geodesy::Frame::parse(remark.substr(start, end == std::string::npos ? std::string::npos : end - start),
-                                    std::string(source) + ": LAS WKT remark");
+  if (auto named = remark_frame(crs.get(), source)) {
+    m.frame = named;
     if (!from_datum.empty() && from_datum != m.frame->name()) {
       fail(source, "the remark names frame " + m.frame->to_string() + " but the datum is '" + datum_text + "'");
     }
@@ -352,10 +356,68 @@ TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view sourc
   return m;
 }
 
+}  // namespace
+
+TileMetadata tile_metadata_from_wkt_as_crs(std::string_view wkt, std::string_view source) {
+  Crs crs = Crs::parse(wkt, std::string(source) + ": LAS WKT");
+  const auto& d = crs.description();
+  std::unique_ptr<PJ_CONTEXT, CtxDeleter> ctx(proj_context_create());
+  proj_log_level(ctx.get(), PJ_LOG_NONE);
+  const std::string text(wkt);
+  Pj pj(proj_create(ctx.get(), text.c_str()));
+  const auto named = pj ? remark_frame(pj.get(), source) : std::nullopt;
+  const char* remarks = pj ? proj_get_remarks(pj.get()) : nullptr;
+  const std::string remark = remarks ? remarks : "";
+  std::optional<geodesy::DecimalYear> epoch = named ? named->epoch() : std::nullopt;
+  if (const auto at = remark.find(kEpochRemark); !epoch && at != std::string::npos) {
+    const auto start = at + sizeof kEpochRemark - 1;
+    const auto end = remark.find_first_of("; ", start);
+    epoch = geodesy::parse_decimal_year(remark.substr(start, end == std::string::npos ? std::string::npos : end - start),
+                                        std::string(source) + ": LAS WKT remark");
+  }
+  if (named && !d.catalog_frame.empty() && named->name() != d.catalog_frame) {
+    fail(source, "the remark names frame " + named->to_string() + " but the datum is '" + d.datum + "' (" +
+                     d.catalog_frame + ")");
+  }
+  if (epoch && d.dynamic) crs = crs.at_epoch(*epoch, std::string(source) + ": LAS WKT remark");
+  return tile_metadata_from_crs(std::move(crs), source);
+}
+
+TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view source) {
+  try {
+    return typed_tile_metadata(wkt, source);
+  } catch (const NotTyped&) {
+    return tile_metadata_from_wkt_as_crs(wkt, source);
+  }
+}
+
+TileMetadata tile_metadata_from_crs(Crs crs, std::string_view source) {
+  TileMetadata m;
+  m.storage = "int32_scaled";
+  const auto& d = crs.description();
+  if (!d.catalog_frame.empty()) {
+    m.frame = geodesy::Frame::parse(d.catalog_frame + (crs.epoch() ? "@" + geodesy::format_decimal_year(*crs.epoch()) : ""),
+                                    std::string(source) + ": the CRS's datum");
+  }
+  m.horizontal_crs = d.name;
+  m.wkt_datum = d.datum;
+  const bool compound = d.type == "compound";
+  m.height_type = compound ? "orthometric" : d.axes.size() >= 3 && d.type != "geocentric" ? "ellipsoidal" : "";
+  m.vertical_datum = compound ? d.vertical_datum : m.height_type.empty() ? "" : "ellipsoid";
+  if (compound) m.geoid_model = d.geoid_model.empty() ? d.vertical_datum : d.geoid_model;
+  m.crs = std::move(crs);
+  return m;
+}
+
 std::string describe_mismatch(const TileMetadata& a, std::string_view an, const TileMetadata& b, std::string_view bn) {
   auto both = [&](const std::string& what, const std::string& x, const std::string& y) {
     return what + " " + x + " (" + std::string(an) + ") vs " + y + " (" + std::string(bn) + ")";
   };
+  if (a.crs || b.crs) {
+    if (!a.crs || !b.crs) return both("coordinates", kind_name(a), kind_name(b));
+    if (!a.crs->same_as(*b.crs)) return both("CRS", a.crs->display_name(), b.crs->display_name());
+    return "";
+  }
   if (a.frame && b.frame && !(*a.frame == *b.frame)) return both("frame", a.frame->to_string(), b.frame->to_string());
   if (kind_name(a.coordinates) != kind_name(b.coordinates)) {
     return both("coordinates", kind_name(a.coordinates), kind_name(b.coordinates));

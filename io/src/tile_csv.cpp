@@ -19,32 +19,68 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
   const std::string source = in.string();
   CsvReader reader(file, source);
   const auto& header = reader.header();
-  const CoordinateColumns columns = classify_coordinate_header(header, source);
-  if (columns.kind != o.from.kind) {
-    throw Error(ErrorKind::input, "E_TILE_KIND",
-                source + ": the header's coordinates are " + std::string(to_string(columns.kind)) +
-                    " but the tile's frame says " + std::string(to_string(o.from.kind)));
+  // The input's coordinate columns: a CRS's (in its visualisation order) or
+  // geoanchor's kinds (in the chain's order).
+  CoordinateColumns columns;
+  std::size_t cols[3] = {0, 0, 0};
+  if (o.file_in) {
+    const CrsColumns& in_cols = *o.file_in->columns;
+    const auto idx = column_indices(in_cols, header);
+    columns = coordinate_columns_at(idx);
+    if (idx.size() != 3) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source + ": " + in_cols.crs.display_name() + " is 2-D and the tile has no height column; a tile's "
+                           "heights must be stated (a 3-D or compound CRS)");
+    }
+    for (std::size_t k = 0; k < 3; ++k) cols[k] = idx[k];
+  } else {
+    columns = classify_coordinate_header(header, source);
+    if (columns.kind != o.from.kind) {
+      throw Error(ErrorKind::input, "E_TILE_KIND",
+                  source + ": the header's coordinates are " + std::string(to_string(columns.kind)) +
+                      " but the tile's frame says " + std::string(to_string(o.from.kind)));
+    }
+    if (!columns.third) {
+      throw Error(ErrorKind::input, "E_COLUMN", source + ": no h_m column; a tile's heights must be stated");
+    }
+    if (columns.utm_zone) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source + ": a utm_zone column; a tile has one projection, stated in its sidecar or --from-zone");
+    }
+    if (columns.epoch) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source + ": an epoch column; a tile has one epoch (its frame's); use `geoanchor convert` for "
+                           "per-row epochs");
+    }
+    cols[0] = columns.first;
+    cols[1] = columns.second;
+    cols[2] = *columns.third;
   }
-  if (!columns.third) {
-    throw Error(ErrorKind::input, "E_COLUMN", source + ": no h_m column; a tile's heights must be stated");
+  // The output's: a CRS's in its write order (latitude before longitude),
+  // or the kind's.
+  std::vector<std::size_t> write_order = {0, 1, 2};
+  std::vector<std::string> out_names;
+  if (o.file_out) {
+    out_names = written_names(*o.file_out->columns);
+    write_order = o.file_out->columns->write_order;
+  } else {
+    out_names = coordinate_column_names(o.to.kind);
   }
-  if (columns.utm_zone) {
-    throw Error(ErrorKind::input, "E_COLUMN",
-                source + ": a utm_zone column; a tile has one projection, stated in its sidecar or --from-zone");
-  }
-  if (columns.epoch) {
-    throw Error(ErrorKind::input, "E_COLUMN",
-                source + ": an epoch column; a tile has one epoch (its frame's); use `geoanchor convert` for "
-                         "per-row epochs");
-  }
-  const auto out_names = coordinate_column_names(o.to.kind);
 
   std::size_t first_coordinate = 0;
   const auto out_header = output_header(header, columns, out_names, source, first_coordinate);
-  refuse_stated_crs(reader.leading_comments(), source,
-                    "give the tile's frame in its sidecar or flags, without the '# crs' statement, or move it with "
-                    "geoanchor convert --to-crs");
-  for (const auto& c : reader.leading_comments()) out << c << '\n';
+  if (o.file_in) {
+    // The input's CRS statement was read (the planner); the output states its own.
+    for (const auto& c : reader.leading_comments()) {
+      if (!is_crs_comment(c)) out << c << '\n';
+    }
+  } else {
+    refuse_stated_crs(reader.leading_comments(), source,
+                      "give the tile's frame in its sidecar or flags, without the '# crs' statement, or move it with "
+                      "apply --to-crs");
+    for (const auto& c : reader.leading_comments()) out << c << '\n';
+  }
+  for (const auto& c : o.crs_comments) out << c << '\n';
   io::write_csv_line(out, out_header);
 
   TileApplyResult r;
@@ -56,8 +92,7 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
   std::vector<double> a(chunk), b(chunk), c(chunk);
   std::vector<std::size_t> rows;  // indices of data records in `records`
   std::vector<std::string> fields;
-  const std::size_t cols[3] = {columns.first, columns.second, *columns.third};
-  const bool geodetic = o.from.kind == CoordinateKind::geodetic;
+  const bool geodetic = !o.file_in && o.from.kind == CoordinateKind::geodetic;
   for (bool more = true; more;) {
     std::size_t filled = 0;
     rows.clear();
@@ -81,8 +116,8 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
     const std::size_t n = rows.size();
     std::span<double> as(a.data(), n), bs(b.data(), n), cs(c.data(), n);
     in_bounds.add(as, bs, cs);
-    const ChainReport report = chain.apply(as, bs, cs);
     auto line_of = [&](std::size_t k) { return source + ":" + std::to_string(records[rows[k]].line); };
+    const ChainReport report = detail::move_points(chain, o, as, bs, cs, nullptr, line_of);
     if (const std::size_t bad = detail::first_non_finite(as, bs, cs); bad < n) {
       throw Error(ErrorKind::input, "E_TRANSFORM",
                   line_of(bad) + ": the point has no finite position in the output frame" +
@@ -101,9 +136,8 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
       fields.clear();
       for (std::size_t i = 0; i < header.size(); ++i) {
         if (i == first_coordinate) {
-          fields.push_back(format_shortest(a[k]));
-          fields.push_back(format_shortest(b[k]));
-          fields.push_back(format_shortest(c[k]));
+          const double values[3] = {a[k], b[k], c[k]};
+          for (std::size_t w : write_order) fields.push_back(format_shortest(values[w]));
         }
         if (!columns.is_coordinate(i)) fields.push_back(rec.raw[i]);
       }

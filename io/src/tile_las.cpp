@@ -24,29 +24,49 @@ constexpr double kMetresPerDegree = 111319.49;
 constexpr double kInt32Max = 2147483647.0;
 constexpr double kInt32Min = -2147483648.0;
 
-double pow10_floor(double v) { return std::pow(10.0, std::floor(std::log10(v))); }
+// The power of ten at or below v (v itself when it is one: log10 may miss
+// an exact power by an ulp).
+double pow10_floor(double v) {
+  constexpr double kLogSlack = 1e-9;
+  return std::pow(10.0, std::floor(std::log10(v) + kLogSlack));
+}
 
 // The resolution in metres of the input's horizontal and vertical axes.
-std::array<double, 2> input_resolution_m(const LasHeader& h, const ArrayFrame& from) {
-  if (from.kind == CoordinateKind::geodetic) {
-    const double lat = 0.5 * (h.min[1] + h.max[1]);
-    const double coslat = std::isfinite(lat) && std::abs(lat) <= 90.0 ? std::cos(lat * M_PI / 180.0) : 1.0;
-    const double lon_m = h.scale[0] * kMetresPerDegree * std::max(coslat, 1e-3);
-    return {std::min(lon_m, h.scale[1] * kMetresPerDegree), h.scale[2]};
+std::array<double, 2> input_resolution_m(const LasHeader& h, const ArrayFrame& from, const std::optional<TileCrsAxes>& crs) {
+  if (crs && !crs->angular && !crs->geocentric) {
+    return {std::min(h.scale[0], h.scale[1]) * crs->horizontal_unit, h.scale[2] * crs->vertical_m};
   }
-  if (from.kind == CoordinateKind::ecef) {
+  if (crs ? crs->angular : from.kind == CoordinateKind::geodetic) {
+    const double unit_deg = crs ? crs->horizontal_unit : 1.0;
+    const double lat = 0.5 * (h.min[1] + h.max[1]) * unit_deg;
+    const double coslat = std::isfinite(lat) && std::abs(lat) <= 90.0 ? std::cos(lat * M_PI / 180.0) : 1.0;
+    const double lon_m = h.scale[0] * unit_deg * kMetresPerDegree * std::max(coslat, 1e-3);
+    return {std::min(lon_m, h.scale[1] * unit_deg * kMetresPerDegree), h.scale[2] * (crs ? crs->vertical_m : 1.0)};
+  }
+  if (crs || from.kind == CoordinateKind::ecef) {
     const double r = std::min({h.scale[0], h.scale[1], h.scale[2]});
     return {r, r};
   }
   return {std::min(h.scale[0], h.scale[1]), h.scale[2]};
 }
 
-std::array<double, 3> output_scale(const std::array<double, 2>& res, const ArrayFrame& to) {
-  if (to.kind == CoordinateKind::geodetic) {
+// The output's scale: the resolution in its units, a power of ten at or
+// below it where the unit is not the metre.
+std::array<double, 3> output_scale(const std::array<double, 2>& res, const ArrayFrame& to, const std::optional<TileCrsAxes>& crs) {
+  if (crs && !crs->geocentric) {
+    const double z = crs->vertical_m == 1.0 ? res[1] : pow10_floor(res[1] / crs->vertical_m);
+    if (crs->angular) {
+      const double unit = pow10_floor(res[0] / kMetresPerDegree / crs->horizontal_unit);
+      return {unit, unit, z};
+    }
+    const double xy = crs->horizontal_unit == 1.0 ? res[0] : pow10_floor(res[0] / crs->horizontal_unit);
+    return {xy, xy, z};
+  }
+  if (!crs && to.kind == CoordinateKind::geodetic) {
     const double deg = pow10_floor(res[0] / kMetresPerDegree);
     return {deg, deg, res[1]};
   }
-  if (to.kind == CoordinateKind::ecef) {
+  if (crs || to.kind == CoordinateKind::ecef) {
     const double r = std::min(res[0], res[1]);
     return {r, r, r};
   }
@@ -133,7 +153,10 @@ void LasTile::pass(Sink&& sink) {
     std::span<double> a(geo_in ? y_.data() : x_.data(), n);
     std::span<double> b(geo_in ? x_.data() : y_.data(), n);
     std::span<double> c(z_.data(), n);
-    ChainReport report;
+    auto point_name = [&](std::size_t i) {
+      return "point " + std::to_string(done + i + 1) + " (byte " + std::to_string(h.offset_to_points + (done + i) * len) +
+             ")";
+    };
     if (o_.epochs_from_gps_time) {
       // Adjusted standard GPS time: GPS seconds minus 1e9.
       epochs_.resize(n);
@@ -150,14 +173,9 @@ void LasTile::pass(Sink&& sink) {
         epoch_lo_ = std::min(epoch_lo_, epochs_[i]);
         epoch_hi_ = std::max(epoch_hi_, epochs_[i]);
       }
-      report = chain_.apply_at_epochs(a, b, c, epochs_);
-    } else {
-      report = chain_.apply(a, b, c);
     }
-    auto point_name = [&](std::size_t i) {
-      return "point " + std::to_string(done + i + 1) + " (byte " + std::to_string(h.offset_to_points + (done + i) * len) +
-             ")";
-    };
+    const ChainReport report =
+        detail::move_points(chain_, o_, a, b, c, o_.epochs_from_gps_time ? &epochs_ : nullptr, point_name);
     // The chain wrote the output in its order into the same arrays.
     std::span<double> xs = geo_out ? b : a;
     std::span<double> ys = geo_out ? a : b;
@@ -266,9 +284,19 @@ TileApplyResult LasTile::run() {
   }
 
   // Scale: the input's resolution (or --resolution), in the output's units.
-  std::array<double, 2> res = input_resolution_m(h, o_.from);
+  std::array<double, 2> res = input_resolution_m(h, o_.from, o_.file_in);
   if (o_.resolution_m) res = {*o_.resolution_m, *o_.resolution_m};
-  r.scale = output_scale(res, o_.to);
+  r.scale = output_scale(res, o_.to, o_.file_out);
+  // Angles in and out in the same unit: the input's steps stay (a step in
+  // metres would shrink by cos(latitude) on each pass).
+  const bool angular_in = o_.file_in ? o_.file_in->angular : o_.from.kind == CoordinateKind::geodetic;
+  const bool angular_out = o_.file_out ? o_.file_out->angular : o_.to.kind == CoordinateKind::geodetic;
+  const double unit_in = o_.file_in ? o_.file_in->horizontal_unit : 1.0;
+  const double unit_out = o_.file_out ? o_.file_out->horizontal_unit : 1.0;
+  if (!o_.resolution_m && angular_in && angular_out && unit_in == unit_out) {
+    r.scale[0] = h.scale[0];
+    r.scale[1] = h.scale[1];
+  }
 
   // Offset: the middle of the header's bounds carried through the chain.
   std::array<double, 3> lo = h.min, hi = h.max;
@@ -282,14 +310,11 @@ TileApplyResult LasTile::run() {
     cb.push_back(geo_in ? x : y);
     cc.push_back(z);
   }
-  if (o_.epochs_from_gps_time) {
-    // Only an estimate for the offset: any epoch moves the corners by
-    // centimetres at most, far inside the int32 range.
-    constexpr double kAnyEpoch = 2000.0;
-    chain_.apply_at_epochs(ca, cb, cc, std::vector<double>(ca.size(), kAnyEpoch));
-  } else {
-    chain_.apply(ca, cb, cc);
-  }
+  // Only an estimate for the offset: any epoch moves the corners by
+  // centimetres at most, far inside the int32 range.
+  constexpr double kAnyEpoch = 2000.0;
+  const std::vector<double> any_epoch(ca.size(), kAnyEpoch);
+  detail::estimate_points(chain_, o_, ca, cb, cc, o_.epochs_from_gps_time ? &any_epoch : nullptr);
   const bool geo_out = detail::lon_first_in_files(o_.to);
   Bounds est;
   est.add(geo_out ? cb : ca, geo_out ? ca : cb, cc);

@@ -101,6 +101,8 @@ std::string kind_name(const ArrayFrame& f) {
   return "?";
 }
 
+std::string kind_name(const TileMetadata& m) { return m.crs ? "crs" : kind_name(m.coordinates); }
+
 std::filesystem::path sidecar_path(const std::filesystem::path& tile) {
   return std::filesystem::path(tile.string() + ".geoanchor.json");
 }
@@ -115,7 +117,7 @@ TileMetadata read_tile_metadata(const std::filesystem::path& path) {
 
 TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view source) {
   const json j = parse_json_strict<json>(text_in, source);
-  only_keys(j, source, "", {"schema", "frame", "coordinates", "enu_origin", "projection", "horizontal_crs",
+  only_keys(j, source, "", {"schema", "frame", "coordinates", "enu_origin", "projection", "crs", "horizontal_crs",
                             "vertical", "survey", "provenance"});
   TileMetadata m;
   const json* schema = member(j, "schema", source, "");
@@ -124,8 +126,40 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
                                (schema ? ", got " + schema->dump() : std::string(", the key is missing")));
   }
   const json* frame = member(j, "frame", source, "");
-  if (!frame) fail(source, "frame", "missing: the tile's datum, realization and epoch, e.g. \"ITRF2014@2024.5\"");
-  m.frame = geodesy::Frame::parse(text(*frame, source, "frame"), std::string(source) + ": frame");
+  const json* coords_for_kind = member(j, "coordinates", source, "");
+  const bool crs_kind = coords_for_kind && coords_for_kind->is_object() && coords_for_kind->contains("kind") &&
+                        (*coords_for_kind)["kind"] == "crs";
+  if (!frame && !crs_kind) {
+    fail(source, "frame", "missing: the tile's datum, realization and epoch, e.g. \"ITRF2014@2024.5\"");
+  }
+  if (frame) m.frame = geodesy::Frame::parse(text(*frame, source, "frame"), std::string(source) + ": frame");
+  const json* crs = member(j, "crs", source, "");
+  if (crs && !crs_kind) fail(source, "crs", "given for coordinates that are not of kind \"crs\"; remove it or say kind \"crs\"");
+  if (crs_kind) {
+    if (!crs) fail(source, "crs", "missing for kind \"crs\": {\"wkt2\": \"...\", \"coordinate_epoch\": YEAR}");
+    only_keys(*crs, source, "crs", {"wkt2", "coordinate_epoch"});
+    const json* w = member(*crs, "wkt2", source, "crs");
+    if (!w) fail(source, "crs.wkt2", "missing: the CRS as WKT2");
+    std::string definition = text(*w, source, "crs.wkt2");
+    if (const json* e = member(*crs, "coordinate_epoch", source, "crs")) {
+      definition += "@" + geodesy::format_decimal_year(
+                              geodesy::DecimalYear{number(*e, source, "crs.coordinate_epoch", 1900, 2200, "[1900, 2200]")});
+    }
+    m.crs = Crs::parse(definition, std::string(source) + ": crs");
+    const auto& d = m.crs->description();
+    if (m.frame && !d.catalog_frame.empty() && m.frame->name() != d.catalog_frame) {
+      fail(source, "frame", "\"" + m.frame->to_string() + "\" but the CRS's datum is " + d.catalog_frame);
+    }
+    if (m.frame && m.crs->epoch() && !(m.frame->epoch() && m.frame->epoch()->year == m.crs->epoch()->year)) {
+      fail(source, "frame", "\"" + m.frame->to_string() + "\" but crs.coordinate_epoch is " +
+                                geodesy::format_decimal_year(*m.crs->epoch()));
+    }
+    if (!m.frame && !d.catalog_frame.empty()) {
+      m.frame = geodesy::Frame::parse(
+          d.catalog_frame + (m.crs->epoch() ? "@" + geodesy::format_decimal_year(*m.crs->epoch()) : ""),
+          std::string(source) + ": crs");
+    }
+  }
 
   const json* coords = member(j, "coordinates", source, "");
   if (!coords) fail(source, "coordinates", "missing: {\"kind\", \"ellipsoid\", \"storage\"}");
@@ -133,7 +167,12 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
   const json* kind = member(*coords, "kind", source, "coordinates");
   if (!kind) fail(source, "coordinates.kind", "missing; expected enu, ned, ecef, geodetic, utm or tm");
   const std::string k = text(*kind, source, "coordinates.kind");
-  if (const json* e = member(*coords, "ellipsoid", source, "coordinates")) {
+  if (k == "crs" && coords->contains("ellipsoid")) {
+    fail(source, "coordinates.ellipsoid", "given for kind \"crs\", whose CRS states its ellipsoid; remove it");
+  }
+  if (k == "crs") {
+    // The CRS says it all.
+  } else if (const json* e = member(*coords, "ellipsoid", source, "coordinates")) {
     m.coordinates.ellipsoid = ellipsoid(*e, source);
   } else if (k != "ecef") {
     fail(source, "coordinates.ellipsoid", "missing for " + k + " coordinates; expected WGS84, GRS80 or {\"a_m\", \"rf\"}");
@@ -167,7 +206,7 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
     o.point.h = geodesy::EllipsoidalHeight{number(*h, source, "enu_origin.h_m", -1.0e4, 1.0e5, "[-10000, 100000] m")};
     m.coordinates.origin = o;
     if (const json* src = member(*origin, "source", source, "enu_origin")) m.origin_source = text(*src, source, "enu_origin.source");
-  } else if (k == "ecef") {
+  } else if (k == "ecef" || k == "crs") {
     m.coordinates.kind = CoordinateKind::ecef;
   } else if (k == "geodetic") {
     m.coordinates.kind = CoordinateKind::geodetic;
@@ -202,7 +241,7 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
       m.coordinates.projection = geodesy::ProjectionDef{m.coordinates.ellipsoid, p, std::nullopt};
     }
   } else {
-    fail(source, "coordinates.kind", "value \"" + k + "\" unknown; expected enu, ned, ecef, geodetic, utm or tm");
+    fail(source, "coordinates.kind", "value \"" + k + "\" unknown; expected enu, ned, ecef, geodetic, utm, tm or crs");
   }
   if (origin && !m.coordinates.origin) fail(source, "enu_origin", "given for " + k + " coordinates, which have none");
   if (projection && !m.coordinates.projection) fail(source, "projection", "given for " + k + " coordinates, which have none");
@@ -261,9 +300,16 @@ std::string to_json_text(const TileMetadata& m) {
   nlohmann::ordered_json j;
   j["schema"] = kTileSchema;
   if (m.frame) j["frame"] = m.frame->to_string();
-  j["coordinates"] = {{"kind", kind_name(m.coordinates)},
-                      {"ellipsoid", ellipsoid_json(m.coordinates.ellipsoid)},
-                      {"storage", m.storage}};
+  if (m.crs) {
+    j["coordinates"] = {{"kind", "crs"}, {"storage", m.storage}};
+    nlohmann::ordered_json c = {{"wkt2", m.crs->wkt2()}};
+    if (m.crs->epoch()) c["coordinate_epoch"] = m.crs->epoch()->year;
+    j["crs"] = c;
+  } else {
+    j["coordinates"] = {{"kind", kind_name(m.coordinates)},
+                        {"ellipsoid", ellipsoid_json(m.coordinates.ellipsoid)},
+                        {"storage", m.storage}};
+  }
   if (m.coordinates.origin) {
     const auto& o = *m.coordinates.origin;
     j["enu_origin"] = {{"lat_deg", o.point.lat.deg()},

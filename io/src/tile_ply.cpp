@@ -163,6 +163,10 @@ TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& ou
   if (!file) throw Error(ErrorKind::io, "E_READ", in.string() + ": cannot open");
   const std::string source = in.string();
   const PlyHeader h = read_header(file, source);
+  if (h.coordinates_float32 && o.file_in) {
+    fail(source, std::to_string(h.element_line + 1),
+         "float32 x/y/z hold coordinates of a CRS; float32 is accepted only for map-local ENU/NED offsets");
+  }
   if (h.coordinates_float32 && o.from.kind != CoordinateKind::enu && o.from.kind != CoordinateKind::ned) {
     fail(source, std::to_string(h.element_line + 1),
          "float32 x/y/z hold " + kind_name(o.from) +
@@ -193,8 +197,8 @@ TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& ou
   auto transform = [&](std::size_t n, const std::string& where_first) {
     std::span<double> a(geo_in ? y.data() : x.data(), n), b(geo_in ? x.data() : y.data(), n), c(z.data(), n);
     in_bounds.add(a, b, c);
-    const ChainReport report = chain.apply(a, b, c);
     auto vertex = [&](std::size_t i) { return "vertex " + std::to_string(r.points + i + 1); };
+    const ChainReport report = detail::move_points(chain, o, a, b, c, nullptr, vertex);
     if (const std::size_t bad = detail::first_non_finite(a, b, c); bad < n) {
       throw Error(ErrorKind::input, "E_TRANSFORM",
                   source + ": " + vertex(bad) + " (of the chunk from " + where_first +

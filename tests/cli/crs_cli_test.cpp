@@ -22,6 +22,7 @@
 
 #include "accuracy.hpp"
 #include "cli_support.hpp"
+#include "las_builder.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "test_support.hpp"
 
@@ -33,6 +34,7 @@ using testing::CliTest;
 using testing::RunResult;
 using testing::slurp;
 using testing::WorstCase;
+using nlohmann::json;
 
 // Issue 13's acceptance: PROJ's own result on the same operation.
 constexpr double kVsProjTol_m = 1e-6;
@@ -141,6 +143,11 @@ class CrsCli : public CliTest {
     Pj c = proj_.crs(code);
     double w = 0, s = 0, e = 0, n = 0;
     EXPECT_TRUE(proj_get_area_of_use(proj_.ctx(), c.get(), &w, &s, &e, &n, nullptr)) << code;
+    return points_in_box(base, {w, s, e, n}, seed);
+  }
+  // The same inside a longitude/latitude box {west, south, east, north}.
+  std::vector<std::array<double, 3>> points_in_box(const std::string& base, std::array<double, 4> box, std::uint32_t seed) {
+    auto [w, s, e, n] = box;
     if (e < w) e += 360.0;
     const double dw = (e - w) * kAreaMargin, dn = (n - s) * kAreaMargin;
     std::mt19937 rng(seed);
@@ -853,6 +860,182 @@ TEST_F(CrsCli, Issue13_AStatedCrsIsReadOrRefusedNeverCopied) {
                               path("c.csv").string() + "'");
   EXPECT_EQ(clash.exit_code, 3);
   EXPECT_NE(clash.err.find("E_CRS_CONFLICT"), std::string::npos) << clash.err;
+}
+
+}  // namespace
+}  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// PROJ's WKT2:2019 of `def`, promoted to 3-D when `to_3d`, on one line.
+std::string wkt_of(const Proj& proj, const std::string& def, bool to_3d) {
+  Pj c = proj.crs(def);
+  Pj p(c && to_3d ? proj_crs_promote_to_3D(proj.ctx(), nullptr, c.get()) : nullptr);
+  const char* opts[] = {"MULTILINE=NO", nullptr};
+  const char* w = (p ? p : c) ? proj_as_wkt(proj.ctx(), p ? p.get() : c.get(), PJ_WKT2_2019, opts) : nullptr;
+  return w ? w : "";
+}
+
+class CrsLas : public CrsCli {
+ protected:
+  struct Tile {
+    std::vector<std::array<double, 3>> xyz;  // the values the file holds (quantized)
+  };
+  // A LAS 1.4 file (point format 6) in CRS `wkt`, its points at `points`
+  // quantized at `scale` (per axis); returns the values the file holds.
+  Tile las(const std::string& name, const std::string& wkt, const std::vector<std::array<double, 3>>& points,
+           const std::array<double, 3>& scale) {
+    testing::LasBuild b;
+    b.scale = scale;
+    for (std::size_t k = 0; k < 3; ++k) b.offset[k] = std::round(points.front()[k]);
+    Tile t;
+    for (const auto& p : points) {
+      std::array<std::int32_t, 3> q{};
+      std::array<double, 3> v{};
+      for (std::size_t k = 0; k < 3; ++k) {
+        q[k] = static_cast<std::int32_t>(std::lround((p[k] - b.offset[k]) / scale[k]));
+        v[k] = q[k] * scale[k] + b.offset[k];
+      }
+      b.xyz.push_back(q);
+      t.xyz.push_back(v);
+    }
+    b.vlrs.push_back({"LASF_Projection", 2112, "", std::vector<std::uint8_t>(wkt.begin(), wkt.end())});
+    fs::create_directories(path(name).parent_path());
+    testing::write_bytes(path(name), testing::build_las(b));
+    return t;
+  }
+  json verify(const fs::path& las) {
+    const std::string text = las_verify_text(las);
+    return text.empty() ? json() : json::parse(text);
+  }
+};
+
+// issue 13, acceptance 2: LAS tiles in EPSG:2236 promoted to 3-D (US survey
+// feet), a 2-D projected WKT from another prime meridian (NTF (Paris) /
+// Lambert zone II, through the ntf_r93 NTv2 grid) and a compound projected
+// + orthometric WKT (UTM 32N + EGM96 height, through egm96_15.gtx) are read,
+// moved and written as PROJ's own operation for the pair does (to half the
+// output's quantization step plus 1e-6 m, 1e-9°), and each output's WKT is
+// read back by PROJ as the output CRS.
+TEST_F(CrsLas, Issue13_LasTilesInAnyCrsAreMovedAsProjDoesAndStateTheirCrs) {
+  struct Case {
+    std::string name, source;
+    std::array<double, 4> box;  // west, south, east, north (degrees)
+    std::string to_crs, target;
+    std::array<double, 3> scale;
+    bool two_d;
+  };
+  const Case cases[] = {
+      {"florida", wkt_of(proj_, "EPSG:2236", true), {-81.6, 27.0, -80.4, 28.2}, "EPSG:26917",
+       wkt_of(proj_, "EPSG:26917", true), {0.01, 0.01, 0.01}, false},
+      {"paris", wkt_of(proj_, "EPSG:27572", false), {1.0, 46.0, 3.0, 48.0}, "EPSG:2154", wkt_of(proj_, "EPSG:2154", false),
+       {0.001, 0.001, 0.01}, true},
+      {"egm96", wkt_of(proj_, "EPSG:32632+5773", false), {8.0, 46.5, 9.5, 47.5}, "EPSG:4979",
+       wkt_of(proj_, "EPSG:4979", false), {0.001, 0.001, 0.001}, false},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    ASSERT_FALSE(c.source.empty() || c.target.empty());
+    // A tile's extent (a LAS axis holds 2^32 steps), inside the area of use
+    // and, for Paris, inside the ntf_r93 grid.
+    const auto points = points_in_box(c.source, c.box, 13);
+    const Tile in = las("in/" + c.name + ".las", c.source, points, c.scale);
+    const fs::path out = path("out_" + c.name);
+    const RunResult r = run("apply '" + path("in/" + c.name + ".las").string() + "' --to-crs " + c.to_crs +
+                            " --out-dir '" + out.string() + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json got = verify(out / (c.name + ".las"));
+    ASSERT_FALSE(got.is_null());
+    ASSERT_EQ(got["points"].size(), in.xyz.size());
+
+    // The output CRS, read back by PROJ as the one asked for.
+    const std::string wkt = got["wkt"];
+    Pj written = proj_.crs(wkt), target = proj_.crs(c.target);
+    ASSERT_TRUE(written) << wkt;
+    EXPECT_TRUE(proj_is_equivalent_to_with_ctx(proj_.ctx(), written.get(), target.get(), PJ_COMP_EQUIVALENT)) << wkt;
+
+    Pj op = proj_.op(c.source, c.target);
+    ASSERT_TRUE(op);
+    const bool angular = proj_get_type(target.get()) == PJ_TYPE_GEOGRAPHIC_3D_CRS ||
+                         proj_get_type(target.get()) == PJ_TYPE_GEOGRAPHIC_2D_CRS;
+    testing::WorstCase worst;  // in units of each axis's tolerance
+    for (std::size_t i = 0; i < in.xyz.size(); ++i) {
+      const auto& a = in.xyz[i];
+      PJ_COORD e = proj_trans(op.get(), PJ_FWD, proj_coord(a[0], a[1], c.two_d ? 0.0 : a[2], 0));
+      const double expected[3] = {e.xyz.x, e.xyz.y, c.two_d ? a[2] : e.xyz.z};  // a 2-D CRS's Z passes unchanged
+      for (std::size_t k = 0; k < 3; ++k) {
+        const double step = got["header"]["scale"][k].get<double>();
+        const double tol = 0.5 * step + (angular && k < 2 ? kVsProjTol_deg : kVsProjTol_m);
+        worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
+      }
+    }
+    EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+
+    const json side = json::parse(slurp(out / (c.name + ".las.geoanchor.json")));
+    EXPECT_EQ(side["coordinates"]["kind"], "crs");
+    Pj side_crs = proj_.crs(side["crs"]["wkt2"].get<std::string>());
+    EXPECT_TRUE(side_crs && proj_is_equivalent_to_with_ctx(proj_.ctx(), side_crs.get(), target.get(), PJ_COMP_EQUIVALENT));
+    const json& ops = side["provenance"]["crs_operations"];
+    ASSERT_EQ(ops.size(), 1u);
+    EXPECT_GT(ops[0]["candidates"].size(), 0u);
+    if (c.name == "paris") {
+      bool grid = false;
+      for (const auto& cand : ops[0]["candidates"]) {
+        for (const auto& g : cand["grids"]) {
+          if (g["on_this_machine"] == true && cand["points"].get<std::size_t>() > 0) grid = g["sha256"].is_string();
+        }
+      }
+      EXPECT_TRUE(grid) << ops.dump();
+    }
+    // The output reads back: its sidecar and WKT agree, and it moves on.
+    const RunResult again = run("apply '" + (out / (c.name + ".las")).string() + "' --to-crs " + c.to_crs +
+                                " --out-dir '" + path("again_" + c.name).string() + "'");
+    EXPECT_EQ(again.exit_code, 0) << again.err;
+  }
+}
+
+// A 2-D CRS's Z values are no heights: moving them into a 3-D CRS is
+// refused by name, with nothing written, unless --crs states the same CRS
+// in 3-D; and a flag that contradicts the tile's WKT is refused.
+TEST_F(CrsLas, Issue13_TwoDimensionalLasWktNeedsItsHeightsStated) {
+  const std::string two_d = wkt_of(proj_, "EPSG:2236", false), three_d = wkt_of(proj_, "EPSG:2236", true);
+  const auto points = points_in_box(two_d, {-81.6, 27.0, -80.4, 28.2}, 7);
+  const Tile in = las("in/fl.las", two_d, points, {0.01, 0.01, 0.01});
+  const fs::path out = path("out");
+  write("utm3d.wkt", wkt_of(proj_, "EPSG:26917", true));
+  const RunResult refused = run("apply '" + path("in/fl.las").string() + "' --to-crs '@" + path("utm3d.wkt").string() +
+                                "' --out-dir '" + out.string() + "'");
+  EXPECT_EQ(refused.exit_code, 3);
+  EXPECT_NE(refused.err.find("E_HEIGHT_TYPE"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("NAD83 / Florida East (ftUS)"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(out / "fl.las"));
+  EXPECT_FALSE(fs::exists(out / "fl.las.geoanchor.json"));
+
+  write("3d.wkt", three_d);
+  const RunResult stated = run("apply '" + path("in/fl.las").string() + "' --crs '@" + path("3d.wkt").string() +
+                               "' --to-crs EPSG:26917 --out-dir '" + out.string() + "'");
+  ASSERT_EQ(stated.exit_code, 0) << stated.err;
+  const json got = verify(out / "fl.las");
+  ASSERT_FALSE(got.is_null());
+  Pj op = proj_.op(three_d, wkt_of(proj_, "EPSG:26917", true));
+  testing::WorstCase worst;
+  for (std::size_t i = 0; i < in.xyz.size(); ++i) {
+    const auto& a = in.xyz[i];
+    const PJ_COORD e = proj_trans(op.get(), PJ_FWD, proj_coord(a[0], a[1], a[2], 0));
+    const double expected[3] = {e.xyz.x, e.xyz.y, e.xyz.z};
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double tol = 0.5 * got["header"]["scale"][k].get<double>() + kVsProjTol_m;
+      worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
+    }
+  }
+  EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+
+  const RunResult other = run("apply '" + path("in/fl.las").string() + "' --crs EPSG:2238 --to-crs EPSG:26917 --out-dir '" +
+                              path("other").string() + "'");
+  EXPECT_EQ(other.exit_code, 2);
+  EXPECT_NE(other.err.find("E_FRAME_CONFLICT"), std::string::npos) << other.err;
+  EXPECT_FALSE(fs::exists(path("other/fl.las")));
 }
 
 }  // namespace

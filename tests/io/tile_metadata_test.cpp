@@ -165,16 +165,16 @@ TEST(TileMetadata, WktOfEachKindParsesBackAndMeansWhatProjMakesOfIt) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("t.las: LAS WKT: PROJ cannot parse it"), std::string::npos) << e.what();
   }
-  try {
-    tile_metadata_from_wkt(
-        "GEOGCRS[\"WGS 84\",DATUM[\"World Geodetic System 1984\",ELLIPSOID[\"WGS 84\",6378137,298.257223563]],"
-        "CS[ellipsoidal,2],AXIS[\"lat\",north,ANGLEUNIT[\"degree\",0.0174532925199433]],AXIS[\"lon\",east,"
-        "ANGLEUNIT[\"degree\",0.0174532925199433]]]",
-        "t.las");
-    ADD_FAILURE() << "a 2D CRS was accepted for a tile with heights";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("heights (Z) are unlabelled"), std::string::npos) << e.what();
-  }
+  // A 2-D CRS: read as a CRS whose Z values are no coordinate (apply
+  // refuses to place them as heights unless --crs states them).
+  const TileMetadata two_d = tile_metadata_from_wkt(
+      "GEOGCRS[\"WGS 84\",DATUM[\"World Geodetic System 1984\",ELLIPSOID[\"WGS 84\",6378137,298.257223563]],"
+      "CS[ellipsoidal,2],AXIS[\"lat\",north,ANGLEUNIT[\"degree\",0.0174532925199433]],AXIS[\"lon\",east,"
+      "ANGLEUNIT[\"degree\",0.0174532925199433]]]",
+      "t.las");
+  ASSERT_TRUE(two_d.crs.has_value());
+  EXPECT_EQ(two_d.crs->description().axes.size(), 2u);
+  EXPECT_EQ(two_d.height_type, "");
 }
 
 // PROJ's WKT2:2019 of `crs` (an EPSG code), promoted to 3D when `to_3d`.
@@ -190,29 +190,28 @@ std::string projs_wkt(const char* crs, bool to_3d) {
   return out;
 }
 
-std::string wkt_error(const std::string& wkt) {
-  try {
-    (void)tile_metadata_from_wkt(wkt, "t.las");
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
-
 // issue 13 (its first defect): a tile CRS in US survey feet, in grads or
 // from another prime meridian was read as metres, degrees and Greenwich
-// (EPSG:2236 moved a tile 700 km); now each is refused, naming what it is.
-TEST(TileMetadata, Issue13_AxesInOtherUnitsOrFromAnotherMeridianAreRefusedByName) {
+// (EPSG:2236 moved a tile 700 km). Now each is read through PROJ as the CRS
+// it is (PROJ then moves its coordinates), never as geoanchor's own kinds;
+// the metre and the degree from Greenwich still read as those.
+TEST(TileMetadata, Issue13_AxesInOtherUnitsOrFromAnotherMeridianAreReadAsTheirCrs) {
+  auto crs_of = [](const std::string& wkt) {
+    const TileMetadata m = tile_metadata_from_wkt(wkt, "t.las");
+    return m.crs ? std::optional<CrsDescription>(m.crs->description()) : std::nullopt;
+  };
   const std::string florida = projs_wkt("EPSG:2236", true);  // NAD83 / Florida East (ftUS), TM
   ASSERT_FALSE(florida.empty()) << "PROJ has no EPSG:2236";
-  const std::string e1 = wkt_error(florida);
-  EXPECT_NE(e1.find("t.las: LAS WKT: 'NAD83 / Florida East (ftUS)': axis 1"), std::string::npos) << e1;
-  EXPECT_NE(e1.find("US survey foot"), std::string::npos) << e1;
-  EXPECT_NE(e1.find("refused, not moved"), std::string::npos) << e1;
+  const auto f = crs_of(florida);
+  ASSERT_TRUE(f) << "EPSG:2236 read as geoanchor's own TM in metres";
+  EXPECT_EQ(f->name, "NAD83 / Florida East (ftUS)");
+  EXPECT_EQ(f->axes.at(0).unit_name, "US survey foot");
 
   const std::string ntf = projs_wkt("EPSG:4807", true);  // NTF (Paris): grads from Paris
   ASSERT_FALSE(ntf.empty()) << "PROJ has no EPSG:4807";
-  EXPECT_NE(wkt_error(ntf).find("grad"), std::string::npos) << wkt_error(ntf);
+  const auto g = crs_of(ntf);
+  ASSERT_TRUE(g);
+  EXPECT_EQ(g->axes.at(0).unit_name, "grad");
 
   // Degrees, but longitudes from Paris.
   const std::string paris =
@@ -220,17 +219,20 @@ TEST(TileMetadata, Issue13_AxesInOtherUnitsOrFromAnotherMeridianAreRefusedByName
       "293.466021293627]],PRIMEM[\"Paris\",2.33722917,ANGLEUNIT[\"degree\",0.0174532925199433]],CS[ellipsoidal,3],"
       "AXIS[\"lat\",north,ANGLEUNIT[\"degree\",0.0174532925199433]],AXIS[\"lon\",east,ANGLEUNIT[\"degree\","
       "0.0174532925199433]],AXIS[\"h\",up,LENGTHUNIT[\"metre\",1]]]";
-  const std::string e3 = wkt_error(paris);
-  EXPECT_NE(e3.find("prime meridian 'Paris' at 2.33722917 degree from Greenwich"), std::string::npos) << e3;
+  const auto pm = crs_of(paris);
+  ASSERT_TRUE(pm);
+  EXPECT_EQ(pm->prime_meridian_deg, 2.33722917);
 
   // A southing (UPS South, promoted to 3D) is not read as a northing.
   const std::string ups = projs_wkt("EPSG:32761", true);
   ASSERT_FALSE(ups.empty()) << "PROJ has no EPSG:32761";
-  EXPECT_NE(wkt_error(ups).find("axis 1 ('Northing', north, metre): geoanchor reads this axis as east"), std::string::npos)
-      << wkt_error(ups);
+  EXPECT_TRUE(crs_of(ups));
 
-  // The metre and the degree from Greenwich still read (UTM 32N in 3D).
-  EXPECT_EQ(wkt_error(projs_wkt("EPSG:25832", true)), "");
+  // The metre and the degree from Greenwich still read as geoanchor's UTM (32N in 3D).
+  const TileMetadata utm = tile_metadata_from_wkt(projs_wkt("EPSG:25832", true), "t.las");
+  EXPECT_FALSE(utm.crs.has_value());
+  ASSERT_TRUE(utm.coordinates.projection && utm.coordinates.projection->utm);
+  EXPECT_EQ(utm.coordinates.projection->utm->to_string(), "32N");
 }
 
 const char* kHelmert = R"J({"model": "helmert7", "convention": "coordinate_frame",

@@ -104,6 +104,21 @@ class CliTest : public ::testing::Test {
     return shell(exe() + " " + args, stdin_file);
   }
 
+  // What the independent LAS reader (npm `copc`, tests/las-verify) prints
+  // for a LAS file, as JSON text: header, VLRs, WKT, every point's
+  // dimensions. "" (and a test failure) when the reader is not installed.
+  std::string las_verify_text(const std::filesystem::path& las) const {
+    const std::string verify = std::string(GEOANCHOR_SOURCE_DIR) + "/tests/las-verify";
+    if (!std::filesystem::exists(verify + "/node_modules/copc")) {
+      ADD_FAILURE() << "the independent LAS reader is not installed: run npm ci --prefix " << verify
+                    << " (scripts/test.sh does)";
+      return "";
+    }
+    const RunResult r = shell("node " + verify + "/verify.mjs '" + las.string() + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.out;
+  }
+
   // The names in `folder` (default: the test's folder), sorted.
   std::vector<std::string> files(const std::filesystem::path& folder = {}) const {
     std::vector<std::string> out;

@@ -20,6 +20,9 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/geodesy/utf8.hpp"
 #include "geoanchor/io/atomic_file.hpp"
+#include "geoanchor/io/crs_csv.hpp"
+#include "geoanchor/io/crs_operation.hpp"
+#include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/io/json_input.hpp"
 #include "geoanchor/io/point_chain.hpp"
@@ -131,7 +134,7 @@ std::pair<std::size_t, std::size_t> parse_shard(const std::string& s) {
 // The options that decide an output's content, for the resumability check.
 json request_json(const ApplyRequest& o) {
   auto opt = [](const std::optional<std::string>& v) { return v ? json(*v) : json(nullptr); };
-  return json{{"to", opt(o.to)},
+  json j{{"to", opt(o.to)},
               {"origin", opt(o.origin)},
               {"zone", opt(o.zone)},
               {"tm", opt(o.tm)},
@@ -143,6 +146,25 @@ json request_json(const ApplyRequest& o) {
               {"inverse", o.inverse},
               {"resolution_m", o.resolution_m ? json(*o.resolution_m) : json(nullptr)},
               {"epoch_from_gps_time", o.epoch_from_gps_time}};
+  // Keys added with issue 13, only when used (earlier outputs stay up to date).
+  if (o.crs) j["crs"] = *o.crs;
+  if (o.to_crs) j["to_crs"] = *o.to_crs;
+  if (o.allow_fallback) j["allow_fallback"] = true;
+  return j;
+}
+
+// The file axes of a tile in `crs`: units and order (visualisation order).
+io::TileCrsAxes file_axes(const io::Crs& crs) {
+  constexpr double kRadiansPerDegree = 0.017453292519943295;
+  const auto& d = crs.description();
+  io::TileCrsAxes a;
+  a.geocentric = d.type == "geocentric";
+  const auto& axes = d.visualization_axes.empty() ? d.axes : d.visualization_axes;
+  a.angular = !axes.empty() && axes[0].unit_type == "angular";
+  if (!axes.empty()) a.horizontal_unit = a.angular ? axes[0].unit_to_si / kRadiansPerDegree : axes[0].unit_to_si;
+  a.has_height = axes.size() >= 3;
+  if (a.has_height) a.vertical_m = axes[2].unit_to_si;
+  return a;
 }
 
 json enu_sigma_json(const Eigen::Matrix3d& cov_ecef, const geodesy::LocalOrigin& at) {
@@ -266,6 +288,27 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   io::TileApplyOptions ao;
   ao.from = p.in.coordinates;
   ao.to = p.out.coordinates;
+  // PROJ's stages (this thread's own operations).
+  const io::CrsOperation::Options crs_options{o_.allow_fallback};
+  std::unique_ptr<io::CrsOperation> before, after;
+  if (p.before) before = std::make_unique<io::CrsOperation>(p.before->first, p.before->second, tile, crs_options);
+  if (p.after) after = std::make_unique<io::CrsOperation>(p.after->first, p.after->second, tile, crs_options);
+  ao.crs_before = before.get();
+  ao.crs_after = after.get();
+  ao.chain_used = p.chain_used;
+  if (p.in.crs) ao.file_in = file_axes(*p.in.crs);
+  if (p.out.crs) ao.file_out = file_axes(*p.out.crs);
+  if (p.format == io::TileFormat::csv && (p.in.crs || p.out.crs)) {
+    std::ifstream f(p.input, std::ios::binary);
+    if (!f) throw Error(ErrorKind::io, "E_READ", tile + ": cannot open");
+    const io::CsvReader reader(f, tile);
+    if (p.in.crs) ao.file_in->columns = io::crs_input_columns(*p.in.crs, reader.header(), tile, "the tile's CRS");
+    if (p.out.crs) {
+      ao.file_out->columns = io::crs_output_columns(*p.out.crs, ao.file_out->has_height,
+                                                    p.out.crs->description().type == "geocentric", "--to-crs");
+      ao.crs_comments = io::crs_comments(*p.out.crs);
+    }
+  }
   ao.resolution_m = o_.resolution_m;
   ao.epochs_from_gps_time = o_.epoch_from_gps_time && t_ && t_->time_dependent();
   if (p.format == io::TileFormat::las) ao.output_wkt = io::tile_crs_wkt(p.out);
@@ -321,6 +364,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
       b.push_back(centre ? 0.5 * (res.in_min[1] + res.in_max[1]) : (k & 2 ? res.in_max[1] : res.in_min[1]));
       c.push_back(centre ? 0.5 * (res.in_min[2] + res.in_max[2]) : (k & 4 ? res.in_max[2] : res.in_min[2]));
     }
+    if (before) before->estimate(a.data(), b.data(), c.data(), a.size());  // the tile's CRS to its geocentric
     const io::ChainReport corners = to_ecef.apply(a, b, c);
     // A bounding-box corner may lie outside the input projection's domain
     // even when every point lies inside it: measure from the others, and say so.
@@ -400,8 +444,13 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   prov["input"] = p.input.string();
   prov["input_sha256"] = input_sha;
   prov["input_format"] = std::string(io::to_string(p.format));
-  prov["input_frame"] = p.in.frame->to_string();
-  prov["input_coordinates"] = io::kind_name(p.in.coordinates);
+  prov["input_frame"] = p.in.frame ? json(p.in.frame->to_string()) : json(nullptr);
+  prov["input_coordinates"] = io::kind_name(p.in);
+  if (p.in.crs) {
+    prov["input_crs"] = p.in.crs->display_name();
+    prov["input_crs_wkt2"] = p.in.crs->wkt2();
+    if (p.in.crs->epoch()) prov["input_coordinate_epoch"] = p.in.crs->epoch()->year;
+  }
   prov["input_frame_from"] = p.in_frame_source;
   if (p.in.coordinates.origin) {
     const auto& g = p.in.coordinates.origin->point;
@@ -428,6 +477,18 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   } else {
     prov["transform_sha256"] = nullptr;
   }
+  if (before || after) {
+    json ops = json::array();
+    for (const io::CrsOperation* op : {before.get(), after.get()}) {
+      if (!op) continue;
+      json rec = json::parse(io::operation_record_json(*op));
+      rec["stage"] = op == before.get() ? (p.chain_used ? "tile CRS to its geocentric CRS" : "tile CRS to output CRS")
+                                        : "output frame's geocentric CRS to output CRS";
+      ops.push_back(rec);
+      for (const auto& w : op->warnings()) warnings.push_back(tile + ": " + w);
+    }
+    prov["crs_operations"] = ops;
+  }
   prov["points"] = res.points;
   prov["bounds"] = {{"min", res.min}, {"max", res.max}};
   if (p.format == io::TileFormat::las) prov["las"] = {{"scale", res.scale}, {"offset", res.offset}};
@@ -436,7 +497,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   for (const auto& w : transform_warnings) all_warnings.push_back(w);
   prov["warnings"] = all_warnings;
   TileMetadata meta = p.out;
-  meta.horizontal_crs = meta.frame->to_string() + " " + io::kind_name(meta.coordinates) +
+  meta.horizontal_crs = (meta.crs ? meta.crs->display_name() : meta.frame->to_string() + " " + io::kind_name(meta.coordinates)) +
                         (p.format == io::TileFormat::las ? " (WKT2 in the LAS file's LASF_Projection 2112 record)" : "");
   meta.provenance_json = prov.dump();
   side.stream() << io::to_json_text(meta);

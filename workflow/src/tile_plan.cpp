@@ -5,6 +5,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/crs_csv.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/las.hpp"
 #include "geoanchor/workflow/value_text.hpp"
@@ -15,6 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 using geodesy::DecimalYear;
 using geodesy::Frame;
+using io::ArrayFrame;
 using io::CoordinateKind;
 using io::TileMetadata;
 
@@ -26,6 +28,19 @@ constexpr double kSameOriginM = 1e-5;
 Frame with_epoch(const Frame& f, DecimalYear e) {
   return Frame::parse(f.name() + "@" + geodesy::format_decimal_year(e), "frame");
 }
+
+// The ellipsoid a CRS is on, as geoanchor's type.
+geodesy::Ellipsoid ellipsoid_of(const io::Crs& crs) {
+  const auto& e = crs.description().ellipsoid;
+  const auto wgs84 = geodesy::Ellipsoid::wgs84(), grs80 = geodesy::Ellipsoid::grs80();
+  constexpr double kSame = 1e-12;  // relative, in a and 1/f
+  auto same = [&](const geodesy::Ellipsoid& g) {
+    return std::abs(e.a_m - g.a_m()) <= kSame * g.a_m() && std::abs(e.rf - g.rf()) <= kSame * g.rf();
+  };
+  return same(wgs84) ? wgs84 : same(grs80) ? grs80 : geodesy::Ellipsoid::custom(e.a_m, e.rf, e.name);
+}
+
+bool two_d(const io::Crs& c) { return c.description().axes.size() < 3; }
 
 bool same_origin(const geodesy::LocalOrigin& a, const geodesy::LocalOrigin& b) {
   return std::abs(a.point.lat.deg() - b.point.lat.deg()) < kSameOriginDeg &&
@@ -73,6 +88,24 @@ TilePlanner::TilePlanner(const ApplyRequest& o, const std::optional<io::Transfor
     }
   }
   if (o.inverse && !t) throw Error(ErrorKind::usage, "E_OPTION", "--inverse: needs --transform T.json");
+  if (o.to_crs && (o.to || o.origin || o.zone || o.tm || o.ellipsoid)) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--to-crs with --to/--origin/--zone/--tm/--ellipsoid: the CRS states the output's coordinates; give one");
+  }
+  if (o.crs && (o.from_frame || o.from_origin || o.from_zone || o.from_tm)) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--crs with --from-frame/--from-origin/--from-zone/--from-tm: the CRS states the tile's coordinates; "
+                "give one");
+  }
+  if ((o.crs || o.to_crs) && o.epoch_from_gps_time) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--epoch-from-gps-time with --crs/--to-crs: per-point epochs are read for geoanchor's own transforms "
+                "only, not for PROJ's operations");
+  }
+  // Parsed here so that a bad one fails before any tile; each tile parses
+  // its own copy (a Crs is one thread's).
+  if (o.crs) (void)io::Crs::parse(*o.crs, "--crs");
+  if (o.to_crs) (void)io::Crs::parse(*o.to_crs, "--to-crs");
   // Parse the value flags once, so that a bad one fails before any tile.
   const auto e = out_.ellipsoid.value_or(geodesy::Ellipsoid::wgs84());
   if (o.origin) parse_origin(*o.origin, "--origin", e);
@@ -96,9 +129,28 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
     io::LasReader reader(p.input);
     p.las_points = reader.header().point_count;
     if (const auto w = reader.wkt()) {
-      wkt = io::tile_metadata_from_wkt(*w, tile);
+      // Where a CRS is asked for or stated, the WKT is read as one (PROJ
+      // moves it), else as geoanchor's own coordinates where it can be.
+      const bool as_crs = o_.crs || o_.to_crs || (side && side->crs);
+      wkt = as_crs ? io::tile_metadata_from_wkt_as_crs(*w, tile) : io::tile_metadata_from_wkt(*w, tile);
     } else {
       for (const auto& v : reader.vlrs()) geotiff_only |= io::is_geotiff_crs_vlr(v);
+    }
+  }
+  std::optional<TileMetadata> stated;  // a CSV's '# crs = …' comments
+  if (p.format == io::TileFormat::csv) {
+    std::ifstream f(p.input, std::ios::binary);
+    if (!f) throw Error(ErrorKind::io, "E_READ", tile + ": cannot open");
+    const io::CsvReader reader(f, tile);
+    if (auto c = io::crs_from_comments(reader.leading_comments(), tile)) {
+      stated = io::tile_metadata_from_crs(std::move(*c), tile);
+      stated->storage = "float64";
+    }
+  }
+  if (side && stated) {
+    const std::string diff = io::describe_mismatch(*side, side_path.string(), *stated, tile + " '# crs' comment");
+    if (!diff.empty()) {
+      throw Error(ErrorKind::input, "E_FRAME_CONFLICT", tile + ": the sidecar and the file's '# crs' comment disagree: " + diff);
     }
   }
   if (side && wkt) {
@@ -108,17 +160,41 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
         wkt->frame->name() == side->frame->name()) {
       wkt->frame = side->frame;
     }
+    if (wkt->crs && side->crs && !wkt->crs->epoch() && side->crs->epoch() &&
+        side->crs->description().dynamic) {
+      *wkt = io::tile_metadata_from_crs(wkt->crs->at_epoch(*side->crs->epoch(), tile + " WKT"), tile);
+    }
     const std::string diff = io::describe_mismatch(*side, side_path.string(), *wkt, tile + " WKT");
     if (!diff.empty()) {
       throw Error(ErrorKind::input, "E_FRAME_CONFLICT", tile + ": the sidecar and the LAS WKT disagree: " + diff);
     }
   }
+  // A tile whose stated CRS is 2-D has Z values that are no coordinate of
+  // it: --crs may state the same CRS in 3-D (ellipsoidal heights) or
+  // compound (orthometric heights), which then reads them.
+  auto with_flag_heights = [&](TileMetadata& m, const std::string& what) {
+    if (!o_.crs || !m.crs || !two_d(*m.crs)) return;
+    const io::Crs flag = io::Crs::parse(*o_.crs, "--crs");
+    if (two_d(flag)) return;
+    const auto& fd = flag.description();
+    bool same = m.crs->promoted_to_3d(what).same_as(flag);
+    if (!same && fd.type == "compound") {
+      same = fd.horizontal_type == m.crs->description().type &&
+             fd.name.rfind(m.crs->description().name + " + ", 0) == 0;
+    }
+    if (same) {
+      m = io::tile_metadata_from_crs(flag, tile);
+      m.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
+      p.in_frame_source += " (heights stated by --crs)";
+    }
+  };
   if (side) {
     p.in_frame_source = "sidecar " + side_path.string();
+    with_flag_heights(*side, p.in_frame_source);
     check_flags_against(*side, p.in_frame_source, tile);
     return *side;
   }
-  if (wkt && !wkt->frame) {
+  if (wkt && !wkt->frame && !wkt->crs) {
     // A datum geoanchor cannot name: --from-frame names it, and is recorded.
     if (!from_frame_) {
       throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
@@ -132,8 +208,20 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
   }
   if (wkt) {
     p.in_frame_source = "LAS WKT";
+    with_flag_heights(*wkt, p.in_frame_source);
     check_flags_against(*wkt, p.in_frame_source, tile);
     return *wkt;
+  }
+  if (stated) {
+    p.in_frame_source = "'# crs' comment";
+    check_flags_against(*stated, p.in_frame_source, tile);
+    return *stated;
+  }
+  if (o_.crs) {
+    TileMetadata m = io::tile_metadata_from_crs(io::Crs::parse(*o_.crs, "--crs"), tile);
+    m.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
+    p.in_frame_source = "--crs";
+    return m;
   }
   // Flags only.
   TileMetadata m;
@@ -191,6 +279,16 @@ void TilePlanner::check_flags_against(const TileMetadata& m, const std::string& 
                 tile + ": " + flag + " " + value + " contradicts the " + what + ", which says " + stated +
                     "; drop the flag or fix the metadata (flags are never silently preferred)");
   };
+  if (o_.crs) {
+    const io::Crs flag = io::Crs::parse(*o_.crs, "--crs");
+    if (!m.crs) conflict("--crs", *o_.crs, io::kind_name(m) + " coordinates in " + (m.frame ? m.frame->to_string() : "?"));
+    if (!m.crs->same_as(flag)) conflict("--crs", *o_.crs, m.crs->display_name());
+  }
+  if (m.crs && from_frame_) conflict("--from-frame", *o_.from_frame, m.crs->display_name() + " (its datum is the frame)");
+  if (m.crs && (o_.from_origin || o_.from_zone || o_.from_tm)) {
+    conflict(o_.from_origin ? "--from-origin" : o_.from_zone ? "--from-zone" : "--from-tm",
+             o_.from_origin ? *o_.from_origin : o_.from_zone ? *o_.from_zone : *o_.from_tm, m.crs->display_name());
+  }
   if (from_frame_ && m.frame && !(*from_frame_ == *m.frame)) conflict("--from-frame", *o_.from_frame, m.frame->to_string());
   if (o_.from_origin) {
     const auto o = parse_origin(*o_.from_origin, "--from-origin", m.coordinates.ellipsoid);
@@ -229,18 +327,40 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
   p.sidecar = io::sidecar_path(p.output);
   p.in = input_metadata(p);
   const std::string tile = input.string();
+  if (p.format == io::TileFormat::csv && p.in.crs && two_d(*p.in.crs)) {
+    // A CSV's height column says what its heights are (h_<u> ellipsoidal,
+    // H_<u> orthometric): the CRS as its columns read it.
+    std::ifstream f(p.input, std::ios::binary);
+    if (!f) throw Error(ErrorKind::io, "E_READ", tile + ": cannot open");
+    const io::CsvReader reader(f, tile);
+    const io::CrsColumns columns = io::crs_input_columns(*p.in.crs, reader.header(), tile, p.in_frame_source);
+    if (columns.has_height()) {
+      const std::string storage = p.in.storage;
+      p.in = io::tile_metadata_from_crs(columns.crs, tile);
+      p.in.storage = storage;
+    }
+  }
   const TileMetadata& in = p.in;
-  if (!in.frame) throw Error(ErrorKind::input, "E_FRAME_UNKNOWN", tile + ": the " + p.in_frame_source + " names no frame");
+  if (in.crs && !in.frame && (t_ || (!o_.to_crs && out_.kind))) {
+    throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
+                tile + ": the tile's CRS " + in.crs->display_name() + " (" + p.in_frame_source + ") is on datum '" +
+                    in.crs->description().datum + "', which is no frame of geoanchor's catalog" +
+                    (t_ ? ", so the transform's source frame cannot be checked against it"
+                        : ", so geoanchor's own coordinates cannot be given in it; give --to-crs"));
+  }
+  if (!in.frame && !in.crs) throw Error(ErrorKind::input, "E_FRAME_UNKNOWN", tile + ": the " + p.in_frame_source + " names no frame");
   // A tile in a dynamic frame without its coordinate epoch: its coordinates
   // are ambiguous by centimetres a year, whatever the transform (the
   // sidecar's "frame", or the LAS WKT's datum), unless each LAS point's GPS
   // time gives its epoch.
-  if (!(o_.epoch_from_gps_time && p.format == io::TileFormat::las)) {
+  // (A tile in a CRS moved by PROJ alone: PROJ's operation says whether it
+  // needs the epoch.)
+  if (!(o_.epoch_from_gps_time && p.format == io::TileFormat::las) && in.frame && (!in.crs || t_)) {
     geodesy::require_epoch_if_dynamic(*in.frame, tile + ": " + p.in_frame_source + (p.in_frame_source.rfind("sidecar", 0) == 0 ? ": frame" : ""),
                                       ErrorKind::input,
                                       p.format == io::TileFormat::las ? ", or --epoch-from-gps-time" : "");
   }
-  if (in.height_type == "orthometric") {
+  if (in.height_type == "orthometric" && !in.crs) {
     throw Error(ErrorKind::input, "E_HEIGHT_TYPE",
                 tile + ": heights are orthometric (" + in.geoid_model.value_or("geoid not named") +
                     ", per the " + p.in_frame_source +
@@ -296,6 +416,27 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
   // The output coordinates: flags, else the tile's own.
   TileMetadata& out = p.out;
   out.frame = out_frame;
+  out.survey_method = in.survey_method;
+  out.rtk_fixed_percent = in.rtk_fixed_percent;
+  out.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
+  if (o_.to_crs || (in.crs && !out_.kind)) {
+    plan_crs_stages(p);
+    return p;
+  }
+  if (in.crs) {
+    // Into geoanchor's own coordinates: PROJ converts the CRS to its
+    // datum's geocentric CRS, geoanchor's chain goes on from there.
+    if (two_d(*in.crs)) {
+      throw Error(ErrorKind::input, "E_HEIGHT_TYPE",
+                  tile + ": the tile's CRS " + in.crs->display_name() + " (" + p.in_frame_source +
+                      ") is 2-D: its Z values are no heights PROJ can place; give --crs with the same CRS in 3-D or "
+                      "compound (its heights), or a 2-D --to-crs (Z then passes unchanged)");
+    }
+    p.before = std::make_pair(*in.crs, in.crs->geocentric(tile));
+    const geodesy::Ellipsoid e = ellipsoid_of(*in.crs);
+    p.in.coordinates = ArrayFrame{};
+    p.in.coordinates.ellipsoid = e;
+  }
   out.coordinates.kind = out_.kind.value_or(in.coordinates.kind);
   out.coordinates.ellipsoid = out_.ellipsoid.value_or(in.coordinates.ellipsoid);
   const bool same_kind = out.coordinates.kind == in.coordinates.kind;
@@ -336,6 +477,80 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
   out.rtk_fixed_percent = in.rtk_fixed_percent;
   out.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
   return p;
+}
+
+void TilePlanner::plan_crs_stages(TilePlan& p) const {
+  const std::string tile = p.input.string();
+  TileMetadata& in = p.in;
+  TileMetadata& out = p.out;
+  io::Crs dst = o_.to_crs ? io::Crs::parse(*o_.to_crs, "--to-crs") : *in.crs;
+  const std::string dst_flag = o_.to_crs ? "--to-crs " + *o_.to_crs : "the tile's CRS";
+  // The file's heights: a 2-D input has none (Z passes unchanged, to a 2-D
+  // output only); a 3-D input keeps them (a 2-D output CRS gets its
+  // ellipsoidal height axis, as convert does).
+  const bool in_2d = in.crs && two_d(*in.crs);
+  if (in_2d && (!two_d(dst) || t_)) {
+    throw Error(ErrorKind::input, "E_HEIGHT_TYPE",
+                tile + ": the tile's CRS " + in.crs->display_name() + " (" + p.in_frame_source +
+                    ") is 2-D: its Z values are no heights PROJ can place; give --crs with the same CRS in 3-D or "
+                    "compound (its heights), or a 2-D --to-crs without a transform (Z then passes unchanged)");
+  }
+  if (!in_2d && two_d(dst)) dst = dst.promoted_to_3d(dst_flag);
+  if (!t_) {
+    if (in.crs) {
+      p.before = std::make_pair(*in.crs, dst);  // PROJ's own operation between the two
+      p.chain_used = false;
+    } else {
+      // geoanchor's coordinates to their frame's geocentric CRS, then PROJ.
+      const io::Crs frame = io::Crs::parse(in.frame->to_string(), tile + ": the tile's frame");
+      p.after = std::make_pair(frame.geocentric(tile), dst);
+      out.coordinates = ArrayFrame{};
+    }
+  } else {
+    if (in.crs) {
+      p.before = std::make_pair(*in.crs, in.crs->geocentric(tile));
+      in.coordinates = ArrayFrame{};
+    }
+    if (!o_.to_crs) {
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  tile + ": the tile is in " + in.crs->display_name() + " and the transform moves it into " +
+                      out.frame->to_string() + ": give the output's CRS (--to-crs) or kind (--to)");
+    }
+    const auto& d = dst.description();
+    if (d.catalog_frame != out.frame->name()) {
+      throw Error(ErrorKind::input, "E_FRAME_MISMATCH",
+                  tile + ": " + dst_flag + " is on datum '" + d.datum + "'" +
+                      (d.catalog_frame.empty() ? "" : " (" + d.catalog_frame + ")") + " but the transform's output is in " +
+                      out.frame->to_string() + ": give a CRS on that frame (e.g. " + out.frame->name() +
+                      "), or move the output on with a second apply");
+    }
+    if (d.dynamic) {
+      const auto& fe = out.frame->epoch();
+      if (dst.epoch() && fe && dst.epoch()->year != fe->year) {
+        throw Error(ErrorKind::input, "E_CRS_EPOCH",
+                    tile + ": " + dst_flag + " is at epoch " + geodesy::format_decimal_year(*dst.epoch()) +
+                        " but the transform's output is at " + geodesy::format_decimal_year(*fe) +
+                        ": a transform does not move points in time");
+      }
+      if (!dst.epoch()) {
+        if (!fe) {
+          throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                      tile + ": " + dst_flag + " is dynamic and the transform's output has no coordinate epoch; give "
+                                               "--to-crs CRS@EPOCH");
+        }
+        dst = dst.at_epoch(*fe, dst_flag);
+      }
+    }
+    p.after = std::make_pair(dst.geocentric(dst_flag), dst);
+    out.coordinates = ArrayFrame{};
+  }
+  const std::string storage = out.storage;
+  const std::string method = out.survey_method;
+  const auto rtk = out.rtk_fixed_percent;
+  out = io::tile_metadata_from_crs(dst, tile);
+  out.storage = storage;
+  out.survey_method = method;
+  out.rtk_fixed_percent = rtk;
 }
 
 }  // namespace geoanchor::workflow

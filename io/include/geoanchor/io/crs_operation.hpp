@@ -74,6 +74,11 @@ class CrsOperation {
   // projection's domain); nothing non-finite is ever returned.
   void transform(double* a, double* b, double* c, std::size_t n, const std::function<std::string(std::size_t)>& point_name);
 
+  // An estimate for a few points (a tile's bounding-box corners): PROJ's
+  // best-ranked operation, no per-point choice, nothing counted or warned;
+  // a point it cannot move becomes NaN. Never for output.
+  void estimate(double* a, double* b, double* c, std::size_t n) const;
+
   std::vector<CrsOperationCandidate> candidates() const;
   // The coordinate epoch the operation is evaluated at (PROJ's t), if any.
   std::optional<double> epoch() const;
@@ -86,5 +91,10 @@ class CrsOperation {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// What an output records of the operation (JSON text): PROJ's version, the
+// epoch it was evaluated at, and every candidate with its accuracy, grid
+// files (path and SHA-256 where on this machine) and the points it moved.
+std::string operation_record_json(const CrsOperation& op);
 
 }  // namespace geoanchor::io

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "geoanchor/io/crs_operation.hpp"
+#include "geoanchor/io/crs_columns.hpp"
 #include "geoanchor/io/point_chain.hpp"
 
 namespace geoanchor::io {
@@ -22,6 +24,20 @@ std::string_view to_string(TileFormat f);
 // By extension (.las, .csv, .txt, .ply, case-insensitive); std::nullopt
 // for anything else.
 std::optional<TileFormat> tile_format_of(const std::filesystem::path& p);
+
+// The file's axes where a tile's coordinates are in a CRS that PROJ moves
+// (apply --crs/--to-crs, a LAS WKT geoanchor's own kinds do not hold): X,
+// Y, Z in the CRS's visualisation order (longitude or easting first), in
+// its units.
+struct TileCrsAxes {
+  bool angular = false;     // X, Y are longitude and latitude
+  bool geocentric = false;  // X, Y, Z are geocentric
+  double horizontal_unit = 1.0;  // metres (angular: degrees) per unit of X and Y
+  double vertical_m = 1.0;       // metres per unit of Z
+  bool has_height = true;        // false: a 2-D CRS; Z is no coordinate and passes unchanged
+  // CSV: the CRS's columns (names, units, write order).
+  std::optional<CrsColumns> columns = std::nullopt;
+};
 
 struct TileApplyOptions {
   ArrayFrame from;  // the tile's coordinates
@@ -36,6 +52,17 @@ struct TileApplyOptions {
   // LAS: evaluate a time-dependent transform at each point's own epoch,
   // from its GPS time (adjusted standard GPS time, global encoding bit 0).
   bool epochs_from_gps_time = false;
+  // CRS stages, run on the file's X, Y, Z (file_in/file_out say their axes):
+  // `crs_before` from the file's CRS into the chain's input (`from` is then
+  // ECEF), or, without `chain_used`, straight into the output CRS;
+  // `crs_after` from the chain's output (`to` ECEF) into the output CRS.
+  // Not owned; each tile has its own (a CrsOperation is one thread's).
+  CrsOperation* crs_before = nullptr;
+  CrsOperation* crs_after = nullptr;
+  bool chain_used = true;
+  std::optional<TileCrsAxes> file_in = std::nullopt, file_out = std::nullopt;
+  // CSV: the comment lines stating the output's CRS (replacing the input's).
+  std::vector<std::string> crs_comments = {};
 };
 
 struct TileApplyResult {

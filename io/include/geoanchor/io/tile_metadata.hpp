@@ -12,6 +12,8 @@
 //                   "source": "..."},                       (enu, ned)
 //    "projection": {"utm_zone": "32N"} | {"tm": {"lat0_deg", "lon0_deg", "k0",
 //                   "false_easting_m", "false_northing_m"}},   (utm, tm)
+//    "crs": {"wkt2": "...", "coordinate_epoch": 2024.5},      (kind "crs": any
+//                   CRS PROJ reads; "frame" then optional, the CRS's datum)
 //    "horizontal_crs": "...",
 //    "vertical": {"datum": "...", "height_type": "ellipsoidal" | "orthometric",
 //                 "geoid_model": "EGM96" | null},
@@ -31,6 +33,7 @@
 #include <string_view>
 
 #include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/io/crs.hpp"
 #include "geoanchor/io/point_chain.hpp"
 
 namespace geoanchor::io {
@@ -50,7 +53,15 @@ struct TileMetadata {
   std::optional<double> rtk_fixed_percent;
   std::string provenance_json;  // an object, as JSON text ("" when absent)
   std::string wkt_datum;        // read from a WKT: the datum's name as written there
+  // The tile's coordinates are in this CRS, read and moved through PROJ
+  // (sidecar kind "crs", or a LAS WKT that geoanchor's own kinds do not
+  // hold: other units, axis directions, prime meridians, projection
+  // methods, 2-D and compound CRSs); `coordinates` then holds nothing.
+  std::optional<Crs> crs;
 };
+
+// "crs" for a tile in a CRS, else kind_name(m.coordinates).
+std::string kind_name(const TileMetadata& m);
 
 // "enu", "ned", "ecef", "geodetic", "utm" or "tm".
 std::string kind_name(const ArrayFrame& f);
@@ -66,7 +77,9 @@ TileMetadata read_tile_metadata(const std::filesystem::path& path);
 TileMetadata parse_tile_metadata(std::string_view text, std::string_view source);
 std::string to_json_text(const TileMetadata& m);
 
-// The tile's coordinate system as WKT2:2019: a geocentric, geographic 3D or
+// The tile's coordinate system as WKT2:2019. A tile in a CRS: PROJ's WKT2
+// of it, with a REMARK stating the coordinate epoch of a dynamic one where
+// the CRS has no remark of its own. Otherwise a geocentric, geographic 3D or
 // projected CRS (Transverse Mercator, or EPSG method 9837 geographic/
 // topocentric for ENU) on the frame's datum, whose name, remark and usage
 // carry the frame as NAME@EPOCH. PROJ parses it. Throws geoanchor::Error
@@ -76,10 +89,21 @@ std::string tile_crs_wkt(const TileMetadata& m);
 
 // The frame and coordinates a WKT describes, read through PROJ; `frame` is
 // empty when the datum is not one geoanchor can name (its name is then in
-// `wkt_datum`). Throws geoanchor::Error (input) naming `source` when PROJ
-// cannot parse the WKT or it describes something a tile cannot be (a 2D
-// CRS, an unknown projection method).
+// `wkt_datum`). A CRS that geoanchor's own kinds do not hold (feet, grads, a
+// southing, another prime meridian, any projection method but TM and
+// topocentric, a 2-D or compound CRS) is returned as `crs`, with the
+// coordinate epoch of geoanchor's remark. Throws geoanchor::Error (input)
+// naming `source` when PROJ cannot parse the WKT or it is not a CRS a tile
+// can be in (vertical only, engineering, …).
 TileMetadata tile_metadata_from_wkt(std::string_view wkt, std::string_view source);
+
+// The same WKT read as a CRS that PROJ moves, whatever it is (apply
+// --crs/--to-crs, a sidecar of kind "crs").
+TileMetadata tile_metadata_from_wkt_as_crs(std::string_view wkt, std::string_view source);
+
+// A tile in `crs` (moved through PROJ): its frame (the catalog frame of the
+// CRS's datum, at its epoch), height type and vertical datum from the CRS.
+TileMetadata tile_metadata_from_crs(Crs crs, std::string_view source);
 
 // "" when the two describe the same frame and coordinates; otherwise what
 // differs, naming `a_name` and `b_name` ("frame ITRF2014@2024.5 (sidecar) vs

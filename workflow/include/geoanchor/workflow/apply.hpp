@@ -38,6 +38,11 @@ struct ApplyRequest {
   std::optional<std::string> to, origin, zone, tm, ellipsoid;
   // Input frame and coordinates, when no sidecar or LAS WKT states them.
   std::optional<std::string> from_frame, from_origin, from_zone, from_tm;
+  // Any CRS through PROJ (docs/commands/apply.md, "Tiles in any CRS"): the
+  // input's (when no sidecar, LAS WKT or '# crs' comment states it) and the
+  // output's; allow_fallback as convert's --allow-fallback.
+  std::optional<std::string> crs, to_crs;
+  bool allow_fallback = false;
   std::optional<double> resolution_m;  // LAS quantization of the output
   bool epoch_from_gps_time = false;    // LAS: a 14-parameter transform at each point's GPS time
   double max_extrapolation_m = 10000.0;

@@ -9,11 +9,17 @@
 // against the transform's frames and epochs; the output takes the
 // transform's target frame (with the input's epoch when the target names
 // none) and the requested output coordinates, else the tile's own.
+// A tile in a CRS (--crs, a '# crs' comment, a LAS WKT or sidecar of kind
+// "crs") or an output in one (--to-crs) is moved through PROJ: without a
+// transform by PROJ's own operation between the two CRSs; with one, each
+// CRS is converted to and from its datum's geocentric CRS (which must be
+// the transform's frame) around the transform.
 
 #include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "geoanchor/geodesy/frame.hpp"
@@ -34,6 +40,13 @@ struct TilePlan {
   std::optional<geodesy::DecimalYear> epoch;  // for a time-dependent transform
   std::uint64_t las_points = 0;               // LAS: the header's count, for progress
   std::vector<std::string> warnings;
+  // PROJ's stages around the chain, for a tile in a CRS or an output in
+  // one (in.crs, out.crs): the file's coordinates go from `before[0]` to
+  // `before[1]` first (into the chain's ECEF input, or, without
+  // `chain_used`, straight into the output CRS), and the chain's ECEF
+  // output from `after[0]` to `after[1]`.
+  std::optional<std::pair<io::Crs, io::Crs>> before, after;
+  bool chain_used = true;
 };
 
 class TilePlanner {
@@ -56,6 +69,7 @@ class TilePlanner {
   };
   io::TileMetadata input_metadata(TilePlan& p) const;
   void check_flags_against(const io::TileMetadata& m, const std::string& what, const std::string& tile) const;
+  void plan_crs_stages(TilePlan& p) const;
   const ApplyRequest& o_;
   const std::optional<io::TransformFile>& t_;
   OutputSpec out_;
