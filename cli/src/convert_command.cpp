@@ -14,6 +14,7 @@
 #include "geoanchor/io/crs.hpp"
 #include "geoanchor/io/crs_columns.hpp"
 #include "geoanchor/io/crs_csv.hpp"
+#include "geoanchor/io/proj_geoid.hpp"
 #include "geoanchor/io/crs_operation.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
@@ -230,7 +231,7 @@ CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   cmd->add_option("--epoch", o.epoch, "Observation epoch (decimal year) for a 14-parameter transform");
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")
       ->check(integer_range(0, 15));
-  cmd->add_option("--geoid", o.geoid, "Geoid model for orthometric heights (H_m columns): EGM96");
+  cmd->add_option("--geoid", o.geoid, "Geoid of orthometric heights (H_m columns): EGM96, EGM96-NGA, a grid PROJ finds by name (egm96_15.gtx) or a PATH (GTX, GeoTIFF)");
   cmd->add_option("--output-heights", o.output_heights, "ellipsoidal (h_m, default) | orthometric (H_m, needs --geoid)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
   cmd->add_flag("--json", o.json, "Print the provenance sidecar (schema geoanchor.convert-provenance/1) on standard output; needs -o FILE");
@@ -401,7 +402,10 @@ void run_convert(const ConvertOptions& o) {
   side["input"]["ellipsoid"] = in_ellipsoid.name();
   if (columns.kind == io::CoordinateKind::geodetic || columns.kind == io::CoordinateKind::projected) {
     side["input"]["height_type"] = columns.orthometric ? "orthometric" : "ellipsoidal";
-    if (columns.orthometric) side["input"]["geoid_model"] = geoid->model_name();
+    if (columns.orthometric) {
+      side["input"]["geoid_model"] = geoid->model_name();
+      side["input"]["geoid"] = json::parse(io::geoid_record_json(*geoid));
+    }
   }
   if (in_frame.origin && (columns.kind == io::CoordinateKind::enu || columns.kind == io::CoordinateKind::ned)) {
     side["input"]["origin"] = origin_json(*in_frame.origin);
@@ -413,7 +417,10 @@ void run_convert(const ConvertOptions& o) {
   side["output"] = {{"path", o.output}, {"kind", std::string(io::to_string(out_kind))},
                     {"ellipsoid", out_ellipsoid.name()}, {"rows", rows},
                     {"height_type", orthometric_out ? "orthometric" : "ellipsoidal"}};
-  if (orthometric_out) side["output"]["geoid_model"] = geoid->model_name();
+  if (orthometric_out) {
+    side["output"]["geoid_model"] = geoid->model_name();
+    side["output"]["geoid"] = json::parse(io::geoid_record_json(*geoid));
+  }
   if (out_frame.origin && (out_kind == io::OutputKind::enu || out_kind == io::OutputKind::ned)) {
     side["output"]["origin"] = origin_json(*out_frame.origin);
   }

@@ -34,7 +34,7 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& o) {
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--geoid", o.geoid,
                   "Geoid model of orthometric heights (H_src_m, H_dst_m; JSON H_m) and of the height_type test: EGM96 "
-                  "(default for the test) or EGM96-NGA");
+                  "(default for the test), EGM96-NGA, a grid name PROJ finds or a PATH");
   cmd->add_option("--sigma", o.sigma, "Noise per coordinate and frame (m, 1σ) assumed when the set gives none (default 0.01)")
       ->check(finite_positive());
   return cmd;

@@ -49,7 +49,7 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   add_control_grid_options(*cmd, o.grids);
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
-  cmd->add_option("--geoid", o.geoid, "Geoid model of orthometric heights (H_src_m, H_dst_m; JSON H_m): EGM96 or EGM96-NGA");
+  cmd->add_option("--geoid", o.geoid, "Geoid of orthometric heights (H_src_m, H_dst_m; JSON H_m): EGM96, EGM96-NGA, a grid name PROJ finds or a PATH");
   cmd->add_option("--alpha", o.alpha, "Significance of the global test (default 0.05)")->check(finite_range(1e-6, 0.5));
   cmd->add_option("--alpha-point", o.alpha_point, "Significance of point tests and data snooping (default 0.001)")
       ->check(finite_range(1e-9, 0.5));

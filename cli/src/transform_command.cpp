@@ -16,6 +16,7 @@
 #include "geoanchor/io/crs.hpp"
 #include "geoanchor/io/crs_columns.hpp"
 #include "geoanchor/io/crs_csv.hpp"
+#include "geoanchor/io/proj_geoid.hpp"
 #include "geoanchor/io/crs_operation.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
@@ -133,7 +134,7 @@ CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
                   "Ellipsoid of geodetic columns (default: each frame's own, GRS80 for ITRF, ETRF, NAD83, GDA; WGS84 "
                   "for WGS 84); one that contradicts a frame is refused");
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")->check(integer_range(0, 15));
-  cmd->add_option("--geoid", o.geoid, "Geoid model of H_m (orthometric height) columns: EGM96; H_m is written back on it");
+  cmd->add_option("--geoid", o.geoid, "Geoid of H_m (orthometric height) columns: EGM96, EGM96-NGA, a grid name PROJ finds or a PATH; H_m is written back on it");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
   cmd->add_flag("--json", o.json, "Print the provenance sidecar (schema geoanchor.transform-provenance/1) on standard output; needs -o FILE");
   return cmd;
@@ -457,7 +458,10 @@ void run_transform(const TransformOptions& o) {
                    {"ellipsoid", in_ellipsoid.name()}};
   side["output"] = {{"path", o.output}, {"frame", to.name()}, {"epoch", epochs_given ? json(t_to.year) : json(nullptr)}, {"rows", rows},
                     {"height_type", columns.orthometric ? "orthometric" : "ellipsoidal"}, {"ellipsoid", out_ellipsoid.name()}};
-  if (!crs_mode && columns.orthometric) side["output"]["geoid_model"] = geoid->model_name();
+  if (!crs_mode && columns.orthometric) {
+    side["output"]["geoid_model"] = geoid->model_name();
+    side["output"]["geoid"] = json::parse(io::geoid_record_json(*geoid));
+  }
   if (crs_mode) {
     // The CRSs as given and as PROJ writes them, and the columns read and written.
     const auto crs_record = [](const io::Crs& crs, const io::CrsColumns& c) {

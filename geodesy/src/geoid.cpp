@@ -135,8 +135,22 @@ double GeoidGrid::spline_m(double y, double x) const {
   return natural_spline_middle(column[0], column[1], column[2], column[3], y - r0);
 }
 
+GeoidGrid GeoidGrid::from_evaluator(std::string model_name, std::filesystem::path path,
+                                    std::function<double(double, double)> n_at) {
+  GeoidGrid g;
+  g.name_ = std::move(model_name);
+  g.path_ = std::move(path);
+  g.external_ = std::make_shared<const std::function<double(double, double)>>(std::move(n_at));
+  return g;
+}
+
 double GeoidGrid::undulation_m(Angle lat, Angle lon) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (external_) {
+    if (!std::isfinite(lat.deg()) || !std::isfinite(lon.deg())) return nan;
+    const double n = (*external_)(lat.deg(), lon.deg());
+    return std::isfinite(n) ? n : nan;
+  }
   const double y = (lat.deg() - lat0_deg_) / dlat_deg_;
   double x = (lon.deg() - lon0_deg_) / dlon_deg_;
   if (!std::isfinite(x) || !std::isfinite(y)) return nan;

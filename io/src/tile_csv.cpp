@@ -69,8 +69,9 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
 
   std::size_t first_coordinate = 0;
   const auto out_header = output_header(header, columns, out_names, source, first_coordinate);
+  // The output states its CRS first (as convert does); the input's statement was read (the planner).
+  for (const auto& c : o.crs_comments) out << c << '\n';
   if (o.file_in) {
-    // The input's CRS statement was read (the planner); the output states its own.
     for (const auto& c : reader.leading_comments()) {
       if (!is_crs_comment(c)) out << c << '\n';
     }
@@ -80,7 +81,6 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
                       "apply --to-crs");
     for (const auto& c : reader.leading_comments()) out << c << '\n';
   }
-  for (const auto& c : o.crs_comments) out << c << '\n';
   io::write_csv_line(out, out_header);
 
   TileApplyResult r;

@@ -23,6 +23,7 @@
 #include "accuracy.hpp"
 #include "cli_support.hpp"
 #include "las_builder.hpp"
+#include "proj_reference.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "test_support.hpp"
 
@@ -1036,6 +1037,146 @@ TEST_F(CrsLas, Issue13_TwoDimensionalLasWktNeedsItsHeightsStated) {
   EXPECT_EQ(other.exit_code, 2);
   EXPECT_NE(other.err.find("E_FRAME_CONFLICT"), std::string::npos) << other.err;
   EXPECT_FALSE(fs::exists(path("other/fl.las")));
+}
+
+// A tile in a dynamic CRS at its epoch (a CSV stating ITRF2014 geographic
+// 3-D and 2024.3) through a 14-parameter transform ITRF2014 -> GDA2020 into
+// MGA zone 56 (EPSG:7856, promoted to 3-D): PROJ converts each CRS to and
+// from its frame's geocentric CRS around geoanchor's transform, which is
+// evaluated at the tile's epoch. The reference is PROJ's pipeline of the
+// same steps, written out here from the published definitions.
+TEST_F(CrsLas, Issue13_ATransformBetweenTwoCrssIsEvaluatedAtTheTilesEpochAsProjDoes) {
+  write("T.json", R"J({"model": "helmert14", "convention": "position_vector",
+    "source_frame": "ITRF2014", "target_frame": "GDA2020", "reference_epoch": 2020.0,
+    "parameters": {"tx_m": 0.1, "ty_m": -0.2, "tz_m": 0.3, "rx_arcsec": 0.01, "ry_arcsec": -0.02, "rz_arcsec": 0.03,
+                   "ds_ppm": 0.5, "dtx_m_per_year": 0.01, "dty_m_per_year": -0.02, "dtz_m_per_year": 0.03,
+                   "drx_arcsec_per_year": 0.001, "dry_arcsec_per_year": 0.002, "drz_arcsec_per_year": -0.003,
+                   "dds_ppm_per_year": 0.1}})J");
+  const auto points = points_in_box("EPSG:7912", {150.5, -34.5, 151.5, -33.5}, 21);
+  std::ostringstream csv;
+  csv << "# crs = EPSG:7912\n# coordinate_epoch = 2024.3\n# survey: test\nid,lat_deg,lon_deg,h_m,class\n";
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    csv << "P" << i << "," << format_shortest(points[i][1]) << "," << format_shortest(points[i][0]) << ","
+        << format_shortest(points[i][2]) << ",2\n";
+  }
+  write("in/sydney.csv", csv.str());
+  const RunResult r = run("apply '" + path("in/sydney.csv").string() + "' --transform '" + path("T.json").string() +
+                          "' --to-crs EPSG:7856 --out-dir '" + path("out").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = slurp(path("out/sydney.csv"));
+  EXPECT_EQ(text.rfind("# crs = PROJCRS[\"GDA2020 / MGA zone 56\"", 0), 0u) << text.substr(0, 80);
+  EXPECT_NE(text.find("\n# survey: test\n"), std::string::npos);
+  EXPECT_EQ(text.find("coordinate_epoch"), std::string::npos);  // GDA2020 is static
+  const Csv got = testing::parse_csv_table(text);
+  ASSERT_EQ(got.rows.size(), points.size());
+  EXPECT_EQ(got.header, (std::vector<std::string>{"id", "easting_m", "northing_m", "h_m", "class"}));
+
+  const testing::ProjPipeline proj(
+      "+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=cart +ellps=GRS80 "
+      "+step +proj=helmert +x=0.1 +y=-0.2 +z=0.3 +rx=0.01 +ry=-0.02 +rz=0.03 +s=0.5 +dx=0.01 +dy=-0.02 +dz=0.03 "
+      "+drx=0.001 +dry=0.002 +drz=-0.003 +ds=0.1 +t_epoch=2020.0 +convention=position_vector "
+      "+step +inv +proj=cart +ellps=GRS80 +step +proj=utm +zone=56 +south +ellps=GRS80");
+  WorstCase worst;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d e = proj.forward(Eigen::Vector3d(points[i][0], points[i][1], points[i][2]), 2024.3);
+    for (std::size_t k = 0; k < 3; ++k) worst.add(std::abs(std::stod(got.rows[i][k + 1]) - e(static_cast<int>(k))), i);
+    EXPECT_EQ(got.rows[i][4], "2");
+  }
+  EXPECT_WORST_WITHIN(worst, kVsProjTol_m);
+  const json side = json::parse(slurp(path("out/sydney.csv.geoanchor.json")));
+  EXPECT_EQ(side["frame"], "GDA2020");
+  EXPECT_EQ(side["provenance"]["observation_epoch"], 2024.3);
+  EXPECT_EQ(side["provenance"]["crs_operations"].size(), 2u);
+}
+
+// Every bad input of a tile in a CRS: named, and nothing written.
+TEST_F(CrsLas, Issue13_BadCrsInputToApplyIsRefusedByNameWithNoOutput) {
+  write("in/es.csv", "id,lat_deg,lon_deg,h_m\nMAD,40.4,-3.7,600\n");
+  write("in/fr.csv", "id,easting_m,northing_m\nA,600000,2400000\n");
+  write("in/ch.csv", "# crs = EPSG:21781\nid,easting_m,northing_m,H_m\nA,600000,200000,500\n");
+  write("T.json", R"J({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014",
+    "target_frame": "GDA2020", "parameters": {"tx_m": 0.1, "ty_m": 0, "tz_m": 0, "rx_arcsec": 0, "ry_arcsec": 0,
+    "rz_arcsec": 0, "ds_ppm": 0}})J");
+  struct Bad {
+    std::string what, tile, args;
+    int exit_code;
+    std::vector<std::string> says;
+  };
+  const Bad cases[] = {
+      {"--to-crs with --to", "es.csv", "--crs EPSG:4937 --to-crs EPSG:4326 --to ecef", 2, {"E_OPTION", "--to-crs with --to"}},
+      {"unknown code", "es.csv", "--crs EPSG:4937 --to-crs EPSG:999999", 3, {"--to-crs", "EPSG:999999"}},
+      {"a missing better grid", "es.csv", "--crs EPSG:4230 --to-crs EPSG:4258", 3, {"E_CRS_GRID_MISSING", "es.csv"}},
+      {"heights in the wrong kind of column", "fr.csv", "--crs EPSG:27572 --to-crs EPSG:2154", 3,
+       {"E_COLUMN", "fr.csv", "EPSG:27572"}},
+      {"the tile states another CRS than --crs", "ch.csv", "--crs EPSG:2056 --to-crs EPSG:4326", 2,
+       {"E_FRAME_CONFLICT", "--crs EPSG:2056", "EPSG:21781"}},
+      {"a transform whose target is not the output CRS's datum", "es.csv",
+       "--crs ITRF2014@2024.5 --transform '" + path("T.json").string() + "' --to-crs EPSG:2154", 3,
+       {"E_FRAME_MISMATCH", "--to-crs EPSG:2154", "GDA2020"}},
+      {"a dynamic CRS without its epoch where the datum changes", "es.csv", "--crs EPSG:7912 --to-crs EPSG:4937", 3,
+       {"E_EPOCH_MISSING"}},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    const fs::path out = path("out");
+    fs::remove_all(out);
+    const RunResult r = run("apply '" + path("in/" + c.tile).string() + "' " + c.args + " --out-dir '" + out.string() + "'");
+    EXPECT_EQ(r.exit_code, c.exit_code) << r.err;
+    for (const auto& s : c.says) EXPECT_NE(r.err.find(s), std::string::npos) << s << " in: " << r.err;
+    EXPECT_FALSE(fs::exists(out / c.tile));
+    EXPECT_FALSE(fs::exists(out / (c.tile + ".geoanchor.json")));
+  }
+}
+
+// --geoid NAME|PATH: a geoid grid by PROJ's name or by path, read by PROJ
+// (vgridshift), agrees with PROJ's own vgridshift on the same grid; the
+// grid's file and hash are recorded; a grid that is not there is refused
+// naming it and where PROJ looked, with no output.
+TEST_F(CrsCli, Issue13_AGeoidByNameOrPathAgreesWithProjsVgridshift) {
+  const auto points = points_in_box("EPSG:4326", {-179.0, -80.0, 179.0, 80.0}, 5);
+  std::ostringstream csv;
+  csv << "id,lat_deg,lon_deg,H_m\n";
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    csv << "P" << i << "," << format_shortest(points[i][1]) << "," << format_shortest(points[i][0]) << ","
+        << format_shortest(points[i][2]) << "\n";
+  }
+  write("h.csv", csv.str());
+  std::string grid;
+  for (const char* dir : {"/usr/share/proj"}) {
+    if (fs::exists(fs::path(dir) / "egm96_15.gtx")) grid = (fs::path(dir) / "egm96_15.gtx").string();
+  }
+  ASSERT_FALSE(grid.empty()) << "proj-data's egm96_15.gtx is not installed";
+  fs::copy_file(grid, path("my geoid.gtx"));
+  const testing::ProjPipeline proj(
+      "+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=vgridshift +grids=" + grid +
+      " +multiplier=1 +step +proj=cart +ellps=WGS84");
+  for (const std::string& geoid : {std::string("egm96_15.gtx"), "'" + path("my geoid.gtx").string() + "'"}) {
+    SCOPED_TRACE(geoid);
+    fs::remove(path("o.csv"));
+    fs::remove(path("o.csv.geoanchor.json"));
+    const RunResult r = run("convert '" + path("h.csv").string() + "' --geoid " + geoid + " --to ecef -o '" +
+                            path("o.csv").string() + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Csv got = testing::parse_csv_table(slurp(path("o.csv")));
+    ASSERT_EQ(got.rows.size(), points.size());
+    WorstCase worst;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector3d e = proj.forward(Eigen::Vector3d(points[i][0], points[i][1], points[i][2]));
+      for (std::size_t k = 0; k < 3; ++k) worst.add(std::abs(std::stod(got.rows[i][k + 1]) - e(static_cast<int>(k))), i);
+    }
+    EXPECT_WORST_WITHIN(worst, kVsProjTol_m);
+    const json side = json::parse(slurp(path("o.csv.geoanchor.json")));
+    const RunResult sha = shell("sha256sum '" + grid + "'");
+    EXPECT_EQ(side["input"]["geoid"]["sha256"], sha.out.substr(0, 64));
+  }
+  const RunResult missing = run("convert '" + path("h.csv").string() + "' --geoid us_noaa_g2018u0.tif --to ecef -o '" +
+                                path("m.csv").string() + "'");
+  EXPECT_EQ(missing.exit_code, 3);
+  EXPECT_NE(missing.err.find("E_GEOID_MISSING"), std::string::npos) << missing.err;
+  EXPECT_NE(missing.err.find("us_noaa_g2018u0.tif"), std::string::npos) << missing.err;
+  EXPECT_NE(missing.err.find("/usr/share/proj"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(path("m.csv")));
+  EXPECT_FALSE(fs::exists(path("m.csv.geoanchor.json")));
 }
 
 }  // namespace

@@ -496,6 +496,10 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
                     "compound (its heights), or a 2-D --to-crs without a transform (Z then passes unchanged)");
   }
   if (!in_2d && two_d(dst)) dst = dst.promoted_to_3d(dst_flag);
+  if (in_2d) {
+    p.warnings.push_back(tile + ": the tile's CRS " + in.crs->display_name() +
+                         " is 2-D: its Z values are no coordinate of it and were copied unchanged into the 2-D output");
+  }
   if (!t_) {
     if (in.crs) {
       p.before = std::make_pair(*in.crs, dst);  // PROJ's own operation between the two

@@ -1,12 +1,15 @@
 #include "geoanchor/workflow/value_text.hpp"
 
-#include <tuple>
-
 #include <cmath>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <tuple>
 #include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/proj_geoid.hpp"
 
 namespace geoanchor::workflow {
 namespace {
@@ -125,10 +128,18 @@ solver::Convention parse_convention(std::string_view text, std::string_view flag
 const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view flag) {
   if (text == "EGM96") return geodesy::GeoidGrid::egm96();
   if (text == "EGM96-NGA") return geodesy::GeoidGrid::egm96_nga();
-  throw Error(ErrorKind::usage, "E_OPTION",
-              std::string(flag) + " " + std::string(text) +
-                  ": expected EGM96 (the 15' grid in Debian's proj-data, bilinear as PROJ's vgridshift) or EGM96-NGA (the "
-                  "same grid interpolated as NGA's INTPT); EGM2008 is not packaged and is not downloaded");
+  if (text == "EGM2008") {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                std::string(flag) + " EGM2008: not packaged in Debian's proj-data and never downloaded; give the path "
+                                    "of a grid file (GTX or GeoTIFF), EGM96 or EGM96-NGA");
+  }
+  // A grid by PROJ's name or path, read by PROJ; loaded once per run.
+  static std::mutex m;
+  static std::map<std::string, std::unique_ptr<geodesy::GeoidGrid>, std::less<>> loaded;
+  std::lock_guard<std::mutex> lock(m);
+  if (const auto it = loaded.find(text); it != loaded.end()) return *it->second;
+  auto grid = std::make_unique<geodesy::GeoidGrid>(io::proj_geoid_grid(text, flag));
+  return *loaded.emplace(std::string(text), std::move(grid)).first->second;
 }
 
 namespace {

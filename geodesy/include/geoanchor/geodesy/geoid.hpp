@@ -19,6 +19,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -47,6 +49,13 @@ class GeoidGrid {
   // spline); its model name says so.
   static const GeoidGrid& egm96_nga();
 
+  // A grid another library evaluates (io/proj_geoid.hpp: PROJ's
+  // vgridshift on any grid format PROJ reads): `n_at(lat_deg, lon_deg)`
+  // returns N in metres, NaN outside the grid. It must be safe to call from
+  // several threads.
+  static GeoidGrid from_evaluator(std::string model_name, std::filesystem::path path,
+                                  std::function<double(double, double)> n_at);
+
   // N in metres at (lat, lon); NaN outside the grid or for NaN input.
   double undulation_m(Angle lat, Angle lon) const;
   // The same, throwing geoanchor::Error (input) that names `where` and the
@@ -66,6 +75,7 @@ class GeoidGrid {
   GeoidInterpolation interpolation_ = GeoidInterpolation::bilinear;
   double spline_m(double row, double col) const;
   std::vector<float> values_m_;  // rows_ × cols_, south row first, west to east
+  std::shared_ptr<const std::function<double(double, double)>> external_;  // from_evaluator
 };
 
 // The geoid at an ECEF position: N there and the local up (unit vector in
