@@ -28,7 +28,7 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseCommandOptions& o) {
   cmd->add_option("--model", o.model, "Model fitted without --transform (default helmert7)");
   cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame of the fitted model (residuals do not depend on it)");
   cmd->add_option("--origin", o.origin, "Nominal origin LAT,LON,H of ENU control coordinates");
-  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic, projected and ENU coordinates (default WGS84)");
+  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic, projected and ENU coordinates (default: each frame's own; WGS84 for an unnamed frame)");
   add_control_grid_options(*cmd, o.grids);
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
@@ -103,8 +103,8 @@ void print_text(const solver::Diagnosis& d, const std::string& control) {
 
 void run_diagnose(const DiagnoseCommandOptions& o) {
   io::ControlReadOptions ro;
-  ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
-  if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
+  if (o.ellipsoid) ro.ellipsoid = parse_ellipsoid(*o.ellipsoid, "--ellipsoid");
+  if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid.value_or(geodesy::Ellipsoid::wgs84()));
   apply_control_grids(o.grids, ro);
 
   solver::DiagnoseOptions d;
@@ -124,16 +124,14 @@ void run_diagnose(const DiagnoseCommandOptions& o) {
   }
   const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
   ro.src_geoid = ro.dst_geoid = geoid;
-  ro.source_frame_overridden = o.source_frame.has_value();
-  ro.target_frame_overridden = o.target_frame.has_value();
+  if (o.source_frame) ro.source_frame.replace = geodesy::Frame::parse(*o.source_frame, "--source-frame");
+  if (o.target_frame) ro.target_frame.replace = geodesy::Frame::parse(*o.target_frame, "--target-frame");
+  if (tf) {
+    ro.source_frame.fallback = tf->source_frame;
+    ro.target_frame.fallback = tf->target_frame;
+  }
   ControlInput in = read_control_input(o.control, ro);
   geodesy::ControlSet& set = in.set;
-  if (tf) {
-    if (!set.source_frame) set.source_frame = tf->source_frame;
-    if (!set.target_frame) set.target_frame = tf->target_frame;
-  }
-  if (o.source_frame) set.source_frame = geodesy::Frame::parse(*o.source_frame, "--source-frame");
-  if (o.target_frame) set.target_frame = geodesy::Frame::parse(*o.target_frame, "--target-frame");
   // A dynamic frame given here needs its epoch, as in the file, unless every point has one.
   const bool every_point_dated = !set.points.empty() && std::all_of(set.points.begin(), set.points.end(),
                                                                     [](const auto& p) { return p.epoch.has_value(); });

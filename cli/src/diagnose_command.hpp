@@ -21,7 +21,7 @@ struct DiagnoseCommandOptions {
   std::string model = "helmert7";
   std::optional<std::string> convention;
   std::optional<std::string> origin;
-  std::string ellipsoid = "WGS84";
+  std::optional<std::string> ellipsoid;  // default: each frame's (io::ControlReadOptions::ellipsoid)
   ControlGridOptions grids;  // easting/northing columns
   std::optional<std::string> source_frame, target_frame;
   std::optional<std::string> geoid;  // EGM96 | EGM96-NGA: reads H columns, and the height_type hypothesis uses it

@@ -45,7 +45,7 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   cmd->add_option("--rotation-model", o.rotation_model, "small_angle (EPSG, default) | exact");
   cmd->add_option("--reference-epoch", o.reference_epoch, "helmert14: parameter epoch (default: mean observation epoch)");
   cmd->add_option("--origin", o.origin, "Nominal origin LAT,LON,H of ENU control coordinates");
-  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic/ENU/projected control coordinates (default WGS84)");
+  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic/ENU/projected control coordinates (default: each frame's own, e.g. GRS80 for ITRF/GDA2020; WGS84 for an unnamed frame)");
   add_control_grid_options(*cmd, o.grids);
   cmd->add_option("--source-frame", o.source_frame, "Source frame NAME[@EPOCH] (overrides the file's)");
   cmd->add_option("--target-frame", o.target_frame, "Target frame NAME[@EPOCH] (overrides the file's)");
@@ -254,8 +254,9 @@ int run_fit(const FitCommandOptions& o) {
   std::ostream& report = out && out->to_stdout() ? std::cerr : std::cout;
 
   io::ControlReadOptions ro;
-  ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
-  if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
+  if (o.ellipsoid) ro.ellipsoid = parse_ellipsoid(*o.ellipsoid, "--ellipsoid");
+  // The origin's and the site grid's ellipsoid are their frame's, known once the set is read.
+  if (o.origin) ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid.value_or(geodesy::Ellipsoid::wgs84()));
   apply_control_grids(o.grids, ro);
   if (o.compare) {
     fo.nominal_origin = ro.origin;
@@ -268,7 +269,8 @@ int run_fit(const FitCommandOptions& o) {
     fo.nominal_origin = ro.origin;
     if (o.tm) {
       if (fo.model != FitModel::site_calibration) throw Error(ErrorKind::usage, "E_OPTION", "--tm: only for --model site-calibration");
-      fo.site_grid = geodesy::ProjectionDef{ro.ellipsoid, parse_tm(*o.tm, "--tm"), std::nullopt};
+      fo.site_grid = geodesy::ProjectionDef{ro.ellipsoid.value_or(geodesy::Ellipsoid::wgs84()), parse_tm(*o.tm, "--tm"),
+                                            std::nullopt};
     }
     fo.enu_yaw = !o.fix_yaw;
     fo.enu_scale = o.with_scale;
@@ -277,19 +279,21 @@ int run_fit(const FitCommandOptions& o) {
   }
   const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
   ro.src_geoid = ro.dst_geoid = geoid;
-  ro.source_frame_overridden = o.source_frame.has_value();
-  ro.target_frame_overridden = o.target_frame.has_value();
+  if (o.source_frame) ro.source_frame.replace = geodesy::Frame::parse(*o.source_frame, "--source-frame");
+  if (o.target_frame) ro.target_frame.replace = geodesy::Frame::parse(*o.target_frame, "--target-frame");
   ControlInput in = read_control_input(o.control, ro, o.json);
   geodesy::ControlSet& set = in.set;
+  if (fo.nominal_origin && set.origin) fo.nominal_origin->ellipsoid = set.origin->ellipsoid;
+  if (fo.site_grid) fo.site_grid->ellipsoid = set.target_input.ellipsoid;
   // A dynamic frame given on the command line needs its epoch as one in the
   // file does (the reader refuses those), unless every point has one.
   const bool every_point_dated = !set.points.empty() && std::all_of(set.points.begin(), set.points.end(),
                                                                     [](const auto& p) { return p.epoch.has_value(); });
-  for (const auto& [flag, text, frame] : {std::tuple{"--source-frame", &o.source_frame, &set.source_frame},
-                                          std::tuple{"--target-frame", &o.target_frame, &set.target_frame}}) {
-    if (!*text) continue;
-    *frame = geodesy::Frame::parse(**text, flag);
-    if (!every_point_dated) geodesy::require_epoch_if_dynamic(**frame, flag, ErrorKind::usage, ", or an epoch for every point");
+  for (const auto& [flag, given] : {std::pair{"--source-frame", &ro.source_frame.replace},
+                                    std::pair{"--target-frame", &ro.target_frame.replace}}) {
+    if (*given && !every_point_dated) {
+      geodesy::require_epoch_if_dynamic(**given, flag, ErrorKind::usage, ", or an epoch for every point");
+    }
   }
   std::vector<std::string> heights;  // what the report says about orthometric input
   for (const auto* form : {&set.source_input, &set.target_input}) {

@@ -29,7 +29,7 @@ struct FitCommandOptions {
   bool with_scale = false;
   std::optional<std::string> origin;
   ControlGridOptions grids;  // easting/northing columns
-  std::string ellipsoid = "WGS84";
+  std::optional<std::string> ellipsoid;  // default: each frame's (io::ControlReadOptions::ellipsoid)
   std::optional<std::string> source_frame, target_frame;
   std::optional<std::string> geoid;  // EGM96 | EGM96-NGA: reads H_src_m/H_dst_m (JSON H_m) as h = H + N
   double alpha = 0.05;

@@ -22,7 +22,7 @@ void add_workbench_options(CLI::App* cmd, WorkbenchOptions& o) {
   cmd->add_option("--model", o.model, "Model to fit (overrides the transform file's; default helmert7)");
   cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame (default: the file's, else position_vector)");
   cmd->add_option("--origin", o.origin, "Nominal origin LAT,LON,H of ENU control coordinates");
-  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic/ENU control coordinates (default WGS84)");
+  cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic/ENU control coordinates (default: each frame's own; WGS84 for an unnamed frame)");
 }
 
 namespace {
@@ -86,9 +86,9 @@ WorkbenchSession open_workbench(const WorkbenchOptions& o) {
     s.notes.push_back("convention: position_vector (no --convention and none in a transform file; switch in the workbench)");
   }
   io::ControlReadOptions ro;
-  ro.ellipsoid = parse_ellipsoid(o.ellipsoid, "--ellipsoid");
+  if (o.ellipsoid) ro.ellipsoid = parse_ellipsoid(*o.ellipsoid, "--ellipsoid");
   if (o.origin) {
-    ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid);
+    ro.origin = parse_origin(*o.origin, "--origin", ro.ellipsoid.value_or(geodesy::Ellipsoid::wgs84()));
     fo.nominal_origin = ro.origin;
   } else if (fo.nominal_origin) {
     ro.origin = fo.nominal_origin;  // the transform file's nominal origin reads ENU control
@@ -100,6 +100,7 @@ WorkbenchSession open_workbench(const WorkbenchOptions& o) {
   }
   ControlInput in = read_control_input(o.control, ro, o.hash_control);
   geodesy::ControlSet& set = in.set;
+  if (fo.nominal_origin && set.origin) fo.nominal_origin->ellipsoid = set.origin->ellipsoid;
   s.control_name = in.name;
   s.control_sha256 = in.sha256;
   std::string cmd;

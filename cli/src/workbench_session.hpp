@@ -24,7 +24,7 @@ struct WorkbenchOptions {
   std::string control;    // a path, or "-" for standard input
   std::string transform;  // empty: none
   std::optional<std::string> model, convention, origin;
-  std::string ellipsoid = "WGS84";
+  std::optional<std::string> ellipsoid;  // default: each frame's (io::ControlReadOptions::ellipsoid)
   std::vector<std::string> argv;
   bool hash_control = false;  // fill WorkbenchSession::control_sha256 (report)
 };

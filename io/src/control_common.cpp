@@ -16,10 +16,58 @@
 
 namespace geoanchor::io::detail {
 
-RoleConverter::RoleConverter(const ControlReadOptions& options) : options_(options), geocentric_(options.ellipsoid) {
-  if (options_.origin) plane_.emplace(*options_.origin);
-  if (options_.src_projection) src_grid_.emplace(*options_.src_projection);
-  if (options_.dst_projection) dst_grid_.emplace(*options_.dst_projection);
+void resolve_ellipsoids(geodesy::ControlSet& set, const ControlReadOptions& o, const bool uses_ellipsoid[2]) {
+  const std::optional<geodesy::Frame>* frames[2] = {&set.source_frame, &set.target_frame};
+  std::optional<geodesy::Ellipsoid> implied[2];
+  for (int k = 0; k < 2; ++k) {
+    if (*frames[k]) implied[k] = geodesy::implied_ellipsoid(**frames[k]);
+  }
+  for (int k = 0; k < 2; ++k) {
+    geodesy::ControlInputForm& form = k == 0 ? set.source_input : set.target_input;
+    if (o.ellipsoid) {
+      if (uses_ellipsoid[k] && implied[k] && !(*implied[k] == *o.ellipsoid)) {
+        throw Error(ErrorKind::usage, "E_ELLIPSOID",
+                    set.source_name + ": --ellipsoid " + o.ellipsoid->name() + " contradicts the " +
+                        (k == 0 ? "source" : "target") + " frame " + (*frames[k])->to_string() + ", which is on " +
+                        implied[k]->name() + "; drop --ellipsoid (the frame says it) or correct the frame");
+      }
+      form.ellipsoid = *o.ellipsoid;
+    } else {
+      form.ellipsoid = implied[k] ? *implied[k] : implied[1 - k] ? *implied[1 - k] : geodesy::Ellipsoid::wgs84();
+    }
+    if (form.projection) form.projection->ellipsoid = form.ellipsoid;
+  }
+}
+
+void apply_caller_frames(geodesy::ControlSet& set, const ControlReadOptions& o) {
+  for (const auto& [caller, frame] : {std::pair{&o.source_frame, &set.source_frame}, std::pair{&o.target_frame, &set.target_frame}}) {
+    if (caller->replace) {
+      *frame = caller->replace;
+    } else if (!*frame && caller->fallback) {
+      *frame = caller->fallback;
+    }
+  }
+}
+
+RoleConverter::RoleConverter(const ControlReadOptions& options, const geodesy::ControlSet& set)
+    : options_(options), src_geocentric_(set.source_input.ellipsoid), dst_geocentric_(set.target_input.ellipsoid) {
+  if (options_.origin) {
+    src_origin_ = dst_origin_ = options_.origin;
+    src_origin_->ellipsoid = set.source_input.ellipsoid;
+    dst_origin_->ellipsoid = set.target_input.ellipsoid;
+    src_plane_.emplace(*src_origin_);
+    dst_plane_.emplace(*dst_origin_);
+  }
+  if (options_.src_projection) {
+    auto p = *options_.src_projection;
+    p.ellipsoid = set.source_input.ellipsoid;
+    src_grid_.emplace(p);
+  }
+  if (options_.dst_projection) {
+    auto p = *options_.dst_projection;
+    p.ellipsoid = set.target_input.ellipsoid;
+    dst_grid_.emplace(p);
+  }
 }
 
 geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<geodesy::ProjectionDef>& projection,
@@ -54,10 +102,10 @@ void check_frame_epochs(const geodesy::ControlSet& set, const ControlReadOptions
       !set.points.empty() && std::all_of(set.points.begin(), set.points.end(), [](const auto& p) { return p.epoch.has_value(); });
   if (every_point_dated) return;
   const std::string other_way = ", or an epoch for every point";
-  if (set.source_frame && !o.source_frame_overridden) {
+  if (set.source_frame && !o.source_frame.replace) {
     geodesy::require_epoch_if_dynamic(*set.source_frame, source_where, ErrorKind::input, other_way);
   }
-  if (set.target_frame && !o.target_frame_overridden) {
+  if (set.target_frame && !o.target_frame.replace) {
     geodesy::require_epoch_if_dynamic(*set.target_frame, target_where, ErrorKind::input, other_way);
   }
 }
@@ -83,18 +131,20 @@ double RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, cons
       geodesy::GeodeticPosition g{geodesy::Angle::degrees(v.a), geodesy::Angle::degrees(v.b),
                                   geodesy::EllipsoidalHeight{v.c}};
       to_ellipsoidal(g);
-      position = geocentric_.ecef_from_geodetic(g);
+      position = (v.source ? src_geocentric_ : dst_geocentric_).ecef_from_geodetic(g);
       local_to_ecef = geodesy::enu_from_ecef_rotation(g.lat, g.lon).transpose();
       break;
     }
-    case CoordinateKind::enu:
-      if (!plane_) {
+    case CoordinateKind::enu: {
+      const auto& plane = v.source ? src_plane_ : dst_plane_;
+      if (!plane) {
         throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
                     "ENU control coordinates need their nominal origin: give --origin LAT,LON,H");
       }
-      position = plane_->ecef_from_enu(geodesy::EnuPosition{Eigen::Vector3d(v.a, v.b, v.c), *options_.origin});
-      local_to_ecef = plane_->enu_from_ecef_rotation().transpose();
+      position = plane->ecef_from_enu(geodesy::EnuPosition{Eigen::Vector3d(v.a, v.b, v.c), v.source ? *src_origin_ : *dst_origin_});
+      local_to_ecef = plane->enu_from_ecef_rotation().transpose();
       break;
+    }
     case CoordinateKind::projected: {
       const auto& grid = v.source ? src_grid_ : dst_grid_;
       if (!grid) fail(RoleField::first, "projected control coordinates need their grid (--src-zone/--src-tm, --dst-zone/--dst-tm)");
@@ -104,7 +154,7 @@ double RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, cons
       if (!inverse) fail(RoleField::first, "not a position on the declared grid: " + grid->explain(how));
       geodesy::GeodeticPosition g = *inverse;
       to_ellipsoidal(g);
-      position = geocentric_.ecef_from_geodetic(g);
+      position = (v.source ? src_geocentric_ : dst_geocentric_).ecef_from_geodetic(g);
       local_to_ecef = geodesy::enu_from_ecef_rotation(g.lat, g.lon).transpose();
       break;
     }

@@ -33,9 +33,20 @@ struct RoleValues {
 enum class RoleField { first, second, third, sigma, covariance };
 using RoleFail = std::function<void(RoleField, const std::string& message)>;  // throws
 
+// Each frame's ellipsoid by the rule of ControlReadOptions::ellipsoid, into
+// the set's input forms; `uses_ellipsoid[k]`: role k (source, target) has
+// geodetic, projected or ENU values. Throws geoanchor::Error (usage,
+// E_ELLIPSOID) for --ellipsoid that contradicts such a role's frame.
+void resolve_ellipsoids(geodesy::ControlSet& set, const ControlReadOptions& o, const bool uses_ellipsoid[2]);
+
+// The caller's frames into the set (CallerFrame: replace, else the file's,
+// else fallback).
+void apply_caller_frames(geodesy::ControlSet& set, const ControlReadOptions& o);
+
 class RoleConverter {
  public:
-  explicit RoleConverter(const ControlReadOptions& options);
+  // With the ellipsoids resolve_ellipsoids put into `set`'s input forms.
+  RoleConverter(const ControlReadOptions& options, const geodesy::ControlSet& set);
   // Position and ECEF covariance; `others_have_sigmas`: the set gives sigmas
   // somewhere, so a frame without them carries no uncertainty. Returns the
   // geoid undulation N added to an orthometric height (0 otherwise); a
@@ -45,8 +56,9 @@ class RoleConverter {
 
  private:
   ControlReadOptions options_;
-  geodesy::GeocentricConverter geocentric_;
-  std::optional<geodesy::LocalTangentPlane> plane_;
+  geodesy::GeocentricConverter src_geocentric_, dst_geocentric_;
+  std::optional<geodesy::LocalOrigin> src_origin_, dst_origin_;  // on each frame's ellipsoid
+  std::optional<geodesy::LocalTangentPlane> src_plane_, dst_plane_;
   std::optional<geodesy::TransverseMercator> src_grid_, dst_grid_;
 };
 

@@ -488,8 +488,6 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
                 source_name + ": ENU control coordinates need their nominal origin: give --origin LAT,LON,H");
   }
-  const detail::RoleConverter converter(o);
-
   ControlSet set;
   set.source_name = source_name;
   // Frames may be declared in leading comments: "# source_frame = ITRF2014@2024.5".
@@ -542,8 +540,20 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
       if (!frame) frame = of_crs;
     }
   }
-  set.ellipsoid = o.ellipsoid;
+  detail::apply_caller_frames(set, o);
+  auto uses = [](const RoleColumns& rc) {
+    return !rc.crs && (rc.coords.kind == CoordinateKind::geodetic || rc.coords.kind == CoordinateKind::projected ||
+                       rc.coords.kind == CoordinateKind::enu);
+  };
+  const bool uses_ellipsoid[2] = {uses(src), uses(dst)};
+  detail::resolve_ellipsoids(set, o, uses_ellipsoid);
+  const detail::RoleConverter converter(o, set);
   set.origin = o.origin;
+  if (set.origin) {
+    set.origin->ellipsoid = src.coords.kind == CoordinateKind::enu || dst.coords.kind != CoordinateKind::enu
+                                ? set.source_input.ellipsoid
+                                : set.target_input.ellipsoid;
+  }
 
   // ECEF position and covariance of one role in one row.
   auto read_role = [&](const CsvRecord& r, const RoleColumns& rc, geodesy::EcefPosition& p, Eigen::Matrix3d& cov,

@@ -135,9 +135,22 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     }
   }
   const std::set<std::string> known = {"id", "source", "target", "sigma_src_m", "sigma_dst_m", "cov_src_m2", "cov_dst_m2", "epoch", "use"};
-  const detail::RoleConverter converter(o);
-  set.ellipsoid = o.ellipsoid;
+  detail::apply_caller_frames(set, o);
+  // Which frames have values on an ellipsoid (any point's not x_m/y_m/z_m).
+  bool uses_ellipsoid[2] = {false, false};
+  bool enu[2] = {false, false};
+  for (const auto& p : points) {
+    for (int k = 0; k < 2; ++k) {
+      const char* role = k == 0 ? "source" : "target";
+      if (!p.is_object() || !p.contains(role) || !p.at(role).is_object()) continue;
+      uses_ellipsoid[k] = uses_ellipsoid[k] || !p.at(role).contains("x_m");
+      enu[k] = enu[k] || p.at(role).contains("e_m");
+    }
+  }
+  detail::resolve_ellipsoids(set, o, uses_ellipsoid);
+  const detail::RoleConverter converter(o, set);
   set.origin = o.origin;
+  if (set.origin) set.origin->ellipsoid = enu[0] || !enu[1] ? set.source_input.ellipsoid : set.target_input.ellipsoid;
   // The forms of the first point; a set whose points use several forms is
   // recorded as ECEF (as_read then holds the ECEF positions).
   std::optional<CoordinateKind> src_kind, dst_kind;
@@ -208,10 +221,13 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
   detail::refuse_duplicate_ids(
       set, [&](const geodesy::ControlPoint& q) { return source_name + ": points[" + std::to_string(q.line) + "]"; },
       [&](const geodesy::ControlPoint& q) { return "points[" + std::to_string(q.line) + "]"; });
+  const geodesy::Ellipsoid src_ellipsoid = set.source_input.ellipsoid, dst_ellipsoid = set.target_input.ellipsoid;
   set.source_input = detail::input_form(mixed_src || !src_kind ? CoordinateKind::ecef : *src_kind, std::nullopt,
                                         src_orthometric.value_or(false) ? "H_m" : "", o.src_geoid);
   set.target_input = detail::input_form(mixed_dst || !dst_kind ? CoordinateKind::ecef : *dst_kind, std::nullopt,
                                         dst_orthometric.value_or(false) ? "H_m" : "", o.dst_geoid);
+  set.source_input.ellipsoid = src_ellipsoid;
+  set.target_input.ellipsoid = dst_ellipsoid;
   for (auto& p : set.points) {
     if (mixed_src) p.source_as_read = p.source.m;
     if (mixed_dst) p.target_as_read = p.target.m;

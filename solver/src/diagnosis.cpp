@@ -86,9 +86,9 @@ struct Engine {
   std::vector<std::size_t> used;
   std::vector<double> sigma;  // per used point, m (1σ per coordinate)
   double noise_rms = 0.0;
-  geodesy::GeocentricConverter geocentric;
+  geodesy::GeocentricConverter source_geocentric, target_geocentric;  // each frame's ellipsoid
 
-  Engine(const ControlSet& s, const DiagnoseOptions& o) : set(s), options(o), geocentric(s.ellipsoid) {
+  Engine(const ControlSet& s, const DiagnoseOptions& o) : set(s), options(o), source_geocentric(s.source_input.ellipsoid), target_geocentric(s.target_input.ellipsoid) {
     for (std::size_t i = 0; i < set.points.size(); ++i) {
       if (set.points[i].use) used.push_back(i);
     }
@@ -198,9 +198,9 @@ std::optional<ControlSet> reread_set(const Engine& e, bool source,
   return s;
 }
 
-std::optional<EcefPosition> from_geodetic(const Engine& e, double lat_deg, double lon_deg, double h_m) {
+std::optional<EcefPosition> from_geodetic(const Engine& e, bool source, double lat_deg, double lon_deg, double h_m) {
   if (!(std::fabs(lat_deg) <= 90.0) || !(std::fabs(lon_deg) <= 360.0) || !std::isfinite(h_m)) return std::nullopt;
-  return e.geocentric.ecef_from_geodetic(geodesy::GeodeticPosition{geodesy::Angle::degrees(lat_deg),
+  return (source ? e.source_geocentric : e.target_geocentric).ecef_from_geodetic(geodesy::GeodeticPosition{geodesy::Angle::degrees(lat_deg),
                                                                    geodesy::Angle::degrees(lon_deg),
                                                                    geodesy::EllipsoidalHeight{h_m}});
 }
@@ -218,7 +218,7 @@ HypothesisResult lat_lon_swap(const Engine& e, const Vectors& base) {
   std::vector<Variant> variants;
   for (bool source : {true, false}) {
     if (input_of(e.set, source).form != CoordinateForm::geodetic) continue;
-    const auto s = reread_set(e, source, [&](const Eigen::Vector3d& v) { return from_geodetic(e, v[1], v[0], v[2]); });
+    const auto s = reread_set(e, source, [&](const Eigen::Vector3d& v) { return from_geodetic(e, source, v[1], v[0], v[2]); });
     variants.push_back({role_name(source) + " latitude and longitude swapped", residuals_of(e, s)});
   }
   return judge_corrections(Hypothesis::lat_lon_swap, e, base, std::move(variants),
@@ -237,11 +237,11 @@ HypothesisResult degrees_radians(const Engine& e, const Vectors& base) {
     }
     if (all_radian_sized) {
       const auto s = reread_set(
-          e, source, [&](const Eigen::Vector3d& v) { return from_geodetic(e, v[0] * kDegPerRad, v[1] * kDegPerRad, v[2]); });
+          e, source, [&](const Eigen::Vector3d& v) { return from_geodetic(e, source, v[0] * kDegPerRad, v[1] * kDegPerRad, v[2]); });
       variants.push_back({role_name(source) + " latitude/longitude are radians (read as degrees)", residuals_of(e, s)});
     }
     const auto s = reread_set(
-        e, source, [&](const Eigen::Vector3d& v) { return from_geodetic(e, v[0] / kDegPerRad, v[1] / kDegPerRad, v[2]); });
+        e, source, [&](const Eigen::Vector3d& v) { return from_geodetic(e, source, v[0] / kDegPerRad, v[1] / kDegPerRad, v[2]); });
     variants.push_back({role_name(source) + " latitude/longitude are degrees converted as if radians (×180/π)",
                         residuals_of(e, s)});
   }
@@ -264,7 +264,7 @@ HypothesisResult web_mercator(const Engine& e, const Vectors& base) {
     if (!candidate) continue;
     const auto s = reread_set(e, source, [&](const Eigen::Vector3d& v) {
       const auto g = geodesy::web_mercator_inverse(v[0], v[1]);
-      return from_geodetic(e, g.lat.deg(), g.lon.deg(), v[2]);
+      return from_geodetic(e, source, g.lat.deg(), g.lon.deg(), v[2]);
     });
     variants.push_back({role_name(source) + " easting/northing are Web Mercator (EPSG:3857)", residuals_of(e, s)});
   }
@@ -285,7 +285,7 @@ HypothesisResult utm_zone(const Engine& e, const Vectors& base) {
         const geodesy::TransverseMercator grid(geodesy::utm_projection(in.projection->ellipsoid, z));
         const auto s = reread_set(e, source, [&](const Eigen::Vector3d& v) -> std::optional<EcefPosition> {
           const auto g = grid.inverse(geodesy::ProjectedPosition{v[0], v[1], geodesy::EllipsoidalHeight{v[2]}, grid.definition()});
-          return from_geodetic(e, g.lat.deg(), g.lon.deg(), v[2]);
+          return from_geodetic(e, source, g.lat.deg(), g.lon.deg(), v[2]);
         });
         variants.push_back({role_name(source) + " grid is UTM zone " + z.to_string() + ", not " + declared.to_string(),
                             residuals_of(e, s)});
@@ -548,7 +548,7 @@ HypothesisResult height_type(const Engine& e, const Expectation& x, double rms_b
   double mean_n = 0.0;
   for (std::size_t i : e.used) {
     const auto& p = e.set.points[i];
-    const auto [n, up] = geodesy::geoid_along_up(*e.options.geoid, e.geocentric, p.target);
+    const auto [n, up] = geodesy::geoid_along_up(*e.options.geoid, e.target_geocentric, p.target);
     if (!std::isfinite(n)) return not_applicable(Hypothesis::height_type, rms_base, "a point lies outside the geoid grid");
     up_n.push_back(up * n);
     g.push_back(up);

@@ -654,6 +654,38 @@ TEST_F(ApplyCli, Issue12Point1_ATilePointOutsideTheForcedZonesBandIsWarnedInStde
   EXPECT_NEAR(std::stod(n), ref.y(), kVsProjTol_m) << line;
 }
 
+// issue 13 point 5: the ellipsoid comes from the frame. A CSV tile named by
+// flags only in GDA2020 on MGA zone 56 is on GRS80 (it was read on WGS84,
+// 0.1 mm off in height and up to 1e-9° in latitude), checked against PROJ's
+// inverse UTM on GRS80; --ellipsoid WGS84 that contradicts GDA2020 is refused.
+TEST_F(ApplyCli, Issue13_Point5_AFramesEllipsoidIsUsedAndAContradictingFlagRefused) {
+  write("in/mga.csv", "id,easting_m,northing_m,h_m\nA,334000,6252000,50\nB,340000,6260000,80\n");
+  const fs::path out = out_dir();
+  const RunResult r = run("apply " + path("in/mga.csv").string() +
+                          " --from-frame GDA2020 --from-zone 56S --to geodetic --out-dir " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto got = testing::parse_csv_table(slurp(out / "mga.csv"));
+  ASSERT_EQ(got.rows.size(), 2u);
+  constexpr double kVsProj_deg = 1e-11;  // about 1 µm; WGS84 instead of GRS80 moves latitude 9e-10°
+  const ProjPipeline utm56("+proj=utm +zone=56 +south +ellps=GRS80");
+  const double in[2][3] = {{334000, 6252000, 50}, {340000, 6260000, 80}};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const Eigen::Vector3d g = utm56.inverse(Eigen::Vector3d(in[i][0], in[i][1], in[i][2]));
+    EXPECT_NEAR(std::stod(got.rows[i][got.col("lat_deg")]), testing::proj_degrees(g.y()), kVsProj_deg) << i;
+    EXPECT_NEAR(std::stod(got.rows[i][got.col("lon_deg")]), testing::proj_degrees(g.x()), kVsProj_deg) << i;
+  }
+  const json side = json::parse(slurp(out / "mga.csv.geoanchor.json"));
+  EXPECT_EQ(side["coordinates"]["ellipsoid"], "GRS80");
+  const RunResult contradicted = run("apply " + path("in/mga.csv").string() +
+                                     " --from-frame GDA2020 --from-zone 56S --to geodetic --ellipsoid WGS84 --out-dir " +
+                                     path("out2").string());
+  EXPECT_EQ(contradicted.exit_code, 2);
+  EXPECT_NE(contradicted.err.find("--ellipsoid WGS84 contradicts the output frame GDA2020, which is on GRS80"),
+            std::string::npos)
+      << contradicted.err;
+  EXPECT_FALSE(fs::exists(path("out2/mga.csv")));
+}
+
 // ---------------------------------------------------------------- issue 12 point 11: outputs
 
 class ApplyOutputs : public ApplyCli {

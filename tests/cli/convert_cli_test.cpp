@@ -235,7 +235,7 @@ TEST_F(ConvertCli, OrthometricHeightsGoThroughEgm96AsProjsVgridshiftDoes) {
   const struct {
     std::string args, message;
   } bad[] = {
-      {"--to ecef --geoid EGM2008", "--geoid EGM2008: expected EGM96"},
+      {"--to ecef --geoid EGM2008", "--geoid EGM2008: not packaged in Debian's proj-data and never downloaded"},
       {"--to geodetic --output-heights orthometric", "--output-heights orthometric: needs the geoid model"},
       {"--to ecef --geoid EGM96 --output-heights orthometric", "only geodetic, UTM and TM outputs have a height column"},
   };

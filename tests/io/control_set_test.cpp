@@ -299,6 +299,8 @@ TEST(ControlSet, Point2_OrthometricHeightsAreReadThroughTheGeoidAsProjsVgridshif
   EXPECT_EQ(set.target_input.geoid_model, geodesy::GeoidGrid::egm96().model_name());
 
   std::string json = kJson;
+  // Without the frames, as the CSV (their ellipsoid would be GRS80, the CSV's WGS84).
+  replace_first(json, "\"source_frame\": \"ITRF2014@2024.5\", \"target_frame\": \"ETRF2000@2024.5\", ", "");
   replace_first(json, "\"h_m\": 480.1", "\"H_m\": 443.8311");
   replace_first(json, "\"lat_deg\": 47.46", "\"lat_deg\": 47.4834644617");
   replace_first(json, "\"lon_deg\": 8.55", "\"lon_deg\": 8.5283688582");
@@ -449,4 +451,47 @@ TEST(ControlSet, ADuplicateIdAmongManyRowsIsNamedAtItsFirstRepeat) {
 }
 
 }  // namespace
+// issue 13 point 5: the ellipsoid comes from each frame. Geodetic values in
+// ITRF2014 are on GRS80 and those in WGS 84 (G2139) on WGS84, each checked
+// against PROJ's cart on that ellipsoid; a set that names no frame stays on
+// WGS84; --ellipsoid that contradicts a frame whose values use it is refused
+// naming both, and one that agrees is taken.
+TEST(ControlSet, Issue13_Point5_TheEllipsoidComesFromEachFrame) {
+  constexpr double kVsProjTol_m = 1e-6;
+  const std::string body =
+      "id,lat_src_deg,lon_src_deg,h_src_m,lat_dst_deg,lon_dst_deg,h_dst_m\n"
+      "P1,47.4834644617,8.5283688582,443.8311,47.4834644,8.5283689,443.8\n";
+  const std::string framed = "# source_frame = ITRF2014@2024.5\n# target_frame = WGS84(G2139)@2024.5\n" + body;
+  const testing::ProjPipeline grs80("+proj=cart +ellps=GRS80"), wgs84("+proj=cart +ellps=WGS84");
+  const Eigen::Vector3d src(testing::proj_radians(8.5283688582), testing::proj_radians(47.4834644617), 443.8311);
+  const Eigen::Vector3d dst(testing::proj_radians(8.5283689), testing::proj_radians(47.4834644), 443.8);
+  ControlReadOptions o;
+  std::istringstream in(framed);
+  const auto set = read_control_csv(in, "c.csv", o);
+  EXPECT_EQ(set.source_input.ellipsoid, geodesy::Ellipsoid::grs80());
+  EXPECT_EQ(set.target_input.ellipsoid, geodesy::Ellipsoid::wgs84());
+  EXPECT_LT((set.points[0].source.m - grs80.forward(src)).norm(), kVsProjTol_m);
+  EXPECT_LT((set.points[0].target.m - wgs84.forward(dst)).norm(), kVsProjTol_m);
+  // The GRS80 and WGS84 positions of one point differ by 0.1 mm here: the
+  // check above tells them apart (1e-6 m).
+  EXPECT_GT((grs80.forward(src) - wgs84.forward(src)).norm(), 100 * kVsProjTol_m);
+
+  std::istringstream bare(body);
+  const auto unnamed = read_control_csv(bare, "c.csv", o);
+  EXPECT_EQ(unnamed.source_input.ellipsoid, geodesy::Ellipsoid::wgs84());
+
+  ControlReadOptions given;
+  given.ellipsoid = geodesy::Ellipsoid::wgs84();
+  const auto [code, message] = read_error(framed, "c.csv", given);
+  EXPECT_EQ(code, "E_ELLIPSOID");
+  EXPECT_NE(message.find("--ellipsoid WGS84 contradicts the source frame ITRF2014@2024.5, which is on GRS80"),
+            std::string::npos)
+      << message;
+  // A caller's frame replaces the file's and its ellipsoid follows.
+  ControlReadOptions replaced;
+  replaced.source_frame.replace = geodesy::Frame::parse("WGS84(G2139)@2024.5", "test");
+  std::istringstream again(framed);
+  EXPECT_EQ(read_control_csv(again, "c.csv", replaced).source_input.ellipsoid, geodesy::Ellipsoid::wgs84());
+}
+
 }  // namespace geoanchor::io

@@ -97,16 +97,16 @@ std::optional<std::string> likely_lat_lon_swap(const geodesy::ControlSet& set) {
       set.points.empty()) {
     return std::nullopt;
   }
-  const geodesy::GeocentricConverter conv(set.ellipsoid);
-  auto swapped = [&](const Eigen::Vector3d& as_read) -> std::optional<geodesy::EcefPosition> {
+  const geodesy::GeocentricConverter src_conv(set.source_input.ellipsoid), dst_conv(set.target_input.ellipsoid);
+  auto swapped = [&](const Eigen::Vector3d& as_read, bool source) -> std::optional<geodesy::EcefPosition> {
     if (!(std::fabs(as_read.y()) <= 90.0)) return std::nullopt;
-    return conv.ecef_from_geodetic({geodesy::Angle::degrees(as_read.y()), geodesy::Angle::degrees(as_read.x()),
+    return (source ? src_conv : dst_conv).ecef_from_geodetic({geodesy::Angle::degrees(as_read.y()), geodesy::Angle::degrees(as_read.x()),
                                     geodesy::EllipsoidalHeight{as_read.z()}});
   };
   std::vector<double> as_read, src_swapped, dst_swapped;
   for (const auto& p : set.points) {
     as_read.push_back((p.target.m - p.source.m).norm());
-    const auto s = swapped(p.source_as_read), t = swapped(p.target_as_read);
+    const auto s = swapped(p.source_as_read, true), t = swapped(p.target_as_read, false);
     src_swapped.push_back(s ? (p.target.m - s->m).norm() : std::numeric_limits<double>::infinity());
     dst_swapped.push_back(t ? (t->m - p.source.m).norm() : std::numeric_limits<double>::infinity());
   }
@@ -150,7 +150,7 @@ std::optional<std::string> orthometric_height_warning(const solver::FitResult& r
   const std::optional<geodesy::DecimalYear> epoch =
       r.model == solver::FitModel::helmert14 ? r.reference_epoch : std::optional<geodesy::DecimalYear>{};
   if (r.model == solver::FitModel::helmert14 && !epoch) return std::nullopt;
-  const geodesy::GeocentricConverter geocentric(set.ellipsoid);
+  const geodesy::GeocentricConverter geocentric(set.source_input.ellipsoid);  // at the source centroid
   const auto [n_m, up] = geodesy::geoid_along_up(geoid, geocentric, centroid);
   const double offset_m = (solver::apply_fit(r, centroid, epoch).m - centroid.m).dot(up);
   if (!std::isfinite(n_m) || !std::isfinite(offset_m) || !(std::fabs(offset_m) > kHeightTypeMinOffset_m)) return std::nullopt;

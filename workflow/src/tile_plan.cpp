@@ -236,7 +236,10 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
                     " and no --from-frame NAME@EPOCH");
   }
   m.frame = from_frame_;
-  m.coordinates.ellipsoid = out_.ellipsoid.value_or(geodesy::Ellipsoid::wgs84());
+  // The frame's own ellipsoid (GRS80 for ITRF, ETRF, GDA, NAD83); --ellipsoid
+  // or WGS84 only for a frame that implies none.
+  m.coordinates.ellipsoid =
+      geodesy::implied_ellipsoid(*from_frame_).value_or(out_.ellipsoid.value_or(geodesy::Ellipsoid::wgs84()));
   if (o_.from_origin) {
     m.coordinates.kind = CoordinateKind::enu;
     m.coordinates.origin = parse_origin(*o_.from_origin, "--from-origin", m.coordinates.ellipsoid);
@@ -438,7 +441,18 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
     p.in.coordinates.ellipsoid = e;
   }
   out.coordinates.kind = out_.kind.value_or(in.coordinates.kind);
-  out.coordinates.ellipsoid = out_.ellipsoid.value_or(in.coordinates.ellipsoid);
+  // A new frame's ellipsoid (GRS80 for ITRF, ETRF, GDA, NAD83), else the
+  // tile's own; --ellipsoid must not contradict the frame for coordinates
+  // that use it.
+  const bool same_frame = out.frame && in.frame && out.frame->name() == in.frame->name();
+  const auto implied = out.frame ? geodesy::implied_ellipsoid(*out.frame) : std::nullopt;
+  if (out_.ellipsoid && implied && !(*implied == *out_.ellipsoid) && out.coordinates.kind != CoordinateKind::ecef) {
+    throw Error(ErrorKind::usage, "E_ELLIPSOID",
+                tile + ": --ellipsoid " + out_.ellipsoid->name() + " contradicts the output frame " + out.frame->to_string() +
+                    ", which is on " + implied->name() + "; drop --ellipsoid (the frame says it)");
+  }
+  out.coordinates.ellipsoid =
+      out_.ellipsoid.value_or(implied && !same_frame ? *implied : in.coordinates.ellipsoid);
   const bool same_kind = out.coordinates.kind == in.coordinates.kind;
   if (out.coordinates.kind == CoordinateKind::enu || out.coordinates.kind == CoordinateKind::ned) {
     if (o_.origin) {

@@ -156,8 +156,10 @@ std::optional<geodesy::ProjectionDef> parse_grid(const std::optional<std::string
 }  // namespace
 
 void apply_control_grids(const ControlGridOptions& o, io::ControlReadOptions& read) {
-  read.src_projection = parse_grid(o.src_zone, o.src_tm, read.ellipsoid, "src");
-  read.dst_projection = parse_grid(o.dst_zone, o.dst_tm, read.ellipsoid, "dst");
+  // Put on each frame's ellipsoid by the reader (io::ControlReadOptions).
+  const geodesy::Ellipsoid e = read.ellipsoid.value_or(geodesy::Ellipsoid::wgs84());
+  read.src_projection = parse_grid(o.src_zone, o.src_tm, e, "src");
+  read.dst_projection = parse_grid(o.dst_zone, o.dst_tm, e, "dst");
   for (const auto& [crs, grid, flag, role] :
        {std::tuple{&o.src_crs, read.src_projection.has_value(), "--src-crs", "src"},
         std::tuple{&o.dst_crs, read.dst_projection.has_value(), "--dst-crs", "dst"}}) {

@@ -38,6 +38,10 @@ struct ControlInputForm {
   std::string height_column;  // orthometric: the column or key read ("H_dst_m", "H_m")
   std::string geoid_model;    // orthometric: the model N came from ("EGM96", "EGM96-NGA")
   std::string crs_name;       // crs: "EPSG:2236 (NAD83 / Florida East (ftUS))"
+  // The ellipsoid of geodetic, projected and ENU values: the one the frame
+  // implies (GRS80 for ITRF, ETRF, GDA, NAD83; WGS84 for WGS 84), or
+  // --ellipsoid, or WGS84 for a frame the set does not name.
+  Ellipsoid ellipsoid = Ellipsoid::wgs84();
 };
 
 // A mark's ECEF velocities (m/yr) in each frame at its epoch, with their
@@ -79,11 +83,10 @@ struct ControlSet {
   // False when the file gave no sigmas: weights are then equal (1 m²) and
   // only σ0 estimated from the residuals gives them a scale.
   bool has_a_priori_sigmas = true;
-  // How the coordinates were read: their forms, the ellipsoid of geodetic
-  // and projected values, the nominal origin of ENU values.
+  // How the coordinates were read: their forms and ellipsoids, the nominal
+  // origin of ENU values (on the ellipsoid of the frame whose values are ENU).
   ControlInputForm source_input;
   ControlInputForm target_input;
-  Ellipsoid ellipsoid = Ellipsoid::wgs84();
   std::optional<LocalOrigin> origin;
 };
 

@@ -40,8 +40,23 @@
 
 namespace geoanchor::io {
 
+// A frame the caller gives: `replace` stands for the file's (fit
+// --source-frame), `fallback` where the file names none (diagnose
+// --transform's frames).
+struct CallerFrame {
+  std::optional<geodesy::Frame> replace, fallback;
+};
+
 struct ControlReadOptions {
-  geodesy::Ellipsoid ellipsoid = geodesy::Ellipsoid::wgs84();
+  // --ellipsoid: the ellipsoid of both frames' geodetic, projected and ENU
+  // values. Without it each frame's is the one the frame implies
+  // (geodesy::implied_ellipsoid: GRS80 for ITRF, ETRF, GDA, NAD83; WGS84
+  // for WGS 84), else the other frame's, else WGS84 when neither is named
+  // or implies one; the set records each (ControlInputForm::ellipsoid).
+  // Given, it must not contradict the frame of a role whose values use it
+  // (E_ELLIPSOID, usage, naming both).
+  std::optional<geodesy::Ellipsoid> ellipsoid;
+  CallerFrame source_frame, target_frame;
   // The CRS of each frame's coordinates, read through PROJ (fit and
   // diagnose --src-crs/--dst-crs; a CSV may state them above its header as
   // "# source_crs = EPSG:2236" / "# target_crs = …", and a flag that
@@ -52,10 +67,13 @@ struct ControlReadOptions {
   // frame with a CRS takes sigma_<role>_m (isotropic, metres) but no
   // covariance columns.
   std::optional<Crs> src_crs, dst_crs;
-  std::optional<geodesy::LocalOrigin> origin;  // for e_src_m/e_dst_m columns
+  // For e_src_m/e_dst_m columns; its ellipsoid is replaced by that of the
+  // frame whose values are ENU.
+  std::optional<geodesy::LocalOrigin> origin;
   // The grids of easting_src_m/northing_src_m and easting_dst_m/northing_dst_m
-  // columns (a UTM zone or a Transverse Mercator, on `ellipsoid`); h_src_m
-  // beside them is ellipsoidal. Projected columns without one are refused.
+  // columns (a UTM zone or a Transverse Mercator, put on the frame's
+  // ellipsoid); h_src_m beside them is ellipsoidal. Projected columns
+  // without one are refused.
   std::optional<geodesy::ProjectionDef> src_projection;
   std::optional<geodesy::ProjectionDef> dst_projection;
   // The geoid of orthometric heights (H_src_m, H_dst_m; JSON H_m) in each
@@ -64,11 +82,6 @@ struct ControlReadOptions {
   // must outlive the read.
   const geodesy::GeoidGrid* src_geoid = nullptr;
   const geodesy::GeoidGrid* dst_geoid = nullptr;
-  // The caller replaces the file's source (target) frame with its own (fit
-  // --source-frame): a dynamic frame the file names without an epoch is
-  // then not refused here; the caller checks the one it gives.
-  bool source_frame_overridden = false;
-  bool target_frame_overridden = false;
 };
 
 geodesy::ControlSet read_control_csv(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
