@@ -8,7 +8,10 @@
 //     arrays (same bytes read and written as the fused path) and a plain
 //     copy of them;
 //   - LAS end to end (file in the page cache): read -> decode -> transform ->
-//     encode -> write, one tile on one thread and two tiles on two threads.
+//     encode -> write, one tile on one thread and two tiles on two threads;
+//   - a LAS tile in a CRS PROJ moves (Lambert-93 -> LAEA Europe, as `apply
+//     --to-crs` runs it: one CrsOperation per tile, proj_trans_generic over
+//     each chunk) against PROJ's proj_trans_generic on the same points.
 // Prints Google Benchmark's medians (≥ 5 repetitions), then a table of
 // points/s and ratios. Never part of the test run's pass/fail.
 
@@ -27,6 +30,8 @@
 #include <thread>
 #include <vector>
 
+#include "geoanchor/io/crs.hpp"
+#include "geoanchor/io/crs_operation.hpp"
 #include "geoanchor/io/las.hpp"
 #include "geoanchor/io/point_chain.hpp"
 #include "geoanchor/io/tile_apply.hpp"
@@ -288,6 +293,93 @@ void las_end_to_end_two_jobs(benchmark::State& state) {
   set_points(state, 2 * kLasPoints);
 }
 
+// ---------------------------------------------------------------- LAS through PROJ
+
+constexpr char kLambert93[] = "EPSG:2154";
+constexpr char kLaea[] = "EPSG:3035";
+
+// A tile of kLasPoints in Lambert-93 (promoted to 3-D), 6 km around Paris, 1 mm.
+fs::path lambert_tile() {
+  const fs::path p = las_dir() / "lambert93.las";
+  if (fs::exists(p)) return p;
+  io::LasHeader h;
+  h.point_format = 6;
+  h.record_length = 30;
+  h.global_encoding = 1;
+  h.offset = {652000.0, 6862000.0, 0.0};
+  std::ofstream out(p, std::ios::binary);
+  io::LasWriter w(out, h, {}, {}, p.string());
+  std::vector<std::uint8_t> rec(30 * 65536);
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<std::int32_t> hq(-3000000, 3000000), vq(-30000, 80000);
+  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (std::size_t done = 0; done < kLasPoints;) {
+    const std::size_t n = std::min<std::size_t>(65536, kLasPoints - done);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::int32_t q[3] = {hq(rng), hq(rng), vq(rng)};
+      std::memcpy(&rec[i * 30], q, 12);
+      for (std::size_t b = 12; b < 30; ++b) rec[i * 30 + b] = static_cast<std::uint8_t>(i + b);
+      for (std::size_t a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], q[a] * 0.001 + h.offset[a]);
+        hi[a] = std::max(hi[a], q[a] * 0.001 + h.offset[a]);
+      }
+    }
+    w.write_records(rec.data(), n);
+    done += n;
+  }
+  std::array<std::uint64_t, 15> by_return{};
+  by_return[0] = kLasPoints;
+  w.finish(by_return, lo, hi);
+  return p;
+}
+
+void las_crs_end_to_end(benchmark::State& state) {
+  const fs::path in = lambert_tile();
+  const io::Crs src = io::Crs::parse(kLambert93, "bench").promoted_to_3d("bench");
+  const io::Crs dst = io::Crs::parse(kLaea, "bench").promoted_to_3d("bench");
+  for (auto _ : state) {
+    state.PauseTiming();
+    fs::remove(las_dir() / "out_crs.las");
+    state.ResumeTiming();
+    io::CrsOperation op(src, dst, "bench");  // per tile, as apply makes it
+    io::TileApplyOptions o{io::ArrayFrame{}, io::ArrayFrame{}, std::nullopt, "WKT", 1 << 16, {}};
+    o.crs_before = &op;
+    o.chain_used = false;
+    o.file_in = io::TileCrsAxes{};
+    o.file_out = io::TileCrsAxes{};
+    const io::PointChain identity(io::ArrayFrame{}, std::nullopt, false, std::nullopt, io::ArrayFrame{});
+    std::ofstream out(las_dir() / "out_crs.las", std::ios::binary);
+    io::apply_las_tile(in, out, (las_dir() / "out_crs.las").string(), identity, o);
+  }
+  set_points(state, kLasPoints);
+}
+
+// PROJ alone on the same points: decoded arrays through proj_trans_generic.
+void proj_crs_kernel(benchmark::State& state) {
+  PJ_CONTEXT* ctx = proj_context_create();
+  PJ* raw = proj_create_crs_to_crs(ctx, kLambert93, kLaea, nullptr);
+  PJ* op = proj_normalize_for_visualization(ctx, raw);
+  std::vector<double> x(kLasPoints), y(kLasPoints), z(kLasPoints);
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<std::int32_t> hq(-3000000, 3000000), vq(-30000, 80000);
+  for (std::size_t i = 0; i < kLasPoints; ++i) {
+    x[i] = hq(rng) * 0.001 + 652000.0;
+    y[i] = hq(rng) * 0.001 + 6862000.0;
+    z[i] = vq(rng) * 0.001;
+  }
+  for (auto _ : state) {
+    state.PauseTiming();
+    std::vector<double> a = x, b = y, c = z;
+    state.ResumeTiming();
+    proj_trans_generic(op, PJ_FWD, a.data(), 8, kLasPoints, b.data(), 8, kLasPoints, c.data(), 8, kLasPoints, nullptr, 0, 0);
+    benchmark::DoNotOptimize(a.data());
+  }
+  proj_destroy(op);
+  proj_destroy(raw);
+  proj_context_destroy(ctx);
+  set_points(state, kLasPoints);
+}
+
 #define GEOANCHOR_BENCH(f) \
   BENCHMARK(f)->Repetitions(5)->ReportAggregatesOnly(true)->Unit(benchmark::kMillisecond)->UseRealTime()
 GEOANCHOR_BENCH(fused_enu_to_enu);
@@ -298,6 +390,8 @@ GEOANCHOR_BENCH(stream_in_place);
 GEOANCHOR_BENCH(stream_copy);
 GEOANCHOR_BENCH(las_end_to_end)->Iterations(1);
 GEOANCHOR_BENCH(las_end_to_end_two_jobs)->Iterations(1);
+GEOANCHOR_BENCH(las_crs_end_to_end)->Iterations(1);
+GEOANCHOR_BENCH(proj_crs_kernel)->Iterations(1);
 
 // The largest difference between the fused path and PROJ on one chain.
 double max_difference_m(const io::PointChain& chain, const std::string& proj_def, bool geodetic) {
@@ -333,6 +427,7 @@ void print_table(const bench::MedianReporter& r) {
   const double fused_geo = mpts("fused_enu_to_geodetic", kPoints), proj_geo = mpts("proj_enu_to_geodetic", kPoints);
   const double in_place = mpts("stream_in_place", kPoints), copy = mpts("stream_copy", kPoints);
   const double las1 = mpts("las_end_to_end", kLasPoints), las2 = mpts("las_end_to_end_two_jobs", 2 * kLasPoints);
+  const double las_crs = mpts("las_crs_end_to_end", kLasPoints), proj_crs = mpts("proj_crs_kernel", kLasPoints);
   std::printf("\n%zu float64 points, medians, million points per second\n", kPoints);
   std::printf("  %-52s %10s %10s\n", "path", "M pts/s", "ratio");
   std::printf("  %-52s %10.1f\n", "ENU(A)->ECEF->Helmert->ENU(B), PROJ proj_trans_generic", proj);
@@ -344,6 +439,9 @@ void print_table(const bench::MedianReporter& r) {
   std::printf("  %-52s %10.1f\n", "ceiling: plain copy of the same bytes", copy);
   std::printf("  %-52s %10.1f\n", "LAS read->transform->write, 1 tile, 1 thread", las1);
   std::printf("  %-52s %10.1f %9.2fx one job\n", "LAS read->transform->write, 2 tiles, 2 threads", las2, las2 / las1);
+  std::printf("  %-52s %10.1f\n", "Lambert-93 -> LAEA, PROJ proj_trans_generic (kernel)", proj_crs);
+  std::printf("  %-52s %10.1f %9.2fx PROJ kernel\n", "Lambert-93 -> LAEA, LAS tile through apply's PROJ stage", las_crs,
+              las_crs / proj_crs);
   const double diff_enu = max_difference_m(chain_to_b(), std::string(kProjChain) + kProjToB, false);
   const double diff_geodetic = max_difference_m(chain_to_geodetic(), std::string(kProjChain) + kProjToGeodetic, true);
   std::printf("  max |geoanchor - PROJ|: ENU(B) %.2e m, geodetic %.2e m\n", diff_enu, diff_geodetic);
