@@ -13,6 +13,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/crs_operation.hpp"
 
 namespace geoanchor::io::detail {
 
@@ -36,6 +37,91 @@ void resolve_ellipsoids(geodesy::ControlSet& set, const ControlReadOptions& o, c
       form.ellipsoid = implied[k] ? *implied[k] : implied[1 - k] ? *implied[1 - k] : geodesy::Ellipsoid::wgs84();
     }
     if (form.projection) form.projection->ellipsoid = form.ellipsoid;
+  }
+}
+
+void adopt_crs(geodesy::ControlSet& set, bool source, const CrsColumns& columns, const std::string& where) {
+  geodesy::ControlInputForm& form = source ? set.source_input : set.target_input;
+  form = geodesy::ControlInputForm{};
+  form.form = geodesy::CoordinateForm::crs;
+  form.crs_name = columns.crs.display_name();
+  if (columns.orthometric) {
+    form.height_type = geodesy::HeightKind::orthometric;
+    form.height_column = columns.names[2];
+    form.geoid_model = columns.crs.description().geoid_model;
+  }
+  const std::string& catalog = columns.crs.description().catalog_frame;
+  auto& frame = source ? set.source_frame : set.target_frame;
+  if (catalog.empty()) return;
+  const auto& e = columns.crs.epoch();
+  const geodesy::Frame of_crs =
+      geodesy::Frame::parse(catalog + (e ? "@" + geodesy::format_decimal_year(*e) : ""), set.source_name + ": " + where);
+  if (frame && frame->name() != of_crs.name()) {
+    throw Error(ErrorKind::input, "E_FRAME_CONFLICT",
+                set.source_name + ": the " + (source ? "source" : "target") + " frame " + frame->to_string() +
+                    " contradicts its CRS " + columns.crs.display_name() + ", which is on " + of_crs.name());
+  }
+  if (!frame) frame = of_crs;
+}
+
+void positions_from_crs(geodesy::ControlSet& set, bool source, const CrsColumns& columns, const std::string& where,
+                        const std::function<bool(std::size_t)>& has_covariance,
+                        const std::function<std::string(const geodesy::ControlPoint&)>& name) {
+  constexpr std::size_t kBatch = 4096;
+  // A step of about a metre on each axis: small against the curvature of
+  // any projection (the Jacobian's relative error is of order (step/R)²).
+  constexpr double kStep_m = 1.0;
+  constexpr double kEarthRadius_m = 6.371e6;
+  const auto& axes = columns.crs.description().visualization_axes;
+  std::array<double, 3> step{};  // in each axis's unit
+  std::array<bool, 3> angular{};
+  for (std::size_t k = 0; k < 3 && k < axes.size(); ++k) {
+    angular[k] = axes[k].unit_type == "angular";
+    step[k] = angular[k] ? kStep_m / kEarthRadius_m / axes[k].unit_to_si : kStep_m / axes[k].unit_to_si;
+  }
+  CrsOperation to_ecef(columns.crs, columns.crs.geocentric(where), set.source_name + ": " + where);
+  std::vector<double> a, b, c;
+  std::vector<std::size_t> with_cov;
+  for (std::size_t first = 0; first < set.points.size(); first += kBatch) {
+    const std::size_t n = std::min(kBatch, set.points.size() - first);
+    with_cov.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (has_covariance(first + i)) with_cov.push_back(i);
+    }
+    // The points, then six neighbours (±step on each axis) of each with a covariance.
+    a.resize(n + 6 * with_cov.size()), b.resize(a.size()), c.resize(a.size());
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d& v = source ? set.points[first + i].source_as_read : set.points[first + i].target_as_read;
+      a[i] = v.x(), b[i] = v.y(), c[i] = v.z();
+    }
+    for (std::size_t j = 0; j < with_cov.size(); ++j) {
+      for (std::size_t k = 0; k < 6; ++k) {
+        const std::size_t at = n + 6 * j + k, i = with_cov[j];
+        a[at] = a[i], b[at] = b[i], c[at] = c[i];
+        double* axis[3] = {&a[at], &b[at], &c[at]};
+        *axis[k / 2] += (k % 2 == 0 ? 1.0 : -1.0) * step[k / 2];
+      }
+    }
+    to_ecef.transform(a.data(), b.data(), c.data(), a.size(), [&](std::size_t i) {
+      const std::size_t point = i < n ? i : with_cov[(i - n) / 6];
+      return name(set.points[first + point]) + (i < n ? "" : " (a neighbour for its covariance)");
+    });
+    for (std::size_t i = 0; i < n; ++i) {
+      (source ? set.points[first + i].source : set.points[first + i].target) = geodesy::EcefPosition(a[i], b[i], c[i]);
+    }
+    for (std::size_t j = 0; j < with_cov.size(); ++j) {
+      Eigen::Matrix3d jacobian;  // d(ECEF, m) / d(metres along each CRS axis)
+      for (std::size_t k = 0; k < 3; ++k) {
+        const std::size_t plus = n + 6 * j + 2 * k, minus = plus + 1;
+        const Eigen::Vector3d d(a[plus] - a[minus], b[plus] - b[minus], c[plus] - c[minus]);
+        // A latitude or longitude axis in ground metres: the unit direction;
+        // a linear axis in its own metres.
+        jacobian.col(static_cast<Eigen::Index>(k)) = angular[k] ? Eigen::Vector3d(d / d.norm()) : Eigen::Vector3d(d / (2.0 * kStep_m));
+      }
+      geodesy::ControlPoint& p = set.points[first + with_cov[j]];
+      Eigen::Matrix3d& cov = source ? p.source_cov_m2 : p.target_cov_m2;
+      cov = jacobian * cov * jacobian.transpose();
+    }
   }
 }
 

@@ -16,6 +16,7 @@
 #include "geoanchor/geodesy/projection.hpp"
 #include "geoanchor/io/control_csv.hpp"
 #include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/io/crs_columns.hpp"
 
 namespace geoanchor::io::detail {
 
@@ -42,6 +43,22 @@ void resolve_ellipsoids(geodesy::ControlSet& set, const ControlReadOptions& o, c
 // The caller's frames into the set (CallerFrame: replace, else the file's,
 // else fallback).
 void apply_caller_frames(geodesy::ControlSet& set, const ControlReadOptions& o);
+
+// A frame whose values are in a CRS: its input form (crs, name, heights)
+// and its frame, the CRS's catalog frame (a frame the file names must be
+// the same, E_FRAME_CONFLICT naming both). `where` names the flag or key.
+void adopt_crs(geodesy::ControlSet& set, bool source, const CrsColumns& columns, const std::string& where);
+
+// That frame's values as read (as_read: the CRS's numbers in visualisation
+// order and units) to ECEF on the CRS's datum through PROJ, a batch at a
+// time. A covariance given in the CRS's axes (m² along each axis: ground
+// metres along a latitude or longitude axis, grid metres along a projected
+// one) is carried by the Jacobian of that conversion, taken by central
+// differences through PROJ, for the points `has_covariance` names; an
+// isotropic sigma needs none. Errors name a point by `name`.
+void positions_from_crs(geodesy::ControlSet& set, bool source, const CrsColumns& columns, const std::string& where,
+                        const std::function<bool(std::size_t)>& has_covariance,
+                        const std::function<std::string(const geodesy::ControlPoint&)>& name);
 
 class RoleConverter {
  public:

@@ -97,13 +97,8 @@ RoleColumns crs_role_columns(const std::vector<std::string>& header, const std::
   rc.coords.first = index[at[0]];
   rc.coords.second = index[at[1]];
   rc.coords.third = index[at[2]];
+  // Covariance columns are in the CRS's axes, in m² (positions_from_crs).
   uncertainty_columns(header, source, rc);
-  if (rc.has_cov) {
-    throw Error(ErrorKind::input, "E_COLUMN",
-                source + ": covariance columns cov_" + role + "_.._m2 with a CRS (" + flag + " " + crs.display_name() +
-                    "): their axes would be the CRS's; give sigma_" + role + "_m, or ECEF coordinates x_" + role +
-                    "_m… with their covariance");
-  }
   return rc;
 }
 
@@ -515,30 +510,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   set.target_input = detail::input_form(dst.coords.kind, o.dst_projection,
                                         dst.coords.orthometric ? header[*dst.coords.third] : std::string(), o.dst_geoid);
   for (const RoleColumns* rc : {&src, &dst}) {
-    if (!rc->crs) continue;
-    geodesy::ControlInputForm& form = rc == &src ? set.source_input : set.target_input;
-    form = geodesy::ControlInputForm{};
-    form.form = geodesy::CoordinateForm::crs;
-    form.crs_name = rc->crs->crs.display_name();
-    if (rc->crs->orthometric) {
-      form.height_type = geodesy::HeightKind::orthometric;
-      form.height_column = rc->crs->names[2];
-      form.geoid_model = rc->crs->crs.description().geoid_model;
-    }
-    // The frame is the CRS's catalog frame; a frame comment must agree.
-    const std::string& catalog = rc->crs->crs.description().catalog_frame;
-    auto& frame = rc == &src ? set.source_frame : set.target_frame;
-    if (!catalog.empty()) {
-      const auto& e = rc->crs->crs.epoch();
-      const geodesy::Frame of_crs = geodesy::Frame::parse(catalog + (e ? "@" + geodesy::format_decimal_year(*e) : ""),
-                                                          source_name + ": " + crs_flags[rc == &src ? 0 : 1]);
-      if (frame && frame->name() != of_crs.name()) {
-        throw Error(ErrorKind::input, "E_FRAME_CONFLICT",
-                    source_name + ": the " + (rc == &src ? "source" : "target") + " frame " + frame->to_string() +
-                        " contradicts its CRS " + rc->crs->crs.display_name() + ", which is on " + of_crs.name());
-      }
-      if (!frame) frame = of_crs;
-    }
+    if (rc->crs) detail::adopt_crs(set, rc == &src, *rc->crs, crs_flags[rc == &src ? 0 : 1]);
   }
   detail::apply_caller_frames(set, o);
   auto uses = [](const RoleColumns& rc) {
@@ -636,28 +608,12 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   };
   read_rows_in_parallel(reader, set.points, point_of);
   // A frame in a CRS: its three numbers as read, to ECEF on its datum
-  // through PROJ, a batch at a time.
+  // through PROJ, a batch at a time (covariances with the conversion's Jacobian).
   for (const RoleColumns* rc : {&src, &dst}) {
     if (!rc->crs) continue;
-    const bool source = rc == &src;
-    const char* flag = crs_flags[source ? 0 : 1];
-    CrsOperation to_ecef(rc->crs->crs, rc->crs->crs.geocentric(flag), source_name + ": " + flag);
-    constexpr std::size_t kBatch = 4096;
-    std::vector<double> a, b, c;
-    for (std::size_t first = 0; first < set.points.size(); first += kBatch) {
-      const std::size_t n = std::min(kBatch, set.points.size() - first);
-      a.resize(n), b.resize(n), c.resize(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        const Eigen::Vector3d& v = source ? set.points[first + i].source_as_read : set.points[first + i].target_as_read;
-        a[i] = v.x(), b[i] = v.y(), c[i] = v.z();
-      }
-      to_ecef.transform(a.data(), b.data(), c.data(), n, [&](std::size_t i) {
-        return source_name + ":" + std::to_string(set.points[first + i].line);
-      });
-      for (std::size_t i = 0; i < n; ++i) {
-        (source ? set.points[first + i].source : set.points[first + i].target) = geodesy::EcefPosition(a[i], b[i], c[i]);
-      }
-    }
+    detail::positions_from_crs(
+        set, rc == &src, *rc->crs, crs_flags[rc == &src ? 0 : 1], [&](std::size_t) { return rc->has_cov; },
+        [&](const ControlPoint& q) { return source_name + ":" + std::to_string(q.line); });
   }
   detail::refuse_duplicate_ids(
       set, [&](const ControlPoint& q) { return source_name + ":" + std::to_string(q.line); },

@@ -1,5 +1,6 @@
 // Control sets in JSON (schema: docs/commands/fit.md).
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstring>
@@ -13,6 +14,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/crs_columns.hpp"
 #include "geoanchor/io/json_input.hpp"
 
 namespace geoanchor::io {
@@ -99,6 +101,34 @@ detail::RoleValues role_values(const json& point, const std::string& role, const
   return v;
 }
 
+// One frame of one point in a CRS: exactly the CRS's keys (`columns`), in
+// its units; read as three numbers that PROJ turns into ECEF once every
+// point is read (positions_from_crs), with the point's sigma or covariance.
+detail::RoleValues crs_role_values(const json& point, const std::string& role, const std::string& where,
+                                   const CrsColumns& columns) {
+  const std::string frame = role == "src" ? "source" : "target";
+  if (!point.contains(frame) || !point.at(frame).is_object()) fail(where + "." + frame, "missing; expected an object of coordinates");
+  const json& c = point.at(frame);
+  const std::string at = where + "." + frame;
+  std::string expected;
+  for (const auto& n : columns.names) expected += (expected.empty() ? "" : ", ") + n;
+  for (const auto& [key, value] : c.items()) {
+    if (std::find(columns.names.begin(), columns.names.end(), key) == columns.names.end()) {
+      fail(at + "." + key, "unknown key for the CRS " + columns.crs.display_name() + "; expected " + expected);
+    }
+  }
+  // The sigma and covariance as role_values reads them, on a stand-in of
+  // ECEF keys (the checks and messages are the same).
+  json stand_in = point;
+  stand_in[frame] = json{{"x_m", 0.0}, {"y_m", 0.0}, {"z_m", 0.0}};
+  detail::RoleValues v = role_values(stand_in, role, where, nullptr);
+  v.kind = CoordinateKind::ecef;  // as read; made ECEF through PROJ after the points are read
+  v.a = number_at(c, columns.names[0], at);
+  v.b = number_at(c, columns.names[1], at);
+  v.c = number_at(c, columns.names[2], at);
+  return v;
+}
+
 }  // namespace
 
 geodesy::ControlSet read_control_json(std::istream& in, const std::string& source_name, const ControlReadOptions& o) {
@@ -107,8 +137,10 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
   const json doc = parse_json_strict<json>(text.str(), source_name);
   if (!doc.is_object()) fail(source_name, "expected a JSON object with \"points\"");
   for (const auto& [key, value] : doc.items()) {
-    if (key != "points" && key != "source_frame" && key != "target_frame" && key != "description") {
-      fail(source_name + ": " + key, "unknown key; expected points, source_frame, target_frame, description");
+    if (key != "points" && key != "source_frame" && key != "target_frame" && key != "source_crs" &&
+        key != "target_crs" && key != "description") {
+      fail(source_name + ": " + key,
+           "unknown key; expected points, source_frame, target_frame, source_crs, target_crs, description");
     }
   }
   // Free text for people; typed so that a misplaced value is not kept as one.
@@ -135,6 +167,41 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     }
   }
   const std::set<std::string> known = {"id", "source", "target", "sigma_src_m", "sigma_dst_m", "cov_src_m2", "cov_dst_m2", "epoch", "use"};
+  // Each frame's CRS: the option, or the file's "source_crs"/"target_crs";
+  // both must say the same. Its keys are the CRS's columns without the role
+  // (easting_ftus, northing_ftus, h_m; lat_deg, lon_deg, H_m for a compound
+  // CRS), the same in every point.
+  std::optional<CrsColumns> crs_columns[2];
+  const char* crs_keys[2] = {"source_crs", "target_crs"};
+  const char* crs_flags[2] = {"--src-crs", "--dst-crs"};
+  for (std::size_t k = 0; k < 2; ++k) {
+    std::optional<Crs> crs = k == 0 ? o.src_crs : o.dst_crs;
+    std::string where = crs_flags[k];
+    if (doc.contains(crs_keys[k])) {
+      const std::string at = source_name + ": " + crs_keys[k];
+      if (!doc.at(crs_keys[k]).is_string()) fail(at, "expected a string such as \"EPSG:2236\"");
+      const Crs stated = Crs::parse(doc.at(crs_keys[k]).get<std::string>(), at);
+      if (crs && !crs->same_as(stated)) {
+        throw Error(ErrorKind::input, "E_CRS_CONFLICT",
+                    std::string(crs_flags[k]) + " " + crs->display_name() + " contradicts " + at + " (" +
+                        stated.display_name() + "); drop the flag or fix the file");
+      }
+      if (!crs) crs = stated, where = crs_keys[k];
+    }
+    if (!crs) continue;
+    const char* role = k == 0 ? "source" : "target";
+    std::vector<std::string> keys;
+    if (!points.empty() && points[0].is_object() && points[0].contains(role) && points[0].at(role).is_object()) {
+      for (const auto& [key, value] : points[0].at(role).items()) keys.push_back(key);
+    }
+    crs_columns[k] = crs_input_columns(*crs, keys, source_name + ": points[0]." + role, where);
+    if (!crs_columns[k]->has_height()) {
+      fail(source_name + ": points[0]." + role,
+           crs_columns[k]->names[0] + ", " + crs_columns[k]->names[1] +
+               " but no height: a control point needs its height (h_<unit>, or H_<unit> with a compound CRS)");
+    }
+    detail::adopt_crs(set, k == 0, *crs_columns[k], where);
+  }
   detail::apply_caller_frames(set, o);
   // Which frames have values on an ellipsoid (any point's not x_m/y_m/z_m).
   bool uses_ellipsoid[2] = {false, false};
@@ -143,7 +210,7 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     for (int k = 0; k < 2; ++k) {
       const char* role = k == 0 ? "source" : "target";
       if (!p.is_object() || !p.contains(role) || !p.at(role).is_object()) continue;
-      uses_ellipsoid[k] = uses_ellipsoid[k] || !p.at(role).contains("x_m");
+      uses_ellipsoid[k] = uses_ellipsoid[k] || (!crs_columns[k] && !p.at(role).contains("x_m"));
       enu[k] = enu[k] || p.at(role).contains("e_m");
     }
   }
@@ -177,7 +244,9 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     p.line = i;
     for (const char* role : {"src", "dst"}) {
       const bool src_role = std::string(role) == "src";
-      const detail::RoleValues v = role_values(jp, role, where, src_role ? o.src_geoid : o.dst_geoid);
+      const auto& in_crs = crs_columns[src_role ? 0 : 1];
+      const detail::RoleValues v = in_crs ? crs_role_values(jp, role, where, *in_crs)
+                                          : role_values(jp, role, where, src_role ? o.src_geoid : o.dst_geoid);
       if (v.kind == CoordinateKind::geodetic) {
         auto& ortho = src_role ? src_orthometric : dst_orthometric;
         auto& first = src_role ? src_height_where : dst_height_where;
@@ -228,6 +297,14 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
                                         dst_orthometric.value_or(false) ? "H_m" : "", o.dst_geoid);
   set.source_input.ellipsoid = src_ellipsoid;
   set.target_input.ellipsoid = dst_ellipsoid;
+  for (std::size_t k = 0; k < 2; ++k) {
+    if (!crs_columns[k]) continue;
+    detail::adopt_crs(set, k == 0, *crs_columns[k], crs_flags[k]);
+    const std::string cov_key = k == 0 ? "cov_src_m2" : "cov_dst_m2";
+    detail::positions_from_crs(
+        set, k == 0, *crs_columns[k], crs_flags[k], [&](std::size_t i) { return points[set.points[i].line].contains(cov_key); },
+        [&](const geodesy::ControlPoint& q) { return source_name + ": points[" + std::to_string(q.line) + "]"; });
+  }
   for (auto& p : set.points) {
     if (mixed_src) p.source_as_read = p.source.m;
     if (mixed_dst) p.target_as_read = p.target.m;

@@ -9,6 +9,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/crs.hpp"
 #include "proj_reference.hpp"
 
 namespace geoanchor::io {
@@ -492,6 +493,78 @@ TEST(ControlSet, Issue13_Point5_TheEllipsoidComesFromEachFrame) {
   replaced.source_frame.replace = geodesy::Frame::parse("WGS84(G2139)@2024.5", "test");
   std::istringstream again(framed);
   EXPECT_EQ(read_control_csv(again, "c.csv", replaced).source_input.ellipsoid, geodesy::Ellipsoid::wgs84());
+}
+
+// issue 13: a JSON control set reads a CRS as the CSV does (--src-crs, or
+// its "source_crs" key), and a covariance given in the CRS's axes (m²) is
+// carried into ECEF by the conversion's Jacobian. The reference: PROJ's
+// own pipeline for UTM 32N on WGS84, and the test's own central
+// differences through it (a tenth of geoanchor's step).
+TEST(ControlSet, Issue13_JsonReadsACrsAndCarriesItsCovariance) {
+  constexpr double kVsProjTol_m = 1e-6;
+  // Relative to the largest entry: both Jacobians are differences of ECEF
+  // values near 6e6 m (ulp 1e-9 m) over steps under a metre, so they agree
+  // to about 1e-9; a Jacobian without UTM's scale (0.9996) is 4e-4 off.
+  constexpr double kCovarianceTol = 1e-8;
+  constexpr double kTestStep_m = 0.5;
+  const testing::ProjPipeline utm("+proj=pipeline +step +inv +proj=utm +zone=32 +ellps=WGS84 +step +proj=cart +ellps=WGS84");
+  const Eigen::Vector3d at(464998.123, 5258862.456, 480.0);
+  Eigen::Matrix3d c;  // grid east, grid north, up (m²)
+  c << 4e-6, 1e-6, 5e-7, 1e-6, 9e-6, -2e-7, 5e-7, -2e-7, 2.5e-5;
+  const std::string json = R"J({"source_crs": "EPSG:32632", "points": [
+    {"id": "A", "source": {"easting_m": 464998.123, "northing_m": 5258862.456, "h_m": 480.0},
+     "target": {"x_m": 4271315.7, "y_m": 641096.4, "z_m": 4678048.5},
+     "cov_src_m2": [[4e-6, 1e-6, 5e-7], [1e-6, 9e-6, -2e-7], [5e-7, -2e-7, 2.5e-5]], "sigma_dst_m": 0.01},
+    {"id": "B", "source": {"easting_m": 465998.123, "northing_m": 5259862.456, "h_m": 481.0},
+     "target": {"x_m": 4270315.7, "y_m": 642096.4, "z_m": 4678848.5}, "sigma_src_m": 0.002, "sigma_dst_m": 0.01}]})J";
+  ControlReadOptions o;
+  std::istringstream in(json);
+  const auto set = read_control_json(in, "c.json", o);
+  ASSERT_EQ(set.points.size(), 2u);
+  EXPECT_EQ(set.source_input.form, geodesy::CoordinateForm::crs);
+  EXPECT_LT((set.points[0].source.m - utm.forward(at)).norm(), kVsProjTol_m);
+  Eigen::Matrix3d j;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Vector3d step = Eigen::Vector3d::Zero();
+    step(k) = kTestStep_m;
+    j.col(k) = (utm.forward(at + step) - utm.forward(at - step)) / (2.0 * kTestStep_m);
+  }
+  const Eigen::Matrix3d expected = j * c * j.transpose();
+  EXPECT_LT((set.points[0].source_cov_m2 - expected).cwiseAbs().maxCoeff(), kCovarianceTol * expected.cwiseAbs().maxCoeff())
+      << set.points[0].source_cov_m2 << "\nexpected\n" << expected;
+  // An isotropic sigma stays isotropic.
+  EXPECT_LT((set.points[1].source_cov_m2 - Eigen::Matrix3d::Identity() * 4e-6).cwiseAbs().maxCoeff(), 1e-18);
+
+  // The CSV reads the same covariance the same way.
+  const std::string csv =
+      "# source_crs = EPSG:32632\n"
+      "id,easting_src_m,northing_src_m,h_src_m,x_dst_m,y_dst_m,z_dst_m,cov_src_xx_m2,cov_src_xy_m2,cov_src_xz_m2,"
+      "cov_src_yy_m2,cov_src_yz_m2,cov_src_zz_m2\n"
+      "A,464998.123,5258862.456,480.0,4271315.7,641096.4,4678048.5,4e-6,1e-6,5e-7,9e-6,-2e-7,2.5e-5\n";
+  std::istringstream cin(csv);
+  const auto from_csv = read_control_csv(cin, "c.csv", o);
+  EXPECT_LT((from_csv.points[0].source_cov_m2 - expected).cwiseAbs().maxCoeff(), kCovarianceTol * expected.cwiseAbs().maxCoeff());
+
+  // A key that is not the CRS's is refused with its path.
+  std::string wrong = json;
+  wrong.replace(wrong.find("\"h_m\": 480.0"), 12, "\"z_m\": 480.0");
+  std::istringstream win(wrong);
+  try {
+    (void)read_control_json(win, "c.json", o);
+    ADD_FAILURE() << "a key that is not the CRS's was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("c.json: points[0].source"), std::string::npos) << e.what();
+  }
+  // --src-crs that contradicts the file's source_crs is refused.
+  ControlReadOptions other;
+  other.src_crs = Crs::parse("EPSG:25832", "--src-crs");
+  std::istringstream oin(json);
+  try {
+    (void)read_control_json(oin, "c.json", other);
+    ADD_FAILURE() << "a contradicting --src-crs was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "E_CRS_CONFLICT") << e.what();
+  }
 }
 
 }  // namespace geoanchor::io
