@@ -145,6 +145,48 @@ TEST_F(ApplyCli, BundledTileIsMovedAsProjWouldAndReadsBackIndependently) {
   EXPECT_WORST_WITHIN(worst, half_step + kVsProjTol_m);
 }
 
+// issue 13: a tile in geoanchor's own coordinates (the bundled ENU tile)
+// through a transform into a CRS on the transform's target frame (ETRF2000
+// geographic 3-D, EPSG:7931): geoanchor's chain to ECEF, PROJ from the
+// frame's geocentric CRS. Against PROJ's pipeline of the same steps, to half
+// the output step plus the issue's 1e-9°; a CRS on another datum is refused.
+TEST_F(ApplyCli, Issue13_AToCrsOutputThroughATransformAgreesWithProj) {
+  const fs::path t = fit();
+  const fs::path out = out_dir();
+  const RunResult r =
+      run("apply " + kTile + " --transform " + t.string() + " --to-crs EPSG:7931 --out-dir " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json side = json::parse(slurp(out / "airport_tile.las.geoanchor.json"));
+  EXPECT_EQ(side["coordinates"]["kind"], "crs");
+  EXPECT_EQ(side["frame"], "ETRF2000@2024.5");
+  const json in = las_verify(kTile), got = las_verify(out / "airport_tile.las");
+  ASSERT_FALSE(got.is_null());
+  const json tf = json::parse(slurp(t));
+  const json& p = tf["parameters"];
+  const std::string topo = "+proj=topocentric +ellps=GRS80 +lat_0=47.464722 +lon_0=8.549167 +h_0=480";
+  const ProjPipeline proj("+proj=pipeline +step +inv " + topo + " +step +proj=helmert +x=" + g17(p["tx_m"]) +
+                          " +y=" + g17(p["ty_m"]) + " +z=" + g17(p["tz_m"]) + " +rx=" + g17(p["rx_arcsec"]) +
+                          " +ry=" + g17(p["ry_arcsec"]) + " +rz=" + g17(p["rz_arcsec"]) + " +s=" + g17(p["ds_ppm"]) +
+                          " +convention=position_vector +step +inv +proj=cart +ellps=GRS80");
+  constexpr double kVsProj_deg = 1e-9;
+  testing::WorstCase worst;  // in units of each axis's tolerance
+  for (std::size_t i = 0; i < in["points"].size(); ++i) {
+    const auto& a = in["points"][i];
+    const Eigen::Vector3d g = proj.forward(Eigen::Vector3d(a[0], a[1], a[2]));
+    const double expected[3] = {testing::proj_degrees(g.x()), testing::proj_degrees(g.y()), g.z()};  // X lon, Y lat
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double tol = 0.5 * got["header"]["scale"][k].get<double>() + (k < 2 ? kVsProj_deg : kVsProjTol_m);
+      worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
+    }
+  }
+  EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+  const RunResult other = run("apply " + kTile + " --transform " + t.string() + " --to-crs EPSG:2056 --out-dir " +
+                              path("other").string());
+  EXPECT_EQ(other.exit_code, 3);
+  EXPECT_NE(other.err.find("E_FRAME_MISMATCH"), std::string::npos) << other.err;
+  EXPECT_FALSE(fs::exists(path("other/airport_tile.las")));
+}
+
 TEST_F(ApplyCli, RefusesATileInAnotherFrameThanTheTransformsSourceAndNamesBoth) {
   const fs::path t = fit();
   const fs::path in = tile("in/tile.las", [](std::string& s) { replace(s, "ITRF2014@2024.5", "ITRF2008@2024.5"); });

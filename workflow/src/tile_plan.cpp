@@ -515,6 +515,10 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
                          " is 2-D: its Z values are no coordinate of it and were copied unchanged into the 2-D output");
   }
   if (!t_) {
+    // A dynamic output CRS without its epoch is at the tile's: an operation
+    // between realizations is evaluated at one epoch and keeps it.
+    const auto in_epoch = in.crs ? in.crs->epoch() : in.frame->epoch();
+    if (dst.description().dynamic && !dst.epoch() && in_epoch) dst = dst.at_epoch(*in_epoch, dst_flag);
     if (in.crs) {
       p.before = std::make_pair(*in.crs, dst);  // PROJ's own operation between the two
       p.chain_used = false;
@@ -565,7 +569,11 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
   const std::string storage = out.storage;
   const std::string method = out.survey_method;
   const auto rtk = out.rtk_fixed_percent;
+  const auto frame = out.frame;
   out = io::tile_metadata_from_crs(dst, tile);
+  // A static frame keeps the epoch of its coordinates' observation, as
+  // geoanchor's own outputs record it (ETRF2000@2024.5).
+  if (frame && out.frame && frame->name() == out.frame->name() && !out.frame->epoch()) out.frame = frame;
   out.storage = storage;
   out.survey_method = method;
   out.rtk_fixed_percent = rtk;
