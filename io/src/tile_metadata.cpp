@@ -302,7 +302,13 @@ std::string to_json_text(const TileMetadata& m) {
   if (m.frame) j["frame"] = m.frame->to_string();
   if (m.crs) {
     j["coordinates"] = {{"kind", "crs"}, {"storage", m.storage}};
-    nlohmann::ordered_json c = {{"wkt2", m.crs->wkt2()}};
+    const std::string wkt = m.crs->wkt2();
+    if (const auto problem = utf8_problem(wkt)) {
+      throw Error(ErrorKind::input, "E_CRS_NOT_UTF8",
+                  "the tile's CRS " + m.crs->display_name() + " has text that is not valid UTF-8 (" + *problem +
+                      "): a sidecar holds UTF-8 only");
+    }
+    nlohmann::ordered_json c = {{"wkt2", wkt}};
     if (m.crs->epoch()) c["coordinate_epoch"] = m.crs->epoch()->year;
     j["crs"] = c;
   } else {
