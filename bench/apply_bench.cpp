@@ -19,6 +19,7 @@
 #include <proj.h>
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -224,18 +225,20 @@ fs::path las_dir() {
   return d.p;
 }
 
-// A LAS 1.4 point format 6 tile of kLasPoints in ENU at A, 1 mm.
-fs::path las_tile(int k) {
-  const fs::path p = las_dir() / ("tile" + std::to_string(k) + ".las");
+// A LAS 1.4 point format 6 tile of kLasPoints, ±3 km around `offset`
+// horizontally, 1 mm steps, made once.
+fs::path make_tile(const std::string& name, const std::array<double, 3>& offset, unsigned seed) {
+  const fs::path p = las_dir() / (name + ".las");
   if (fs::exists(p) && fs::file_size(p) == 375 + kLasPoints * 30) return p;
   io::LasHeader h;
   h.point_format = 6;
   h.record_length = 30;
   h.global_encoding = 1;
+  h.offset = offset;
   std::ofstream out(p, std::ios::binary);
   io::LasWriter w(out, h, {}, {}, p.string());
   std::vector<std::uint8_t> rec(30 * 65536);
-  std::mt19937_64 rng(static_cast<unsigned>(k));
+  std::mt19937_64 rng(seed);
   std::uniform_int_distribution<std::int32_t> hq(-3000000, 3000000), vq(-30000, 80000);
   std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   for (std::size_t done = 0; done < kLasPoints;) {
@@ -244,7 +247,10 @@ fs::path las_tile(int k) {
       const std::int32_t q[3] = {hq(rng), hq(rng), vq(rng)};
       std::memcpy(&rec[i * 30], q, 12);
       for (std::size_t b = 12; b < 30; ++b) rec[i * 30 + b] = static_cast<std::uint8_t>(i + b);
-      for (std::size_t a = 0; a < 3; ++a) lo[a] = std::min(lo[a], q[a] * 0.001), hi[a] = std::max(hi[a], q[a] * 0.001);
+      for (std::size_t k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], q[k] * 0.001 + offset[k]);
+        hi[k] = std::max(hi[k], q[k] * 0.001 + offset[k]);
+      }
     }
     w.write_records(rec.data(), n);
     done += n;
@@ -254,6 +260,9 @@ fs::path las_tile(int k) {
   w.finish(by_return, lo, hi);
   return p;
 }
+
+// In ENU at A.
+fs::path las_tile(int k) { return make_tile("tile" + std::to_string(k), {0.0, 0.0, 0.0}, static_cast<unsigned>(k)); }
 
 void las_tile_to(int k, const fs::path& out_path) {
   std::ofstream out(out_path, std::ios::binary);
@@ -298,40 +307,10 @@ void las_end_to_end_two_jobs(benchmark::State& state) {
 constexpr char kLambert93[] = "EPSG:2154";
 constexpr char kLaea[] = "EPSG:3035";
 
-// A tile of kLasPoints in Lambert-93 (promoted to 3-D), 6 km around Paris, 1 mm.
-fs::path lambert_tile() {
-  const fs::path p = las_dir() / "lambert93.las";
-  if (fs::exists(p)) return p;
-  io::LasHeader h;
-  h.point_format = 6;
-  h.record_length = 30;
-  h.global_encoding = 1;
-  h.offset = {652000.0, 6862000.0, 0.0};
-  std::ofstream out(p, std::ios::binary);
-  io::LasWriter w(out, h, {}, {}, p.string());
-  std::vector<std::uint8_t> rec(30 * 65536);
-  std::mt19937_64 rng(7);
-  std::uniform_int_distribution<std::int32_t> hq(-3000000, 3000000), vq(-30000, 80000);
-  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-  for (std::size_t done = 0; done < kLasPoints;) {
-    const std::size_t n = std::min<std::size_t>(65536, kLasPoints - done);
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::int32_t q[3] = {hq(rng), hq(rng), vq(rng)};
-      std::memcpy(&rec[i * 30], q, 12);
-      for (std::size_t b = 12; b < 30; ++b) rec[i * 30 + b] = static_cast<std::uint8_t>(i + b);
-      for (std::size_t a = 0; a < 3; ++a) {
-        lo[a] = std::min(lo[a], q[a] * 0.001 + h.offset[a]);
-        hi[a] = std::max(hi[a], q[a] * 0.001 + h.offset[a]);
-      }
-    }
-    w.write_records(rec.data(), n);
-    done += n;
-  }
-  std::array<std::uint64_t, 15> by_return{};
-  by_return[0] = kLasPoints;
-  w.finish(by_return, lo, hi);
-  return p;
-}
+// In Lambert-93 (promoted to 3-D), around Paris.
+constexpr std::array<double, 3> kParisLambert93{652000.0, 6862000.0, 0.0};
+constexpr unsigned kLambertSeed = 7;
+fs::path lambert_tile() { return make_tile("lambert93", kParisLambert93, kLambertSeed); }
 
 void las_crs_end_to_end(benchmark::State& state) {
   const fs::path in = lambert_tile();
@@ -360,11 +339,11 @@ void proj_crs_kernel(benchmark::State& state) {
   PJ* raw = proj_create_crs_to_crs(ctx, kLambert93, kLaea, nullptr);
   PJ* op = proj_normalize_for_visualization(ctx, raw);
   std::vector<double> x(kLasPoints), y(kLasPoints), z(kLasPoints);
-  std::mt19937_64 rng(7);
+  std::mt19937_64 rng(kLambertSeed);
   std::uniform_int_distribution<std::int32_t> hq(-3000000, 3000000), vq(-30000, 80000);
   for (std::size_t i = 0; i < kLasPoints; ++i) {
-    x[i] = hq(rng) * 0.001 + 652000.0;
-    y[i] = hq(rng) * 0.001 + 6862000.0;
+    x[i] = hq(rng) * 0.001 + kParisLambert93[0];
+    y[i] = hq(rng) * 0.001 + kParisLambert93[1];
     z[i] = vq(rng) * 0.001;
   }
   for (auto _ : state) {

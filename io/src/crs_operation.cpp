@@ -506,6 +506,17 @@ std::optional<std::size_t> CrsOperation::Impl::uniform_choice(const std::vector<
   return choice.use;
 }
 
+namespace {
+
+// `op` over n points in place (c may be null: 2-D), at epoch t if given.
+void trans_arrays(PJ* op, double* a, double* b, double* c, std::size_t n, const std::optional<double>& t) {
+  double t_value = t.value_or(0.0);
+  proj_trans_generic(op, PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, c ? sizeof(double) : 0, c ? n : 0,
+                     t ? &t_value : nullptr, 0, t ? 1 : 0);
+}
+
+}  // namespace
+
 void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
                              const std::function<std::string(std::size_t)>& point_name) {
   Impl& m = *impl_;
@@ -513,13 +524,10 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   const std::size_t z_stride = c ? sizeof(double) : 0;
   const std::size_t z_count = c ? n : 0;
   double t_value = m.t.value_or(0.0);
-  if (m.pre) {
-    // Geocentric x, y, z to longitude, latitude, height on their datum (a
-    // conversion), which the candidates start from. The points' own
-    // coordinates name them in errors below as converted.
-    proj_trans_generic(m.pre.get(), PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, z_stride, z_count, nullptr, 0,
-                       0);
-  }
+  // Geocentric x, y, z to longitude, latitude, height on their datum (a
+  // conversion), which the candidates start from. The points' own
+  // coordinates name them in errors below as converted.
+  if (m.pre) trans_arrays(m.pre.get(), a, b, c, n, std::nullopt);
   const std::vector<double> in_a(a, a + n), in_b(b, b + n);
   std::vector<double> in_c;
   if (c) in_c.assign(c, c + n);
@@ -664,16 +672,9 @@ std::vector<CrsOperationCandidate> CrsOperation::candidates() const {
 void CrsOperation::estimate(double* a, double* b, double* c, std::size_t n) const {
   const Impl& m = *impl_;
   if (n == 0 || m.all.empty()) return;
-  const std::size_t z_stride = c ? sizeof(double) : 0;
-  const std::size_t z_count = c ? n : 0;
-  double t_value = m.t.value_or(0.0);
-  if (m.pre) {
-    proj_trans_generic(m.pre.get(), PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, z_stride, z_count, nullptr, 0,
-                       0);
-  }
+  if (m.pre) trans_arrays(m.pre.get(), a, b, c, n, std::nullopt);
   // PROJ's best-ranked available operation; a point it cannot move is NaN.
-  proj_trans_generic(m.all.front().op.get(), PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, z_stride, z_count,
-                     m.t ? &t_value : nullptr, 0, m.t ? 1 : 0);
+  trans_arrays(m.all.front().op.get(), a, b, c, n, m.t);
   for (std::size_t i = 0; i < n; ++i) {
     if (!(std::isfinite(a[i]) && std::isfinite(b[i]) && (!c || std::isfinite(c[i])))) {
       a[i] = b[i] = std::numeric_limits<double>::quiet_NaN();
