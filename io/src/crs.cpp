@@ -547,6 +547,15 @@ Crs Crs::geocentric(std::string_view where) const {
   return out;
 }
 
+geodesy::Ellipsoid typed_ellipsoid(const CrsEllipsoid& e) {
+  constexpr double kEllipsoidMatch = 1e-9;  // relative, in a and 1/f
+  const auto wgs84 = geodesy::Ellipsoid::wgs84(), grs80 = geodesy::Ellipsoid::grs80();
+  auto same = [&](const geodesy::Ellipsoid& g) {
+    return std::abs(e.a_m - g.a_m()) < kEllipsoidMatch * g.a_m() && std::abs(e.rf - g.rf()) < kEllipsoidMatch * g.rf();
+  };
+  return same(wgs84) ? wgs84 : same(grs80) ? grs80 : geodesy::Ellipsoid::custom(e.a_m, e.rf, e.name.empty() ? "custom" : e.name);
+}
+
 std::string proj_version_text() { return text_or(proj_info().version); }
 
 std::string column_unit_suffix(const CrsAxis& axis, std::string_view crs_name) {

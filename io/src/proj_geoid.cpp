@@ -5,8 +5,6 @@
 #include <nlohmann/json.hpp>
 #include <proj.h>
 
-#include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -17,6 +15,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/io/hash.hpp"
+#include "crs_impl.hpp"
 #include "proj_handles.hpp"
 
 namespace geoanchor::io {
@@ -24,26 +23,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
 // The file: a path as given, else a grid of that name (any letter case) in
 // PROJ's data directories.
 std::optional<fs::path> find(std::string_view text) {
   std::error_code ec;
   const fs::path given{std::string(text)};
   if (fs::is_regular_file(given, ec)) return fs::absolute(given, ec);
-  if (given.has_parent_path()) return std::nullopt;
-  const std::string wanted = lower(given.string());
-  for (const auto& dir : detail::proj_search_paths()) {
-    if (fs::is_regular_file(fs::path(dir) / given, ec)) return fs::path(dir) / given;
-    for (const auto& e : fs::directory_iterator(dir, ec)) {
-      if (lower(e.path().filename().string()) == wanted && e.is_regular_file(ec)) return e.path();
-    }
-  }
-  return std::nullopt;
+  return detail::find_grid_file(given.string());
 }
 
 // One PROJ operation shared by copies of the grid; PROJ objects are not
@@ -84,10 +70,9 @@ geodesy::GeoidGrid proj_geoid_grid(std::string_view text, std::string_view flag)
                 "grid (" + detail::text_or(proj_context_errno_string(e->ctx.get(), proj_context_errno(e->ctx.get()))) + ")");
   }
   auto n_at = [e](double lat_deg, double lon_deg) {
-    constexpr double kRadiansPerDegree = 0.017453292519943295;
     std::lock_guard<std::mutex> lock(e->m);
     proj_errno_reset(e->op.get());
-    PJ_COORD c = proj_coord(lon_deg * kRadiansPerDegree, lat_deg * kRadiansPerDegree, 0.0, 0.0);
+    PJ_COORD c = proj_coord(lon_deg * detail::kRadiansPerDegree, lat_deg * detail::kRadiansPerDegree, 0.0, 0.0);
     c = proj_trans(e->op.get(), PJ_FWD, c);
     if (proj_errno(e->op.get()) != 0 || c.xyz.z == HUGE_VAL || !std::isfinite(c.xyz.z)) {
       return std::numeric_limits<double>::quiet_NaN();

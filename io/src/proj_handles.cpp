@@ -24,26 +24,30 @@ const char* find_grid_any_case(PJ_CONTEXT*, const char* name, void*) {
   const std::string wanted(name);
   const std::string extension = lower(std::filesystem::path(wanted).extension().string());
   if (extension != ".gsb" && extension != ".gtx" && extension != ".tif" && extension != ".tiff") return nullptr;
-  if (wanted.find('/') != std::string::npos) return nullptr;
-  const auto paths = proj_search_paths();
-  std::error_code ec;
-  for (const auto& dir : paths) {
-    if (std::filesystem::exists(std::filesystem::path(dir) / wanted, ec)) return nullptr;
-  }
-  const std::string key = lower(wanted);
-  for (const auto& dir : paths) {
-    for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-      if (lower(it->path().filename().string()) == key && it->is_regular_file(ec)) {
-        found = it->path().string();
-        return found.c_str();
-      }
-    }
-    ec.clear();
-  }
-  return nullptr;
+  const auto path = find_grid_file(wanted);
+  if (!path || path->filename().string() == wanted) return nullptr;  // none, or PROJ finds it itself
+  found = path->string();
+  return found.c_str();
 }
 
 }  // namespace
+
+std::optional<std::filesystem::path> find_grid_file(const std::string& name) {
+  if (name.empty() || name.find('/') != std::string::npos) return std::nullopt;
+  const auto paths = proj_search_paths();
+  std::error_code ec;
+  for (const auto& dir : paths) {
+    if (std::filesystem::is_regular_file(std::filesystem::path(dir) / name, ec)) return std::filesystem::path(dir) / name;
+  }
+  const std::string key = lower(name);
+  for (const auto& dir : paths) {
+    for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      if (lower(it->path().filename().string()) == key && it->is_regular_file(ec)) return it->path();
+    }
+    ec.clear();
+  }
+  return std::nullopt;
+}
 
 std::vector<std::string> proj_search_paths() {
   const PJ_INFO info = proj_info();

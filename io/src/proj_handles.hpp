@@ -3,7 +3,9 @@
 
 #include <proj.h>
 
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +29,10 @@ PjContext quiet_context();
 
 // PROJ's data directories, in its search order.
 std::vector<std::string> proj_search_paths();
+
+// A file of that bare name in PROJ's data directories: as written first,
+// else under another letter case; nullopt when none holds it.
+std::optional<std::filesystem::path> find_grid_file(const std::string& name);
 
 inline std::string text_or(const char* s, const char* fallback = "") { return s ? s : fallback; }
 

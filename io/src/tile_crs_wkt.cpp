@@ -312,13 +312,7 @@ TileMetadata typed_tile_metadata(std::string_view wkt, std::string_view source) 
   if (!ell || !proj_ellipsoid_get_parameters(ctx.get(), ell.get(), &a, &b, &computed, &rf)) {
     fail(source, "'" + m.horizontal_crs + "': no ellipsoid");
   }
-  const auto wgs84 = geodesy::Ellipsoid::wgs84();
-  const auto grs80 = geodesy::Ellipsoid::grs80();
-  constexpr double kEllipsoidMatch = 1e-9;  // relative, in a and 1/f
-  auto same = [&](const geodesy::Ellipsoid& e) {
-    return std::abs(a - e.a_m()) < kEllipsoidMatch * e.a_m() && std::abs(rf - e.rf()) < kEllipsoidMatch * e.rf();
-  };
-  m.coordinates.ellipsoid = same(wgs84) ? wgs84 : same(grs80) ? grs80 : geodesy::Ellipsoid::custom(a, rf, "custom");
+  m.coordinates.ellipsoid = typed_ellipsoid(CrsEllipsoid{"custom", a, rf});
   if (m.coordinates.origin) m.coordinates.origin->ellipsoid = m.coordinates.ellipsoid;
   if (m.coordinates.projection) {
     auto& p = *m.coordinates.projection;

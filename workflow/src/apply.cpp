@@ -153,20 +153,6 @@ json request_json(const ApplyRequest& o) {
   return j;
 }
 
-// The file axes of a tile in `crs`: units and order (visualisation order).
-io::TileCrsAxes file_axes(const io::Crs& crs) {
-  constexpr double kRadiansPerDegree = 0.017453292519943295;
-  const auto& d = crs.description();
-  io::TileCrsAxes a;
-  a.geocentric = d.type == "geocentric";
-  const auto& axes = d.visualization_axes.empty() ? d.axes : d.visualization_axes;
-  a.angular = !axes.empty() && axes[0].unit_type == "angular";
-  if (!axes.empty()) a.horizontal_unit = a.angular ? axes[0].unit_to_si / kRadiansPerDegree : axes[0].unit_to_si;
-  a.has_height = axes.size() >= 3;
-  if (a.has_height) a.vertical_m = axes[2].unit_to_si;
-  return a;
-}
-
 json enu_sigma_json(const Eigen::Matrix3d& cov_ecef, const geodesy::LocalOrigin& at) {
   const Eigen::Matrix3d r = geodesy::enu_from_ecef_rotation(at.point.lat, at.point.lon);
   const Eigen::Matrix3d c = r * cov_ecef * r.transpose();
@@ -296,8 +282,8 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   ao.crs_before = before.get();
   ao.crs_after = after.get();
   ao.chain_used = p.chain_used;
-  if (p.in.crs) ao.file_in = file_axes(*p.in.crs);
-  if (p.out.crs) ao.file_out = file_axes(*p.out.crs);
+  if (p.in.crs) ao.file_in = io::tile_crs_axes(*p.in.crs);
+  if (p.out.crs) ao.file_out = io::tile_crs_axes(*p.out.crs);
   if (p.format == io::TileFormat::csv && (p.in.crs || p.out.crs)) {
     std::ifstream f(p.input, std::ios::binary);
     if (!f) throw Error(ErrorKind::io, "E_READ", tile + ": cannot open");

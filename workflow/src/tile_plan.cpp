@@ -29,17 +29,6 @@ Frame with_epoch(const Frame& f, DecimalYear e) {
   return Frame::parse(f.name() + "@" + geodesy::format_decimal_year(e), "frame");
 }
 
-// The ellipsoid a CRS is on, as geoanchor's type.
-geodesy::Ellipsoid ellipsoid_of(const io::Crs& crs) {
-  const auto& e = crs.description().ellipsoid;
-  const auto wgs84 = geodesy::Ellipsoid::wgs84(), grs80 = geodesy::Ellipsoid::grs80();
-  constexpr double kSame = 1e-12;  // relative, in a and 1/f
-  auto same = [&](const geodesy::Ellipsoid& g) {
-    return std::abs(e.a_m - g.a_m()) <= kSame * g.a_m() && std::abs(e.rf - g.rf()) <= kSame * g.rf();
-  };
-  return same(wgs84) ? wgs84 : same(grs80) ? grs80 : geodesy::Ellipsoid::custom(e.a_m, e.rf, e.name);
-}
-
 bool two_d(const io::Crs& c) { return c.description().axes.size() < 3; }
 
 bool same_origin(const geodesy::LocalOrigin& a, const geodesy::LocalOrigin& b) {
@@ -436,7 +425,7 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
                       "compound (its heights), or a 2-D --to-crs (Z then passes unchanged)");
     }
     p.before = std::make_pair(*in.crs, in.crs->geocentric(tile));
-    const geodesy::Ellipsoid e = ellipsoid_of(*in.crs);
+    const geodesy::Ellipsoid e = io::typed_ellipsoid(in.crs->description().ellipsoid);
     p.in.coordinates = ArrayFrame{};
     p.in.coordinates.ellipsoid = e;
   }
@@ -487,9 +476,6 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
   // its ellipsoidal height; only ECEF has no height at all.
   out.height_type = out.coordinates.kind == CoordinateKind::ecef ? "" : "ellipsoidal";
   out.vertical_datum = out.height_type.empty() ? "" : "ellipsoid " + out.coordinates.ellipsoid.name();
-  out.survey_method = in.survey_method;
-  out.rtk_fixed_percent = in.rtk_fixed_percent;
-  out.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
   return p;
 }
 
@@ -526,7 +512,6 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
       // geoanchor's coordinates to their frame's geocentric CRS, then PROJ.
       const io::Crs frame = io::Crs::parse(in.frame->to_string(), tile + ": the tile's frame");
       p.after = std::make_pair(frame.geocentric(tile), dst);
-      out.coordinates = ArrayFrame{};
     }
   } else {
     if (in.crs) {
@@ -564,19 +549,19 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
       }
     }
     p.after = std::make_pair(dst.geocentric(dst_flag), dst);
-    out.coordinates = ArrayFrame{};
   }
-  const std::string storage = out.storage;
-  const std::string method = out.survey_method;
-  const auto rtk = out.rtk_fixed_percent;
-  const auto frame = out.frame;
-  out = io::tile_metadata_from_crs(dst, tile);
-  // A static frame keeps the epoch of its coordinates' observation, as
-  // geoanchor's own outputs record it (ETRF2000@2024.5).
-  if (frame && out.frame && frame->name() == out.frame->name() && !out.frame->epoch()) out.frame = frame;
-  out.storage = storage;
-  out.survey_method = method;
-  out.rtk_fixed_percent = rtk;
+  // The output in the CRS (its coordinates ECEF between the stages), with
+  // the tile's survey record; a static frame keeps the epoch of its
+  // coordinates' observation, as geoanchor's own outputs record it
+  // (ETRF2000@2024.5).
+  io::TileMetadata in_crs = io::tile_metadata_from_crs(dst, tile);
+  if (out.frame && in_crs.frame && out.frame->name() == in_crs.frame->name() && !in_crs.frame->epoch()) {
+    in_crs.frame = out.frame;
+  }
+  in_crs.storage = out.storage;
+  in_crs.survey_method = out.survey_method;
+  in_crs.rtk_fixed_percent = out.rtk_fixed_percent;
+  out = std::move(in_crs);
 }
 
 }  // namespace geoanchor::workflow

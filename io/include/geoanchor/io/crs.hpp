@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "geoanchor/geodesy/ellipsoid.hpp"
 #include "geoanchor/geodesy/units.hpp"
 
 namespace geoanchor::io {
@@ -135,6 +136,10 @@ class Crs {
   std::string text_;
   bool from_frame_name_ = false;
 };
+
+// The ellipsoid as geoanchor's type: WGS84 or GRS80 when a and 1/f are
+// theirs (to 1e-9 relative), else a custom one with the CRS's values.
+geodesy::Ellipsoid typed_ellipsoid(const CrsEllipsoid& e);
 
 // The version of the PROJ library geoanchor reads CRSs with ("9.1.1").
 std::string proj_version_text();

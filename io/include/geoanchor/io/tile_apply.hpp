@@ -39,6 +39,10 @@ struct TileCrsAxes {
   std::optional<CrsColumns> columns = std::nullopt;
 };
 
+// The file axes of a tile in `crs` (its visualisation order and units;
+// `columns` left for the caller, who has the CSV header).
+TileCrsAxes tile_crs_axes(const Crs& crs);
+
 struct TileApplyOptions {
   ArrayFrame from;  // the tile's coordinates
   ArrayFrame to;    // the output's
