@@ -373,6 +373,17 @@ TileMetadata tile_metadata_from_wkt_as_crs(std::string_view wkt, std::string_vie
     fail(source, "the remark names frame " + named->to_string() + " but the datum is '" + d.datum + "' (" +
                      d.catalog_frame + ")");
   }
+  if (epoch && !d.dynamic && named && geodesy::is_dynamic(*named)) {
+    // geoanchor's own WKT for its own coordinates names a dynamic frame's
+    // datum without DYNAMIC[]: PROJ would read it as static and lose the
+    // epoch, so it is read as geoanchor wrote it (its frame and epoch).
+    try {
+      return typed_tile_metadata(wkt, source);
+    } catch (const NotTyped& e) {
+      fail(source, "the remark names the dynamic frame " + named->to_string() + " but PROJ reads datum '" + d.datum +
+                       "' as static (" + e.why + "); give the tile a sidecar or --crs with the CRS at its epoch");
+    }
+  }
   if (epoch && d.dynamic) crs = crs.at_epoch(*epoch, std::string(source) + ": LAS WKT remark");
   return tile_metadata_from_crs(std::move(crs), source);
 }

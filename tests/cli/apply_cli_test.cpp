@@ -180,11 +180,71 @@ TEST_F(ApplyCli, Issue13_AToCrsOutputThroughATransformAgreesWithProj) {
     }
   }
   EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+
+  // geoanchor's own output (UTM 32N on ETRF2000@2024.5, its sidecar beside
+  // the WKT it wrote) moves on into a CRS of its frame: against PROJ's
+  // inverse UTM on GRS80, from the values that file holds.
+  const fs::path utm = path("utm");
+  const RunResult u = run("apply " + kTile + " --transform " + t.string() + " --to utm --zone 32N --out-dir " + utm.string());
+  ASSERT_EQ(u.exit_code, 0) << u.err;
+  const fs::path geo = path("geo");
+  const RunResult on = run("apply " + (utm / "airport_tile.las").string() + " --to-crs EPSG:7931 --out-dir " + geo.string());
+  ASSERT_EQ(on.exit_code, 0) << on.err;
+  EXPECT_EQ(json::parse(slurp(geo / "airport_tile.las.geoanchor.json"))["frame"], "ETRF2000@2024.5");
+  const json u_in = las_verify(utm / "airport_tile.las"), u_got = las_verify(geo / "airport_tile.las");
+  ASSERT_FALSE(u_got.is_null());
+  ASSERT_EQ(u_got["points"].size(), u_in["points"].size());
+  const ProjPipeline inv_utm("+proj=pipeline +step +inv +proj=utm +zone=32 +ellps=GRS80");
+  testing::WorstCase worst_utm;
+  for (std::size_t i = 0; i < u_in["points"].size(); ++i) {
+    const auto& a = u_in["points"][i];
+    const Eigen::Vector3d g = inv_utm.forward(Eigen::Vector3d(a[0], a[1], a[2]));
+    const double expected[3] = {testing::proj_degrees(g.x()), testing::proj_degrees(g.y()), g.z()};
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double tol = 0.5 * u_got["header"]["scale"][k].get<double>() + (k < 2 ? kVsProj_deg : kVsProjTol_m);
+      worst_utm.add(std::abs(u_got["points"][i][k].get<double>() - expected[k]) / tol, i);
+    }
+  }
+  EXPECT_WORST_WITHIN(worst_utm, 1.0) << "(ratio to the tolerance)";
+
   const RunResult other = run("apply " + kTile + " --transform " + t.string() + " --to-crs EPSG:2056 --out-dir " +
                               path("other").string());
   EXPECT_EQ(other.exit_code, 3);
   EXPECT_NE(other.err.find("E_FRAME_MISMATCH"), std::string::npos) << other.err;
   EXPECT_FALSE(fs::exists(path("other/airport_tile.las")));
+}
+
+// issue 13: geoanchor's own WKT for its own coordinates (ECEF in the
+// dynamic ITRF2014 at 2024.5), its sidecar gone, moved into a CRS: the
+// remark's epoch is kept (PROJ alone reads the plain datum as static), the
+// output is ITRF2014@2024.5 and agrees with PROJ's inverse cart on GRS80.
+TEST_F(ApplyCli, Issue13_GeoanchorsOwnWktWithoutItsSidecarKeepsItsEpoch) {
+  const fs::path ecef = path("ecef");
+  const RunResult e = run("apply " + kTile + " --to ecef --out-dir " + ecef.string());
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  fs::remove(ecef / "airport_tile.las.geoanchor.json");
+  const fs::path geo = path("geo");
+  const RunResult r = run("apply " + (ecef / "airport_tile.las").string() + " --to-crs EPSG:7912 --out-dir " + geo.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json side = json::parse(slurp(geo / "airport_tile.las.geoanchor.json"));
+  EXPECT_EQ(side["frame"], "ITRF2014@2024.5");
+  EXPECT_EQ(side["crs"]["coordinate_epoch"], 2024.5) << side["crs"].dump();
+  const json in = las_verify(ecef / "airport_tile.las"), got = las_verify(geo / "airport_tile.las");
+  ASSERT_FALSE(got.is_null());
+  ASSERT_EQ(got["points"].size(), in["points"].size());
+  const ProjPipeline proj("+proj=pipeline +step +inv +proj=cart +ellps=GRS80");
+  constexpr double kVsProj_deg = 1e-9;
+  testing::WorstCase worst;  // in units of each axis's tolerance
+  for (std::size_t i = 0; i < in["points"].size(); ++i) {
+    const auto& a = in["points"][i];
+    const Eigen::Vector3d g = proj.forward(Eigen::Vector3d(a[0], a[1], a[2]));
+    const double expected[3] = {testing::proj_degrees(g.x()), testing::proj_degrees(g.y()), g.z()};
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double tol = 0.5 * got["header"]["scale"][k].get<double>() + (k < 2 ? kVsProj_deg : kVsProjTol_m);
+      worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
+    }
+  }
+  EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
 }
 
 TEST_F(ApplyCli, RefusesATileInAnotherFrameThanTheTransformsSourceAndNamesBoth) {

@@ -118,9 +118,11 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
     io::LasReader reader(p.input);
     p.las_points = reader.header().point_count;
     if (const auto w = reader.wkt()) {
-      // Where a CRS is asked for or stated, the WKT is read as one (PROJ
-      // moves it), else as geoanchor's own coordinates where it can be.
-      const bool as_crs = o_.crs || o_.to_crs || (side && side->crs);
+      // A sidecar says how the WKT is read (the sidecar of geoanchor's own
+      // coordinates beside the WKT geoanchor wrote for them); without one,
+      // where a CRS is asked for, the WKT is read as one (PROJ moves it),
+      // else as geoanchor's own coordinates where it can be.
+      const bool as_crs = side ? side->crs.has_value() : (o_.crs || o_.to_crs);
       wkt = as_crs ? io::tile_metadata_from_wkt_as_crs(*w, tile) : io::tile_metadata_from_wkt(*w, tile);
     } else {
       for (const auto& v : reader.vlrs()) geotiff_only |= io::is_geotiff_crs_vlr(v);
@@ -510,7 +512,10 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
       p.chain_used = false;
     } else {
       // geoanchor's coordinates to their frame's geocentric CRS, then PROJ.
-      const io::Crs frame = io::Crs::parse(in.frame->to_string(), tile + ": the tile's frame");
+      // A static frame's epoch records when its points were observed (as
+      // geoanchor's outputs state ETRF2000@2024.5): no coordinate of its CRS.
+      const io::Crs frame = io::Crs::parse(geodesy::is_dynamic(*in.frame) ? in.frame->to_string() : in.frame->name(),
+                                           tile + ": the tile's frame");
       p.after = std::make_pair(frame.geocentric(tile), dst);
     }
   } else {
