@@ -147,6 +147,13 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
     }
     m.crs = Crs::parse(definition, std::string(source) + ": crs");
     const auto& d = m.crs->description();
+    if (m.frame && d.catalog_frame.empty()) {
+      // The CRS's datum is the frame: another one named beside it would
+      // pick a transform for points that PROJ moves on the CRS's datum.
+      fail(source, "frame", "\"" + m.frame->to_string() + "\" but the CRS " + m.crs->display_name() + " is on datum '" +
+                                d.datum + "', which is no frame of geoanchor's catalog; remove the key (the CRS states "
+                                "the datum)");
+    }
     if (m.frame && !d.catalog_frame.empty() && m.frame->name() != d.catalog_frame) {
       fail(source, "frame", "\"" + m.frame->to_string() + "\" but the CRS's datum is " + d.catalog_frame);
     }
@@ -257,6 +264,28 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
       }
     }
     if (const json* g = member_or_null(*v, "geoid_model")) m.geoid_model = text(*g, source, "vertical.geoid_model");
+  }
+  if (m.crs) {
+    // The CRS states its heights: the sidecar's labels may repeat them,
+    // never contradict them (horizontal_crs is a label for readers).
+    const TileMetadata c = tile_metadata_from_crs(*m.crs, source);
+    const std::string what = " but the CRS " + m.crs->display_name() + " says ";
+    if (!m.height_type.empty() && m.height_type != c.height_type) {
+      fail(source, "vertical.height_type",
+           "\"" + m.height_type + "\"" + what +
+               (c.height_type.empty() ? "it has no height axis (2-D: its Z values are no heights)" : "\"" + c.height_type + "\""));
+    }
+    if (!m.vertical_datum.empty() && m.vertical_datum != c.vertical_datum) {
+      fail(source, "vertical.datum", "\"" + m.vertical_datum + "\"" + what +
+                                         (c.vertical_datum.empty() ? "none" : "\"" + c.vertical_datum + "\""));
+    }
+    if (m.geoid_model && m.geoid_model != c.geoid_model) {
+      fail(source, "vertical.geoid_model", "\"" + *m.geoid_model + "\"" + what +
+                                               (c.geoid_model ? "\"" + *c.geoid_model + "\"" : "none (no orthometric heights)"));
+    }
+    m.height_type = c.height_type;
+    m.vertical_datum = c.vertical_datum;
+    m.geoid_model = c.geoid_model;
   }
   const bool has_heights = m.coordinates.kind == CoordinateKind::geodetic || m.coordinates.kind == CoordinateKind::projected;
   if (has_heights && m.height_type.empty()) {

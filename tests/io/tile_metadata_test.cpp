@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <proj.h>
 #include <proj_experimental.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -519,6 +520,40 @@ TEST(TileMetadata, Point10_NullsWrongTypesAndUnreadKeysAreRefused) {
   EXPECT_NE(sidecar_error(sidecar_with("\"survey\": {", "\"provenance\": {\"output_size_bytes\": \"12\"}, \"survey\": {"))
                 .find("provenance.output_size_bytes: value \"12\" is not a byte count"),
             std::string::npos);
+}
+
+
+// issue 13: a sidecar of kind "crs" states its coordinates by the CRS
+// alone: a frame beside a CRS whose datum is no catalog frame, or height
+// labels that contradict the CRS, are refused by key; labels that repeat
+// it are accepted, and a written sidecar reads back.
+TEST(TileMetadata, Issue13_ACrsSidecarsFrameAndHeightsMustNotContradictItsCrs) {
+  auto crs_sidecar = [](const char* crs, const std::string& extra) {
+    const std::string wkt = projs_wkt(crs, false);
+    return std::string(R"({"schema": "geoanchor.tile/1", "coordinates": {"kind": "crs", "storage": "float64"}, "crs": {"wkt2": )") +
+           nlohmann::json(wkt).dump() + "}" + extra + "}";
+  };
+  // NTF (Paris) / Lambert zone II: a datum of no catalog frame.
+  const std::string framed = crs_sidecar("EPSG:27572", R"(, "frame": "ETRF2000")");
+  EXPECT_NE(sidecar_error(framed).find("t.json: frame: \"ETRF2000\" but the CRS"), std::string::npos) << sidecar_error(framed);
+  EXPECT_NE(sidecar_error(framed).find("no frame of geoanchor's catalog"), std::string::npos) << sidecar_error(framed);
+  // UTM 32N + EGM96 height: orthometric heights on the EGM96 geoid.
+  const std::string ortho = crs_sidecar("EPSG:32632+5773", R"(, "vertical": {"height_type": "ellipsoidal"})");
+  EXPECT_NE(sidecar_error(ortho).find("t.json: vertical.height_type: \"ellipsoidal\" but the CRS"), std::string::npos)
+      << sidecar_error(ortho);
+  EXPECT_NE(sidecar_error(crs_sidecar("EPSG:32632+5773", R"(, "vertical": {"geoid_model": "some other geoid"})"))
+                .find("vertical.geoid_model: \"some other geoid\" but the CRS"),
+            std::string::npos);
+  // A 2-D CRS has no heights to label.
+  EXPECT_NE(sidecar_error(crs_sidecar("EPSG:27572", R"(, "vertical": {"height_type": "ellipsoidal"})"))
+                .find("it has no height axis"),
+            std::string::npos);
+  const TileMetadata m = parse_tile_metadata(crs_sidecar("EPSG:32632+5773", R"(, "vertical": {"height_type": "orthometric"})"), "t.json");
+  EXPECT_EQ(m.height_type, "orthometric");
+  ASSERT_TRUE(m.geoid_model.has_value());
+  const TileMetadata again = parse_tile_metadata(to_json_text(m), "again.json");
+  EXPECT_EQ(describe_mismatch(m, "a", again, "b"), "");
+  EXPECT_EQ(again.geoid_model, m.geoid_model);
 }
 
 }  // namespace
