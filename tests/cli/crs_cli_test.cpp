@@ -1094,6 +1094,7 @@ TEST_F(CrsLas, Issue13_BadCrsInputToApplyIsRefusedByNameWithNoOutput) {
   write("in/es.csv", "id,lat_deg,lon_deg,h_m\nMAD,40.4,-3.7,600\n");
   write("in/fr.csv", "id,easting_m,northing_m\nA,600000,2400000\n");
   write("in/ch.csv", "# crs = EPSG:21781\nid,easting_m,northing_m,H_m\nA,600000,200000,500\n");
+  write("in/lv95.csv", "# crs = EPSG:2056\nid,easting_m,northing_m\nA,2600000,1200000\n");
   write("T.json", R"J({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014",
     "target_frame": "GDA2020", "parameters": {"tx_m": 0.1, "ty_m": 0, "tz_m": 0, "rx_arcsec": 0, "ry_arcsec": 0,
     "rz_arcsec": 0, "ds_ppm": 0}})J");
@@ -1115,6 +1116,9 @@ TEST_F(CrsLas, Issue13_BadCrsInputToApplyIsRefusedByNameWithNoOutput) {
        {"E_FRAME_MISMATCH", "--to-crs EPSG:2154", "GDA2020"}},
       {"a dynamic CRS without its epoch where the datum changes", "es.csv", "--crs EPSG:7912 --to-crs EPSG:4937", 3,
        {"E_EPOCH_MISSING"}},
+      {"an output flag that a tile staying in its CRS cannot use", "lv95.csv", "--zone 32N", 2,
+       {"E_OPTION", "EPSG:2056", "--zone"}},
+      {"an ellipsoid for a tile staying in its CRS", "lv95.csv", "--ellipsoid GRS80", 2, {"E_OPTION", "--ellipsoid"}},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.what);

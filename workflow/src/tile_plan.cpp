@@ -485,6 +485,13 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
   const std::string tile = p.input.string();
   TileMetadata& in = p.in;
   TileMetadata& out = p.out;
+  if (!o_.to_crs && (o_.origin || o_.zone || o_.tm || o_.ellipsoid)) {
+    // The output stays in the tile's CRS, which these flags cannot change.
+    throw Error(ErrorKind::usage, "E_OPTION",
+                tile + ": the tile is in the CRS " + in.crs->display_name() + " (" + p.in_frame_source + "), so " +
+                    (o_.origin ? "--origin" : o_.zone ? "--zone" : o_.tm ? "--tm" : "--ellipsoid") +
+                    " says nothing about its output; give --to KIND (geoanchor's own coordinates) or --to-crs CRS");
+  }
   io::Crs dst = o_.to_crs ? io::Crs::parse(*o_.to_crs, "--to-crs") : *in.crs;
   const std::string dst_flag = o_.to_crs ? "--to-crs " + *o_.to_crs : "the tile's CRS";
   // The file's heights: a 2-D input has none (Z passes unchanged, to a 2-D
