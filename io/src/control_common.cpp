@@ -42,8 +42,16 @@ void resolve_ellipsoids(geodesy::ControlSet& set, const ControlReadOptions& o, c
 
 void adopt_crs(geodesy::ControlSet& set, bool source, const CrsColumns& columns, const std::string& where) {
   geodesy::ControlInputForm& form = source ? set.source_input : set.target_input;
+  const geodesy::Ellipsoid before = form.ellipsoid;
   form = geodesy::ControlInputForm{};
   form.form = geodesy::CoordinateForm::crs;
+  // The CRS's own ellipsoid (PROJ places the points on it); one geoanchor's
+  // type cannot hold (a sphere) leaves the role's as it was resolved.
+  try {
+    form.ellipsoid = typed_ellipsoid(columns.crs.description().ellipsoid);
+  } catch (const Error&) {
+    form.ellipsoid = before;
+  }
   form.crs_name = columns.crs.display_name();
   if (columns.orthometric) {
     form.height_type = geodesy::HeightKind::orthometric;
@@ -126,6 +134,28 @@ void positions_from_crs(geodesy::ControlSet& set, bool source, const CrsColumns&
 }
 
 void apply_caller_frames(geodesy::ControlSet& set, const ControlReadOptions& o) {
+  for (const bool source : {true, false}) {
+    // A role read through a CRS has the CRS's datum for its frame: a flag
+    // may add the epoch of the points' observation, never another frame.
+    const geodesy::ControlInputForm& form = source ? set.source_input : set.target_input;
+    const auto& caller = source ? o.source_frame.replace : o.target_frame.replace;
+    const auto& frame = source ? set.source_frame : set.target_frame;
+    if (form.form != geodesy::CoordinateForm::crs || !caller) continue;
+    const char* flag = source ? "--source-frame" : "--target-frame";
+    const std::string role = source ? "source" : "target";
+    if (!frame) {
+      throw Error(ErrorKind::usage, "E_FRAME_CONFLICT",
+                  set.source_name + ": " + flag + " " + caller->to_string() + " names the " + role + " frame, but the " +
+                      role + " coordinates are in the CRS " + form.crs_name +
+                      ", whose datum is no frame of geoanchor's catalog and is moved by PROJ as that datum; drop the flag");
+    }
+    if (caller->name() != frame->name() ||
+        (frame->epoch() && !(caller->epoch() && caller->epoch()->year == frame->epoch()->year))) {
+      throw Error(ErrorKind::usage, "E_FRAME_CONFLICT",
+                  set.source_name + ": " + flag + " " + caller->to_string() + " contradicts the " + role + " CRS " +
+                      form.crs_name + ", whose frame is " + frame->to_string() + "; drop the flag or give that frame");
+    }
+  }
   for (const auto& [caller, frame] : {std::pair{&o.source_frame, &set.source_frame}, std::pair{&o.target_frame, &set.target_frame}}) {
     if (caller->replace) {
       *frame = caller->replace;

@@ -567,4 +567,45 @@ TEST(ControlSet, Issue13_JsonReadsACrsAndCarriesItsCovariance) {
   }
 }
 
+
+// issue 13 point 5: a role read through a CRS is on the CRS's ellipsoid and
+// frame: MGA zone 56 (GDA2020, GRS80) in JSON and CSV; --source-frame may
+// add the observation epoch to a static frame, never name another frame.
+TEST(ControlSet, Issue13_ACrsRoleKeepsItsEllipsoidAndFrame) {
+  const std::string json = R"J({"source_crs": "EPSG:7856", "target_crs": "EPSG:7856", "points": [
+    {"id": "A", "source": {"easting_m": 334000.0, "northing_m": 6252000.0, "h_m": 40.0},
+     "target": {"easting_m": 334000.1, "northing_m": 6252000.1, "h_m": 40.1}}]})J";
+  const std::string csv = "# source_crs = EPSG:7856\n# target_crs = EPSG:7856\n"
+                          "id,easting_src_m,northing_src_m,h_src_m,easting_dst_m,northing_dst_m,h_dst_m\n"
+                          "A,334000.0,6252000.0,40.0,334000.1,6252000.1,40.1\n";
+  auto read = [&](bool as_json, const ControlReadOptions& o) {
+    std::istringstream in(as_json ? json : csv);
+    return as_json ? read_control_json(in, "c.json", o) : read_control_csv(in, "c.csv", o);
+  };
+  for (const bool as_json : {true, false}) {
+    SCOPED_TRACE(as_json ? "json" : "csv");
+    const auto set = read(as_json, ControlReadOptions{});
+    EXPECT_TRUE(set.source_input.ellipsoid == geodesy::Ellipsoid::grs80()) << set.source_input.ellipsoid.name();
+    EXPECT_TRUE(set.target_input.ellipsoid == geodesy::Ellipsoid::grs80()) << set.target_input.ellipsoid.name();
+    ASSERT_TRUE(set.source_frame.has_value());
+    EXPECT_EQ(set.source_frame->name(), "GDA2020");
+
+    ControlReadOptions dated;
+    dated.source_frame.replace = geodesy::Frame::parse("GDA2020@2024.5", "--source-frame");
+    EXPECT_EQ(read(as_json, dated).source_frame->to_string(), "GDA2020@2024.5");
+
+    ControlReadOptions other;
+    other.source_frame.replace = geodesy::Frame::parse("ITRF2014@2024.5", "--source-frame");
+    try {
+      (void)read(as_json, other);
+      ADD_FAILURE() << "--source-frame that contradicts the CRS was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), "E_FRAME_CONFLICT") << e.what();
+      EXPECT_NE(std::string(e.what()).find("--source-frame ITRF2014@2024.5 contradicts the source CRS 'GDA2020 / MGA zone 56', whose frame is GDA2020"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 }  // namespace geoanchor::io
