@@ -245,6 +245,13 @@ TEST_F(ApplyCli, Issue13_GeoanchorsOwnWktWithoutItsSidecarKeepsItsEpoch) {
     }
   }
   EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+
+  // Into a static frame's CRS (ETRF2000, by PROJ's own operation): the
+  // output's frame keeps the epoch its points were observed at.
+  const fs::path etrf = path("etrf");
+  const RunResult s = run("apply " + kTile + " --to-crs EPSG:7931 --out-dir " + etrf.string());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  EXPECT_EQ(json::parse(slurp(etrf / "airport_tile.las.geoanchor.json"))["frame"], "ETRF2000@2024.5");
 }
 
 TEST_F(ApplyCli, RefusesATileInAnotherFrameThanTheTransformsSourceAndNamesBoth) {

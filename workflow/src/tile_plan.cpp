@@ -567,8 +567,14 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
   // coordinates' observation, as geoanchor's own outputs record it
   // (ETRF2000@2024.5).
   io::TileMetadata in_crs = io::tile_metadata_from_crs(dst, tile);
-  if (out.frame && in_crs.frame && out.frame->name() == in_crs.frame->name() && !in_crs.frame->epoch()) {
-    in_crs.frame = out.frame;
+  if (out.frame && in_crs.frame && !in_crs.frame->epoch()) {
+    // A static output frame (ETRF2000, GDA2020) is labelled with the
+    // epoch its points were observed at, as the input states it.
+    if (out.frame->name() == in_crs.frame->name()) {
+      in_crs.frame = out.frame;
+    } else if (out.frame->epoch()) {
+      in_crs.frame = with_epoch(*in_crs.frame, *out.frame->epoch());
+    }
   }
   in_crs.storage = out.storage;
   in_crs.survey_method = out.survey_method;
