@@ -100,12 +100,16 @@ CrsColumns crs_input_columns(const Crs& given, const std::vector<std::string>& h
   } else if (ellipsoidal && gd.axes.size() == 2 && gd.type != "compound") {
     crs = given.promoted_to_3d(flag);  // h_<u> beside a 2-D CRS: its ellipsoidal height
   }
+  // The CRS as the user gave it, and the form read when that differs (a
+  // 2-D CRS read with its ellipsoidal height: EPSG:4258 as EPSG:4937).
+  const std::string shown =
+      crs.same_as(given) ? given.display_name() : given.display_name() + " (read as " + crs.display_name() + ")";
   if (orthometric && crs.description().type != "compound") {
-    fail(source, "header column '" + orthometric_column + "' is an orthometric height but " + std::string(flag) + " " + crs.display_name() +
+    fail(source, "header column '" + orthometric_column + "' is an orthometric height but " + std::string(flag) + " " + shown +
                      " has no vertical CRS; give a compound CRS (EPSG:h+v) whose vertical CRS is those heights'");
   }
   if (ellipsoidal && crs.description().type == "compound") {
-    fail(source, "the header has an ellipsoidal height (h_…) but " + std::string(flag) + " " + crs.display_name() +
+    fail(source, "the header has an ellipsoidal height (h_…) but " + std::string(flag) + " " + shown +
                      " is compound: its heights are orthometric (" + crs.description().vertical_crs + ")");
   }
   CrsColumns c = layout(crs, role);
@@ -117,7 +121,7 @@ CrsColumns crs_input_columns(const Crs& given, const std::vector<std::string>& h
                                        [&](const std::string& n) { return stem_of(n) == stem_of(header[i]); });
     if (!same_stem) {
       fail(source, "header column " + std::to_string(i + 1) + " '" + header[i] + "' is not an axis of " +
-                       std::string(flag) + " " + crs.display_name() + " (a " + crs.description().type +
+                       std::string(flag) + " " + shown + " (a " + crs.description().type +
                        " CRS, read from " + list(c.names) + "); rename it if it is an attribute");
     }
   }
@@ -128,17 +132,17 @@ CrsColumns crs_input_columns(const Crs& given, const std::vector<std::string>& h
     for (std::size_t i : coordinate_like) {
       if (stem_of(header[i]) == stem_of(name)) {
         fail(source, "header column " + std::to_string(i + 1) + " '" + header[i] + "' disagrees with " +
-                         std::string(flag) + " " + crs.display_name() + ", whose axis is in another unit: expected '" +
+                         std::string(flag) + " " + shown + ", whose axis is in another unit: expected '" +
                          name + "' (the CRS's columns: " + list(c.names) + ")");
       }
     }
-    fail(source, "no column '" + name + "': " + std::string(flag) + " " + crs.display_name() + " (a " +
+    fail(source, "no column '" + name + "': " + std::string(flag) + " " + shown + " (a " +
                      crs.description().type + " CRS) is read from the columns " + list(c.names));
   }
   for (std::size_t i : coordinate_like) {
     if (std::find(c.names.begin(), c.names.end(), header[i]) == c.names.end()) {
       fail(source, "header column " + std::to_string(i + 1) + " '" + header[i] + "' is not a column of " +
-                       std::string(flag) + " " + crs.display_name() + " (read from " + list(c.names) + ")");
+                       std::string(flag) + " " + shown + " (read from " + list(c.names) + ")");
     }
   }
   return c;

@@ -25,8 +25,16 @@ namespace {
 
 struct Candidate {
   CrsOperationCandidate info;
-  Pj op;  // normalized for visualization; null when a grid is missing
+  Pj op;  // normalized for visualization; null when a grid is missing or PROJ cannot run it
   bool instantiable = false;
+  std::string unusable;  // why PROJ cannot run it although its grids are here ("" when it can)
+  // The areas of use of its datum-changing steps (not of its conversions,
+  // which hold wherever their formulas do): a point it moves must lie in
+  // each. Empty for a conversion.
+  std::vector<CrsArea> datum_areas;
+  bool holds(double lon, double lat) const {
+    return std::all_of(datum_areas.begin(), datum_areas.end(), [&](const CrsArea& a) { return a.contains(lon, lat); });
+  }
 };
 
 std::string joined(const std::vector<std::string>& v, const char* sep = ", ") {
@@ -63,6 +71,25 @@ struct ListDeleter {
   void operator()(PJ_OBJ_LIST* l) const { proj_list_destroy(l); }
 };
 using PjList = std::unique_ptr<PJ_OBJ_LIST, ListDeleter>;
+
+// The areas of use of an operation's datum-changing steps (see Candidate).
+void datum_change_areas(PJ_CONTEXT* ctx, PJ* op, std::vector<CrsArea>& out) {
+  const PJ_TYPE type = proj_get_type(op);
+  if (type == PJ_TYPE_CONCATENATED_OPERATION) {
+    const int steps = proj_concatoperation_get_step_count(ctx, op);
+    for (int i = 0; i < steps; ++i) {
+      Pj step(proj_concatoperation_get_step(ctx, op, i));
+      if (step) datum_change_areas(ctx, step.get(), out);
+    }
+    return;
+  }
+  if (type == PJ_TYPE_CONVERSION) return;
+  double west = 0, south = 0, east = 0, north = 0;
+  const char* name = nullptr;
+  if (proj_get_area_of_use(ctx, op, &west, &south, &east, &north, &name) && west > -1000.0) {
+    out.push_back(CrsArea{text_or(name), west, south, east, north});
+  }
+}
 
 // PROJ's candidate operations for the pair. With `grids` =
 // PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID they are exactly
@@ -111,7 +138,18 @@ std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool a
       c.info.grids.push_back(std::move(f));
     }
     c.instantiable = proj_coordoperation_is_instantiable(ctx, raw.get()) != 0;
-    for (const auto& g : c.info.grids) c.instantiable = c.instantiable && g.available;
+    const bool grids_here =
+        std::all_of(c.info.grids.begin(), c.info.grids.end(), [](const CrsGridFile& g) { return g.available; });
+    if (!c.instantiable && grids_here) {
+      // Its grids are here, yet PROJ cannot run it (a method PROJ does not
+      // implement): PROJ says why when asked for its pipeline.
+      (void)detail::take_last_proj_error();
+      (void)proj_as_proj_string(ctx, raw.get(), PJ_PROJ_5, nullptr);
+      c.unusable = detail::take_last_proj_error();
+      if (c.unusable.empty()) c.unusable = "PROJ cannot instantiate it";
+    }
+    c.instantiable = c.instantiable && grids_here;
+    datum_change_areas(ctx, raw.get(), c.datum_areas);
     double west = 0, south = 0, east = 0, north = 0;
     const char* area = nullptr;
     if (proj_get_area_of_use(ctx, raw.get(), &west, &south, &east, &north, &area) && west > -1000.0) {
@@ -126,7 +164,11 @@ std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool a
     }
     if (c.instantiable) {
       c.op.reset(proj_normalize_for_visualization(ctx, raw.get()));
-      if (!c.op) c.instantiable = false;
+      if (!c.op) {
+        c.instantiable = false;
+        c.unusable = detail::take_last_proj_error();
+        if (c.unusable.empty()) c.unusable = "PROJ cannot give it in longitude/easting-first order";
+      }
     }
     if (c.op) {
       const char* proj_text = proj_as_proj_string(ctx, c.op.get(), PJ_PROJ_5, nullptr);
@@ -157,7 +199,7 @@ struct AreaTally {
   void check(double lon, double lat, const std::function<std::string()>& name) {
     ++seen;
     if (!area || area->contains(lon, lat)) return;
-    if (outside++ == 0) first = name() + " (" + format_shortest(lon) + "°, " + format_shortest(lat) + "°)";
+    if (outside++ == 0) first = name() + " (latitude " + format_shortest(lat) + "°, longitude " + format_shortest(lon) + "°)";
   }
   std::optional<std::string> warning() const {
     if (outside == 0) return std::nullopt;
@@ -201,8 +243,9 @@ struct CrsOperation::Impl {
   std::vector<std::string> notes;
   Pj to_lonlat;  // source → geographic longitude/latitude, degrees (for choices and areas)
   bool source_is_lonlat = false, target_is_lonlat = false;
+  std::vector<std::string> axis_labels;  // the source's axes in the order the coordinates are given ("Lon", "Lat", "h")
   bool source_is_planar = false;  // a projected source: a box in its plane bounds a batch (not so for x, y, z)
-  AreaTally source_area;
+  AreaTally source_area, target_area;  // points outside either CRS's area of use: warned
   std::size_t fallbacks = 0;
   std::string first_fallback;
 
@@ -218,7 +261,9 @@ struct CrsOperation::Impl {
   // After a candidate failed at a point: the best other available one that
   // holds it (--allow-fallback), skipping `tried`.
   std::optional<std::size_t> fallback(double lon, double lat, const std::vector<std::size_t>& tried) const;
-  bool batch_inside_area(const std::vector<double>& a, const std::vector<double>& b) const;
+  // Whether every point of a batch in a projected source lies inside each
+  // of `areas` (see the definition).
+  bool batch_inside(const std::vector<const CrsArea*>& areas, const std::vector<double>& a, const std::vector<double>& b) const;
   std::optional<std::size_t> uniform_choice(const std::vector<double>& lon, const std::vector<double>& lat, double a0,
                                             double b0, double c0) const;
 };
@@ -296,9 +341,9 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     m.all = list_operations(ctx, m.src.get(), m.dst.get(), false,
                             PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID, &m.available);
     chosen_from.type = chosen_from.horizontal_type = "geographic 3D";
-    chosen_from.axes = {CrsAxis{"Geodetic latitude", "Lat", "north", "degree", detail::kRadiansPerDegree, "angular"},
-                        CrsAxis{"Geodetic longitude", "Lon", "east", "degree", detail::kRadiansPerDegree, "angular"},
-                        CrsAxis{"Ellipsoidal height", "h", "up", "metre", 1.0, "linear"}};
+    chosen_from.axes = {CrsAxis{"Geodetic latitude", "Lat", "north", "degree", detail::kRadiansPerDegree, "angular", std::nullopt},
+                        CrsAxis{"Geodetic longitude", "Lon", "east", "degree", detail::kRadiansPerDegree, "angular", std::nullopt},
+                        CrsAxis{"Ellipsoidal height", "h", "up", "metre", 1.0, "linear", std::nullopt}};
     chosen_from.visualization_axes = {chosen_from.axes[1], chosen_from.axes[0], chosen_from.axes[2]};
     chosen_from.prime_meridian_deg = 0.0;
   }
@@ -315,6 +360,15 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
                                 "accuracy, often metres to hundreds of metres); geoanchor does not use it"
                               : "PROJ knows no operation between them"));
   }
+  if (m.available_count > 0 &&
+      std::none_of(m.all.begin(), m.all.begin() + static_cast<std::ptrdiff_t>(m.available_count),
+                   [](const Candidate& c) { return c.op != nullptr; })) {
+    std::vector<std::string> why;
+    for (std::size_t i = 0; i < m.available_count; ++i) why.push_back("'" + m.all[i].info.name + "': " + m.all[i].unusable);
+    throw Error(ErrorKind::input, "E_CRS_NO_OPERATION",
+                m.where + ": " + pair + ": PROJ cannot run its operation" + (why.size() > 1 ? "s" : "") +
+                    " between them (" + joined(why, "; ") + "); geoanchor uses no other");
+  }
   // An ensemble: its members differ by up to its accuracy. A conversion
   // keeps the datum, and an operation no better than that accuracy cannot
   // tell the members apart: both are warned. A finer datum change would
@@ -328,8 +382,8 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     const std::string name = d == &sd ? m.src_name : m.dst_name;
     const std::string accuracy = d->ensemble_accuracy_m ? format_shortest(*d->ensemble_accuracy_m) + " m" : "not stated";
     if (same_datum) {
-      m.notes.push_back(name + " is on the datum ensemble '" + d->datum + "' (accuracy " + accuracy +
-                        "): the conversion to " + (d == &sd ? m.dst_name : m.src_name) +
+      if (d == &td && sd.ensemble) continue;  // the same ensemble on both sides: said once
+      m.notes.push_back(name + " is on the datum ensemble '" + d->datum + "' (accuracy " + accuracy + "): " + pair +
                         " keeps the datum, so the realization does not change it; the coordinates stay in whichever "
                         "realization they were");
     } else if (finest && d->ensemble_accuracy_m && *finest >= *d->ensemble_accuracy_m) {
@@ -383,7 +437,7 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
   // Grids in use: hashed once, as they are on this machine.
   for (auto& c : m.all) {
     for (auto& g : c.info.grids) {
-      if (g.available) g.sha256 = sha256_file_hex(g.path);
+      if (g.available) g.sha256 = m.options.grid_hashes ? m.options.grid_hashes->sha256_hex(g.path) : sha256_file_hex(g.path);
     }
   }
 
@@ -391,8 +445,17 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
                      chosen_from.axes[0].name != chosen_from.visualization_axes[0].name;
   m.source_is_lonlat = is_geographic_degrees(chosen_from);
   m.source_is_planar = chosen_from.horizontal_type == "projected";
+  for (const auto& axis : chosen_from.visualization_axes) {
+    m.axis_labels.push_back(axis.abbreviation.empty() ? axis.name : axis.abbreviation);
+  }
   m.target_is_lonlat = is_geographic_degrees(td);
-  const bool need_lonlat = m.all.size() > 1 || (!m.source_is_lonlat && !m.target_is_lonlat && sd.area);
+  // Longitude and latitude are needed to choose among candidates, to hold
+  // a point to a datum change's area of use, and to warn about points
+  // outside a CRS's area (from the output, when it is in degrees, where
+  // nothing else needs them).
+  const bool datum_areas = std::any_of(m.all.begin(), m.all.end(), [](const Candidate& c) { return !c.datum_areas.empty(); });
+  const bool need_lonlat =
+      m.all.size() > 1 || datum_areas || (!m.source_is_lonlat && !m.target_is_lonlat && (sd.area || td.area));
   if (need_lonlat && !m.source_is_lonlat) {
     Pj geog(proj_create(ctx, "OGC:CRS84"));
     const char* opts[] = {"ALLOW_BALLPARK=YES", nullptr};  // for areas only: metres do not matter
@@ -405,6 +468,8 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
   }
   m.source_area.crs = m.src_name;
   m.source_area.area = sd.area;
+  m.target_area.crs = m.dst_name;
+  m.target_area.area = td.area;
 }
 
 CrsOperation::~CrsOperation() = default;
@@ -420,10 +485,13 @@ CrsOperation::Impl::Choice CrsOperation::Impl::choose(double a, double b, double
     const int k = proj_get_suggested_operation(ctx.get(), available.get(), PJ_FWD, native);
     if (k >= 0 && static_cast<std::size_t>(k) < available_count) choice.use = static_cast<std::size_t>(k);
   }
+  // One PROJ cannot run, or (where the point's longitude and latitude are
+  // known) whose datum change does not hold the point, is no choice.
+  if (choice.use && (!all[*choice.use].op || (lonlat_known && !all[*choice.use].holds(lon, lat)))) choice.use.reset();
   if (!lonlat_known) return choice;
   for (std::size_t i = available_count; i < all.size(); ++i) {
     const auto& m = all[i];
-    if (m.info.area && !m.info.area->contains(lon, lat)) continue;
+    if (!m.holds(lon, lat) || (m.info.area && !m.info.area->contains(lon, lat))) continue;
     if (!choice.use || better(m.info.accuracy_m, all[*choice.use].info.accuracy_m)) {
       choice.missing_better = i;
       break;
@@ -437,26 +505,28 @@ std::optional<std::size_t> CrsOperation::Impl::fallback(double lon, double lat, 
   std::optional<std::size_t> use;
   for (std::size_t i = 0; i < available_count; ++i) {
     if (std::find(tried.begin(), tried.end(), i) != tried.end()) continue;
-    if (all[i].info.area && !all[i].info.area->contains(lon, lat)) continue;
+    if (!all[i].op || !all[i].holds(lon, lat)) continue;
     if (!use || better(all[i].info.accuracy_m, all[*use].info.accuracy_m)) use = i;
   }
   return use;
 }
 
-// Whether every point of a batch lies inside the source CRS's area of use,
-// decided from the boundary of the batch's bounding box in the source plane:
-// a projection maps the box's inside within the curve its boundary maps to,
-// so a boundary that maps inside the (convex) longitude/latitude box keeps
-// every point inside. The boundary is sampled densely and held a small
-// margin inside the box, for the curve between samples; a batch that fails
-// the test is checked point by point.
-bool CrsOperation::Impl::batch_inside_area(const std::vector<double>& a, const std::vector<double>& b) const {
-  const Impl& m = *this;
+// Whether every point of a batch in a projected source lies inside each of
+// `areas` (the CRSs' and the datum change's areas of use), decided from the
+// boundary of the batch's bounding box in the source plane: a projection
+// maps the box's inside within the curve its boundary maps to, so a
+// boundary that maps inside a (convex) longitude/latitude box keeps every
+// point inside. The boundary is sampled densely and held a small margin
+// inside each area, for the curve between samples; a batch that fails the
+// test is checked point by point.
+bool CrsOperation::Impl::batch_inside(const std::vector<const CrsArea*>& areas, const std::vector<double>& a,
+                                      const std::vector<double>& b) const {
   constexpr int kSamplesPerEdge = 32;
   constexpr double kMargin = 1e-4;  // of the area's span, degrees
-  if (!m.source_area.area || a.empty()) return false;
-  const CrsArea& area = *m.source_area.area;
-  if (area.west_deg > area.east_deg) return false;  // across the antimeridian: point by point
+  if (a.empty() || !to_lonlat) return false;
+  for (const CrsArea* area : areas) {
+    if (area->west_deg > area->east_deg) return false;  // across the antimeridian: point by point
+  }
   double amin = a[0], amax = a[0], bmin = b[0], bmax = b[0];
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (!std::isfinite(a[i]) || !std::isfinite(b[i])) return false;
@@ -470,13 +540,15 @@ bool CrsOperation::Impl::batch_inside_area(const std::vector<double>& a, const s
     x.insert(x.end(), {xa, xa, amin, amax});
     y.insert(y.end(), {bmin, bmax, yb, yb});
   }
-  proj_trans_generic(m.to_lonlat.get(), PJ_FWD, x.data(), sizeof(double), x.size(), y.data(), sizeof(double), y.size(),
+  proj_trans_generic(to_lonlat.get(), PJ_FWD, x.data(), sizeof(double), x.size(), y.data(), sizeof(double), y.size(),
                      nullptr, 0, 0, nullptr, 0, 0);
-  const double mw = kMargin * (area.east_deg - area.west_deg), mn = kMargin * (area.north_deg - area.south_deg);
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    if (!(x[i] >= area.west_deg + mw && x[i] <= area.east_deg - mw && y[i] >= area.south_deg + mn &&
-          y[i] <= area.north_deg - mn)) {
-      return false;
+  for (const CrsArea* area : areas) {
+    const double mw = kMargin * (area->east_deg - area->west_deg), mn = kMargin * (area->north_deg - area->south_deg);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      if (!(x[i] >= area->west_deg + mw && x[i] <= area->east_deg - mw && y[i] >= area->south_deg + mn &&
+            y[i] <= area->north_deg - mn)) {
+        return false;
+      }
     }
   }
   return true;
@@ -493,12 +565,15 @@ std::optional<std::size_t> CrsOperation::Impl::uniform_choice(const std::vector<
     w = std::min(w, lon[i]), e = std::max(e, lon[i]), s = std::min(s, lat[i]), nn = std::max(nn, lat[i]);
   }
   for (const auto& c : all) {
-    if (!c.info.area) continue;
-    const CrsArea& a = *c.info.area;
-    if (a.west_deg > a.east_deg) return std::nullopt;  // across the antimeridian: point by point
-    const bool whole = w >= a.west_deg && e <= a.east_deg && s >= a.south_deg && nn <= a.north_deg;
-    const bool none = e < a.west_deg || w > a.east_deg || nn < a.south_deg || s > a.north_deg;
-    if (!whole && !none) return std::nullopt;
+    std::vector<const CrsArea*> areas;
+    if (c.info.area) areas.push_back(&*c.info.area);
+    for (const auto& d : c.datum_areas) areas.push_back(&d);
+    for (const CrsArea* a : areas) {
+      if (a->west_deg > a->east_deg) return std::nullopt;  // across the antimeridian: point by point
+      const bool whole = w >= a->west_deg && e <= a->east_deg && s >= a->south_deg && nn <= a->north_deg;
+      const bool none = e < a->west_deg || w > a->east_deg || nn < a->south_deg || s > a->north_deg;
+      if (!whole && !none) return std::nullopt;
+    }
   }
   // Every point holds the same candidates: PROJ's choice for the first is every point's.
   const Choice choice = choose(a0, b0, c0, lon[0], lat[0], true);
@@ -536,11 +611,20 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   // (a geocentric source's with its z: x and y alone would be at 0°).
   const bool single = m.available_count == 1 && m.all.size() == 1;
   std::vector<double> lon, lat;
+  bool tallied = false;  // the points counted against the CRSs' areas of use
+  std::vector<const CrsArea*> areas;  // those a single candidate's batch is held to
+  if (single) {
+    if (m.source_area.area) areas.push_back(&*m.source_area.area);
+    if (m.target_area.area) areas.push_back(&*m.target_area.area);
+    for (const auto& d : m.all.front().datum_areas) areas.push_back(&d);
+  }
   if (m.source_is_lonlat) {
     lon = in_a;
     lat = in_b;
-  } else if (m.to_lonlat && single && m.source_is_planar && m.batch_inside_area(in_a, in_b)) {
+  } else if (m.to_lonlat && single && m.source_is_planar && m.batch_inside(areas, in_a, in_b)) {
     m.source_area.seen += n;  // the whole batch lies inside: no point needs its own inverse
+    m.target_area.seen += n;
+    tallied = true;
   } else if (m.to_lonlat) {
     lon = in_a;
     lat = in_b;
@@ -549,12 +633,22 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
                        c ? z.data() : nullptr, c ? sizeof(double) : 0, c ? n : 0, nullptr, 0, 0);
   }
   if (!lon.empty()) {
-    for (std::size_t i = 0; i < n; ++i) m.source_area.check(lon[i], lat[i], [&] { return point_name(i); });
+    for (std::size_t i = 0; i < n; ++i) {
+      m.source_area.check(lon[i], lat[i], [&] { return point_name(i); });
+      m.target_area.check(lon[i], lat[i], [&] { return point_name(i); });
+    }
+    tallied = true;
   }
 
+  // A point's coordinates as given, each named by its axis ("Lon=8.5, Lat=47.4, h=480").
+  auto coordinates_of = [&](std::size_t i) {
+    auto label = [&](std::size_t k) { return k < m.axis_labels.size() ? m.axis_labels[k] + "=" : std::string(); };
+    std::string coords = label(0) + format_shortest(in_a[i]) + ", " + label(1) + format_shortest(in_b[i]);
+    if (c) coords += ", " + label(2) + format_shortest(in_c[i]);
+    return coords;
+  };
   auto fail_point = [&](std::size_t i, const Candidate& op, const std::string& why) {
-    std::string coords = format_shortest(in_a[i]) + ", " + format_shortest(in_b[i]);
-    if (c) coords += ", " + format_shortest(in_c[i]);
+    const std::string coords = coordinates_of(i);
     std::vector<std::string> grids;
     for (const auto& g : op.info.grids) grids.push_back(g.name);
     throw Error(ErrorKind::input, "E_CRS_TRANSFORM",
@@ -562,6 +656,25 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
                     op.info.name + "'" + (grids.empty() ? "" : " (grid " + joined(grids) + ")") + " to " + m.dst_name +
                     (grids.empty() ? "" : "; the point is outside the grid's extent") +
                     (m.options.allow_fallback ? "" : "; no other operation is used for it without --allow-fallback"));
+  };
+  // A point outside the area of use of the only datum change that could
+  // move it (PROJ would apply it anyway).
+  auto fail_area = [&](std::size_t i, const Candidate& op) {
+    const CrsArea* out = nullptr;
+    for (const auto& d : op.datum_areas) {
+      if (!d.contains(lon[i], lat[i])) out = &d;
+    }
+    throw Error(ErrorKind::input, "E_CRS_TRANSFORM",
+                m.where + ": " + point_name(i) + ": (" + coordinates_of(i) + ") in " + m.src_name + ", at latitude " +
+                    format_shortest(lat[i]) + "°, longitude " + format_shortest(lon[i]) +
+                    "°, lies outside the area of use of PROJ's operation '" + op.info.name + "' (" +
+                    accuracy_text(op.info.accuracy_m) + ") to " + m.dst_name +
+                    (out ? ": " + out->name + ", latitude " + format_shortest(out->south_deg) + "° to " +
+                               format_shortest(out->north_deg) + "°, longitude " + format_shortest(out->west_deg) + "° to " +
+                               format_shortest(out->east_deg) + "°"
+                         : std::string()) +
+                    "; its parameters do not hold there, and PROJ knows no other operation for this pair here but a "
+                    "ballpark one");
   };
   auto run = [&](const Candidate& op, double* x, double* y, double* z, std::size_t count) {
     proj_trans_generic(op.op.get(), PJ_FWD, x, sizeof(double), count, y, sizeof(double), count, z, z ? sizeof(double) : 0,
@@ -576,6 +689,11 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
 
   if (single) {
     Candidate& op = m.all.front();
+    if (!lon.empty() && !op.datum_areas.empty()) {
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!op.holds(lon[i], lat[i])) fail_area(i, op);
+      }
+    }
     proj_trans_generic(op.op.get(), PJ_FWD, a, sizeof(double), n, b, sizeof(double), n, c, z_stride, z_count,
                        m.t ? &t_value : nullptr, 0, m.t ? 1 : 0);
     for (std::size_t i = 0; i < n; ++i) {
@@ -610,6 +728,7 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
       }
       if (choice.missing_better) note_fallback(i);  // --allow-fallback: a worse operation than PROJ would use with its grid
       if (!choice.use) choice.use = lon.empty() ? std::nullopt : m.fallback(plon, plat, {});
+      if (!choice.use && m.available_count == 1 && !lon.empty()) fail_area(i, m.all.front());
       if (!choice.use) fail_point(i, m.all.front(), "no operation's area of use holds it; the best-ranked is");
       use[i] = *choice.use;
     }
@@ -658,8 +777,11 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
       m.all[k].info.points += 1;
     }
   }
-  if (m.target_is_lonlat && !m.source_is_lonlat && lon.empty()) {
-    for (std::size_t i = 0; i < n; ++i) m.source_area.check(a[i], b[i], [&] { return point_name(i); });
+  if (m.target_is_lonlat && !tallied) {
+    for (std::size_t i = 0; i < n; ++i) {
+      m.source_area.check(a[i], b[i], [&] { return point_name(i); });
+      m.target_area.check(a[i], b[i], [&] { return point_name(i); });
+    }
   }
 }
 
@@ -673,8 +795,10 @@ void CrsOperation::estimate(double* a, double* b, double* c, std::size_t n) cons
   const Impl& m = *impl_;
   if (n == 0 || m.all.empty()) return;
   if (m.pre) trans_arrays(m.pre.get(), a, b, c, n, std::nullopt);
-  // PROJ's best-ranked available operation; a point it cannot move is NaN.
-  trans_arrays(m.all.front().op.get(), a, b, c, n, m.t);
+  // PROJ's best-ranked available operation it can run; a point it cannot
+  // move is NaN.
+  const auto first = std::find_if(m.all.begin(), m.all.end(), [](const Candidate& k) { return k.op != nullptr; });
+  trans_arrays(first->op.get(), a, b, c, n, m.t);
   for (std::size_t i = 0; i < n; ++i) {
     if (!(std::isfinite(a[i]) && std::isfinite(b[i]) && (!c || std::isfinite(c[i])))) {
       a[i] = b[i] = std::numeric_limits<double>::quiet_NaN();
@@ -688,6 +812,7 @@ std::optional<double> CrsOperation::epoch() const { return impl_->t; }
 std::vector<std::string> CrsOperation::warnings() const {
   std::vector<std::string> out = impl_->notes;
   if (auto w = impl_->source_area.warning()) out.push_back(*w);
+  if (auto w = impl_->target_area.warning()) out.push_back(*w);
   if (impl_->fallbacks > 0) {
     out.push_back(std::to_string(impl_->fallbacks) + " points were moved by a worse operation than PROJ's first "
                   "choice for them (--allow-fallback); the first is " + impl_->first_fallback);

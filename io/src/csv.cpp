@@ -1,5 +1,7 @@
 #include "geoanchor/io/csv.hpp"
 
+#include <cctype>
+
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/geodesy/utf8.hpp"
@@ -107,7 +109,11 @@ double number_cell(const CsvRecord& r, std::size_t column, const std::vector<std
   const std::string& text = r.values[column];
   const auto v = parse_finite_double(text);
   if (!v) {
-    std::string why = text.empty() ? "empty field; expected a number" : "not a finite number";
+    const bool spaced = !text.empty() && (std::isspace(static_cast<unsigned char>(text.front())) != 0 ||
+                                          std::isspace(static_cast<unsigned char>(text.back())) != 0);
+    std::string why = text.empty() ? "empty field; expected a number"
+                      : spaced     ? "spaces around the number; expected the number alone"
+                                   : "not a finite number";
     if (text.find(',') != std::string::npos) why += " (decimal comma? use '.')";
     throw Error(ErrorKind::input, "E_VALUE",
                 source + ":" + std::to_string(r.line) + ": " + header[column] + "='" + text + "': " + why);

@@ -64,4 +64,19 @@ std::string sha256_file_hex(const std::filesystem::path& path) {
   return h.hex();
 }
 
+std::string FileHashCache::sha256_hex(const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  const auto time = ec ? std::filesystem::file_time_type{} : std::filesystem::last_write_time(path, ec);
+  if (ec) return sha256_file_hex(path);  // names the failure
+  Key key{std::filesystem::absolute(path, ec).string(), size, time};
+  {
+    const std::lock_guard lock(mutex_);
+    if (const auto it = hashes_.find(key); it != hashes_.end()) return it->second;
+  }
+  std::string hex = sha256_file_hex(path);  // outside the lock: two threads may both read a new file once
+  const std::lock_guard lock(mutex_);
+  return hashes_.emplace(std::move(key), std::move(hex)).first->second;
+}
+
 }  // namespace geoanchor::io

@@ -30,7 +30,21 @@ const char* find_grid_any_case(PJ_CONTEXT*, const char* name, void*) {
   return found.c_str();
 }
 
+// A thread's last PROJ error, as errno is kept: each context is used by one
+// thread at a time.
+thread_local std::string last_error;
+
+void keep_error(void*, int level, const char* message) {
+  if (level <= PJ_LOG_ERROR && message) last_error = message;
+}
+
 }  // namespace
+
+std::string take_last_proj_error() {
+  std::string out;
+  out.swap(last_error);
+  return out;
+}
 
 std::optional<std::filesystem::path> find_grid_file(const std::string& name) {
   if (name.empty() || name.find('/') != std::string::npos) return std::nullopt;
@@ -66,7 +80,8 @@ std::vector<std::string> proj_search_paths() {
 
 PjContext quiet_context() {
   PjContext ctx(proj_context_create());
-  proj_log_level(ctx.get(), PJ_LOG_NONE);
+  proj_log_func(ctx.get(), nullptr, keep_error);
+  proj_log_level(ctx.get(), PJ_LOG_ERROR);
   proj_context_set_enable_network(ctx.get(), 0);
   proj_context_set_file_finder(ctx.get(), find_grid_any_case, nullptr);
   return ctx;

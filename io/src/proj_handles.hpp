@@ -27,6 +27,11 @@ using PjContext = std::unique_ptr<PJ_CONTEXT, CtxDeleter>;
 // PROJ's database names CHENyx06a.gsb) is found by `find_grid_any_case`.
 PjContext quiet_context();
 
+// The last error PROJ reported on this thread through a quiet context's
+// logger ("Unsupported conversion method: Tunisia Mining Grid"), taken and
+// cleared; "" when none. Errors are kept, never printed.
+std::string take_last_proj_error();
+
 // PROJ's data directories, in its search order.
 std::vector<std::string> proj_search_paths();
 

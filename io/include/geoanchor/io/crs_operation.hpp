@@ -47,8 +47,13 @@ struct CrsOperationCandidate {
   std::size_t points = 0;  // how many points it moved
 };
 
+class FileHashCache;
+
 struct CrsOperationOptions {
   bool allow_fallback = false;  // --allow-fallback: a worse operation where a grid is missing or does not cover
+  // Where the grid files' hashes are kept between operations (a batch's
+  // tiles); null: each operation hashes its grids itself.
+  FileHashCache* grid_hashes = nullptr;
 };
 
 class CrsOperation {
