@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <iostream>
 
 #include "geoanchor/geodesy/number_text.hpp"
@@ -60,8 +61,14 @@ void run_crs(const CrsCommandOptions& o) {
   std::cout << "axes:\n";
   int k = 0;
   for (const auto& a : j["axes"]) {
-    std::cout << "  " << ++k << ". " << text(a["name"]) << " (" << text(a["abbreviation"]) << "), " << text(a["direction"])
-              << ", " << text(a["unit"]) << '\n';
+    std::cout << "  " << ++k << ". " << text(a["name"]) << " (" << text(a["abbreviation"]) << "), " << text(a["direction"]);
+    if (a.contains("meridian_deg")) {
+      // PROJ's wording: "South along 90°E"; 0° and 180° have no side.
+      const double m = a["meridian_deg"].get<double>();
+      std::cout << " along " << format_shortest(std::abs(m)) << "°"
+                << (m == 0.0 || std::abs(m) == 180.0 ? "" : m > 0.0 ? "E" : "W");
+    }
+    std::cout << ", " << text(a["unit"]) << '\n';
   }
   if (!j["projection"].is_null()) {
     const auto& p = j["projection"];
@@ -82,6 +89,11 @@ void run_crs(const CrsCommandOptions& o) {
                       : text(v["geoid_model"]) + (v["geoid_on_this_machine"].get<bool>() ? " (on this machine)"
                                                                                           : " (not on this machine)"))
               << '\n';
+    if (!v["geoid_operation"].is_null()) {
+      std::cout << "geoid model:    " << text(v["geoid_operation"])
+                << (v["geoid_operation_id"].is_null() ? std::string() : " (" + text(v["geoid_operation_id"]) + ")")
+                << ", written as GEOIDMODEL in the WKT2\n";
+    }
   }
   if (!j["area_of_use"].is_null()) {
     const auto& a = j["area_of_use"];

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
 #include <proj_experimental.h>
 
 #include "crs_impl.hpp"
@@ -149,11 +150,48 @@ CrsAxis read_axis(PJ_CONTEXT* ctx, PJ* cs, int i) {
   return a;
 }
 
+// The meridians a coordinate system's axes point along (polar
+// projections), which PROJ's C API leaves out and its PROJJSON states.
+std::vector<std::optional<double>> read_meridians(PJ_CONTEXT* ctx, PJ* cs, int n) {
+  std::vector<std::optional<double>> out(static_cast<std::size_t>(n));
+  const char* text = proj_as_projjson(ctx, cs, nullptr);
+  const auto j = nlohmann::json::parse(text_or(text, "{}"), nullptr, false);
+  if (j.is_discarded() || !j.contains("axis") || !j["axis"].is_array()) return out;
+  for (int i = 0; i < n && static_cast<std::size_t>(i) < j["axis"].size(); ++i) {
+    const auto& axis = j["axis"][static_cast<std::size_t>(i)];
+    if (!axis.is_object() || !axis.contains("meridian")) continue;
+    const auto& lon = axis["meridian"].value("longitude", nlohmann::json());
+    if (lon.is_number()) {
+      out[static_cast<std::size_t>(i)] = lon.get<double>();  // degrees, PROJJSON's default unit
+    } else if (lon.is_object() && lon.contains("value") && lon["value"].is_number()) {
+      // {"value": V, "unit": U}: U a unit name ("degree") or {"conversion_factor": radians per unit}
+      double factor = detail::kRadiansPerDegree;
+      if (lon.contains("unit") && lon["unit"].is_object() && lon["unit"].contains("conversion_factor")) {
+        factor = lon["unit"]["conversion_factor"].get<double>();
+      } else if (lon.contains("unit") && lon["unit"].is_string() && lon["unit"] == "grad") {
+        factor = detail::kRadiansPerGrad;
+      } else if (lon.contains("unit") && lon["unit"].is_string() && lon["unit"] == "radian") {
+        factor = 1.0;
+      }
+      out[static_cast<std::size_t>(i)] = lon["value"].get<double>() * factor / detail::kRadiansPerDegree;
+    }
+  }
+  return out;
+}
+
 void read_axes(PJ_CONTEXT* ctx, PJ* crs, std::vector<CrsAxis>& out) {
   Pj cs(proj_crs_get_coordinate_system(ctx, crs));
   if (!cs) return;
   const int n = proj_cs_get_axis_count(ctx, cs.get());
-  for (int i = 0; i < n; ++i) out.push_back(read_axis(ctx, cs.get(), i));
+  const std::size_t first = out.size();
+  bool along_meridian = false;
+  for (int i = 0; i < n; ++i) {
+    out.push_back(read_axis(ctx, cs.get(), i));
+    along_meridian = along_meridian || out.back().direction == "north" || out.back().direction == "south";
+  }
+  if (!along_meridian || proj_cs_get_type(ctx, cs.get()) != PJ_CS_TYPE_CARTESIAN) return;
+  const auto meridians = read_meridians(ctx, cs.get(), n);
+  for (std::size_t i = 0; i < meridians.size(); ++i) out[first + i].meridian_deg = meridians[i];
 }
 
 // An ensemble's name, members and accuracy.
@@ -236,6 +274,55 @@ void read_projection(PJ_CONTEXT* ctx, PJ* projected, CrsDescription& d) {
   }
 }
 
+// The transformation of PROJ's database that applies the geoid grid
+// `d.geoid_model`, which names the geoid model: the operation itself when it
+// has a code, else the one among the steps its name lists ("ETRS89 to NAP
+// height (2) + Inverse of Amersfoort to ETRS89 (9) + RD New"; PROJ builds
+// such operations without codes, nor steps the C API can list) that uses
+// the grid.
+void name_geoid_model(PJ_CONTEXT* ctx, PJ* op, CrsDescription& d) {
+  // "EPSG:10084"; PROJ names the authority of an object it derived from a
+  // database one "DERIVED_FROM(EPSG)".
+  auto code_of = [](const PJ* o) {
+    const char* auth = proj_get_id_auth_name(o, 0);
+    const char* code = proj_get_id_code(o, 0);
+    if (!auth || !code) return std::string();
+    std::string a(auth);
+    constexpr std::string_view kDerived = "DERIVED_FROM(";
+    if (a.rfind(kDerived, 0) == 0 && a.back() == ')') a = a.substr(kDerived.size(), a.size() - kDerived.size() - 1);
+    return a + ":" + code;
+  };
+  if (const std::string id = code_of(op); !id.empty()) {
+    d.geoid_operation = text_or(proj_get_name(op));
+    d.geoid_operation_id = id;
+    return;
+  }
+  const std::string name = text_or(proj_get_name(op));
+  constexpr std::string_view kJoin = " + ", kInverse = "Inverse of ";
+  for (std::size_t start = 0; start <= name.size();) {
+    const std::size_t end = std::min(name.find(kJoin, start), name.size());
+    std::string step = name.substr(start, end - start);
+    start = end + kJoin.size();
+    if (step.rfind(kInverse, 0) == 0) step.erase(0, kInverse.size());
+    const PJ_TYPE types[] = {PJ_TYPE_TRANSFORMATION, PJ_TYPE_OTHER_COORDINATE_OPERATION};
+    PJ_OBJ_LIST* found = proj_create_from_name(ctx, "EPSG", step.c_str(), types, 2, 0, 2, nullptr);
+    Pj match(found && proj_list_get_count(found) == 1 ? proj_list_get(ctx, found, 0) : nullptr);
+    proj_list_destroy(found);
+    if (!match || text_or(proj_get_name(match.get())) != step) continue;
+    const int grids = proj_coordoperation_get_grid_used_count(ctx, match.get());
+    for (int g = 0; g < grids; ++g) {
+      const char* short_name = nullptr;
+      if (proj_coordoperation_get_grid_used(ctx, match.get(), g, &short_name, nullptr, nullptr, nullptr, nullptr, nullptr,
+                                            nullptr) &&
+          short_name && d.geoid_model == short_name) {
+        d.geoid_operation = step;
+        d.geoid_operation_id = code_of(match.get());
+        return;
+      }
+    }
+  }
+}
+
 // The geoid of a compound CRS: the grid of PROJ's best operation from the
 // horizontal part's ellipsoidal heights (its geographic 3D CRS) to it.
 void read_geoid(PJ_CONTEXT* ctx, PJ* horizontal, PJ* compound, CrsDescription& d) {
@@ -264,6 +351,7 @@ void read_geoid(PJ_CONTEXT* ctx, PJ* horizontal, PJ* compound, CrsDescription& d
         break;
       }
     }
+    if (!d.geoid_model.empty()) name_geoid_model(ctx, op.get(), d);
   }
   proj_list_destroy(ops);
 }
@@ -366,6 +454,9 @@ Crs Crs::parse(std::string_view typed, std::string_view where) {
   // CRS@EPOCH: the last '@' followed by a number (a file is @FILE, at 0).
   if (const auto at = definition.rfind('@'); at != std::string::npos && at > 0) {
     const std::string tail = trim(std::string_view(definition).substr(at + 1));
+    if (tail.empty() && definition.find_first_of("[{") == std::string::npos) {
+      fail(where, text, "nothing after '@'; expected the coordinate epoch as a decimal year, e.g. CRS@2024.5", "E_EPOCH");
+    }
     const bool wkt_or_json = definition.find_first_of("[{") != std::string::npos;
     // In WKT or JSON the epoch follows the closing bracket: an '@' inside a
     // quoted name or remark ("ITRF2014@2024.5") is the text's own.
@@ -463,9 +554,39 @@ std::string Crs::display_name() const {
   return s;
 }
 
+namespace {
+
+// The compound CRS with GEOIDMODEL on its vertical part (built through its
+// PROJJSON, read back by PROJ and held equivalent to the CRS), or null when
+// it names a geoid model already, PROJ knows none, or PROJ refuses it.
+Pj with_geoid_model(PJ_CONTEXT* ctx, PJ* crs, const CrsDescription& d) {
+  if (d.type != "compound" || d.geoid_operation.empty()) return nullptr;
+  auto j = nlohmann::json::parse(text_or(proj_as_projjson(ctx, crs, nullptr), "{}"), nullptr, false);
+  if (j.is_discarded() || !j.contains("components") || !j["components"].is_array() || j["components"].size() != 2) {
+    return nullptr;
+  }
+  auto& vertical = j["components"][1];
+  if (!vertical.is_object() || vertical.contains("geoid_model") || vertical.contains("geoid_models")) return nullptr;
+  nlohmann::json model = {{"name", d.geoid_operation}};
+  if (const auto colon = d.geoid_operation_id.find(':'); colon != std::string::npos) {
+    const std::string code = d.geoid_operation_id.substr(colon + 1);
+    const bool digits = !code.empty() && std::all_of(code.begin(), code.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+    model["id"] = {{"authority", d.geoid_operation_id.substr(0, colon)},
+                   {"code", digits ? nlohmann::json(std::stol(code)) : nlohmann::json(code)}};
+  }
+  vertical["geoid_model"] = model;
+  Pj out(proj_create(ctx, j.dump().c_str()));
+  if (!out || !proj_is_equivalent_to_with_ctx(ctx, out.get(), crs, PJ_COMP_EQUIVALENT)) return nullptr;
+  return out;
+}
+
+}  // namespace
+
 std::string Crs::wkt2() const {
   const char* options[] = {"MULTILINE=NO", nullptr};
-  const char* w = proj_as_wkt(impl_->ctx.get(), impl_->crs.get(), PJ_WKT2_2019, options);
+  PJ_CONTEXT* ctx = impl_->ctx.get();
+  const Pj geoid = with_geoid_model(ctx, impl_->crs.get(), impl_->description);
+  const char* w = proj_as_wkt(ctx, geoid ? geoid.get() : impl_->crs.get(), PJ_WKT2_2019, options);
   return text_or(w);
 }
 
@@ -501,6 +622,27 @@ Crs Crs::promoted_to_3d(std::string_view where) const {
   if (!promoted) fail(where, text_, "'" + d.name + "' cannot be given an ellipsoidal height axis");
   impl->crs = std::move(promoted);
   impl->description = describe(impl->ctx.get(), impl->crs.get());
+  Crs out(std::move(impl), epoch_, text_);
+  out.from_frame_name_ = from_frame_name_;
+  return out;
+}
+
+Crs Crs::horizontal(std::string_view where) const {
+  const auto& d = impl_->description;
+  const bool three_d = d.type == "geographic 3D" || (d.type == "projected" && d.axes.size() >= 3);
+  if (d.type != "compound" && !three_d) return *this;
+  auto impl = std::make_shared<Impl>();
+  impl->ctx = detail::quiet_context();
+  PJ_CONTEXT* ctx = impl->ctx.get();
+  // A PJ belongs to its context: rebuild it there from its PROJJSON.
+  Pj same(proj_create(ctx, projjson().c_str()));
+  if (same && d.type == "compound") {
+    impl->crs.reset(proj_crs_get_sub_crs(ctx, same.get(), 0));
+  } else if (same) {
+    impl->crs.reset(proj_crs_demote_to_2D(ctx, nullptr, same.get()));
+  }
+  if (!impl->crs) fail(where, text_, "'" + d.name + "': PROJ gives no horizontal part of it");
+  impl->description = describe(ctx, impl->crs.get());
   Crs out(std::move(impl), epoch_, text_);
   out.from_frame_name_ = from_frame_name_;
   return out;

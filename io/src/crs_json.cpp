@@ -13,8 +13,10 @@ using json = nlohmann::ordered_json;
 namespace {
 
 json axis_json(const CrsAxis& a) {
-  return json{{"name", a.name},           {"abbreviation", a.abbreviation}, {"direction", a.direction},
-              {"unit", a.unit_name},       {"unit_to_si", a.unit_to_si},     {"unit_type", a.unit_type}};
+  json j{{"name", a.name},           {"abbreviation", a.abbreviation}, {"direction", a.direction},
+         {"unit", a.unit_name},       {"unit_to_si", a.unit_to_si},     {"unit_type", a.unit_type}};
+  if (a.meridian_deg) j["meridian_deg"] = *a.meridian_deg;  // "south along 90°E"
+  return j;
 }
 
 json columns_json(const Crs& crs, bool with_height) {
@@ -70,7 +72,9 @@ std::string crs_json_text(const Crs& crs) {
     j["vertical"] = {{"crs", d.vertical_crs},
                      {"datum", d.vertical_datum},
                      {"geoid_model", d.geoid_model.empty() ? json(nullptr) : json(d.geoid_model)},
-                     {"geoid_on_this_machine", d.geoid_available}};
+                     {"geoid_on_this_machine", d.geoid_available},
+                     {"geoid_operation", d.geoid_operation.empty() ? json(nullptr) : json(d.geoid_operation)},
+                     {"geoid_operation_id", d.geoid_operation_id.empty() ? json(nullptr) : json(d.geoid_operation_id)}};
   } else {
     j["vertical"] = nullptr;
   }

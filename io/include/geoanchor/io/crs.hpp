@@ -28,6 +28,9 @@ struct CrsAxis {
   std::string unit_name;     // "metre", "US survey foot", "degree", "grad"
   double unit_to_si = 1.0;   // metres or radians per unit
   std::string unit_type;     // "linear" | "angular"
+  // The meridian a polar projection's axis points along ("south along
+  // 90°E"), degrees east of Greenwich; nullopt when the CRS names none.
+  std::optional<double> meridian_deg;
 };
 
 struct CrsParameter {
@@ -80,6 +83,11 @@ struct CrsDescription {
   // and whether it is on this machine.
   std::string geoid_model;
   bool geoid_available = false;
+  // The operation (or step) that applies that grid, which names the geoid
+  // model in the WKT2 geoanchor writes (GEOIDMODEL["WGS 84 to EGM96 height
+  // (1)",ID["EPSG",10084]]); "" when none.
+  std::string geoid_operation;
+  std::string geoid_operation_id;  // "EPSG:10084", or ""
   std::optional<CrsArea> area;
 };
 
@@ -107,7 +115,9 @@ class Crs {
 
   // PROJ's WKT2:2019 and PROJJSON of the CRS (both read back by PROJ as the
   // same CRS). The coordinate epoch is not part of them (PROJ 9.1 has no
-  // coordinate metadata); the sidecars record it beside.
+  // coordinate metadata); the sidecars record it beside. The WKT2 of a
+  // compound CRS names its geoid model (GEOIDMODEL, the operation PROJ
+  // applies its grid with) where PROJ knows one and the CRS names none.
   std::string wkt2() const;
   std::string projjson() const;
 
@@ -123,6 +133,10 @@ class Crs {
   // projected CRS); itself when it has three axes already. Throws for a
   // type that cannot be promoted.
   Crs promoted_to_3d(std::string_view where) const;
+  // The horizontal part as a 2-D CRS: a compound CRS's first part, a 3-D
+  // geographic or projected CRS without its ellipsoidal height axis;
+  // itself when it is 2-D already or geocentric. Keeps the epoch.
+  Crs horizontal(std::string_view where) const;
   // The geocentric CRS on the same datum (for x_m, y_m, z_m columns).
   Crs geocentric(std::string_view where) const;
 
