@@ -472,6 +472,11 @@ TEST_F(CrsCli, Issue13_BadInputIsRefusedByNameWithNoOutput) {
        {"--ellipsoid"}},
       {"PROJ string without +type=crs", "id,lat_deg,lon_deg\nA,1,2\n", "--crs '+proj=utm +zone=31' --to-crs EPSG:4326", 3,
        {"+type=crs"}},
+      {"an operation PROJ lists but cannot run", "id,lat_grad,lon_grad\nA,38.9,8.5\n", "--crs EPSG:4816 --to-crs EPSG:22300",
+       3, {"E_CRS_NO_OPERATION", "Unsupported conversion method: Tunisia Mining Grid"}},
+      {"a datum change outside its area of use", "id,lat_deg,lon_deg\nPE,-12,-77\n", "--crs EPSG:4618 --to-crs EPSG:4674",
+       3, {"E_CRS_TRANSFORM", "bad.csv:2", "SAD69 to SIRGAS 2000 (1)", "Brazil", "lies outside the area of use"}},
+      {"an empty epoch", "id,lat_deg,lon_deg\nA,1,2\n", "--crs EPSG:4326@ --to-crs EPSG:32631", 3, {"E_EPOCH", "after '@'"}},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.name);
@@ -514,6 +519,15 @@ TEST_F(CrsCli, Issue13_CrsCommandReportsWhatItUnderstood) {
   ASSERT_TRUE(back);
   EXPECT_TRUE(proj_is_equivalent_to(original.get(), back.get(), PJ_COMP_EQUIVALENT));
 
+  // A polar projection's axes point along meridians (PROJ: "South along 90°E").
+  const RunResult ups = run("crs EPSG:5041 --json");
+  ASSERT_EQ(ups.exit_code, 0) << ups.err;
+  const auto u = nlohmann::json::parse(ups.out);
+  EXPECT_EQ(u["axes"][0]["direction"], "south");
+  EXPECT_EQ(u["axes"][0]["meridian_deg"], 90.0);
+  EXPECT_EQ(u["axes"][1]["meridian_deg"], 180.0);
+  EXPECT_NE(run("crs EPSG:5041").out.find("south along 90°E"), std::string::npos);
+
   const RunResult d = run("crs 'WGS 84 (G2139)'");
   EXPECT_EQ(d.exit_code, 0) << d.err;
   EXPECT_NE(d.out.find("World Geodetic System 1984 (G2139)"), std::string::npos) << d.out;
@@ -523,6 +537,38 @@ TEST_F(CrsCli, Issue13_CrsCommandReportsWhatItUnderstood) {
   const RunResult g = run("crs 'NAD83(CSRS)'");
   EXPECT_EQ(g.exit_code, 3);
   EXPECT_NE(g.err.find("NAD83(CSRSv8)"), std::string::npos) << g.err;
+}
+
+// Point 7: the WKT2 geoanchor writes for a compound CRS names its geoid
+// model (EPSG's "WGS 84 to EGM96 height (1)", EPSG:10084, for EGM96
+// heights), which PROJ reads back as the same CRS, applying the same grid.
+TEST_F(CrsCli, Issue13_ACompoundCrsIsWrittenWithItsGeoidModel) {
+  const RunResult c = run("crs EPSG:32632+5773 --json");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const auto j = nlohmann::json::parse(c.out);
+  EXPECT_EQ(j["vertical"]["geoid_operation_id"], "EPSG:10084");
+  write("h.csv", "id,lat_deg,lon_deg,h_m\nZH,47.4,8.5,500\n");
+  const RunResult r = run("convert '" + path("h.csv").string() + "' --crs EPSG:4979 --to-crs EPSG:32632+5773 -o '" +
+                          path("H.csv").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = slurp(path("H.csv"));
+  const std::string line = text.substr(0, text.find('\n'));
+  ASSERT_EQ(line.rfind("# crs = ", 0), 0u) << line;
+  const std::string wkt = line.substr(8);
+  EXPECT_NE(wkt.find("GEOIDMODEL[\"WGS 84 to EGM96 height (1)\",ID[\"EPSG\",10084]]"), std::string::npos) << wkt;
+  Pj written = proj_.crs(wkt), asked = proj_.crs("EPSG:32632+5773");
+  ASSERT_TRUE(written) << wkt;
+  EXPECT_TRUE(proj_is_equivalent_to_with_ctx(proj_.ctx(), written.get(), asked.get(), PJ_COMP_EQUIVALENT));
+  // The same heights back from the written WKT as from EPSG's code.
+  Pj a = proj_.op(wkt, "EPSG:4979"), b = proj_.op("EPSG:32632+5773", "EPSG:4979");
+  ASSERT_TRUE(a && b);
+  const PJ_COORD pa = proj_trans(a.get(), PJ_FWD, proj_coord(464000, 5250000, 450, 0));
+  const PJ_COORD pb = proj_trans(b.get(), PJ_FWD, proj_coord(464000, 5250000, 450, 0));
+  EXPECT_LT(std::abs(pa.xyz.z - pb.xyz.z), kVsProjTol_m);
+  EXPECT_GT(std::abs(pa.xyz.z - 450.0), 40.0);  // the geoid was applied (N ≈ 48 m here)
+  // And the file reads back through its own statement.
+  const RunResult back = run("convert '" + path("H.csv").string() + "' --to-crs EPSG:4979 -o '" + path("back.csv").string() + "'");
+  EXPECT_EQ(back.exit_code, 0) << back.err;
 }
 
 // Japan's plane zones are X north, Y east: "easting" is the axis PROJ's
@@ -552,12 +598,14 @@ namespace {
 
 // Points outside the source CRS's area of use are converted with one
 // warning, counted and naming the first, in the sidecar too; points inside
-// give none (whether the batch is decided at once or point by point).
+// give none (whether the batch is decided at once or point by point). A
+// datum change is another matter: its parameters hold in its own area only,
+// so a point outside it is refused (PROJ would apply it anyway).
 TEST_F(CrsCli, Issue13_PointsOutsideTheAreaOfUseAreWarnedAndRecorded) {
   // Lambert-93 covers France (longitude -9.86° to 10.38°, latitude 41.15° to 51.56°):
-  // (3000000, 6600000) lies near 15.6°E, outside.
+  // (3000000, 6600000) lies near 31.7°E, outside.
   write("l93.csv", "id,easting_m,northing_m\nPARIS,652000,6862000\nLYON,842000,6519000\nFAR,3000000,6600000\n");
-  const Csv got = convert("l93.csv", "EPSG:2154", "EPSG:3035");
+  const Csv got = convert("l93.csv", "EPSG:2154", "EPSG:4171");  // RGF93 v1 geographic: the same datum
   EXPECT_EQ(got.rows.size(), 3u);
   const auto side = nlohmann::json::parse(slurp(path("out_l93.csv.geoanchor.json")));
   std::string warning;
@@ -573,6 +621,15 @@ TEST_F(CrsCli, Issue13_PointsOutsideTheAreaOfUseAreWarnedAndRecorded) {
   for (const auto& w : inside["warnings"]) {
     EXPECT_EQ(w.get<std::string>().find("outside the area of use"), std::string::npos) << w;
   }
+
+  // Into LAEA Europe on ETRS89, through "RGF93 v1 to ETRS89 (1)" (France):
+  // FAR is refused by name and nothing is written.
+  const RunResult r = run("convert '" + path("l93.csv").string() + "' --crs EPSG:2154 --to-crs EPSG:3035 -o '" +
+                          path("far.csv").string() + "'");
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("l93.csv:4"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("lies outside the area of use of PROJ's operation"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("far.csv")));
 }
 
 }  // namespace
@@ -1037,6 +1094,85 @@ TEST_F(CrsLas, Issue13_TwoDimensionalLasWktNeedsItsHeightsStated) {
   EXPECT_EQ(other.exit_code, 2);
   EXPECT_NE(other.err.find("E_FRAME_CONFLICT"), std::string::npos) << other.err;
   EXPECT_FALSE(fs::exists(path("other/fl.las")));
+}
+
+// --crs completes what a tile's WKT states, compared by PROJ and never by
+// name: the heights of a 2-D CRS as a compound CRS whose horizontal part is
+// equivalent (the tile's WKT under another name), a dynamic CRS's coordinate
+// epoch (CRS@EPOCH), and a 2-D --crs beside a 3-D WKT (it says less, not
+// otherwise); the tile's points move as PROJ's own operation moves them.
+TEST_F(CrsLas, Issue13_ACrsFlagCompletesTheTilesCrsAsProjReadsIt) {
+  // UTM 32N under a name of the surveyor's own: PROJ holds it equivalent to EPSG:32632.
+  std::string renamed = wkt_of(proj_, "EPSG:32632", false);
+  renamed.replace(renamed.find("WGS 84 / UTM zone 32N"), 21, "Site grid (UTM 32N)");
+  renamed.erase(renamed.rfind(",ID[\"EPSG\",32632]"), 17);
+  const auto utm_points = points_in_box("EPSG:32632", {8.0, 46.5, 9.5, 47.5}, 5);
+  const Tile utm = las("in/site.las", renamed, utm_points, {0.001, 0.001, 0.001});
+  const RunResult h = run("apply '" + path("in/site.las").string() + "' --crs EPSG:32632+5773 --to-crs EPSG:4979 --out-dir '" +
+                          path("out_site").string() + "'");
+  ASSERT_EQ(h.exit_code, 0) << h.err;
+  {
+    const json got = verify(path("out_site/site.las"));
+    ASSERT_FALSE(got.is_null());
+    Pj op = proj_.op("EPSG:32632+5773", "EPSG:4979");
+    testing::WorstCase worst;  // ratio to the tolerance
+    for (std::size_t i = 0; i < utm.xyz.size(); ++i) {
+      const auto& a = utm.xyz[i];
+      const PJ_COORD e = proj_trans(op.get(), PJ_FWD, proj_coord(a[0], a[1], a[2], 0));
+      const double expected[3] = {e.xyz.x, e.xyz.y, e.xyz.z};
+      for (std::size_t k = 0; k < 3; ++k) {
+        const double tol = 0.5 * got["header"]["scale"][k].get<double>() + (k < 2 ? kVsProjTol_deg : kVsProjTol_m);
+        worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
+      }
+    }
+    EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+  }
+  // A compound CRS on another horizontal CRS is still refused.
+  const RunResult other = run("apply '" + path("in/site.las").string() + "' --crs EPSG:32633+5773 --to-crs EPSG:4979 --out-dir '" +
+                              path("out_other").string() + "'");
+  EXPECT_EQ(other.exit_code, 2) << other.err;
+  EXPECT_NE(other.err.find("E_FRAME_CONFLICT"), std::string::npos) << other.err;
+  EXPECT_FALSE(fs::exists(path("out_other/site.las")));
+
+  // ITRF2014 geographic 3-D without its epoch: --crs EPSG:7912@2024.5 gives it.
+  const auto itrf_points = points_in_box("EPSG:7912", {8.0, 46.5, 9.5, 47.5}, 9);
+  const Tile itrf = las("in/itrf.las", wkt_of(proj_, "EPSG:7912", false), itrf_points, {1e-8, 1e-8, 0.001});
+  const RunResult missing = run("apply '" + path("in/itrf.las").string() + "' --to-crs EPSG:9989 --out-dir '" +
+                                path("out_missing").string() + "'");
+  EXPECT_EQ(missing.exit_code, 3) << missing.err;
+  EXPECT_NE(missing.err.find("E_EPOCH_MISSING"), std::string::npos) << missing.err;
+  const RunResult dated = run("apply '" + path("in/itrf.las").string() + "' --crs EPSG:7912@2024.5 --to-crs EPSG:9989 --out-dir '" +
+                              path("out_itrf").string() + "'");
+  ASSERT_EQ(dated.exit_code, 0) << dated.err;
+  {
+    const json got = verify(path("out_itrf/itrf.las"));
+    ASSERT_FALSE(got.is_null());
+    Pj op = proj_.op("EPSG:7912", "EPSG:9989");
+    testing::WorstCase worst;
+    for (std::size_t i = 0; i < itrf.xyz.size(); ++i) {
+      const auto& a = itrf.xyz[i];
+      const PJ_COORD e = proj_trans(op.get(), PJ_FWD, proj_coord(a[0], a[1], a[2], 2024.5));
+      const double expected[3] = {e.xyz.x, e.xyz.y, e.xyz.z};
+      for (std::size_t k = 0; k < 3; ++k) {
+        const double tol = 0.5 * got["header"]["scale"][k].get<double>() + (k < 2 ? kVsProjTol_deg : kVsProjTol_m);
+        worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
+      }
+    }
+    EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+    const json side = json::parse(slurp(path("out_itrf/itrf.las.geoanchor.json")));
+    EXPECT_EQ(side["frame"], "ITRF2020@2024.5");
+    EXPECT_EQ(side["crs"]["coordinate_epoch"], 2024.5);
+  }
+  // A 2-D --crs beside the 3-D WKT says less, not otherwise: the same points.
+  const RunResult less = run("apply '" + path("in/itrf.las").string() + "' --crs EPSG:9000@2024.5 --to-crs EPSG:9989 --out-dir '" +
+                             path("out_less").string() + "'");
+  ASSERT_EQ(less.exit_code, 0) << less.err;
+  EXPECT_EQ(verify(path("out_less/itrf.las"))["points"], verify(path("out_itrf/itrf.las"))["points"]);
+  // Another epoch than the one the tile states is a contradiction.
+  const RunResult twice = run("apply '" + path("out_itrf/itrf.las").string() + "' --crs EPSG:9989@2020.0 --to-crs EPSG:7912 --out-dir '" +
+                              path("out_twice").string() + "'");
+  EXPECT_EQ(twice.exit_code, 2) << twice.err;
+  EXPECT_NE(twice.err.find("E_FRAME_CONFLICT"), std::string::npos) << twice.err;
 }
 
 // A tile in a dynamic CRS at its epoch (a CSV stating ITRF2014 geographic

@@ -166,6 +166,8 @@ class TileRunner {
   TileRunner(const ApplyRequest& o, const TilePlanner& planner, const std::optional<io::TransformFile>& t,
              const std::string& transform_sha, ApplyProgress& progress)
       : o_(o), planner_(planner), t_(t), transform_sha_(transform_sha), progress_(progress) {}
+  TileRunner(const TileRunner&) = delete;
+  TileRunner& operator=(const TileRunner&) = delete;
 
   TileOutcome run(const fs::path& input) const;
 
@@ -176,6 +178,7 @@ class TileRunner {
   const std::optional<io::TransformFile>& t_;
   const std::string& transform_sha_;
   ApplyProgress& progress_;
+  mutable io::FileHashCache grid_hashes_;  // a grid is hashed once per run, not once per tile
 };
 
 TileOutcome TileRunner::run(const fs::path& input) const {
@@ -275,7 +278,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   ao.from = p.in.coordinates;
   ao.to = p.out.coordinates;
   // PROJ's stages (this thread's own operations).
-  const io::CrsOperation::Options crs_options{o_.allow_fallback};
+  const io::CrsOperation::Options crs_options{o_.allow_fallback, &grid_hashes_};
   std::unique_ptr<io::CrsOperation> before, after;
   if (p.before) before = std::make_unique<io::CrsOperation>(p.before->first, p.before->second, tile, crs_options);
   if (p.after) after = std::make_unique<io::CrsOperation>(p.after->first, p.after->second, tile, crs_options);

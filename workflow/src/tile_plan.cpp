@@ -31,6 +31,24 @@ Frame with_epoch(const Frame& f, DecimalYear e) {
 
 bool two_d(const io::Crs& c) { return c.description().axes.size() < 3; }
 
+// What a tile's stated CRS and --crs say together, or nullopt when they
+// contradict each other. --crs may restate the CRS or state it less fully
+// (its horizontal part, no epoch), or complete it: the heights of a 2-D CRS
+// (the same CRS in 3-D, or a compound CRS with it as the horizontal part)
+// and the coordinate epoch of a dynamic one. Compared by PROJ, never by name.
+std::optional<io::Crs> reconcile_crs(const io::Crs& stated, const io::Crs& flag) {
+  if (stated.epoch() && flag.epoch() && stated.epoch()->year != flag.epoch()->year) return std::nullopt;
+  const auto epoch = stated.epoch() ? stated.epoch() : flag.epoch();
+  auto at_epoch = [&](const io::Crs& c) {
+    return epoch && !c.epoch() && c.description().dynamic ? c.at_epoch(*epoch, "--crs") : c;
+  };
+  const io::Crs s = at_epoch(stated), f = at_epoch(flag);
+  if (s.same_as(f)) return s;
+  if (two_d(s) && !two_d(f) && f.horizontal("--crs").same_as(s)) return f;
+  if (!two_d(s) && two_d(f) && s.horizontal("--crs").same_as(f)) return s;
+  return std::nullopt;
+}
+
 bool same_origin(const geodesy::LocalOrigin& a, const geodesy::LocalOrigin& b) {
   return std::abs(a.point.lat.deg() - b.point.lat.deg()) < kSameOriginDeg &&
          std::abs(a.point.lon.deg() - b.point.lon.deg()) < kSameOriginDeg &&
@@ -85,6 +103,11 @@ TilePlanner::TilePlanner(const ApplyRequest& o, const std::optional<io::Transfor
     throw Error(ErrorKind::usage, "E_OPTION",
                 "--crs with --from-frame/--from-origin/--from-zone/--from-tm: the CRS states the tile's coordinates; "
                 "give one");
+  }
+  if (o.allow_fallback && !o.crs && !o.to_crs) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--allow-fallback: only with --crs or --to-crs, where PROJ's operation between two datums may need a "
+                "grid");
   }
   if ((o.crs || o.to_crs) && o.epoch_from_gps_time) {
     throw Error(ErrorKind::usage, "E_OPTION",
@@ -160,29 +183,9 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
       throw Error(ErrorKind::input, "E_FRAME_CONFLICT", tile + ": the sidecar and the LAS WKT disagree: " + diff);
     }
   }
-  // A tile whose stated CRS is 2-D has Z values that are no coordinate of
-  // it: --crs may state the same CRS in 3-D (ellipsoidal heights) or
-  // compound (orthometric heights), which then reads them.
-  auto with_flag_heights = [&](TileMetadata& m, const std::string& what) {
-    if (!o_.crs || !m.crs || !two_d(*m.crs)) return;
-    const io::Crs flag = io::Crs::parse(*o_.crs, "--crs");
-    if (two_d(flag)) return;
-    const auto& fd = flag.description();
-    bool same = m.crs->promoted_to_3d(what).same_as(flag);
-    if (!same && fd.type == "compound") {
-      same = fd.horizontal_type == m.crs->description().type &&
-             fd.name.rfind(m.crs->description().name + " + ", 0) == 0;
-    }
-    if (same) {
-      m = io::tile_metadata_from_crs(flag, tile);
-      m.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
-      p.in_frame_source += " (heights stated by --crs)";
-    }
-  };
   if (side) {
     p.in_frame_source = "sidecar " + side_path.string();
-    with_flag_heights(*side, p.in_frame_source);
-    check_flags_against(*side, p.in_frame_source, tile);
+    check_flags_against(*side, p, tile);
     return *side;
   }
   if (wkt && !wkt->frame && !wkt->crs) {
@@ -194,18 +197,17 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
     }
     wkt->frame = from_frame_;
     p.in_frame_source = "LAS WKT (datum '" + wkt->wkt_datum + "' named by --from-frame)";
-    check_flags_against(*wkt, p.in_frame_source, tile);
+    check_flags_against(*wkt, p, tile);
     return *wkt;
   }
   if (wkt) {
     p.in_frame_source = "LAS WKT";
-    with_flag_heights(*wkt, p.in_frame_source);
-    check_flags_against(*wkt, p.in_frame_source, tile);
+    check_flags_against(*wkt, p, tile);
     return *wkt;
   }
   if (stated) {
     p.in_frame_source = "'# crs' comment";
-    check_flags_against(*stated, p.in_frame_source, tile);
+    check_flags_against(*stated, p, tile);
     return *stated;
   }
   if (o_.crs) {
@@ -267,7 +269,8 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
   return m;
 }
 
-void TilePlanner::check_flags_against(const TileMetadata& m, const std::string& what, const std::string& tile) const {
+void TilePlanner::check_flags_against(TileMetadata& m, TilePlan& p, const std::string& tile) const {
+  const std::string& what = p.in_frame_source;
   auto conflict = [&](const std::string& flag, const std::string& value, const std::string& stated) {
     throw Error(ErrorKind::usage, "E_FRAME_CONFLICT",
                 tile + ": " + flag + " " + value + " contradicts the " + what + ", which says " + stated +
@@ -276,7 +279,21 @@ void TilePlanner::check_flags_against(const TileMetadata& m, const std::string& 
   if (o_.crs) {
     const io::Crs flag = io::Crs::parse(*o_.crs, "--crs");
     if (!m.crs) conflict("--crs", *o_.crs, io::kind_name(m) + " coordinates in " + (m.frame ? m.frame->to_string() : "?"));
-    if (!m.crs->same_as(flag)) conflict("--crs", *o_.crs, m.crs->display_name());
+    const std::optional<io::Crs> both = reconcile_crs(*m.crs, flag);
+    if (!both) conflict("--crs", *o_.crs, m.crs->display_name());
+    if (!both->same_as(*m.crs)) {
+      // --crs says more than the tile: the heights of a 2-D CRS (the same
+      // CRS in 3-D or compound), or a dynamic CRS's coordinate epoch.
+      TileMetadata stated = io::tile_metadata_from_crs(*both, tile);
+      stated.storage = m.storage;
+      stated.survey_method = m.survey_method;
+      stated.rtk_fixed_percent = m.rtk_fixed_percent;
+      stated.provenance_json = m.provenance_json;
+      const bool heights = two_d(*m.crs) && !two_d(*both), epoch = !m.crs->epoch() && both->epoch();
+      m = std::move(stated);
+      p.in_frame_source += std::string(" (") + (heights ? "heights" : "") + (heights && epoch ? " and " : "") +
+                           (epoch ? "coordinate epoch" : "") + " stated by --crs)";
+    }
   }
   if (m.crs && from_frame_) conflict("--from-frame", *o_.from_frame, m.crs->display_name() + " (its datum is the frame)");
   if (m.crs && (o_.from_origin || o_.from_zone || o_.from_tm)) {

@@ -68,7 +68,10 @@ class TilePlanner {
     std::optional<geodesy::Ellipsoid> ellipsoid;
   };
   io::TileMetadata input_metadata(TilePlan& p) const;
-  void check_flags_against(const io::TileMetadata& m, const std::string& what, const std::string& tile) const;
+  // Refuses a flag that contradicts what the tile states (p.in_frame_source
+  // names where); --crs may complete a stated CRS (heights, epoch), which
+  // then replaces it in `m`.
+  void check_flags_against(io::TileMetadata& m, TilePlan& p, const std::string& tile) const;
   void plan_crs_stages(TilePlan& p) const;
   const ApplyRequest& o_;
   const std::optional<io::TransformFile>& t_;
