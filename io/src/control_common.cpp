@@ -14,6 +14,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/crs_operation.hpp"
+#include "crs_impl.hpp"
 
 namespace geoanchor::io::detail {
 
@@ -76,59 +77,91 @@ void positions_from_crs(geodesy::ControlSet& set, bool source, const CrsColumns&
                         const std::function<bool(std::size_t)>& has_covariance,
                         const std::function<std::string(const geodesy::ControlPoint&)>& name) {
   constexpr std::size_t kBatch = 4096;
-  // A step of about a metre on each axis: small against the curvature of
-  // any projection (the Jacobian's relative error is of order (step/R)²).
+  // The covariance is in metres along each axis. A linear axis (easting,
+  // northing, height, X) is differenced over ±1 m of PROJ's conversion:
+  // small against the curvature of any projection (the Jacobian's relative
+  // error is of order (step/R)²). A latitude or longitude axis is the unit
+  // vector north or east at the point, from its latitude and longitude:
+  // exact, and defined at a pole, where a step in latitude would leave the
+  // CRS's domain.
   constexpr double kStep_m = 1.0;
-  constexpr double kEarthRadius_m = 6.371e6;
-  const auto& axes = columns.crs.description().visualization_axes;
-  std::array<double, 3> step{};  // in each axis's unit
-  std::array<bool, 3> angular{};
-  for (std::size_t k = 0; k < 3 && k < axes.size(); ++k) {
-    angular[k] = axes[k].unit_type == "angular";
-    step[k] = angular[k] ? kStep_m / kEarthRadius_m / axes[k].unit_to_si : kStep_m / axes[k].unit_to_si;
+  const CrsDescription& d = columns.crs.description();
+  const auto& axes = d.visualization_axes;
+  const std::size_t dims = std::min<std::size_t>(3, axes.size());
+  std::vector<std::size_t> linear;  // the axes differenced, in order
+  std::optional<std::size_t> lat_axis, lon_axis;
+  for (std::size_t k = 0; k < dims; ++k) {
+    if (axes[k].unit_type != "angular") {
+      linear.push_back(k);
+    } else if (axes[k].direction == "north" || axes[k].direction == "south") {
+      lat_axis = k;
+    } else {
+      lon_axis = k;
+    }
   }
+  if (lat_axis.has_value() != lon_axis.has_value()) {
+    throw Error(ErrorKind::input, "E_CRS",
+                set.source_name + ": " + where + ": the CRS " + columns.crs.display_name() +
+                    " has one angular axis without the other; expected a latitude and a longitude");
+  }
+  // An axis pointing south or west counts the other way.
+  const auto signed_si = [&](std::size_t k) {
+    const bool reversed = axes[k].direction == "south" || axes[k].direction == "west";
+    return reversed ? -axes[k].unit_to_si : axes[k].unit_to_si;
+  };
+  const double pm_rad = d.prime_meridian_deg * detail::kRadiansPerDegree;
+  const std::size_t per_point = 2 * linear.size();  // neighbours of a point with a covariance
   CrsOperation to_ecef(columns.crs, columns.crs.geocentric(where), set.source_name + ": " + where);
   std::vector<double> a, b, c;
   std::vector<std::size_t> with_cov;
+  std::vector<Eigen::Matrix3d> jacobians;  // d(ECEF, m) / d(metres along each CRS axis)
   for (std::size_t first = 0; first < set.points.size(); first += kBatch) {
     const std::size_t n = std::min(kBatch, set.points.size() - first);
     with_cov.clear();
     for (std::size_t i = 0; i < n; ++i) {
       if (has_covariance(first + i)) with_cov.push_back(i);
     }
-    // The points, then six neighbours (±step on each axis) of each with a covariance.
-    a.resize(n + 6 * with_cov.size()), b.resize(a.size()), c.resize(a.size());
+    a.resize(n + per_point * with_cov.size()), b.resize(a.size()), c.resize(a.size());
     for (std::size_t i = 0; i < n; ++i) {
       const Eigen::Vector3d& v = source ? set.points[first + i].source_as_read : set.points[first + i].target_as_read;
       a[i] = v.x(), b[i] = v.y(), c[i] = v.z();
     }
+    jacobians.assign(with_cov.size(), Eigen::Matrix3d::Zero());
     for (std::size_t j = 0; j < with_cov.size(); ++j) {
-      for (std::size_t k = 0; k < 6; ++k) {
-        const std::size_t at = n + 6 * j + k, i = with_cov[j];
+      const std::size_t i = with_cov[j];
+      const double as_read[3] = {a[i], b[i], c[i]};
+      if (lat_axis) {
+        const double lat = as_read[*lat_axis] * signed_si(*lat_axis);
+        const double lon = as_read[*lon_axis] * signed_si(*lon_axis) + pm_rad;
+        const Eigen::Vector3d east(-std::sin(lon), std::cos(lon), 0.0);
+        const Eigen::Vector3d north(-std::sin(lat) * std::cos(lon), -std::sin(lat) * std::sin(lon), std::cos(lat));
+        jacobians[j].col(static_cast<Eigen::Index>(*lat_axis)) = (signed_si(*lat_axis) < 0 ? -1.0 : 1.0) * north;
+        jacobians[j].col(static_cast<Eigen::Index>(*lon_axis)) = (signed_si(*lon_axis) < 0 ? -1.0 : 1.0) * east;
+      }
+      // Its neighbours, ±step on each linear axis.
+      for (std::size_t k = 0; k < per_point; ++k) {
+        const std::size_t at = n + per_point * j + k;
         a[at] = a[i], b[at] = b[i], c[at] = c[i];
         double* axis[3] = {&a[at], &b[at], &c[at]};
-        *axis[k / 2] += (k % 2 == 0 ? 1.0 : -1.0) * step[k / 2];
+        *axis[linear[k / 2]] += (k % 2 == 0 ? 1.0 : -1.0) * kStep_m / axes[linear[k / 2]].unit_to_si;
       }
     }
     to_ecef.transform(a.data(), b.data(), c.data(), a.size(), [&](std::size_t i) {
-      const std::size_t point = i < n ? i : with_cov[(i - n) / 6];
+      const std::size_t point = i < n ? i : with_cov[(i - n) / per_point];
       return name(set.points[first + point]) + (i < n ? "" : " (a neighbour for its covariance)");
     });
     for (std::size_t i = 0; i < n; ++i) {
       (source ? set.points[first + i].source : set.points[first + i].target) = geodesy::EcefPosition(a[i], b[i], c[i]);
     }
     for (std::size_t j = 0; j < with_cov.size(); ++j) {
-      Eigen::Matrix3d jacobian;  // d(ECEF, m) / d(metres along each CRS axis)
-      for (std::size_t k = 0; k < 3; ++k) {
-        const std::size_t plus = n + 6 * j + 2 * k, minus = plus + 1;
-        const Eigen::Vector3d d(a[plus] - a[minus], b[plus] - b[minus], c[plus] - c[minus]);
-        // A latitude or longitude axis in ground metres: the unit direction;
-        // a linear axis in its own metres.
-        jacobian.col(static_cast<Eigen::Index>(k)) = angular[k] ? Eigen::Vector3d(d / d.norm()) : Eigen::Vector3d(d / (2.0 * kStep_m));
+      for (std::size_t l = 0; l < linear.size(); ++l) {
+        const std::size_t plus = n + per_point * j + 2 * l, minus = plus + 1;
+        const Eigen::Vector3d diff(a[plus] - a[minus], b[plus] - b[minus], c[plus] - c[minus]);
+        jacobians[j].col(static_cast<Eigen::Index>(linear[l])) = diff / (2.0 * kStep_m);
       }
       geodesy::ControlPoint& p = set.points[first + with_cov[j]];
       Eigen::Matrix3d& cov = source ? p.source_cov_m2 : p.target_cov_m2;
-      cov = jacobian * cov * jacobian.transpose();
+      cov = jacobians[j] * cov * jacobians[j].transpose();
     }
   }
 }

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <GeographicLib/Geocentric.hpp>
+
 #include <map>
 #include <sstream>
 
@@ -10,6 +12,7 @@
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/io/control_csv.hpp"
 #include "geoanchor/io/crs.hpp"
+#include "accuracy.hpp"
 #include "proj_reference.hpp"
 
 namespace geoanchor::io {
@@ -564,6 +567,46 @@ TEST(ControlSet, Issue13_JsonReadsACrsAndCarriesItsCovariance) {
     ADD_FAILURE() << "a contradicting --src-crs was accepted";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), "E_CRS_CONFLICT") << e.what();
+  }
+}
+
+
+// A covariance in a geographic CRS is in ground metres east, north and up
+// (the columns' order, longitude first, whatever the CRS's own axis order),
+// carried into ECEF by the local east/north/up directions at the mark:
+// checked against GeographicLib's Geocentric rotation, at 47°N, within
+// a centimetre of the north pole, at both poles and on the antimeridian,
+// where a finite step in latitude would leave the CRS.
+TEST(ControlSet, Issue13_AGeographicCovarianceIsCarriedAtThePoles) {
+  // The up column is a central difference of ECEF values near 6.4e6 m (ulp
+  // 9.3e-10 m) over 2 m, so about 5e-10 relative, on entries up to 9e-4 m²;
+  // east and north are exact. A swap of east and north is 3e-4 m² off.
+  constexpr double kCovarianceTol_m2 = 1e-11;
+  Eigen::Matrix3d c;  // east, north, up (m²): distinct, so that a swap shows
+  c << 1e-4, 2e-5, 0.0, 2e-5, 4e-4, -1e-5, 0.0, -1e-5, 9e-4;
+  const double marks[][2] = {{47.46, 8.55}, {89.9999999, 30.0}, {90.0, 45.0}, {-90.0, -120.0}, {-33.0, 180.0}};
+  std::string csv = "# source_crs = EPSG:4979\n"
+                    "id,lat_src_deg,lon_src_deg,h_src_m,x_dst_m,y_dst_m,z_dst_m,cov_src_xx_m2,cov_src_xy_m2,cov_src_xz_m2,"
+                    "cov_src_yy_m2,cov_src_yz_m2,cov_src_zz_m2,sigma_dst_m\n";
+  for (std::size_t i = 0; i < std::size(marks); ++i) {
+    std::ostringstream row;
+    row.precision(12);
+    row << "P" << i << "," << marks[i][0] << "," << marks[i][1] << ",100.0,0,0,6378137,1e-4,2e-5,0,4e-4,-1e-5,9e-4,0.01\n";
+    csv += row.str();
+  }
+  std::istringstream in(csv);
+  const auto set = read_control_csv(in, "c.csv", {});
+  ASSERT_EQ(set.points.size(), std::size(marks));
+  for (std::size_t i = 0; i < std::size(marks); ++i) {
+    double x = 0, y = 0, z = 0;
+    std::vector<double> m(9);
+    // m: local east, north, up at the mark -> geocentric, row-major
+    GeographicLib::Geocentric::WGS84().Forward(marks[i][0], marks[i][1], 100.0, x, y, z, m);
+    Eigen::Matrix3d r;
+    r << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
+    const Eigen::Matrix3d expected = r * c * r.transpose();
+    const double worst = testing::max_abs_component(set.points[i].source_cov_m2 - expected);
+    EXPECT_LE(worst, kCovarianceTol_m2) << "mark " << i << "\n" << set.points[i].source_cov_m2 << "\nexpected\n" << expected;
   }
 }
 
