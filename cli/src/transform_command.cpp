@@ -10,6 +10,8 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/coordinate_codec.hpp"
@@ -30,7 +32,10 @@ namespace {
 using geodesy::DecimalYear;
 using nlohmann::json;
 
-constexpr const char* kVelocityColumns[3] = {"vx_m_per_year", "vy_m_per_year", "vz_m_per_year"};
+// Velocity columns: ECEF, or local east, north, up at each point (on its
+// frame's ellipsoid), as stations' velocities are published in either.
+constexpr const char* kVelocityColumns[2][3] = {{"vx_m_per_year", "vy_m_per_year", "vz_m_per_year"},
+                                                {"ve_m_per_year", "vn_m_per_year", "vu_m_per_year"}};
 
 // The plates of a plate motion model, for messages: all of them, since
 // geoanchor does not know which plate the points are on.
@@ -40,6 +45,12 @@ std::string plate_list(const std::string& model) {
     if (m.frame == model) list += (list.empty() ? "" : ", ") + m.plate;
   }
   return (list.empty() ? std::string("none") : list) + " in the " + model + " model";
+}
+
+// ECEF -> local east, north, up at a point, on a converter's ellipsoid.
+Eigen::Matrix3d local_rotation(const geodesy::GeocentricConverter& on, const geodesy::EcefPosition& x) {
+  const auto g = on.geodetic_from_ecef(x);
+  return geodesy::enu_from_ecef_rotation(g.lat, g.lon);
 }
 
 // Whether a --from/--to text is a CRS for PROJ (EPSG:n, WKT, PROJJSON, a
@@ -111,6 +122,16 @@ class CrsRows {
   }
   const io::CrsColumns& input() const { return in_; }
   const io::CrsColumns& output() const { return out_; }
+  // PROJ's operations at both ends, as the sidecar records them.
+  json operations_json() const {
+    json ops = json::array();
+    for (const auto* op : {&to_ecef_, &from_ecef_}) {
+      json rec = json::parse(io::operation_record_json(*op));
+      rec["stage"] = op == &to_ecef_ ? "input CRS to its datum's geocentric CRS" : "output datum's geocentric CRS to output CRS";
+      ops.push_back(std::move(rec));
+    }
+    return ops;
+  }
 
  private:
   io::CrsColumns in_, out_;
@@ -124,7 +145,9 @@ class CrsRows {
 
 CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
   auto* cmd = app.add_subcommand("transform", "Move coordinates between reference frames and epochs (frame catalog)");
-  cmd->add_option("IN", o.input, "Input CSV (x_m,y_m,z_m or lat_deg,lon_deg,h_m; optional vx/vy/vz_m_per_year), - for stdin");
+  cmd->add_option("IN", o.input,
+                  "Input CSV (x_m,y_m,z_m or lat_deg,lon_deg,h_m, or a CRS's columns; optional velocities "
+                  "vx/vy/vz_m_per_year (ECEF) or ve/vn/vu_m_per_year (local)), - for stdin");
   cmd->add_option("-o,--output", o.output, "Output CSV, written atomically with its sidecar OUT.geoanchor.json; - or none: standard output (no sidecar)");
   cmd->add_option("--from", o.from, "Frame and epoch of the input, e.g. ITRF2014@2010.0")->required();
   cmd->add_option("--to", o.to, "Frame and epoch of the output, e.g. ITRF2020@2024.5 (epoch default: --from's)")->required();
@@ -273,21 +296,30 @@ void run_transform(const TransformOptions& o) {
                 source_name + ": transform reads ECEF (x_m,y_m,z_m) or geodetic (lat_deg,lon_deg,h_m) columns, not " +
                     std::string(io::to_string(columns.kind)) + " (use convert first)");
   }
+  // The velocity columns: one set of three, ECEF (vx, vy, vz) or local (ve, vn, vu).
   std::optional<std::size_t> velocity[3];
-  for (std::size_t k = 0; k < 3; ++k) {
-    for (std::size_t i = 0; i < header.size(); ++i) {
-      if (header[i] == kVelocityColumns[k]) velocity[k] = i;
+  bool local_velocity = false;
+  for (std::size_t set = 0; set < 2; ++set) {
+    std::optional<std::size_t> found[3];
+    for (std::size_t k = 0; k < 3; ++k) {
+      for (std::size_t i = 0; i < header.size(); ++i) {
+        if (header[i] == kVelocityColumns[set][k]) found[k] = i;
+      }
     }
+    if (!found[0] && !found[1] && !found[2]) continue;
+    if (!(found[0] && found[1] && found[2])) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source_name + ": velocities need all three columns " + kVelocityColumns[set][0] + ", " +
+                      kVelocityColumns[set][1] + ", " + kVelocityColumns[set][2]);
+    }
+    if (velocity[0]) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source_name + ": both ECEF (vx, vy, vz) and local (ve, vn, vu) velocity columns; give one set");
+    }
+    for (std::size_t k = 0; k < 3; ++k) velocity[k] = found[k];
+    local_velocity = set == 1;
   }
-  const bool has_velocity = velocity[0] && velocity[1] && velocity[2];
-  if (crs_mode && (velocity[0] || velocity[1] || velocity[2])) {
-    throw Error(ErrorKind::input, "E_COLUMN",
-                source_name + ": velocity columns are read with frame names and ECEF coordinates (x_m, y_m, z_m), not "
-                "with a CRS in --from/--to");
-  }
-  if (!has_velocity && (velocity[0] || velocity[1] || velocity[2])) {
-    throw Error(ErrorKind::input, "E_COLUMN", source_name + ": velocities need all three columns vx_m_per_year, vy_m_per_year, vz_m_per_year");
-  }
+  const bool has_velocity = velocity[0].has_value();
   if (t_to.year != t_from.year && !has_velocity && !plate) {
     throw Error(ErrorKind::usage, "E_EPOCH_PROPAGATION",
                 "--to " + o.to + ": moving coordinates from " + geodesy::format_decimal_year(t_from) + " to " +
@@ -298,14 +330,18 @@ void run_transform(const TransformOptions& o) {
   if (has_velocity && plate) {
     throw Error(ErrorKind::usage, "E_OPTION", "--plate: the input has velocity columns; give one or the other");
   }
-  if (has_velocity && columns.kind != io::CoordinateKind::ecef) {
-    throw Error(ErrorKind::input, "E_COLUMN", source_name + ": velocities (ECEF, m/yr) need ECEF coordinates x_m,y_m,z_m");
-  }
 
   const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
   const bool columns_need_ellipsoid = !crs_mode && columns.kind == io::CoordinateKind::geodetic;
   const geodesy::Ellipsoid in_ellipsoid = ellipsoid_of(from_ellipsoid, from, columns_need_ellipsoid);
   const geodesy::Ellipsoid out_ellipsoid = ellipsoid_of(to_ellipsoid, to, columns_need_ellipsoid);
+  // Local velocities are east, north and up at each point on its frame's
+  // (or CRS's) own ellipsoid.
+  std::optional<geodesy::GeocentricConverter> velocity_in, velocity_out;
+  if (local_velocity) {
+    velocity_in.emplace(crs_mode ? io::typed_ellipsoid(from_crs->description().ellipsoid) : in_ellipsoid);
+    velocity_out.emplace(crs_mode ? io::typed_ellipsoid(to_crs->description().ellipsoid) : out_ellipsoid);
+  }
   io::InputCoordinateFrame in_frame;
   in_frame.ellipsoid = in_ellipsoid;
   in_frame.geoid = geoid;
@@ -398,17 +434,15 @@ void run_transform(const TransformOptions& o) {
                                std::nullopt};
     if (has_velocity) {
       Eigen::Vector3d v;
-      for (std::size_t k = 0; k < 3; ++k) {
-        const auto value = parse_finite_double(record.values[*velocity[k]]);
-        if (!value) {
-          throw Error(ErrorKind::input, "E_VALUE",
-                      where + ": " + kVelocityColumns[k] + " '" + record.values[*velocity[k]] + "': expected a finite number (m/yr)");
-        }
-        v(static_cast<Eigen::Index>(k)) = *value;
-      }
+      for (std::size_t k = 0; k < 3; ++k) v(static_cast<Eigen::Index>(k)) = io::number_cell(record, *velocity[k], header, source_name);
+      if (local_velocity) v = local_rotation(*velocity_in, state.x).transpose() * v;  // ENU -> ECEF
       state.v_m_per_year = v;
     }
-    const geodesy::StateVector moved = transformation.apply(state, where);
+    geodesy::StateVector moved = transformation.apply(state, where);
+    if (local_velocity && moved.v_m_per_year) {
+      const Eigen::Vector3d v_ecef = *moved.v_m_per_year;
+      moved.v_m_per_year = Eigen::Vector3d(local_rotation(*velocity_out, moved.x) * v_ecef);  // ECEF -> ENU
+    }
     const auto coords = crs_mode ? crs_rows->encode(moved.x, where) : encoder->encode(moved.x, where);
     fields.clear();
     for (std::size_t i = 0; i < header.size(); ++i) {
@@ -477,13 +511,15 @@ void run_transform(const TransformOptions& o) {
     side["output"]["kind"] = "crs";
     side["input"].erase("ellipsoid");
     side["output"].erase("ellipsoid");
+    side["crs_operations"] = crs_rows->operations_json();
   }
   side["path"] = {{"steps", steps}, {"accuracy_m", path.accuracy_m()}, {"stated_accuracy_m", stated_m}};
   if (from.epoch() && from.epoch()->year != t_from.year) side["input"]["stated_epoch"] = from.epoch()->year;
   if (to.epoch() && to.epoch()->year != t_to.year) side["output"]["stated_epoch"] = to.epoch()->year;
   if (t_to.year != t_from.year) {
     side["epoch_propagation"] =
-        has_velocity ? json{{"by", "velocities"}, {"accuracy_m", nullptr}}
+        has_velocity ? json{{"by", local_velocity ? "velocities (local east, north, up)" : "velocities (ECEF)"},
+                            {"accuracy_m", nullptr}}
                      : json{{"by", "plate_motion_model"}, {"plate", plate->plate},     {"frame", plate->frame},
                             {"source", plate->source},    {"accuracy_m", motion_m},    {"wrms_source", plate->wrms_source}};
   }

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <GeographicLib/Constants.hpp>
+#include <GeographicLib/Geocentric.hpp>
 #include <nlohmann/json.hpp>
 
 #include <sstream>
@@ -236,6 +238,98 @@ TEST_F(TransformCli, Issue13_TheEllipsoidComesFromEachFrame) {
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("contradicts frame ITRF2014"), std::string::npos) << bad.err;
   EXPECT_FALSE(std::filesystem::exists(path("b.csv")));
+}
+
+// Issue 13 point 4: velocities carry the points in CRS mode too, and may be
+// given in local east, north, up. Reference: the mark moved by its ECEF
+// velocity to 2024.5, then EPSG:9991 at 2024.5 (PROJ), geodetic through
+// PROJ's cart on GRS80; the local velocities rotated with GeographicLib's
+// east/north/up matrix at the mark.
+TEST_F(TransformCli, Issue13_VelocitiesInACrsAndInLocalAxes) {
+  constexpr double kAngleAgreement_deg = 1e-9;  // the issue's bound for angles (0.1 mm of arc)
+  const ProjPipeline epsg(kEpsg9991);
+  const ProjPipeline geodetic("+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=cart +ellps=GRS80");
+  const auto local_from_ecef = [](const Eigen::Vector3d& lonlath) {
+    double x = 0, y = 0, z = 0;
+    std::vector<double> m(9);  // local east, north, up -> geocentric, row-major
+    GeographicLib::Geocentric(6378137.0, 1.0 / 298.257222101)  // GRS80 (EPSG:7019)
+        .Forward(lonlath.y(), lonlath.x(), lonlath.z(), x, y, z, m);
+    Eigen::Matrix3d r;
+    r << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
+    return Eigen::Matrix3d(r.transpose());
+  };
+  // Rows of a CSV that may state its CRS above the header.
+  const auto rows = [](const std::string& csv) {
+    std::istringstream in(csv);
+    std::string line;
+    std::vector<std::vector<double>> out;
+    bool header = true;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      if (header) {
+        header = false;
+        continue;
+      }
+      std::vector<double> v;
+      std::stringstream row(line);
+      std::string cell;
+      std::getline(row, cell, ',');  // id
+      while (std::getline(row, cell, ',')) v.push_back(std::stod(cell));
+      out.push_back(v);
+    }
+    return out;
+  };
+  std::string crs_csv = "id,lat_deg,lon_deg,h_m,vx_m_per_year,vy_m_per_year,vz_m_per_year\n";
+  std::string local_csv = "id,x_m,y_m,z_m,ve_m_per_year,vn_m_per_year,vu_m_per_year\n";
+  for (std::size_t i = 0; i < std::size(kMarks); ++i) {
+    const Eigen::Vector3d g = geodetic.inverse(kMarks[i]);  // lon, lat, h
+    crs_csv += "M" + std::to_string(i) + "," + format_shortest(g.y()) + "," + format_shortest(g.x()) + "," +
+               format_shortest(g.z()) + "," + format_shortest(kVelocity.x()) + "," + format_shortest(kVelocity.y()) + "," +
+               format_shortest(kVelocity.z()) + "\n";
+    const Eigen::Vector3d v_local = local_from_ecef(g) * kVelocity;
+    local_csv += "M" + std::to_string(i) + "," + format_shortest(kMarks[i].x()) + "," + format_shortest(kMarks[i].y()) + "," +
+                 format_shortest(kMarks[i].z()) + "," + format_shortest(v_local.x()) + "," + format_shortest(v_local.y()) +
+                 "," + format_shortest(v_local.z()) + "\n";
+  }
+  const auto crs_in = write("crs.csv", crs_csv), local_in = write("local.csv", local_csv);
+  const auto a = run("transform " + crs_in.string() + " --from EPSG:7912@2010.0 --to EPSG:9989@2024.5 -o " + path("a.csv").string());
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const auto b = run("transform " + local_in.string() + " --from ITRF2014@2010.0 --to ITRF2020@2024.5 -o " + path("b.csv").string());
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  const auto got_a = rows(slurp(path("a.csv"))), got_b = rows(slurp(path("b.csv")));
+  ASSERT_EQ(got_a.size(), std::size(kMarks));
+  ASSERT_EQ(got_b.size(), std::size(kMarks));
+  for (std::size_t i = 0; i < std::size(kMarks); ++i) {
+    SCOPED_TRACE(i);
+    const Eigen::Vector3d x = epsg.forward(kMarks[i] + 14.5 * kVelocity, 2024.5);
+    const Eigen::Vector3d v = (epsg.forward(kMarks[i] + kVelocity, 2011.0) - epsg.forward(kMarks[i] - kVelocity, 2009.0)) / 2.0;
+    const Eigen::Vector3d g = geodetic.inverse(x);
+    // The CRS input is the marks' geodetic coordinates as PROJ gave them
+    // (its inverse cart is a Bowring step, µm off at these marks' 14 km
+    // heights): PROJ's ECEF of those is where they start.
+    const Eigen::Vector3d start = geodetic.forward(geodetic.inverse(kMarks[i]));
+    const Eigen::Vector3d g_crs = geodetic.inverse(epsg.forward(start + 14.5 * kVelocity, 2024.5));
+    EXPECT_NEAR(got_a[i][0], g_crs.y(), kAngleAgreement_deg);
+    EXPECT_NEAR(got_a[i][1], g_crs.x(), kAngleAgreement_deg);
+    EXPECT_NEAR(got_a[i][2], g_crs.z(), kProjAgreement_m);
+    EXPECT_LT((Eigen::Vector3d(got_a[i][3], got_a[i][4], got_a[i][5]) - v).norm(), kVelocityAgreement_m_per_year);
+    EXPECT_LT((Eigen::Vector3d(got_b[i][0], got_b[i][1], got_b[i][2]) - x).norm(), kProjAgreement_m);
+    const Eigen::Vector3d v_local = local_from_ecef(g) * v;  // at the moved mark, in ITRF2020 (GRS80)
+    EXPECT_LT((Eigen::Vector3d(got_b[i][3], got_b[i][4], got_b[i][5]) - v_local).norm(), kVelocityAgreement_m_per_year);
+  }
+  const auto side = nlohmann::json::parse(slurp(path("b.csv.geoanchor.json")));
+  EXPECT_EQ(side["epoch_propagation"]["by"], "velocities (local east, north, up)");
+  // A CRS's conversions at both ends are recorded as convert records them.
+  const auto crs_side = nlohmann::json::parse(slurp(path("a.csv.geoanchor.json")));
+  ASSERT_EQ(crs_side["crs_operations"].size(), 2u);
+  EXPECT_EQ(crs_side["crs_operations"][0]["candidates"][0]["points"], std::size(kMarks));
+  // Both sets at once, or a set missing a column, is refused.
+  const auto both = write("both.csv", "id,x_m,y_m,z_m,vx_m_per_year,vy_m_per_year,vz_m_per_year,ve_m_per_year,vn_m_per_year,vu_m_per_year\n"
+                                      "A,4331297,567555.6,4633133.7,0,0,0,0,0,0\n");
+  const auto r = run("transform " + both.string() + " --from ITRF2014@2010.0 --to ITRF2020@2024.5 -o " + path("c.csv").string());
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_NE(r.err.find("give one set"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("c.csv")));
 }
 
 }  // namespace
