@@ -38,6 +38,7 @@ using testing::RunResult;
 using testing::slurp;
 
 constexpr double kVsProjTol_m = 1e-6;  // beyond half the LAS quantization step (issue acceptance)
+constexpr double kVsProjTol_deg = 1e-9;  // the same for angles (issue acceptance)
 
 const std::string kFixtures = GEOANCHOR_FIXTURES_DIR;
 const std::string kTile = kFixtures + "/airport_tile.las";
@@ -464,6 +465,7 @@ TEST_F(ApplyCli, PerPointEpochsFromLasGpsTimeAgreeWithProjAtEachPointsTime) {
   const sys_seconds gps_epoch = sys_days{year{1980} / January / 6};
   const double half_step = 0.0005;
   testing::WorstCase worst;
+  std::vector<Eigen::Vector3d> expected_ecef;  // PROJ's, at each point's time
   for (std::size_t i = 0; i < gps.size(); ++i) {
     // The point's decimal year by the C++20 calendar (no leap seconds, as documented).
     const double s = gps[i] + 1e9;
@@ -473,11 +475,44 @@ TEST_F(ApplyCli, PerPointEpochsFromLasGpsTimeAgreeWithProjAtEachPointsTime) {
     const double when = static_cast<int>(ymd.year()) + static_cast<double>((t - start).count()) / static_cast<double>((end - start).count());
     const Eigen::Vector3d x(b.xyz[i][0] * 0.001 + b.offset[0], b.xyz[i][1] * 0.001 + b.offset[1], b.xyz[i][2] * 0.001 + b.offset[2]);
     const Eigen::Vector3d e = proj.forward(x, when);
+    expected_ecef.push_back(e);
     const auto& p = got["points"][i];
     for (int k = 0; k < 3; ++k) worst.add(std::abs(p[static_cast<std::size_t>(k)].get<double>() - e(k)), i);
     EXPECT_EQ(p[17].get<double>(), gps[i]);  // GpsTime passes through
   }
   EXPECT_WORST_WITHIN(worst, half_step + kVsProjTol_m);
+
+  // The same tile in a CRS (no sidecar: --crs ITRF2014 geocentric), into
+  // GDA2020's geographic 3-D CRS: PROJ's conversions around the transform
+  // need no epoch, the transform takes each point's.
+  fs::create_directories(path("crs"));
+  testing::write_bytes(path("crs/tile.las"), bytes);
+  const fs::path crs_out = path("crs_out");
+  const RunResult c = run("apply " + path("crs/tile.las").string() + " --transform " + path("T14.json").string() +
+                          " --crs EPSG:7789 --to-crs EPSG:7843 --epoch-from-gps-time --out-dir " + crs_out.string());
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const json in_crs = las_verify(crs_out / "tile.las");
+  ASSERT_FALSE(in_crs.is_null());
+  // PROJ's helmert at each point's time, then its geodetic coordinates on GRS80.
+  const ProjPipeline geodetic("+proj=pipeline +step +inv +proj=cart +ellps=GRS80 +step +proj=unitconvert +xy_in=rad +xy_out=deg");
+  testing::WorstCase worst_deg, worst_m;  // ratios to the tolerance
+  const double step_deg = in_crs["header"]["scale"][0].get<double>(), step_m = in_crs["header"]["scale"][2].get<double>();
+  for (std::size_t i = 0; i < gps.size(); ++i) {
+    const Eigen::Vector3d g = geodetic.forward(expected_ecef[i]);  // lon, lat, h
+    const auto& p = in_crs["points"][i];
+    worst_deg.add(std::abs(p[0].get<double>() - g.x()) / (0.5 * step_deg + kVsProjTol_deg), i);
+    worst_deg.add(std::abs(p[1].get<double>() - g.y()) / (0.5 * step_deg + kVsProjTol_deg), i);
+    worst_m.add(std::abs(p[2].get<double>() - g.z()) / (0.5 * step_m + kVsProjTol_m), i);
+  }
+  EXPECT_WORST_WITHIN(worst_deg, 1.0) << "(ratio to the tolerance)";
+  EXPECT_WORST_WITHIN(worst_m, 1.0) << "(ratio to the tolerance)";
+
+  // Without a time-dependent transform the epochs would not be used: refused.
+  const RunResult unused = run("apply " + path("crs/tile.las").string() + " --crs EPSG:7789 --to-crs EPSG:7843 "
+                               "--epoch-from-gps-time --out-dir " + path("unused").string());
+  EXPECT_EQ(unused.exit_code, 2) << unused.err;
+  EXPECT_NE(unused.err.find("--epoch-from-gps-time"), std::string::npos) << unused.err;
+  EXPECT_FALSE(fs::exists(path("unused/tile.las")));
 }
 
 TEST_F(ApplyCli, ATileFarOutsideTheControlNetworkIsRefusedAndANearOneWarned) {

@@ -22,7 +22,6 @@
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/crs_csv.hpp"
 #include "geoanchor/io/crs_operation.hpp"
-#include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/io/json_input.hpp"
 #include "geoanchor/io/point_chain.hpp"
@@ -288,10 +287,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   if (p.in.crs) ao.file_in = io::tile_crs_axes(*p.in.crs);
   if (p.out.crs) ao.file_out = io::tile_crs_axes(*p.out.crs);
   if (p.format == io::TileFormat::csv && (p.in.crs || p.out.crs)) {
-    std::ifstream f(p.input, std::ios::binary);
-    if (!f) throw Error(ErrorKind::io, "E_READ", tile + ": cannot open");
-    const io::CsvReader reader(f, tile);
-    if (p.in.crs) ao.file_in->columns = io::crs_input_columns(*p.in.crs, reader.header(), tile, "the tile's CRS");
+    if (p.in.crs) ao.file_in->columns = io::crs_input_columns(*p.in.crs, p.csv_header, tile, "the tile's CRS");
     if (p.out.crs) {
       ao.file_out->columns = io::crs_output_columns(*p.out.crs, ao.file_out->has_height,
                                                     p.out.crs->description().type == "geocentric", "--to-crs");

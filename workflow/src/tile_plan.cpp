@@ -109,10 +109,11 @@ TilePlanner::TilePlanner(const ApplyRequest& o, const std::optional<io::Transfor
                 "--allow-fallback: only with --crs or --to-crs, where PROJ's operation between two datums may need a "
                 "grid");
   }
-  if ((o.crs || o.to_crs) && o.epoch_from_gps_time) {
+  if (o.epoch_from_gps_time && !(t && t->time_dependent())) {
     throw Error(ErrorKind::usage, "E_OPTION",
-                "--epoch-from-gps-time with --crs/--to-crs: per-point epochs are read for geoanchor's own transforms "
-                "only, not for PROJ's operations");
+                "--epoch-from-gps-time: each LAS point's epoch is what a 14-parameter (time-dependent) --transform is "
+                "evaluated at; " + std::string(t ? "this transform does not depend on time" : "there is no --transform") +
+                    ", so the epochs would not be used (PROJ's operations between two CRSs take the CRSs' epoch)");
   }
   // Parsed here so that a bad one fails before any tile; each tile parses
   // its own copy (a Crs is one thread's).
@@ -156,7 +157,9 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
     std::ifstream f(p.input, std::ios::binary);
     if (!f) throw Error(ErrorKind::io, "E_READ", tile + ": cannot open");
     const io::CsvReader reader(f, tile);
-    if (auto c = io::crs_from_comments(reader.leading_comments(), tile)) {
+    p.csv_header = reader.header();
+    p.csv_comments = reader.leading_comments();
+    if (auto c = io::crs_from_comments(p.csv_comments, tile)) {
       stated = io::tile_metadata_from_crs(std::move(*c), tile);
       stated->storage = "float64";
     }
@@ -248,10 +251,7 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
   }
   if (p.format == io::TileFormat::csv) {
     // The header names the kind; flags must agree with it.
-    std::ifstream f(p.input, std::ios::binary);
-    if (!f) throw Error(ErrorKind::io, "E_READ", tile + ": cannot open");
-    io::CsvReader reader(f, tile);
-    const auto cols = io::classify_coordinate_header(reader.header(), tile);
+    const auto cols = io::classify_coordinate_header(p.csv_header, tile);
     if (cols.kind == CoordinateKind::geodetic) {
       if (o_.from_origin || o_.from_zone || o_.from_tm) {
         throw Error(ErrorKind::usage, "E_FRAME_CONFLICT", tile + ": the header has geodetic columns but a --from-origin/"
@@ -341,10 +341,7 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
   if (p.format == io::TileFormat::csv && p.in.crs && two_d(*p.in.crs)) {
     // A CSV's height column says what its heights are (h_<u> ellipsoidal,
     // H_<u> orthometric): the CRS as its columns read it.
-    std::ifstream f(p.input, std::ios::binary);
-    if (!f) throw Error(ErrorKind::io, "E_READ", tile + ": cannot open");
-    const io::CsvReader reader(f, tile);
-    const io::CrsColumns columns = io::crs_input_columns(*p.in.crs, reader.header(), tile, p.in_frame_source);
+    const io::CrsColumns columns = io::crs_input_columns(*p.in.crs, p.csv_header, tile, p.in_frame_source);
     if (columns.has_height()) {
       const std::string storage = p.in.storage;
       p.in = io::tile_metadata_from_crs(columns.crs, tile);
@@ -568,14 +565,15 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
                         " but the transform's output is at " + geodesy::format_decimal_year(*fe) +
                         ": a transform does not move points in time");
       }
-      if (!dst.epoch()) {
-        if (!fe) {
-          throw Error(ErrorKind::input, "E_EPOCH_MISSING",
-                      tile + ": " + dst_flag + " is dynamic and the transform's output has no coordinate epoch; give "
-                                               "--to-crs CRS@EPOCH");
-        }
-        dst = dst.at_epoch(*fe, dst_flag);
+      // Per-point epochs (--epoch-from-gps-time) leave the output without
+      // one epoch: the conversion to the CRS needs none.
+      const bool per_point = o_.epoch_from_gps_time && p.format == io::TileFormat::las;
+      if (!dst.epoch() && !fe && !per_point) {
+        throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                    tile + ": " + dst_flag + " is dynamic and the transform's output has no coordinate epoch; give "
+                                             "--to-crs CRS@EPOCH");
       }
+      if (!dst.epoch() && fe) dst = dst.at_epoch(*fe, dst_flag);
     }
     p.after = std::make_pair(dst.geocentric(dst_flag), dst);
   }

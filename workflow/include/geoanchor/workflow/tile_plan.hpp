@@ -39,6 +39,8 @@ struct TilePlan {
   io::TileMetadata out;
   std::optional<geodesy::DecimalYear> epoch;  // for a time-dependent transform
   std::uint64_t las_points = 0;               // LAS: the header's count, for progress
+  // CSV: the header and the comments above it, read once while planning.
+  std::vector<std::string> csv_header, csv_comments;
   std::vector<std::string> warnings;
   // PROJ's stages around the chain, for a tile in a CRS or an output in
   // one (in.crs, out.crs): the file's coordinates go from `before[0]` to
