@@ -1,6 +1,7 @@
 #include "control_common.hpp"
 
 #include <Eigen/Cholesky>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -164,6 +165,14 @@ void positions_from_crs(geodesy::ControlSet& set, bool source, const CrsColumns&
       cov = jacobians[j] * cov * jacobians[j].transpose();
     }
   }
+  // What PROJ did, for the outputs to record.
+  nlohmann::ordered_json record;
+  record["crs"] = columns.crs.text();
+  record["name"] = d.name;
+  record["identifier"] = d.identifier.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(d.identifier);
+  record["wkt2"] = columns.crs.wkt2();
+  record["operation"] = nlohmann::ordered_json::parse(operation_record_json(to_ecef));
+  (source ? set.source_input : set.target_input).crs_record_json = record.dump();
 }
 
 void apply_caller_frames(geodesy::ControlSet& set, const ControlReadOptions& o) {

@@ -46,7 +46,7 @@ const std::set<std::string> kTopLevelKeys = {
     "model",       "convention", "rotation_model", "source_frame", "target_frame", "reference_epoch",
     "parameters",  "sigmas",     "correlation",    "statistics",   "points",       "proj_pipeline",
     "epsg_method", "generator",  "format_version", "description",  "alternatives", "nominal_origin",
-    "wkt2",        "projjson",   "grid",          "correlation_parameters", "control_extent"};
+    "wkt2",        "projjson",   "grid",          "correlation_parameters", "control_extent", "control_crs"};
 
 [[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& what) {
   throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
@@ -1037,7 +1037,8 @@ ControlExtent parse_extent(const json& e, std::string_view source) {
 std::optional<FitRecord> parse_fit_record(const json& doc, const TransformFile& t, const ModelParameters& mp,
                                           std::string_view source) {
   bool any = false;
-  for (const char* key : {"sigmas", "correlation", "correlation_parameters", "statistics", "points", "control_extent"}) {
+  for (const char* key : {"sigmas", "correlation", "correlation_parameters", "statistics", "points", "control_extent",
+                          "control_crs"}) {
     any = any || doc.contains(key);
   }
   if (!any) return std::nullopt;
@@ -1048,6 +1049,15 @@ std::optional<FitRecord> parse_fit_record(const json& doc, const TransformFile& 
   if (const json* st = member(doc, "statistics")) parse_statistics(*st, f, source);
   if (const json* pts = member(doc, "points")) parse_points(*pts, f, source);
   if (const json* e = member(doc, "control_extent")) f.extent = parse_extent(*e, source);
+  if (const json* c = member(doc, "control_crs")) {
+    // A record of how the control was read, kept as it is: only its shape is checked.
+    if (!c->is_object()) fail(source, "control_crs", "value is not a JSON object");
+    for (const auto& [role, record] : c->items()) {
+      if (role != "source" && role != "target") fail(source, "control_crs." + role, "unknown key; expected source or target");
+      if (!record.is_object()) fail(source, "control_crs." + role, "value is not a JSON object");
+    }
+    f.control_crs_json = c->dump();
+  }
   return f;
 }
 
@@ -1515,6 +1525,7 @@ void write_json_with(std::ostream& out, const TransformFile& t, const PointRecor
   if (t.fit) {
     const FitRecord& f = *t.fit;
     if (!f.generator.empty()) doc["generator"] = f.generator;
+    if (!f.control_crs_json.empty()) doc["control_crs"] = json::parse(f.control_crs_json);
     json sig = json::object();
     for (const auto& [name, value] : f.sigmas) sig[name] = number(value);
     doc["sigmas"] = sig;

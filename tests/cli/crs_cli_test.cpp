@@ -762,8 +762,13 @@ TEST_F(CrsCli, Issue13_FitReadsControlInAnyCrs) {
   const std::string common = " --model helmert7 --convention position_vector -o '" + path("t.json").string() + "' --overwrite";
   const RunResult r = run("fit '" + path("ctl.csv").string() + "' --src-crs EPSG:2236" + common);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  auto params = nlohmann::json::parse(slurp(path("t.json")))["parameters"];
+  const auto written = nlohmann::json::parse(slurp(path("t.json")));
+  auto params = written["parameters"];
   for (const char* t : {"tx_m", "ty_m", "tz_m"}) EXPECT_LT(std::abs(params[t].get<double>()), kIdentity_m) << t;
+  // The transform file records how the source was read: the CRS and PROJ's operation.
+  EXPECT_EQ(written["control_crs"]["source"]["crs"], "EPSG:2236");
+  EXPECT_EQ(written["control_crs"]["source"]["operation"]["candidates"][0]["points"], 12);
+  EXPECT_FALSE(written["control_crs"].contains("target"));
   EXPECT_LT(std::abs(params["ds_ppm"].get<double>()), kIdentity_ppm);
 
   // The same file stating its CRS above the header needs no --src-crs.

@@ -381,6 +381,17 @@ TEST(TransformFile, Point10_FitRecordValuesOfTheWrongTypeAndUnknownKeysAreRefuse
   EXPECT_NE(err(replace(extent, "\"hull_en_m\"", "\"hull_m\"")).find("control_extent.hull_m: unknown key"), std::string::npos);
   EXPECT_NE(err(replace(extent, "[10, 0]", "[10, \"0\"]")).find("control_extent.hull_en_m[1][1]: value \"0\" is not a number"),
             std::string::npos);
+  // How control in a CRS was read: kept whole; roles other than source and target refused.
+  const std::string crs = R"("control_crs": {"source": {"crs": "EPSG:2236", "operation": {"candidates": []}}})";
+  const TransformFile with_crs = parse_transform_json(helmert7_with(fit + crs), "T.json");
+  ASSERT_TRUE(with_crs.fit);
+  const TransformFile crs_back = parse_transform_json(to_json_text(with_crs), "written");
+  ASSERT_TRUE(crs_back.fit);
+  EXPECT_EQ(crs_back.fit->control_crs_json, with_crs.fit->control_crs_json);
+  EXPECT_NE(crs_back.fit->control_crs_json.find("EPSG:2236"), std::string::npos);
+  EXPECT_NE(err(replace(crs, "\"source\"", "\"src\"")).find("control_crs.src: unknown key; expected source or target"),
+            std::string::npos);
+  EXPECT_NE(err(R"("control_crs": [])").find("control_crs: value is not a JSON object"), std::string::npos);
   // A control extent without sigmas is read, not dropped.
   const TransformFile with_extent = parse_transform_json(helmert7_with(extent), "T.json");
   ASSERT_TRUE(with_extent.fit);

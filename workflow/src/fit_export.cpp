@@ -265,6 +265,14 @@ StreamedTransformFile streamed_file(const solver::FitResult& r, const geodesy::C
   f.variance_factors = r.variance_factors;
   f.extent = std::move(extent);  // the network's, source frame: the marks the fit used
   f.generator = generator;
+  // How roles given in a CRS were read (PROJ's operation and grids): each
+  // role's record is a JSON object already.
+  for (const auto& [role, record] : {std::pair{"source", &set.source_input.crs_record_json},
+                                     std::pair{"target", &set.target_input.crs_record_json}}) {
+    if (record->empty()) continue;
+    f.control_crs_json += (f.control_crs_json.empty() ? "{\"" : ",\"") + std::string(role) + "\":" + *record;
+  }
+  if (!f.control_crs_json.empty()) f.control_crs_json += "}";
   t.fit = std::move(f);
   streamed.points.count = r.points.size();
   streamed.points.record = [&r, left_out](std::size_t i, io::FitPointRecord& q) { point_record(r.points[i], left_out, q); };

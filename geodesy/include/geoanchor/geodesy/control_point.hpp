@@ -38,6 +38,10 @@ struct ControlInputForm {
   std::string height_column;  // orthometric: the column or key read ("H_dst_m", "H_m")
   std::string geoid_model;    // orthometric: the model N came from ("EGM96", "EGM96-NGA")
   std::string crs_name;       // crs: "EPSG:2236 (NAD83 / Florida East (ftUS))"
+  // crs: how PROJ read the role, as a JSON object (the CRS as typed, its
+  // WKT2, and PROJ's operation to ECEF with its grids and their SHA-256),
+  // for the outputs to record; "" otherwise.
+  std::string crs_record_json;
   // The ellipsoid of geodetic, projected and ENU values: the one the frame
   // implies (GRS80 for ITRF, ETRF, GDA, NAD83; WGS84 for WGS 84), or
   // --ellipsoid, or WGS84 for a frame the set does not name.

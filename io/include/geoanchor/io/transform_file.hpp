@@ -105,6 +105,10 @@ struct FitRecord {
   std::vector<std::string> warnings;
   std::optional<std::pair<double, double>> variance_factors;  // source, target (--vce)
   std::string generator;  // "geoanchor 0.1.0 fit ..."
+  // "control_crs": how each role of the control set read through a CRS was
+  // read ({"source": {...}, "target": {...}}: the CRS, its WKT2, PROJ's
+  // operation to ECEF with its grids' SHA-256), as JSON text; "" when none.
+  std::string control_crs_json;
   std::optional<ControlExtent> extent;
 };
 
