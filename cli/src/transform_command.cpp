@@ -3,8 +3,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <iostream>
 #include <memory>
+#include <string_view>
 #include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -320,11 +322,26 @@ void run_transform(const TransformOptions& o) {
     local_velocity = set == 1;
   }
   const bool has_velocity = velocity[0].has_value();
+  // A column that reads as a velocity in another unit or spelling would
+  // pass through unmoved: refused by name.
+  for (const auto& h : header) {
+    const bool velocity_like = h.size() > 3 && h[0] == 'v' && std::string_view("xyzenu").find(h[1]) != std::string_view::npos && h[2] == '_';
+    const bool known = std::any_of(std::begin(kVelocityColumns), std::end(kVelocityColumns), [&](const auto& set) {
+      return std::find(std::begin(set), std::end(set), h) != std::end(set);
+    });
+    if (velocity_like && !known) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source_name + ": column '" + h + "' reads as a velocity, but velocities are " + kVelocityColumns[0][0] +
+                      ", " + kVelocityColumns[0][1] + ", " + kVelocityColumns[0][2] + " (ECEF) or " + kVelocityColumns[1][0] +
+                      ", " + kVelocityColumns[1][1] + ", " + kVelocityColumns[1][2] + " (local), in m/yr; rename it");
+    }
+  }
   if (t_to.year != t_from.year && !has_velocity && !plate) {
     throw Error(ErrorKind::usage, "E_EPOCH_PROPAGATION",
                 "--to " + o.to + ": moving coordinates from " + geodesy::format_decimal_year(t_from) + " to " +
                     geodesy::format_decimal_year(t_to) +
-                    " needs velocities (columns vx_m_per_year, vy_m_per_year, vz_m_per_year) or a plate motion model: "
+                    " needs velocities (columns vx_m_per_year, vy_m_per_year, vz_m_per_year, or ve_m_per_year, "
+                    "vn_m_per_year, vu_m_per_year) or a plate motion model: "
                     "--plate PLATE, the plate the points are on (" + plate_list(o.plate_model) + ")");
   }
   if (has_velocity && plate) {

@@ -147,10 +147,12 @@ void positions_from_crs(geodesy::ControlSet& set, bool source, const CrsColumns&
         *axis[linear[k / 2]] += (k % 2 == 0 ? 1.0 : -1.0) * kStep_m / axes[linear[k / 2]].unit_to_si;
       }
     }
-    to_ecef.transform(a.data(), b.data(), c.data(), a.size(), [&](std::size_t i) {
-      const std::size_t point = i < n ? i : with_cov[(i - n) / per_point];
-      return name(set.points[first + point]) + (i < n ? "" : " (a neighbour for its covariance)");
-    });
+    to_ecef.transform(a.data(), b.data(), c.data(), n, [&](std::size_t i) { return name(set.points[first + i]); });
+    // The neighbours serve the Jacobian only: not counted as marks moved.
+    to_ecef.transform(
+        a.data() + n, b.data() + n, c.data() + n, a.size() - n,
+        [&](std::size_t i) { return name(set.points[first + with_cov[i / per_point]]) + " (a neighbour for its covariance)"; },
+        CrsOperation::Count::no);
     for (std::size_t i = 0; i < n; ++i) {
       (source ? set.points[first + i].source : set.points[first + i].target) = geodesy::EcefPosition(a[i], b[i], c[i]);
     }
@@ -172,7 +174,10 @@ void positions_from_crs(geodesy::ControlSet& set, bool source, const CrsColumns&
   record["identifier"] = d.identifier.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(d.identifier);
   record["wkt2"] = columns.crs.wkt2();
   record["operation"] = nlohmann::ordered_json::parse(operation_record_json(to_ecef));
-  (source ? set.source_input : set.target_input).crs_record_json = record.dump();
+  geodesy::ControlInputForm& form = source ? set.source_input : set.target_input;
+  form.crs_warnings = to_ecef.warnings();
+  record["warnings"] = form.crs_warnings;
+  form.crs_record_json = record.dump();
 }
 
 void apply_caller_frames(geodesy::ControlSet& set, const ControlReadOptions& o) {

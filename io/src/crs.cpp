@@ -336,22 +336,43 @@ void read_geoid(PJ_CONTEXT* ctx, PJ* horizontal, PJ* compound, CrsDescription& d
   PJ_OBJ_LIST* ops = proj_create_operations(ctx, geographic3d.get(), compound, fc);
   proj_operation_factory_context_destroy(fc);
   const int n = ops ? proj_list_get_count(ops) : 0;
-  for (int i = 0; i < n && d.geoid_model.empty(); ++i) {
+  // The geoid model is named only where every operation with a grid names
+  // the same one (NAVD88 heights are GEOID18 in CONUS and GEOID12B in
+  // Alaska: no one name holds for every point, so none is written).
+  bool one_model = true;
+  std::string model, model_id;
+  for (int i = 0; i < n; ++i) {
     Pj op(proj_list_get(ctx, ops, i));
     if (!op || proj_coordoperation_has_ballpark_transformation(ctx, op.get())) continue;
     const int grids = proj_coordoperation_get_grid_used_count(ctx, op.get());
-    for (int g = 0; g < grids; ++g) {
+    std::string grid;
+    int available = 0;
+    for (int g = 0; g < grids && grid.empty(); ++g) {
       const char* short_name = nullptr;
-      int available = 0;
       if (proj_coordoperation_get_grid_used(ctx, op.get(), g, &short_name, nullptr, nullptr, nullptr, nullptr, nullptr,
                                             &available) &&
           short_name) {
-        d.geoid_model = short_name;
-        d.geoid_available = available != 0;
-        break;
+        grid = short_name;
       }
     }
-    if (!d.geoid_model.empty()) name_geoid_model(ctx, op.get(), d);
+    if (grid.empty()) continue;
+    if (d.geoid_model.empty()) {  // PROJ's best-ranked operation's grid
+      d.geoid_model = grid;
+      d.geoid_available = available != 0;
+    }
+    CrsDescription named;
+    named.geoid_model = grid;
+    name_geoid_model(ctx, op.get(), named);
+    if (named.geoid_operation.empty() || (!model.empty() && (named.geoid_operation != model || named.geoid_operation_id != model_id))) {
+      one_model = false;
+      break;
+    }
+    model = named.geoid_operation;
+    model_id = named.geoid_operation_id;
+  }
+  if (one_model && !model.empty()) {
+    d.geoid_operation = model;
+    d.geoid_operation_id = model_id;
   }
   proj_list_destroy(ops);
 }
@@ -451,18 +472,27 @@ Crs Crs::parse(std::string_view typed, std::string_view where) {
   if (text.empty()) fail(where, typed, "empty; expected EPSG:n, EPSG:h+v, WKT, PROJJSON, a PROJ string, @FILE or a frame name");
   std::string definition = text;
   std::optional<geodesy::DecimalYear> epoch;
-  // CRS@EPOCH: the last '@' followed by a number (a file is @FILE, at 0).
-  if (const auto at = definition.rfind('@'); at != std::string::npos && at > 0) {
-    const std::string tail = trim(std::string_view(definition).substr(at + 1));
-    if (tail.empty() && definition.find_first_of("[{") == std::string::npos) {
-      fail(where, text, "nothing after '@'; expected the coordinate epoch as a decimal year, e.g. CRS@2024.5", "E_EPOCH");
+  // CRS@EPOCH. WKT and PROJJSON end at their closing bracket: what follows
+  // is nothing or @EPOCH (an '@' inside a quoted name or remark is the
+  // text's own). Otherwise the last '@' (a file is @FILE, at 0) begins the
+  // epoch, unless what follows it is a PROJ string's ("+nadgrids=@null").
+  const bool wkt_or_json = definition.find_first_of("[{") != std::string::npos && definition[0] != '@';
+  if (wkt_or_json) {
+    const auto close = definition.find_last_of("]}");
+    const std::string tail = close == std::string::npos ? std::string() : trim(std::string_view(definition).substr(close + 1));
+    if (!tail.empty()) {
+      if (tail[0] != '@') {
+        fail(where, text, "text after the CRS's closing bracket (" + echo(tail) + "); expected nothing or @EPOCH, e.g. @2024.5");
+      }
+      const std::string year = trim(std::string_view(tail).substr(1));
+      if (year.empty()) fail(where, text, "nothing after '@'; expected the coordinate epoch as a decimal year, e.g. CRS@2024.5", "E_EPOCH");
+      epoch = geodesy::parse_decimal_year(year, std::string(where) + ": coordinate epoch of CRS " + echo(text));
+      definition = trim(std::string_view(definition).substr(0, close + 1));
     }
-    const bool wkt_or_json = definition.find_first_of("[{") != std::string::npos;
-    // In WKT or JSON the epoch follows the closing bracket: an '@' inside a
-    // quoted name or remark ("ITRF2014@2024.5") is the text's own.
-    const bool inside_text = wkt_or_json && tail.find_first_of("]}\"") != std::string::npos;
-    if (!tail.empty() && !inside_text && (std::isdigit(static_cast<unsigned char>(tail[0])) || tail[0] == '.' || tail[0] == '-' ||
-                          (!wkt_or_json && tail.find_first_of(" +=:") == std::string::npos))) {
+  } else if (const auto at = definition.rfind('@'); at != std::string::npos && at > 0) {
+    const std::string tail = trim(std::string_view(definition).substr(at + 1));
+    if (tail.empty()) fail(where, text, "nothing after '@'; expected the coordinate epoch as a decimal year, e.g. CRS@2024.5", "E_EPOCH");
+    if (tail.find_first_of(" +=:") == std::string::npos) {
       epoch = geodesy::parse_decimal_year(tail, std::string(where) + ": coordinate epoch of CRS " + echo(text));
       definition = trim(std::string_view(definition).substr(0, at));
     }
@@ -478,6 +508,14 @@ Crs Crs::parse(std::string_view typed, std::string_view where) {
     definition = trim(definition);
     if (definition.empty()) fail(where, text, "the file " + path + " is empty; expected a CRS definition in it");
     if (definition[0] == '@') fail(where, text, "the file " + path + " names another file; give the CRS itself");
+    if (definition.find_first_of("[{") != std::string::npos) {
+      const auto close = definition.find_last_of("]}");
+      if (close != std::string::npos && close + 1 < definition.size()) {
+        fail(where, text, "the file " + path + " has text after the CRS's closing bracket (" +
+                              echo(trim(std::string_view(definition).substr(close + 1))) +
+                              "); give the epoch as @FILE@EPOCH");
+      }
+    }
   }
 
   auto impl = std::make_shared<Impl>();
@@ -661,7 +699,27 @@ Crs Crs::geocentric(std::string_view where) const {
   // built on the datum itself.
   Pj datum(geodetic ? proj_crs_get_datum(ctx, geodetic.get()) : nullptr);
   if (!datum && geodetic) datum.reset(proj_crs_get_datum_ensemble(ctx, geodetic.get()));
-  if (datum) {
+  if (datum && d.prime_meridian_deg != 0.0) {
+    // geoanchor's ECEF has its X axis through Greenwich; PROJ's geocentric
+    // CRS of a datum on another meridian (NTF (Paris)) through that
+    // meridian. The same datum with Greenwich as its prime meridian: PROJ
+    // moves between the two by the change of meridian alone (a "ballpark"
+    // it holds exact: the same name and ellipsoid; CrsOperation allows it).
+    auto j = nlohmann::json::parse(text_or(proj_as_projjson(ctx, datum.get(), nullptr), "{}"), nullptr, false);
+    if (!j.is_discarded() && j.is_object()) {
+      j.erase("prime_meridian");
+      j.erase("id");
+      nlohmann::json cs = {{"subtype", "Cartesian"},
+                           {"axis", nlohmann::json::array({{{"name", "Geocentric X"}, {"abbreviation", "X"}, {"direction", "geocentricX"}, {"unit", "metre"}},
+                                                           {{"name", "Geocentric Y"}, {"abbreviation", "Y"}, {"direction", "geocentricY"}, {"unit", "metre"}},
+                                                           {{"name", "Geocentric Z"}, {"abbreviation", "Z"}, {"direction", "geocentricZ"}, {"unit", "metre"}}})}};
+      const nlohmann::json crs = {{"type", "GeodeticCRS"},
+                                  {"name", d.datum + " (geocentric, X through Greenwich)"},
+                                  {"datum", j},
+                                  {"coordinate_system", cs}};
+      impl->crs.reset(proj_create(ctx, crs.dump().c_str()));
+    }
+  } else if (datum) {
     const PJ_TYPE types[] = {PJ_TYPE_GEODETIC_REFERENCE_FRAME, PJ_TYPE_DYNAMIC_GEODETIC_REFERENCE_FRAME,
                              PJ_TYPE_DATUM_ENSEMBLE};
     const char* name = proj_get_name(datum.get());

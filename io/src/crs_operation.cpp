@@ -163,6 +163,7 @@ std::vector<Candidate> list_operations(PJ_CONTEXT* ctx, PJ* src, PJ* dst, bool a
                               text.find("proj=defmodel") != std::string::npos;
     }
     if (c.instantiable) {
+      (void)detail::take_last_proj_error();
       c.op.reset(proj_normalize_for_visualization(ctx, raw.get()));
       if (!c.op) {
         c.instantiable = false;
@@ -248,11 +249,17 @@ struct CrsOperation::Impl {
   AreaTally source_area, target_area;  // points outside either CRS's area of use: warned
   std::size_t fallbacks = 0;
   std::string first_fallback;
+  // Points whose PROJ choice was set aside for one whose area holds them.
+  std::size_t set_aside = 0;
+  std::string first_set_aside;
 
   // The candidate PROJ would use at (lon, lat), from index `from` on, and a
   // better-ranked one whose grid is missing (when there is one).
   struct Choice {
     std::optional<std::size_t> use, missing_better;
+    // PROJ's own choice, set aside: its datum change does not hold the point
+    // (PROJ judges areas by a box in the source CRS).
+    std::optional<std::size_t> set_aside;
   };
   // PROJ's own choice for a point (proj_get_suggested_operation on its list,
   // given the point in the source's own axis order), and a candidate with a
@@ -329,8 +336,12 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     }
   }
 
-  m.all = list_operations(ctx, m.src.get(), m.dst.get(), false, PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID,
-                          &m.available);
+  // The same datum on two prime meridians (Crs::geocentric's ECEF through
+  // Greenwich of NTF (Paris)): PROJ calls the change of meridian between
+  // them a ballpark, and it is exact.
+  const bool meridian_only = same_datum && sd.prime_meridian_deg != td.prime_meridian_deg;
+  m.all = list_operations(ctx, m.src.get(), m.dst.get(), meridian_only,
+                          PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID, &m.available);
   CrsDescription chosen_from = sd;  // the source the candidates start from
   if (sd.type == "geocentric" && m.all.size() > 1) {
     Pj geographic = geographic_3d_on_datum(ctx, m.src.get());
@@ -338,7 +349,7 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     if (!raw) throw Error(ErrorKind::io, "E_CRS", m.where + ": " + pair + ": PROJ cannot give the geocentric source's latitude");
     m.pre.reset(proj_normalize_for_visualization(ctx, raw.get()));
     m.src = std::move(geographic);
-    m.all = list_operations(ctx, m.src.get(), m.dst.get(), false,
+    m.all = list_operations(ctx, m.src.get(), m.dst.get(), meridian_only,
                             PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID, &m.available);
     chosen_from.type = chosen_from.horizontal_type = "geographic 3D";
     chosen_from.axes = {CrsAxis{"Geodetic latitude", "Lat", "north", "degree", detail::kRadiansPerDegree, "angular", std::nullopt},
@@ -461,9 +472,10 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
     const char* opts[] = {"ALLOW_BALLPARK=YES", nullptr};  // for areas only: metres do not matter
     Pj raw(proj_create_crs_to_crs_from_pj(ctx, m.src.get(), geog.get(), nullptr, opts));
     if (raw) m.to_lonlat.reset(proj_normalize_for_visualization(ctx, raw.get()));
-    if (!m.to_lonlat && m.all.size() > 1) {
+    if (!m.to_lonlat && (m.all.size() > 1 || datum_areas)) {
       throw Error(ErrorKind::io, "E_CRS", m.where + ": " + pair + ": PROJ cannot give " + m.src_name +
-                                              "'s longitude and latitude, which choosing among its operations needs");
+                                              "'s longitude and latitude, which choosing among its operations and "
+                                              "holding a datum change to its area of use need");
     }
   }
   m.source_area.crs = m.src_name;
@@ -487,7 +499,10 @@ CrsOperation::Impl::Choice CrsOperation::Impl::choose(double a, double b, double
   }
   // One PROJ cannot run, or (where the point's longitude and latitude are
   // known) whose datum change does not hold the point, is no choice.
-  if (choice.use && (!all[*choice.use].op || (lonlat_known && !all[*choice.use].holds(lon, lat)))) choice.use.reset();
+  if (choice.use && (!all[*choice.use].op || (lonlat_known && !all[*choice.use].holds(lon, lat)))) {
+    if (all[*choice.use].op) choice.set_aside = choice.use;
+    choice.use.reset();
+  }
   if (!lonlat_known) return choice;
   for (std::size_t i = available_count; i < all.size(); ++i) {
     const auto& m = all[i];
@@ -593,9 +608,26 @@ void trans_arrays(PJ* op, double* a, double* b, double* c, std::size_t n, const 
 }  // namespace
 
 void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
-                             const std::function<std::string(std::size_t)>& point_name) {
+                             const std::function<std::string(std::size_t)>& point_name, Count counted) {
   Impl& m = *impl_;
   if (n == 0) return;
+  if (counted == Count::no) {
+    // The same, with the tallies (points per candidate, areas, fallbacks) as they were.
+    std::vector<std::size_t> points;
+    for (const auto& k : m.all) points.push_back(k.info.points);
+    const AreaTally source_area = m.source_area, target_area = m.target_area;
+    const std::size_t fallbacks = m.fallbacks, set_aside = m.set_aside;
+    const std::string first_fallback = m.first_fallback, first_set_aside = m.first_set_aside;
+    transform(a, b, c, n, point_name, Count::yes);
+    for (std::size_t k = 0; k < m.all.size(); ++k) m.all[k].info.points = points[k];
+    m.source_area = source_area;
+    m.target_area = target_area;
+    m.fallbacks = fallbacks;
+    m.set_aside = set_aside;
+    m.first_fallback = first_fallback;
+    m.first_set_aside = first_set_aside;
+    return;
+  }
   const std::size_t z_stride = c ? sizeof(double) : 0;
   const std::size_t z_count = c ? n : 0;
   double t_value = m.t.value_or(0.0);
@@ -657,24 +689,39 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
                     (grids.empty() ? "" : "; the point is outside the grid's extent") +
                     (m.options.allow_fallback ? "" : "; no other operation is used for it without --allow-fallback"));
   };
-  // A point outside the area of use of the only datum change that could
-  // move it (PROJ would apply it anyway).
+  // A point outside the area of use of every datum change PROJ can run here
+  // for the pair (PROJ would apply one anyway): `op` is the best-ranked.
   auto fail_area = [&](std::size_t i, const Candidate& op) {
     const CrsArea* out = nullptr;
     for (const auto& d : op.datum_areas) {
       if (!d.contains(lon[i], lat[i])) out = &d;
     }
+    std::vector<std::string> grids;
+    for (const auto& g : op.info.grids) grids.push_back(g.name);
+    // One whose grid is not here may hold it.
+    std::string missing;
+    for (std::size_t k = m.available_count; k < m.all.size() && missing.empty(); ++k) {
+      if (!m.all[k].holds(lon[i], lat[i])) continue;
+      std::vector<std::string> absent;
+      for (const auto& g : m.all[k].info.grids) {
+        if (!g.available) absent.push_back(g.name);
+      }
+      missing = "; PROJ's operation '" + m.all[k].info.name + "' holds it but needs the grid " + joined(absent) +
+                ", which is not on this machine (PROJ looked in " + joined(detail::proj_search_paths()) + ")";
+    }
     throw Error(ErrorKind::input, "E_CRS_TRANSFORM",
                 m.where + ": " + point_name(i) + ": (" + coordinates_of(i) + ") in " + m.src_name + ", at latitude " +
                     format_shortest(lat[i]) + "°, longitude " + format_shortest(lon[i]) +
-                    "°, lies outside the area of use of PROJ's operation '" + op.info.name + "' (" +
-                    accuracy_text(op.info.accuracy_m) + ") to " + m.dst_name +
+                    "°, lies outside the area of use of " +
+                    (m.available_count == 1 ? "PROJ's only operation '" : "every operation PROJ can run here, the best-ranked '") +
+                    op.info.name + "' (" + accuracy_text(op.info.accuracy_m) + (grids.empty() ? "" : ", grid " + joined(grids)) +
+                    ") to " + m.dst_name +
                     (out ? ": " + out->name + ", latitude " + format_shortest(out->south_deg) + "° to " +
                                format_shortest(out->north_deg) + "°, longitude " + format_shortest(out->west_deg) + "° to " +
                                format_shortest(out->east_deg) + "°"
                          : std::string()) +
-                    "; its parameters do not hold there, and PROJ knows no other operation for this pair here but a "
-                    "ballpark one");
+                    "; a datum change's parameters hold in its own area only" +
+                    (missing.empty() ? ", and PROJ knows no other operation for this point but a ballpark one" : missing));
   };
   auto run = [&](const Candidate& op, double* x, double* y, double* z, std::size_t count) {
     proj_trans_generic(op.op.get(), PJ_FWD, x, sizeof(double), count, y, sizeof(double), count, z, z ? sizeof(double) : 0,
@@ -728,8 +775,12 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
       }
       if (choice.missing_better) note_fallback(i);  // --allow-fallback: a worse operation than PROJ would use with its grid
       if (!choice.use) choice.use = lon.empty() ? std::nullopt : m.fallback(plon, plat, {});
-      if (!choice.use && m.available_count == 1 && !lon.empty()) fail_area(i, m.all.front());
-      if (!choice.use) fail_point(i, m.all.front(), "no operation's area of use holds it; the best-ranked is");
+      if (!choice.use && lon.empty()) fail_point(i, m.all.front(), "no operation's area of use is known to hold it; the best-ranked is");
+      if (!choice.use) fail_area(i, m.all[choice.set_aside.value_or(0)]);
+      if (choice.set_aside && m.set_aside++ == 0) {
+        m.first_set_aside = point_name(i) + " ('" + m.all[*choice.set_aside].info.name + "' set aside for '" +
+                            m.all[*choice.use].info.name + "')";
+      }
       use[i] = *choice.use;
     }
     std::vector<std::size_t> members;
@@ -813,6 +864,11 @@ std::vector<std::string> CrsOperation::warnings() const {
   std::vector<std::string> out = impl_->notes;
   if (auto w = impl_->source_area.warning()) out.push_back(*w);
   if (auto w = impl_->target_area.warning()) out.push_back(*w);
+  if (impl_->set_aside > 0) {
+    out.push_back(std::to_string(impl_->set_aside) + " points lie outside the area of use of the datum change PROJ "
+                  "chose for them (PROJ judges areas by a box in the source CRS) and were moved by the most accurate "
+                  "operation whose area holds them; the first is " + impl_->first_set_aside);
+  }
   if (impl_->fallbacks > 0) {
     out.push_back(std::to_string(impl_->fallbacks) + " points were moved by a worse operation than PROJ's first "
                   "choice for them (--allow-fallback); the first is " + impl_->first_fallback);

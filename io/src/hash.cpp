@@ -69,7 +69,9 @@ std::string FileHashCache::sha256_hex(const std::filesystem::path& path) {
   const auto size = std::filesystem::file_size(path, ec);
   const auto time = ec ? std::filesystem::file_time_type{} : std::filesystem::last_write_time(path, ec);
   if (ec) return sha256_file_hex(path);  // names the failure
-  Key key{std::filesystem::absolute(path, ec).string(), size, time};
+  const std::string absolute = std::filesystem::absolute(path, ec).string();
+  if (ec || absolute.empty()) return sha256_file_hex(path);  // no key to keep it under
+  Key key{absolute, size, time};
   {
     const std::lock_guard lock(mutex_);
     if (const auto it = hashes_.find(key); it != hashes_.end()) return it->second;

@@ -507,6 +507,17 @@ TEST_F(ApplyCli, PerPointEpochsFromLasGpsTimeAgreeWithProjAtEachPointsTime) {
   EXPECT_WORST_WITHIN(worst_deg, 1.0) << "(ratio to the tolerance)";
   EXPECT_WORST_WITHIN(worst_m, 1.0) << "(ratio to the tolerance)";
 
+  // A tile that states its epoch as well is refused: one or the other.
+  fs::create_directories(path("dated"));
+  testing::write_bytes(path("dated/tile.las"), bytes);
+  write("dated/tile.las.geoanchor.json", R"({"schema": "geoanchor.tile/1", "frame": "ITRF2014@2020.0",
+      "coordinates": {"kind": "ecef", "storage": "int32_scaled"}})");
+  const RunResult both = run("apply " + path("dated/tile.las").string() + " --transform " + path("T14.json").string() +
+                             " --epoch-from-gps-time --out-dir " + path("dated_out").string());
+  EXPECT_EQ(both.exit_code, 2) << both.err;
+  EXPECT_NE(both.err.find("states the coordinate epoch 2020.0"), std::string::npos) << both.err;
+  EXPECT_FALSE(fs::exists(path("dated_out/tile.las")));
+
   // Without a time-dependent transform the epochs would not be used: refused.
   const RunResult unused = run("apply " + path("crs/tile.las").string() + " --crs EPSG:7789 --to-crs EPSG:7843 "
                                "--epoch-from-gps-time --out-dir " + path("unused").string());

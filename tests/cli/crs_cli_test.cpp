@@ -478,7 +478,18 @@ TEST_F(CrsCli, Issue13_BadInputIsRefusedByNameWithNoOutput) {
        3, {"E_CRS_TRANSFORM", "bad.csv:2", "SAD69 to SIRGAS 2000 (1)", "Brazil", "lies outside the area of use"}},
       {"an empty epoch", "id,lat_deg,lon_deg\nA,1,2\n", "--crs EPSG:4326@ --to-crs EPSG:32631", 3, {"E_EPOCH", "after '@'"}},
   };
-  for (const auto& c : cases) {
+  // Text after a WKT's closing bracket is an epoch or an error, never dropped.
+  const char* one_line[] = {"MULTILINE=NO", nullptr};
+  Pj itrf_crs = proj_.crs("EPSG:7912");
+  const std::string itrf = proj_as_wkt(proj_.ctx(), itrf_crs.get(), PJ_WKT2_2019, one_line);
+  std::vector<BadCase> all = cases;
+  all.push_back({"text after a WKT", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n", "--crs '" + itrf + " junk' --to-crs EPSG:7789",
+                 3, {"E_CRS", "after the CRS's closing bracket", "junk"}});
+  all.push_back({"an epoch after a WKT that is no decimal year", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n",
+                 "--crs '" + itrf + "@x2024.5' --to-crs EPSG:7789", 3, {"E_EPOCH", "x2024.5"}});
+  all.push_back({"an empty epoch after a WKT", "id,lat_deg,lon_deg,h_m\nA,50,8,100\n", "--crs '" + itrf + "@' --to-crs EPSG:7789",
+                 3, {"E_EPOCH", "nothing after '@'"}});
+  for (const auto& c : all) {
     SCOPED_TRACE(c.name);
     write("bad.csv", c.header_and_rows);
     const RunResult r = run("convert '" + path("bad.csv").string() + "' " + c.args + " -o '" + path("o.csv").string() + "'");
@@ -566,6 +577,12 @@ TEST_F(CrsCli, Issue13_ACompoundCrsIsWrittenWithItsGeoidModel) {
   const PJ_COORD pb = proj_trans(b.get(), PJ_FWD, proj_coord(464000, 5250000, 450, 0));
   EXPECT_LT(std::abs(pa.xyz.z - pb.xyz.z), kVsProjTol_m);
   EXPECT_GT(std::abs(pa.xyz.z - 450.0), 40.0);  // the geoid was applied (N ≈ 48 m here)
+  // NAVD88 heights are GEOID18 in CONUS and GEOID12B in Alaska: no one geoid model is named.
+  const RunResult navd = run("crs EPSG:6318+5703 --json");
+  ASSERT_EQ(navd.exit_code, 0) << navd.err;
+  const auto n = nlohmann::json::parse(navd.out);
+  EXPECT_TRUE(n["vertical"]["geoid_operation"].is_null()) << n["vertical"].dump();
+  EXPECT_EQ(n["wkt2"].get<std::string>().find("GEOIDMODEL"), std::string::npos);
   // And the file reads back through its own statement.
   const RunResult back = run("convert '" + path("H.csv").string() + "' --to-crs EPSG:4979 -o '" + path("back.csv").string() + "'");
   EXPECT_EQ(back.exit_code, 0) << back.err;
@@ -628,7 +645,7 @@ TEST_F(CrsCli, Issue13_PointsOutsideTheAreaOfUseAreWarnedAndRecorded) {
                           path("far.csv").string() + "'");
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_NE(r.err.find("l93.csv:4"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("lies outside the area of use of PROJ's operation"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("lies outside the area of use of PROJ's only operation"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(path("far.csv")));
 }
 

@@ -330,6 +330,12 @@ TEST_F(TransformCli, Issue13_VelocitiesInACrsAndInLocalAxes) {
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_NE(r.err.find("give one set"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(path("c.csv")));
+  // A velocity in another unit would pass through unmoved: refused by name.
+  const auto mm = write("mm.csv", "id,x_m,y_m,z_m,ve_mm_per_year,vn_mm_per_year,vu_mm_per_year\nA,4331297,567555.6,4633133.7,1,2,3\n");
+  const auto u = run("transform " + mm.string() + " --from ITRF2014@2020.0 --to ITRF2020@2020.0 -o " + path("d.csv").string());
+  EXPECT_EQ(u.exit_code, 3);
+  EXPECT_NE(u.err.find("'ve_mm_per_year' reads as a velocity"), std::string::npos) << u.err;
+  EXPECT_FALSE(std::filesystem::exists(path("d.csv")));
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 #include <GeographicLib/Geocentric.hpp>
 
 #include <map>
+
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -607,6 +609,45 @@ TEST(ControlSet, Issue13_AGeographicCovarianceIsCarriedAtThePoles) {
     const Eigen::Matrix3d expected = r * c * r.transpose();
     const double worst = testing::max_abs_component(set.points[i].source_cov_m2 - expected);
     EXPECT_LE(worst, kCovarianceTol_m2) << "mark " << i << "\n" << set.points[i].source_cov_m2 << "\nexpected\n" << expected;
+  }
+  // The record of how they were read counts the marks, not the neighbours
+  // the Jacobian's height column was differenced with.
+  const auto record = nlohmann::json::parse(set.source_input.crs_record_json);
+  EXPECT_EQ(record["operation"]["candidates"][0]["points"], std::size(marks));
+
+  // NTF (Paris), EPSG:4807: grads, latitude first, longitudes from the
+  // Paris meridian (2.5969213 grad east of Greenwich, EPSG:8903).
+  constexpr double kParis_deg = 2.5969213 * 0.9;
+  const double paris_marks[][2] = {{53.0, 0.5}, {51.2, -3.1}};  // grads
+  std::string ntf = "# source_crs = EPSG:4807\n"
+                    "id,lat_src_grad,lon_src_grad,h_src_m,x_dst_m,y_dst_m,z_dst_m,cov_src_xx_m2,cov_src_xy_m2,cov_src_xz_m2,"
+                    "cov_src_yy_m2,cov_src_yz_m2,cov_src_zz_m2,sigma_dst_m\n";
+  for (std::size_t i = 0; i < std::size(paris_marks); ++i) {
+    std::ostringstream row;
+    row.precision(12);
+    row << "F" << i << "," << paris_marks[i][0] << "," << paris_marks[i][1]
+        << ",100.0,0,0,6378137,1e-4,2e-5,0,4e-4,-1e-5,9e-4,0.01\n";
+    ntf += row.str();
+  }
+  std::istringstream nin(ntf);
+  const auto paris = read_control_csv(nin, "ntf.csv", {});
+  for (std::size_t i = 0; i < std::size(paris_marks); ++i) {
+    double x = 0, y = 0, z = 0;
+    std::vector<double> m(9);
+    GeographicLib::Geocentric::WGS84().Forward(paris_marks[i][0] * 0.9, paris_marks[i][1] * 0.9 + kParis_deg, 100.0, x, y, z, m);
+    Eigen::Matrix3d r;
+    r << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
+    const Eigen::Matrix3d expected = r * c * r.transpose();
+    // geoanchor's ECEF has its X axis through Greenwich (PROJ's geocentric
+    // CRS of NTF (Paris) has it through Paris: 2.34°, 170 km here). PROJ's
+    // own Paris meridian (2°20'14.025") is 3e-9° from EPSG's 2.5969213 grad.
+    constexpr double kMeridian_m = 5e-4;
+    const GeographicLib::Geocentric clarke_ign(6378249.2, 1.0 / 293.466021293627);  // Clarke 1880 (IGN), EPSG:7011
+    double gx = 0, gy = 0, gz = 0;
+    clarke_ign.Forward(paris_marks[i][0] * 0.9, paris_marks[i][1] * 0.9 + kParis_deg, 100.0, gx, gy, gz);
+    EXPECT_LE((paris.points[i].source.m - Eigen::Vector3d(gx, gy, gz)).norm(), kMeridian_m) << "NTF mark " << i;
+    EXPECT_LE(testing::max_abs_component(paris.points[i].source_cov_m2 - expected), kCovarianceTol_m2)
+        << "NTF mark " << i << "\n" << paris.points[i].source_cov_m2 << "\nexpected\n" << expected;
   }
 }
 

@@ -36,6 +36,7 @@ std::vector<std::string> control_set_warnings(const geodesy::ControlSet& set) {
   }
   for (const bool source : {true, false}) {
     const geodesy::ControlInputForm& form = source ? set.source_input : set.target_input;
+    for (const auto& w : form.crs_warnings) out.push_back(std::string(source ? "source" : "target") + " CRS: " + w);
     if (form.form != geodesy::CoordinateForm::ecef || set.points.size() < 3) continue;
     bool all = true;
     double widest = 0.0;

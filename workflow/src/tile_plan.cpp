@@ -401,6 +401,12 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
                       tile + ": --epoch-from-gps-time reads LAS GPS times; for per-row epochs in a CSV use "
                              "`geoanchor convert` with an epoch column");
         }
+        if (in.frame->epoch()) {
+          throw Error(ErrorKind::usage, "E_OPTION",
+                      tile + ": the " + p.in_frame_source + " states the coordinate epoch " +
+                          geodesy::format_decimal_year(*in.frame->epoch()) +
+                          " and --epoch-from-gps-time dates each point by its GPS time: give one");
+        }
       } else if (t_->time_dependent()) {
         if (!in.frame->epoch()) {
           throw Error(ErrorKind::input, "E_EPOCH_MISSING",
@@ -568,6 +574,11 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
       // Per-point epochs (--epoch-from-gps-time) leave the output without
       // one epoch: the conversion to the CRS needs none.
       const bool per_point = o_.epoch_from_gps_time && p.format == io::TileFormat::las;
+      if (per_point && dst.epoch()) {
+        throw Error(ErrorKind::usage, "E_OPTION",
+                    tile + ": " + dst_flag + " names the epoch " + geodesy::format_decimal_year(*dst.epoch()) +
+                        " but --epoch-from-gps-time leaves each point at its own GPS time; give the CRS without it");
+      }
       if (!dst.epoch() && !fe && !per_point) {
         throw Error(ErrorKind::input, "E_EPOCH_MISSING",
                     tile + ": " + dst_flag + " is dynamic and the transform's output has no coordinate epoch; give "

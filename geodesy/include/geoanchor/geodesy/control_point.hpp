@@ -42,6 +42,7 @@ struct ControlInputForm {
   // WKT2, and PROJ's operation to ECEF with its grids and their SHA-256),
   // for the outputs to record; "" otherwise.
   std::string crs_record_json;
+  std::vector<std::string> crs_warnings;  // crs: what PROJ's reading warned of (areas of use, ensembles)
   // The ellipsoid of geodetic, projected and ENU values: the one the frame
   // implies (GRS80 for ITRF, ETRF, GDA, NAD83; WGS84 for WGS 84), or
   // --ellipsoid, or WGS84 for a frame the set does not name.

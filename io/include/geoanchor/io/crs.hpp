@@ -137,7 +137,9 @@ class Crs {
   // geographic or projected CRS without its ellipsoidal height axis;
   // itself when it is 2-D already or geocentric. Keeps the epoch.
   Crs horizontal(std::string_view where) const;
-  // The geocentric CRS on the same datum (for x_m, y_m, z_m columns).
+  // The geocentric CRS on the same datum (for x_m, y_m, z_m columns), its
+  // X axis through Greenwich as geoanchor's ECEF has it: for a datum on
+  // another prime meridian (NTF (Paris)) the same datum on Greenwich.
   Crs geocentric(std::string_view where) const;
 
   struct Impl;

@@ -77,7 +77,12 @@ class CrsOperation {
   // E_CRS_TRANSFORM) naming the point, its coordinates and the operation
   // for a point the operation cannot move (outside a grid, outside the
   // projection's domain); nothing non-finite is ever returned.
-  void transform(double* a, double* b, double* c, std::size_t n, const std::function<std::string(std::size_t)>& point_name);
+  // With Count::no the points are not counted in candidates() nor in the
+  // warnings (points that only serve a computation, such as a Jacobian's
+  // neighbours).
+  enum class Count { yes, no };
+  void transform(double* a, double* b, double* c, std::size_t n, const std::function<std::string(std::size_t)>& point_name,
+                 Count count = Count::yes);
 
   // An estimate for a few points (a tile's bounding-box corners): PROJ's
   // best-ranked operation, no per-point choice, nothing counted or warned;
