@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -14,58 +15,102 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
+ObservationTest test_observation(const Eigen::VectorXd& v, const Eigen::MatrixXd& w, const Eigen::MatrixXd& q,
+                                 const Eigen::MatrixXd& axes, bool in_fit, double sigma_scale, double lambda0) {
+  ObservationTest t;
+  const Eigen::Index k = v.size();
+  const Eigen::VectorXd vw = w * v;
+  // The observation test over the redundant directions of Q (all of them
+  // unless the observation alone determines some unknown).
+  const Eigen::LLT<Eigen::MatrixXd> llt(q);
+  if (llt.info() == Eigen::Success && llt.matrixLLT().diagonal().minCoeff() > 1e-5) {
+    t.statistic = vw.dot(llt.solve(vw));
+    t.dof = static_cast<int>(k);
+  } else {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> qe(q);
+    for (Eigen::Index e = 0; e < k; ++e) {
+      if (qe.eigenvalues()(e) > 1e-9) {
+        const double proj = qe.eigenvectors().col(e).dot(vw);
+        t.statistic += proj * proj / qe.eigenvalues()(e);
+        ++t.dof;
+      }
+    }
+  }
+  t.statistic /= sigma_scale * sigma_scale;
+  t.p_value = t.dof > 0 ? chi_squared_upper_tail(t.dof, t.statistic) : 1.0;
+
+  // Redundancy numbers: the diagonal of R = Q_v P (Q_v the residuals'
+  // cofactor, P = C⁻¹) along each axis; in whitened terms R = W⁻¹ Q W, whose
+  // trace over all observations is the degrees of freedom.
+  const Eigen::MatrixXd r = w.partialPivLu().solve(Eigen::MatrixXd(q * w));
+  // w-tests (Baarda) for a blunder along each axis.
+  const Eigen::Index n_axes = axes.rows();
+  t.w = Eigen::VectorXd::Zero(n_axes);
+  t.redundancy = Eigen::VectorXd::Zero(n_axes);
+  t.mdb = Eigen::VectorXd::Constant(n_axes, in_fit ? 0.0 : kNaN);  // outside the fit: no detectability
+  for (Eigen::Index axis = 0; axis < n_axes; ++axis) {
+    const Eigen::VectorXd b = w * axes.row(axis).transpose();  // blunder direction, whitened
+    const double qb = b.dot(q * b);
+    if (!(qb > 1e-12 * b.squaredNorm())) {  // no redundancy along this axis: the blunder is invisible
+      t.w(axis) = kNaN;
+      if (in_fit) t.mdb(axis) = std::numeric_limits<double>::infinity();
+      continue;
+    }
+    t.w(axis) = b.dot(vw) / std::sqrt(qb) / sigma_scale;  // τ-test when σ0 is estimated
+    if (!(std::fabs(t.w(axis)) <= t.w_max)) t.w_max = std::fabs(t.w(axis));
+    if (in_fit) {
+      double along = 0.0;  // aᵀ R a
+      for (Eigen::Index i = 0; i < k; ++i) {
+        for (Eigen::Index j = 0; j < k; ++j) along += axes(axis, i) * r(i, j) * axes(axis, j);
+      }
+      t.redundancy(axis) = along;
+      t.mdb(axis) = std::sqrt(lambda0) * sigma_scale / std::sqrt(qb);
+    }
+  }
+  return t;
+}
+
 void test_point(const PointTestInput& in, double sigma_scale, double lambda0, PointResult& pr) {
-  const Eigen::Vector3d vw = in.w * in.v_m;
   pr.residual_enu_m = in.enu * in.v_m;
   // C_v = W⁻¹ Q W⁻ᵀ (W whitens: Wᵀ W = C⁻¹), in E, N, U, scaled as σ is.
   const Eigen::Matrix3d w_inv = in.w.inverse();
   pr.residual_cov_enu_m2 = (sigma_scale * sigma_scale) * (in.enu * w_inv * in.q * w_inv.transpose() * in.enu.transpose());
-
-  // The point test over the redundant directions of Q (all three unless the
-  // point alone determines some parameter).
-  double stat = 0.0;
-  int rank = 0;
-  const Eigen::LLT<Eigen::Matrix3d> llt(in.q);
-  if (llt.info() == Eigen::Success && llt.matrixLLT().diagonal().minCoeff() > 1e-5) {
-    stat = vw.dot(llt.solve(vw));
-    rank = 3;
-  } else {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> qe(in.q);
-    for (int e = 0; e < 3; ++e) {
-      if (qe.eigenvalues()(e) > 1e-9) {
-        const double proj = qe.eigenvectors().col(e).dot(vw);
-        stat += proj * proj / qe.eigenvalues()(e);
-        ++rank;
-      }
-    }
+  const ObservationTest t = test_observation(in.v_m, in.w, in.q, in.enu, in.in_fit, sigma_scale, lambda0);
+  pr.point_statistic = t.statistic;
+  pr.point_dof = t.dof;
+  pr.point_p_value = t.p_value;
+  pr.w_enu = t.w;
+  pr.w_max = t.w_max;
+  pr.redundancy_enu = t.redundancy;
+  // The largest MDB over the axes (inf when one is undetectable, NaN outside the fit).
+  pr.mdb_m = in.in_fit ? 0.0 : kNaN;
+  for (Eigen::Index axis = 0; axis < 3 && in.in_fit; ++axis) {
+    if (!(t.mdb(axis) <= pr.mdb_m)) pr.mdb_m = t.mdb(axis);
   }
-  pr.point_statistic = stat / (sigma_scale * sigma_scale);
-  pr.point_dof = rank;
-  pr.point_p_value = rank > 0 ? chi_squared_upper_tail(rank, pr.point_statistic) : 1.0;
+}
 
-  // w-tests (Baarda) for a blunder along each local axis.
-  pr.w_max = 0.0;
-  pr.mdb_m = in.in_fit ? 0.0 : kNaN;  // outside the fit: no detectability
-  for (int axis = 0; axis < 3; ++axis) {
-    const Eigen::Vector3d b = in.w * in.enu.row(axis).transpose();  // blunder direction, whitened
-    const double q = b.dot(in.q * b);
-    if (!(q > 1e-12 * b.squaredNorm())) {  // no redundancy along this axis: the blunder is invisible
-      pr.w_enu(axis) = kNaN;
-      pr.redundancy_enu(axis) = 0.0;
-      if (in.in_fit) pr.mdb_m = std::numeric_limits<double>::infinity();
-      continue;
-    }
-    const double w = b.dot(vw) / std::sqrt(q) / sigma_scale;  // τ-test when σ0 is estimated
-    pr.w_enu(axis) = w;
-    if (!(std::fabs(w) <= pr.w_max)) pr.w_max = std::fabs(w);
-    if (in.in_fit) {
-      pr.redundancy_enu(axis) = q / b.squaredNorm();
-      const double mdb = std::sqrt(lambda0) * sigma_scale / std::sqrt(q);
-      if (!(mdb <= pr.mdb_m)) pr.mdb_m = mdb;
-    } else {
-      pr.redundancy_enu(axis) = 0.0;
-    }
+GlobalTest global_test(double omega, int dof, double alpha, bool applicable) {
+  GlobalTest g;
+  g.statistic = omega;
+  g.applicable = applicable && dof > 0;
+  if (dof > 0) {
+    g.critical_lower = chi_squared_quantile(dof, alpha / 2.0);
+    g.critical_upper = chi_squared_quantile(dof, 1.0 - alpha / 2.0);
+    g.passed = omega >= g.critical_lower && omega <= g.critical_upper;
   }
+  return g;
+}
+
+std::vector<std::size_t> snoop_selection(const std::vector<SnoopCandidate>& failing,
+                                         const std::function<bool(std::size_t)>& may_take) {
+  std::vector<std::size_t> take;
+  double leverage = 0.0;
+  for (std::size_t k = 0; k < failing.size(); ++k) {
+    if (!take.empty() && (leverage + failing[k].leverage > kSnoopLeverageBudget || !may_take(take.size() + 1))) break;
+    leverage += failing[k].leverage;
+    take.push_back(k);
+  }
+  return take;
 }
 
 PointTestLevels point_test_levels(const FitOptions& o) {
@@ -78,15 +123,7 @@ PointTestLevels point_test_levels(const FitOptions& o) {
 void fill_global_test(FitResult& r, double omega, int dof, double alpha, bool a_priori_sigmas) {
   r.dof = dof;
   r.sigma0 = dof > 0 ? std::optional<double>(std::sqrt(omega / dof)) : std::nullopt;
-  auto& g = r.global_test;
-  g = GlobalTest{};
-  g.statistic = omega;
-  g.applicable = a_priori_sigmas && dof > 0;
-  if (dof > 0) {
-    g.critical_lower = chi_squared_quantile(dof, alpha / 2.0);
-    g.critical_upper = chi_squared_quantile(dof, 1.0 - alpha / 2.0);
-    g.passed = omega >= g.critical_lower && omega <= g.critical_upper;
-  }
+  r.global_test = global_test(omega, dof, alpha, a_priori_sigmas);
 }
 
 double sigma_scale(const FitResult& r, const FitOptions& o) { return o.scale_by_sigma0 && r.sigma0 ? *r.sigma0 : 1.0; }
@@ -153,18 +190,16 @@ SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions
   // In a small network one point's leverage exceeds the budget, and this is
   // Baarda's one-at-a-time data snooping; in a network of 10⁵ marks the
   // chance failures at alpha_point go in a few passes instead of one each.
-  double leverage = 0.0;
-  std::vector<std::size_t> take;
+  std::vector<SnoopCandidate> candidates;
   for (std::size_t k : failing) {
     const PointResult& p = r.points[active[k]];
-    const double h = 1.0 - p.redundancy_enu.sum() / 3.0;
-    if (!take.empty() && (leverage + h > kSnoopLeverageBudget || removed + take.size() + 1 > limit ||
-                          n - static_cast<int>(take.size()) - 1 < min_points || 3 * (n - static_cast<int>(take.size()) - 1) - u <= 0)) {
-      break;
-    }
-    leverage += h;
-    take.push_back(k);
+    candidates.push_back({p.point_p_value, 1.0 - p.redundancy_enu.sum() / 3.0});
   }
+  std::vector<std::size_t> take = snoop_selection(candidates, [&](std::size_t count) {
+    const int left = n - static_cast<int>(count);
+    return removed + count <= limit && left >= min_points && 3 * left - u > 0;
+  });
+  for (std::size_t& k : take) k = failing[k];
   for (std::size_t k : take) {
     PointResult& pr = r.points[active[k]];
     pr.outlier = true;

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,6 +25,44 @@ struct PointTestInput {
   Eigen::Matrix3d enu;    // rows: local east, north, up in the residual's axes
   bool in_fit = true;
 };
+
+// The tests of one observation of k components (a mark's three
+// coordinates, a GNSS baseline, a distance): `v` its residual, `w` the
+// whitening (Wᵀ W = C⁻¹), `q` the cofactor of the whitened residual
+// (I − A N⁻¹ Aᵀ in the adjustment, I + A N⁻¹ Aᵀ for one tested against
+// it), `axes` the directions in the observation's space along which
+// blunders are tested (rows, unit length: the local E, N, U of a mark, the
+// identity for a measurement's own components).
+// How much leverage (Σ over removed points of 1 − mean redundancy) one
+// snooping pass may remove at once; see snoop().
+inline constexpr double kSnoopLeverageBudget = 0.01;
+
+struct ObservationTest {
+  Eigen::VectorXd w;           // per axis (NaN: no redundancy along it)
+  Eigen::VectorXd redundancy;  // per axis: the diagonal of Q_v P there (0 outside the adjustment, or without redundancy)
+  Eigen::VectorXd mdb;         // per axis, in the observation's units (inf: undetectable; NaN outside)
+  double w_max = 0.0;
+  double statistic = 0.0;      // vᵀ Q⁺ v of the whitened residual: χ²(dof) under H0
+  int dof = 0;
+  double p_value = 1.0;
+};
+ObservationTest test_observation(const Eigen::VectorXd& v, const Eigen::MatrixXd& w, const Eigen::MatrixXd& q,
+                                 const Eigen::MatrixXd& axes, bool in_fit, double sigma_scale, double lambda0);
+
+// The two-sided χ² global test of Ω = Σ vᵀPv with `dof` degrees of
+// freedom at `alpha`; applicable with a-priori sigmas and redundancy.
+GlobalTest global_test(double omega, int dof, double alpha, bool applicable);
+
+// Which failing items (worst first: ascending p-value) one pass of data
+// snooping removes: the first, then more while their leverages (1 − mean
+// redundancy) add up to at most kSnoopLeverageBudget and `may_take(count)`
+// allows `count` of them. Returns indices into `failing`.
+struct SnoopCandidate {
+  double p_value = 1.0;
+  double leverage = 0.0;
+};
+std::vector<std::size_t> snoop_selection(const std::vector<SnoopCandidate>& failing,
+                                         const std::function<bool(std::size_t)>& may_take);
 
 // Fills residual_enu_m, w_enu, w_max, redundancy_enu, mdb_m and the point
 // test of `pr`. `sigma_scale` is σ̂0 when σ0 is estimated (τ-tests), else 1;
@@ -62,9 +101,6 @@ Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov);
 // names it, and past the share `r.refused_because` says the data or the
 // model is wrong and which test failed.
 enum class SnoopStep { none, removed, stopped };
-// How much leverage (Σ over removed points of 1 − mean redundancy) one
-// snooping pass may remove at once; see snoop().
-inline constexpr double kSnoopLeverageBudget = 0.01;
 SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions& o, int u, int min_points);
 
 // The largest number of marks data snooping may remove from `n` marks.

@@ -1,0 +1,131 @@
+#pragma once
+// A survey network as it was measured: stations with their a-priori
+// coordinates and datum constraints, and measurements with their a-priori
+// covariance (docs/commands/adjust.md). Readers (io/) fill it from
+// geoanchor's JSON, DynaML, SINEX and GNU Gama's XML; the adjustment
+// (solver/network_adjustment.hpp) estimates the stations from it.
+//
+// Units inside are SI: metres, radians, square metres and square radians.
+// Two spaces:
+//  - ellipsoidal: 3-D on the ellipsoid of `ellipsoid`; station positions
+//    are ECEF metres (X through Greenwich); terrestrial measurements are
+//    modelled in the local geodetic horizon at the instrument (the
+//    ellipsoid normal: deflections of the vertical zero);
+//  - local: a plane local Cartesian system (GNU Gama's local networks):
+//    x, y horizontal in the input's own axis convention, z up; 1-D
+//    (levelling: z only), 2-D (x, y) or 3-D.
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/ellipsoid.hpp"
+#include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/units.hpp"
+
+namespace geoanchor::geodesy {
+
+enum class NetworkSpace { ellipsoidal, local };
+
+// A local network's horizontal axes, as GNU Gama's `axes-xy` names them:
+// the directions of +x and +y ("ne": x north, y east). Directions and
+// angles in the input turn clockwise (`angles="left-handed"`, the
+// surveyor's sense) or counter-clockwise.
+struct LocalAxes {
+  char x = 'n', y = 'e';          // each one of n, e, s, w
+  bool angles_clockwise = true;   // directions and angles turn clockwise (seen from above)
+  // +1 when a bearing measured from +x towards +y turns in the angles'
+  // sense, −1 otherwise.
+  double bearing_sign() const;
+  std::string name() const;       // "ne"
+};
+
+// What a station's coordinates are held to, per component: for an
+// ellipsoidal network latitude, longitude, height (DynAdjust's order:
+// "CCF" holds latitude and longitude, leaves the height free), for a local
+// network x, y, z. 'F' free; 'C' constrained: fixed when its sigma is 0,
+// else held to the a-priori value with that standard deviation (metres).
+struct StationConstraint {
+  std::array<char, 3> code = {'F', 'F', 'F'};
+  std::array<double, 3> sigma_m = {0.0, 0.0, 0.0};
+  bool any() const { return code[0] == 'C' || code[1] == 'C' || code[2] == 'C'; }
+  std::string text() const;  // "CCF"
+};
+
+struct NetworkStation {
+  std::string id;
+  // A-priori coordinates: ECEF metres (ellipsoidal network, in the
+  // network's frame) or local x, y, z metres. A local 2-D network's z and a
+  // levelling network's x, y are 0 and not estimated.
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  bool position_known = true;  // false: no a-priori value was given (found from the measurements)
+  StationConstraint constraint;
+  std::string source;  // "file:line" or "file: stations[3]"
+};
+
+enum class MeasurementKind {
+  // GNSS, ECEF metres (ellipsoidal) or local x, y, z (local): several
+  // baselines or points with their joint covariance form one measurement.
+  gnss_baselines,  // stations: from, to pairs; value: Δ = to − from, 3 per baseline
+  gnss_points,     // stations: the points; value: positions, 3 per point
+  // Terrestrial, one value each (metres or radians).
+  slope_distance,       // stations: from, to; with instrument and target heights
+  horizontal_distance,  // in the local horizon at the instrument (ellipsoidal), the x/y plane (local)
+  ellipsoid_arc,        // geodesic on the ellipsoid between the stations' footpoints
+  direction,            // from, to: bearing − the set's orientation unknown
+  horizontal_angle,     // at, from (backsight), to (foresight): bearing(to) − bearing(from)
+  zenith_angle,         // from, to; with instrument and target heights
+  vertical_angle,       // from, to: 90° − zenith angle
+  azimuth,              // from, to: geodetic azimuth in the local horizon at `from`
+  height_difference,    // from, to: orthometric (levelled) H(to) − H(from); local: z(to) − z(from)
+  ellipsoidal_height,   // at
+  orthometric_height,   // at
+};
+
+// "gnss baselines", "slope distance", … for messages.
+const char* to_string(MeasurementKind k);
+
+struct NetworkMeasurement {
+  MeasurementKind kind = MeasurementKind::slope_distance;
+  std::vector<std::size_t> stations;  // indices into Network::stations, as the kind says
+  Eigen::VectorXd value;              // SI
+  Eigen::MatrixXd covariance;         // SI², value.size() square, positive definite
+  double instrument_height_m = 0.0;
+  double target_height_m = 0.0;
+  std::optional<std::size_t> set;     // direction: its set (one orientation unknown each)
+  // GNSS: the frame and epoch the values are in (nullopt: the network's).
+  std::optional<Frame> frame;
+  std::string group;                  // --estimate-helmert GROUP: measurements sharing a datum
+  bool ignore = false;                // read, not adjusted (DynAdjust's Ignore)
+  std::string source;                 // "file:line" or "file: DnaMeasurement[12]"
+  // What was done to bring it to the network's frame ("ITRF2014@2020.0 ->
+  // GDA2020 by ..."), filled when it was.
+  std::string frame_step;
+};
+
+struct DirectionSet {
+  std::size_t station = 0;  // the instrument
+  std::string source;
+};
+
+struct Network {
+  NetworkSpace space = NetworkSpace::ellipsoidal;
+  std::optional<Frame> frame;  // ellipsoidal: the frame (and epoch) of the stations
+  Ellipsoid ellipsoid = Ellipsoid::grs80();
+  LocalAxes axes;           // local: the input's axis convention
+  int local_dimensions = 3; // local: 1 (z), 2 (x, y) or 3
+  std::vector<NetworkStation> stations;
+  std::vector<NetworkMeasurement> measurements;
+  std::vector<DirectionSet> direction_sets;
+  std::string source_name;  // the input file(s), for messages
+  std::vector<std::string> warnings;
+
+  // The index of station `id`; nullopt when there is none.
+  std::optional<std::size_t> find(const std::string& id) const;
+};
+
+}  // namespace geoanchor::geodesy

@@ -1,0 +1,47 @@
+#include "geoanchor/geodesy/network.hpp"
+
+namespace geoanchor::geodesy {
+namespace {
+
+// The direction of an axis letter as a bearing clockwise from north, in quarter turns.
+int quarter_turns(char axis) { return axis == 'n' ? 0 : axis == 'e' ? 1 : axis == 's' ? 2 : 3; }
+
+}  // namespace
+
+double LocalAxes::bearing_sign() const {
+  // +x to +y is a clockwise quarter turn when y is x turned by +1 (mod 4).
+  const bool x_to_y_clockwise = (quarter_turns(y) - quarter_turns(x) + 4) % 4 == 1;
+  return x_to_y_clockwise == angles_clockwise ? 1.0 : -1.0;
+}
+
+std::string LocalAxes::name() const { return std::string{x, y}; }
+
+std::string StationConstraint::text() const { return std::string(code.begin(), code.end()); }
+
+const char* to_string(MeasurementKind k) {
+  switch (k) {
+    case MeasurementKind::gnss_baselines: return "GNSS baselines";
+    case MeasurementKind::gnss_points: return "GNSS point cluster";
+    case MeasurementKind::slope_distance: return "slope distance";
+    case MeasurementKind::horizontal_distance: return "horizontal distance";
+    case MeasurementKind::ellipsoid_arc: return "ellipsoid arc";
+    case MeasurementKind::direction: return "direction";
+    case MeasurementKind::horizontal_angle: return "horizontal angle";
+    case MeasurementKind::zenith_angle: return "zenith angle";
+    case MeasurementKind::vertical_angle: return "vertical angle";
+    case MeasurementKind::azimuth: return "geodetic azimuth";
+    case MeasurementKind::height_difference: return "height difference";
+    case MeasurementKind::ellipsoidal_height: return "ellipsoidal height";
+    case MeasurementKind::orthometric_height: return "orthometric height";
+  }
+  return "measurement";
+}
+
+std::optional<std::size_t> Network::find(const std::string& id) const {
+  for (std::size_t i = 0; i < stations.size(); ++i) {
+    if (stations[i].id == id) return i;
+  }
+  return std::nullopt;
+}
+
+}  // namespace geoanchor::geodesy

@@ -1,0 +1,145 @@
+#pragma once
+// Least-squares adjustment of a survey network (geodesy/network.hpp):
+// GNSS baselines and point clusters with their joint covariances, and
+// terrestrial measurements modelled in 3-D on the ellipsoid in the local
+// geodetic horizon at the instrument, or in a plane local system
+// (docs/commands/adjust.md states the models).
+//
+// Unknowns: each station's corrections along its local east, north and up
+// (ellipsoidal) or x, y, z (local), less the components its constraint
+// fixes, and one orientation per direction set. Gauss–Newton: the normal
+// matrix AᵀPA, assembled sparse, is factored by CHOLMOD (supernodal, with
+// a fill-reducing ordering) each iteration, until the largest coordinate
+// correction is below `convergence_m`. The statistics come from the final
+// factor: station covariances, covariances between stations that share a
+// measurement and every measurement's redundancy from the entries of N⁻¹
+// on the factor's pattern (Takahashi's selected inversion), never a dense
+// inverse.
+//
+// The datum: station constraints (fixed, or held with a standard
+// deviation), or --free: the defect is found (which of the three
+// translations, three rotations and scale no measurement defines) and the
+// network is held by inner constraints over the chosen stations (all by
+// default): the minimum-norm solution over them, by an S-transformation of
+// a minimally constrained one. A defect that is not defined is refused by
+// name.
+//
+// The statistics are fit's (one implementation, solver/src/
+// point_statistics.hpp): vᵀPv, dof, σ0 and the two-sided χ² global test;
+// per measurement the residual, its standard deviation, redundancy numbers,
+// w-tests, MDB and the measurement test; data snooping by the same rule
+// (the smallest p-value below alpha_point goes, within
+// max_outlier_share).
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/geoid.hpp"
+#include "geoanchor/geodesy/network.hpp"
+#include "geoanchor/solver/helmert_fit.hpp"
+
+namespace geoanchor::solver {
+
+struct AdjustOptions {
+  double alpha = 0.05;          // the global test
+  double alpha_point = 0.001;   // w-tests, measurement tests and data snooping
+  double power = 0.80;          // for the minimal detectable bias
+  double confidence = 0.95;     // the error ellipses' second size
+  bool data_snooping = true;
+  double max_outlier_share = 0.10;
+  double convergence_m = 1e-5;  // the iteration ends when no coordinate moves more (metres)
+  int max_iterations = 25;
+  double refraction_k = 0.0;    // zenith angles: coefficient of refraction (0.13 is typical by day)
+  // Free network: the datum by inner constraints over these stations (all
+  // when empty) instead of station constraints.
+  bool free = false;
+  std::vector<std::string> inner_constraint_stations;
+  // Orthometric heights and levelled height differences (ellipsoidal
+  // networks) need the geoid; refused without one.
+  const geodesy::GeoidGrid* geoid = nullptr;
+  // The tests' reference: a dense normal-equation solve and full inverse.
+  bool dense = false;
+};
+
+struct ErrorEllipse {
+  double semi_major_m = 0.0;
+  double semi_minor_m = 0.0;
+  double azimuth_rad = 0.0;  // of the semi-major axis, clockwise from north (local: from +x towards +y)
+};
+
+struct AdjustedStation {
+  std::string id;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // ECEF (ellipsoidal) or local x, y, z
+  Eigen::Vector3d a_priori = Eigen::Vector3d::Zero();
+  // Covariance (σ0 = 1, from the a-priori weights) in ECEF or local x, y, z,
+  // and in local east, north, up (ellipsoidal; local: x, y, z again).
+  Eigen::Matrix3d covariance_m2 = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d covariance_local_m2 = Eigen::Matrix3d::Zero();
+  ErrorEllipse ellipse;             // 1σ, horizontal
+  ErrorEllipse ellipse_confidence;  // at AdjustOptions::confidence (2-D χ² scale)
+  std::string constraint;           // "CCF"
+  bool used = true;                 // false: no measurement reaches it (left out)
+};
+
+// A measurement after the adjustment; vectors have one entry per component
+// (3 per baseline or point, 1 for a terrestrial measurement), in SI.
+struct AdjustedMeasurement {
+  std::size_t index = 0;  // into Network::measurements
+  bool used = true;       // in the final adjustment
+  bool outlier = false;   // removed by data snooping
+  std::string removed_because;
+  Eigen::VectorXd observed, adjusted;
+  Eigen::VectorXd residual;        // adjusted − observed
+  Eigen::VectorXd sigma;           // a priori
+  Eigen::VectorXd residual_sigma;  // of the residual (σ0 = 1)
+  Eigen::VectorXd redundancy;      // 0 … 1 per component
+  Eigen::VectorXd w;               // w-test per component (NaN: no redundancy)
+  Eigen::VectorXd mdb;             // minimal detectable bias per component (inf: none)
+  double w_max = 0.0;
+  double statistic = 0.0;  // the measurement test: χ²(dof) under H0
+  int test_dof = 0;
+  double p_value = 1.0;
+};
+
+struct RelativePrecision {
+  std::size_t from = 0, to = 0;  // indices into AdjustmentResult::stations
+  double distance_m = 0.0;
+  double sigma_distance_m = 0.0;  // of the distance between them
+  ErrorEllipse ellipse;           // of their horizontal difference, 1σ
+};
+
+struct AdjustmentResult {
+  std::vector<AdjustedStation> stations;          // in the network's order
+  std::vector<AdjustedMeasurement> measurements;  // in the network's order (ignored ones left out)
+  std::vector<double> orientations_rad, orientation_sigmas_rad;  // per direction set
+  std::vector<RelativePrecision> relative;  // between stations that share a measurement
+  double vtpv = 0.0;                // vᵀ Σ⁻¹ v, Σ the a-priori covariance
+  int dof = 0;
+  std::optional<double> variance_factor;  // vtpv / dof
+  std::optional<double> sigma0;
+  GlobalTest global_test;
+  double w_critical = 0.0;
+  int iterations = 0;
+  bool converged = false;
+  double largest_correction_m = 0.0;  // of the last iteration
+  std::string datum;                  // how the datum is defined, in words
+  std::vector<std::string> warnings;
+  std::string refused_because;        // set when data snooping reached its limit
+  std::size_t unknowns = 0, observations = 0;
+  std::int64_t factor_nonzeros = 0;
+};
+
+// Throws geoanchor::Error (input) naming the station or measurement: an
+// undefined datum (E_DATUM_DEFECT, naming what is undefined), a disconnected
+// network (E_NETWORK_DISCONNECTED, naming the components), a station the
+// measurements do not determine (E_NETWORK_SINGULAR), a covariance that is
+// not positive definite (E_COVARIANCE, with its smallest eigenvalue), a
+// height without a geoid (E_GEOID_MISSING); (rejected) no convergence
+// (E_NOT_CONVERGED, with the largest correction and its station).
+AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOptions& options);
+
+}  // namespace geoanchor::solver

@@ -1,0 +1,1002 @@
+// Least-squares adjustment of a survey network (network_adjustment.hpp).
+
+#include "geoanchor/solver/network_adjustment.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <set>
+
+#include "fit_common.hpp"
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "network_model.hpp"
+#include "point_statistics.hpp"
+#include "sparse_factor.hpp"
+#include "statistics.hpp"
+
+namespace geoanchor::solver {
+
+using geodesy::MeasurementKind;
+using geodesy::NetworkSpace;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A combination of datum parameters (translations, rotations, scale, each
+// scaled to move the stations by a metre) that the measurements and
+// constraints determine worse than this is undefined: a network whose
+// rotation about the vertical only the convergence of the ellipsoid's
+// normals fixes (a terrestrial network with no azimuth) is refused, not
+// held to tens of metres.
+constexpr double kUndefinedDatum_m = 1.0;
+
+using Index = std::int64_t;
+
+// The stations' unknowns: per station the index of each local component's
+// correction (east, north, up | x, y, z), −1 where none; per direction set
+// its orientation's.
+struct Layout {
+  std::vector<std::array<Index, 3>> station;
+  std::vector<Index> orientation;
+  Index count = 0;
+  // What each unknown is: the station (or set) and the component (3: an orientation).
+  std::vector<std::pair<std::size_t, int>> owner;
+};
+
+const char* component_name(NetworkSpace space, int c) {
+  static const char* ellipsoidal[] = {"east", "north", "up"};
+  static const char* local[] = {"x", "y", "z"};
+  return space == NetworkSpace::ellipsoidal ? ellipsoidal[c] : local[c];
+}
+
+// The local component a constraint letter holds: latitude, longitude,
+// height are north, east, up; a local network's x, y, z are themselves.
+int constrained_component(NetworkSpace space, int k) {
+  if (space == NetworkSpace::local) return k;
+  return k == 0 ? 1 : k == 1 ? 0 : 2;
+}
+
+// Whether a local network estimates component c.
+bool estimated_component(const geodesy::Network& net, int c) {
+  if (net.space == NetworkSpace::ellipsoidal || net.local_dimensions == 3) return true;
+  return net.local_dimensions == 2 ? c < 2 : c == 2;
+}
+
+std::string fmt_m(double v) { return format_fixed(v, 4) + " m"; }
+
+// One measurement's rows, linearized: its unknowns and the whitened design
+// rows over them, the whitened misclosure (observed − computed).
+struct Rows {
+  std::vector<Index> unknowns;
+  Eigen::MatrixXd a;  // whitened, rows × unknowns.size()
+  Eigen::VectorXd l;  // whitened misclosure
+  Eigen::VectorXd computed;
+};
+
+struct Problem {
+  const geodesy::Network& net;
+  const AdjustOptions& o;
+  geodesy::GeocentricConverter geocentric;
+  std::vector<StationState> states;
+  std::vector<double> orientations;
+  std::vector<Eigen::MatrixXd> whitening;  // per measurement: W with Wᵀ W = C⁻¹
+  std::vector<bool> active;                // measurements in the adjustment
+  std::vector<bool> station_used;
+  Layout layout;
+  bool free = false;
+  std::vector<std::size_t> inner;          // free: the inner-constraint stations
+  Eigen::MatrixXd defect;                  // free: the undefined datum directions over the unknowns (u × d)
+  std::vector<std::size_t> anchor;         // free: the stations the defect is held at while iterating
+  std::vector<std::string> defect_names;
+
+  Problem(const geodesy::Network& n, const AdjustOptions& opt) : net(n), o(opt), geocentric(n.ellipsoid) {}
+
+  Rows linearize(std::size_t mi) const {
+    const auto& m = net.measurements[mi];
+    const ModelContext ctx{net, o, states, orientations};
+    const Evaluation ev = evaluate(m, ctx);
+    Rows r;
+    r.computed = ev.computed;
+    std::map<Index, Eigen::Index> slot;
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(ev.computed.size(), 0);
+    auto column = [&](Index unknown) {
+      const auto [it, fresh] = slot.emplace(unknown, static_cast<Eigen::Index>(r.unknowns.size()));
+      if (fresh) {
+        r.unknowns.push_back(unknown);
+        a.conservativeResize(Eigen::NoChange, a.cols() + 1);
+        a.col(a.cols() - 1).setZero();
+      }
+      return it->second;
+    };
+    for (std::size_t s = 0; s < ev.stations.size(); ++s) {
+      for (int c = 0; c < 3; ++c) {
+        const Index u = layout.station[ev.stations[s]][static_cast<std::size_t>(c)];
+        if (u < 0) continue;
+        const Eigen::Index k = column(u);
+        a.col(k) += ev.d_local.col(static_cast<Eigen::Index>(3 * s + static_cast<std::size_t>(c)));
+      }
+    }
+    if (ev.orientation) {
+      const Eigen::Index k = column(layout.orientation[*m.set]);
+      a.col(k).array() -= 1.0;
+    }
+    r.a = whitening[mi] * a;
+    r.l = whitening[mi] * misclosure(m, ev.computed);
+    return r;
+  }
+
+  // The constraint of station s along component c held with a sigma: its
+  // whitened misclosure (a-priori − current, along the local axis) and unknown.
+  struct Pseudo {
+    Index unknown;
+    double l;
+  };
+  std::vector<Pseudo> pseudo_observations() const {
+    std::vector<Pseudo> out;
+    if (free) return out;
+    for (std::size_t s = 0; s < net.stations.size(); ++s) {
+      if (!station_used[s]) continue;
+      const auto& con = net.stations[s].constraint;
+      for (int k = 0; k < 3; ++k) {
+        if (con.code[static_cast<std::size_t>(k)] != 'C' || con.sigma_m[static_cast<std::size_t>(k)] <= 0.0) continue;
+        const int c = constrained_component(net.space, k);
+        const Eigen::Vector3d d = states[s].local_from_xyz * (net.stations[s].position - states[s].x);
+        out.push_back({layout.station[s][static_cast<std::size_t>(c)], d(c) / con.sigma_m[static_cast<std::size_t>(k)]});
+      }
+    }
+    return out;
+  }
+  double pseudo_weight(Index unknown) const {
+    const auto [s, c] = layout.owner[static_cast<std::size_t>(unknown)];
+    for (int k = 0; k < 3; ++k) {
+      if (constrained_component(net.space, k) == c) return 1.0 / net.stations[s].constraint.sigma_m[static_cast<std::size_t>(k)];
+    }
+    return 0.0;
+  }
+};
+
+// Union-find over stations joined by a measurement.
+std::vector<std::size_t> components_of(const Problem& p, std::size_t& count) {
+  std::vector<std::size_t> parent(p.net.stations.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](std::size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
+    if (!p.active[mi]) continue;
+    const auto& st = p.net.measurements[mi].stations;
+    for (std::size_t k = 1; k < st.size(); ++k) parent[find(st[k])] = find(st[0]);
+  }
+  std::map<std::size_t, std::size_t> id;
+  std::vector<std::size_t> out(parent.size(), 0);
+  for (std::size_t s = 0; s < parent.size(); ++s) {
+    if (!p.station_used[s]) continue;
+    const auto [it, fresh] = id.emplace(find(s), id.size());
+    out[s] = it->second;
+  }
+  count = id.size();
+  return out;
+}
+
+Layout make_layout(const Problem& p) {
+  Layout l;
+  const auto& net = p.net;
+  l.station.assign(net.stations.size(), {-1, -1, -1});
+  for (std::size_t s = 0; s < net.stations.size(); ++s) {
+    if (!p.station_used[s]) continue;
+    for (int c = 0; c < 3; ++c) {
+      if (!estimated_component(net, c)) continue;
+      bool fixed = false;
+      if (!p.free) {
+        for (int k = 0; k < 3; ++k) {
+          const auto& con = net.stations[s].constraint;
+          fixed = fixed || (constrained_component(net.space, k) == c && con.code[static_cast<std::size_t>(k)] == 'C' &&
+                            con.sigma_m[static_cast<std::size_t>(k)] <= 0.0);
+        }
+      }
+      if (fixed) continue;
+      l.station[s][static_cast<std::size_t>(c)] = l.count++;
+      l.owner.emplace_back(s, c);
+    }
+  }
+  l.orientation.assign(net.direction_sets.size(), -1);
+  for (std::size_t k = 0; k < net.direction_sets.size(); ++k) {
+    l.orientation[k] = l.count++;
+    l.owner.emplace_back(k, 3);
+  }
+  return l;
+}
+
+// The normal equations at the current state: entries of N (upper
+// triangle), Aᵀ l, the number of observation rows and vᵀPv of the misclosures.
+struct Normal {
+  std::vector<SymmetricEntry> entries;
+  Eigen::VectorXd b;
+  std::size_t rows = 0;
+};
+
+Normal assemble(const Problem& p) {
+  Normal n;
+  n.b = Eigen::VectorXd::Zero(p.layout.count);
+  for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
+    if (!p.active[mi]) continue;
+    const Rows r = p.linearize(mi);
+    n.rows += static_cast<std::size_t>(r.l.size());
+    const Eigen::MatrixXd ata = r.a.transpose() * r.a;
+    const Eigen::VectorXd atl = r.a.transpose() * r.l;
+    for (std::size_t i = 0; i < r.unknowns.size(); ++i) {
+      n.b(r.unknowns[i]) += atl(static_cast<Eigen::Index>(i));
+      for (std::size_t j = 0; j < r.unknowns.size(); ++j) {
+        if (r.unknowns[i] > r.unknowns[j]) continue;
+        n.entries.push_back({r.unknowns[i], r.unknowns[j], ata(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j))});
+      }
+    }
+  }
+  for (const auto& q : p.pseudo_observations()) {
+    const double w = p.pseudo_weight(q.unknown);
+    n.entries.push_back({q.unknown, q.unknown, w * w});
+    n.b(q.unknown) += w * q.l;
+    ++n.rows;
+  }
+  return n;
+}
+
+// The datum parameters as motions of the unknowns, each scaled to move the
+// stations by 1 m RMS: translations along X, Y, Z (x, y, z), rotations
+// about X, Y, Z through the centroid (local: about the vertical), scale.
+struct DatumVectors {
+  Eigen::MatrixXd g;  // u × d
+  std::vector<std::string> names;
+};
+
+DatumVectors datum_vectors(const Problem& p) {
+  const auto& net = p.net;
+  const bool ellipsoidal = net.space == NetworkSpace::ellipsoidal;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (std::size_t s = 0; s < net.stations.size(); ++s) {
+    if (p.station_used[s]) centroid += p.states[s].x, ++n;
+  }
+  centroid /= static_cast<double>(std::max<std::size_t>(n, 1));
+  double radius2 = 0.0;
+  for (std::size_t s = 0; s < net.stations.size(); ++s) {
+    if (p.station_used[s]) radius2 += (p.states[s].x - centroid).squaredNorm();
+  }
+  const double radius = std::max(1.0, std::sqrt(radius2 / static_cast<double>(std::max<std::size_t>(n, 1))));
+
+  // The motions of a station's position, per parameter (in the positions' axes).
+  struct Motion {
+    std::string name;
+    std::function<Eigen::Vector3d(const Eigen::Vector3d&)> move;
+    Eigen::Vector3d rotation_axis = Eigen::Vector3d::Zero();  // for the orientations
+  };
+  std::vector<Motion> motions;
+  const char* axis_names[] = {"X", "Y", "Z"};
+  if (ellipsoidal) {
+    for (int k = 0; k < 3; ++k) {
+      motions.push_back({std::string("translation along ") + axis_names[k] + " (ECEF)",
+                         [k](const Eigen::Vector3d&) { return Eigen::Vector3d::Unit(k); }, Eigen::Vector3d::Zero()});
+    }
+    for (int k = 0; k < 3; ++k) {
+      motions.push_back({std::string("rotation about ") + axis_names[k] + " (ECEF, through the network's centroid)",
+                         [k, centroid, radius](const Eigen::Vector3d& x) {
+                           return Eigen::Vector3d(Eigen::Vector3d::Unit(k).cross(x - centroid) / radius);
+                         },
+                         Eigen::Vector3d::Unit(k) / radius});
+    }
+    motions.push_back({"scale", [centroid, radius](const Eigen::Vector3d& x) { return Eigen::Vector3d((x - centroid) / radius); },
+                       Eigen::Vector3d::Zero()});
+  } else {
+    const char* local_names[] = {"x", "y", "z"};
+    for (int k = 0; k < 3; ++k) {
+      if (!estimated_component(net, k)) continue;
+      motions.push_back({std::string("translation along ") + local_names[k],
+                         [k](const Eigen::Vector3d&) { return Eigen::Vector3d::Unit(k); }, Eigen::Vector3d::Zero()});
+    }
+    if (net.local_dimensions >= 2) {
+      motions.push_back({"rotation about the vertical",
+                         [centroid, radius](const Eigen::Vector3d& x) {
+                           return Eigen::Vector3d(Eigen::Vector3d::UnitZ().cross(x - centroid) / radius);
+                         },
+                         Eigen::Vector3d::UnitZ() / radius});
+      motions.push_back({"scale",
+                         [centroid, radius](const Eigen::Vector3d& x) {
+                           Eigen::Vector3d d = (x - centroid) / radius;
+                           d.z() = 0.0;
+                           return d;
+                         },
+                         Eigen::Vector3d::Zero()});
+    }
+  }
+  DatumVectors dv;
+  dv.g = Eigen::MatrixXd::Zero(p.layout.count, static_cast<Eigen::Index>(motions.size()));
+  for (std::size_t k = 0; k < motions.size(); ++k) {
+    dv.names.push_back(motions[k].name);
+    for (std::size_t s = 0; s < net.stations.size(); ++s) {
+      if (!p.station_used[s]) continue;
+      const Eigen::Vector3d local = p.states[s].local_from_xyz * motions[k].move(p.states[s].x);
+      for (int c = 0; c < 3; ++c) {
+        const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
+        if (u >= 0) dv.g(u, static_cast<Eigen::Index>(k)) = local(c);
+      }
+    }
+    // A rotation turns the bearings at a station by its component about
+    // the local vertical: the set's orientation turns with them.
+    if (motions[k].rotation_axis.squaredNorm() > 0.0) {
+      for (std::size_t set = 0; set < net.direction_sets.size(); ++set) {
+        const auto& st = p.states[net.direction_sets[set].station];
+        const double about_up = motions[k].rotation_axis.dot(st.local_from_xyz.row(2).transpose());
+        dv.g(p.layout.orientation[set], static_cast<Eigen::Index>(k)) =
+            ellipsoidal ? -about_up : net.axes.bearing_sign() * about_up;
+      }
+    }
+  }
+  // Unit RMS motion over the stations.
+  for (Eigen::Index k = 0; k < dv.g.cols(); ++k) {
+    double rms2 = 0.0;
+    for (std::size_t u = 0; u < p.layout.owner.size(); ++u) {
+      if (p.layout.owner[u].second < 3) rms2 += dv.g(static_cast<Eigen::Index>(u), k) * dv.g(static_cast<Eigen::Index>(u), k);
+    }
+    if (rms2 > 0.0) dv.g.col(k) /= std::sqrt(rms2 / static_cast<double>(std::max<std::size_t>(n, 1)));
+  }
+  return dv;
+}
+
+// N·G from the upper-triangle entries.
+Eigen::MatrixXd times(const std::vector<SymmetricEntry>& entries, const Eigen::MatrixXd& g) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(g.rows(), g.cols());
+  for (const auto& e : entries) {
+    out.row(e.row) += e.value * g.row(e.col);
+    if (e.row != e.col) out.row(e.col) += e.value * g.row(e.row);
+  }
+  return out;
+}
+
+// The combinations (columns, over the datum parameters `names`) that a
+// motion matrix M (Gᵀ N G: how much vᵀPv a unit motion costs) leaves
+// undefined: its eigenvectors whose motion of kUndefinedDatum_m raises vᵀPv
+// by less than 1. Each is named by its largest parts into `described`.
+Eigen::MatrixXd weak_combinations(const Eigen::MatrixXd& m, const std::vector<std::string>& names,
+                                  std::vector<std::string>& described) {
+  described.clear();
+  if (m.rows() == 0) return Eigen::MatrixXd(0, 0);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m);
+  std::vector<Eigen::Index> weak;
+  for (Eigen::Index k = 0; k < m.rows(); ++k) {
+    if (eig.eigenvalues()(k) < 1.0 / (kUndefinedDatum_m * kUndefinedDatum_m)) weak.push_back(k);
+  }
+  Eigen::MatrixXd v(m.rows(), static_cast<Eigen::Index>(weak.size()));
+  for (std::size_t k = 0; k < weak.size(); ++k) v.col(static_cast<Eigen::Index>(k)) = eig.eigenvectors().col(weak[k]);
+  return v;
+  (void)names;
+}
+
+// Names a combination over the datum parameters by its largest parts.
+std::string name_combination(const Eigen::VectorXd& e, const std::vector<std::string>& names) {
+  std::string what;
+  for (Eigen::Index j = 0; j < e.size(); ++j) {
+    if (std::fabs(e(j)) >= 0.3 * e.cwiseAbs().maxCoeff()) what += (what.empty() ? "" : " with ") + names[static_cast<std::size_t>(j)];
+  }
+  return what;
+}
+
+// A fixed coordinate component as a constraint of this weight (1/m²): a
+// datum motion that moves it is defined.
+constexpr double kFixedWeight = 1e12;
+
+// Three stations of the inner set far apart (one for translations alone):
+// where the defect is held while iterating.
+std::vector<std::size_t> anchors(const Problem& p, bool rotations_or_scale) {
+  const auto& set = p.inner;
+  std::vector<std::size_t> out;
+  if (set.empty()) return out;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (std::size_t s : set) centroid += p.states[s].x;
+  centroid /= static_cast<double>(set.size());
+  auto farthest = [&](const std::function<double(std::size_t)>& score) {
+    std::size_t best = set.front();
+    double top = -1.0;
+    for (std::size_t s : set) {
+      if (score(s) > top) top = score(s), best = s;
+    }
+    return best;
+  };
+  const std::size_t a = farthest([&](std::size_t s) { return (p.states[s].x - centroid).squaredNorm(); });
+  out.push_back(a);
+  if (!rotations_or_scale || set.size() < 3) {
+    if (rotations_or_scale) out = set;
+    return out;
+  }
+  const std::size_t b = farthest([&](std::size_t s) { return (p.states[s].x - p.states[a].x).squaredNorm(); });
+  const std::size_t c = farthest([&](std::size_t s) {
+    return (p.states[s].x - p.states[a].x).cross(p.states[b].x - p.states[a].x).squaredNorm();
+  });
+  out.push_back(b);
+  if (c != a && c != b) out.push_back(c);
+  return out;
+}
+
+// The defect directions over the unknowns of `stations` only (zero elsewhere).
+Eigen::MatrixXd restricted(const Problem& p, const std::vector<std::size_t>& stations) {
+  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(p.defect.rows(), p.defect.cols());
+  for (std::size_t s : stations) {
+    for (int c = 0; c < 3; ++c) {
+      const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
+      if (u >= 0) e.row(u) = p.defect.row(u);
+    }
+  }
+  return e;
+}
+
+// Adds w·C Cᵀ to the normal equations (C: the defect held at the anchors).
+void hold_defect(const Problem& p, Normal& n) {
+  if (!p.free || p.defect.cols() == 0) return;
+  const Eigen::MatrixXd c = restricted(p, p.anchor);
+  double trace = 0.0;
+  std::size_t diagonal = 0;
+  for (const auto& e : n.entries) {
+    if (e.row == e.col) trace += e.value, ++diagonal;
+  }
+  const double w = diagonal > 0 ? trace / static_cast<double>(diagonal) : 1.0;
+  std::vector<Index> rows;
+  for (Index u = 0; u < c.rows(); ++u) {
+    if (c.row(u).squaredNorm() > 0.0) rows.push_back(u);
+  }
+  for (Index a : rows) {
+    for (Index b : rows) {
+      if (a <= b) n.entries.push_back({a, b, w * c.row(a).dot(c.row(b))});
+    }
+  }
+}
+
+[[noreturn]] void singular(const Problem& p, Index column) {
+  const std::string where = p.net.source_name;
+  if (column < 0 || static_cast<std::size_t>(column) >= p.layout.owner.size()) {
+    throw Error(ErrorKind::input, "E_NETWORK_SINGULAR",
+                where + ": the normal equations are singular: some unknown is not determined by the measurements");
+  }
+  const auto [s, c] = p.layout.owner[static_cast<std::size_t>(column)];
+  if (c == 3) {
+    throw Error(ErrorKind::input, "E_NETWORK_SINGULAR",
+                where + ": the orientation of the direction set at " + p.net.stations[p.net.direction_sets[s].station].id +
+                    " (" + p.net.direction_sets[s].source + ") is not determined: the set needs directions to stations "
+                    "whose positions the rest of the network gives");
+  }
+  std::size_t count = 0;
+  for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
+    if (!p.active[mi]) continue;
+    const auto& st = p.net.measurements[mi].stations;
+    if (std::find(st.begin(), st.end(), s) != st.end()) ++count;
+  }
+  throw Error(ErrorKind::input, "E_NETWORK_SINGULAR",
+              where + ": station " + p.net.stations[s].id + " (" + p.net.stations[s].source + "): its " +
+                  component_name(p.net.space, c) + " coordinate is not determined by the " + std::to_string(count) +
+                  " measurement" + (count == 1 ? "" : "s") + " that reach it; add measurements or constrain it");
+}
+
+// Moves the stations and orientations by the unknowns' corrections; returns
+// the largest station correction (metres) and its station.
+std::pair<double, std::size_t> apply_corrections(Problem& p, const Eigen::VectorXd& dx) {
+  double largest = 0.0;
+  std::size_t at = 0;
+  const auto& net = p.net;
+  for (std::size_t s = 0; s < net.stations.size(); ++s) {
+    if (!p.station_used[s]) continue;
+    Eigen::Vector3d local = Eigen::Vector3d::Zero();
+    for (int c = 0; c < 3; ++c) {
+      const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
+      if (u >= 0) local(c) = dx(u);
+    }
+    if (local.norm() > largest) largest = local.norm(), at = s;
+    Eigen::Vector3d x = p.states[s].x + p.states[s].local_from_xyz.transpose() * local;
+    if (net.space == NetworkSpace::ellipsoidal && !p.free && net.stations[s].constraint.any()) {
+      // Components held fixed stay at their a-priori geodetic values.
+      const auto& con = net.stations[s].constraint;
+      auto g = p.geocentric.geodetic_from_ecef(geodesy::EcefPosition(x.x(), x.y(), x.z()));
+      const auto a = p.geocentric.geodetic_from_ecef(geodesy::EcefPosition(net.stations[s].position.x(), net.stations[s].position.y(),
+                                                                           net.stations[s].position.z()));
+      bool changed = false;
+      if (con.code[0] == 'C' && con.sigma_m[0] <= 0.0) g.lat = a.lat, changed = true;
+      if (con.code[1] == 'C' && con.sigma_m[1] <= 0.0) g.lon = a.lon, changed = true;
+      if (con.code[2] == 'C' && con.sigma_m[2] <= 0.0) g.h = a.h, changed = true;
+      if (changed) x = p.geocentric.ecef_from_geodetic(g).m;
+    }
+    p.states[s] = station_state(net, p.geocentric, x);
+  }
+  for (std::size_t k = 0; k < p.orientations.size(); ++k) p.orientations[k] += dx(p.layout.orientation[k]);
+  return {largest, at};
+}
+
+NormalFactor factor_or_explain(const Problem& p, const Normal& n) {
+  Index failed = -1;
+  auto f = NormalFactor::factor(p.layout.count, n.entries, p.o.dense ? NormalFactor::Mode::dense : NormalFactor::Mode::sparse,
+                                &failed);
+  if (!f) singular(p, failed);
+  return std::move(*f);
+}
+
+ErrorEllipse ellipse_of(const Eigen::Matrix2d& c) {
+  // c in (first, second) = (east, north) or (x, y); azimuth from the second
+  // axis (north) towards the first (east); local: from +x towards +y.
+  const double a = c(0, 0), b = c(1, 1), ab = c(0, 1);
+  const double mean = 0.5 * (a + b), diff = 0.5 * (a - b);
+  const double root = std::sqrt(diff * diff + ab * ab);
+  ErrorEllipse e;
+  e.semi_major_m = std::sqrt(std::max(0.0, mean + root));
+  e.semi_minor_m = std::sqrt(std::max(0.0, mean - root));
+  e.azimuth_rad = 0.5 * std::atan2(2.0 * ab, b - a);  // from the second axis towards the first
+  if (e.azimuth_rad < 0.0) e.azimuth_rad += std::numbers::pi;
+  return e;
+}
+
+}  // namespace
+
+AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOptions& o) {
+  Problem p(network, o);
+  const auto& net = network;
+  AdjustmentResult result;
+  const std::string where = net.source_name;
+  if (net.stations.empty()) throw Error(ErrorKind::input, "E_NETWORK_EMPTY", where + ": no stations");
+
+  // Whitening of each measurement's covariance.
+  p.whitening.resize(net.measurements.size());
+  p.active.assign(net.measurements.size(), false);
+  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+    const auto& m = net.measurements[mi];
+    if (m.ignore) continue;
+    p.active[mi] = true;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m.covariance);
+    const double smallest = eig.eigenvalues().size() ? eig.eigenvalues()(0) : 0.0;
+    const double largest = eig.eigenvalues().size() ? eig.eigenvalues().maxCoeff() : 0.0;
+    if (!(smallest > 1e-15 * std::max(largest, 1e-300)) || !std::isfinite(largest)) {
+      throw Error(ErrorKind::input, "E_COVARIANCE",
+                  m.source + ": " + geodesy::to_string(m.kind) + ": the covariance is not positive definite (smallest "
+                  "eigenvalue " + format_shortest(smallest) + ", largest " + format_shortest(largest) + ")");
+    }
+    const Eigen::LLT<Eigen::MatrixXd> llt(m.covariance);
+    p.whitening[mi] = llt.matrixL().solve(Eigen::MatrixXd::Identity(m.covariance.rows(), m.covariance.cols()));
+  }
+  p.free = o.free;
+  if (p.free) {
+    std::size_t held = 0;
+    for (const auto& s : net.stations) held += s.constraint.any() ? 1u : 0u;
+    if (held > 0) {
+      result.warnings.push_back("--free: the constraints of " + std::to_string(held) +
+                                " station(s) in the input are set aside; the datum is the inner constraints'");
+    }
+  }
+
+  // The state: a-priori positions; orientations from the first direction of each set.
+  for (const auto& s : net.stations) p.states.push_back(station_state(net, p.geocentric, s.position));
+  p.orientations.assign(net.direction_sets.size(), 0.0);
+  {
+    std::vector<bool> seeded(net.direction_sets.size(), false);
+    const ModelContext ctx{net, o, p.states, p.orientations};
+    for (const auto& m : net.measurements) {
+      if (m.kind != MeasurementKind::direction || m.ignore || !m.set || seeded[*m.set]) continue;
+      const Evaluation ev = evaluate(m, ctx);  // computed = bearing − 0
+      p.orientations[*m.set] = ev.computed(0) - m.value(0);
+      seeded[*m.set] = true;
+    }
+  }
+
+  std::size_t removed = 0;
+  const std::size_t countable = static_cast<std::size_t>(std::count(p.active.begin(), p.active.end(), true));
+  FitOptions levels_of;
+  levels_of.alpha_point = o.alpha_point;
+  levels_of.power = o.power;
+  const PointTestLevels levels = point_test_levels(levels_of);
+  result.w_critical = levels.w_critical;
+  std::vector<std::string> outlier_why(net.measurements.size());
+
+  for (;;) {
+    // Stations reached by the measurements; the rest are left out.
+    p.station_used.assign(net.stations.size(), false);
+    for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+      if (!p.active[mi]) continue;
+      for (std::size_t s : net.measurements[mi].stations) p.station_used[s] = true;
+    }
+    std::size_t components = 0;
+    const auto component = components_of(p, components);
+    if (components > 1) {
+      std::map<std::size_t, std::vector<std::string>> members;
+      for (std::size_t s = 0; s < net.stations.size(); ++s) {
+        if (p.station_used[s]) members[component[s]].push_back(net.stations[s].id);
+      }
+      std::string list;
+      for (const auto& [k, ids] : members) {
+        list += (list.empty() ? "" : "; ") + std::to_string(ids.size()) + " station" + (ids.size() == 1 ? "" : "s") + " (" +
+                ids.front() + (ids.size() > 1 ? ", " + ids[1] : "") + (ids.size() > 2 ? ", …" : "") + ")";
+      }
+      throw Error(ErrorKind::input, "E_NETWORK_DISCONNECTED",
+                  where + ": the network falls into " + std::to_string(components) +
+                      " parts that no measurement joins: " + list + "; adjust them separately or join them");
+    }
+    p.layout = make_layout(p);
+    p.inner.clear();
+    if (p.free) {
+      if (o.inner_constraint_stations.empty()) {
+        for (std::size_t s = 0; s < net.stations.size(); ++s) {
+          if (p.station_used[s]) p.inner.push_back(s);
+        }
+      } else {
+        for (const auto& id : o.inner_constraint_stations) {
+          const auto s = net.find(id);
+          if (!s) throw Error(ErrorKind::usage, "E_OPTION", "--inner-constraints " + id + ": no station of that name in " + where);
+          if (!p.station_used[*s]) {
+            throw Error(ErrorKind::usage, "E_OPTION", "--inner-constraints " + id + ": the station has no measurement");
+          }
+          p.inner.push_back(*s);
+        }
+      }
+    }
+
+    // Gauss–Newton.
+    bool converged = false;
+    double largest = 0.0;
+    std::size_t largest_at = 0;
+    int iteration = 0;
+    for (iteration = 1; iteration <= o.max_iterations; ++iteration) {
+      Normal n = assemble(p);
+      if (iteration == 1) {
+        // The datum. First what the measurements leave undefined (every
+        // component an unknown, no constraint), then whether the
+        // constraints define it: a station the measurements do not fix on
+        // its own is no datum defect but a singularity, named below.
+        Problem probe = p;
+        probe.free = true;
+        probe.layout = make_layout(probe);
+        const Normal n0 = assemble(probe);
+        const DatumVectors dv = datum_vectors(probe);
+        const Eigen::MatrixXd m0 = dv.g.transpose() * times(n0.entries, dv.g);
+        std::vector<std::string> unused;
+        const Eigen::MatrixXd v0 = weak_combinations(m0, dv.names, unused);
+        std::vector<std::string> names;
+        if (p.free) {
+          p.defect = dv.g * v0;  // the free layout is the probe's
+          for (Eigen::Index k = 0; k < v0.cols(); ++k) names.push_back(name_combination(v0.col(k), dv.names));
+        } else if (v0.cols() > 0) {
+          // The constraints' weight on those combinations.
+          Eigen::VectorXd weight = Eigen::VectorXd::Zero(probe.layout.count);
+          for (std::size_t st = 0; st < net.stations.size(); ++st) {
+            if (!p.station_used[st]) continue;
+            const auto& con = net.stations[st].constraint;
+            for (int k = 0; k < 3; ++k) {
+              if (con.code[static_cast<std::size_t>(k)] != 'C') continue;
+              const Index u = probe.layout.station[st][static_cast<std::size_t>(constrained_component(net.space, k))];
+              if (u < 0) continue;
+              const double sigma = con.sigma_m[static_cast<std::size_t>(k)];
+              weight(u) = sigma > 0.0 ? 1.0 / (sigma * sigma) : kFixedWeight;
+            }
+          }
+          const Eigen::MatrixXd gv = dv.g * v0;
+          const Eigen::MatrixXd mv = v0.transpose() * m0 * v0 + gv.transpose() * weight.asDiagonal() * gv;
+          const Eigen::MatrixXd still = weak_combinations(mv, {}, unused);
+          for (Eigen::Index k = 0; k < still.cols(); ++k) names.push_back(name_combination(v0 * still.col(k), dv.names));
+          if (!names.empty()) {
+            std::string list;
+            for (const auto& x : names) list += (list.empty() ? "" : "; ") + x;
+            throw Error(ErrorKind::input, "E_DATUM_DEFECT",
+                        where + ": the datum is not defined: neither the measurements nor the constraints fix the " + list +
+                            (names.size() == 1 ? "" : " (" + std::to_string(names.size()) + " combinations)") +
+                            "; constrain stations (--constrain ID=CCC[,SIGMA_M]) or adjust it as a free network (--free)");
+          }
+        }
+        p.defect_names = names;
+        if (p.free && p.defect.cols() > 0) {
+          bool beyond_translation = false;
+          for (const auto& x : names) beyond_translation = beyond_translation || x.find("translation") == std::string::npos || x.find(" with ") != std::string::npos;
+          p.anchor = anchors(p, beyond_translation);
+        }
+      } else if (p.free && p.defect.cols() > 0) {
+        // The same combinations, at the moved positions.
+        const DatumVectors dv = datum_vectors(p);
+        std::vector<std::string> unused;
+        const Eigen::MatrixXd m = dv.g.transpose() * times(n.entries, dv.g);
+        const Eigen::MatrixXd weak = weak_combinations(m, dv.names, unused);
+        if (weak.cols() == p.defect.cols()) p.defect = dv.g * weak;
+      }
+      hold_defect(p, n);
+      const NormalFactor f = factor_or_explain(p, n);
+      const Eigen::VectorXd dx = f.solve(n.b);
+      if (!dx.allFinite()) singular(p, -1);
+      const auto [moved, at] = apply_corrections(p, dx);
+      largest = moved;
+      largest_at = at;
+      if (moved < o.convergence_m) {
+        converged = true;
+        break;
+      }
+    }
+    result.iterations += std::min(iteration, o.max_iterations);
+    result.largest_correction_m = largest;
+    if (!converged) {
+      throw Error(ErrorKind::rejected, "E_NOT_CONVERGED",
+                  where + ": the adjustment did not converge in " + std::to_string(o.max_iterations) +
+                      " iterations: the last moved station " + net.stations[largest_at].id + " by " + fmt_m(largest) +
+                      " (threshold " + format_shortest(o.convergence_m) + " m); check the a-priori coordinates and units");
+    }
+
+    // Free network: the minimum-norm solution over the inner stations (an
+    // S-transformation of the solution held at the anchors).
+    Eigen::MatrixXd inner_e, inner_m;
+    if (p.free && p.defect.cols() > 0) {
+      inner_e = restricted(p, p.inner);
+      inner_m = (inner_e.transpose() * p.defect).inverse();
+      Eigen::VectorXd corrections = Eigen::VectorXd::Zero(p.layout.count);
+      for (std::size_t s : p.inner) {
+        const Eigen::Vector3d d = p.states[s].local_from_xyz * (p.states[s].x - net.stations[s].position);
+        for (int c = 0; c < 3; ++c) {
+          const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
+          if (u >= 0) corrections(u) = d(c);
+        }
+      }
+      const Eigen::VectorXd t = -inner_m * (inner_e.transpose() * corrections);
+      apply_corrections(p, p.defect * t);
+    }
+
+    // The statistics at the solution.
+    Normal n = assemble(p);
+    hold_defect(p, n);
+    NormalFactor f = factor_or_explain(p, n);
+    f.select_inverse();
+    result.factor_nonzeros = f.factor_nonzeros();
+    result.unknowns = static_cast<std::size_t>(p.layout.count);
+    result.observations = n.rows;
+    const int defect = p.free ? static_cast<int>(p.defect.cols()) : 0;
+    result.dof = static_cast<int>(n.rows) - static_cast<int>(p.layout.count) + defect;
+
+    // Per measurement.
+    result.measurements.clear();
+    double vtpv = 0.0;
+    std::vector<std::pair<std::size_t, AdjustedMeasurement>> tested;
+    for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+      const auto& m = net.measurements[mi];
+      if (m.ignore) continue;
+      const bool in = p.active[mi];
+      const bool was_outlier = !in && !outlier_why[mi].empty();
+      // An outlier is tested against the adjustment (its prediction) where its stations are in it.
+      bool testable = in;
+      if (was_outlier) {
+        testable = true;
+        for (std::size_t s : m.stations) testable = testable && p.station_used[s];
+        if (m.set && p.layout.orientation.size() > *m.set) testable = testable && true;
+      }
+      AdjustedMeasurement am;
+      am.index = mi;
+      am.used = in;
+      am.outlier = was_outlier;
+      am.removed_because = outlier_why[mi];
+      am.observed = m.value;
+      am.sigma = m.covariance.diagonal().cwiseSqrt();
+      const Eigen::Index k = m.value.size();
+      if (!testable) {
+        am.adjusted = am.residual = am.residual_sigma = am.w = am.mdb = Eigen::VectorXd::Constant(k, kNaN);
+        am.redundancy = Eigen::VectorXd::Zero(k);
+        result.measurements.push_back(std::move(am));
+        continue;
+      }
+      const Rows r = p.linearize(mi);
+      am.adjusted = r.computed;
+      am.residual = -misclosure(m, r.computed);  // adjusted − observed
+      // A Q Aᵀ over the measurement's unknowns, from the selected inverse.
+      const std::size_t nu = r.unknowns.size();
+      Eigen::MatrixXd q(static_cast<Eigen::Index>(nu), static_cast<Eigen::Index>(nu));
+      for (std::size_t a = 0; a < nu; ++a) {
+        for (std::size_t b = a; b < nu; ++b) {
+          q(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = q(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(a)) =
+              f.inverse(r.unknowns[a], r.unknowns[b]);
+        }
+      }
+      const Eigen::MatrixXd aqa = r.a * q * r.a.transpose();
+      const Eigen::MatrixXd qv = in ? Eigen::MatrixXd(Eigen::MatrixXd::Identity(k, k) - aqa)
+                                    : Eigen::MatrixXd(Eigen::MatrixXd::Identity(k, k) + aqa);
+      const ObservationTest t = test_observation(am.residual, p.whitening[mi], qv, Eigen::MatrixXd::Identity(k, k), in, 1.0,
+                                                 levels.lambda0);
+      am.w = t.w;
+      am.redundancy = t.redundancy;
+      am.mdb = t.mdb;
+      am.w_max = t.w_max;
+      am.statistic = t.statistic;
+      am.test_dof = t.dof;
+      am.p_value = t.p_value;
+      // σ of the residual: W⁻¹ Q_v W⁻ᵀ.
+      const Eigen::MatrixXd w_inv = p.whitening[mi].inverse();
+      am.residual_sigma = (w_inv * qv * w_inv.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+      if (in) {
+        const Eigen::VectorXd vw = p.whitening[mi] * am.residual;
+        vtpv += vw.squaredNorm();
+      }
+      result.measurements.push_back(std::move(am));
+    }
+    for (const auto& q : p.pseudo_observations()) vtpv += q.l * q.l;
+    result.vtpv = vtpv;
+    result.variance_factor = result.dof > 0 ? std::optional<double>(vtpv / result.dof) : std::nullopt;
+    result.sigma0 = result.variance_factor ? std::optional<double>(std::sqrt(*result.variance_factor)) : std::nullopt;
+    result.global_test = global_test(vtpv, result.dof, o.alpha, true);
+
+    // Data snooping: the measurement with the smallest p-value below
+    // alpha_point goes, within the share; then the network is adjusted again.
+    if (o.data_snooping && result.dof > 0) {
+      std::vector<std::pair<std::size_t, SnoopCandidate>> failing;  // measurement index, candidate
+      for (const auto& am : result.measurements) {
+        if (am.used && am.test_dof > 0 && am.p_value < o.alpha_point) {
+          failing.push_back({am.index, {am.p_value, 1.0 - am.redundancy.mean()}});
+        }
+      }
+      std::stable_sort(failing.begin(), failing.end(),
+                       [](const auto& a, const auto& b) { return a.second.p_value < b.second.p_value; });
+      if (!failing.empty()) {
+        const std::size_t limit = std::max<std::size_t>(
+            1, static_cast<std::size_t>(std::floor(o.max_outlier_share * static_cast<double>(countable))));
+        const auto& worst = net.measurements[failing.front().first];
+        const auto describe = [&](std::size_t mi) {
+          const auto it = std::find_if(result.measurements.begin(), result.measurements.end(),
+                                       [&](const AdjustedMeasurement& am) { return am.index == mi; });
+          return "measurement test " + format_shortest(it->statistic) + " (χ²(" + std::to_string(it->test_dof) +
+                 "), p = " + format_shortest(it->p_value) + " < " + format_shortest(o.alpha_point) + "); max |w| " +
+                 format_fixed(it->w_max, 2);
+        };
+        if (removed + 1 > limit) {
+          result.refused_because = "data snooping stopped after removing " + std::to_string(removed) + " of " +
+                                   std::to_string(countable) + " measurements (the limit is " +
+                                   format_shortest(100.0 * o.max_outlier_share) + " %): " + worst.source + " (" +
+                                   geodesy::to_string(worst.kind) + ") still fails its " + describe(failing.front().first) +
+                                   "; " + std::to_string(failing.size()) +
+                                   " measurements fail now. So many failures mean the data or the model is wrong "
+                                   "(frames, units, heights, station names), not a few blunders";
+          result.warnings.push_back(result.refused_because);
+        } else {
+          std::vector<SnoopCandidate> candidates;
+          for (const auto& x : failing) candidates.push_back(x.second);
+          const auto take = snoop_selection(candidates, [&](std::size_t count) { return removed + count <= limit; });
+          for (std::size_t k : take) {
+            const std::size_t mi = failing[k].first;
+            outlier_why[mi] = "data snooping: " + describe(mi);
+            p.active[mi] = false;
+            ++removed;
+          }
+          continue;  // adjust again without them
+        }
+      }
+    }
+
+    // Stations: coordinates and covariances (S-transformed for a free network).
+    const std::size_t d = static_cast<std::size_t>(p.defect.cols());
+    Eigen::MatrixXd ze, eze;  // Z E (u × d) and Eᵀ Z E
+    if (p.free && d > 0) {
+      ze = f.solve(Eigen::MatrixXd(inner_e));
+      eze = inner_e.transpose() * ze;
+    }
+    auto q_block = [&](std::size_t s1, std::size_t s2) {
+      Eigen::Matrix3d q = Eigen::Matrix3d::Zero();
+      for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+          const Index ua = p.layout.station[s1][static_cast<std::size_t>(a)], ub = p.layout.station[s2][static_cast<std::size_t>(b)];
+          if (ua < 0 || ub < 0) continue;
+          double v = f.inverse(ua, ub);
+          if (p.free && d > 0) {
+            // S Z Sᵀ, S = I − D M Eᵀ.
+            const Eigen::RowVectorXd da = p.defect.row(ua) * inner_m, db = p.defect.row(ub) * inner_m;
+            v += -da.dot(ze.row(ub)) - ze.row(ua).dot(db) + da * eze * db.transpose();
+          }
+          q(a, b) = v;
+        }
+      }
+      return q;
+    };
+    const double confidence_scale = std::sqrt(-2.0 * std::log(1.0 - o.confidence));  // √χ²₂(p)
+    result.stations.clear();
+    for (std::size_t s = 0; s < net.stations.size(); ++s) {
+      AdjustedStation as;
+      as.id = net.stations[s].id;
+      as.position = p.states[s].x;
+      as.a_priori = net.stations[s].position;
+      as.constraint = p.free ? "FFF" : net.stations[s].constraint.text();
+      as.used = p.station_used[s];
+      if (as.used) {
+        as.covariance_local_m2 = q_block(s, s);
+        as.covariance_m2 = p.states[s].local_from_xyz.transpose() * as.covariance_local_m2 * p.states[s].local_from_xyz;
+        as.ellipse = ellipse_of(as.covariance_local_m2.topLeftCorner<2, 2>());
+        as.ellipse_confidence = as.ellipse;
+        as.ellipse_confidence.semi_major_m *= confidence_scale;
+        as.ellipse_confidence.semi_minor_m *= confidence_scale;
+      }
+      result.stations.push_back(std::move(as));
+    }
+    result.orientations_rad = p.orientations;
+    result.orientation_sigmas_rad.clear();
+    for (std::size_t k = 0; k < p.orientations.size(); ++k) {
+      result.orientation_sigmas_rad.push_back(std::sqrt(std::max(0.0, f.inverse(p.layout.orientation[k], p.layout.orientation[k]))));
+    }
+    // Relative precision between stations that share a measurement.
+    result.relative.clear();
+    std::set<std::pair<std::size_t, std::size_t>> pairs;
+    for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+      if (!p.active[mi]) continue;
+      // The stations a measurement joins: a baseline's ends, a terrestrial
+      // measurement's stations (not a point cluster's points, which it
+      // positions each on its own).
+      const auto& m = net.measurements[mi];
+      const auto& st = m.stations;
+      if (m.kind == MeasurementKind::gnss_points) continue;
+      for (std::size_t a = 0; a < st.size(); ++a) {
+        for (std::size_t b = a + 1; b < st.size(); ++b) {
+          if (m.kind == MeasurementKind::gnss_baselines && !(a % 2 == 0 && b == a + 1)) continue;
+          if (st[a] != st[b]) pairs.insert({std::min(st[a], st[b]), std::max(st[a], st[b])});
+        }
+      }
+    }
+    for (const auto& [s1, s2] : pairs) {
+      // In the axes of the first station; a local network's axes are one.
+      const Eigen::Matrix3d r1 = p.states[s1].local_from_xyz, r2 = p.states[s2].local_from_xyz;
+      const Eigen::Matrix3d c11 = r1.transpose() * q_block(s1, s1) * r1, c22 = r2.transpose() * q_block(s2, s2) * r2;
+      const Eigen::Matrix3d c12 = r1.transpose() * q_block(s1, s2) * r2;
+      const Eigen::Matrix3d diff = r1 * (c11 + c22 - c12 - c12.transpose()) * r1.transpose();
+      RelativePrecision rp;
+      rp.from = s1;
+      rp.to = s2;
+      const Eigen::Vector3d dxyz = p.states[s2].x - p.states[s1].x;
+      rp.distance_m = dxyz.norm();
+      const Eigen::Vector3d unit_local = r1 * dxyz / std::max(rp.distance_m, 1e-12);
+      rp.sigma_distance_m = std::sqrt(std::max(0.0, unit_local.dot(diff * unit_local)));
+      rp.ellipse = ellipse_of(diff.topLeftCorner<2, 2>());
+      result.relative.push_back(rp);
+    }
+
+    // The datum in words.
+    std::size_t fixed = 0, weighted = 0;
+    for (std::size_t s = 0; s < net.stations.size(); ++s) {
+      if (!p.station_used[s] || p.free) continue;
+      const auto& con = net.stations[s].constraint;
+      for (int k = 0; k < 3; ++k) {
+        if (con.code[static_cast<std::size_t>(k)] != 'C') continue;
+        (con.sigma_m[static_cast<std::size_t>(k)] > 0.0 ? weighted : fixed) += 1;
+      }
+    }
+    if (p.free && d > 0) {
+      std::string list;
+      for (const auto& x : p.defect_names) list += (list.empty() ? "" : "; ") + x;
+      result.datum = "free network: " + list + " held by inner constraints over " + std::to_string(p.inner.size()) + " station" +
+                     (p.inner.size() == 1 ? "" : "s");
+    } else {
+      result.datum = std::to_string(fixed) + " coordinate component" + (fixed == 1 ? "" : "s") + " fixed, " +
+                     std::to_string(weighted) + " held with a standard deviation" +
+                     (p.free ? " (free network: the measurements define the datum)" : "");
+    }
+    for (std::size_t s = 0; s < net.stations.size(); ++s) {
+      if (!p.station_used[s]) {
+        result.warnings.push_back("station " + net.stations[s].id + " (" + net.stations[s].source +
+                                  ") is reached by no measurement in the adjustment: left out");
+      }
+    }
+    if (result.dof <= 0) {
+      result.warnings.push_back("no redundancy (dof = " + std::to_string(result.dof) +
+                                "): σ0, the global test and the measurement tests are undefined");
+    } else if (result.dof <= 5) {
+      result.warnings.push_back("low redundancy (dof = " + std::to_string(result.dof) +
+                                "): the global test and the w-tests have little power");
+    }
+    const auto& g = result.global_test;
+    if (g.applicable && !g.passed) {
+      result.warnings.push_back(std::string("global test ") +
+                                (g.statistic > g.critical_upper ? "FAILED high: the residuals are larger than the a-priori "
+                                                                  "standard deviations allow"
+                                                                : "low: the residuals are smaller than the a-priori standard "
+                                                                  "deviations suggest (too pessimistic?)") +
+                                " (variance factor " + format_shortest(result.variance_factor.value_or(kNaN)) + ")");
+    }
+    result.converged = true;
+    return result;
+  }
+}
+
+}  // namespace geoanchor::solver

@@ -1,0 +1,286 @@
+// The observation equations of the network adjustment (network_model.hpp).
+
+#include "network_model.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geodesic.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor::solver {
+
+using geodesy::MeasurementKind;
+using geodesy::NetworkSpace;
+
+namespace {
+
+[[noreturn]] void fail(const geodesy::NetworkMeasurement& m, const char* code, const std::string& problem) {
+  throw Error(ErrorKind::input, code, m.source + ": " + geodesy::to_string(m.kind) + ": " + problem);
+}
+
+double wrap(double a) {
+  a = std::remainder(a, 2.0 * std::numbers::pi);
+  return a <= -std::numbers::pi ? a + 2.0 * std::numbers::pi : a;
+}
+
+// The instrument and target points and the vector between them, with the
+// instrument's local axes.
+struct Sight {
+  Eigen::Vector3d d;          // target point − instrument point, in the positions' axes
+  Eigen::Vector3d e, n, u;    // the instrument's local axes in the positions' axes
+  double east = 0, north = 0, up = 0;  // d in those axes
+  double horizontal = 0, slope = 0;
+};
+
+Sight sight(const geodesy::NetworkMeasurement& m, const StationState& from, const StationState& to) {
+  Sight s;
+  s.e = from.local_from_xyz.row(0).transpose();
+  s.n = from.local_from_xyz.row(1).transpose();
+  s.u = from.local_from_xyz.row(2).transpose();
+  const Eigen::Vector3d up_to = to.local_from_xyz.row(2).transpose();
+  s.d = (to.x + m.target_height_m * up_to) - (from.x + m.instrument_height_m * s.u);
+  s.east = s.d.dot(s.e);
+  s.north = s.d.dot(s.n);
+  s.up = s.d.dot(s.u);
+  s.horizontal = std::hypot(s.east, s.north);
+  s.slope = s.d.norm();
+  return s;
+}
+
+// A bearing and its gradient with respect to d: clockwise from north at the
+// instrument (ellipsoidal), or from +x in the angles' sense (local).
+double bearing(const Sight& s, const geodesy::Network& net, Eigen::Vector3d& gradient) {
+  const double h2 = s.horizontal * s.horizontal;
+  if (net.space == NetworkSpace::ellipsoidal) {
+    gradient = (s.north * s.e - s.east * s.n) / h2;
+    return std::atan2(s.east, s.north);
+  }
+  // Local: x is the first axis, y the second; the local axes are x, y, z.
+  const double sign = net.axes.bearing_sign();
+  gradient = sign * Eigen::Vector3d(-s.north, s.east, 0.0) / h2;  // east = dx, north = dy here
+  return sign * std::atan2(s.north, s.east);
+}
+
+// The gradient g of f with respect to a station's position, as ∂f/∂(local axes).
+Eigen::RowVector3d to_local(const Eigen::Vector3d& g, const StationState& st) {
+  return (st.local_from_xyz * g).transpose();
+}
+
+}  // namespace
+
+bool is_angular(MeasurementKind k) {
+  switch (k) {
+    case MeasurementKind::direction:
+    case MeasurementKind::horizontal_angle:
+    case MeasurementKind::zenith_angle:
+    case MeasurementKind::vertical_angle:
+    case MeasurementKind::azimuth:
+      return true;
+    default:
+      return false;
+  }
+}
+
+StationState station_state(const geodesy::Network& net, const geodesy::GeocentricConverter& geocentric,
+                           const Eigen::Vector3d& x) {
+  StationState s;
+  s.x = x;
+  if (net.space == NetworkSpace::local) return s;
+  const auto g = geocentric.geodetic_from_ecef(geodesy::EcefPosition(x.x(), x.y(), x.z()));
+  s.lat_rad = g.lat.rad();
+  s.lon_rad = g.lon.rad();
+  s.h_m = g.h.m;
+  s.local_from_xyz = geodesy::enu_from_ecef_rotation(g.lat, g.lon);
+  return s;
+}
+
+Eigen::VectorXd misclosure(const geodesy::NetworkMeasurement& m, const Eigen::VectorXd& computed) {
+  Eigen::VectorXd r = m.value - computed;
+  if (is_angular(m.kind)) {
+    for (Eigen::Index k = 0; k < r.size(); ++k) r(k) = wrap(r(k));
+  }
+  return r;
+}
+
+Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c) {
+  const geodesy::Network& net = c.net;
+  const bool local = net.space == NetworkSpace::local;
+  const auto& st = c.stations;
+  Evaluation ev;
+  ev.stations = m.stations;
+  const Eigen::Index rows = m.value.size();
+  ev.computed = Eigen::VectorXd::Zero(rows);
+  ev.d_local = Eigen::MatrixXd::Zero(rows, static_cast<Eigen::Index>(3 * m.stations.size()));
+  auto put = [&](Eigen::Index row, std::size_t which, const Eigen::Vector3d& g) {
+    ev.d_local.block<1, 3>(row, static_cast<Eigen::Index>(3 * which)) = to_local(g, st[m.stations[which]]);
+  };
+  auto station_of = [&](std::size_t which) -> const StationState& { return st[m.stations[which]]; };
+  auto need_horizontal = [&](const Sight& s) {
+    if (!(s.horizontal > 1e-6)) {
+      fail(m, "E_NETWORK_GEOMETRY",
+           "stations " + net.stations[m.stations[0]].id + " and " + net.stations[m.stations[1]].id +
+               " are on one vertical: no horizontal direction or distance between them");
+    }
+  };
+  // The geoid undulation at a station, for orthometric heights.
+  auto undulation = [&](std::size_t station) {
+    if (!c.options.geoid) {
+      fail(m, "E_GEOID_MISSING",
+           "orthometric heights need the geoid: give --geoid NAME|PATH (EGM96, a grid PROJ reads)");
+    }
+    const StationState& s = st[station];
+    return c.options.geoid->undulation_m(geodesy::Angle::radians(s.lat_rad), geodesy::Angle::radians(s.lon_rad),
+                                        m.source + ": station " + net.stations[station].id);
+  };
+
+  switch (m.kind) {
+    case MeasurementKind::gnss_baselines: {
+      for (std::size_t p = 0; p + 1 < m.stations.size(); p += 2) {
+        const Eigen::Index row = static_cast<Eigen::Index>(3 * (p / 2));
+        ev.computed.segment<3>(row) = station_of(p + 1).x - station_of(p).x;
+        for (int k = 0; k < 3; ++k) {
+          put(row + k, p + 1, Eigen::Vector3d::Unit(k));
+          put(row + k, p, -Eigen::Vector3d::Unit(k));
+        }
+      }
+      break;
+    }
+    case MeasurementKind::gnss_points: {
+      for (std::size_t p = 0; p < m.stations.size(); ++p) {
+        const Eigen::Index row = static_cast<Eigen::Index>(3 * p);
+        ev.computed.segment<3>(row) = station_of(p).x;
+        for (int k = 0; k < 3; ++k) put(row + k, p, Eigen::Vector3d::Unit(k));
+      }
+      break;
+    }
+    case MeasurementKind::slope_distance: {
+      const Sight s = sight(m, station_of(0), station_of(1));
+      if (!(s.slope > 1e-6)) fail(m, "E_NETWORK_GEOMETRY", "the two points coincide");
+      ev.computed(0) = s.slope;
+      put(0, 1, s.d / s.slope);
+      put(0, 0, -s.d / s.slope);
+      break;
+    }
+    case MeasurementKind::horizontal_distance: {
+      const Sight s = sight(m, station_of(0), station_of(1));
+      need_horizontal(s);
+      ev.computed(0) = s.horizontal;
+      const Eigen::Vector3d g = (s.east * s.e + s.north * s.n) / s.horizontal;
+      put(0, 1, g);
+      put(0, 0, -g);
+      break;
+    }
+    case MeasurementKind::ellipsoid_arc: {
+      if (local) fail(m, "E_NETWORK_KIND", "an ellipsoid arc needs a network on the ellipsoid");
+      const StationState& a = station_of(0);
+      const StationState& b = station_of(1);
+      const auto line = geodesy::geodesic_inverse(net.ellipsoid, geodesy::Angle::radians(a.lat_rad), geodesy::Angle::radians(a.lon_rad),
+                                                  geodesy::Angle::radians(b.lat_rad), geodesy::Angle::radians(b.lon_rad));
+      ev.computed(0) = line.length_m;
+      // Moving an end along its local north or east moves its footpoint by
+      // that much times ρ/(ρ + h) (ρ: the meridian or prime-vertical radius).
+      auto gradient = [&](const StationState& s, geodesy::Angle azimuth, double sign) {
+        const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
+        const double w = std::sqrt(1.0 - e2 * std::sin(s.lat_rad) * std::sin(s.lat_rad));
+        const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
+        const Eigen::Vector3d e = s.local_from_xyz.row(0).transpose(), n = s.local_from_xyz.row(1).transpose();
+        return Eigen::Vector3d(sign * (std::cos(azimuth.rad()) * meridian / (meridian + s.h_m) * n +
+                                       std::sin(azimuth.rad()) * prime / (prime + s.h_m) * e));
+      };
+      put(0, 1, gradient(b, line.azimuth2, 1.0));
+      put(0, 0, gradient(a, line.azimuth1, -1.0));
+      break;
+    }
+    case MeasurementKind::direction:
+    case MeasurementKind::azimuth: {
+      const Sight s = sight(m, station_of(0), station_of(1));
+      need_horizontal(s);
+      Eigen::Vector3d g;
+      const double b = bearing(s, net, g);
+      if (m.kind == MeasurementKind::direction) {
+        ev.computed(0) = b - c.orientations[*m.set];
+        ev.orientation = true;
+      } else {
+        if (local) fail(m, "E_NETWORK_KIND", "a geodetic azimuth needs a network on the ellipsoid");
+        ev.computed(0) = b;
+      }
+      put(0, 1, g);
+      put(0, 0, -g);
+      break;
+    }
+    case MeasurementKind::horizontal_angle: {
+      // at, from (backsight), to (foresight)
+      const StationState& at = station_of(0);
+      const Sight back = sight(m, at, station_of(1));
+      const Sight fore = sight(m, at, station_of(2));
+      need_horizontal(back);
+      need_horizontal(fore);
+      Eigen::Vector3d gb, gf;
+      const double bb = bearing(back, net, gb), bf = bearing(fore, net, gf);
+      ev.computed(0) = bf - bb;
+      put(0, 2, gf);
+      put(0, 1, -gb);
+      put(0, 0, gb - gf);
+      break;
+    }
+    case MeasurementKind::zenith_angle:
+    case MeasurementKind::vertical_angle: {
+      const Sight s = sight(m, station_of(0), station_of(1));
+      need_horizontal(s);
+      const double z = std::atan2(s.horizontal, s.up);
+      const double r2 = s.horizontal * s.horizontal + s.up * s.up;
+      const Eigen::Vector3d dh = (s.east * s.e + s.north * s.n) / s.horizontal;
+      Eigen::Vector3d g = (s.up * dh - s.horizontal * s.u) / r2;
+      double value = z;
+      if (c.options.refraction_k != 0.0 && !local) {
+        // The line of sight bends towards the ground: the observed zenith
+        // angle is smaller than the geometric one by k·s / (2R).
+        const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
+        const double sl = std::sin(station_of(0).lat_rad);
+        const double radius = a_m * std::sqrt(1.0 - e2) / (1.0 - e2 * sl * sl);  // Gaussian mean radius
+        value -= c.options.refraction_k * s.slope / (2.0 * radius);
+        g -= c.options.refraction_k / (2.0 * radius) * s.d / s.slope;
+      }
+      if (m.kind == MeasurementKind::vertical_angle) {
+        value = std::numbers::pi / 2.0 - value;
+        g = -g;
+      }
+      ev.computed(0) = value;
+      put(0, 1, g);
+      put(0, 0, -g);
+      break;
+    }
+    case MeasurementKind::height_difference: {
+      const StationState& a = station_of(0);
+      const StationState& b = station_of(1);
+      if (local) {
+        ev.computed(0) = b.x.z() - a.x.z();
+        put(0, 1, Eigen::Vector3d::UnitZ());
+        put(0, 0, -Eigen::Vector3d::UnitZ());
+      } else {
+        ev.computed(0) = (b.h_m - undulation(m.stations[1])) - (a.h_m - undulation(m.stations[0]));
+        put(0, 1, b.local_from_xyz.row(2).transpose());
+        put(0, 0, -a.local_from_xyz.row(2).transpose());
+      }
+      break;
+    }
+    case MeasurementKind::ellipsoidal_height:
+    case MeasurementKind::orthometric_height: {
+      const StationState& a = station_of(0);
+      if (local) {
+        ev.computed(0) = a.x.z();
+        put(0, 0, Eigen::Vector3d::UnitZ());
+      } else {
+        ev.computed(0) = a.h_m - (m.kind == MeasurementKind::orthometric_height ? undulation(m.stations[0]) : 0.0);
+        put(0, 0, a.local_from_xyz.row(2).transpose());
+      }
+      break;
+    }
+  }
+  return ev;
+}
+
+}  // namespace geoanchor::solver

@@ -1,0 +1,61 @@
+#pragma once
+// The observation equations of a network adjustment: each measurement's
+// value computed from the stations' current positions, and its derivatives
+// with respect to the stations' coordinates along their local axes (east,
+// north, up on the ellipsoid; x, y, z in a local network) and the direction
+// sets' orientations. docs/commands/adjust.md states the models.
+//
+// Private to solver.
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/network.hpp"
+#include "geoanchor/solver/network_adjustment.hpp"
+
+namespace geoanchor::solver {
+
+// A station during the adjustment: its position and local axes there.
+struct StationState {
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();  // ECEF, or local x, y, z
+  // Rows: the local axes in the position's axes (east, north, up at the
+  // geodetic position; the identity in a local network).
+  Eigen::Matrix3d local_from_xyz = Eigen::Matrix3d::Identity();
+  double lat_rad = 0.0, lon_rad = 0.0, h_m = 0.0;  // ellipsoidal
+};
+
+// Each station's state from its position (geodetic position and local axes).
+StationState station_state(const geodesy::Network& net, const geodesy::GeocentricConverter& geocentric,
+                           const Eigen::Vector3d& x);
+
+struct Evaluation {
+  Eigen::VectorXd computed;           // f(x), SI
+  std::vector<std::size_t> stations;  // whose coordinates f depends on
+  Eigen::MatrixXd d_local;            // rows × 3·stations.size(): ∂f / ∂(each station's local axes)
+  bool orientation = false;           // a direction: ∂f / ∂(its set's orientation) = −1
+};
+
+struct ModelContext {
+  const geodesy::Network& net;
+  const AdjustOptions& options;
+  const std::vector<StationState>& stations;
+  const std::vector<double>& orientations;  // per direction set, radians
+};
+
+// Throws geoanchor::Error (input) naming the measurement: coincident
+// stations for a distance or direction, a height without a geoid, a point
+// outside the geoid grid, a kind the network's space has no model for.
+Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c);
+
+// observed − computed, with angles brought to (−π, π].
+Eigen::VectorXd misclosure(const geodesy::NetworkMeasurement& m, const Eigen::VectorXd& computed);
+
+// Whether the kind's values are angles (radians).
+bool is_angular(geodesy::MeasurementKind k);
+
+}  // namespace geoanchor::solver

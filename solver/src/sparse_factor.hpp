@@ -1,0 +1,68 @@
+#pragma once
+// The normal matrix of a least-squares problem, factored once: a sparse
+// Cholesky by CHOLMOD (supernodal, fill-reducing ordering), its solves, and
+// the entries of its inverse on the factor's pattern by the Takahashi
+// equations (selected inversion): every pair of unknowns that share a
+// measurement is on that pattern, so station covariances, covariances
+// between connected stations and every measurement's redundancy come from
+// it without a dense inverse. A dense mode (Eigen's LDLᵀ and the full
+// inverse) is the tests' reference for small problems.
+//
+// Private to solver.
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace geoanchor::solver {
+
+// One entry of the upper triangle of a symmetric matrix (row <= col); the
+// entries given for the same (row, col) are summed.
+struct SymmetricEntry {
+  std::int64_t row = 0, col = 0;
+  double value = 0.0;
+};
+
+class NormalFactor {
+ public:
+  enum class Mode { sparse, dense };
+
+  // Factors the n × n matrix the entries sum to. When it is not positive
+  // definite, nullopt, and `failed_column` the first unknown (in the
+  // caller's order) at which the factorization broke down.
+  static std::optional<NormalFactor> factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
+                                            std::int64_t* failed_column);
+  ~NormalFactor();
+  NormalFactor(NormalFactor&&) noexcept;
+  NormalFactor& operator=(NormalFactor&&) noexcept;
+  NormalFactor(const NormalFactor&) = delete;
+  NormalFactor& operator=(const NormalFactor&) = delete;
+
+  std::int64_t size() const;
+  // N⁻¹ b, and N⁻¹ B column by column.
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const;
+
+  // Computes the entries of N⁻¹ on the factor's pattern (sparse), or the
+  // whole inverse (dense). Call once before inverse().
+  void select_inverse();
+  // (N⁻¹)(a, b). Throws std::logic_error for an entry off the pattern (a
+  // pair of unknowns that share no measurement): a caller bug.
+  double inverse(std::int64_t a, std::int64_t b) const;
+
+  // The factor's size: nonzeros of L, and floating-point work of the
+  // factorization (CHOLMOD's flop count; 0 in dense mode).
+  std::int64_t factor_nonzeros() const;
+  double factor_flops() const;
+
+ private:
+  struct Impl;
+  explicit NormalFactor(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace geoanchor::solver

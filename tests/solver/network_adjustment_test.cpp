@@ -1,0 +1,420 @@
+// The network adjustment against independent references: observations
+// computed from a known truth by GeographicLib (geocentric positions, local
+// east/north/up at the instrument) are adjusted back to that truth; the
+// sparse factor and its selected inversion against a dense solve; Monte
+// Carlo coverage of the reported sigmas, the variance factor and the
+// detection rate the MDB promises; the datum's defects by name.
+
+#include <gtest/gtest.h>
+
+#include <GeographicLib/Geocentric.hpp>
+#include <GeographicLib/Geodesic.hpp>
+#include <GeographicLib/LocalCartesian.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include <Eigen/Cholesky>
+
+#include "test_support.hpp"
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/solver/network_adjustment.hpp"
+
+namespace geoanchor::solver {
+namespace {
+
+using geodesy::MeasurementKind;
+using geodesy::Network;
+using geodesy::NetworkMeasurement;
+using geodesy::NetworkStation;
+
+constexpr double kRecoveryTol_m = 1e-6;       // noise-free observations back to the truth (iteration stops at 1e-7 m)
+constexpr double kSparseVsDense_m = 1e-9;     // the bound
+constexpr double kSparseVsDenseRelative = 1e-9;
+constexpr double kArcsec = std::numbers::pi / 648000.0;
+
+const GeographicLib::Geocentric& grs80() {
+  static const GeographicLib::Geocentric g(6378137.0, 1.0 / 298.257222101);  // GRS 1980, EPSG:7019
+  return g;
+}
+
+// Stations on a jittered grid around Zürich airport, truth on GRS80.
+struct Site {
+  std::vector<Eigen::Vector3d> ecef;  // truth
+  std::vector<std::array<double, 3>> geodetic;  // lat, lon (deg), h (m)
+};
+
+Site make_site(int n, std::mt19937& rng, double spacing_m = 400.0) {
+  Site s;
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3), height(420.0, 520.0);
+  const int side = static_cast<int>(std::ceil(std::sqrt(n)));
+  for (int i = 0; i < n; ++i) {
+    const double e = (i % side + jitter(rng)) * spacing_m, nn = (i / side + jitter(rng)) * spacing_m;
+    const double lat = 47.45 + nn / 111200.0, lon = 8.54 + e / (111200.0 * std::cos(47.45 * std::numbers::pi / 180.0));
+    const double h = height(rng);
+    double x = 0, y = 0, z = 0;
+    grs80().Forward(lat, lon, h, x, y, z);
+    s.ecef.emplace_back(x, y, z);
+    s.geodetic.push_back({lat, lon, h});
+  }
+  return s;
+}
+
+Network network_of(const Site& s) {
+  Network net;
+  net.ellipsoid = geodesy::Ellipsoid::grs80();
+  net.source_name = "test network";
+  for (std::size_t i = 0; i < s.ecef.size(); ++i) {
+    NetworkStation st;
+    st.id = "S" + std::to_string(i);
+    st.position = s.ecef[i];
+    st.source = "station " + std::to_string(i);
+    net.stations.push_back(st);
+  }
+  return net;
+}
+
+// A baseline's covariance: 3 mm horizontal, 6 mm vertical at the first
+// station, rotated into ECEF with GeographicLib's east/north/up matrix.
+Eigen::Matrix3d baseline_covariance(const Site& s, std::size_t at) {
+  double x = 0, y = 0, z = 0;
+  std::vector<double> m(9);
+  grs80().Forward(s.geodetic[at][0], s.geodetic[at][1], s.geodetic[at][2], x, y, z, m);
+  Eigen::Matrix3d r;
+  r << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];  // local -> geocentric
+  const Eigen::Matrix3d local = Eigen::Vector3d(0.003 * 0.003, 0.003 * 0.003, 0.006 * 0.006).asDiagonal();
+  return r * local * r.transpose();
+}
+
+// Draws e ~ N(0, C).
+Eigen::VectorXd draw(const Eigen::MatrixXd& c, std::mt19937& rng) {
+  std::normal_distribution<double> z;
+  Eigen::VectorXd u(c.rows());
+  for (Eigen::Index k = 0; k < u.size(); ++k) u(k) = z(rng);
+  return Eigen::LLT<Eigen::MatrixXd>(c).matrixL() * u;
+}
+
+void add_baseline(Network& net, const Site& s, std::size_t i, std::size_t j, std::mt19937* rng) {
+  NetworkMeasurement m;
+  m.kind = MeasurementKind::gnss_baselines;
+  m.stations = {i, j};
+  m.covariance = baseline_covariance(s, i);
+  m.value = s.ecef[j] - s.ecef[i];
+  if (rng) m.value += draw(m.covariance, *rng);
+  m.source = "baseline " + std::to_string(i) + "-" + std::to_string(j);
+  net.measurements.push_back(m);
+}
+
+// Terrestrial observations from i to j computed by GeographicLib: the
+// target's east/north/up in the local Cartesian frame at the instrument
+// point (instrument height hi above i, target height ht above j, both along
+// the ellipsoid normal).
+struct Sighting {
+  double east, north, up;
+};
+Sighting sighting(const Site& s, std::size_t i, std::size_t j, double hi, double ht) {
+  const GeographicLib::LocalCartesian at(s.geodetic[i][0], s.geodetic[i][1], s.geodetic[i][2] + hi, grs80());
+  Sighting g{};
+  at.Forward(s.geodetic[j][0], s.geodetic[j][1], s.geodetic[j][2] + ht, g.east, g.north, g.up);
+  return g;
+}
+
+NetworkMeasurement scalar(MeasurementKind k, std::vector<std::size_t> stations, double value, double sigma, const std::string& src) {
+  NetworkMeasurement m;
+  m.kind = k;
+  m.stations = std::move(stations);
+  m.value = Eigen::VectorXd::Constant(1, value);
+  m.covariance = Eigen::MatrixXd::Constant(1, 1, sigma * sigma);
+  m.source = src;
+  return m;
+}
+
+// A mixed network: baselines, slope and horizontal distances, direction
+// sets, zenith and vertical angles, azimuths, angles, ellipsoidal heights
+// and an ellipsoid arc, all computed from the truth (noise optional).
+Network mixed_network(const Site& s, std::mt19937* rng) {
+  Network net = network_of(s);
+  std::normal_distribution<double> z;
+  auto noise = [&](double sigma) { return rng ? sigma * z(*rng) : 0.0; };
+  const std::size_t n = s.ecef.size();
+  for (std::size_t i = 0; i + 1 < n; ++i) add_baseline(net, s, i, i + 1, rng);
+  for (std::size_t i = 0; i + 3 < n; i += 2) add_baseline(net, s, i, i + 3, rng);
+  const double hi = 1.55, ht = 1.30;
+  const double sd = 0.002, sa = 1.0 * kArcsec;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t set = net.direction_sets.size();
+    net.direction_sets.push_back({i, "set at " + std::to_string(i)});
+    const double orientation = 0.3 + 0.1 * static_cast<double>(i);
+    for (std::size_t j : {(i + 1) % n, (i + 2) % n, (i + 5) % n}) {
+      const Sighting g = sighting(s, i, j, hi, ht);
+      const double horizontal = std::hypot(g.east, g.north), slope = std::hypot(horizontal, g.up);
+      const double azimuth = std::atan2(g.east, g.north), zenith = std::atan2(horizontal, g.up);
+      auto m = scalar(MeasurementKind::slope_distance, {i, j}, slope + noise(sd), sd, "slope");
+      m.instrument_height_m = hi, m.target_height_m = ht;
+      net.measurements.push_back(m);
+      m = scalar(MeasurementKind::horizontal_distance, {i, j}, horizontal + noise(sd), sd, "horizontal");
+      m.instrument_height_m = hi, m.target_height_m = ht;
+      net.measurements.push_back(m);
+      m = scalar(MeasurementKind::direction, {i, j}, azimuth - orientation + noise(sa), sa, "direction");
+      m.instrument_height_m = hi, m.target_height_m = ht;
+      m.set = set;
+      net.measurements.push_back(m);
+      m = scalar(MeasurementKind::zenith_angle, {i, j}, zenith + noise(sa), sa, "zenith");
+      m.instrument_height_m = hi, m.target_height_m = ht;
+      net.measurements.push_back(m);
+    }
+    const std::size_t a = (i + 1) % n, b = (i + 3) % n;
+    const Sighting ga = sighting(s, i, a, hi, ht), gb = sighting(s, i, b, hi, ht);
+    auto m = scalar(MeasurementKind::horizontal_angle, {i, a, b},
+                    std::remainder(std::atan2(gb.east, gb.north) - std::atan2(ga.east, ga.north), 2 * std::numbers::pi) + noise(sa),
+                    sa, "angle");
+    m.instrument_height_m = hi, m.target_height_m = ht;
+    net.measurements.push_back(m);
+    m = scalar(MeasurementKind::vertical_angle, {i, b}, std::atan2(gb.up, std::hypot(gb.east, gb.north)) + noise(sa), sa, "vertical");
+    m.instrument_height_m = hi, m.target_height_m = ht;
+    net.measurements.push_back(m);
+    m = scalar(MeasurementKind::azimuth, {i, b}, std::atan2(gb.east, gb.north) + noise(sa), sa, "azimuth");
+    m.instrument_height_m = hi, m.target_height_m = ht;
+    net.measurements.push_back(m);
+    net.measurements.push_back(scalar(MeasurementKind::ellipsoidal_height, {i}, s.geodetic[i][2] + noise(0.01), 0.01, "h"));
+  }
+  // Ellipsoid arcs: GeographicLib's geodesic between the footpoints.
+  const GeographicLib::Geodesic geodesic(6378137.0, 1.0 / 298.257222101);
+  for (std::size_t i = 0; i + 2 < n; i += 3) {
+    double arc = 0.0;
+    geodesic.Inverse(s.geodetic[i][0], s.geodetic[i][1], s.geodetic[i + 2][0], s.geodetic[i + 2][1], arc);
+    net.measurements.push_back(scalar(MeasurementKind::ellipsoid_arc, {i, i + 2}, arc + noise(sd), sd, "arc"));
+  }
+  return net;
+}
+
+AdjustOptions options(bool dense) {
+  AdjustOptions o;
+  o.dense = dense;
+  o.data_snooping = false;
+  return o;
+}
+
+TEST(NetworkAdjustment, NoiseFreeObservationsOfEveryKindGiveBackTheTruth) {
+  std::mt19937 rng(7);
+  const Site s = make_site(12, rng);
+  Network net = mixed_network(s, nullptr);
+  net.stations[0].constraint.code = {'C', 'C', 'C'};
+  // Start 5 m away from the truth (the fixed station at it).
+  std::normal_distribution<double> z;
+  for (std::size_t i = 1; i < net.stations.size(); ++i) net.stations[i].position += 2.0 * Eigen::Vector3d(z(rng), z(rng), z(rng));
+  AdjustOptions o = options(false);
+  o.convergence_m = 1e-7;
+  const AdjustmentResult r = adjust_network(net, o);
+  testing::WorstCase worst;
+  for (std::size_t i = 0; i < s.ecef.size(); ++i) worst.add((r.stations[i].position - s.ecef[i]).norm(), i);
+  EXPECT_WORST_WITHIN(worst, kRecoveryTol_m);
+  EXPECT_LT(r.vtpv, 1e-6);
+  // Each orientation is the one the directions were made with.
+  for (std::size_t k = 0; k < r.orientations_rad.size(); ++k) {
+    EXPECT_NEAR(std::remainder(r.orientations_rad[k] - (0.3 + 0.1 * static_cast<double>(k)), 2 * std::numbers::pi), 0.0, 1e-9);
+  }
+}
+
+TEST(NetworkAdjustment, SparseAndDenseSolvesAgreeAndRedundancyNumbersSumToTheDegreesOfFreedom) {
+  std::mt19937 rng(11);
+  const Site s = make_site(16, rng);
+  Network net = mixed_network(s, &rng);
+  net.stations[0].constraint.code = {'C', 'C', 'C'};
+  net.stations[5].constraint.code = {'C', 'C', 'F'};
+  net.stations[5].constraint.sigma_m = {0.005, 0.005, 0.0};
+  const AdjustmentResult sparse = adjust_network(net, options(false));
+  const AdjustmentResult dense = adjust_network(net, options(true));
+  ASSERT_EQ(sparse.stations.size(), dense.stations.size());
+  testing::WorstCase position, covariance, redundancy;
+  for (std::size_t i = 0; i < sparse.stations.size(); ++i) {
+    position.add((sparse.stations[i].position - dense.stations[i].position).norm(), i);
+    const double scale = dense.stations[i].covariance_m2.cwiseAbs().maxCoeff();
+    if (scale > 0.0) covariance.add((sparse.stations[i].covariance_m2 - dense.stations[i].covariance_m2).cwiseAbs().maxCoeff() / scale, i);
+  }
+  double sum = 0.0;
+  for (std::size_t k = 0; k < sparse.measurements.size(); ++k) {
+    redundancy.add((sparse.measurements[k].redundancy - dense.measurements[k].redundancy).cwiseAbs().maxCoeff(), k);
+    sum += sparse.measurements[k].redundancy.sum();
+  }
+  EXPECT_WORST_WITHIN(position, kSparseVsDense_m);
+  EXPECT_WORST_WITHIN(covariance, kSparseVsDenseRelative);
+  EXPECT_WORST_WITHIN(redundancy, kSparseVsDenseRelative);
+  // Σ r over the measurements and the held station's two constraints = dof.
+  // The constraints' share: r of a pseudo-observation is 1 − σ_x²/σ_c².
+  const auto& held = sparse.stations[5];
+  const double c_north = held.covariance_local_m2(1, 1), c_east = held.covariance_local_m2(0, 0);
+  sum += (1.0 - c_north / (0.005 * 0.005)) + (1.0 - c_east / (0.005 * 0.005));
+  EXPECT_NEAR(sum, static_cast<double>(sparse.dof), 1e-8);
+  EXPECT_EQ(sparse.dof, dense.dof);
+  EXPECT_NEAR(sparse.vtpv, dense.vtpv, 1e-9 * std::max(1.0, dense.vtpv));
+}
+
+// Monte Carlo on a GNSS network with known truth: the reported sigmas cover
+// the truth at 1.96σ in 93–97 % of the coordinates, the mean variance factor
+// is 1 ± 0.05.
+TEST(NetworkAdjustment, MonteCarloCoverageAndVarianceFactor) {
+  constexpr int kTrials = 300;
+  std::mt19937 rng(2024);
+  const Site s = make_site(15, rng);
+  std::size_t inside = 0, total = 0;
+  double factor_sum = 0.0;
+  for (int t = 0; t < kTrials; ++t) {
+    Network net = network_of(s);
+    for (std::size_t i = 0; i + 1 < s.ecef.size(); ++i) add_baseline(net, s, i, i + 1, &rng);
+    for (std::size_t i = 0; i + 4 < s.ecef.size(); ++i) add_baseline(net, s, i, i + 4, &rng);
+    for (std::size_t i = 0; i + 5 < s.ecef.size(); i += 2) add_baseline(net, s, i, i + 5, &rng);
+    net.stations[0].constraint.code = {'C', 'C', 'C'};
+    const AdjustmentResult r = adjust_network(net, options(false));
+    factor_sum += *r.variance_factor;
+    for (std::size_t i = 1; i < s.ecef.size(); ++i) {
+      const Eigen::Vector3d e = r.stations[i].position - s.ecef[i];
+      for (int k = 0; k < 3; ++k) {
+        inside += std::fabs(e(k)) <= 1.96 * std::sqrt(r.stations[i].covariance_m2(k, k)) ? 1u : 0u;
+        ++total;
+      }
+    }
+  }
+  const double coverage = static_cast<double>(inside) / static_cast<double>(total);
+  EXPECT_GE(coverage, 0.93);
+  EXPECT_LE(coverage, 0.97);
+  EXPECT_NEAR(factor_sum / kTrials, 1.0, 0.05);
+}
+
+// A blunder of the size of a distance's MDB is found by its w-test about as
+// often as the MDB's power (0.80) promises.
+TEST(NetworkAdjustment, APlantedBlunderOfTheMdbIsFoundAtTheMdbsPower) {
+  constexpr int kTrials = 300;
+  std::mt19937 rng(99);
+  const Site s = make_site(12, rng);
+  Network base = mixed_network(s, &rng);
+  base.stations[0].constraint.code = {'C', 'C', 'C'};
+  const AdjustmentResult clean = adjust_network(base, options(false));
+  // A slope distance with fair redundancy.
+  std::size_t target = 0;
+  for (const auto& am : clean.measurements) {
+    if (base.measurements[am.index].kind == MeasurementKind::slope_distance && am.redundancy(0) > 0.3) {
+      target = am.index;
+      break;
+    }
+  }
+  double mdb = 0.0;
+  for (const auto& am : clean.measurements) {
+    if (am.index == target) mdb = am.mdb(0);
+  }
+  ASSERT_GT(mdb, 0.0);
+  int found = 0;
+  for (int t = 0; t < kTrials; ++t) {
+    Network net = mixed_network(s, &rng);
+    net.stations[0].constraint.code = {'C', 'C', 'C'};
+    net.measurements[target].value(0) += mdb;
+    const AdjustmentResult r = adjust_network(net, options(false));
+    for (const auto& am : r.measurements) {
+      if (am.index == target && std::fabs(am.w(0)) > r.w_critical) ++found;
+    }
+  }
+  const double rate = static_cast<double>(found) / kTrials;
+  EXPECT_GE(rate, 0.72);  // 0.80 ± 3.4 standard errors of 300 trials
+  EXPECT_LE(rate, 0.88);
+}
+
+TEST(NetworkAdjustment, AnUndefinedDatumIsNamedAndAFreeNetworkHeldByInnerConstraints) {
+  std::mt19937 rng(5);
+  const Site s = make_site(9, rng);
+  Network net = network_of(s);
+  for (std::size_t i = 0; i + 1 < s.ecef.size(); ++i) add_baseline(net, s, i, i + 1, &rng);
+  for (std::size_t i = 0; i + 3 < s.ecef.size(); ++i) add_baseline(net, s, i, i + 3, &rng);
+  try {
+    (void)adjust_network(net, options(false));
+    ADD_FAILURE() << "a network of baselines alone was adjusted without a datum";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "E_DATUM_DEFECT");
+    const std::string what = e.what();
+    EXPECT_NE(what.find("translation along X"), std::string::npos) << what;
+    EXPECT_EQ(what.find("rotation"), std::string::npos) << what;  // baselines fix the orientation
+    EXPECT_EQ(what.find("scale"), std::string::npos) << what;
+  }
+  AdjustOptions o = options(false);
+  o.free = true;
+  const AdjustmentResult free = adjust_network(net, o);
+  // Inner constraints over all stations: the corrections average to zero.
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& st : free.stations) mean += st.position - st.a_priori;
+  mean /= static_cast<double>(free.stations.size());
+  EXPECT_LT(mean.norm(), 1e-9);
+  // The residuals do not depend on the datum: the same as with one station fixed.
+  Network held = net;
+  held.stations[4].constraint.code = {'C', 'C', 'C'};
+  const AdjustmentResult fixed = adjust_network(held, options(false));
+  EXPECT_NEAR(free.vtpv, fixed.vtpv, 1e-9 * fixed.vtpv);
+  EXPECT_EQ(free.dof, fixed.dof);
+  // The inner-constraint covariance has the smallest trace of any datum.
+  double trace_free = 0.0, trace_fixed = 0.0;
+  for (std::size_t i = 0; i < free.stations.size(); ++i) {
+    trace_free += free.stations[i].covariance_m2.trace();
+    trace_fixed += fixed.stations[i].covariance_m2.trace();
+  }
+  EXPECT_LT(trace_free, trace_fixed);
+  // The translations' covariance is zero: the covariance of the mean
+  // position (over all pairs) vanishes; on the diagonal blocks alone, their
+  // sum is (n - 1)/n of the fixed datum's sum over the other stations when
+  // the defect is a pure translation.
+  const AdjustmentResult dense_free = [&] {
+    AdjustOptions d = o;
+    d.dense = true;
+    return adjust_network(net, d);
+  }();
+  testing::WorstCase agreement;
+  for (std::size_t i = 0; i < free.stations.size(); ++i) {
+    const double scale = dense_free.stations[i].covariance_m2.cwiseAbs().maxCoeff();
+    agreement.add((free.stations[i].covariance_m2 - dense_free.stations[i].covariance_m2).cwiseAbs().maxCoeff() / scale, i);
+  }
+  EXPECT_WORST_WITHIN(agreement, kSparseVsDenseRelative);
+}
+
+TEST(NetworkAdjustment, BadNetworksAreRefusedByName) {
+  std::mt19937 rng(3);
+  const Site s = make_site(8, rng);
+  auto code_of = [](const Network& net, const AdjustOptions& o) {
+    try {
+      (void)adjust_network(net, o);
+    } catch (const Error& e) {
+      return std::string(e.code()) + ": " + e.what();
+    }
+    return std::string("no error");
+  };
+  // Two parts that no measurement joins.
+  Network split = network_of(s);
+  add_baseline(split, s, 0, 1, &rng);
+  add_baseline(split, s, 2, 3, &rng);
+  split.stations[0].constraint.code = {'C', 'C', 'C'};
+  split.stations[2].constraint.code = {'C', 'C', 'C'};
+  const std::string disconnected = code_of(split, options(false));
+  EXPECT_EQ(disconnected.rfind("E_NETWORK_DISCONNECTED", 0), 0u) << disconnected;
+  EXPECT_NE(disconnected.find("S2"), std::string::npos) << disconnected;
+  // A covariance that is not positive definite, named with its smallest eigenvalue.
+  Network bad = network_of(s);
+  add_baseline(bad, s, 0, 1, &rng);
+  bad.stations[0].constraint.code = {'C', 'C', 'C'};
+  bad.measurements[0].covariance(0, 1) = bad.measurements[0].covariance(1, 0) = 1.0;
+  const std::string cov = code_of(bad, options(false));
+  EXPECT_EQ(cov.rfind("E_COVARIANCE", 0), 0u) << cov;
+  EXPECT_NE(cov.find("baseline 0-1"), std::string::npos) << cov;
+  EXPECT_NE(cov.find("smallest eigenvalue -"), std::string::npos) << cov;
+  // A station reached by one distance only: its position is not determined
+  // (the baselines 0-1 and 0-3 and the fixed station define the datum).
+  Network weak = network_of(s);
+  add_baseline(weak, s, 0, 1, &rng);
+  add_baseline(weak, s, 0, 3, &rng);
+  weak.stations[0].constraint.code = {'C', 'C', 'C'};
+  const Sighting g = sighting(s, 1, 2, 0.0, 0.0);
+  weak.measurements.push_back(scalar(MeasurementKind::slope_distance, {1, 2},
+                                     std::sqrt(g.east * g.east + g.north * g.north + g.up * g.up), 0.002, "line 9"));
+  const std::string singular = code_of(weak, options(false));
+  EXPECT_EQ(singular.rfind("E_NETWORK_SINGULAR", 0), 0u) << singular;
+  EXPECT_NE(singular.find("station S2"), std::string::npos) << singular;
+}
+
+}  // namespace
+}  // namespace geoanchor::solver
