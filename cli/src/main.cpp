@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "adjust_command.hpp"
 #include "apply_command.hpp"
 #include "command_input.hpp"
 #include "convert_command.hpp"
@@ -67,6 +68,9 @@ int main(int argc, char** argv) {
   geoanchor::cli::FitCommandOptions fit;
   fit.argv.assign(argv, argv + argc);
   auto* fit_cmd = geoanchor::cli::add_fit_command(app, fit);
+  geoanchor::cli::AdjustCommandOptions adjust;
+  adjust.argv.assign(argv, argv + argc);
+  auto* adjust_cmd = geoanchor::cli::add_adjust_command(app, adjust);
   geoanchor::cli::ApplyOptions apply;
   apply.argv.assign(argv, argv + argc);
   auto* apply_cmd = geoanchor::cli::add_apply_command(app, apply);
@@ -119,6 +123,7 @@ int main(int argc, char** argv) {
     if (convert_cmd->parsed()) geoanchor::cli::run_convert(convert);
     if (fit_cmd->parsed()) return geoanchor::cli::run_fit(fit);
     if (apply_cmd->parsed()) return geoanchor::cli::run_apply(apply);
+    if (adjust_cmd->parsed()) return geoanchor::cli::run_adjust(adjust);
     if (transform_cmd->parsed()) geoanchor::cli::run_transform(transform);
     if (crs_cmd->parsed()) geoanchor::cli::run_crs(crs);
     if (diagnose_cmd->parsed()) geoanchor::cli::run_diagnose(diagnose);

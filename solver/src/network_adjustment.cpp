@@ -597,7 +597,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   result.w_critical = levels.w_critical;
   std::vector<std::string> outlier_why(net.measurements.size());
 
+  const std::vector<std::string> base_warnings = result.warnings;
   for (;;) {
+    result.warnings = base_warnings;  // each pass states its own
     // Stations reached by the measurements; the rest are left out.
     p.station_used.assign(net.stations.size(), false);
     for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
@@ -828,9 +830,16 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     if (o.data_snooping && result.dof > 0) {
       std::vector<std::pair<std::size_t, SnoopCandidate>> failing;  // measurement index, candidate
       for (const auto& am : result.measurements) {
-        if (am.used && am.test_dof > 0 && am.p_value < o.alpha_point) {
-          failing.push_back({am.index, {am.p_value, 1.0 - am.redundancy.mean()}});
+        if (!am.used || am.test_dof <= 0 || !(am.p_value < o.alpha_point)) continue;
+        if (am.test_dof < am.observed.size()) {
+          // Some of its components are redundant and some not: without it
+          // part of the network would be undetermined; it stays, named.
+          result.warnings.push_back(net.measurements[am.index].source + " (" + geodesy::to_string(net.measurements[am.index].kind) +
+                                    ") fails its measurement test (p = " + format_shortest(am.p_value) +
+                                    ") but cannot be removed: the rest of the network does not determine all of what it measures");
+          continue;
         }
+        failing.push_back({am.index, {am.p_value, 1.0 - am.redundancy.mean()}});
       }
       std::stable_sort(failing.begin(), failing.end(),
                        [](const auto& a, const auto& b) { return a.second.p_value < b.second.p_value; });

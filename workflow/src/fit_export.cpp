@@ -267,11 +267,12 @@ StreamedTransformFile streamed_file(const solver::FitResult& r, const geodesy::C
   f.generator = generator;
   // How roles given in a CRS were read (PROJ's operation and grids): each
   // role's record is a JSON object already.
-  for (const auto& [role, record] : {std::pair{"source", &set.source_input.crs_record_json},
-                                     std::pair{"target", &set.target_input.crs_record_json}}) {
-    if (record->empty()) continue;
-    f.control_crs_json += (f.control_crs_json.empty() ? "{\"" : ",\"") + std::string(role) + "\":" + *record;
-  }
+  auto add_record = [&f](const char* role, const std::string& record) {
+    if (record.empty()) return;
+    f.control_crs_json += (f.control_crs_json.empty() ? "{\"" : ",\"") + std::string(role) + "\":" + record;
+  };
+  add_record("source", set.source_input.crs_record_json);
+  add_record("target", set.target_input.crs_record_json);
   if (!f.control_crs_json.empty()) f.control_crs_json += "}";
   t.fit = std::move(f);
   streamed.points.count = r.points.size();

@@ -116,6 +116,7 @@ struct Network {
   NetworkSpace space = NetworkSpace::ellipsoidal;
   std::optional<Frame> frame;  // ellipsoidal: the frame (and epoch) of the stations
   Ellipsoid ellipsoid = Ellipsoid::grs80();
+  bool ellipsoid_stated = false;  // by an input (its frame or ellipsoid), not this default
   LocalAxes axes;           // local: the input's axis convention
   int local_dimensions = 3; // local: 1 (z), 2 (x, y) or 3
   std::vector<NetworkStation> stations;

@@ -1,0 +1,148 @@
+#include "adjust_command.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <iostream>
+
+#include "command_input.hpp"
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/atomic_file.hpp"
+#include "geoanchor/io/hash.hpp"
+#include "geoanchor/workflow/adjust.hpp"
+#include "option_parsing.hpp"
+#include "version.hpp"
+
+namespace geoanchor::cli {
+
+CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
+  auto* cmd = app.add_subcommand("adjust", "Least-squares adjustment of a survey network (GNSS and terrestrial)");
+  cmd->add_option("INPUT", o.inputs,
+                  "Network inputs, detected from their content: geoanchor network JSON, DynaML station and measurement "
+                  "files, SINEX, GNU Gama local XML; - for standard input")
+      ->required();
+  cmd->add_option("-o,--output", o.output, "Adjusted stations as a control-set CSV (with its sidecar OUT.geoanchor.json); - for standard output")
+      ->required();
+  cmd->add_option("--measurements", o.measurements, "Write the measurements with their statistics as CSV");
+  cmd->add_option("--report", o.report, "Write the text report to this file (else it goes to standard output, or standard error with -o -)");
+  cmd->add_flag("--json", o.json, "Print the report as JSON (schema geoanchor.adjust-report/1) on standard output");
+  cmd->add_option("--sinex", o.sinex, "Write the adjusted stations with their covariance as SINEX");
+  cmd->add_option("--frame", o.frame, "The adjustment's frame and epoch, e.g. GDA2020, ITRF2020@2024.5 (default: the inputs')");
+  cmd->add_option("--constrain", o.constrain, "ID=CCC[,SIGMA_M]: hold station ID's latitude, longitude, height (C) or leave them free (F); with SIGMA_M held with that standard deviation");
+  cmd->add_flag("--free", o.free, "Free network: the datum by inner constraints (no station held)");
+  cmd->add_option("--inner-constraints", o.inner, "With --free: the stations the inner constraints are over, ID,ID,... (default: all)");
+  cmd->add_option("--confidence", o.confidence, "Confidence of the global test and of the error ellipses (default 0.95)")
+      ->check(finite_range(0.5, 0.9999));
+  cmd->add_option("--alpha", o.alpha, "Significance of the w-tests and data snooping (default 0.001)")->check(finite_range(1e-9, 0.5));
+  cmd->add_option("--max-outlier-share", o.max_outlier_share, "Refuse when data snooping would remove more than this share of the measurements (default 0.10)")
+      ->check(finite_range(0.0, 0.5));
+  cmd->add_flag("--no-snooping", o.no_snooping, "Report failing measurements but remove none");
+  cmd->add_option("--geoid", o.geoid, "Geoid for orthometric heights and levelled height differences: EGM96, EGM96-NGA, a grid name PROJ finds or a PATH");
+  cmd->add_option("--refraction", o.refraction, "Coefficient of refraction for zenith angles (default 0; 0.13 is typical by day)")
+      ->check(finite_range(-1.0, 1.0));
+  cmd->add_option("--convergence", o.convergence_m, "Stop when no station moves more than this (m; default 1e-5)")->check(finite_range(1e-9, 1.0));
+  cmd->add_option("--max-iterations", o.max_iterations, "Iteration limit (default 25)")->check(integer_range(1, 1000));
+  cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
+  cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
+  return cmd;
+}
+
+int run_adjust(const AdjustCommandOptions& o) {
+  if (o.inner && !o.free) throw Error(ErrorKind::usage, "E_OPTION", "--inner-constraints: only with --free");
+  if (o.free && !o.constrain.empty()) throw Error(ErrorKind::usage, "E_OPTION", "--free with --constrain: give one datum");
+  if (o.sinex) throw Error(ErrorKind::usage, "E_OPTION", "--sinex: SINEX output is not written by this geoanchor yet");
+  workflow::AdjustRequest request;
+  request.inputs = o.inputs;
+  request.frame = o.frame;
+  request.constrain = o.constrain;
+  auto& so = request.options;
+  so.alpha = 1.0 - o.confidence;
+  so.confidence = o.confidence;
+  so.alpha_point = o.alpha;
+  so.max_outlier_share = o.max_outlier_share;
+  so.data_snooping = !o.no_snooping;
+  so.refraction_k = o.refraction;
+  so.convergence_m = o.convergence_m;
+  so.max_iterations = o.max_iterations;
+  so.free = o.free;
+  if (o.inner) {
+    std::string id;
+    for (char c : *o.inner + ",") {
+      if (c == ',') {
+        if (!id.empty()) so.inner_constraint_stations.push_back(id);
+        id.clear();
+      } else {
+        id += c;
+      }
+    }
+  }
+  if (o.geoid) so.geoid = &parse_geoid(*o.geoid, "--geoid");
+
+  // Outputs are claimed before the adjustment: a path that cannot be written fails first.
+  const io::Overwrite overwrite = o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
+  io::DataOutput stations(o.output, overwrite);
+  std::unique_ptr<io::AtomicOutputFile> measurements, report;
+  if (o.measurements) measurements = std::make_unique<io::AtomicOutputFile>(*o.measurements, overwrite);
+  if (o.report) report = std::make_unique<io::AtomicOutputFile>(*o.report, overwrite);
+
+  const workflow::PreparedNetwork prepared = workflow::prepare_network(request);
+  const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
+
+  const std::string text = workflow::report_text(prepared, r, so);
+  const std::string json = workflow::report_json(prepared, r, so);
+  // The report is shown whether or not the results are written.
+  std::ostream& shown = stations.is_standard_output() || o.json ? std::cerr : std::cout;
+  if (!report) shown << text;
+  if (o.json) std::cout << json;
+  for (const auto& w : r.warnings) std::cerr << "geoanchor: warning: " << w << '\n';
+
+  const auto& g = r.global_test;
+  if (!r.refused_because.empty()) {
+    std::cerr << "geoanchor: error[E_ADJUST_SNOOPING_LIMIT]: " << r.refused_because << "; nothing written\n";
+    return exit_code(ErrorKind::rejected);
+  }
+  if (g.applicable && !g.passed && g.statistic > g.critical_upper && !o.accept_failed_global_test) {
+    std::string worst;
+    double w = 0.0;
+    for (const auto& am : r.measurements) {
+      if (am.used && std::isfinite(am.w_max) && am.w_max > w) w = am.w_max, worst = prepared.network.measurements[am.index].source;
+    }
+    std::cerr << "geoanchor: error[E_ADJUST_GLOBAL_TEST]: the global test fails high (" << format_fixed(g.statistic, 3)
+              << " > " << format_fixed(g.critical_upper, 3) << ", variance factor " << format_fixed(r.variance_factor.value_or(0.0), 4)
+              << "): the measurements disagree more than their standard deviations allow"
+              << (worst.empty() ? "" : "; the worst is " + worst + " (|w| " + format_fixed(w, 2) + ")")
+              << "; nothing written (--accept-failed-global-test writes it anyway)\n";
+    return exit_code(ErrorKind::rejected);
+  }
+
+  stations.stream() << workflow::stations_csv(prepared.network, r, so);
+  if (!stations.is_standard_output()) {
+    nlohmann::ordered_json side = nlohmann::ordered_json::parse(json);
+    side.erase("measurements");
+    side["schema"] = "geoanchor.stations/1";
+    side["report_schema"] = "geoanchor.adjust-report/1";
+    side["geoanchor_version"] = GEOANCHOR_VERSION;
+    side["command"] = o.argv;
+    nlohmann::ordered_json inputs = nlohmann::ordered_json::array();
+    for (const auto& in : o.inputs) {
+      inputs.push_back({{"path", in == "-" ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(in)},
+                        {"sha256", in == "-" ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(io::sha256_file_hex(in))}});
+    }
+    side["inputs"] = inputs;
+    stations.sidecar() << side.dump(2) << "\n";
+  }
+  if (measurements) {
+    measurements->stream() << workflow::measurements_csv(prepared.network, r);
+    measurements->commit();
+  }
+  if (report) {
+    report->stream() << text;
+    report->commit();
+  }
+  stations.commit("the adjusted stations");
+  if (o.json) io::finish_standard_output("the report (--json)");
+  return 0;
+}
+
+}  // namespace geoanchor::cli

@@ -1,0 +1,39 @@
+#pragma once
+// The inputs of `geoanchor adjust`, each detected from its content and read
+// into one network (geodesy/network.hpp):
+//  - geoanchor's own JSON (schema "geoanchor.network/1", docs/network-format.md);
+//  - DynAdjust's DynaML station and measurement files (XML);
+//  - SINEX (SOLUTION/ESTIMATE with SOLUTION/MATRIX_ESTIMATE: a point cluster);
+//  - GNU Gama's local-network XML (gama-local).
+// Stations are matched by name across the inputs; a station given twice
+// with different coordinates is an error naming both places.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/network.hpp"
+
+namespace geoanchor::io {
+
+enum class NetworkFormat { json, dynaml, sinex, gama_local };
+const char* to_string(NetworkFormat f);
+
+// The format of a file's content; throws geoanchor::Error (input) naming
+// the file when it is none of them.
+NetworkFormat detect_network_format(std::string_view text, std::string_view source);
+
+// Reads `inputs` (files; "-" is standard input, read once) into one
+// network. Throws geoanchor::Error: io for an unreadable file, input for
+// malformed content (named by file and line or JSON path / XML element),
+// an undefined or duplicate station, a covariance of the wrong size or not
+// symmetric, angles in an unknown unit, inputs of both spaces.
+geodesy::Network read_network(const std::vector<std::string>& inputs);
+
+// One input's content read into `into` (used by read_network and the tests).
+void read_network_text(std::string_view text, std::string_view source, geodesy::Network& into);
+
+}  // namespace geoanchor::io

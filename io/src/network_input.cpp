@@ -1,0 +1,220 @@
+// The inputs of a network adjustment: detection, merging by station name,
+// sexagesimal angles (network_input.hpp, network_builder.hpp).
+
+#include "geoanchor/io/network_input.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <numbers>
+#include <sstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/utf8.hpp"
+#include "network_builder.hpp"
+#include "network_readers.hpp"
+
+namespace geoanchor::io {
+
+namespace detail {
+
+NetworkBuilder::NetworkBuilder(geodesy::Network& net) : net_(net) {
+  for (std::size_t i = 0; i < net.stations.size(); ++i) index_.emplace(net.stations[i].id, i);
+}
+
+std::size_t NetworkBuilder::reference(const std::string& id, const std::string& where) {
+  if (id.empty()) throw Error(ErrorKind::input, "E_STATION", where + ": an empty station name");
+  const auto [it, fresh] = index_.emplace(id, net_.stations.size());
+  if (fresh) {
+    geodesy::NetworkStation s;
+    s.id = id;
+    s.position_known = false;
+    s.source = where;
+    net_.stations.push_back(s);  // its source names the first reference until it is defined
+  }
+  return it->second;
+}
+
+std::size_t NetworkBuilder::define(const std::string& id, const Eigen::Vector3d& position,
+                                   const geodesy::StationConstraint& constraint, const std::string& where) {
+  constexpr double kSamePlace_m = 1e-3;
+  const std::size_t i = reference(id, where);
+  geodesy::NetworkStation& s = net_.stations[i];
+  if (s.position_known) {
+    if ((s.position - position).norm() > kSamePlace_m || s.constraint.code != constraint.code ||
+        s.constraint.sigma_m != constraint.sigma_m) {
+      throw Error(ErrorKind::input, "E_STATION_DUPLICATE",
+                  where + ": station " + id + " is defined again, differently from " + s.source + " (" +
+                      format_fixed((s.position - position).norm(), 4) + " m apart, constraints " + s.constraint.text() +
+                      " and " + constraint.text() + "); give one definition");
+    }
+    return i;
+  }
+  s.position = position;
+  s.position_known = true;
+  s.constraint = constraint;
+  s.source = where;
+  return i;
+}
+
+void NetworkBuilder::finish() const {
+  for (std::size_t i = 0; i < net_.stations.size(); ++i) {
+    if (net_.stations[i].position_known) continue;
+    throw Error(ErrorKind::input, "E_STATION_UNDEFINED",
+                net_.stations[i].source + ": station " + net_.stations[i].id +
+                    " is measured but no input defines it (its a-priori coordinates); give it in a station file");
+  }
+}
+
+namespace {
+
+// Degrees, minutes and seconds to radians, checked.
+double sexagesimal(bool negative, double degrees, double minutes, double seconds, const std::string& text,
+                   const std::string& where) {
+  if (!(minutes >= 0.0 && minutes < 60.0 && seconds >= 0.0 && seconds < 60.0)) {
+    throw Error(ErrorKind::input, "E_ANGLE",
+                where + ": '" + text + "': minutes " + format_shortest(minutes) + " and seconds " + format_shortest(seconds) +
+                    " must be below 60 (is it in decimal degrees, or another unit?)");
+  }
+  const double deg = degrees + minutes / 60.0 + seconds / 3600.0;
+  return (negative ? -deg : deg) * std::numbers::pi / 180.0;
+}
+
+}  // namespace
+
+double dms_text_to_rad(const std::string& text, const std::string& where) {
+  std::string t = text;
+  bool negative = false;
+  std::size_t at = 0;
+  while (at < t.size() && std::isspace(static_cast<unsigned char>(t[at]))) ++at;
+  if (at < t.size() && (t[at] == '-' || t[at] == '+')) negative = t[at++] == '-';
+  std::vector<std::string> parts;
+  std::string current;
+  for (std::size_t i = at; i < t.size(); ++i) {
+    const char c = t[i];
+    if (c == '-' || c == ' ' || c == ':') {
+      if (!current.empty()) parts.push_back(current);
+      current.clear();
+    } else {
+      current += c;
+    }
+  }
+  if (!current.empty()) parts.push_back(current);
+  if (parts.size() != 3) {
+    throw Error(ErrorKind::input, "E_ANGLE", where + ": '" + text + "': expected degrees-minutes-seconds, e.g. 57-32-28.428");
+  }
+  double v[3];
+  for (int k = 0; k < 3; ++k) {
+    const auto x = parse_finite_double(parts[static_cast<std::size_t>(k)]);
+    if (!x || *x < 0.0) throw Error(ErrorKind::input, "E_ANGLE", where + ": '" + text + "': '" + parts[static_cast<std::size_t>(k)] + "' is not a number");
+    v[k] = *x;
+  }
+  return sexagesimal(negative, v[0], v[1], v[2], text, where);
+}
+
+double packed_dms_to_rad(const std::string& text, const std::string& where) {
+  std::string t;
+  for (char c : text) {
+    if (!std::isspace(static_cast<unsigned char>(c))) t += c;
+  }
+  bool negative = false;
+  std::size_t at = 0;
+  if (!t.empty() && (t[0] == '-' || t[0] == '+')) negative = t[at++] == '-';
+  const std::size_t dot = t.find('.', at);
+  const std::string whole = t.substr(at, dot == std::string::npos ? std::string::npos : dot - at);
+  std::string fraction = dot == std::string::npos ? std::string() : t.substr(dot + 1);
+  const bool digits_only = !whole.empty() && whole.find_first_not_of("0123456789") == std::string::npos &&
+                           fraction.find_first_not_of("0123456789") == std::string::npos;
+  if (!digits_only) {
+    throw Error(ErrorKind::input, "E_ANGLE",
+                where + ": '" + text + "': expected packed degrees, minutes and seconds DDD.MMSSsss (e.g. 91.41495)");
+  }
+  while (fraction.size() < 4) fraction += '0';
+  const double degrees = std::stod(whole);
+  const double minutes = std::stod(fraction.substr(0, 2));
+  const double seconds = std::stod(fraction.substr(2, 2) + "." + (fraction.size() > 4 ? fraction.substr(4) : "0"));
+  return sexagesimal(negative, degrees, minutes, seconds, text, where);
+}
+
+}  // namespace detail
+
+const char* to_string(NetworkFormat f) {
+  switch (f) {
+    case NetworkFormat::json: return "geoanchor network JSON";
+    case NetworkFormat::dynaml: return "DynaML";
+    case NetworkFormat::sinex: return "SINEX";
+    case NetworkFormat::gama_local: return "GNU Gama local-network XML";
+  }
+  return "network";
+}
+
+NetworkFormat detect_network_format(std::string_view text, std::string_view source) {
+  std::size_t at = 0;
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") at = 3;
+  while (at < text.size() && std::isspace(static_cast<unsigned char>(text[at]))) ++at;
+  const std::string_view t = text.substr(at);
+  if (t.substr(0, 5) == "%=SNX") return NetworkFormat::sinex;
+  if (!t.empty() && t[0] == '{') return NetworkFormat::json;
+  if (!t.empty() && t[0] == '<') {
+    // The root element, past the XML declaration, comments and doctype.
+    std::size_t p = 0;
+    while ((p = t.find('<', p)) != std::string_view::npos) {
+      const std::string_view rest = t.substr(p + 1);
+      if (rest.substr(0, 1) == "?" || rest.substr(0, 1) == "!") {
+        p += 1;
+        continue;
+      }
+      if (rest.substr(0, 12) == "DnaXmlFormat") return NetworkFormat::dynaml;
+      if (rest.substr(0, 10) == "gama-local") return NetworkFormat::gama_local;
+      const std::size_t end = rest.find_first_of(" \t\r\n>/");
+      throw Error(ErrorKind::input, "E_NETWORK_FORMAT",
+                  std::string(source) + ": an XML file whose root element is <" + std::string(rest.substr(0, end)) +
+                      ">; expected <DnaXmlFormat> (DynaML) or <gama-local> (GNU Gama)");
+    }
+  }
+  throw Error(ErrorKind::input, "E_NETWORK_FORMAT",
+              std::string(source) + ": not a network input geoanchor reads: expected geoanchor's network JSON, DynaML, "
+                                    "SINEX (%=SNX) or GNU Gama's local-network XML");
+}
+
+void read_network_text(std::string_view text, std::string_view source, geodesy::Network& into) {
+  if (const auto bad = first_invalid_utf8(text)) {
+    throw Error(ErrorKind::input, "E_ENCODING",
+                std::string(source) + ": byte " + std::to_string(*bad) + " is not UTF-8; geoanchor reads UTF-8 text");
+  }
+  switch (detect_network_format(text, source)) {
+    case NetworkFormat::json: detail::read_network_json(text, source, into); break;
+    case NetworkFormat::dynaml: detail::read_dynaml(text, source, into); break;
+    case NetworkFormat::sinex: detail::read_sinex(text, source, into); break;
+    case NetworkFormat::gama_local: detail::read_gama_local(text, source, into); break;
+  }
+}
+
+geodesy::Network read_network(const std::vector<std::string>& inputs) {
+  geodesy::Network net;
+  bool stdin_read = false;
+  for (const auto& input : inputs) {
+    std::string text;
+    if (input == "-") {
+      if (stdin_read) throw Error(ErrorKind::usage, "E_INPUT", "-: standard input is given twice");
+      stdin_read = true;
+      std::ostringstream s;
+      s << std::cin.rdbuf();
+      text = s.str();
+    } else {
+      std::ifstream f(input, std::ios::binary);
+      if (!f) throw Error(ErrorKind::io, "E_READ", input + ": cannot be read");
+      std::ostringstream s;
+      s << f.rdbuf();
+      text = s.str();
+    }
+    net.source_name += (net.source_name.empty() ? "" : ", ") + (input == "-" ? std::string("standard input") : input);
+    read_network_text(text, input == "-" ? "standard input" : input, net);
+  }
+  detail::NetworkBuilder(net).finish();
+  return net;
+}
+
+}  // namespace geoanchor::io

@@ -1,0 +1,430 @@
+// `geoanchor adjust` as a library (adjust.hpp).
+
+#include "geoanchor/workflow/adjust.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame_catalog.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/network_input.hpp"
+
+namespace geoanchor::workflow {
+namespace {
+
+using geodesy::Frame;
+using geodesy::MeasurementKind;
+using geodesy::NetworkSpace;
+
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+constexpr double kRadToArcsec = 648000.0 / std::numbers::pi;
+
+// The change from frame `from` to frame `to` as one affine map, following
+// the catalog's rule for static and dynamic frames (the time-dependent sets
+// evaluated at the dynamic side's epoch); throws naming `where` for a change
+// of epoch within a dynamic frame (that needs velocities) or a missing epoch.
+struct FrameChange {
+  geodesy::AffineMap map = geodesy::AffineMap::identity();
+  std::string description;
+};
+
+FrameChange frame_change(const Frame& from, const Frame& to, const std::string& where) {
+  FrameChange c;
+  const bool from_dynamic = geodesy::is_dynamic(from), to_dynamic = geodesy::is_dynamic(to);
+  if (from_dynamic && to_dynamic && from.epoch() && to.epoch() && from.epoch()->year != to.epoch()->year) {
+    throw Error(ErrorKind::input, "E_EPOCH_PROPAGATION",
+                where + ": in " + from.to_string() + ", the adjustment is in " + to.to_string() +
+                    ": moving measurements between epochs needs the stations' velocities; bring them to " +
+                    geodesy::format_decimal_year(*to.epoch()) + " first (geoanchor transform with velocities or --plate), "
+                    "or adjust at " + geodesy::format_decimal_year(*from.epoch()));
+  }
+  const geodesy::FramePath path = geodesy::find_frame_path(from.name(), to.name(), where);
+  std::optional<geodesy::DecimalYear> t = from_dynamic ? from.epoch() : to_dynamic ? to.epoch() : from.epoch() ? from.epoch() : to.epoch();
+  if ((from_dynamic && !from.epoch()) || (to_dynamic && !to.epoch()) || (path.time_dependent() && !t)) {
+    throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                where + ": " + from.to_string() + " -> " + to.to_string() +
+                    " needs the coordinate epoch of the dynamic frame (NAME@YYYY.Y)");
+  }
+  c.map = path.at(t.value_or(geodesy::DecimalYear{2000.0}));
+  c.description = from.to_string() + " -> " + to.to_string() + (t ? " at " + geodesy::format_decimal_year(*t) : "") +
+                  " (" + std::to_string(path.steps.size()) + " step" + (path.steps.size() == 1 ? "" : "s") + ", ±" +
+                  format_shortest(path.accuracy_m()) + " m)";
+  return c;
+}
+
+geodesy::StationConstraint parse_constraint(const std::string& text, std::string& id) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--constrain " + text + ": expected ID=CCC[,SIGMA_M] (e.g. A1=CCC, B7=CCF,0.005)");
+  }
+  id = text.substr(0, eq);
+  const std::string rest = text.substr(eq + 1);
+  const auto comma = rest.find(',');
+  const std::string code = rest.substr(0, comma);
+  if (code.size() != 3 || code.find_first_not_of("CF") != std::string::npos) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--constrain " + text + ": '" + code + "': expected three letters C or F (e.g. CCF)");
+  }
+  geodesy::StationConstraint c;
+  for (std::size_t k = 0; k < 3; ++k) c.code[k] = code[k];
+  if (comma != std::string::npos) {
+    const auto sigma = parse_finite_double(rest.substr(comma + 1));
+    if (!sigma || !(*sigma > 0.0)) {
+      throw Error(ErrorKind::usage, "E_OPTION", "--constrain " + text + ": '" + rest.substr(comma + 1) + "': expected a standard deviation > 0 in metres");
+    }
+    for (std::size_t k = 0; k < 3; ++k) c.sigma_m[k] = c.code[k] == 'C' ? *sigma : 0.0;
+  }
+  return c;
+}
+
+std::string kind_key(MeasurementKind k) {
+  switch (k) {
+    case MeasurementKind::gnss_baselines: return "gnss_baselines";
+    case MeasurementKind::gnss_points: return "gnss_point_cluster";
+    case MeasurementKind::slope_distance: return "slope_distance";
+    case MeasurementKind::horizontal_distance: return "horizontal_distance";
+    case MeasurementKind::ellipsoid_arc: return "ellipsoid_arc";
+    case MeasurementKind::direction: return "direction";
+    case MeasurementKind::horizontal_angle: return "horizontal_angle";
+    case MeasurementKind::zenith_angle: return "zenith_angle";
+    case MeasurementKind::vertical_angle: return "vertical_angle";
+    case MeasurementKind::azimuth: return "azimuth";
+    case MeasurementKind::height_difference: return "height_difference";
+    case MeasurementKind::ellipsoidal_height: return "ellipsoidal_height";
+    case MeasurementKind::orthometric_height: return "orthometric_height";
+  }
+  return "measurement";
+}
+
+bool angular(MeasurementKind k) {
+  return k == MeasurementKind::direction || k == MeasurementKind::horizontal_angle || k == MeasurementKind::zenith_angle ||
+         k == MeasurementKind::vertical_angle || k == MeasurementKind::azimuth;
+}
+
+// The stations a measurement names, "A->B" or "A,B,C".
+std::string stations_of(const geodesy::Network& net, const geodesy::NetworkMeasurement& m) {
+  std::string s;
+  const bool pairs = m.kind == MeasurementKind::gnss_baselines;
+  for (std::size_t k = 0; k < m.stations.size(); ++k) {
+    s += (k == 0 ? "" : pairs && k % 2 == 1 ? "->" : " ") + net.stations[m.stations[k]].id;
+  }
+  if (m.stations.size() == 2 && !pairs) s = net.stations[m.stations[0]].id + "->" + net.stations[m.stations[1]].id;
+  return s;
+}
+
+std::string csv_field(const std::string& v) {
+  if (v.find_first_of(",\"\n\r") == std::string::npos) return v;
+  std::string out = "\"";
+  for (char c : v) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+std::string number_or_empty(double v) { return std::isfinite(v) ? format_shortest(v) : std::string(); }
+
+double correlation(const Eigen::Matrix3d& c, int a, int b) {
+  const double d = std::sqrt(c(a, a) * c(b, b));
+  return d > 0.0 ? c(a, b) / d : 0.0;
+}
+
+const char* verdict(const solver::GlobalTest& g) {
+  return !g.applicable ? "not applicable" : g.passed ? "passed" : g.statistic > g.critical_upper ? "failed high" : "failed low";
+}
+
+}  // namespace
+
+PreparedNetwork prepare_network(const AdjustRequest& request) {
+  PreparedNetwork p;
+  p.network = io::read_network(request.inputs);
+  geodesy::Network& net = p.network;
+  if (net.space == NetworkSpace::ellipsoidal) {
+    std::optional<Frame> target = net.frame;
+    if (request.frame) target = Frame::parse(*request.frame, "--frame");
+    if (!target) {
+      throw Error(ErrorKind::usage, "E_FRAME_MISSING",
+                  net.source_name + ": the inputs name no frame for the stations: give --frame NAME[@EPOCH] (e.g. GDA2020, "
+                                    "ITRF2020@2024.5)");
+    }
+    geodesy::require_epoch_if_dynamic(*target, request.frame ? "--frame" : net.source_name + ": the stations' frame",
+                                      ErrorKind::usage);
+    // The stations are ECEF already; heights and terrestrial models use the
+    // adjustment frame's own ellipsoid.
+    if (const auto e = geodesy::implied_ellipsoid(*target)) net.ellipsoid = *e;
+    // The stations' a-priori positions and each GNSS measurement into the target.
+    if (net.frame && !(*net.frame == *target)) {
+      const FrameChange c = frame_change(*net.frame, *target, net.source_name + ": the stations");
+      for (auto& s : net.stations) s.position = c.map.apply(s.position);
+      p.notes.push_back("stations' a-priori positions: " + c.description);
+    }
+    std::size_t moved = 0;
+    std::string first;
+    for (auto& m : net.measurements) {
+      if (m.kind != MeasurementKind::gnss_baselines && m.kind != MeasurementKind::gnss_points) continue;
+      const Frame from = m.frame ? *m.frame : net.frame ? *net.frame : *target;
+      if (from == *target) continue;
+      const FrameChange c = frame_change(from, *target, m.source);
+      const Eigen::Matrix3d linear = c.map.linear();
+      const Eigen::Index n = m.value.size() / 3;
+      Eigen::MatrixXd j = Eigen::MatrixXd::Zero(m.value.size(), m.value.size());
+      for (Eigen::Index k = 0; k < n; ++k) {
+        j.block<3, 3>(3 * k, 3 * k) = linear;
+        const Eigen::Vector3d v = m.value.segment<3>(3 * k);
+        if (m.kind == MeasurementKind::gnss_points) {
+          m.value.segment<3>(3 * k) = c.map.apply(v);
+        } else {
+          m.value.segment<3>(3 * k) = linear * v;  // a difference: the translation cancels
+        }
+      }
+      m.covariance = j * m.covariance * j.transpose();
+      m.frame_step = c.description;
+      if (moved++ == 0) first = m.source + ": " + c.description;
+    }
+    if (moved > 0) p.notes.push_back(std::to_string(moved) + " GNSS measurement(s) brought to " + target->to_string() + "; the first " + first);
+    net.frame = target;
+  } else if (request.frame) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--frame " + *request.frame + ": the network is local (" + net.source_name + "): it has no frame");
+  }
+  for (const auto& text : request.constrain) {
+    std::string id;
+    const geodesy::StationConstraint c = parse_constraint(text, id);
+    const auto s = net.find(id);
+    if (!s) throw Error(ErrorKind::usage, "E_OPTION", "--constrain " + text + ": no station " + id + " in " + net.source_name);
+    net.stations[*s].constraint = c;
+    p.notes.push_back("station " + id + " constrained " + c.text() + " by --constrain");
+  }
+  return p;
+}
+
+std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
+  std::ostringstream out;
+  const bool ellipsoidal = net.space == NetworkSpace::ellipsoidal;
+  if (ellipsoidal) {
+    out << "# frame = " << (net.frame ? net.frame->to_string() : std::string("?")) << "\n";
+    out << "# ellipsoid = " << net.ellipsoid.name() << "\n";
+  } else {
+    out << "# local network: axes " << net.axes.name() << ", " << net.local_dimensions << "-D\n";
+  }
+  out << "# sigmas from the a-priori weights (sigma0 = 1); ellipse_conf at " << format_shortest(100.0 * o.confidence) << " %\n";
+  const geodesy::GeocentricConverter geocentric(net.ellipsoid);
+  if (ellipsoidal) {
+    out << "id,x_m,y_m,z_m,lat_deg,lon_deg,h_m,sigma_e_m,sigma_n_m,sigma_u_m,corr_en,corr_eu,corr_nu,ellipse_a_m,ellipse_b_m,"
+           "ellipse_azimuth_deg,ellipse_conf_a_m,ellipse_conf_b_m,constraint\n";
+  } else {
+    std::vector<std::string> cols = {"id"};
+    if (net.local_dimensions >= 2) cols.insert(cols.end(), {"x_m", "y_m"});
+    if (net.local_dimensions != 2) cols.push_back("z_m");
+    if (net.local_dimensions >= 2) cols.insert(cols.end(), {"sigma_x_m", "sigma_y_m"});
+    if (net.local_dimensions != 2) cols.push_back("sigma_z_m");
+    if (net.local_dimensions >= 2) cols.insert(cols.end(), {"corr_xy", "ellipse_a_m", "ellipse_b_m", "ellipse_azimuth_deg", "ellipse_conf_a_m", "ellipse_conf_b_m"});
+    cols.push_back("constraint");
+    for (std::size_t k = 0; k < cols.size(); ++k) out << (k ? "," : "") << cols[k];
+    out << "\n";
+  }
+  for (const auto& s : r.stations) {
+    if (!s.used) continue;
+    const Eigen::Matrix3d& c = s.covariance_local_m2;
+    out << csv_field(s.id);
+    if (ellipsoidal) {
+      const auto g = geocentric.geodetic_from_ecef(geodesy::EcefPosition(s.position.x(), s.position.y(), s.position.z()));
+      out << ',' << format_fixed(s.position.x(), 5) << ',' << format_fixed(s.position.y(), 5) << ',' << format_fixed(s.position.z(), 5)
+          << ',' << format_fixed(g.lat.deg(), 11) << ',' << format_fixed(g.lon.deg(), 11) << ',' << format_fixed(g.h.m, 5);
+      for (int k = 0; k < 3; ++k) out << ',' << format_fixed(std::sqrt(std::max(0.0, c(k, k))), 6);
+      out << ',' << format_fixed(correlation(c, 0, 1), 6) << ',' << format_fixed(correlation(c, 0, 2), 6) << ','
+          << format_fixed(correlation(c, 1, 2), 6);
+    } else {
+      if (net.local_dimensions >= 2) out << ',' << format_fixed(s.position.x(), 5) << ',' << format_fixed(s.position.y(), 5);
+      if (net.local_dimensions != 2) out << ',' << format_fixed(s.position.z(), 5);
+      if (net.local_dimensions >= 2) out << ',' << format_fixed(std::sqrt(std::max(0.0, c(0, 0))), 6) << ',' << format_fixed(std::sqrt(std::max(0.0, c(1, 1))), 6);
+      if (net.local_dimensions != 2) out << ',' << format_fixed(std::sqrt(std::max(0.0, c(2, 2))), 6);
+      if (net.local_dimensions >= 2) out << ',' << format_fixed(correlation(c, 0, 1), 6);
+    }
+    if (ellipsoidal || net.local_dimensions >= 2) {
+      out << ',' << format_fixed(s.ellipse.semi_major_m, 6) << ',' << format_fixed(s.ellipse.semi_minor_m, 6) << ','
+          << format_fixed(s.ellipse.azimuth_rad * kRadToDeg, 3) << ',' << format_fixed(s.ellipse_confidence.semi_major_m, 6) << ','
+          << format_fixed(s.ellipse_confidence.semi_minor_m, 6);
+    }
+    out << ',' << s.constraint << "\n";
+  }
+  return out.str();
+}
+
+std::string measurements_csv(const geodesy::Network& net, const solver::AdjustmentResult& r) {
+  std::ostringstream out;
+  out << "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,"
+         "mdb,status\n";
+  for (const auto& am : r.measurements) {
+    const auto& m = net.measurements[am.index];
+    const bool ang = angular(m.kind);
+    const double value_scale = ang ? kRadToDeg : 1.0, small_scale = ang ? kRadToArcsec : 1.0;
+    const std::string status = am.outlier ? "outlier" : am.used ? "used" : "not used";
+    for (Eigen::Index k = 0; k < am.observed.size(); ++k) {
+      const char* axis[] = {"x", "y", "z"};
+      const std::string component =
+          am.observed.size() == 1 ? "" : (m.kind == MeasurementKind::gnss_points ? net.stations[m.stations[static_cast<std::size_t>(k / 3)]].id + "." : std::to_string(k / 3) + ".") + axis[k % 3];
+      out << csv_field(m.source) << ',' << kind_key(m.kind) << ',' << csv_field(stations_of(net, m)) << ',' << component << ','
+          << number_or_empty(am.observed(k) * value_scale) << ',' << number_or_empty(am.adjusted(k) * value_scale) << ','
+          << (ang ? "deg" : "m") << ',' << number_or_empty(am.residual(k) * small_scale) << ','
+          << number_or_empty(am.sigma(k) * small_scale) << ',' << number_or_empty(am.residual_sigma(k) * small_scale) << ','
+          << (ang ? "arcsec" : "m") << ',' << number_or_empty(am.redundancy(k)) << ',' << number_or_empty(am.w(k)) << ','
+          << number_or_empty(am.mdb(k) * small_scale) << ',' << status << "\n";
+    }
+  }
+  return out.str();
+}
+
+std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
+  const auto& net = prepared.network;
+  std::ostringstream out;
+  out << "geoanchor adjust: " << net.source_name << "\n";
+  out << "  network: " << (net.space == NetworkSpace::ellipsoidal ? "on the ellipsoid " + net.ellipsoid.name() + ", frame " +
+                                                                         (net.frame ? net.frame->to_string() : std::string("?"))
+                                                                   : "local, axes " + net.axes.name())
+      << "; " << net.stations.size() << " stations, " << net.measurements.size() << " measurements\n";
+  for (const auto& n : prepared.notes) out << "  " << n << "\n";
+  out << "  datum: " << r.datum << "\n";
+  out << "  solve: " << r.iterations << " iterations, last correction " << format_fixed(r.largest_correction_m, 6) << " m; "
+      << r.unknowns << " unknowns, " << r.observations << " observations, factor " << r.factor_nonzeros << " nonzeros\n\n";
+  out << "Statistics\n";
+  out << "  vtpv = " << format_shortest(r.vtpv) << ", dof = " << r.dof;
+  if (r.variance_factor) out << ", variance factor = " << format_fixed(*r.variance_factor, 4) << ", sigma0 = " << format_fixed(*r.sigma0, 4);
+  out << "\n";
+  const auto& g = r.global_test;
+  if (r.dof > 0) {
+    out << "  global test (chi-squared, " << format_shortest(100.0 * (1.0 - o.alpha)) << " %): " << format_fixed(g.statistic, 3)
+        << " in [" << format_fixed(g.critical_lower, 3) << ", " << format_fixed(g.critical_upper, 3) << "]: "
+        << (g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED (high)" : "FAILED (low)") << "\n";
+  }
+  out << "  w-tests: critical |w| = " << format_fixed(r.w_critical, 2) << " (alpha " << format_shortest(o.alpha_point) << ")\n\n";
+  out << "Stations (sigmas from the a-priori weights; ellipse 1 sigma)\n";
+  const bool ellipsoidal = net.space == NetworkSpace::ellipsoidal;
+  out << "  id            " << (ellipsoidal ? "sigma_e  sigma_n  sigma_u" : "sigma_x  sigma_y  sigma_z") << "  (mm)   ellipse a/b (mm) az (deg)  constraint\n";
+  for (const auto& s : r.stations) {
+    if (!s.used) continue;
+    const Eigen::Matrix3d& c = s.covariance_local_m2;
+    char line[200];
+    std::snprintf(line, sizeof line, "  %-12s %8.2f %8.2f %8.2f        %7.2f/%-7.2f %7.2f    %s\n", s.id.c_str(),
+                  1e3 * std::sqrt(std::max(0.0, c(0, 0))), 1e3 * std::sqrt(std::max(0.0, c(1, 1))),
+                  1e3 * std::sqrt(std::max(0.0, c(2, 2))), 1e3 * s.ellipse.semi_major_m, 1e3 * s.ellipse.semi_minor_m,
+                  s.ellipse.azimuth_rad * kRadToDeg, s.constraint.c_str());
+    out << line;
+  }
+  // The measurements with the largest |w|.
+  std::vector<const solver::AdjustedMeasurement*> by_w;
+  for (const auto& am : r.measurements) {
+    if (std::isfinite(am.w_max)) by_w.push_back(&am);
+  }
+  std::stable_sort(by_w.begin(), by_w.end(), [](auto* a, auto* b) { return a->w_max > b->w_max; });
+  out << "\nMeasurements with the largest |w| (of " << r.measurements.size() << ")\n";
+  for (std::size_t k = 0; k < by_w.size() && k < 20; ++k) {
+    const auto& am = *by_w[k];
+    const auto& m = net.measurements[am.index];
+    out << "  " << m.source << "  " << geodesy::to_string(m.kind) << " " << stations_of(net, m) << ": max |w| "
+        << format_fixed(am.w_max, 2) << ", p " << format_shortest(am.p_value) << (am.outlier ? "  OUTLIER" : "") << "\n";
+  }
+  std::size_t outliers = 0;
+  for (const auto& am : r.measurements) outliers += am.outlier ? 1u : 0u;
+  if (outliers > 0) {
+    out << "\nOutliers removed by data snooping: " << outliers << "\n";
+    for (const auto& am : r.measurements) {
+      if (am.outlier) out << "  " << net.measurements[am.index].source << ": " << am.removed_because << "\n";
+    }
+  }
+  if (!r.warnings.empty()) {
+    out << "\nWarnings\n";
+    for (const auto& w : r.warnings) out << "  " << w << "\n";
+  }
+  return out.str();
+}
+
+std::string report_json(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
+  using nlohmann::ordered_json;
+  const auto& net = prepared.network;
+  auto num = [](double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); };
+  ordered_json j;
+  j["schema"] = "geoanchor.adjust-report/1";
+  j["inputs"] = net.source_name;
+  j["space"] = net.space == NetworkSpace::ellipsoidal ? "ellipsoidal" : "local";
+  if (net.frame) j["frame"] = net.frame->to_string();
+  j["ellipsoid"] = net.ellipsoid.name();
+  j["datum"] = r.datum;
+  j["notes"] = prepared.notes;
+  j["vtpv"] = r.vtpv;
+  j["dof"] = r.dof;
+  j["variance_factor"] = r.variance_factor ? ordered_json(*r.variance_factor) : ordered_json(nullptr);
+  j["sigma0"] = r.sigma0 ? ordered_json(*r.sigma0) : ordered_json(nullptr);
+  j["global_test"] = {{"statistic", r.global_test.statistic},
+                      {"lower", r.global_test.critical_lower},
+                      {"upper", r.global_test.critical_upper},
+                      {"passed", r.global_test.passed},
+                      {"verdict", verdict(r.global_test)},
+                      {"confidence", 1.0 - o.alpha}};
+  j["w_critical"] = r.w_critical;
+  j["iterations"] = r.iterations;
+  j["converged"] = r.converged;
+  j["largest_correction_m"] = r.largest_correction_m;
+  j["unknowns"] = r.unknowns;
+  j["observations"] = r.observations;
+  ordered_json stations = ordered_json::array();
+  const double sigma_scale = r.sigma0.value_or(1.0);
+  for (const auto& s : r.stations) {
+    if (!s.used) continue;
+    const Eigen::Matrix3d& c = s.covariance_local_m2;
+    ordered_json st = {{"id", s.id}, {"position_m", {s.position.x(), s.position.y(), s.position.z()}}};
+    if (net.space == NetworkSpace::ellipsoidal) {
+      const auto g = geodesy::geodetic_from_ecef(net.ellipsoid, geodesy::EcefPosition(s.position.x(), s.position.y(), s.position.z()));
+      st["lat_deg"] = g.lat.deg();
+      st["lon_deg"] = g.lon.deg();
+      st["h_m"] = g.h.m;
+      st["sigma_enu_m"] = {std::sqrt(std::max(0.0, c(0, 0))), std::sqrt(std::max(0.0, c(1, 1))), std::sqrt(std::max(0.0, c(2, 2)))};
+      st["sigma_enu_scaled_m"] = {sigma_scale * std::sqrt(std::max(0.0, c(0, 0))), sigma_scale * std::sqrt(std::max(0.0, c(1, 1))),
+                                  sigma_scale * std::sqrt(std::max(0.0, c(2, 2)))};
+    } else {
+      st["sigma_xyz_m"] = {std::sqrt(std::max(0.0, c(0, 0))), std::sqrt(std::max(0.0, c(1, 1))), std::sqrt(std::max(0.0, c(2, 2)))};
+      st["sigma_xyz_scaled_m"] = {sigma_scale * std::sqrt(std::max(0.0, c(0, 0))), sigma_scale * std::sqrt(std::max(0.0, c(1, 1))),
+                                  sigma_scale * std::sqrt(std::max(0.0, c(2, 2)))};
+    }
+    ordered_json cov = ordered_json::array();
+    for (int a = 0; a < 3; ++a) cov.push_back({s.covariance_m2(a, 0), s.covariance_m2(a, 1), s.covariance_m2(a, 2)});
+    st["covariance_m2"] = cov;
+    st["ellipse"] = {{"a_m", s.ellipse.semi_major_m}, {"b_m", s.ellipse.semi_minor_m}, {"azimuth_deg", s.ellipse.azimuth_rad * kRadToDeg}};
+    st["ellipse_confidence"] = {{"a_m", s.ellipse_confidence.semi_major_m}, {"b_m", s.ellipse_confidence.semi_minor_m},
+                                {"confidence", o.confidence}};
+    st["constraint"] = s.constraint;
+    stations.push_back(st);
+  }
+  j["stations"] = stations;
+  ordered_json measurements = ordered_json::array(), outliers = ordered_json::array();
+  for (const auto& am : r.measurements) {
+    const auto& m = net.measurements[am.index];
+    ordered_json x = {{"source", m.source}, {"kind", kind_key(m.kind)}, {"stations", stations_of(net, m)},
+                      {"unit", angular(m.kind) ? "rad" : "m"}};
+    auto vec = [&](const Eigen::VectorXd& v) {
+      ordered_json a = ordered_json::array();
+      for (Eigen::Index k = 0; k < v.size(); ++k) a.push_back(num(v(k)));
+      return a;
+    };
+    x["observed"] = vec(am.observed);
+    x["adjusted"] = vec(am.adjusted);
+    x["residual"] = vec(am.residual);
+    x["sigma"] = vec(am.sigma);
+    x["residual_sigma"] = vec(am.residual_sigma);
+    x["redundancy"] = vec(am.redundancy);
+    x["w"] = vec(am.w);
+    x["mdb"] = vec(am.mdb);
+    x["test"] = {{"statistic", am.statistic}, {"dof", am.test_dof}, {"p_value", am.p_value}};
+    x["status"] = am.outlier ? "outlier" : am.used ? "used" : "not used";
+    if (!m.frame_step.empty()) x["frame_step"] = m.frame_step;
+    if (am.outlier) outliers.push_back({{"source", m.source}, {"because", am.removed_because}});
+    measurements.push_back(x);
+  }
+  j["measurements"] = measurements;
+  j["outliers"] = outliers;
+  j["warnings"] = r.warnings;
+  if (!r.refused_because.empty()) j["refused_because"] = r.refused_because;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace geoanchor::workflow
