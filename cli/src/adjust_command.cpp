@@ -28,6 +28,7 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_option("--report", o.report, "Write the text report to this file (else it goes to standard output, or standard error with -o -)");
   cmd->add_flag("--json", o.json, "Print the report as JSON (schema geoanchor.adjust-report/1) on standard output");
   cmd->add_option("--sinex", o.sinex, "Write the adjusted stations with their covariance as SINEX");
+  cmd->add_option("--sinex-frame", o.sinex_frame, "The frame of SINEX inputs' estimates (SINEX names none), e.g. ITRF2014, IGS20; their epoch is REF_EPOCH");
   cmd->add_option("--frame", o.frame, "The adjustment's frame and epoch, e.g. GDA2020, ITRF2020@2024.5 (default: the inputs')");
   cmd->add_option("--constrain", o.constrain, "ID=CCC[,SIGMA_M]: hold station ID's latitude, longitude, height (C) or leave them free (F); with SIGMA_M held with that standard deviation");
   cmd->add_flag("--free", o.free, "Free network: the datum by inner constraints (no station held)");
@@ -51,10 +52,10 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
 int run_adjust(const AdjustCommandOptions& o) {
   if (o.inner && !o.free) throw Error(ErrorKind::usage, "E_OPTION", "--inner-constraints: only with --free");
   if (o.free && !o.constrain.empty()) throw Error(ErrorKind::usage, "E_OPTION", "--free with --constrain: give one datum");
-  if (o.sinex) throw Error(ErrorKind::usage, "E_OPTION", "--sinex: SINEX output is not written by this geoanchor yet");
   workflow::AdjustRequest request;
   request.inputs = o.inputs;
   request.frame = o.frame;
+  request.sinex_frame = o.sinex_frame;
   request.constrain = o.constrain;
   auto& so = request.options;
   so.alpha = 1.0 - o.confidence;
@@ -66,6 +67,7 @@ int run_adjust(const AdjustCommandOptions& o) {
   so.convergence_m = o.convergence_m;
   so.max_iterations = o.max_iterations;
   so.free = o.free;
+  so.joint_covariance = o.sinex.has_value();
   if (o.inner) {
     std::string id;
     for (char c : *o.inner + ",") {
@@ -85,6 +87,8 @@ int run_adjust(const AdjustCommandOptions& o) {
   std::unique_ptr<io::AtomicOutputFile> measurements, report;
   if (o.measurements) measurements = std::make_unique<io::AtomicOutputFile>(*o.measurements, overwrite);
   if (o.report) report = std::make_unique<io::AtomicOutputFile>(*o.report, overwrite);
+  std::unique_ptr<io::AtomicOutputFile> sinex;
+  if (o.sinex) sinex = std::make_unique<io::AtomicOutputFile>(*o.sinex, overwrite);
 
   const workflow::PreparedNetwork prepared = workflow::prepare_network(request);
   const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
@@ -116,6 +120,8 @@ int run_adjust(const AdjustCommandOptions& o) {
     return exit_code(ErrorKind::rejected);
   }
 
+  // Every output's text before any is written: a refusal leaves none.
+  const std::string sinex_text = sinex ? workflow::stations_sinex(prepared, r, std::string("geoanchor ") + GEOANCHOR_VERSION) : "";
   stations.stream() << workflow::stations_csv(prepared.network, r, so);
   if (!stations.is_standard_output()) {
     nlohmann::ordered_json side = nlohmann::ordered_json::parse(json);
@@ -131,6 +137,10 @@ int run_adjust(const AdjustCommandOptions& o) {
     }
     side["inputs"] = inputs;
     stations.sidecar() << side.dump(2) << "\n";
+  }
+  if (sinex) {
+    sinex->stream() << sinex_text;
+    sinex->commit();
   }
   if (measurements) {
     measurements->stream() << workflow::measurements_csv(prepared.network, r);

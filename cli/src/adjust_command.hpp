@@ -16,6 +16,7 @@ struct AdjustCommandOptions {
   std::vector<std::string> inputs;
   std::string output;  // stations CSV ("-": standard output)
   std::optional<std::string> measurements, report, sinex;
+  std::optional<std::string> sinex_frame;
   bool json = false;
   std::optional<std::string> frame;
   std::vector<std::string> constrain;

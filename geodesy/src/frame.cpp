@@ -127,6 +127,15 @@ DecimalYear decimal_year_from_gps_seconds(double gps_seconds) {
   return DecimalYear{static_cast<double>(year) + (unix_s - start) / (end - start)};
 }
 
+std::optional<DecimalYear> decimal_year_from_date(int year, int month, int day) {
+  static constexpr int kDays[] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  const bool leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+  if (month < 1 || month > 12 || day < 1 || day > kDays[month - 1] + (month == 2 && leap ? 1 : 0)) return std::nullopt;
+  const double start = static_cast<double>(days_from_civil(year, 1, 1));
+  const double length = static_cast<double>(days_from_civil(year + 1, 1, 1)) - start;
+  return DecimalYear{static_cast<double>(year) + (static_cast<double>(days_from_civil(year, static_cast<unsigned>(month), static_cast<unsigned>(day))) - start) / length};
+}
+
 std::string format_decimal_year(DecimalYear y) {
   std::string s = format_shortest(y.year);
   if (s.find_first_of(".e") == std::string::npos) s += ".0";

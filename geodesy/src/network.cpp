@@ -25,6 +25,7 @@ const char* to_string(MeasurementKind k) {
     case MeasurementKind::slope_distance: return "slope distance";
     case MeasurementKind::horizontal_distance: return "horizontal distance";
     case MeasurementKind::ellipsoid_arc: return "ellipsoid arc";
+    case MeasurementKind::chord_distance: return "chord distance";
     case MeasurementKind::direction: return "direction";
     case MeasurementKind::horizontal_angle: return "horizontal angle";
     case MeasurementKind::zenith_angle: return "zenith angle";
@@ -33,6 +34,8 @@ const char* to_string(MeasurementKind k) {
     case MeasurementKind::height_difference: return "height difference";
     case MeasurementKind::ellipsoidal_height: return "ellipsoidal height";
     case MeasurementKind::orthometric_height: return "orthometric height";
+    case MeasurementKind::geodetic_latitude: return "geodetic latitude";
+    case MeasurementKind::geodetic_longitude: return "geodetic longitude";
   }
   return "measurement";
 }

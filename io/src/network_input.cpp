@@ -31,6 +31,7 @@ std::size_t NetworkBuilder::reference(const std::string& id, const std::string& 
     geodesy::NetworkStation s;
     s.id = id;
     s.position_known = false;
+    s.defined = false;
     s.source = where;
     net_.stations.push_back(s);  // its source names the first reference until it is defined
   }
@@ -56,12 +57,16 @@ std::size_t NetworkBuilder::define(const std::string& id, const Eigen::Vector3d&
   s.position_known = true;
   s.constraint = constraint;
   s.source = where;
+  s.defined = true;
   return i;
 }
 
 void NetworkBuilder::finish() const {
   for (std::size_t i = 0; i < net_.stations.size(); ++i) {
     if (net_.stations[i].position_known) continue;
+    // A local network's unplaced stations are placed from the measurements
+    // by the adjustment (GNU Gama's points given without coordinates).
+    if (net_.space == geodesy::NetworkSpace::local && net_.stations[i].defined) continue;
     throw Error(ErrorKind::input, "E_STATION_UNDEFINED",
                 net_.stations[i].source + ": station " + net_.stations[i].id +
                     " is measured but no input defines it (its a-priori coordinates); give it in a station file");
@@ -179,20 +184,21 @@ NetworkFormat detect_network_format(std::string_view text, std::string_view sour
                                     "SINEX (%=SNX) or GNU Gama's local-network XML");
 }
 
-void read_network_text(std::string_view text, std::string_view source, geodesy::Network& into) {
+void read_network_text(std::string_view text, std::string_view source, geodesy::Network& into,
+                       const NetworkReadOptions& options) {
   if (const auto bad = first_invalid_utf8(text)) {
     throw Error(ErrorKind::input, "E_ENCODING",
                 std::string(source) + ": byte " + std::to_string(*bad) + " is not UTF-8; geoanchor reads UTF-8 text");
   }
   switch (detect_network_format(text, source)) {
     case NetworkFormat::json: detail::read_network_json(text, source, into); break;
-    case NetworkFormat::dynaml: detail::read_dynaml(text, source, into); break;
-    case NetworkFormat::sinex: detail::read_sinex(text, source, into); break;
+    case NetworkFormat::dynaml: detail::read_dynaml(text, source, into, options); break;
+    case NetworkFormat::sinex: detail::read_sinex(text, source, into, options); break;
     case NetworkFormat::gama_local: detail::read_gama_local(text, source, into); break;
   }
 }
 
-geodesy::Network read_network(const std::vector<std::string>& inputs) {
+geodesy::Network read_network(const std::vector<std::string>& inputs, const NetworkReadOptions& options) {
   geodesy::Network net;
   bool stdin_read = false;
   for (const auto& input : inputs) {
@@ -211,7 +217,26 @@ geodesy::Network read_network(const std::vector<std::string>& inputs) {
       text = s.str();
     }
     net.source_name += (net.source_name.empty() ? "" : ", ") + (input == "-" ? std::string("standard input") : input);
-    read_network_text(text, input == "-" ? "standard input" : input, net);
+    read_network_text(text, input == "-" ? "standard input" : input, net, options);
+  }
+  // Stations no input defines but a point measurement positions (a SINEX
+  // solution's sites) start from that measurement, free.
+  std::size_t from_points = 0;
+  for (const auto& m : net.measurements) {
+    if (m.kind != geodesy::MeasurementKind::gnss_points) continue;
+    for (std::size_t k = 0; k < m.stations.size(); ++k) {
+      geodesy::NetworkStation& s = net.stations[m.stations[k]];
+      if (s.defined) continue;
+      s.position = m.value.segment<3>(static_cast<Eigen::Index>(3 * k));
+      s.position_known = true;
+      s.defined = true;
+      s.source = m.source;
+      ++from_points;
+    }
+  }
+  if (from_points > 0) {
+    net.warnings.push_back(std::to_string(from_points) + " station(s) defined by no station input take their a-priori "
+                           "position from the point measurement that gives it (free, in that measurement's frame and epoch)");
   }
   detail::NetworkBuilder(net).finish();
   return net;

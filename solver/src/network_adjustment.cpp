@@ -16,6 +16,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "network_approximate.hpp"
 #include "network_model.hpp"
 #include "point_statistics.hpp"
 #include "sparse_factor.hpp"
@@ -90,8 +91,10 @@ struct Problem {
   std::vector<bool> active;                // measurements in the adjustment
   std::vector<bool> station_used;
   Layout layout;
-  bool free = false;
+  bool aside = false;  // --free: the input's station constraints are set aside
+  bool free = false;   // the datum (or what the constraints leave of it) by inner constraints
   std::vector<std::size_t> inner;          // free: the inner-constraint stations
+  std::vector<std::array<bool, 3>> inner_components;  // their components in the inner constraints
   Eigen::MatrixXd defect;                  // free: the undefined datum directions over the unknowns (u × d)
   std::vector<std::size_t> anchor;         // free: the stations the defect is held at while iterating
   std::vector<std::string> defect_names;
@@ -140,7 +143,7 @@ struct Problem {
   };
   std::vector<Pseudo> pseudo_observations() const {
     std::vector<Pseudo> out;
-    if (free) return out;
+    if (aside) return out;
     for (std::size_t s = 0; s < net.stations.size(); ++s) {
       if (!station_used[s]) continue;
       const auto& con = net.stations[s].constraint;
@@ -195,7 +198,7 @@ Layout make_layout(const Problem& p) {
     for (int c = 0; c < 3; ++c) {
       if (!estimated_component(net, c)) continue;
       bool fixed = false;
-      if (!p.free) {
+      if (!p.aside) {
         for (int k = 0; k < 3; ++k) {
           const auto& con = net.stations[s].constraint;
           fixed = fixed || (constrained_component(net.space, k) == c && con.code[static_cast<std::size_t>(k)] == 'C' &&
@@ -425,10 +428,13 @@ std::vector<std::size_t> anchors(const Problem& p, bool rotations_or_scale) {
 }
 
 // The defect directions over the unknowns of `stations` only (zero elsewhere).
-Eigen::MatrixXd restricted(const Problem& p, const std::vector<std::size_t>& stations) {
+Eigen::MatrixXd restricted(const Problem& p, const std::vector<std::size_t>& stations,
+                           const std::vector<std::array<bool, 3>>& components = {}) {
   Eigen::MatrixXd e = Eigen::MatrixXd::Zero(p.defect.rows(), p.defect.cols());
-  for (std::size_t s : stations) {
+  for (std::size_t k = 0; k < stations.size(); ++k) {
+    const std::size_t s = stations[k];
     for (int c = 0; c < 3; ++c) {
+      if (k < components.size() && !components[k][static_cast<std::size_t>(c)]) continue;
       const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
       if (u >= 0) e.row(u) = p.defect.row(u);
     }
@@ -497,7 +503,7 @@ std::pair<double, std::size_t> apply_corrections(Problem& p, const Eigen::Vector
     }
     if (local.norm() > largest) largest = local.norm(), at = s;
     Eigen::Vector3d x = p.states[s].x + p.states[s].local_from_xyz.transpose() * local;
-    if (net.space == NetworkSpace::ellipsoidal && !p.free && net.stations[s].constraint.any()) {
+    if (net.space == NetworkSpace::ellipsoidal && !p.aside && net.stations[s].constraint.any()) {
       // Components held fixed stay at their a-priori geodetic values.
       const auto& con = net.stations[s].constraint;
       auto g = p.geocentric.geodetic_from_ecef(geodesy::EcefPosition(x.x(), x.y(), x.z()));
@@ -540,6 +546,16 @@ ErrorEllipse ellipse_of(const Eigen::Matrix2d& c) {
 }  // namespace
 
 AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOptions& o) {
+  std::size_t unplaced = 0;
+  for (const auto& s : network.stations) unplaced += s.position_known ? 0u : 1u;
+  if (unplaced > 0) {
+    geodesy::Network placed = network;
+    approximate_positions(placed);
+    AdjustmentResult r = adjust_network(placed, o);
+    r.warnings.insert(r.warnings.begin(), std::to_string(unplaced) + " station(s) had no a-priori coordinates: their "
+                                          "approximate positions were computed from the measurements");
+    return r;
+  }
   Problem p(network, o);
   const auto& net = network;
   AdjustmentResult result;
@@ -565,6 +581,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     p.whitening[mi] = llt.matrixL().solve(Eigen::MatrixXd::Identity(m.covariance.rows(), m.covariance.cols()));
   }
   p.free = o.free;
+  p.aside = o.free;
   if (p.free) {
     std::size_t held = 0;
     for (const auto& s : net.stations) held += s.constraint.any() ? 1u : 0u;
@@ -588,6 +605,39 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     }
   }
 
+  // Gross misclosures at the a-priori coordinates (GNU Gama's tol-abs):
+  // set aside before the adjustment, each named.
+  std::vector<std::string> gross_why(net.measurements.size());
+  if (net.gross_misclosure_m > 0.0) {
+    const ModelContext ctx{net, o, p.states, p.orientations};
+    for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+      if (!p.active[mi]) continue;
+      const auto& m = net.measurements[mi];
+      Evaluation ev;
+      try {
+        ev = evaluate(m, ctx);
+      } catch (const Error&) {
+        continue;  // its geometry is judged by the adjustment
+      }
+      const Eigen::VectorXd w = misclosure(m, ev.computed);
+      double length = 1.0;
+      if (is_angular(m.kind) && m.stations.size() >= 2) {
+        length = 0.0;
+        for (std::size_t k = 1; k < m.stations.size(); ++k) {
+          length = std::max(length, (p.states[m.stations[k]].x - p.states[m.stations[0]].x).norm());
+        }
+      }
+      const double gross = w.cwiseAbs().maxCoeff() * length;
+      if (gross > net.gross_misclosure_m) {
+        p.active[mi] = false;
+        gross_why[mi] = "misclosure " + fmt_m(gross) + " at the a-priori coordinates exceeds the input's tolerance " +
+                        fmt_m(net.gross_misclosure_m);
+        result.warnings.push_back(m.source + " (" + geodesy::to_string(m.kind) + "): set aside before the adjustment: " +
+                                  gross_why[mi]);
+      }
+    }
+  }
+
   std::size_t removed = 0;
   const std::size_t countable = static_cast<std::size_t>(std::count(p.active.begin(), p.active.end(), true));
   FitOptions levels_of;
@@ -595,7 +645,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   levels_of.power = o.power;
   const PointTestLevels levels = point_test_levels(levels_of);
   result.w_critical = levels.w_critical;
-  std::vector<std::string> outlier_why(net.measurements.size());
+  std::vector<std::string> outlier_why = gross_why;
 
   const std::vector<std::string> base_warnings = result.warnings;
   for (;;) {
@@ -624,6 +674,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     }
     p.layout = make_layout(p);
     p.inner.clear();
+    p.inner_components.clear();
+    p.free = o.free;  // a pass may find the constraints leave a defect (datum stations)
+    p.defect.resize(0, 0);
     if (p.free) {
       if (o.inner_constraint_stations.empty()) {
         for (std::size_t s = 0; s < net.stations.size(); ++s) {
@@ -655,6 +708,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         // its own is no datum defect but a singularity, named below.
         Problem probe = p;
         probe.free = true;
+        probe.aside = true;  // every component an unknown
         probe.layout = make_layout(probe);
         const Normal n0 = assemble(probe);
         const DatumVectors dv = datum_vectors(probe);
@@ -683,7 +737,25 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           const Eigen::MatrixXd mv = v0.transpose() * m0 * v0 + gv.transpose() * weight.asDiagonal() * gv;
           const Eigen::MatrixXd still = weak_combinations(mv, {}, unused);
           for (Eigen::Index k = 0; k < still.cols(); ++k) names.push_back(name_combination(v0 * still.col(k), dv.names));
-          if (!names.empty()) {
+          if (!names.empty() && !net.datum_stations.empty()) {
+            // What the constraints leave undefined is held by the input's
+            // own datum stations (GNU Gama's constrained points): the
+            // minimum-norm solution over them, the fixed components kept.
+            names.clear();
+            p.free = true;
+            for (const auto& ds : net.datum_stations) {
+              if (p.station_used[ds.station]) p.inner.push_back(ds.station), p.inner_components.push_back(ds.components);
+            }
+            if (p.inner.empty()) {
+              throw Error(ErrorKind::input, "E_DATUM_DEFECT",
+                          where + ": the datum is not defined and none of the input's datum stations has a measurement");
+            }
+            const DatumVectors dvp = datum_vectors(p);
+            const Eigen::MatrixXd mp = dvp.g.transpose() * times(n.entries, dvp.g);
+            const Eigen::MatrixXd vp = weak_combinations(mp, dvp.names, unused);
+            p.defect = dvp.g * vp;
+            for (Eigen::Index k = 0; k < vp.cols(); ++k) names.push_back(name_combination(vp.col(k), dvp.names));
+          } else if (!names.empty()) {
             std::string list;
             for (const auto& x : names) list += (list.empty() ? "" : "; ") + x;
             throw Error(ErrorKind::input, "E_DATUM_DEFECT",
@@ -731,7 +803,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     // S-transformation of the solution held at the anchors).
     Eigen::MatrixXd inner_e, inner_m;
     if (p.free && p.defect.cols() > 0) {
-      inner_e = restricted(p, p.inner);
+      inner_e = restricted(p, p.inner, p.inner_components);
       inner_m = (inner_e.transpose() * p.defect).inverse();
       Eigen::VectorXd corrections = Eigen::VectorXd::Zero(p.layout.count);
       for (std::size_t s : p.inner) {
@@ -792,7 +864,20 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       // A Q Aᵀ over the measurement's unknowns, from the selected inverse.
       const std::size_t nu = r.unknowns.size();
       Eigen::MatrixXd q(static_cast<Eigen::Index>(nu), static_cast<Eigen::Index>(nu));
-      for (std::size_t a = 0; a < nu; ++a) {
+      if (!in) {
+        // A measurement left out joins unknowns that may share no other
+        // measurement (off the factor's pattern): solve for its columns.
+        Eigen::MatrixXd e = Eigen::MatrixXd::Zero(p.layout.count, static_cast<Eigen::Index>(nu));
+        for (std::size_t a = 0; a < nu; ++a) e(r.unknowns[a], static_cast<Eigen::Index>(a)) = 1.0;
+        const Eigen::MatrixXd z = f.solve(e);
+        for (std::size_t a = 0; a < nu; ++a) {
+          for (std::size_t b = 0; b < nu; ++b) {
+            q(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = z(r.unknowns[a], static_cast<Eigen::Index>(b));
+          }
+        }
+        q = (0.5 * (q + q.transpose())).eval();
+      }
+      for (std::size_t a = 0; in && a < nu; ++a) {
         for (std::size_t b = a; b < nu; ++b) {
           q(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = q(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(a)) =
               f.inverse(r.unknowns[a], r.unknowns[b]);
@@ -909,7 +994,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       as.id = net.stations[s].id;
       as.position = p.states[s].x;
       as.a_priori = net.stations[s].position;
-      as.constraint = p.free ? "FFF" : net.stations[s].constraint.text();
+      as.constraint = p.aside ? "FFF" : net.stations[s].constraint.text();
       as.used = p.station_used[s];
       if (as.used) {
         as.covariance_local_m2 = q_block(s, s);
@@ -920,6 +1005,46 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         as.ellipse_confidence.semi_minor_m *= confidence_scale;
       }
       result.stations.push_back(std::move(as));
+    }
+    if (o.joint_covariance) {
+      result.covariance_stations.clear();
+      for (std::size_t s = 0; s < net.stations.size(); ++s) {
+        if (p.station_used[s]) result.covariance_stations.push_back(s);
+      }
+      const std::size_t m = result.covariance_stations.size();
+      if (m > kMaxJointCovarianceStations) {
+        throw Error(ErrorKind::usage, "E_JOINT_COVARIANCE",
+                    where + ": the joint covariance of " + std::to_string(m) + " stations (" +
+                        format_shortest(72.0 * static_cast<double>(m) * static_cast<double>(m) / 1e9) +
+                        " GB) is more than geoanchor writes (at most " + std::to_string(kMaxJointCovarianceStations) +
+                        " stations); the stations CSV carries each station's covariance");
+      }
+      // Z E_s: the columns of N⁻¹ for every station unknown.
+      Eigen::MatrixXd sel = Eigen::MatrixXd::Zero(p.layout.count, static_cast<Eigen::Index>(3 * m));
+      for (std::size_t i = 0; i < m; ++i) {
+        for (int c = 0; c < 3; ++c) {
+          const Index u = p.layout.station[result.covariance_stations[i]][static_cast<std::size_t>(c)];
+          if (u >= 0) sel(u, static_cast<Eigen::Index>(3 * i) + c) = 1.0;
+        }
+      }
+      const Eigen::MatrixXd z = f.solve(sel);
+      Eigen::MatrixXd q = sel.transpose() * z;  // local axes
+      if (p.free && d > 0) {
+        const Eigen::MatrixXd dm = sel.transpose() * (p.defect * inner_m);  // (3m × d)
+        const Eigen::MatrixXd zes = sel.transpose() * ze;                  // (3m × d)
+        q += -dm * zes.transpose() - zes * dm.transpose() + dm * eze * dm.transpose();
+      }
+      q = (0.5 * (q + q.transpose())).eval();
+      // To ECEF (ellipsoidal) per station block: Rᵢᵀ Q Rⱼ.
+      result.station_covariance_m2.resize(static_cast<Eigen::Index>(3 * m), static_cast<Eigen::Index>(3 * m));
+      for (std::size_t i = 0; i < m; ++i) {
+        const Eigen::Matrix3d ri = p.states[result.covariance_stations[i]].local_from_xyz;
+        for (std::size_t j = 0; j < m; ++j) {
+          const Eigen::Matrix3d rj = p.states[result.covariance_stations[j]].local_from_xyz;
+          result.station_covariance_m2.block<3, 3>(static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * j)) =
+              ri.transpose() * q.block<3, 3>(static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * j)) * rj;
+        }
+      }
     }
     result.orientations_rad = p.orientations;
     result.orientation_sigmas_rad.clear();
@@ -964,14 +1089,21 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     // The datum in words.
     std::size_t fixed = 0, weighted = 0;
     for (std::size_t s = 0; s < net.stations.size(); ++s) {
-      if (!p.station_used[s] || p.free) continue;
+      if (!p.station_used[s] || p.aside) continue;
       const auto& con = net.stations[s].constraint;
       for (int k = 0; k < 3; ++k) {
         if (con.code[static_cast<std::size_t>(k)] != 'C') continue;
         (con.sigma_m[static_cast<std::size_t>(k)] > 0.0 ? weighted : fixed) += 1;
       }
     }
-    if (p.free && d > 0) {
+    if (p.free && d > 0 && !p.aside) {
+      std::string list;
+      for (const auto& x : p.defect_names) list += (list.empty() ? "" : "; ") + x;
+      result.datum = std::to_string(fixed) + " coordinate component" + (fixed == 1 ? "" : "s") + " fixed, " +
+                     std::to_string(weighted) + " held with a standard deviation; what they leave undefined (" + list +
+                     ") held by the minimum-norm correction of the input's " + std::to_string(p.inner.size()) +
+                     " datum station" + (p.inner.size() == 1 ? "" : "s");
+    } else if (p.free && d > 0) {
       std::string list;
       for (const auto& x : p.defect_names) list += (list.empty() ? "" : "; ") + x;
       result.datum = "free network: " + list + " held by inner constraints over " + std::to_string(p.inner.size()) + " station" +

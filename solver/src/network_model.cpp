@@ -78,6 +78,8 @@ bool is_angular(MeasurementKind k) {
     case MeasurementKind::zenith_angle:
     case MeasurementKind::vertical_angle:
     case MeasurementKind::azimuth:
+    case MeasurementKind::geodetic_latitude:
+    case MeasurementKind::geodetic_longitude:
       return true;
     default:
       return false;
@@ -194,6 +196,46 @@ Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c)
       put(0, 0, gradient(a, line.azimuth1, -1.0));
       break;
     }
+    case MeasurementKind::chord_distance: {
+      if (local) fail(m, "E_NETWORK_KIND", "a chord distance needs a network on the ellipsoid");
+      // The footpoints: each station moved down its normal to the ellipsoid.
+      const StationState& a = station_of(0);
+      const StationState& b = station_of(1);
+      const Eigen::Vector3d fa = a.x - a.h_m * a.local_from_xyz.row(2).transpose();
+      const Eigen::Vector3d fb = b.x - b.h_m * b.local_from_xyz.row(2).transpose();
+      const Eigen::Vector3d d = fb - fa;
+      const double chord = d.norm();
+      if (!(chord > 1e-6)) fail(m, "E_NETWORK_GEOMETRY", "the two footpoints coincide");
+      ev.computed(0) = chord;
+      // A footpoint moves with its station's horizontal motion scaled by ρ/(ρ + h).
+      auto gradient = [&](const StationState& s, double sign) {
+        const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
+        const double w = std::sqrt(1.0 - e2 * std::sin(s.lat_rad) * std::sin(s.lat_rad));
+        const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
+        const Eigen::Vector3d e = s.local_from_xyz.row(0).transpose(), n = s.local_from_xyz.row(1).transpose();
+        const Eigen::Vector3d unit = d / chord;
+        return Eigen::Vector3d(sign * (unit.dot(n) * meridian / (meridian + s.h_m) * n + unit.dot(e) * prime / (prime + s.h_m) * e));
+      };
+      put(0, 1, gradient(b, 1.0));
+      put(0, 0, gradient(a, -1.0));
+      break;
+    }
+    case MeasurementKind::geodetic_latitude:
+    case MeasurementKind::geodetic_longitude: {
+      if (local) fail(m, "E_NETWORK_KIND", "a geodetic latitude or longitude needs a network on the ellipsoid");
+      const StationState& a = station_of(0);
+      const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
+      const double w = std::sqrt(1.0 - e2 * std::sin(a.lat_rad) * std::sin(a.lat_rad));
+      const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
+      if (m.kind == MeasurementKind::geodetic_latitude) {
+        ev.computed(0) = a.lat_rad;
+        put(0, 0, a.local_from_xyz.row(1).transpose() / (meridian + a.h_m));
+      } else {
+        ev.computed(0) = a.lon_rad;
+        put(0, 0, a.local_from_xyz.row(0).transpose() / ((prime + a.h_m) * std::cos(a.lat_rad)));
+      }
+      break;
+    }
     case MeasurementKind::direction:
     case MeasurementKind::azimuth: {
       const Sight s = sight(m, station_of(0), station_of(1));
@@ -204,7 +246,6 @@ Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c)
         ev.computed(0) = b - c.orientations[*m.set];
         ev.orientation = true;
       } else {
-        if (local) fail(m, "E_NETWORK_KIND", "a geodetic azimuth needs a network on the ellipsoid");
         ev.computed(0) = b;
       }
       put(0, 1, g);

@@ -7,12 +7,15 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <stdexcept>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/network_input.hpp"
+#include "geoanchor/io/sinex.hpp"
 
 namespace geoanchor::workflow {
 namespace {
@@ -43,6 +46,12 @@ FrameChange frame_change(const Frame& from, const Frame& to, const std::string& 
                     geodesy::format_decimal_year(*to.epoch()) + " first (geoanchor transform with velocities or --plate), "
                     "or adjust at " + geodesy::format_decimal_year(*from.epoch()));
   }
+  if (from.name() == to.name()) {
+    // The same frame: a dynamic one at the same epoch (checked above), or a
+    // static one, whose epoch records when it was observed.
+    c.description = from.to_string() + " -> " + to.to_string() + " (the same frame)";
+    return c;
+  }
   const geodesy::FramePath path = geodesy::find_frame_path(from.name(), to.name(), where);
   std::optional<geodesy::DecimalYear> t = from_dynamic ? from.epoch() : to_dynamic ? to.epoch() : from.epoch() ? from.epoch() : to.epoch();
   if ((from_dynamic && !from.epoch()) || (to_dynamic && !to.epoch()) || (path.time_dependent() && !t)) {
@@ -53,7 +62,7 @@ FrameChange frame_change(const Frame& from, const Frame& to, const std::string& 
   c.map = path.at(t.value_or(geodesy::DecimalYear{2000.0}));
   c.description = from.to_string() + " -> " + to.to_string() + (t ? " at " + geodesy::format_decimal_year(*t) : "") +
                   " (" + std::to_string(path.steps.size()) + " step" + (path.steps.size() == 1 ? "" : "s") + ", ±" +
-                  format_shortest(path.accuracy_m()) + " m)";
+                  format_fixed(path.accuracy_m(), 3) + " m)";
   return c;
 }
 
@@ -88,6 +97,9 @@ std::string kind_key(MeasurementKind k) {
     case MeasurementKind::slope_distance: return "slope_distance";
     case MeasurementKind::horizontal_distance: return "horizontal_distance";
     case MeasurementKind::ellipsoid_arc: return "ellipsoid_arc";
+    case MeasurementKind::chord_distance: return "chord_distance";
+    case MeasurementKind::geodetic_latitude: return "geodetic_latitude";
+    case MeasurementKind::geodetic_longitude: return "geodetic_longitude";
     case MeasurementKind::direction: return "direction";
     case MeasurementKind::horizontal_angle: return "horizontal_angle";
     case MeasurementKind::zenith_angle: return "zenith_angle";
@@ -102,7 +114,8 @@ std::string kind_key(MeasurementKind k) {
 
 bool angular(MeasurementKind k) {
   return k == MeasurementKind::direction || k == MeasurementKind::horizontal_angle || k == MeasurementKind::zenith_angle ||
-         k == MeasurementKind::vertical_angle || k == MeasurementKind::azimuth;
+         k == MeasurementKind::vertical_angle || k == MeasurementKind::azimuth || k == MeasurementKind::geodetic_latitude ||
+         k == MeasurementKind::geodetic_longitude;
 }
 
 // The stations a measurement names, "A->B" or "A,B,C".
@@ -138,8 +151,32 @@ const char* verdict(const solver::GlobalTest& g) {
 
 PreparedNetwork prepare_network(const AdjustRequest& request) {
   PreparedNetwork p;
-  p.network = io::read_network(request.inputs);
+  io::NetworkReadOptions read_options;
+  read_options.geoid = request.options.geoid;
+  if (request.sinex_frame) read_options.sinex_frame = geodesy::Frame::parse(*request.sinex_frame, "--sinex-frame");
+  p.network = io::read_network(request.inputs, read_options);
   geodesy::Network& net = p.network;
+  for (const auto& w : net.warnings) p.notes.push_back("warning: " + w);
+  // DynaML's Pscale, Lscale, Hscale: variances scaled along north, east and
+  // up at each item's first station, now that its position is known.
+  {
+    const geodesy::GeocentricConverter geocentric(net.ellipsoid);
+    for (auto& m : net.measurements) {
+      if (m.local_variance_scale == Eigen::Vector3d::Ones()) continue;
+      const bool pairs = m.kind == MeasurementKind::gnss_baselines;
+      Eigen::MatrixXd s = Eigen::MatrixXd::Identity(m.covariance.rows(), m.covariance.cols());
+      for (Eigen::Index k = 0; k < m.value.size() / 3; ++k) {
+        const auto& x = net.stations[m.stations[static_cast<std::size_t>(pairs ? 2 * k : k)]].position;
+        const auto g = geocentric.geodetic_from_ecef(geodesy::EcefPosition(x.x(), x.y(), x.z()));
+        const Eigen::Matrix3d r = geodesy::enu_from_ecef_rotation(g.lat, g.lon);
+        const Eigen::Vector3d enu_scale(std::sqrt(m.local_variance_scale(1)), std::sqrt(m.local_variance_scale(0)),
+                                        std::sqrt(m.local_variance_scale(2)));  // east: L, north: P, up: H
+        s.block<3, 3>(3 * k, 3 * k) = r.transpose() * enu_scale.asDiagonal() * r;
+      }
+      m.covariance = s * m.covariance * s.transpose();
+      m.local_variance_scale = Eigen::Vector3d::Ones();
+    }
+  }
   if (net.space == NetworkSpace::ellipsoidal) {
     std::optional<Frame> target = net.frame;
     if (request.frame) target = Frame::parse(*request.frame, "--frame");
@@ -196,6 +233,55 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
     p.notes.push_back("station " + id + " constrained " + c.text() + " by --constrain");
   }
   return p;
+}
+
+std::string stations_sinex(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const std::string& software) {
+  const geodesy::Network& net = prepared.network;
+  if (net.space != NetworkSpace::ellipsoidal) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--sinex: a local network has no geocentric coordinates to write as SINEX");
+  }
+  if (!net.frame) throw Error(ErrorKind::usage, "E_OPTION", "--sinex: the network has no frame; give --frame FRAME@EPOCH");
+  if (r.station_covariance_m2.rows() != static_cast<Eigen::Index>(3 * r.covariance_stations.size())) {
+    throw std::logic_error("stations_sinex: the adjustment was run without the joint covariance");
+  }
+  io::SinexSolution s(*net.frame);
+  const geodesy::GeocentricConverter geocentric(net.ellipsoid);
+  bool terrestrial = false;
+  for (const auto& m : net.measurements) {
+    terrestrial = terrestrial || (m.kind != MeasurementKind::gnss_baselines && m.kind != MeasurementKind::gnss_points);
+  }
+  s.technique = terrestrial ? 'C' : 'P';
+  bool fixed = false, held = false;
+  for (std::size_t i : r.covariance_stations) {
+    const auto& st = r.stations[i];
+    const auto g = geocentric.geodetic_from_ecef(geodesy::EcefPosition(st.position.x(), st.position.y(), st.position.z()));
+    io::SinexSite site;
+    site.id = st.id;
+    site.ecef_m = st.position;
+    site.lat_deg = g.lat.deg();
+    site.lon_deg = g.lon.deg();
+    site.h_m = g.h.m;
+    s.sites.push_back(site);
+    const auto& con = net.stations[i].constraint;
+    for (int k = 0; k < 3; ++k) {
+      if (st.constraint[static_cast<std::size_t>(k)] != 'C') continue;
+      (con.sigma_m[static_cast<std::size_t>(k)] > 0.0 ? held : fixed) = true;
+    }
+  }
+  const bool inner = r.datum.find("inner constraints") != std::string::npos || r.datum.find("minimum-norm") != std::string::npos;
+  s.constraint_code = fixed ? 0 : (held || inner) ? 1 : 2;
+  s.covariance_m2 = r.station_covariance_m2;
+  s.observations = r.observations;
+  s.unknowns = r.unknowns;
+  s.dof = r.dof;
+  s.vtpv = r.vtpv;
+  s.variance_factor = r.variance_factor.value_or(0.0);
+  s.description = "network adjustment by geoanchor adjust";
+  s.software = software;
+  s.input = net.source_name;
+  s.comments.push_back("Datum: " + r.datum);
+  s.comments.push_back("Covariance from the a-priori weights (sigma0 = 1); VARIANCE FACTOR is vtpv/dof.");
+  return io::sinex_text(s);
 }
 
 std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
@@ -327,7 +413,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
   std::size_t outliers = 0;
   for (const auto& am : r.measurements) outliers += am.outlier ? 1u : 0u;
   if (outliers > 0) {
-    out << "\nOutliers removed by data snooping: " << outliers << "\n";
+    out << "\nMeasurements set aside (data snooping, or a gross misclosure before the adjustment): " << outliers << "\n";
     for (const auto& am : r.measurements) {
       if (am.outlier) out << "  " << net.measurements[am.index].source << ": " << am.removed_because << "\n";
     }

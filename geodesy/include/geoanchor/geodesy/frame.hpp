@@ -84,6 +84,9 @@ DecimalYear parse_decimal_year(std::string_view text, std::string_view where);
 // applied: GPS time runs 18 s ahead of UTC since 2017, 5.7e-7 years, which
 // moves a point by 3e-8 m at a plate velocity of 5 cm/yr.
 DecimalYear decimal_year_from_gps_seconds(double gps_seconds);
+// The decimal year at the start of a calendar day (2020-01-01 is 2020.0);
+// nullopt for a date that does not exist.
+std::optional<DecimalYear> decimal_year_from_date(int year, int month, int day);
 
 // Shortest text that reads back to the same double, with at least one
 // decimal ("2010.0", "2024.5").

@@ -63,6 +63,7 @@ struct NetworkStation {
   // levelling network's x, y are 0 and not estimated.
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   bool position_known = true;  // false: no a-priori value was given (found from the measurements)
+  bool defined = true;         // false: only named by a measurement so far (while reading)
   StationConstraint constraint;
   std::string source;  // "file:line" or "file: stations[3]"
 };
@@ -76,6 +77,7 @@ enum class MeasurementKind {
   slope_distance,       // stations: from, to; with instrument and target heights
   horizontal_distance,  // in the local horizon at the instrument (ellipsoidal), the x/y plane (local)
   ellipsoid_arc,        // geodesic on the ellipsoid between the stations' footpoints
+  chord_distance,       // straight line between the stations' footpoints on the ellipsoid
   direction,            // from, to: bearing − the set's orientation unknown
   horizontal_angle,     // at, from (backsight), to (foresight): bearing(to) − bearing(from)
   zenith_angle,         // from, to; with instrument and target heights
@@ -84,6 +86,8 @@ enum class MeasurementKind {
   height_difference,    // from, to: orthometric (levelled) H(to) − H(from); local: z(to) − z(from)
   ellipsoidal_height,   // at
   orthometric_height,   // at
+  geodetic_latitude,    // at (radians)
+  geodetic_longitude,   // at (radians)
 };
 
 // "gnss baselines", "slope distance", … for messages.
@@ -105,11 +109,22 @@ struct NetworkMeasurement {
   // What was done to bring it to the network's frame ("ITRF2014@2020.0 ->
   // GDA2020 by ..."), filled when it was.
   std::string frame_step;
+  // GNSS: variance scales along the local north, east, up at the first
+  // station (DynAdjust's Pscale, Lscale, Hscale), applied once the
+  // stations' positions are known; 1 when none.
+  Eigen::Vector3d local_variance_scale = Eigen::Vector3d::Ones();
 };
 
 struct DirectionSet {
   std::size_t station = 0;  // the instrument
   std::string source;
+};
+
+// A station whose minimum-norm correction holds the datum defect the
+// constraints leave, over the components marked.
+struct DatumStation {
+  std::size_t station = 0;
+  std::array<bool, 3> components = {true, true, true};  // x, y, z (local) or east, north, up
 };
 
 struct Network {
@@ -122,6 +137,14 @@ struct Network {
   std::vector<NetworkStation> stations;
   std::vector<NetworkMeasurement> measurements;
   std::vector<DirectionSet> direction_sets;
+  // Stations whose minimum-norm correction holds whatever datum defect the
+  // constraints leave (GNU Gama's constrained points, upper-case `adj`):
+  // used only when there is such a defect.
+  std::vector<DatumStation> datum_stations;
+  // Measurements whose misclosure at the a-priori coordinates exceeds this
+  // (metres; angles times their sight length) are set aside before the
+  // adjustment with a warning (GNU Gama's tol-abs); 0: none is.
+  double gross_misclosure_m = 0.0;
   std::string source_name;  // the input file(s), for messages
   std::vector<std::string> warnings;
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/geoid.hpp"
 #include "geoanchor/geodesy/network.hpp"
 
 namespace geoanchor::io {
@@ -26,14 +27,26 @@ const char* to_string(NetworkFormat f);
 // the file when it is none of them.
 NetworkFormat detect_network_format(std::string_view text, std::string_view source);
 
+struct NetworkReadOptions {
+  // Orthometric station heights (DynaML LLH and UTM stations, point
+  // clusters) become ellipsoidal on it; without one such heights are
+  // refused where they are measured or held, and otherwise only start the
+  // iteration (with a warning).
+  const geodesy::GeoidGrid* geoid = nullptr;
+  // The frame of SINEX inputs' estimates (SINEX names none; --sinex-frame),
+  // without an epoch: each file's REF_EPOCH is theirs.
+  std::optional<geodesy::Frame> sinex_frame;
+};
+
 // Reads `inputs` (files; "-" is standard input, read once) into one
 // network. Throws geoanchor::Error: io for an unreadable file, input for
 // malformed content (named by file and line or JSON path / XML element),
 // an undefined or duplicate station, a covariance of the wrong size or not
 // symmetric, angles in an unknown unit, inputs of both spaces.
-geodesy::Network read_network(const std::vector<std::string>& inputs);
+geodesy::Network read_network(const std::vector<std::string>& inputs, const NetworkReadOptions& options = {});
 
 // One input's content read into `into` (used by read_network and the tests).
-void read_network_text(std::string_view text, std::string_view source, geodesy::Network& into);
+void read_network_text(std::string_view text, std::string_view source, geodesy::Network& into,
+                       const NetworkReadOptions& options = {});
 
 }  // namespace geoanchor::io

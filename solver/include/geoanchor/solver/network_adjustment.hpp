@@ -44,6 +44,8 @@
 
 namespace geoanchor::solver {
 
+inline constexpr std::size_t kMaxJointCovarianceStations = 5000;
+
 struct AdjustOptions {
   double alpha = 0.05;          // the global test
   double alpha_point = 0.001;   // w-tests, measurement tests and data snooping
@@ -63,6 +65,10 @@ struct AdjustOptions {
   const geodesy::GeoidGrid* geoid = nullptr;
   // The tests' reference: a dense normal-equation solve and full inverse.
   bool dense = false;
+  // Also the joint covariance of all stations in the adjustment
+  // (AdjustmentResult::station_covariance_m2): one solve per coordinate,
+  // for SINEX output; refused above kMaxJointCovarianceStations.
+  bool joint_covariance = false;
 };
 
 struct ErrorEllipse {
@@ -130,6 +136,11 @@ struct AdjustmentResult {
   std::vector<std::string> warnings;
   std::string refused_because;        // set when data snooping reached its limit
   std::size_t unknowns = 0, observations = 0;
+  // With AdjustOptions::joint_covariance: the stations in the adjustment
+  // (indices into `stations`) and their joint covariance, 3 rows each, in
+  // ECEF (ellipsoidal) or local x, y, z, from the a-priori weights.
+  std::vector<std::size_t> covariance_stations;
+  Eigen::MatrixXd station_covariance_m2;
   std::int64_t factor_nonzeros = 0;
 };
 

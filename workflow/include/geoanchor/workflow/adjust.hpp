@@ -18,6 +18,7 @@ namespace geoanchor::workflow {
 struct AdjustRequest {
   std::vector<std::string> inputs;      // files, or "-"
   std::optional<std::string> frame;     // --frame NAME[@EPOCH]
+  std::optional<std::string> sinex_frame;  // --sinex-frame NAME: the frame of SINEX inputs
   std::vector<std::string> constrain;   // --constrain ID=CCC[,SIGMA_M]
   solver::AdjustOptions options;
 };
@@ -44,6 +45,11 @@ PreparedNetwork prepare_network(const AdjustRequest& request);
 std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
 
 // One row per measurement component with its statistics.
+// The adjusted stations and their joint covariance as SINEX 2.02 (the
+// adjustment run with AdjustOptions::joint_covariance). Throws
+// geoanchor::Error (usage) for a local network or a frame without epoch.
+std::string stations_sinex(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const std::string& software);
+
 std::string measurements_csv(const geodesy::Network& net, const solver::AdjustmentResult& r);
 
 // The report as text, and as JSON (schema geoanchor.adjust-report/1).

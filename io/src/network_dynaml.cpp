@@ -1,0 +1,622 @@
+// DynAdjust's DynaML station and measurement files (XML), read as a stream
+// with expat: no tree of the whole file is built.
+//
+// The format as DynaML.xsd (DynAdjust, sampleData/DynaML.xsd, v1.0.2) and
+// DynAdjust's own reader define it (docs/network-format.md lists what is
+// read and how):
+//  - <DnaXmlFormat referenceframe="GDA2020" epoch="dd.mm.yyyy"> holds
+//    <DnaStation> and <DnaMeasurement> elements in any order;
+//  - a station's Constraints are three letters C/F: latitude, longitude,
+//    height for Type LLH, otherwise east, north, up (UTM, LLh) or X, Y, Z
+//    (XYZ); LLH and UTM heights are orthometric, LLh ellipsoidal; latitudes
+//    and longitudes are packed sexagesimal DDD.MMSSsss;
+//  - angles are packed sexagesimal, their standard deviations arc-seconds;
+//    distances and heights metres;
+//  - a GNSS baseline's covariance is the upper triangle SigmaXX … SigmaZZ
+//    (m²); in a cluster (X, Y) item i carries the blocks cov(i, j) for
+//    j = i + 1, …, n − 1 as GPSCovariance / PointCovariance m11 … m33
+//    (m_rc: component r of i, component c of j);
+//  - Vscale multiplies a GNSS covariance; Pscale, Lscale, Hscale its
+//    variances along latitude, longitude and height at the first station;
+//  - an empty <Ignore/> is a measurement in use, any text one left out;
+//  - a direction set's parent gives the reference object (Second, Value,
+//    StdDev) and its <Directions> the other targets.
+
+#include <expat.h>
+
+#include <cctype>
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/projection.hpp"
+#include "network_builder.hpp"
+#include "network_readers.hpp"
+
+namespace geoanchor::io::detail {
+namespace {
+
+using geodesy::MeasurementKind;
+
+constexpr double kArcsec = std::numbers::pi / 648000.0;
+
+// One vector of a GNSS measurement: its values, its own covariance terms
+// and the cross-covariance blocks that follow it.
+struct Item {
+  std::string first, second;
+  std::map<std::string, std::string> fields;      // X, Y, Z, SigmaXX, …
+  std::vector<std::map<std::string, std::string>> blocks;  // m11 … m33
+  std::size_t line = 0;
+};
+
+struct Direction {
+  std::map<std::string, std::string> fields;  // Ignore, Target, Value, StdDev
+  std::size_t line = 0;
+};
+
+struct Measurement {
+  std::map<std::string, std::string> fields;  // Type, Ignore, First, Second, Third, Value, StdDev, …
+  std::vector<std::string> firsts, seconds;   // as they come, for X and Y clusters
+  std::vector<Item> items;
+  std::vector<Direction> directions;
+  std::size_t line = 0;
+};
+
+struct Station {
+  std::map<std::string, std::string> fields;  // Name, Constraints, Type, Description
+  std::map<std::string, std::string> coord;   // XAxis, YAxis, Height, HemisphereZone
+  std::size_t line = 0;
+};
+
+class Reader {
+ public:
+  Reader(std::string_view source, geodesy::Network& net, const NetworkReadOptions& o)
+      : source_(source), net_(net), options_(o), builder_(net), geocentric_(net.ellipsoid) {}
+
+  void parse(std::string_view text) {
+    std::unique_ptr<XML_ParserStruct, decltype(&XML_ParserFree)> parser(XML_ParserCreate("UTF-8"), &XML_ParserFree);
+    if (!parser) throw std::bad_alloc();
+    parser_ = parser.get();
+    XML_SetUserData(parser_, this);
+    XML_SetElementHandler(parser_, &Reader::start_cb, &Reader::end_cb);
+    XML_SetCharacterDataHandler(parser_, &Reader::text_cb);
+    constexpr std::size_t kChunk = 1 << 20;
+    for (std::size_t at = 0; at < text.size() || at == 0; at += kChunk) {
+      const std::size_t n = std::min(kChunk, text.size() - at);
+      const bool last = at + n >= text.size();
+      if (XML_Parse(parser_, text.data() + at, static_cast<int>(n), last ? 1 : 0) != XML_STATUS_OK) {
+        if (error_) std::rethrow_exception(error_);
+        fail(XML_GetCurrentLineNumber(parser_), std::string("not well-formed XML: ") + XML_ErrorString(XML_GetErrorCode(parser_)));
+      }
+      if (error_) std::rethrow_exception(error_);
+      if (last) break;
+    }
+    if (!root_seen_) fail(1, "no <DnaXmlFormat> root element");
+  }
+
+ private:
+  [[noreturn]] void fail(std::size_t line, const std::string& what) const {
+    throw Error(ErrorKind::input, "E_DYNAML", source_ + ":" + std::to_string(line) + ": " + what);
+  }
+  std::size_t line() const { return XML_GetCurrentLineNumber(parser_); }
+  std::string where(std::size_t at) const { return source_ + ":" + std::to_string(at); }
+
+  static void start_cb(void* self, const XML_Char* name, const XML_Char** attributes) {
+    auto* r = static_cast<Reader*>(self);
+    if (r->error_) return;
+    try {
+      r->start(name, attributes);
+    } catch (...) {
+      r->error_ = std::current_exception();
+      XML_StopParser(r->parser_, XML_FALSE);
+    }
+  }
+  static void end_cb(void* self, const XML_Char* name) {
+    auto* r = static_cast<Reader*>(self);
+    if (r->error_) return;
+    try {
+      r->end(name);
+    } catch (...) {
+      r->error_ = std::current_exception();
+      XML_StopParser(r->parser_, XML_FALSE);
+    }
+  }
+  static void text_cb(void* self, const XML_Char* s, int len) {
+    auto* r = static_cast<Reader*>(self);
+    if (!r->error_) r->text_.append(s, static_cast<std::size_t>(len));
+  }
+
+  void start(const std::string& name, const XML_Char** attributes) {
+    text_.clear();
+    const std::string parent = path_.empty() ? "" : path_.back();
+    path_.push_back(name);
+    if (path_.size() == 1) {
+      if (name != "DnaXmlFormat") fail(line(), "root element <" + name + ">; expected <DnaXmlFormat>");
+      root_seen_ = true;
+      for (const XML_Char** a = attributes; *a; a += 2) {
+        const std::string key = a[0], value = a[1];
+        if (key == "referenceframe") frame_name_ = value;
+        else if (key == "epoch") epoch_text_ = value;
+      }
+      root_frame_ = frame_of(frame_name_.empty() ? "GDA2020" : frame_name_, epoch_text_.empty() ? "01.01.2020" : epoch_text_, line(),
+                             "<DnaXmlFormat>");
+      if (!net_.frame) {
+        net_.frame = root_frame_;
+        if (const auto e = geodesy::implied_ellipsoid(*root_frame_)) {
+          net_.ellipsoid = *e;
+          net_.ellipsoid_stated = true;
+          geocentric_ = geodesy::GeocentricConverter(net_.ellipsoid);
+        }
+      }
+      return;
+    }
+    if (path_.size() == 2) {
+      if (name == "DnaStation") {
+        station_ = Station{};
+        station_->line = line();
+      } else if (name == "DnaMeasurement") {
+        measurement_ = Measurement{};
+        measurement_->line = line();
+      } else {
+        fail(line(), "element <" + name + "> in <DnaXmlFormat>; expected <DnaStation> or <DnaMeasurement>");
+      }
+      return;
+    }
+    if (measurement_ && name == "GPSBaseline") {
+      Item item;
+      item.line = line();
+      item.first = measurement_->firsts.empty() ? "" : measurement_->firsts.back();
+      item.second = measurement_->seconds.empty() ? "" : measurement_->seconds.back();
+      measurement_->items.push_back(item);
+    } else if (measurement_ && name == "Clusterpoint") {
+      Item item;
+      item.line = line();
+      item.first = measurement_->firsts.empty() ? "" : measurement_->firsts.back();
+      measurement_->items.push_back(item);
+    } else if (measurement_ && (name == "GPSCovariance" || name == "PointCovariance")) {
+      if (measurement_->items.empty()) fail(line(), "<" + name + "> outside a baseline or cluster point");
+      measurement_->items.back().blocks.emplace_back();
+    } else if (measurement_ && name == "Directions" && path_.size() == 3) {
+      Direction d;
+      d.line = line();
+      measurement_->directions.push_back(d);
+    }
+    (void)parent;
+  }
+
+  void end(const std::string& name) {
+    const std::string value = trim(text_);
+    text_.clear();
+    const std::size_t depth = path_.size();
+    const std::string parent = depth >= 2 ? path_[depth - 2] : "";
+    path_.pop_back();
+    if (depth == 2) {
+      if (name == "DnaStation") finish_station();
+      if (name == "DnaMeasurement") finish_measurement();
+      station_.reset();
+      measurement_.reset();
+      return;
+    }
+    if (station_) {
+      if (parent == "DnaStation") station_->fields[name] = value;
+      else if (parent == "StationCoord") station_->coord[name] = value;
+      return;
+    }
+    if (!measurement_) return;
+    Measurement& m = *measurement_;
+    if (parent == "DnaMeasurement") {
+      if (name == "First") m.firsts.push_back(value);
+      if (name == "Second") m.seconds.push_back(value);
+      if (name != "GPSBaseline" && name != "Clusterpoint" && name != "Directions") {
+        if (!m.fields.count(name) || (name != "First" && name != "Second")) m.fields[name] = value;
+      }
+    } else if (parent == "GPSBaseline" || parent == "Clusterpoint") {
+      if (name != "GPSCovariance" && name != "PointCovariance") m.items.back().fields[name] = value;
+    } else if (parent == "GPSCovariance" || parent == "PointCovariance") {
+      m.items.back().blocks.back()[name] = value;
+    } else if (parent == "Directions") {
+      m.directions.back().fields[name] = value;
+    }
+  }
+
+  static std::string trim(const std::string& s) {
+    const auto b = s.find_first_not_of(" \t\r\n");
+    if (b == std::string::npos) return "";
+    return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
+  }
+
+  geodesy::Frame frame_of(const std::string& name, const std::string& date, std::size_t at, const std::string& what) const {
+    // dd.mm.yyyy
+    int d = 0, mo = 0, y = 0;
+    char dot1 = 0, dot2 = 0;
+    std::istringstream in(date);
+    in >> d >> dot1 >> mo >> dot2 >> y;
+    const auto year = in && dot1 == '.' && dot2 == '.' ? geodesy::decimal_year_from_date(y, mo, d) : std::nullopt;
+    if (!year) fail(at, what + " epoch '" + date + "': expected a date dd.mm.yyyy");
+    return geodesy::Frame::parse(name + "@" + geodesy::format_decimal_year(*year), where(at) + ": " + what + " reference frame");
+  }
+
+  double number(const std::map<std::string, std::string>& f, const std::string& key, std::size_t at, const std::string& what) const {
+    const auto it = f.find(key);
+    if (it == f.end() || it->second.empty()) fail(at, what + ": <" + key + "> missing");
+    const auto v = parse_finite_double(it->second);
+    if (!v) fail(at, what + ": <" + key + "> '" + it->second + "' is not a number");
+    return *v;
+  }
+  std::string text(const std::map<std::string, std::string>& f, const std::string& key) const {
+    const auto it = f.find(key);
+    return it == f.end() ? std::string() : it->second;
+  }
+  double positive_sigma(double v, std::size_t at, const std::string& what) const {
+    if (!(v > 0.0)) fail(at, what + ": standard deviation " + format_shortest(v) + " must be > 0");
+    return v;
+  }
+
+  // Orthometric height H to ellipsoidal at (lat, lon), when the geoid is there.
+  std::optional<double> undulation(double lat_rad, double lon_rad, std::size_t at) const {
+    if (!options_.geoid) return std::nullopt;
+    return options_.geoid->undulation_m(geodesy::Angle::radians(lat_rad), geodesy::Angle::radians(lon_rad), where(at));
+  }
+
+  void finish_station() {
+    const Station& s = *station_;
+    const std::string name = text(s.fields, "Name");
+    const std::string what = "station " + name;
+    if (name.empty()) fail(s.line, "a <DnaStation> without a <Name>");
+    std::string code = text(s.fields, "Constraints");
+    if (code.empty()) code = "FFF";
+    if (code.size() != 3 || code.find_first_not_of("CFcf") != std::string::npos) {
+      fail(s.line, what + ": <Constraints> '" + code + "': expected three letters C (constrained) or F (free)");
+    }
+    const std::string type = text(s.fields, "Type");
+    geodesy::StationConstraint c;
+    Eigen::Vector3d position;
+    bool orthometric = false;
+    double lat = 0, lon = 0, height = number(s.coord, "Height", s.line, what);
+    if (type == "XYZ") {
+      position = {number(s.coord, "XAxis", s.line, what), number(s.coord, "YAxis", s.line, what), height};
+    } else if (type == "LLH" || type == "LLh") {
+      lat = packed_dms_to_rad(text(s.coord, "XAxis"), where(s.line) + ": " + what + " <XAxis> (latitude)");
+      lon = packed_dms_to_rad(text(s.coord, "YAxis"), where(s.line) + ": " + what + " <YAxis> (longitude)");
+      orthometric = type == "LLH";
+    } else if (type == "UTM") {
+      const std::string zone_text = text(s.coord, "HemisphereZone");
+      std::string zone = zone_text;
+      if (!zone.empty() && std::isdigit(static_cast<unsigned char>(zone.back()))) {
+        // DynaML writes the zone number alone; its frames (GDA94, GDA2020) are
+        // Australia's, south of the equator. Elsewhere the hemisphere must be said.
+        const std::string frame = net_.frame ? net_.frame->name() : "";
+        if (frame.rfind("GDA", 0) != 0) {
+          fail(s.line, what + ": <HemisphereZone> '" + zone_text + "' names no hemisphere and the frame " + frame +
+                           " does not imply one; write it as " + zone_text + "N or " + zone_text + "S");
+        }
+        zone += "S";
+      }
+      const auto def = geodesy::utm_projection(net_.ellipsoid, geodesy::parse_utm_zone(zone, where(s.line) + ": " + what + " <HemisphereZone>"));
+      const geodesy::TransverseMercator tm(def);
+      geodesy::ProjectedPosition p;
+      p.easting_m = number(s.coord, "XAxis", s.line, what);
+      p.northing_m = number(s.coord, "YAxis", s.line, what);
+      p.projection = def;
+      const auto g = tm.try_inverse(p);
+      if (!g) fail(s.line, what + ": easting/northing outside UTM zone " + zone);
+      lat = g->lat.rad();
+      lon = g->lon.rad();
+      orthometric = true;
+    } else {
+      fail(s.line, what + ": <Type> '" + type + "': expected XYZ, LLH, LLh or UTM");
+    }
+    if (type != "XYZ") {
+      double h = height;
+      if (orthometric) {
+        if (const auto n = undulation(lat, lon, s.line)) {
+          h = height + *n;
+        } else if (code[2] == 'C' || code[2] == 'c') {
+          fail(s.line, what + ": its orthometric height is held (Constraints " + code +
+                           ") and there is no geoid to make it ellipsoidal; give --geoid");
+        } else {
+          ++approximate_heights_;
+        }
+      }
+      position = geocentric_.ecef_from_geodetic({geodesy::Angle::radians(lat), geodesy::Angle::radians(lon), geodesy::EllipsoidalHeight{h}}).m;
+    }
+    // The letters' order: latitude, longitude, height for LLH; east, north,
+    // up (or X, Y, Z) otherwise. geoanchor's order is latitude, longitude, height.
+    for (std::size_t k = 0; k < 3; ++k) code[k] = static_cast<char>(std::toupper(static_cast<unsigned char>(code[k])));
+    if (type == "XYZ" && code != "CCC" && code != "FFF") {
+      fail(s.line, what + ": <Constraints> " + code + " holds some of X, Y, Z: geoanchor holds latitude, longitude and "
+                       "height; give CCC, FFF or the station in LLh");
+    }
+    c.code = type == "LLH" || type == "XYZ" ? std::array<char, 3>{code[0], code[1], code[2]}
+                                             : std::array<char, 3>{code[1], code[0], code[2]};
+    builder_.define(name, position, c, where(s.line));
+  }
+
+  // A GNSS measurement's frame: its own ReferenceFrame/Epoch, else the file's.
+  geodesy::Frame measurement_frame(const Measurement& m) const {
+    const std::string f = text(m.fields, "ReferenceFrame"), e = text(m.fields, "Epoch");
+    if (f.empty() && e.empty()) return *root_frame_;
+    return frame_of(f.empty() ? root_frame_->name() : f, e.empty() ? (epoch_text_.empty() ? "01.01.2020" : epoch_text_) : e, m.line,
+                    "measurement");
+  }
+
+  // The covariance of n GNSS items: diagonal blocks from Sigma*, cross blocks from the items' blocks.
+  Eigen::MatrixXd gnss_covariance(const Measurement& m, const std::string& what) const {
+    const std::size_t n = m.items.size();
+    Eigen::MatrixXd v = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(3 * n), static_cast<Eigen::Index>(3 * n));
+    const char* sig[3][3] = {{"SigmaXX", "SigmaXY", "SigmaXZ"}, {"SigmaXY", "SigmaYY", "SigmaYZ"}, {"SigmaXZ", "SigmaYZ", "SigmaZZ"}};
+    for (std::size_t i = 0; i < n; ++i) {
+      const Item& it = m.items[i];
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) v(static_cast<Eigen::Index>(3 * i) + r, static_cast<Eigen::Index>(3 * i) + c) = number(it.fields, sig[r][c], it.line, what);
+      }
+      if (it.blocks.size() != n - 1 - i) {
+        fail(it.line, what + ": item " + std::to_string(i + 1) + " of " + std::to_string(n) + " carries " +
+                          std::to_string(it.blocks.size()) + " covariance blocks; expected " + std::to_string(n - 1 - i) +
+                          " (one with each later item)");
+      }
+      for (std::size_t k = 0; k < it.blocks.size(); ++k) {
+        const std::size_t j = i + 1 + k;
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 3; ++c) {
+            const double x = number(it.blocks[k], "m" + std::to_string(r + 1) + std::to_string(c + 1), it.line, what);
+            v(static_cast<Eigen::Index>(3 * i) + r, static_cast<Eigen::Index>(3 * j) + c) = x;
+            v(static_cast<Eigen::Index>(3 * j) + c, static_cast<Eigen::Index>(3 * i) + r) = x;
+          }
+        }
+      }
+    }
+    return v;
+  }
+
+  void finish_measurement() {
+    const Measurement& m = *measurement_;
+    const std::string type = text(m.fields, "Type");
+    const std::string what = "measurement " + type;
+    geodesy::NetworkMeasurement x;
+    x.source = where(m.line);
+    x.ignore = !text(m.fields, "Ignore").empty();
+    auto station = [&](const std::string& id, const char* role) {
+      if (id.empty()) fail(m.line, what + ": <" + std::string(role) + "> missing");
+      return builder_.reference(id, where(m.line));
+    };
+    const std::string first = m.firsts.empty() ? "" : m.firsts.front();
+    const std::string second = m.seconds.empty() ? "" : m.seconds.front();
+    auto scalar = [&](MeasurementKind kind, double value, double sigma) {
+      x.kind = kind;
+      x.value = Eigen::VectorXd::Constant(1, value);
+      x.covariance = Eigen::MatrixXd::Constant(1, 1, sigma * sigma);
+    };
+    auto angle = [&](const std::map<std::string, std::string>& f, std::size_t at) {
+      return packed_dms_to_rad(text(f, "Value"), where(at) + ": " + what + " <Value>");
+    };
+    auto angle_sigma = [&](const std::map<std::string, std::string>& f, std::size_t at) {
+      return positive_sigma(number(f, "StdDev", at, what), at, what) * kArcsec;
+    };
+    auto linear_sigma = [&]() { return positive_sigma(number(m.fields, "StdDev", m.line, what), m.line, what); };
+    auto heights = [&]() {
+      if (m.fields.count("InstHeight") && !text(m.fields, "InstHeight").empty()) x.instrument_height_m = number(m.fields, "InstHeight", m.line, what);
+      if (m.fields.count("TargHeight") && !text(m.fields, "TargHeight").empty()) x.target_height_m = number(m.fields, "TargHeight", m.line, what);
+    };
+    if (type.size() != 1) fail(m.line, "<Type> '" + type + "': expected one letter (A, B, C, D, E, G, H, I, J, K, L, P, Q, R, S, V, X, Y, Z)");
+    switch (type[0]) {
+      case 'G':
+      case 'X': {
+        if (m.items.empty()) fail(m.line, what + ": no <GPSBaseline>");
+        if (type[0] == 'X' && !text(m.fields, "Total").empty() &&
+            number(m.fields, "Total", m.line, what) != static_cast<double>(m.items.size())) {
+          fail(m.line, what + ": <Total> " + text(m.fields, "Total") + " but " + std::to_string(m.items.size()) + " <GPSBaseline>");
+        }
+        x.kind = MeasurementKind::gnss_baselines;
+        x.value.resize(static_cast<Eigen::Index>(3 * m.items.size()));
+        for (std::size_t i = 0; i < m.items.size(); ++i) {
+          const Item& it = m.items[i];
+          const std::string a = type[0] == 'G' ? first : it.first, b = type[0] == 'G' ? second : it.second;
+          x.stations.push_back(station(a, "First"));
+          x.stations.push_back(station(b, "Second"));
+          x.value.segment<3>(static_cast<Eigen::Index>(3 * i)) =
+              Eigen::Vector3d(number(it.fields, "X", it.line, what), number(it.fields, "Y", it.line, what), number(it.fields, "Z", it.line, what));
+        }
+        x.covariance = gnss_covariance(m, what);
+        x.frame = measurement_frame(m);
+        scale(x, m, what);
+        break;
+      }
+      case 'Y': {
+        if (m.items.empty()) fail(m.line, what + ": no <Clusterpoint>");
+        const std::string coords = text(m.fields, "Coords");
+        if (coords != "XYZ" && coords != "LLH") fail(m.line, what + ": <Coords> '" + coords + "': expected XYZ or LLH");
+        x.kind = MeasurementKind::gnss_points;
+        const std::size_t n = m.items.size();
+        x.value.resize(static_cast<Eigen::Index>(3 * n));
+        Eigen::MatrixXd v = gnss_covariance(m, what);
+        Eigen::MatrixXd j = Eigen::MatrixXd::Identity(v.rows(), v.cols());
+        for (std::size_t i = 0; i < n; ++i) {
+          const Item& it = m.items[i];
+          x.stations.push_back(station(it.first, "First"));
+          if (coords == "XYZ") {
+            x.value.segment<3>(static_cast<Eigen::Index>(3 * i)) =
+                Eigen::Vector3d(number(it.fields, "X", it.line, what), number(it.fields, "Y", it.line, what), number(it.fields, "Z", it.line, what));
+            continue;
+          }
+          // LLH: latitude and longitude (packed), orthometric height; the
+          // covariance in (latitude rad, longitude rad, height m).
+          const double lat = packed_dms_to_rad(text(it.fields, "X"), where(it.line) + ": " + what + " <X> (latitude)");
+          const double lon = packed_dms_to_rad(text(it.fields, "Y"), where(it.line) + ": " + what + " <Y> (longitude)");
+          const auto n_m = undulation(lat, lon, it.line);
+          if (!n_m) fail(it.line, what + ": a point cluster of orthometric heights (Coords LLH) needs the geoid: give --geoid");
+          const double h = number(it.fields, "Z", it.line, what) + *n_m;
+          const geodesy::GeodeticPosition g{geodesy::Angle::radians(lat), geodesy::Angle::radians(lon), geodesy::EllipsoidalHeight{h}};
+          x.value.segment<3>(static_cast<Eigen::Index>(3 * i)) = geocentric_.ecef_from_geodetic(g).m;
+          // ∂(X, Y, Z) / ∂(φ, λ, h): north·(M + h), east·(N + h)·cos φ, up.
+          const double e2 = net_.ellipsoid.e2(), a = net_.ellipsoid.a_m();
+          const double w = std::sqrt(1.0 - e2 * std::sin(lat) * std::sin(lat));
+          const double meridian = a * (1.0 - e2) / (w * w * w), prime = a / w;
+          const Eigen::Matrix3d r = geodesy::enu_from_ecef_rotation(g.lat, g.lon);
+          Eigen::Matrix3d jac;
+          jac.col(0) = r.row(1).transpose() * (meridian + h);
+          jac.col(1) = r.row(0).transpose() * (prime + h) * std::cos(lat);
+          jac.col(2) = r.row(2).transpose();
+          j.block<3, 3>(static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * i)) = jac;
+        }
+        x.covariance = j * v * j.transpose();
+        x.frame = measurement_frame(m);
+        scale(x, m, what);
+        break;
+      }
+      case 'S':
+      case 'E':
+      case 'C': {
+        const bool slope = type[0] == 'S';
+        scalar(slope ? MeasurementKind::slope_distance : type[0] == 'E' ? MeasurementKind::ellipsoid_arc : MeasurementKind::chord_distance,
+               number(m.fields, "Value", m.line, what), linear_sigma());
+        x.stations = {station(first, "First"), station(second, "Second")};
+        if (slope) heights();
+        break;
+      }
+      case 'A': {
+        scalar(MeasurementKind::horizontal_angle, angle(m.fields, m.line), angle_sigma(m.fields, m.line));
+        x.stations = {station(first, "First"), station(second, "Second"), station(text(m.fields, "Third"), "Third")};
+        break;
+      }
+      case 'B':
+      case 'K': {
+        // K, an astronomic azimuth, is read as geodetic: the deflections of
+        // the vertical are taken as zero (docs/commands/adjust.md).
+        scalar(MeasurementKind::azimuth, angle(m.fields, m.line), angle_sigma(m.fields, m.line));
+        x.stations = {station(first, "First"), station(second, "Second")};
+        break;
+      }
+      case 'V':
+      case 'Z': {
+        scalar(type[0] == 'V' ? MeasurementKind::zenith_angle : MeasurementKind::vertical_angle, angle(m.fields, m.line),
+               angle_sigma(m.fields, m.line));
+        x.stations = {station(first, "First"), station(second, "Second")};
+        heights();
+        break;
+      }
+      case 'H':
+      case 'R': {
+        scalar(type[0] == 'H' ? MeasurementKind::orthometric_height : MeasurementKind::ellipsoidal_height,
+               number(m.fields, "Value", m.line, what), linear_sigma());
+        x.stations = {station(first, "First")};
+        break;
+      }
+      case 'L': {
+        scalar(MeasurementKind::height_difference, number(m.fields, "Value", m.line, what), linear_sigma());
+        x.stations = {station(first, "First"), station(second, "Second")};
+        break;
+      }
+      case 'P':
+      case 'Q':
+      case 'I':
+      case 'J': {
+        // I and J, astronomic, are read as geodetic (deflections zero).
+        scalar(type[0] == 'P' || type[0] == 'I' ? MeasurementKind::geodetic_latitude : MeasurementKind::geodetic_longitude,
+               angle(m.fields, m.line), angle_sigma(m.fields, m.line));
+        x.stations = {station(first, "First")};
+        break;
+      }
+      case 'D': {
+        const std::size_t at = station(first, "First");
+        const std::size_t set = net_.direction_sets.size();
+        net_.direction_sets.push_back({at, where(m.line)});
+        const bool ignored = x.ignore;
+        // The reference object, then the other targets.
+        geodesy::NetworkMeasurement ro;
+        ro.source = where(m.line);
+        ro.kind = MeasurementKind::direction;
+        ro.stations = {at, station(second, "Second")};
+        const double s = angle_sigma(m.fields, m.line);
+        ro.value = Eigen::VectorXd::Constant(1, angle(m.fields, m.line));
+        ro.covariance = Eigen::MatrixXd::Constant(1, 1, s * s);
+        ro.set = set;
+        ro.ignore = ignored;
+        net_.measurements.push_back(ro);
+        if (!text(m.fields, "Total").empty() &&
+            number(m.fields, "Total", m.line, what) != static_cast<double>(m.directions.size())) {
+          fail(m.line, what + ": <Total> " + text(m.fields, "Total") + " but " + std::to_string(m.directions.size()) + " <Directions>");
+        }
+        for (const auto& d : m.directions) {
+          geodesy::NetworkMeasurement dir = ro;
+          dir.source = where(d.line);
+          dir.stations = {at, station(text(d.fields, "Target"), "Target")};
+          const double sd = angle_sigma(d.fields, d.line);
+          dir.value = Eigen::VectorXd::Constant(1, angle(d.fields, d.line));
+          dir.covariance = Eigen::MatrixXd::Constant(1, 1, sd * sd);
+          dir.ignore = ignored || !text(d.fields, "Ignore").empty();
+          net_.measurements.push_back(dir);
+        }
+        return;
+      }
+      case 'M':
+        fail(m.line, what + ": an MSL arc is not read by geoanchor (give it as an ellipsoid arc, type E)");
+      default:
+        fail(m.line, "<Type> '" + type + "': expected one of A, B, C, D, E, G, H, I, J, K, L, P, Q, R, S, V, X, Y, Z");
+    }
+    net_.measurements.push_back(std::move(x));
+  }
+
+  // Vscale multiplies the whole covariance; Pscale, Lscale, Hscale the
+  // variances along latitude (north), longitude (east) and height (up),
+  // applied when the stations are known (Network measurement's
+  // local_variance_scale).
+  void scale(geodesy::NetworkMeasurement& x, const Measurement& m, const std::string& what) const {
+    auto factor = [&](const char* key) {
+      const std::string t = text(m.fields, key);
+      if (t.empty()) return 1.0;
+      const auto v = parse_finite_double(t);
+      if (!v || !(*v > 0.0)) fail(m.line, what + ": <" + std::string(key) + "> '" + t + "': expected a factor > 0");
+      return *v;
+    };
+    x.covariance *= factor("Vscale");
+    x.local_variance_scale = Eigen::Vector3d(factor("Pscale"), factor("Lscale"), factor("Hscale"));
+  }
+
+ public:
+  std::size_t approximate_heights() const { return approximate_heights_; }
+
+ private:
+  std::string source_;
+  geodesy::Network& net_;
+  const NetworkReadOptions& options_;
+  NetworkBuilder builder_;
+  geodesy::GeocentricConverter geocentric_;
+  XML_Parser parser_ = nullptr;
+  std::exception_ptr error_;
+  std::vector<std::string> path_;
+  std::string text_;
+  bool root_seen_ = false;
+  std::string frame_name_, epoch_text_;
+  std::optional<geodesy::Frame> root_frame_;
+  std::optional<Station> station_;
+  std::optional<Measurement> measurement_;
+  std::size_t approximate_heights_ = 0;
+};
+
+}  // namespace
+
+void read_dynaml(std::string_view text, std::string_view source, geodesy::Network& into, const NetworkReadOptions& options) {
+  if (!into.stations.empty() && into.space != geodesy::NetworkSpace::ellipsoidal) {
+    throw Error(ErrorKind::input, "E_NETWORK", std::string(source) + ": DynaML is a network on the ellipsoid; the other inputs are local");
+  }
+  into.space = geodesy::NetworkSpace::ellipsoidal;
+  Reader reader(source, into, options);
+  reader.parse(text);
+  if (reader.approximate_heights() > 0) {
+    into.warnings.push_back(std::string(source) + ": " + std::to_string(reader.approximate_heights()) +
+                            " free station(s) have orthometric heights and there is no --geoid: each starts the iteration "
+                            "at h = H (metres off where N is metres; their adjusted heights do not depend on it)");
+  }
+}
+
+}  // namespace geoanchor::io::detail

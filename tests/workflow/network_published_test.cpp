@@ -1,0 +1,266 @@
+// Published sample networks adjusted by geoanchor, read in their own
+// formats, against the results those programs publish
+// (fixtures/networks/README.md names each source):
+//  - GNU Gama's levelling example stroner-levelling-a and its 3-D
+//    tetrahedron tst-tetrahedron-1 (a gross error set aside by tol-abs, a
+//    datum defect held by the constrained points);
+//  - DynAdjust's GNSS sample network (DynaML; baselines in ITRF2008 and
+//    ITRF2014 at their epochs brought to GDA2020).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <cstdio>
+
+#include <Eigen/LU>
+
+#include "temp_folder.hpp"
+#include "test_support.hpp"
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/solver/network_adjustment.hpp"
+#include "geoanchor/workflow/adjust.hpp"
+
+namespace {
+const std::string kDir = std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/";
+}  // namespace
+
+namespace geoanchor::solver {
+namespace {
+
+// GNU Gama prints vᵀPv with 8 significant digits; its iterations stop
+// at its own threshold (a few parts in 1e7 here).
+constexpr double kGamaVtpvRelative = 1e-6;
+// Gama prints coordinates to 1e-10 m; both iterate to well below a micrometre.
+constexpr double kGamaCoordinate_m = 2e-6;
+// Gama prints standard deviations in mm (cc) with 3 or 4 decimals.
+constexpr double kGamaSigma_mm = 6e-4;
+
+AdjustmentResult adjust_file(const std::vector<std::string>& files, AdjustOptions o = {}) {
+  // As `geoanchor adjust` reads them: GNSS measurements brought to the
+  // network's frame and epoch through the frame catalog.
+  workflow::AdjustRequest request;
+  for (const auto& f : files) request.inputs.push_back(kDir + f);
+  request.options = o;
+  const workflow::PreparedNetwork prepared = workflow::prepare_network(request);
+  return adjust_network(prepared.network, o);
+}
+
+const AdjustedStation& station(const AdjustmentResult& r, const std::string& id) {
+  for (const auto& s : r.stations) {
+    if (s.id == id) return s;
+  }
+  throw std::runtime_error("no station " + id);
+}
+
+TEST(NetworkPublished, GamaLevellingStronerA) {
+  // sigma-apr 3 mm, sigma-act apriori: Gama's weights are σ_apr²/σ², so its
+  // vᵀPv is σ_apr² times geoanchor's and its ratio m0/σ_apr is our σ0.
+  const AdjustmentResult r = adjust_file({"gama/stroner-levelling-a.gkf"});
+  EXPECT_EQ(r.dof, 8);
+  EXPECT_EQ(r.unknowns, 7u);
+  EXPECT_NEAR(r.vtpv * 9.0, 33.680920, 33.680920 * kGamaVtpvRelative);
+  EXPECT_NEAR(*r.sigma0, 2.0518565 / 3.0, 1e-7);
+  EXPECT_TRUE(r.global_test.passed);
+  // Published adjusted heights (m) and standard deviations (mm, sigma-act apriori).
+  const std::map<std::string, std::pair<double, double>> published = {
+      {"1", {250.6962377763539962, 2.1025}},  {"11", {249.8106300937259903, 2.0954}}, {"17", {244.7769807699725959, 1.7337}},
+      {"32", {253.6317554477260785, 1.9683}}, {"34", {267.9199288778169148, 2.0385}}, {"38", {268.2926289418810484, 2.0489}},
+      {"43", {236.3185878269286206, 1.9331}}};
+  for (const auto& [id, expected] : published) {
+    const AdjustedStation& s = station(r, id);
+    EXPECT_NEAR(s.position.z(), expected.first, kGamaCoordinate_m) << id;
+    EXPECT_NEAR(std::sqrt(s.covariance_local_m2(2, 2)) * 1e3, expected.second, kGamaSigma_mm) << id;
+  }
+  EXPECT_DOUBLE_EQ(station(r, "51").position.z(), 234.3145);  // fixed
+}
+
+TEST(NetworkPublished, GamaTetrahedronWithGrossErrorAndDefect) {
+  AdjustOptions o;
+  o.data_snooping = false;  // Gama does not snoop; its global test fails
+  const AdjustmentResult r = adjust_file({"gama/tst-tetrahedron-1.gkf"}, o);
+  EXPECT_EQ(r.dof, 27);
+  EXPECT_EQ(r.unknowns, 14u);  // Z of 1, x y z of 2, 3, 4 and four orientations
+  EXPECT_NEAR(r.vtpv * 100.0, 9.6197833e4, 9.6197833e4 * kGamaVtpvRelative);
+  EXPECT_NEAR(*r.sigma0 * 10.0, 59.689888, 59.689888 * kGamaVtpvRelative);
+  EXPECT_FALSE(r.global_test.passed);
+  // The dh of 1500.025 m is set aside before the adjustment (tol-abs 1000 mm).
+  std::size_t aside = 0;
+  for (const auto& m : r.measurements) aside += m.used ? 0u : 1u;
+  EXPECT_EQ(aside, 1u);
+  // Published: adjusted value (m) and standard deviation scaled by m0 (mm).
+  struct Row {
+    const char* id;
+    int axis;
+    double value, sigma_mm;
+  };
+  const Row published[] = {{"1", 2, -0.0481890340317265, 9.143},   {"2", 0, 3000.0091583753542182, 19.285},
+                           {"2", 1, 0.0314726894331622, 47.373},   {"2", 2, -0.0129034191987782, 10.413},
+                           {"3", 0, 1500.0011345710054229, 26.458}, {"3", 1, 2598.0731081360859207, 22.964},
+                           {"3", 2, 0.0610924532305046, 9.277},    {"4", 0, 1500.0096342399419882, 23.073},
+                           {"4", 1, 865.9937283657513944, 24.009},  {"4", 2, 2449.4671915913627345, 19.704}};
+  for (const Row& row : published) {
+    const AdjustedStation& s = station(r, row.id);
+    EXPECT_NEAR(s.position(row.axis), row.value, kGamaCoordinate_m) << row.id << " axis " << row.axis;
+    const double scaled_mm = std::sqrt(s.covariance_local_m2(row.axis, row.axis)) * *r.sigma0 * 1e3;
+    EXPECT_NEAR(scaled_mm, row.sigma_mm, kGamaSigma_mm) << row.id << " axis " << row.axis;
+  }
+}
+
+TEST(NetworkPublished, DynAdjustGnssSample) {
+  AdjustOptions o;
+  o.data_snooping = false;  // DynAdjust's simultaneous run flags, it does not remove
+  const AdjustmentResult r = adjust_file({"dynadjust/gnss-networkstn.xml", "dynadjust/gnss-networkmsr.xml"}, o);
+  EXPECT_EQ(r.observations, 417u);
+  EXPECT_EQ(r.unknowns, 129u);
+  EXPECT_EQ(r.dof, 288);
+  // DynAdjust: χ² 336.64, variance factor 1.169, from the DNA text twin
+  // whose VCVs carry fewer digits, with 10 m pseudo-observations on every
+  // free station: within 0.3 % of ours.
+  constexpr double kDynAdjustVtpvRelative = 3e-3;
+  EXPECT_NEAR(r.vtpv, 336.64, 336.64 * kDynAdjustVtpvRelative);
+  EXPECT_NEAR(*r.variance_factor, 1.169, 1.169 * kDynAdjustVtpvRelative);
+  // Published coordinates (0.1 mm) and standard deviations (0.1 mm).
+  constexpr double kDynAdjustCoordinate_m = 5e-4;
+  constexpr double kDynAdjustSigma_m = 0.06e-3;  // half the printed 0.1 mm, and a little
+  std::ifstream in(kDir + "dynadjust/gnss.simult.adj.expected.csv");
+  std::string line;
+  std::size_t compared = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line.rfind("id,", 0) == 0) continue;
+    std::stringstream ss(line);
+    std::string id, field;
+    std::getline(ss, id, ',');
+    double v[6];
+    for (double& x : v) {
+      std::getline(ss, field, ',');
+      x = std::stod(field);
+    }
+    const AdjustedStation& s = station(r, id);
+    EXPECT_LE((s.position - Eigen::Vector3d(v[0], v[1], v[2])).norm(), kDynAdjustCoordinate_m) << id;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(std::sqrt(s.covariance_local_m2(k, k)), v[3 + k], kDynAdjustSigma_m) << id << " component " << k;
+    }
+    ++compared;
+  }
+  EXPECT_EQ(compared, 43u);
+}
+
+}  // namespace
+}  // namespace geoanchor::solver
+
+namespace geoanchor::workflow {
+namespace {
+
+// SINEX out and back in: the positions (15 significant digits) and the
+// joint covariance survive; the reader's CORR, INFO and upper-triangle
+// forms give the covariance the SINEX 2.02 description defines.
+TEST(NetworkSinex, WrittenStationsReadBackAsOnePointCluster) {
+  const geoanchor::testing::TempFolder dir("network_sinex");
+  AdjustRequest request;
+  request.inputs = {kDir + "dynadjust/gnss-networkstn.xml", kDir + "dynadjust/gnss-networkmsr.xml"};
+  request.options.data_snooping = false;
+  request.options.joint_covariance = true;
+  const PreparedNetwork prepared = prepare_network(request);
+  const solver::AdjustmentResult r = solver::adjust_network(prepared.network, request.options);
+  ASSERT_EQ(r.covariance_stations.size(), 43u);
+  // The joint covariance's diagonal blocks are the stations' own.
+  for (std::size_t i = 0; i < r.covariance_stations.size(); ++i) {
+    const Eigen::Matrix3d block = r.station_covariance_m2.block<3, 3>(static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * i));
+    EXPECT_LE((block - r.stations[r.covariance_stations[i]].covariance_m2).cwiseAbs().maxCoeff(), 1e-12 * block.norm());
+  }
+  const std::string path = (dir.path() / "gnss.snx").string();
+  {
+    std::ofstream out(path);
+    out << stations_sinex(prepared, r, "geoanchor test");
+  }
+  AdjustRequest back;
+  back.inputs = {path};
+  back.sinex_frame = "GDA2020";
+  const PreparedNetwork again = prepare_network(back);
+  ASSERT_EQ(again.network.measurements.size(), 1u);
+  const auto& m = again.network.measurements.front();
+  ASSERT_EQ(m.value.size(), 129);
+  constexpr double kWrittenDigits_m = 1e-7;  // 15 significant digits of 4e6 m
+  constexpr double kCovarianceRelative = 1e-13;
+  for (std::size_t i = 0; i < 43; ++i) {
+    const Eigen::Vector3d x = r.stations[r.covariance_stations[i]].position;
+    EXPECT_LE((m.value.segment<3>(static_cast<Eigen::Index>(3 * i)) - x).cwiseAbs().maxCoeff(), kWrittenDigits_m);
+  }
+  EXPECT_LE((m.covariance - r.station_covariance_m2).cwiseAbs().maxCoeff(),
+            kCovarianceRelative * r.station_covariance_m2.cwiseAbs().maxCoeff() * 10.0);
+  ASSERT_TRUE(m.frame.has_value());
+  EXPECT_EQ(m.frame->to_string(), "GDA2020@2020.0");
+}
+
+TEST(NetworkSinex, CorrelationAndNormalMatricesAreCovariances) {
+  const geoanchor::testing::TempFolder dir("network_sinex_forms");
+  // Two stations; covariance C built from SDs and correlations by hand.
+  const double sd[6] = {0.002, 0.003, 0.004, 0.0025, 0.0035, 0.0045};
+  Eigen::MatrixXd corr = Eigen::MatrixXd::Identity(6, 6);
+  corr(0, 1) = corr(1, 0) = 0.3;
+  corr(2, 4) = corr(4, 2) = -0.2;
+  corr(1, 5) = corr(5, 1) = 0.1;
+  Eigen::MatrixXd cov(6, 6);
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) cov(i, j) = corr(i, j) * sd[i] * sd[j];
+  }
+  const double x[6] = {-4052052.659, 4212836.007, -2545104.721, -2713833.186, 5303935.121, -2269513.888};
+  auto file = [&](const std::string& kind, const Eigen::MatrixXd& m, bool upper) {
+    std::ostringstream o;
+    o << "%=SNX 2.02 XXX 24:001:00000 XXX 24:001:00000 24:001:00000 P 00006 2 S\n+SOLUTION/ESTIMATE\n"
+         "*INDEX TYPE__ CODE PT SOLN _REF_EPOCH__ UNIT S __ESTIMATED VALUE____ _STD_DEV___\n";
+    const char* types[] = {"STAX", "STAY", "STAZ"};
+    for (int i = 0; i < 6; ++i) {
+      char line[128];
+      std::snprintf(line, sizeof line, " %5d %-6s %-4s  A    1 24:183:43200 m    2 %21.9f %11.5f\n", i + 1, types[i % 3],
+                    i < 3 ? "AAAA" : "BBBB", x[i], sd[i]);
+      o << line;
+    }
+    o << "-SOLUTION/ESTIMATE\n+SOLUTION/MATRIX_ESTIMATE " << (upper ? "U " : "L ") << kind << "\n";
+    for (int r = 0; r < 6; ++r) {
+      const int from = upper ? r : 0, to = upper ? 5 : r;
+      for (int c = from; c <= to; c += 3) {
+        char line[160];
+        int n = std::snprintf(line, sizeof line, " %5d %5d", r + 1, c + 1);
+        for (int k = c; k <= std::min(c + 2, to); ++k) n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %21.14E", m(r, k));
+        o << line << "\n";
+      }
+    }
+    o << "-SOLUTION/MATRIX_ESTIMATE " << (upper ? "U " : "L ") << kind << "\n%ENDSNX\n";
+    const std::string p = (dir.path() / (kind + (upper ? "_u" : "_l") + ".snx")).string();
+    std::ofstream(p) << o.str();
+    return p;
+  };
+  Eigen::MatrixXd corr_form = corr;
+  for (int i = 0; i < 6; ++i) corr_form(i, i) = sd[i];
+  const Eigen::MatrixXd info = cov.inverse();
+  for (const auto& [kind, m, upper] : {std::tuple{std::string("COVA"), cov, false}, std::tuple{std::string("CORR"), corr_form, true},
+                                       std::tuple{std::string("INFO"), info, false}}) {
+    AdjustRequest request;
+    request.inputs = {file(kind, m, upper)};
+    request.sinex_frame = "ITRF2014";
+    const PreparedNetwork p = prepare_network(request);
+    ASSERT_EQ(p.network.measurements.size(), 1u) << kind;
+    const auto& msr = p.network.measurements.front();
+    EXPECT_LE((msr.covariance - cov).cwiseAbs().maxCoeff(), 1e-12 * cov.cwiseAbs().maxCoeff()) << kind;
+    EXPECT_EQ(msr.frame->name(), "ITRF2014");
+    EXPECT_NEAR(msr.frame->epoch()->year, 2024.0 + (182.5) / 366.0, 1e-9) << kind;
+  }
+  // No frame: refused by name.
+  AdjustRequest no_frame;
+  no_frame.inputs = {file("COVA", cov, false)};
+  try {
+    (void)prepare_network(no_frame);
+    ADD_FAILURE() << "a SINEX without --sinex-frame was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--sinex-frame"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace geoanchor::workflow
