@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_process.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/network.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
@@ -42,6 +43,9 @@
 namespace {
 
 using namespace geoanchor;
+using bench::median;
+using bench::parse_sizes;
+using bench::Run;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
@@ -179,12 +183,6 @@ double bare_cholmod_seconds(const Generated& g) {
   return seconds;
 }
 
-struct Run {
-  double seconds = 0.0;
-  double peak_mb = 0.0;
-  int status = -1;
-};
-
 // The adjustment in a child process: its seconds through a pipe, its peak
 // resident set from wait4.
 Run adjust_in_child(const Generated& g) {
@@ -214,46 +212,6 @@ Run adjust_in_child(const Generated& g) {
   run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
   run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return run;
-}
-
-Run run_command(const std::vector<std::string>& args, const fs::path& folder) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, (folder / "stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, 2, (folder / "stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  const auto t0 = Clock::now();
-  pid_t pid = 0;
-  Run r;
-  if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) std::exit(1);
-  struct rusage usage {};
-  int status = 0;
-  wait4(pid, &status, 0, &usage);
-  r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-  r.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  posix_spawn_file_actions_destroy(&actions);
-  return r;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t m = v.size() / 2;
-  return v.size() % 2 == 1 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-}
-
-std::vector<std::size_t> parse_sizes(const std::string& text) {
-  std::vector<std::size_t> sizes;
-  std::size_t at = 0;
-  while (at < text.size()) {
-    const std::size_t comma = text.find(',', at);
-    sizes.push_back(static_cast<std::size_t>(std::stod(text.substr(at, comma - at))));
-    if (comma == std::string::npos) break;
-    at = comma + 1;
-  }
-  return sizes;
 }
 
 }  // namespace
@@ -303,7 +261,7 @@ int main(int argc, char** argv) {
       for (int k = 0; k < repetitions; ++k) {
         fs::remove(folder / "st.csv");
         fs::remove(folder / "st.csv.geoanchor.json");
-        const Run r = run_command({GEOANCHOR_EXE, "adjust", json.string(), "-o", (folder / "st.csv").string(), "--no-snooping",
+        const Run r = bench::run_command({GEOANCHOR_EXE, "adjust", json.string(), "-o", (folder / "st.csv").string(), "--no-snooping",
                                    "--report", (folder / "report.txt").string(), "--overwrite"},
                                   folder);
         if (r.status != 0) {

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_process.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
 #include "geoanchor/io/control_csv.hpp"
@@ -34,6 +35,9 @@
 namespace {
 
 using namespace geoanchor;
+using bench::median;
+using bench::parse_sizes;
+using bench::Run;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
@@ -74,57 +78,6 @@ void write_control_csv(const fs::path& path, std::size_t n) {
     std::exit(1);
   }
   close(fd);
-}
-
-struct Run {
-  double seconds = 0.0;
-  double peak_mb = 0.0;
-  int status = -1;
-};
-
-// Runs the command with stdout and stderr to files; wall time and the
-// child's peak resident set (wait4's ru_maxrss, kB).
-Run run_command(const std::vector<std::string>& args, const fs::path& folder) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, (folder / "report.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, 2, (folder / "stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  const auto t0 = Clock::now();
-  pid_t pid = 0;
-  Run r;
-  if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) {
-    std::fprintf(stderr, "cannot start %s\n", argv[0]);
-    std::exit(1);
-  }
-  struct rusage usage {};
-  int status = 0;
-  wait4(pid, &status, 0, &usage);
-  r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-  r.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  posix_spawn_file_actions_destroy(&actions);
-  return r;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t m = v.size() / 2;
-  return v.size() % 2 == 1 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-}
-
-std::vector<std::size_t> parse_sizes(const std::string& text) {
-  std::vector<std::size_t> sizes;
-  std::size_t at = 0;
-  while (at < text.size()) {
-    const std::size_t comma = text.find(',', at);
-    sizes.push_back(static_cast<std::size_t>(std::stod(text.substr(at, comma - at))));
-    if (comma == std::string::npos) break;
-    at = comma + 1;
-  }
-  return sizes;
 }
 
 }  // namespace
@@ -173,7 +126,7 @@ int main(int argc, char** argv) {
         // pays for freeing or writing back another's output.
         fs::remove(folder / "T.json");
         sync();
-        const Run r = run_command(args, folder);
+        const Run r = bench::run_command(args, folder, "report.txt");
         if (r.status != 0) {
           std::fprintf(stderr, "%s exited %d; see %s\n", exe.c_str(), r.status, (folder / "stderr.txt").c_str());
           return 1;

@@ -22,8 +22,6 @@
 //  - a direction set's parent gives the reference object (Second, Value,
 //    StdDev) and its <Directions> the other targets.
 
-#include <expat.h>
-
 #include <cctype>
 #include <cmath>
 #include <map>
@@ -41,6 +39,7 @@
 #include "geoanchor/geodesy/projection.hpp"
 #include "network_builder.hpp"
 #include "network_readers.hpp"
+#include "xml_stream.hpp"
 
 namespace geoanchor::io::detail {
 namespace {
@@ -77,63 +76,26 @@ struct Station {
   std::size_t line = 0;
 };
 
-class Reader {
+class Reader final : public XmlHandler {
  public:
   Reader(std::string_view source, geodesy::Network& net, const NetworkReadOptions& o)
       : source_(source), net_(net), options_(o), builder_(net), geocentric_(net.ellipsoid) {}
 
   void parse(std::string_view text) {
-    std::unique_ptr<XML_ParserStruct, decltype(&XML_ParserFree)> parser(XML_ParserCreate("UTF-8"), &XML_ParserFree);
-    if (!parser) throw std::bad_alloc();
-    parser_ = parser.get();
-    XML_SetUserData(parser_, this);
-    XML_SetElementHandler(parser_, &Reader::start_cb, &Reader::end_cb);
-    XML_SetCharacterDataHandler(parser_, &Reader::text_cb);
-    constexpr std::size_t kChunk = 1 << 20;
-    for (std::size_t at = 0; at < text.size() || at == 0; at += kChunk) {
-      const std::size_t n = std::min(kChunk, text.size() - at);
-      const bool last = at + n >= text.size();
-      if (XML_Parse(parser_, text.data() + at, static_cast<int>(n), last ? 1 : 0) != XML_STATUS_OK) {
-        if (error_) std::rethrow_exception(error_);
-        fail(XML_GetCurrentLineNumber(parser_), std::string("not well-formed XML: ") + XML_ErrorString(XML_GetErrorCode(parser_)));
-      }
-      if (error_) std::rethrow_exception(error_);
-      if (last) break;
-    }
+    xml_.parse(text, source_, "E_DYNAML");
     if (!root_seen_) fail(1, "no <DnaXmlFormat> root element");
   }
+
+  void start_element(const std::string& name, const XML_Char** attributes) override { start(name, attributes); }
+  void end_element(const std::string& name) override { end(name); }
+  void character_data(const char* s, std::size_t n) override { text_.append(s, n); }
 
  private:
   [[noreturn]] void fail(std::size_t line, const std::string& what) const {
     throw Error(ErrorKind::input, "E_DYNAML", source_ + ":" + std::to_string(line) + ": " + what);
   }
-  std::size_t line() const { return XML_GetCurrentLineNumber(parser_); }
+  std::size_t line() const { return xml_.line(); }
   std::string where(std::size_t at) const { return source_ + ":" + std::to_string(at); }
-
-  static void start_cb(void* self, const XML_Char* name, const XML_Char** attributes) {
-    auto* r = static_cast<Reader*>(self);
-    if (r->error_) return;
-    try {
-      r->start(name, attributes);
-    } catch (...) {
-      r->error_ = std::current_exception();
-      XML_StopParser(r->parser_, XML_FALSE);
-    }
-  }
-  static void end_cb(void* self, const XML_Char* name) {
-    auto* r = static_cast<Reader*>(self);
-    if (r->error_) return;
-    try {
-      r->end(name);
-    } catch (...) {
-      r->error_ = std::current_exception();
-      XML_StopParser(r->parser_, XML_FALSE);
-    }
-  }
-  static void text_cb(void* self, const XML_Char* s, int len) {
-    auto* r = static_cast<Reader*>(self);
-    if (!r->error_) r->text_.append(s, static_cast<std::size_t>(len));
-  }
 
   void start(const std::string& name, const XML_Char** attributes) {
     text_.clear();
@@ -591,8 +553,7 @@ class Reader {
   const NetworkReadOptions& options_;
   NetworkBuilder builder_;
   geodesy::GeocentricConverter geocentric_;
-  XML_Parser parser_ = nullptr;
-  std::exception_ptr error_;
+  XmlStream xml_{*this};
   std::vector<std::string> path_;
   std::string text_;
   bool root_seen_ = false;

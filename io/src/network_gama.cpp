@@ -27,8 +27,6 @@
 //  - tol-abs (mm): measurements whose misclosure at the a-priori
 //    coordinates is larger are set aside (with a warning).
 
-#include <expat.h>
-
 #include <cmath>
 #include <map>
 #include <memory>
@@ -43,6 +41,7 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "network_builder.hpp"
 #include "network_readers.hpp"
+#include "xml_stream.hpp"
 
 namespace geoanchor::io::detail {
 namespace {
@@ -72,59 +71,30 @@ struct PointText {
   std::size_t line = 0;
 };
 
-class Reader {
+class Reader final : public XmlHandler {
  public:
   Reader(std::string_view source, geodesy::Network& net) : source_(source), net_(net), builder_(net) {}
 
   void parse(std::string_view text) {
-    std::unique_ptr<XML_ParserStruct, decltype(&XML_ParserFree)> parser(XML_ParserCreate("UTF-8"), &XML_ParserFree);
-    if (!parser) throw std::bad_alloc();
-    parser_ = parser.get();
-    XML_SetUserData(parser_, this);
-    XML_SetElementHandler(parser_, &Reader::start_cb, &Reader::end_cb);
-    XML_SetCharacterDataHandler(parser_, &Reader::text_cb);
-    if (XML_Parse(parser_, text.data(), static_cast<int>(text.size()), 1) != XML_STATUS_OK) {
-      if (error_) std::rethrow_exception(error_);
-      fail(XML_GetCurrentLineNumber(parser_), std::string("not well-formed XML: ") + XML_ErrorString(XML_GetErrorCode(parser_)));
-    }
-    if (error_) std::rethrow_exception(error_);
+    xml_.parse(text, source_, "E_GAMA");
     if (!network_seen_) fail(1, "no <network> in <gama-local>");
     finish();
   }
+
+  void start_element(const std::string& name, const XML_Char** attributes) override {
+    Attributes a;
+    for (const XML_Char** p = attributes; *p; p += 2) a[p[0]] = p[1];
+    start(name, a);
+  }
+  void end_element(const std::string& name) override { end(name); }
+  void character_data(const char* s, std::size_t n) override { text_.append(s, n); }
 
  private:
   [[noreturn]] void fail(std::size_t line, const std::string& what) const {
     throw Error(ErrorKind::input, "E_GAMA", source_ + ":" + std::to_string(line) + ": " + what);
   }
-  std::size_t line() const { return XML_GetCurrentLineNumber(parser_); }
+  std::size_t line() const { return xml_.line(); }
   std::string where(std::size_t at) const { return source_ + ":" + std::to_string(at); }
-
-  static void start_cb(void* self, const XML_Char* name, const XML_Char** attributes) {
-    auto* r = static_cast<Reader*>(self);
-    if (r->error_) return;
-    try {
-      Attributes a;
-      for (const XML_Char** p = attributes; *p; p += 2) a[p[0]] = p[1];
-      r->start(name, a);
-    } catch (...) {
-      r->error_ = std::current_exception();
-      XML_StopParser(r->parser_, XML_FALSE);
-    }
-  }
-  static void end_cb(void* self, const XML_Char* name) {
-    auto* r = static_cast<Reader*>(self);
-    if (r->error_) return;
-    try {
-      r->end(name);
-    } catch (...) {
-      r->error_ = std::current_exception();
-      XML_StopParser(r->parser_, XML_FALSE);
-    }
-  }
-  static void text_cb(void* self, const XML_Char* s, int len) {
-    auto* r = static_cast<Reader*>(self);
-    if (!r->error_) r->text_.append(s, static_cast<std::size_t>(len));
-  }
 
   void only(const std::string& element, const Attributes& a, const std::set<std::string>& allowed) const {
     for (const auto& [key, value] : a) {
@@ -623,8 +593,7 @@ class Reader {
   std::string source_;
   geodesy::Network& net_;
   NetworkBuilder builder_;
-  XML_Parser parser_ = nullptr;
-  std::exception_ptr error_;
+  XmlStream xml_{*this};
   std::vector<std::string> path_;
   std::string text_;
   bool network_seen_ = false;

@@ -1,0 +1,71 @@
+// expat driven in chunks for the XML readers (xml_stream.hpp).
+
+#include "xml_stream.hpp"
+
+#include <algorithm>
+#include <memory>
+#include <new>
+
+#include "geoanchor/geodesy/error.hpp"
+
+namespace geoanchor::io::detail {
+
+void XmlStream::parse(std::string_view text, const std::string& source, const char* code) {
+  std::unique_ptr<XML_ParserStruct, decltype(&XML_ParserFree)> parser(XML_ParserCreate("UTF-8"), &XML_ParserFree);
+  if (!parser) throw std::bad_alloc();
+  parser_ = parser.get();
+  XML_SetUserData(parser_, this);
+  XML_SetElementHandler(parser_, &XmlStream::on_start, &XmlStream::on_end);
+  XML_SetCharacterDataHandler(parser_, &XmlStream::on_text);
+  constexpr std::size_t kChunk = 1 << 20;
+  for (std::size_t at = 0; at < text.size() || at == 0; at += kChunk) {
+    const std::size_t n = std::min(kChunk, text.size() - at);
+    const bool last = at + n >= text.size();
+    if (XML_Parse(parser_, text.data() + at, static_cast<int>(n), last ? 1 : 0) != XML_STATUS_OK) {
+      if (error_) std::rethrow_exception(error_);
+      throw Error(ErrorKind::input, code,
+                  source + ":" + std::to_string(XML_GetCurrentLineNumber(parser_)) +
+                      ": not well-formed XML: " + XML_ErrorString(XML_GetErrorCode(parser_)));
+    }
+    if (error_) std::rethrow_exception(error_);
+    if (last) break;
+  }
+  parser_ = nullptr;
+}
+
+std::size_t XmlStream::line() const { return parser_ ? static_cast<std::size_t>(XML_GetCurrentLineNumber(parser_)) : 0; }
+
+void XmlStream::on_start(void* self, const XML_Char* name, const XML_Char** attributes) {
+  auto* x = static_cast<XmlStream*>(self);
+  if (x->error_) return;
+  try {
+    x->handler_.start_element(name, attributes);
+  } catch (...) {
+    x->error_ = std::current_exception();
+    XML_StopParser(x->parser_, XML_FALSE);
+  }
+}
+
+void XmlStream::on_end(void* self, const XML_Char* name) {
+  auto* x = static_cast<XmlStream*>(self);
+  if (x->error_) return;
+  try {
+    x->handler_.end_element(name);
+  } catch (...) {
+    x->error_ = std::current_exception();
+    XML_StopParser(x->parser_, XML_FALSE);
+  }
+}
+
+void XmlStream::on_text(void* self, const XML_Char* s, int len) {
+  auto* x = static_cast<XmlStream*>(self);
+  if (x->error_) return;
+  try {
+    x->handler_.character_data(s, static_cast<std::size_t>(len));
+  } catch (...) {
+    x->error_ = std::current_exception();
+    XML_StopParser(x->parser_, XML_FALSE);
+  }
+}
+
+}  // namespace geoanchor::io::detail

@@ -1,0 +1,47 @@
+#pragma once
+// An XML text streamed through expat to a handler's start and end of each
+// element and its character data (private to io): no tree of the whole file
+// is built. A handler's exception stops the parse and is rethrown; text that
+// is not well-formed XML is an error naming the source and line.
+
+#include <expat.h>
+
+#include <cstddef>
+#include <exception>
+#include <string>
+#include <string_view>
+
+namespace geoanchor::io::detail {
+
+class XmlHandler {
+ public:
+  virtual ~XmlHandler() = default;
+  // `attributes`: name, value, name, value, …, nullptr (expat's).
+  virtual void start_element(const std::string& name, const XML_Char** attributes) = 0;
+  virtual void end_element(const std::string& name) = 0;
+  virtual void character_data(const char* s, std::size_t n) = 0;
+};
+
+class XmlStream {
+ public:
+  explicit XmlStream(XmlHandler& handler) : handler_(handler) {}
+  XmlStream(const XmlStream&) = delete;
+  XmlStream& operator=(const XmlStream&) = delete;
+
+  // Throws geoanchor::Error (input, `code`) "SOURCE:LINE: not well-formed
+  // XML: …", or whatever the handler threw.
+  void parse(std::string_view text, const std::string& source, const char* code);
+  // The line of the element being handled (1-based).
+  std::size_t line() const;
+
+ private:
+  static void on_start(void* self, const XML_Char* name, const XML_Char** attributes);
+  static void on_end(void* self, const XML_Char* name);
+  static void on_text(void* self, const XML_Char* s, int len);
+
+  XmlHandler& handler_;
+  XML_Parser parser_ = nullptr;
+  std::exception_ptr error_;
+};
+
+}  // namespace geoanchor::io::detail
