@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <iostream>
 
 #include "command_input.hpp"
@@ -28,7 +29,7 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_option("--report", o.report, "Write the text report to this file (else it goes to standard output, or standard error with -o -)");
   cmd->add_flag("--json", o.json, "Print the report as JSON (schema geoanchor.adjust-report/1) on standard output");
   cmd->add_option("--sinex", o.sinex, "Write the adjusted stations with their covariance as SINEX");
-  cmd->add_option("--sinex-frame", o.sinex_frame, "The frame of SINEX inputs' estimates (SINEX names none), e.g. ITRF2014, IGS20; their epoch is REF_EPOCH");
+  cmd->add_option("--sinex-frame", o.sinex_frame, "The frame of SINEX inputs' estimates (SINEX names none), a catalog frame, e.g. ITRF2014; their epoch is REF_EPOCH");
   cmd->add_option("--frame", o.frame, "The adjustment's frame and epoch, e.g. GDA2020, ITRF2020@2024.5 (default: the inputs')");
   cmd->add_option("--constrain", o.constrain, "ID=CCC[,SIGMA_M]: hold station ID's latitude, longitude, height (C) or leave them free (F); with SIGMA_M held with that standard deviation");
   cmd->add_flag("--free", o.free, "Free network: the datum by inner constraints (no station held)");
@@ -81,6 +82,31 @@ int run_adjust(const AdjustCommandOptions& o) {
   }
   if (o.geoid) so.geoid = &parse_geoid(*o.geoid, "--geoid");
 
+  // Every output its own file (the stations' sidecar included).
+  {
+    std::vector<std::pair<std::string, std::string>> outputs;
+    if (o.output != "-") outputs.push_back({"-o", o.output}), outputs.push_back({"-o's sidecar", o.output + ".geoanchor.json"});
+    if (o.measurements) outputs.push_back({"--measurements", *o.measurements});
+    if (o.report) outputs.push_back({"--report", *o.report});
+    if (o.sinex) outputs.push_back({"--sinex", *o.sinex});
+    for (std::size_t a = 0; a < outputs.size(); ++a) {
+      for (std::size_t b = a + 1; b < outputs.size(); ++b) {
+        std::error_code ec;
+        const bool same = outputs[a].second == outputs[b].second ||
+                          std::filesystem::weakly_canonical(outputs[a].second, ec) == std::filesystem::weakly_canonical(outputs[b].second, ec);
+        if (same) {
+          throw Error(ErrorKind::usage, "E_OPTION", outputs[a].first + " and " + outputs[b].first + " name the same file " +
+                                                        outputs[b].second + "; give each output its own");
+        }
+      }
+      for (const auto& in : o.inputs) {
+        std::error_code ec;
+        if (in != "-" && std::filesystem::weakly_canonical(in, ec) == std::filesystem::weakly_canonical(outputs[a].second, ec)) {
+          throw Error(ErrorKind::usage, "E_OPTION", outputs[a].first + " " + outputs[a].second + " is an input");
+        }
+      }
+    }
+  }
   // Outputs are claimed before the adjustment: a path that cannot be written fails first.
   const io::Overwrite overwrite = o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
   io::DataOutput stations(o.output, overwrite);
@@ -99,6 +125,9 @@ int run_adjust(const AdjustCommandOptions& o) {
   std::ostream& shown = stations.is_standard_output() || o.json ? std::cerr : std::cout;
   if (!report) shown << text;
   if (o.json) std::cout << json;
+  for (const auto& n : prepared.notes) {
+    if (n.rfind("warning: ", 0) == 0) std::cerr << "geoanchor: " << n << '\n';
+  }
   for (const auto& w : r.warnings) std::cerr << "geoanchor: warning: " << w << '\n';
 
   const auto& g = r.global_test;

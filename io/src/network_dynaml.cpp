@@ -25,6 +25,7 @@
 #include <cctype>
 #include <cmath>
 #include <map>
+#include <set>
 #include <sstream>
 #include <memory>
 #include <numbers>
@@ -108,6 +109,15 @@ class Reader final : public XmlHandler {
         const std::string key = a[0], value = a[1];
         if (key == "referenceframe") frame_name_ = value;
         else if (key == "epoch") epoch_text_ = value;
+        else if (key != "type" && key != "xmlns:xsi" && key != "xsi:noNamespaceSchemaLocation") {
+          fail(line(), "<DnaXmlFormat> attribute " + key + "=\"" + value +
+                           "\" is not read by geoanchor; expected type, referenceframe, epoch");
+        }
+      }
+      if (frame_name_.empty() || epoch_text_.empty()) {
+        net_.warnings.push_back(source_ + ": <DnaXmlFormat> names no " +
+                                std::string(frame_name_.empty() ? "referenceframe" : "epoch") +
+                                ": DynaML.xsd's default (GDA2020, 01.01.2020) applies");
       }
       root_frame_ = frame_of(frame_name_.empty() ? "GDA2020" : frame_name_, epoch_text_.empty() ? "01.01.2020" : epoch_text_, line(),
                              "<DnaXmlFormat>");
@@ -132,6 +142,32 @@ class Reader final : public XmlHandler {
         fail(line(), "element <" + name + "> in <DnaXmlFormat>; expected <DnaStation> or <DnaMeasurement>");
       }
       return;
+    }
+    // Every element where DynaML.xsd puts it, without attributes; anything
+    // else is refused by name, never skipped.
+    static const std::map<std::string, std::set<std::string>> kChildren = {
+        {"DnaStation", {"Name", "Constraints", "Type", "StationCoord", "Description"}},
+        {"StationCoord", {"Name", "XAxis", "YAxis", "Height", "HemisphereZone"}},
+        {"DnaMeasurement", {"Type", "Ignore", "ReferenceFrame", "Epoch", "First", "Second", "Third", "Value", "StdDev",
+                            "InstHeight", "TargHeight", "Total", "Directions", "Vscale", "Pscale", "Lscale", "Hscale",
+                            "GPSBaseline", "Clusterpoint", "Coords", "Source", "MeasurementID", "ClusterID"}},
+        {"GPSBaseline", {"X", "Y", "Z", "MeasurementID", "SigmaXX", "SigmaXY", "SigmaXZ", "SigmaYY", "SigmaYZ", "SigmaZZ",
+                         "GPSCovariance"}},
+        {"Clusterpoint", {"X", "Y", "Z", "MeasurementID", "SigmaXX", "SigmaXY", "SigmaXZ", "SigmaYY", "SigmaYZ", "SigmaZZ",
+                          "PointCovariance"}},
+        {"GPSCovariance", {"m11", "m12", "m13", "m21", "m22", "m23", "m31", "m32", "m33"}},
+        {"PointCovariance", {"m11", "m12", "m13", "m21", "m22", "m23", "m31", "m32", "m33"}},
+        {"Directions", {"Ignore", "Target", "Value", "StdDev", "MeasurementID"}},
+    };
+    const auto allowed = kChildren.find(parent);
+    if (allowed == kChildren.end()) fail(line(), "element <" + name + "> inside <" + parent + ">, which holds a value, not elements");
+    if (!allowed->second.count(name)) {
+      std::string list;
+      for (const auto& k : allowed->second) list += (list.empty() ? "" : ", ") + k;
+      fail(line(), "element <" + name + "> in <" + parent + "> is not read by geoanchor; expected one of " + list);
+    }
+    if (*attributes) {
+      fail(line(), "<" + name + "> attribute " + std::string(attributes[0]) + "=\"" + attributes[1] + "\" is not read by geoanchor");
     }
     if (measurement_ && name == "GPSBaseline") {
       Item item;
@@ -168,9 +204,13 @@ class Reader final : public XmlHandler {
       measurement_.reset();
       return;
     }
+    // A value given twice is refused (First and Second repeat in clusters).
+    auto put = [&](std::map<std::string, std::string>& into) {
+      if (!into.emplace(name, value).second) fail(line(), "<" + name + "> given twice in <" + parent + ">");
+    };
     if (station_) {
-      if (parent == "DnaStation") station_->fields[name] = value;
-      else if (parent == "StationCoord") station_->coord[name] = value;
+      if (parent == "DnaStation" && name != "StationCoord") put(station_->fields);
+      else if (parent == "StationCoord") put(station_->coord);
       return;
     }
     if (!measurement_) return;
@@ -179,14 +219,18 @@ class Reader final : public XmlHandler {
       if (name == "First") m.firsts.push_back(value);
       if (name == "Second") m.seconds.push_back(value);
       if (name != "GPSBaseline" && name != "Clusterpoint" && name != "Directions") {
-        if (!m.fields.count(name) || (name != "First" && name != "Second")) m.fields[name] = value;
+        if (name == "First" || name == "Second") {
+          if (!m.fields.count(name)) m.fields[name] = value;
+        } else {
+          put(m.fields);
+        }
       }
     } else if (parent == "GPSBaseline" || parent == "Clusterpoint") {
-      if (name != "GPSCovariance" && name != "PointCovariance") m.items.back().fields[name] = value;
+      if (name != "GPSCovariance" && name != "PointCovariance") put(m.items.back().fields);
     } else if (parent == "GPSCovariance" || parent == "PointCovariance") {
-      m.items.back().blocks.back()[name] = value;
+      put(m.items.back().blocks.back());
     } else if (parent == "Directions") {
-      m.directions.back().fields[name] = value;
+      put(m.directions.back().fields);
     }
   }
 
@@ -249,6 +293,12 @@ class Reader final : public XmlHandler {
     } else if (type == "LLH" || type == "LLh") {
       lat = packed_dms_to_rad(text(s.coord, "XAxis"), where(s.line) + ": " + what + " <XAxis> (latitude)");
       lon = packed_dms_to_rad(text(s.coord, "YAxis"), where(s.line) + ": " + what + " <YAxis> (longitude)");
+      if (!(std::fabs(lat) <= std::numbers::pi / 2.0)) {
+        fail(s.line, what + ": latitude <XAxis> " + text(s.coord, "XAxis") + " is not within ±90°");
+      }
+      if (!(std::fabs(lon) <= std::numbers::pi)) {
+        fail(s.line, what + ": longitude <YAxis> " + text(s.coord, "YAxis") + " is not within ±180°");
+      }
       orthometric = type == "LLH";
     } else if (type == "UTM") {
       const std::string zone_text = text(s.coord, "HemisphereZone");
@@ -395,6 +445,9 @@ class Reader final : public XmlHandler {
       }
       case 'Y': {
         if (m.items.empty()) fail(m.line, what + ": no <Clusterpoint>");
+        if (!text(m.fields, "Total").empty() && number(m.fields, "Total", m.line, what) != static_cast<double>(m.items.size())) {
+          fail(m.line, what + ": <Total> " + text(m.fields, "Total") + " but " + std::to_string(m.items.size()) + " <Clusterpoint>");
+        }
         const std::string coords = text(m.fields, "Coords");
         if (coords != "XYZ" && coords != "LLH") fail(m.line, what + ": <Coords> '" + coords + "': expected XYZ or LLH");
         x.kind = MeasurementKind::gnss_points;

@@ -27,6 +27,8 @@
 //  - tol-abs (mm): measurements whose misclosure at the a-priori
 //    coordinates is larger are set aside (with a warning).
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -135,7 +137,12 @@ class Reader final : public XmlHandler {
   // standard deviation: gon and cc, or d-m-s text and arc-seconds.
   std::pair<double, double> angle(const std::string& element, const std::string& text) const {
     const std::string t = trim(text);
-    if (t.find('-', t[0] == '-' || t[0] == '+' ? 1 : 0) != std::string::npos) {
+    // d-m-s text: a '-' between digits past the sign (not an exponent's).
+    bool dms = false;
+    for (std::size_t i = 1; i + 1 < t.size(); ++i) {
+      dms = dms || (t[i] == '-' && std::isdigit(static_cast<unsigned char>(t[i - 1])) && std::isdigit(static_cast<unsigned char>(t[i + 1])));
+    }
+    if (dms) {
       return {dms_text_to_rad(t, where(line()) + ": <" + element + "> val"), kArcsec};
     }
     return {number(element, "val", t) * kGon, kCc};
@@ -226,11 +233,19 @@ class Reader final : public XmlHandler {
         while (in >> word) abc.push_back(number(name, "distance-stdev", word));
         if (abc.empty() || abc.size() > 3) fail(line(), "distance-stdev=\"" + a.at("distance-stdev") + "\"; expected a [b [c]]");
         distance_abc_ = {abc[0], abc.size() > 1 ? abc[1] : 0.0, abc.size() > 2 ? abc[2] : 1.0};
+        if (!(distance_abc_[0] > 0.0) || distance_abc_[1] < 0.0 || distance_abc_[2] < 0.0) {
+          fail(line(), "distance-stdev=\"" + a.at("distance-stdev") + "\": a must be > 0 and b, c >= 0 (σ = a + b·D_km^c mm)");
+        }
       }
       defaults_.direction = optional_number(name, a, "direction-stdev");
       defaults_.angle = optional_number(name, a, "angle-stdev");
       defaults_.zenith = optional_number(name, a, "zenith-angle-stdev");
       defaults_.azimuth = optional_number(name, a, "azimuth-stdev");
+      for (const char* key : {"direction-stdev", "angle-stdev", "zenith-angle-stdev", "azimuth-stdev"}) {
+        if (const auto v = optional_number(name, a, key); v && !(*v > 0.0)) {
+          fail(line(), std::string(key) + "=\"" + a.at(key) + "\" must be > 0");
+        }
+      }
       return;
     }
     if (parent == "points-observations") {
@@ -254,9 +269,12 @@ class Reader final : public XmlHandler {
     }
     if (name == "cov-mat" && (parent == "obs" || parent == "height-differences" || parent == "vectors" || parent == "coordinates")) {
       only(name, a, {"dim", "band"});
-      cov_dim_ = static_cast<long>(required_number(name, a, "dim"));
-      cov_band_ = static_cast<long>(required_number(name, a, "band"));
-      if (cov_dim_ < 0 || cov_band_ < 0) fail(line(), "<cov-mat> dim and band must not be negative");
+      const double dim = required_number(name, a, "dim"), band = required_number(name, a, "band");
+      if (!(dim >= 0.0 && dim <= 1e6 && dim == std::floor(dim)) || !(band >= 0.0 && band <= 1e6 && band == std::floor(band))) {
+        fail(line(), "<cov-mat dim=\"" + a.at("dim") + "\" band=\"" + a.at("band") + "\">: expected whole numbers >= 0");
+      }
+      cov_dim_ = static_cast<long>(dim);
+      cov_band_ = std::min(static_cast<long>(band), std::max(cov_dim_ - 1, 0L));  // a band past the last column is the full matrix
       cov_line_ = line();
       return;
     }
@@ -329,9 +347,19 @@ class Reader final : public XmlHandler {
       p.line = line();
       point_order_.push_back(id);
     }
-    if (const auto v = optional_number("point", a, "x")) p.x = v;
-    if (const auto v = optional_number("point", a, "y")) p.y = v;
-    if (const auto v = optional_number("point", a, "z")) p.z = v;
+    // A point named again may add to it; its coordinates must not change.
+    auto coordinate = [&](const char* key, std::optional<double>& into) {
+      const auto v = optional_number("point", a, key);
+      if (!v) return;
+      if (into && *into != *v) {
+        fail(line(), "point " + id + ": " + key + "=\"" + a.at(key) + "\" differs from " + format_shortest(*into) +
+                         " given at line " + std::to_string(p.line) + "; give one value");
+      }
+      into = v;
+    };
+    coordinate("x", p.x);
+    coordinate("y", p.y);
+    coordinate("z", p.z);
     if ((a.count("x") != 0) != (a.count("y") != 0)) fail(line(), "point " + id + ": x without y or y without x");
     auto flags = [&](const std::string& key) {
       if (!a.count(key)) return std::optional<std::string>();

@@ -26,6 +26,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <initializer_list>
 #include <set>
 #include <sstream>
 #include <string>
@@ -45,6 +46,7 @@ namespace {
 struct Estimate {
   std::string type, code, pt, soln, epoch, unit;
   double value = 0.0;
+  std::optional<double> std_dev;
   std::size_t line = 0;
 };
 
@@ -68,14 +70,15 @@ class Reader {
   void parse(std::string_view text) {
     std::size_t at = 0, line_no = 0;
     bool ended = false;
+    if (text.substr(0, 3) == "\xEF\xBB\xBF") at = 3;  // a UTF-8 byte-order mark
     std::string block;
     while (at < text.size()) {
-      std::size_t end = text.find('\n', at);
+      std::size_t end = text.find_first_of("\r\n", at);
       if (end == std::string_view::npos) end = text.size();
       std::string line(text.substr(at, end - at));
       at = end + 1;
+      if (end < text.size() && text[end] == '\r' && at < text.size() && text[at] == '\n') ++at;  // CRLF
       ++line_no;
-      if (!line.empty() && line.back() == '\r') line.pop_back();
       if (ended) {
         if (!trim(line).empty()) fail(line_no, "text after %ENDSNX");
         continue;
@@ -97,6 +100,21 @@ class Reader {
         if (!block.empty()) fail(line_no, "block " + trim(line) + " starts inside +" + block);
         block = trim(std::string_view(line).substr(1));
         block_line_ = line_no;
+        {
+          // The blocks of SINEX 2.02; the ones this reader does not use do
+          // not change what the estimates and their covariance mean.
+          static const std::set<std::string> kKnown = {
+              "FILE/REFERENCE", "FILE/COMMENT", "INPUT/HISTORY", "INPUT/FILES", "INPUT/ACKNOWLEDGEMENTS", "INPUT/ACKNOWLEDGMENTS",
+              "NUTATION/DATA", "PRECESSION/DATA", "SOURCE/ID", "SITE/ID", "SITE/DATA", "SITE/RECEIVER", "SITE/ANTENNA",
+              "SITE/GPS_PHASE_CENTER", "SITE/GAL_PHASE_CENTER", "SITE/ECCENTRICITY", "SATELLITE/ID", "SATELLITE/PHASE_CENTER",
+              "BIAS/EPOCHS", "SOLUTION/EPOCHS", "SOLUTION/STATISTICS", "SOLUTION/ESTIMATE", "SOLUTION/APRIORI",
+              "SOLUTION/DISCONTINUITY", "SOLUTION/NORMAL_EQUATION_VECTOR"};
+          const std::string head = block.substr(0, block.find(' '));
+          if (!kKnown.count(block) && head != "SOLUTION/MATRIX_ESTIMATE" && head != "SOLUTION/MATRIX_APRIORI" &&
+              head != "SOLUTION/NORMAL_EQUATION_MATRIX") {
+            fail(line_no, "block +" + block + " is not a SINEX 2.02 block");
+          }
+        }
         if (block.rfind("SOLUTION/MATRIX_ESTIMATE", 0) == 0) matrix_start(block, line_no);
         continue;
       }
@@ -141,13 +159,29 @@ class Reader {
     // version agency created agency start end technique count constraint [types]
     if (t.size() < 9) fail(1, "the %=SNX header has " + std::to_string(t.size()) + " fields after %=SNX; expected at least 9");
     version_ = t[0];
+    if (version_.rfind("1.", 0) != 0 && version_.rfind("2.", 0) != 0) {
+      fail(1, "SINEX version " + version_ + "; geoanchor reads versions 1.xx and 2.xx (2.02 described)");
+    }
     constraint_code_ = t[8];
     if (constraint_code_ != "0" && constraint_code_ != "1" && constraint_code_ != "2") {
       fail(1, "constraint code '" + constraint_code_ + "' in the header; expected 0, 1 or 2");
     }
   }
 
+  // The blanks between fixed-width fields (1-based columns): a field
+  // shifted into its neighbour is refused, never read as another number.
+  void separators(const std::string& line, std::size_t line_no, std::initializer_list<std::size_t> columns_between,
+                  const char* block) const {
+    for (std::size_t c : columns_between) {
+      if (line.size() >= c && line[c - 1] != ' ') {
+        fail(line_no, std::string(block) + ": column " + std::to_string(c) + " holds '" + std::string(1, line[c - 1]) +
+                          "' where the fixed-column layout has a blank: a field is shifted");
+      }
+    }
+  }
+
   void estimate(const std::string& line, std::size_t line_no) {
+    separators(line, line_no, {1, 7, 14, 19, 22, 27, 40, 45, 47, 69}, "SOLUTION/ESTIMATE");
     const std::string index_text = columns(line, 2, 6);
     const double index = number(index_text, line_no, "INDEX");
     if (index < 1 || index != std::floor(index)) fail(line_no, "INDEX " + index_text + " must be a positive integer");
@@ -159,6 +193,8 @@ class Reader {
     e.epoch = columns(line, 28, 39);
     e.unit = columns(line, 41, 44);
     e.value = number(columns(line, 48, 68), line_no, "ESTIMATED VALUE");
+    const std::string sd = columns(line, 70, 80);
+    if (!sd.empty()) e.std_dev = number(sd, line_no, "STD_DEV");
     e.line = line_no;
     const std::size_t i = static_cast<std::size_t>(index);
     if (estimates_.count(i)) fail(line_no, "INDEX " + index_text + " appears twice (first at line " + std::to_string(estimates_.at(i).line) + ")");
@@ -192,7 +228,8 @@ class Reader {
         fail(line_no, "element (" + std::to_string(row) + ", " + std::to_string(col) + ") is outside the " +
                           (matrix_triangle_ == "L" ? "lower" : "upper") + " triangle the block names");
       }
-      elements_[{std::min(row, col), std::max(row, col)}] = number(t[k], line_no, "matrix element");
+      const auto [it, fresh] = elements_.emplace(std::make_pair(std::min(row, col), std::max(row, col)), number(t[k], line_no, "matrix element"));
+      if (!fresh) fail(line_no, "matrix element (" + std::to_string(row) + ", " + std::to_string(col) + ") given twice");
     }
   }
 
@@ -203,7 +240,7 @@ class Reader {
               "correlations)");
     }
     if (!options_.sinex_frame) {
-      fail(1, "SINEX names no reference frame: give the frame of its estimates with --sinex-frame (e.g. ITRF2014 or IGS20)");
+      fail(1, "SINEX names no reference frame: give the frame of its estimates with --sinex-frame (a frame of the catalog, e.g. ITRF2014)");
     }
     const std::size_t n = estimates_.rbegin()->first;
     if (estimates_.size() != n) fail(1, "SOLUTION/ESTIMATE has " + std::to_string(estimates_.size()) + " parameters but indices up to " + std::to_string(n));
@@ -228,6 +265,20 @@ class Reader {
                            "with a datum defect?); its covariance does not exist");
       }
       m = ldlt.solve(Eigen::MatrixXd::Identity(m.rows(), m.cols()));
+    }
+
+    // The matrix's standard deviations are the estimates' STD_DEV (printed
+    // with 5 digits): a matrix of another kind than its block says, or of
+    // other units, is refused.
+    constexpr double kStdDevAgreement = 2e-3;
+    for (const auto& [i, e] : estimates_) {
+      if (!e.std_dev) continue;
+      const double from_matrix = std::sqrt(std::max(0.0, m(static_cast<Eigen::Index>(i - 1), static_cast<Eigen::Index>(i - 1))));
+      if (!(std::fabs(from_matrix - *e.std_dev) <= kStdDevAgreement * std::max(*e.std_dev, from_matrix) + 1e-12)) {
+        fail(e.line, "STD_DEV " + format_shortest(*e.std_dev) + " of parameter " + std::to_string(i) + " (" + e.type + " " + e.code +
+                         ") disagrees with the " + matrix_kind_ + " matrix's " + format_shortest(from_matrix) +
+                         " (block +SOLUTION/MATRIX_ESTIMATE at line " + std::to_string(matrix_line_) + ")");
+      }
     }
 
     // The stations: X, Y, Z of each site (code, point, solution).

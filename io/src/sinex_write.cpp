@@ -57,7 +57,8 @@ std::string dms_field(double deg, bool longitude) {
   double s = ((a - d) * 60.0 - m) * 60.0;
   if (s >= 59.95) s = 0.0, ++m;
   if (m >= 60) m = 0, ++d;
-  return fmt("%3d %2d %4.1f", negative ? -d : d, m, s);
+  const std::string degrees = negative ? "-" + std::to_string(d) : std::to_string(d);  // −0° 30′ keeps its sign
+  return fmt("%3s %2d %4.1f", degrees.c_str(), m, s);
 }
 
 }  // namespace
@@ -130,7 +131,7 @@ std::string sinex_text(const SinexSolution& s) {
   o << "+SITE/ID\n*CODE PT __DOMES__ T _STATION DESCRIPTION__ APPROX_LON_ APPROX_LAT_ _APP_H_\n";
   for (std::size_t i = 0; i < n; ++i) {
     const auto& site = s.sites[i];
-    o << fmt(" %-4s  A %-9s C %-22s %s %s %7.1f\n", code[i].c_str(), "", site.id.substr(0, 22).c_str(),
+    o << fmt(" %-4s  A %-9s %c %-22s %s %s %7.1f\n", code[i].c_str(), "---------", s.technique, site.id.substr(0, 22).c_str(),
              dms_field(site.lon_deg, true).c_str(), dms_field(site.lat_deg, false).c_str(), site.h_m);
   }
   o << "-SITE/ID\n" << rule;
@@ -144,7 +145,7 @@ std::string sinex_text(const SinexSolution& s) {
   o << fmt(" %-30s %s\n", "NUMBER OF UNKNOWNS", fortran_e(static_cast<double>(s.unknowns), 22, 15).c_str());
   o << fmt(" %-30s %s\n", "NUMBER OF DEGREES OF FREEDOM", fortran_e(static_cast<double>(s.dof), 22, 15).c_str());
   o << fmt(" %-30s %s\n", "SQUARE SUM OF RESIDUALS (VTPV)", fortran_e(s.vtpv, 22, 15).c_str());
-  o << fmt(" %-30s %s\n", "VARIANCE FACTOR", fortran_e(s.variance_factor, 22, 15).c_str());
+  if (s.variance_factor) o << fmt(" %-30s %s\n", "VARIANCE FACTOR", fortran_e(*s.variance_factor, 22, 15).c_str());
   o << "-SOLUTION/STATISTICS\n" << rule;
   o << "+SOLUTION/ESTIMATE\n*INDEX TYPE__ CODE PT SOLN _REF_EPOCH__ UNIT S __ESTIMATED VALUE____ _STD_DEV___\n";
   const char* types[] = {"STAX", "STAY", "STAZ"};

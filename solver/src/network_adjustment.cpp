@@ -2,6 +2,7 @@
 
 #include "geoanchor/solver/network_adjustment.hpp"
 
+#include <Eigen/SVD>
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
@@ -258,6 +259,10 @@ Normal assemble(const Problem& p) {
 struct DatumVectors {
   Eigen::MatrixXd g;  // u × d
   std::vector<std::string> names;
+  // The columns of g over the named motions (identity unless some
+  // combination of them moves nothing, e.g. a rotation about the line
+  // through the only two stations: such combinations are no datum).
+  Eigen::MatrixXd basis;
 };
 
 DatumVectors datum_vectors(const Problem& p) {
@@ -349,6 +354,19 @@ DatumVectors datum_vectors(const Problem& p) {
       if (p.layout.owner[u].second < 3) rms2 += dv.g(static_cast<Eigen::Index>(u), k) * dv.g(static_cast<Eigen::Index>(u), k);
     }
     if (rms2 > 0.0) dv.g.col(k) /= std::sqrt(rms2 / static_cast<double>(std::max<std::size_t>(n, 1)));
+  }
+  dv.basis = Eigen::MatrixXd::Identity(dv.g.cols(), dv.g.cols());
+  if (dv.g.cols() > 0) {
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(dv.g, Eigen::ComputeThinV);
+    const Eigen::VectorXd& sv = svd.singularValues();
+    Eigen::Index keep = 0;
+    while (keep < sv.size() && sv(keep) > 1e-6 * sv(0)) ++keep;
+    if (keep < dv.g.cols()) {
+      // Unit RMS motion per column again: g·basis = U·√n.
+      dv.basis = svd.matrixV().leftCols(keep) * sv.head(keep).cwiseInverse().asDiagonal() *
+                 std::sqrt(static_cast<double>(std::max<std::size_t>(n, 1)));
+      dv.g = dv.g * dv.basis;
+    }
   }
   return dv;
 }
@@ -638,6 +656,28 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     }
   }
 
+  // A station whose every measurement misses by more than the tolerance
+  // has wrong a-priori coordinates, not only gross measurements: refused,
+  // never left out of the results.
+  if (net.gross_misclosure_m > 0.0) {
+    std::vector<int> before(net.stations.size(), 0), after(net.stations.size(), 0);
+    for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+      if (net.measurements[mi].ignore) continue;
+      for (std::size_t st : net.measurements[mi].stations) {
+        ++before[st];
+        if (p.active[mi]) ++after[st];
+      }
+    }
+    for (std::size_t st = 0; st < net.stations.size(); ++st) {
+      if (before[st] > 0 && after[st] == 0) {
+        throw Error(ErrorKind::input, "E_GROSS_MISCLOSURE",
+                    net.stations[st].source + ": every measurement of station " + net.stations[st].id +
+                        " misses by more than the input's tolerance " + fmt_m(net.gross_misclosure_m) +
+                        " at its a-priori coordinates: check them (or its measurements)");
+      }
+    }
+  }
+
   std::size_t removed = 0;
   const std::size_t countable = static_cast<std::size_t>(std::count(p.active.begin(), p.active.end(), true));
   FitOptions levels_of;
@@ -718,7 +758,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         std::vector<std::string> names;
         if (p.free) {
           p.defect = dv.g * v0;  // the free layout is the probe's
-          for (Eigen::Index k = 0; k < v0.cols(); ++k) names.push_back(name_combination(v0.col(k), dv.names));
+          for (Eigen::Index k = 0; k < v0.cols(); ++k) names.push_back(name_combination(dv.basis * v0.col(k), dv.names));
         } else if (v0.cols() > 0) {
           // The constraints' weight on those combinations.
           Eigen::VectorXd weight = Eigen::VectorXd::Zero(probe.layout.count);
@@ -736,7 +776,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           const Eigen::MatrixXd gv = dv.g * v0;
           const Eigen::MatrixXd mv = v0.transpose() * m0 * v0 + gv.transpose() * weight.asDiagonal() * gv;
           const Eigen::MatrixXd still = weak_combinations(mv, {}, unused);
-          for (Eigen::Index k = 0; k < still.cols(); ++k) names.push_back(name_combination(v0 * still.col(k), dv.names));
+          for (Eigen::Index k = 0; k < still.cols(); ++k) names.push_back(name_combination(dv.basis * (v0 * still.col(k)), dv.names));
           if (!names.empty() && !net.datum_stations.empty()) {
             // What the constraints leave undefined is held by the input's
             // own datum stations (GNU Gama's constrained points): the
@@ -754,7 +794,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
             const Eigen::MatrixXd mp = dvp.g.transpose() * times(n.entries, dvp.g);
             const Eigen::MatrixXd vp = weak_combinations(mp, dvp.names, unused);
             p.defect = dvp.g * vp;
-            for (Eigen::Index k = 0; k < vp.cols(); ++k) names.push_back(name_combination(vp.col(k), dvp.names));
+            for (Eigen::Index k = 0; k < vp.cols(); ++k) names.push_back(name_combination(dvp.basis * vp.col(k), dvp.names));
           } else if (!names.empty()) {
             std::string list;
             for (const auto& x : names) list += (list.empty() ? "" : "; ") + x;

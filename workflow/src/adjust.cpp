@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -153,8 +154,21 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
   PreparedNetwork p;
   io::NetworkReadOptions read_options;
   read_options.geoid = request.options.geoid;
-  if (request.sinex_frame) read_options.sinex_frame = geodesy::Frame::parse(*request.sinex_frame, "--sinex-frame");
+  if (request.sinex_frame) {
+    read_options.sinex_frame = geodesy::Frame::parse(*request.sinex_frame, "--sinex-frame");
+    const auto known = geodesy::catalog_frame_names();
+    if (std::find(known.begin(), known.end(), read_options.sinex_frame->name()) == known.end()) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw Error(ErrorKind::usage, "E_OPTION", "--sinex-frame " + *request.sinex_frame + ": not a frame of the catalog (" + list + ")");
+    }
+  }
   p.network = io::read_network(request.inputs, read_options);
+  if (request.sinex_frame) {
+    bool sinex = false;
+    for (const auto& m : p.network.measurements) sinex = sinex || m.source.find("SOLUTION/ESTIMATE") != std::string::npos;
+    if (!sinex) throw Error(ErrorKind::usage, "E_OPTION", "--sinex-frame " + *request.sinex_frame + ": no input is a SINEX file");
+  }
   geodesy::Network& net = p.network;
   for (const auto& w : net.warnings) p.notes.push_back("warning: " + w);
   // DynaML's Pscale, Lscale, Hscale: variances scaled along north, east and
@@ -275,7 +289,7 @@ std::string stations_sinex(const PreparedNetwork& prepared, const solver::Adjust
   s.unknowns = r.unknowns;
   s.dof = r.dof;
   s.vtpv = r.vtpv;
-  s.variance_factor = r.variance_factor.value_or(0.0);
+  s.variance_factor = r.variance_factor;
   s.description = "network adjustment by geoanchor adjust";
   s.software = software;
   s.input = net.source_name;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,7 +31,7 @@ struct SinexSolution {
   std::size_t observations = 0, unknowns = 0;
   int dof = 0;
   double vtpv = 0.0;
-  double variance_factor = 0.0;
+  std::optional<double> variance_factor;  // none without redundancy
   std::string description, software, input;
   std::vector<std::string> comments;
 };
