@@ -192,20 +192,39 @@ void NormalFactor::select_inverse() {
   // every Z(k, i) it needs has k and i in one column's pattern, which the
   // elimination tree closes under.
   m.z.assign(m.rows.size(), 0.0);
-  auto z_at = [&](std::int64_t a, std::int64_t b) {
-    const std::int64_t p = a >= b ? m.find(a, b) : m.find(b, a);
-    if (p < 0) throw std::logic_error("selected inversion: an entry off the factor's pattern");
-    return m.z[static_cast<std::size_t>(p)];
-  };
+  // For column j with the rows r_1 < … < r_k below its diagonal:
+  // Z(r_a, j) = −Σ_b L(r_b, j) Z(r_b, r_a). Each pair a < b reads
+  // Z(r_b, r_a) once, from column r_a (whose pattern holds r_b: the
+  // elimination tree closes it), by a merge of two sorted row lists, and
+  // adds it to both sums; Z(r_a, r_a) is column r_a's first entry.
+  std::vector<double> sum;
   for (std::size_t jj = n; jj-- > 0;) {
     const std::int64_t begin = m.col[jj] + 1, end = m.col[jj + 1];
-    for (std::int64_t a = begin; a < end; ++a) {
-      double sum = 0.0;
-      for (std::int64_t b = begin; b < end; ++b) sum += l[static_cast<std::size_t>(b)] * z_at(m.rows[static_cast<std::size_t>(b)], m.rows[static_cast<std::size_t>(a)]);
-      m.z[static_cast<std::size_t>(a)] = -sum;
+    const std::size_t k = static_cast<std::size_t>(end - begin);
+    sum.assign(k, 0.0);
+    for (std::size_t a = 0; a < k; ++a) {
+      const std::int64_t ra = m.rows[static_cast<std::size_t>(begin) + a];
+      const double la = l[static_cast<std::size_t>(begin) + a];
+      std::int64_t q = m.col[static_cast<std::size_t>(ra)];
+      const std::int64_t q_end = m.col[static_cast<std::size_t>(ra) + 1];
+      sum[a] += la * m.z[static_cast<std::size_t>(q)];  // Z(r_a, r_a)
+      ++q;
+      for (std::size_t b = a + 1; b < k; ++b) {
+        const std::int64_t rb = m.rows[static_cast<std::size_t>(begin) + b];
+        while (q < q_end && m.rows[static_cast<std::size_t>(q)] < rb) ++q;
+        if (q == q_end || m.rows[static_cast<std::size_t>(q)] != rb) {
+          throw std::logic_error("selected inversion: an entry off the factor's pattern");
+        }
+        const double w = m.z[static_cast<std::size_t>(q)];  // Z(r_b, r_a)
+        sum[a] += l[static_cast<std::size_t>(begin) + b] * w;
+        sum[b] += la * w;
+      }
     }
     double diagonal = 1.0 / d[jj];
-    for (std::int64_t b = begin; b < end; ++b) diagonal -= l[static_cast<std::size_t>(b)] * m.z[static_cast<std::size_t>(b)];
+    for (std::size_t a = 0; a < k; ++a) {
+      m.z[static_cast<std::size_t>(begin) + a] = -sum[a];
+      diagonal += l[static_cast<std::size_t>(begin) + a] * sum[a];
+    }
     m.z[static_cast<std::size_t>(m.col[jj])] = diagonal;
   }
 }
