@@ -642,7 +642,7 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   // Longitude and latitude of each point where choices or areas need them
   // (a geocentric source's with its z: x and y alone would be at 0°).
   const bool single = m.available_count == 1 && m.all.size() == 1;
-  std::vector<double> lon, lat;
+  std::vector<double> lon_store, lat_store;
   bool tallied = false;  // the points counted against the CRSs' areas of use
   std::vector<const CrsArea*> areas;  // those a single candidate's batch is held to
   if (single) {
@@ -651,19 +651,20 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
     for (const auto& d : m.all.front().datum_areas) areas.push_back(&d);
   }
   if (m.source_is_lonlat) {
-    lon = in_a;
-    lat = in_b;
+    // The input itself (no copy).
   } else if (m.to_lonlat && single && m.source_is_planar && m.batch_inside(areas, in_a, in_b)) {
     m.source_area.seen += n;  // the whole batch lies inside: no point needs its own inverse
     m.target_area.seen += n;
     tallied = true;
   } else if (m.to_lonlat) {
-    lon = in_a;
-    lat = in_b;
+    lon_store = in_a;
+    lat_store = in_b;
     std::vector<double> z = c ? in_c : std::vector<double>();
-    proj_trans_generic(m.to_lonlat.get(), PJ_FWD, lon.data(), sizeof(double), n, lat.data(), sizeof(double), n,
+    proj_trans_generic(m.to_lonlat.get(), PJ_FWD, lon_store.data(), sizeof(double), n, lat_store.data(), sizeof(double), n,
                        c ? z.data() : nullptr, c ? sizeof(double) : 0, c ? n : 0, nullptr, 0, 0);
   }
+  const std::vector<double>& lon = m.source_is_lonlat ? in_a : lon_store;
+  const std::vector<double>& lat = m.source_is_lonlat ? in_b : lat_store;
   if (!lon.empty()) {
     for (std::size_t i = 0; i < n; ++i) {
       m.source_area.check(lon[i], lat[i], [&] { return point_name(i); });
@@ -783,29 +784,13 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
       }
       use[i] = *choice.use;
     }
-    std::vector<std::size_t> members;
-    std::vector<double> x, y, z;
     if (uniform) run(m.all[*uniform], a, b, c, n);  // in place: a, b, c still hold the input
-    for (std::size_t k = 0; k < m.available_count && !uniform; ++k) {
-      members.clear();
-      for (std::size_t i = 0; i < n; ++i) {
-        if (use[i] == k) members.push_back(i);
-      }
-      if (members.empty()) continue;
-      x.resize(members.size());
-      y.resize(members.size());
-      z.assign(members.size(), 0.0);
-      for (std::size_t j = 0; j < members.size(); ++j) {
-        x[j] = in_a[members[j]];
-        y[j] = in_b[members[j]];
-        if (c) z[j] = in_c[members[j]];
-      }
-      run(m.all[k], x.data(), y.data(), c ? z.data() : nullptr, members.size());
-      for (std::size_t j = 0; j < members.size(); ++j) {
-        a[members[j]] = x[j];
-        b[members[j]] = y[j];
-        if (c) c[members[j]] = z[j];
-      }
+    // Otherwise each run of consecutive points with one operation, in place.
+    for (std::size_t i = 0; i < n && !uniform;) {
+      std::size_t j = i + 1;
+      while (j < n && use[j] == use[i]) ++j;
+      run(m.all[use[i]], a + i, b + i, c ? c + i : nullptr, j - i);
+      i = j;
     }
     std::vector<std::size_t> tried;
     for (std::size_t i = 0; i < n; ++i) {
