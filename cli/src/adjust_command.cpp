@@ -45,12 +45,20 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
       ->check(finite_range(-1.0, 1.0));
   cmd->add_option("--convergence", o.convergence_m, "Stop when no station moves more than this (m; default 1e-5)")->check(finite_range(1e-9, 1.0));
   cmd->add_option("--max-iterations", o.max_iterations, "Iteration limit (default 25)")->check(integer_range(1, 1000));
+  cmd->add_option("--estimate-helmert", o.estimate_helmert,
+                  "GROUP[:helmert7|helmert14]: a Helmert between the group's measurements and the network frame as unknowns (not yet in this geoanchor)");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
   return cmd;
 }
 
 int run_adjust(const AdjustCommandOptions& o) {
+  if (o.estimate_helmert) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--estimate-helmert " + *o.estimate_helmert +
+                    ": combined datum estimation is not in this geoanchor yet; adjust the group in its own frame and fit "
+                    "the transform with geoanchor fit");
+  }
   if (o.inner && !o.free) throw Error(ErrorKind::usage, "E_OPTION", "--inner-constraints: only with --free");
   if (o.free && !o.constrain.empty()) throw Error(ErrorKind::usage, "E_OPTION", "--free with --constrain: give one datum");
   workflow::AdjustRequest request;

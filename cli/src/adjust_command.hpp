@@ -17,6 +17,7 @@ struct AdjustCommandOptions {
   std::string output;  // stations CSV ("-": standard output)
   std::optional<std::string> measurements, report, sinex;
   std::optional<std::string> sinex_frame;
+  std::optional<std::string> estimate_helmert;
   bool json = false;
   std::optional<std::string> frame;
   std::vector<std::string> constrain;
