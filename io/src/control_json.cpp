@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "control_common.hpp"
+#include "json_fields.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/control_csv.hpp"
@@ -27,12 +28,7 @@ using nlohmann::json;
 }
 
 double number_at(const json& obj, const std::string& key, const std::string& where) {
-  if (!obj.contains(key)) fail(where + "." + key, "missing");
-  const json& v = obj.at(key);
-  if (!v.is_number()) fail(where + "." + key, "value " + v.dump() + " is not a number");
-  const double d = v.get<double>();
-  if (!std::isfinite(d)) fail(where + "." + key, "not finite");
-  return d;
+  return detail::finite_json_number(obj, key, where, "E_VALUE");
 }
 
 // One frame of one point: {"x_m","y_m","z_m"} | {"lat_deg","lon_deg","h_m"} | {"e_m","n_m","u_m"}, with

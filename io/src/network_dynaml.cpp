@@ -188,7 +188,6 @@ class Reader final : public XmlHandler {
       d.line = line();
       measurement_->directions.push_back(d);
     }
-    (void)parent;
   }
 
   void end(const std::string& name) {

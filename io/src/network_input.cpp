@@ -200,7 +200,7 @@ void read_network_text(std::string_view text, std::string_view source, geodesy::
 
 geodesy::Network read_network(const std::vector<std::string>& inputs, const NetworkReadOptions& options) {
   geodesy::Network net;
-  bool stdin_read = false;
+  bool stdin_read = false, sinex_read = false;
   for (const auto& input : inputs) {
     std::string text;
     if (input == "-") {
@@ -217,7 +217,9 @@ geodesy::Network read_network(const std::vector<std::string>& inputs, const Netw
       text = s.str();
     }
     net.source_name += (net.source_name.empty() ? "" : ", ") + (input == "-" ? std::string("standard input") : input);
-    read_network_text(text, input == "-" ? "standard input" : input, net, options);
+    const std::string source = input == "-" ? "standard input" : input;
+    sinex_read = sinex_read || detect_network_format(text, source) == NetworkFormat::sinex;
+    read_network_text(text, source, net, options);
   }
   // Stations no input defines but a point measurement positions (a SINEX
   // solution's sites) start from that measurement, free.
@@ -237,6 +239,9 @@ geodesy::Network read_network(const std::vector<std::string>& inputs, const Netw
   if (from_points > 0) {
     net.warnings.push_back(std::to_string(from_points) + " station(s) defined by no station input take their a-priori "
                            "position from the point measurement that gives it (free, in that measurement's frame and epoch)");
+  }
+  if (options.sinex_frame && !sinex_read) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--sinex-frame " + options.sinex_frame->to_string() + ": no input is a SINEX file");
   }
   detail::NetworkBuilder(net).finish();
   return net;

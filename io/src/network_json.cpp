@@ -11,6 +11,7 @@
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/json_input.hpp"
+#include "json_fields.hpp"
 #include "network_builder.hpp"
 #include "network_readers.hpp"
 
@@ -39,12 +40,7 @@ void only_keys(const json& obj, const std::string& where, const std::set<std::st
 }
 
 double number(const json& obj, const std::string& key, const std::string& where) {
-  if (!obj.contains(key)) fail(where + "." + key, "missing");
-  const json& v = obj.at(key);
-  if (!v.is_number()) fail(where + "." + key, "value " + v.dump() + " is not a number");
-  const double d = v.get<double>();
-  if (!std::isfinite(d)) fail(where + "." + key, "not finite");
-  return d;
+  return finite_json_number(obj, key, where, "E_NETWORK");
 }
 
 std::string text(const json& obj, const std::string& key, const std::string& where) {

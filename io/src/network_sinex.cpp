@@ -99,7 +99,6 @@ class Reader {
       if (c == '+') {
         if (!block.empty()) fail(line_no, "block " + trim(line) + " starts inside +" + block);
         block = trim(std::string_view(line).substr(1));
-        block_line_ = line_no;
         {
           // The blocks of SINEX 2.02; the ones this reader does not use do
           // not change what the estimates and their covariance mean.
@@ -158,9 +157,8 @@ class Reader {
     for (std::string w; in >> w;) t.push_back(w);
     // version agency created agency start end technique count constraint [types]
     if (t.size() < 9) fail(1, "the %=SNX header has " + std::to_string(t.size()) + " fields after %=SNX; expected at least 9");
-    version_ = t[0];
-    if (version_.rfind("1.", 0) != 0 && version_.rfind("2.", 0) != 0) {
-      fail(1, "SINEX version " + version_ + "; geoanchor reads versions 1.xx and 2.xx (2.02 described)");
+    if (t[0].rfind("1.", 0) != 0 && t[0].rfind("2.", 0) != 0) {
+      fail(1, "SINEX version " + t[0] + "; geoanchor reads versions 1.xx and 2.xx (2.02 described)");
     }
     constraint_code_ = t[8];
     if (constraint_code_ != "0" && constraint_code_ != "1" && constraint_code_ != "2") {
@@ -386,8 +384,7 @@ class Reader {
   geodesy::Network& net_;
   const NetworkReadOptions& options_;
   NetworkBuilder builder_;
-  std::string version_, constraint_code_;
-  std::size_t block_line_ = 0;
+  std::string constraint_code_;
   std::map<std::size_t, Estimate> estimates_;
   std::string matrix_triangle_, matrix_kind_;
   std::size_t matrix_line_ = 0;

@@ -100,11 +100,12 @@ std::string sinex_text(const SinexSolution& s) {
   const std::time_t t = std::chrono::system_clock::to_time_t(now);
   std::tm utc{};
   gmtime_r(&t, &utc);
-  const double created = 1900 + utc.tm_year + (utc.tm_yday + (utc.tm_hour * 3600 + utc.tm_min * 60 + utc.tm_sec) / 86400.0) /
-                                                   ((((1900 + utc.tm_year) % 4 == 0 && (1900 + utc.tm_year) % 100 != 0) || (1900 + utc.tm_year) % 400 == 0) ? 366.0 : 365.0);
+  // The creation time straight from the calendar (no decimal year between).
+  const std::string created = fmt("%02d:%03d:%05d", (1900 + utc.tm_year) % 100, utc.tm_yday + 1,
+                                  utc.tm_hour * 3600 + utc.tm_min * 60 + utc.tm_sec);
   std::ostringstream o;
   const std::string rule = "*-------------------------------------------------------------------------------\n";
-  o << fmt("%%=SNX 2.02 GAN %s GAN %s %s %c %05zu %d S", sinex_epoch(created).c_str(), epoch.c_str(), epoch.c_str(), s.technique,
+  o << fmt("%%=SNX 2.02 GAN %s GAN %s %s %c %05zu %d S", created.c_str(), epoch.c_str(), epoch.c_str(), s.technique,
            3 * n, s.constraint_code)
     << "\n" << rule;
   auto text60 = [](const std::string& x) { return x.substr(0, 60); };

@@ -1136,6 +1136,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         (con.sigma_m[static_cast<std::size_t>(k)] > 0.0 ? weighted : fixed) += 1;
       }
     }
+    result.datum_by_minimum_norm = p.free && d > 0;
     if (p.free && d > 0 && !p.aside) {
       std::string list;
       for (const auto& x : p.defect_names) list += (list.empty() ? "" : "; ") + x;

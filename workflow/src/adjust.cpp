@@ -164,11 +164,6 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
     }
   }
   p.network = io::read_network(request.inputs, read_options);
-  if (request.sinex_frame) {
-    bool sinex = false;
-    for (const auto& m : p.network.measurements) sinex = sinex || m.source.find("SOLUTION/ESTIMATE") != std::string::npos;
-    if (!sinex) throw Error(ErrorKind::usage, "E_OPTION", "--sinex-frame " + *request.sinex_frame + ": no input is a SINEX file");
-  }
   geodesy::Network& net = p.network;
   for (const auto& w : net.warnings) p.notes.push_back("warning: " + w);
   // DynaML's Pscale, Lscale, Hscale: variances scaled along north, east and
@@ -282,8 +277,7 @@ std::string stations_sinex(const PreparedNetwork& prepared, const solver::Adjust
       (con.sigma_m[static_cast<std::size_t>(k)] > 0.0 ? held : fixed) = true;
     }
   }
-  const bool inner = r.datum.find("inner constraints") != std::string::npos || r.datum.find("minimum-norm") != std::string::npos;
-  s.constraint_code = fixed ? 0 : (held || inner) ? 1 : 2;
+  s.constraint_code = fixed ? 0 : (held || r.datum_by_minimum_norm) ? 1 : 2;
   s.covariance_m2 = r.station_covariance_m2;
   s.observations = r.observations;
   s.unknowns = r.unknowns;

@@ -34,7 +34,8 @@ struct NetworkReadOptions {
   // iteration (with a warning).
   const geodesy::GeoidGrid* geoid = nullptr;
   // The frame of SINEX inputs' estimates (SINEX names none; --sinex-frame),
-  // without an epoch: each file's REF_EPOCH is theirs.
+  // without an epoch: each file's REF_EPOCH is theirs. Given with no SINEX
+  // input, read_network refuses it (usage).
   std::optional<geodesy::Frame> sinex_frame;
 };
 

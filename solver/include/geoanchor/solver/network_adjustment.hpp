@@ -133,6 +133,7 @@ struct AdjustmentResult {
   bool converged = false;
   double largest_correction_m = 0.0;  // of the last iteration
   std::string datum;                  // how the datum is defined, in words
+  bool datum_by_minimum_norm = false;  // part of it held by inner constraints (free network, Gama's constrained points)
   std::vector<std::string> warnings;
   std::string refused_because;        // set when data snooping reached its limit
   std::size_t unknowns = 0, observations = 0;
