@@ -9,7 +9,12 @@
 #     writing the new tile, its provenance sidecar and the run summary;
 #  3. report: the fit's report and PNGs of the workbench's views (off-screen);
 #  4. convert: the airport marks go geodetic -> ECEF -> ENU (at the LSZH
-#     reference point) -> ECEF -> geodetic, and the round trip is measured.
+#     reference point) -> ECEF -> geodetic, and the round trip is measured;
+#  5. adjust -> fit -> apply: the airport's control network
+#     (fixtures/airport_network: GNSS baselines to two reference stations
+#     and a terrestrial traverse) is adjusted in ITRF2014@2024.5; the LiDAR
+#     map's origin is corrected by fitting the marks as the map sees them to
+#     the adjusted stations (enu-origin), and the tile is moved with it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -64,4 +69,21 @@ paste -d, "$out/points_ecef.csv" "$out/points_ecef_final.csv" | grep -v '^#' | a
   NR == 1 { for (i = 1; i <= NF; i++) col[$i] = col[$i] ? col[$i] : i; n = NF / 2; next }
   { for (a = 2; a <= 4; a++) { d = $a - $(a + n); if (d < 0) d = -d; if (d > worst) worst = d } rows++ }
   END { printf "round trip geodetic -> ECEF -> ENU -> ECEF -> geodetic -> ECEF over %d marks: worst axis difference %.3g m\n", rows, worst }'
+
+echo
+echo "== adjust -> fit -> apply =="
+# The control network: 2 reference stations (one GNSS point cluster), 16
+# baselines, a traverse of direction sets, slope distances and zenith angles.
+net=fixtures/airport_network
+"$geoanchor" adjust "$net/lszh_network.json" -o "$out/lszh_stations.csv" --measurements "$out/lszh_measurements.csv" \
+  --report "$out/lszh_adjust.txt" --sinex "$out/lszh_stations.snx" --overwrite
+grep -E "vtpv|global test" "$out/lszh_adjust.txt" | sed 's/^ */  /'
+# The marks as the map sees them (ENU at the nominal origin) against the
+# adjusted stations: the map origin's shift and yaw (planted by the
+# generator: E 0.412, N -0.287, U 0.153 m, yaw 14.0 arcsec).
+"$geoanchor" fit --src "$net/lszh_marks_map.csv" --dst "$out/lszh_stations.csv" --model enu-origin --origin "$origin" \
+  -o "$out/lszh_map_origin.json" --overwrite | grep -E "shift_|yaw_|σ0 =|global test" | sed 's/^ */  /'
+mkdir -p "$out/network_tiles"
+"$geoanchor" apply fixtures/airport_tile.las --transform "$out/lszh_map_origin.json" --out-dir "$out/network_tiles" --overwrite
+grep -E '"(transform_model|sigma_[enu]_m|distance_outside_control_m)"' "$out/network_tiles/airport_tile.las.geoanchor.json" | sed 's/^ */  /'
 echo "outputs and their provenance sidecars (*.geoanchor.json) are in $out/"

@@ -104,6 +104,13 @@ struct ControlInput {
   std::string name;  // "<stdin>" or the path
   bool from_stdin = false;
   std::string sha256;  // empty unless asked for
+  // fit --src/--dst: the two files, one frame each (role "source" or
+  // "target", path, SHA-256 when asked for); `name` is "SRC + DST".
+  struct RoleFile {
+    std::string role, path, sha256;
+  };
+  std::vector<RoleFile> role_files;
+  std::vector<std::string> notes;  // what the join of the two files left out
 };
 
 inline ControlInput read_control_input(const std::string& path, const io::ControlReadOptions& options, bool hash = false) {
@@ -125,6 +132,23 @@ inline ControlInput read_control_input(const std::string& path, const io::Contro
   const bool json = first != std::string::npos && text[first] == '{';
   std::istringstream in(std::move(text));
   c.set = json ? io::read_control_json(in, c.name, options) : io::read_control_csv(in, c.name, options);
+  return c;
+}
+
+// A control set from two files, one frame each (io::read_control_pair).
+inline ControlInput read_control_pair_input(const std::string& source, const std::string& target,
+                                            const io::ControlReadOptions& options, bool hash = false) {
+  for (const auto* path : {&source, &target}) {
+    if (*path == "-") {
+      throw Error(ErrorKind::usage, "E_OPTION", "--src/--dst: give files (standard input holds one file; a control set with "
+                                                "both frames' columns can come from it as CONTROL)");
+    }
+  }
+  ControlInput c;
+  c.set = io::read_control_pair(source, target, options, &c.notes);
+  c.name = c.set.source_name;
+  c.role_files = {{"source", source, hash ? io::sha256_file_hex(source) : std::string()},
+                  {"target", target, hash ? io::sha256_file_hex(target) : std::string()}};
   return c;
 }
 

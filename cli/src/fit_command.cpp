@@ -31,7 +31,9 @@ using solver::FitModel;
 
 CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   auto* cmd = app.add_subcommand("fit", "Fit a datum transform to control points, with statistics");
-  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON), or - for standard input")->required();
+  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON), or - for standard input");
+  cmd->add_option("--src", o.src, "Instead of CONTROL: the source frame's coordinates (CSV without roles, e.g. adjust's stations), joined by id with --dst");
+  cmd->add_option("--dst", o.dst, "Instead of CONTROL: the target frame's coordinates (CSV without roles, e.g. adjust's stations), joined by id with --src");
   cmd->add_option("--model", o.model,
                   "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin|site-calibration");
   cmd->add_flag("--compare", o.compare, "Fit every applicable model on the same points and compare them");
@@ -85,10 +87,16 @@ std::string verdict_json(const solver::GlobalTest& g) {
 // "control" of the JSON reports: where the set came from.
 ordered_json control_json(const ControlInput& in) {
   ordered_json c;
-  c["path"] = in.from_stdin ? ordered_json(nullptr) : ordered_json(in.name);
+  c["path"] = in.from_stdin || !in.role_files.empty() ? ordered_json(nullptr) : ordered_json(in.name);
   c["name"] = in.name;
   c["sha256"] = in.sha256;
   c["points"] = in.set.points.size();
+  if (!in.role_files.empty()) {
+    ordered_json files = ordered_json::array();
+    for (const auto& f : in.role_files) files.push_back({{"role", f.role}, {"path", f.path}, {"sha256", f.sha256}});
+    c["files"] = files;
+    c["notes"] = in.notes;
+  }
   return c;
 }
 
@@ -186,6 +194,11 @@ int run_fit(const FitCommandOptions& o) {
   // the command, so nothing is held for longer.
   (void)mallopt(M_MMAP_MAX, 0);
   (void)mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
+  if (o.control.empty() == (o.src.empty() || o.dst.empty()) || (o.src.empty() != o.dst.empty())) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "the control: give CONTROL (one file with both frames' columns) or --src FILE --dst FILE (one frame each, "
+                "joined by id)");
+  }
   if (o.model.empty() && !o.compare) {
     throw Error(ErrorKind::usage, "E_OPTION", "--model: required (or --compare to fit every applicable model)");
   }
@@ -248,7 +261,9 @@ int run_fit(const FitCommandOptions& o) {
   // file goes to standard output and the report to standard error.
   std::unique_ptr<CommandOutput> out;
   if (!o.output.empty()) {
-    if (o.control != "-" && o.output != "-") io::refuse_same_file(o.control, o.output);
+    for (const auto* input : {&o.control, &o.src, &o.dst}) {
+      if (!input->empty() && *input != "-" && o.output != "-") io::refuse_same_file(*input, o.output);
+    }
     out = std::make_unique<CommandOutput>(o.output, o.overwrite);
   }
   std::ostream& report = out && out->to_stdout() ? std::cerr : std::cout;
@@ -281,7 +296,8 @@ int run_fit(const FitCommandOptions& o) {
   ro.src_geoid = ro.dst_geoid = geoid;
   if (o.source_frame) ro.source_frame.replace = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) ro.target_frame.replace = geodesy::Frame::parse(*o.target_frame, "--target-frame");
-  ControlInput in = read_control_input(o.control, ro, o.json);
+  ControlInput in = o.control.empty() ? read_control_pair_input(o.src, o.dst, ro, o.json) : read_control_input(o.control, ro, o.json);
+  for (const auto& n : in.notes) std::cerr << "geoanchor: note: " << n << '\n';
   geodesy::ControlSet& set = in.set;
   if (fo.nominal_origin && set.origin) fo.nominal_origin->ellipsoid = set.origin->ellipsoid;
   if (fo.site_grid) fo.site_grid->ellipsoid = set.target_input.ellipsoid;

@@ -16,6 +16,7 @@ namespace geoanchor::cli {
 
 struct FitCommandOptions {
   std::string control;  // a path, or "-" for standard input
+  std::string src, dst;  // or two files, one frame each (--src, --dst)
   std::string model;
   std::optional<std::string> convention;
   std::string rotation_model = "small_angle";

@@ -119,14 +119,15 @@ bool angular(MeasurementKind k) {
          k == MeasurementKind::geodetic_longitude;
 }
 
-// The stations a measurement names, "A->B" or "A,B,C".
+// The stations a measurement names: "A->B" (from, to), "A->B C->D" for
+// baselines, "A B C" for a point cluster.
 std::string stations_of(const geodesy::Network& net, const geodesy::NetworkMeasurement& m) {
   std::string s;
   const bool pairs = m.kind == MeasurementKind::gnss_baselines;
   for (std::size_t k = 0; k < m.stations.size(); ++k) {
     s += (k == 0 ? "" : pairs && k % 2 == 1 ? "->" : " ") + net.stations[m.stations[k]].id;
   }
-  if (m.stations.size() == 2 && !pairs) s = net.stations[m.stations[0]].id + "->" + net.stations[m.stations[1]].id;
+  if (m.stations.size() == 2 && !pairs && m.kind != MeasurementKind::gnss_points) s = net.stations[m.stations[0]].id + "->" + net.stations[m.stations[1]].id;
   return s;
 }
 

@@ -33,6 +33,7 @@
 #include <istream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "geoanchor/geodesy/control_point.hpp"
 #include "geoanchor/geodesy/geoid.hpp"
@@ -99,6 +100,23 @@ geodesy::ControlSet read_control_csv(const std::filesystem::path& path, const Co
 // the CSV rules (an epoch for a dynamic frame, unless every point has one);
 // one frame's heights are all h_m or all H_m.
 geodesy::ControlSet read_control_json(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
+
+// A control set from two CSV files, one frame each (fit --src/--dst): the
+// marks whose ids are in both, in the source file's order; `notes` (when
+// given) receives, per file, the ids the other lacks. Each file's columns
+// name no role: id; x_m,y_m,z_m | lat_deg,lon_deg,h_m | e_m,n_m,u_m |
+// easting_m,northing_m,h_m (H_m with a geoid) or its CRS's columns; sigma_m,
+// or cov_xx_m2 … cov_zz_m2, or sigma_e_m,sigma_n_m,sigma_u_m with
+// corr_en,corr_eu,corr_nu (the local east, north, up of geodetic or ENU
+// coordinates); use. Comments above the header state "# frame = NAME@EPOCH",
+// "# ellipsoid = NAME" (checked against the frame's) and "# crs = CRS".
+// The stations CSV of `geoanchor adjust` is such a file: its x_m,y_m,z_m
+// are checked against its lat_deg,lon_deg,h_m, its ellipses are derived
+// from the sigmas read, and a component its constraint column holds (C)
+// may have a zero sigma. A per-point epoch, velocities, a role in a column
+// name, a local network's stations, or no id in common are refused by name.
+geodesy::ControlSet read_control_pair(const std::filesystem::path& source, const std::filesystem::path& target,
+                                      const ControlReadOptions& o, std::vector<std::string>* notes = nullptr);
 
 // CSV or JSON, by content (a file whose first non-blank character is '{' is JSON).
 geodesy::ControlSet read_control_set(const std::filesystem::path& path, const ControlReadOptions& o);
