@@ -46,18 +46,29 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_option("--convergence", o.convergence_m, "Stop when no station moves more than this (m; default 1e-5)")->check(finite_range(1e-9, 1.0));
   cmd->add_option("--max-iterations", o.max_iterations, "Iteration limit (default 25)")->check(integer_range(1, 1000));
   cmd->add_option("--estimate-helmert", o.estimate_helmert,
-                  "GROUP[:helmert7|helmert14]: a Helmert between the group's measurements and the network frame as unknowns (not yet in this geoanchor)");
+                  "GROUP[:helmert7|helmert14]: a Helmert from the datum of a group of GNSS measurements (their 'group', or an input file) to the network's frame, estimated with the stations");
+  cmd->add_option("--convention", o.convention, "--estimate-helmert: position_vector|coordinate_frame, the convention of the written transform (required)");
+  cmd->add_option("--helmert-output", o.helmert_output, "--estimate-helmert: the transform file (default: STATIONS less .csv, plus .helmert.json)");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
   return cmd;
 }
 
 int run_adjust(const AdjustCommandOptions& o) {
+  if (!o.estimate_helmert && (o.convention || o.helmert_output)) {
+    throw Error(ErrorKind::usage, "E_OPTION", std::string(o.convention ? "--convention" : "--helmert-output") + ": only with --estimate-helmert");
+  }
+  // The estimated Helmert's transform file.
+  std::optional<std::string> helmert_path;
   if (o.estimate_helmert) {
-    throw Error(ErrorKind::usage, "E_OPTION",
-                "--estimate-helmert " + *o.estimate_helmert +
-                    ": combined datum estimation is not in this geoanchor yet; adjust the group in its own frame and fit "
-                    "the transform with geoanchor fit");
+    if (o.helmert_output) {
+      helmert_path = *o.helmert_output;
+    } else if (o.output == "-") {
+      throw Error(ErrorKind::usage, "E_OPTION", "--estimate-helmert with -o -: give the transform file's path with --helmert-output");
+    } else {
+      const std::filesystem::path out(o.output);
+      helmert_path = (out.parent_path() / (out.extension() == ".csv" ? out.stem() : out.filename())).string() + ".helmert.json";
+    }
   }
   if (o.inner && !o.free) throw Error(ErrorKind::usage, "E_OPTION", "--inner-constraints: only with --free");
   if (o.free && !o.constrain.empty()) throw Error(ErrorKind::usage, "E_OPTION", "--free with --constrain: give one datum");
@@ -66,6 +77,8 @@ int run_adjust(const AdjustCommandOptions& o) {
   request.frame = o.frame;
   request.sinex_frame = o.sinex_frame;
   request.constrain = o.constrain;
+  request.estimate_helmert = o.estimate_helmert;
+  request.convention = o.convention;
   auto& so = request.options;
   so.alpha = 1.0 - o.confidence;
   so.confidence = o.confidence;
@@ -97,6 +110,7 @@ int run_adjust(const AdjustCommandOptions& o) {
     if (o.measurements) outputs.push_back({"--measurements", *o.measurements});
     if (o.report) outputs.push_back({"--report", *o.report});
     if (o.sinex) outputs.push_back({"--sinex", *o.sinex});
+    if (helmert_path) outputs.push_back({"--estimate-helmert's transform file", *helmert_path});
     for (std::size_t a = 0; a < outputs.size(); ++a) {
       for (std::size_t b = a + 1; b < outputs.size(); ++b) {
         std::error_code ec;
@@ -121,10 +135,12 @@ int run_adjust(const AdjustCommandOptions& o) {
   std::unique_ptr<io::AtomicOutputFile> measurements, report;
   if (o.measurements) measurements = std::make_unique<io::AtomicOutputFile>(*o.measurements, overwrite);
   if (o.report) report = std::make_unique<io::AtomicOutputFile>(*o.report, overwrite);
-  std::unique_ptr<io::AtomicOutputFile> sinex;
+  std::unique_ptr<io::AtomicOutputFile> sinex, helmert;
   if (o.sinex) sinex = std::make_unique<io::AtomicOutputFile>(*o.sinex, overwrite);
+  if (helmert_path) helmert = std::make_unique<io::AtomicOutputFile>(*helmert_path, overwrite);
 
   const workflow::PreparedNetwork prepared = workflow::prepare_network(request);
+  so.helmert = prepared.helmert;
   const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
 
   const std::string text = workflow::report_text(prepared, r, so);
@@ -159,6 +175,12 @@ int run_adjust(const AdjustCommandOptions& o) {
 
   // Every output's text before any is written: a refusal leaves none.
   const std::string sinex_text = sinex ? workflow::stations_sinex(prepared, r, std::string("geoanchor ") + GEOANCHOR_VERSION) : "";
+  std::string helmert_text;
+  if (helmert) {
+    std::string cmd;
+    for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
+    helmert_text = io::to_json_text(workflow::helmert_transform_file(prepared, r, so, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
+  }
   stations.stream() << workflow::stations_csv(prepared.network, r, so);
   if (!stations.is_standard_output()) {
     nlohmann::ordered_json side = nlohmann::ordered_json::parse(json);
@@ -178,6 +200,10 @@ int run_adjust(const AdjustCommandOptions& o) {
   if (sinex) {
     sinex->stream() << sinex_text;
     sinex->commit();
+  }
+  if (helmert) {
+    helmert->stream() << helmert_text;
+    helmert->commit();
   }
   if (measurements) {
     measurements->stream() << workflow::measurements_csv(prepared.network, r);

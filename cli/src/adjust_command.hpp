@@ -18,6 +18,8 @@ struct AdjustCommandOptions {
   std::optional<std::string> measurements, report, sinex;
   std::optional<std::string> sinex_frame;
   std::optional<std::string> estimate_helmert;
+  std::optional<std::string> convention;      // of the estimated Helmert's file
+  std::optional<std::string> helmert_output;  // default: -o's name less .csv, plus .helmert.json
   bool json = false;
   std::optional<std::string> frame;
   std::vector<std::string> constrain;

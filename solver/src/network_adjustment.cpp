@@ -47,8 +47,10 @@ using Index = std::int64_t;
 struct Layout {
   std::vector<std::array<Index, 3>> station;
   std::vector<Index> orientation;
+  std::vector<Index> helmert;  // AdjustOptions::helmert's parameters (7 or 14), in HelmertGroup's order
   Index count = 0;
-  // What each unknown is: the station (or set) and the component (3: an orientation).
+  // What each unknown is: the station (or set) and the component (3: an
+  // orientation; 4: a Helmert parameter, `first` its index).
   std::vector<std::pair<std::size_t, int>> owner;
 };
 
@@ -73,6 +75,44 @@ bool estimated_component(const geodesy::Network& net, int c) {
 
 std::string fmt_m(double v) { return format_fixed(v, 4) + " m"; }
 
+const char* const kHelmertNames[14] = {"tx", "ty", "tz", "rx", "ry", "rz", "ds", "dtx", "dty", "dtz", "drx", "dry", "drz", "dds"};
+
+// [v]×: the matrix of v × ·.
+Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
+// A Helmert group member's values taken back into the group's datum (the
+// model of AdjustOptions::helmert): `computed` (positions or baseline
+// differences in the network's frame) becomes y = R⁻¹ (X − T) / (1 + s),
+// d_local its derivatives through R⁻¹ / (1 + s), and `d_parameters` (rows
+// × 7 or 14) receives ∂y / ∂(each parameter).
+void into_group_datum(Evaluation& ev, bool points, const Eigen::VectorXd& params, bool rates, double dt,
+                      Eigen::MatrixXd& d_parameters) {
+  Eigen::Matrix<double, 7, 1> q = params.head<7>();
+  if (rates) q += dt * params.segment<7>(7);
+  const Eigen::Vector3d t = q.head<3>(), r = q.segment<3>(3);
+  const double scale = 1.0 + q(6);
+  const Eigen::Matrix3d r_inv = (Eigen::Matrix3d::Identity() + cross_matrix(r)).inverse();
+  const Eigen::Matrix3d a = r_inv / scale;
+  const Eigen::Index rows = ev.computed.size();
+  d_parameters = Eigen::MatrixXd::Zero(rows, rates ? 14 : 7);
+  for (Eigen::Index k = 0; k + 2 < rows; k += 3) {
+    const Eigen::Vector3d x = ev.computed.segment<3>(k);
+    const Eigen::Vector3d y = a * (points ? Eigen::Vector3d(x - t) : x);
+    ev.computed.segment<3>(k) = y;
+    ev.d_local.middleRows(k, 3) = a * ev.d_local.middleRows(k, 3);
+    Eigen::Matrix<double, 3, 7> d = Eigen::Matrix<double, 3, 7>::Zero();
+    if (points) d.leftCols<3>() = -a;
+    d.middleCols<3>(3) = r_inv * cross_matrix(y);  // ∂y/∂r = −R⁻¹ (∂R/∂r_i) y, ∂R/∂r_i = [e_i]×
+    d.col(6) = -y / scale;
+    d_parameters.block(k, 0, 3, 7) = d;
+    if (rates) d_parameters.block(k, 7, 3, 7) = dt * d;
+  }
+}
+
 // One measurement's rows, linearized: its unknowns and the whitened design
 // rows over them, the whitened misclosure (observed − computed).
 struct Rows {
@@ -88,6 +128,8 @@ struct Problem {
   geodesy::GeocentricConverter geocentric;
   std::vector<StationState> states;
   std::vector<double> orientations;
+  Eigen::VectorXd helmert;        // AdjustOptions::helmert's parameters (SI), p0 then the rates
+  std::vector<int> helmert_slot;  // per measurement: its place in the group, −1 outside it
   std::vector<Eigen::MatrixXd> whitening;  // per measurement: W with Wᵀ W = C⁻¹
   std::vector<bool> active;                // measurements in the adjustment
   std::vector<bool> station_used;
@@ -105,7 +147,14 @@ struct Problem {
   Rows linearize(std::size_t mi) const {
     const auto& m = net.measurements[mi];
     const ModelContext ctx{net, o, states, orientations};
-    const Evaluation ev = evaluate(m, ctx);
+    Evaluation ev = evaluate(m, ctx);
+    Eigen::MatrixXd d_helmert;
+    const int member = helmert_slot.empty() ? -1 : helmert_slot[mi];
+    if (member >= 0) {
+      const HelmertGroup& g = *o.helmert;
+      into_group_datum(ev, m.kind == geodesy::MeasurementKind::gnss_points, helmert, g.rates,
+                       g.rates ? g.epochs[static_cast<std::size_t>(member)] - g.reference_epoch : 0.0, d_helmert);
+    }
     Rows r;
     r.computed = ev.computed;
     std::map<Index, Eigen::Index> slot;
@@ -130,6 +179,10 @@ struct Problem {
     if (ev.orientation) {
       const Eigen::Index k = column(layout.orientation[*m.set]);
       a.col(k).array() -= 1.0;
+    }
+    for (Eigen::Index j = 0; j < d_helmert.cols(); ++j) {
+      const Eigen::Index k = column(layout.helmert[static_cast<std::size_t>(j)]);
+      a.col(k) += d_helmert.col(j);
     }
     r.a = whitening[mi] * a;
     r.l = whitening[mi] * misclosure(m, ev.computed);
@@ -215,6 +268,12 @@ Layout make_layout(const Problem& p) {
   for (std::size_t k = 0; k < net.direction_sets.size(); ++k) {
     l.orientation[k] = l.count++;
     l.owner.emplace_back(k, 3);
+  }
+  if (p.o.helmert) {
+    for (std::size_t k = 0; k < (p.o.helmert->rates ? 14u : 7u); ++k) {
+      l.helmert.push_back(l.count++);
+      l.owner.emplace_back(k, 4);
+    }
   }
   return l;
 }
@@ -335,6 +394,24 @@ DatumVectors datum_vectors(const Problem& p) {
         const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
         if (u >= 0) dv.g(u, static_cast<Eigen::Index>(k)) = local(c);
       }
+    }
+    // The group's datum moves with the stations, so that its values stay
+    // as they are: its translation, rotation and scale take up the motion
+    // (to first order), the rates none of it.
+    if (ellipsoidal && !p.layout.helmert.empty()) {
+      const Eigen::Vector3d t = p.helmert.head<3>();
+      Eigen::Matrix<double, 7, 1> d = Eigen::Matrix<double, 7, 1>::Zero();
+      if (k < 3) {
+        d.head<3>() = Eigen::Vector3d::Unit(static_cast<int>(k));
+      } else if (k < 6) {
+        const Eigen::Vector3d e = Eigen::Vector3d::Unit(static_cast<int>(k) - 3);
+        d.head<3>() = e.cross(t - centroid) / radius;
+        d(static_cast<Eigen::Index>(k)) = 1.0 / radius;
+      } else {
+        d.head<3>() = (t - centroid) / radius;
+        d(6) = 1.0 / radius;
+      }
+      for (Eigen::Index j = 0; j < 7; ++j) dv.g(p.layout.helmert[static_cast<std::size_t>(j)], static_cast<Eigen::Index>(k)) = d(j);
     }
     // A rotation turns the bearings at a station by its component about
     // the local vertical: the set's orientation turns with them.
@@ -488,6 +565,12 @@ void hold_defect(const Problem& p, Normal& n) {
                 where + ": the normal equations are singular: some unknown is not determined by the measurements");
   }
   const auto [s, c] = p.layout.owner[static_cast<std::size_t>(column)];
+  if (c == 4) {
+    throw Error(ErrorKind::input, "E_NETWORK_SINGULAR",
+                where + ": the Helmert parameter " + kHelmertNames[s] + " of group " + p.o.helmert->name +
+                    " is not determined by its measurements (a translation needs a point cluster in the group, rates "
+                    "need its measurements at two epochs or more, rotations and scale positions or baselines that span them)");
+  }
   if (c == 3) {
     throw Error(ErrorKind::input, "E_NETWORK_SINGULAR",
                 where + ": the orientation of the direction set at " + p.net.stations[p.net.direction_sets[s].station].id +
@@ -536,6 +619,14 @@ std::pair<double, std::size_t> apply_corrections(Problem& p, const Eigen::Vector
     p.states[s] = station_state(net, p.geocentric, x);
   }
   for (std::size_t k = 0; k < p.orientations.size(); ++k) p.orientations[k] += dx(p.layout.orientation[k]);
+  // A Helmert parameter's correction counts by how far it moves a point
+  // of the Earth's surface (a rate's over a year).
+  for (std::size_t k = 0; k < p.layout.helmert.size(); ++k) {
+    const double d = dx(p.layout.helmert[k]);
+    p.helmert(static_cast<Eigen::Index>(k)) += d;
+    const double moved = k % 7 < 3 ? std::abs(d) : std::abs(d) * net.ellipsoid.a_m();
+    if (moved > largest) largest = moved, at = net.stations.size();
+  }
   return {largest, at};
 }
 
@@ -612,6 +703,24 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   // The state: a-priori positions; orientations from the first direction of each set.
   for (const auto& s : net.stations) p.states.push_back(station_state(net, p.geocentric, s.position));
   p.orientations.assign(net.direction_sets.size(), 0.0);
+  if (o.helmert) {
+    if (net.space != NetworkSpace::ellipsoidal) {
+      throw Error(ErrorKind::usage, "E_OPTION", where + ": a Helmert transformation needs a network on the ellipsoid");
+    }
+    if (o.free) throw Error(ErrorKind::usage, "E_OPTION", "--estimate-helmert with --free: give the network's datum by constraints");
+    p.helmert = Eigen::VectorXd::Zero(o.helmert->rates ? 14 : 7);
+    p.helmert_slot.assign(net.measurements.size(), -1);
+    for (std::size_t k = 0; k < o.helmert->measurements.size(); ++k) {
+      const std::size_t mi = o.helmert->measurements[k];
+      const auto kind = net.measurements.at(mi).kind;
+      if (kind != geodesy::MeasurementKind::gnss_baselines && kind != geodesy::MeasurementKind::gnss_points) {
+        throw Error(ErrorKind::input, "E_HELMERT_GROUP",
+                    net.measurements[mi].source + ": " + geodesy::to_string(kind) + " in Helmert group " + o.helmert->name +
+                        ": a datum transformation relates GNSS positions and baselines only");
+      }
+      p.helmert_slot[mi] = static_cast<int>(k);
+    }
+  }
   {
     std::vector<bool> seeded(net.direction_sets.size(), false);
     const ModelContext ctx{net, o, p.states, p.orientations};
@@ -630,6 +739,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     const ModelContext ctx{net, o, p.states, p.orientations};
     for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
       if (!p.active[mi]) continue;
+      if (!p.helmert_slot.empty() && p.helmert_slot[mi] >= 0) continue;  // in a datum of its own, not yet known
       const auto& m = net.measurements[mi];
       Evaluation ev;
       try {
@@ -801,7 +911,10 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
             throw Error(ErrorKind::input, "E_DATUM_DEFECT",
                         where + ": the datum is not defined: neither the measurements nor the constraints fix the " + list +
                             (names.size() == 1 ? "" : " (" + std::to_string(names.size()) + " combinations)") +
-                            "; constrain stations (--constrain ID=CCC[,SIGMA_M]) or adjust it as a free network (--free)");
+                            (o.helmert ? "; the Helmert of group " + o.helmert->name +
+                                             " takes up the datum its measurements would give: constrain stations "
+                                             "(--constrain ID=CCC[,SIGMA_M]) or add measurements in the network's frame"
+                                       : "; constrain stations (--constrain ID=CCC[,SIGMA_M]) or adjust it as a free network (--free)"));
           }
         }
         p.defect_names = names;
@@ -835,7 +948,10 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     if (!converged) {
       throw Error(ErrorKind::rejected, "E_NOT_CONVERGED",
                   where + ": the adjustment did not converge in " + std::to_string(o.max_iterations) +
-                      " iterations: the last moved station " + net.stations[largest_at].id + " by " + fmt_m(largest) +
+                      " iterations: the last moved " +
+                      (largest_at < net.stations.size() ? "station " + net.stations[largest_at].id
+                                                        : "the Helmert of group " + o.helmert->name + " (at the surface)") +
+                      " by " + fmt_m(largest) +
                       " (threshold " + format_shortest(o.convergence_m) + " m); check the a-priori coordinates and units");
     }
 
@@ -1090,6 +1206,18 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     result.orientation_sigmas_rad.clear();
     for (std::size_t k = 0; k < p.orientations.size(); ++k) {
       result.orientation_sigmas_rad.push_back(std::sqrt(std::max(0.0, f.inverse(p.layout.orientation[k], p.layout.orientation[k]))));
+    }
+    if (!p.layout.helmert.empty()) {
+      EstimatedHelmert h;
+      h.parameters = p.helmert;
+      const auto n_par = static_cast<Eigen::Index>(p.layout.helmert.size());
+      h.covariance.resize(n_par, n_par);
+      for (Eigen::Index i = 0; i < n_par; ++i) {
+        for (Eigen::Index j = 0; j < n_par; ++j) {
+          h.covariance(i, j) = f.inverse(p.layout.helmert[static_cast<std::size_t>(i)], p.layout.helmert[static_cast<std::size_t>(j)]);
+        }
+      }
+      result.helmert = std::move(h);
     }
     // Relative precision between stations that share a measurement.
     result.relative.clear();

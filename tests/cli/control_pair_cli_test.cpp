@@ -11,7 +11,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <Eigen/Cholesky>
+
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <numbers>
 #include <string>
@@ -48,6 +51,12 @@ const std::map<std::string, Eigen::Vector3d> kTruthEnu = {
 constexpr double kShiftE = 0.412, kShiftN = -0.287, kShiftU = 0.153, kYawArcsec = 14.0;
 
 class ControlPairCli : public CliTest {};
+
+std::string g17(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
 
 TEST_F(ControlPairCli, Issue14_AirportNetworkAdjustFitApplyRecoversThePlantedTruth) {
   const std::string st = path("stations.csv").string(), t = path("map_to_itrf.json").string();
@@ -99,6 +108,69 @@ TEST_F(ControlPairCli, Issue14_AirportNetworkAdjustFitApplyRecoversThePlantedTru
   const auto side = nlohmann::json::parse(testing::slurp(path("tiles/airport_tile.las.geoanchor.json")));
   EXPECT_EQ(side.at("frame"), "ITRF2014@2024.5");
   EXPECT_EQ(side.at("provenance").at("extrapolation").at("distance_outside_control_m").get<double>(), 0.0);
+}
+
+// The 1998 site survey (lszh_site1998.json, a point cluster in the site
+// datum SITE1998) related to the network by an estimated Helmert: the
+// planted parameters lie within the estimate's covariance (a site a
+// kilometre across determines the geocentric parameters only together:
+// σ of tens of metres, correlations near ±1), and the transform takes the
+// site survey onto the adjusted stations.
+TEST_F(ControlPairCli, Issue14_SiteDatumHelmertIsEstimatedWithTheNetwork) {
+  const std::string st = path("stations.csv").string();
+  const RunResult r = run("adjust '" + kNetworkDir + "lszh_network.json' '" + kNetworkDir + "lszh_site1998.json' -o '" + st +
+                          "' --estimate-helmert '" + kNetworkDir + "lszh_site1998.json' --convention position_vector");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto file = nlohmann::json::parse(testing::slurp(path("stations.helmert.json")));
+  EXPECT_EQ(file.at("source_frame"), "SITE1998");
+  // make_airport_network.py SITE_HELMERT.
+  const std::map<std::string, double> planted = {{"tx_m", -0.512},     {"ty_m", 1.204},      {"tz_m", -0.337},
+                                                 {"rx_arcsec", 0.12},  {"ry_arcsec", -0.31}, {"rz_arcsec", 0.45},
+                                                 {"ds_ppm", -2.4}};
+  const auto& names = file.at("correlation_parameters");
+  ASSERT_EQ(names.size(), 7u);
+  Eigen::VectorXd d(7), sigma(7);
+  Eigen::MatrixXd corr(7, 7);
+  for (int i = 0; i < 7; ++i) {
+    const std::string n = names[static_cast<std::size_t>(i)];
+    d(i) = file.at("parameters").at(n).get<double>() - planted.at(n);
+    sigma(i) = file.at("sigmas").at(n).get<double>();
+    for (int j = 0; j < 7; ++j) corr(i, j) = file.at("correlation")[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)].get<double>();
+  }
+  const Eigen::MatrixXd cov = sigma.asDiagonal() * corr * sigma.asDiagonal();
+  const double mahalanobis2 = d.dot(cov.ldlt().solve(d));
+  // χ²(7) at 0.999 (any table: 24.32).
+  constexpr double kChi2Seven999 = 24.32;
+  EXPECT_WORST_WITHIN(mahalanobis2, kChi2Seven999);
+  RecordProperty("planted_helmert_chi2", std::to_string(mahalanobis2));
+
+  // The site's coordinates of P04 through the file: onto the adjusted P04
+  // within the site survey's 5 mm per axis (4σ: 35 mm in 3-D).
+  const auto site = nlohmann::json::parse(testing::slurp(kNetworkDir + "lszh_site1998.json"));
+  std::string in = "id,x_m,y_m,z_m\n";
+  for (const auto& p : site.at("measurements")[0].at("points")) {
+    if (p.at("id") == "P04") {
+      in += "P04," + g17(p.at("x_m").get<double>()) + "," + g17(p.at("y_m").get<double>()) + "," +
+            g17(p.at("z_m").get<double>()) + "\n";
+    }
+  }
+  write("site.csv", in);
+  const RunResult c = run("convert '" + path("site.csv").string() + "' --transform '" + path("stations.helmert.json").string() +
+                          "' --to ecef --precision 5");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const auto moved = testing::parse_csv_table(c.out);
+  const auto adjusted = testing::parse_csv_table(testing::slurp(path("stations.csv")));
+  ASSERT_EQ(moved.rows.size(), 1u);
+  for (const auto& row : adjusted.rows) {
+    if (row[adjusted.col("id")] != "P04") continue;
+    Eigen::Vector3d delta;
+    for (int k = 0; k < 3; ++k) {
+      const char* axis[] = {"x_m", "y_m", "z_m"};
+      delta(k) = std::stod(moved.rows[0][moved.col(axis[k])]) - std::stod(row[adjusted.col(axis[k])]);
+    }
+    constexpr double kSiteSurveyWithinM = 4.0 * 0.005 * 1.7320508;
+    EXPECT_WORST_WITHIN(delta.norm(), kSiteSurveyWithinM);
+  }
 }
 
 // The join itself: ids in both files, in the source file's order, with each

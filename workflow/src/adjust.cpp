@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
@@ -151,6 +152,103 @@ const char* verdict(const solver::GlobalTest& g) {
 
 }  // namespace
 
+namespace {
+
+// --estimate-helmert GROUP[:MODEL]: the group's measurements, frame and
+// epochs (AdjustRequest's rules), into `p`.
+void resolve_helmert_group(const AdjustRequest& request, const geodesy::Network& net, const Frame& target, PreparedNetwork& p) {
+  const std::string& text = *request.estimate_helmert;
+  const std::string flag = "--estimate-helmert " + text;
+  const auto colon = text.rfind(':');
+  std::string group = text, model = "helmert7";
+  if (colon != std::string::npos && (text.substr(colon + 1) == "helmert7" || text.substr(colon + 1) == "helmert14")) {
+    group = text.substr(0, colon);
+    model = text.substr(colon + 1);
+  } else if (colon != std::string::npos && text.find_first_of("/\\.", colon) == std::string::npos) {
+    throw Error(ErrorKind::usage, "E_OPTION", flag + ": the model after ':' is helmert7 or helmert14, not '" + text.substr(colon + 1) + "'");
+  }
+  if (group.empty()) throw Error(ErrorKind::usage, "E_OPTION", flag + ": name the group (a measurement 'group' or an input file)");
+  if (!request.convention) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                flag + ": --convention position_vector|coordinate_frame is required: the transform file is written in it "
+                       "(never assumed)");
+  }
+  if (*request.convention != "position_vector" && *request.convention != "coordinate_frame") {
+    throw Error(ErrorKind::usage, "E_OPTION", "--convention " + *request.convention + ": expected position_vector or coordinate_frame");
+  }
+  solver::HelmertGroup g;
+  g.name = group;
+  g.rates = model == "helmert14";
+  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+    if (net.measurements[mi].group == group && !net.measurements[mi].ignore) g.measurements.push_back(mi);
+  }
+  const bool by_file = g.measurements.empty();
+  if (by_file) {
+    for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+      if (net.measurements[mi].source.rfind(group + ":", 0) == 0 && !net.measurements[mi].ignore) g.measurements.push_back(mi);
+    }
+  }
+  if (g.measurements.empty()) {
+    std::vector<std::string> groups;
+    for (const auto& m : net.measurements) {
+      if (!m.group.empty() && std::find(groups.begin(), groups.end(), m.group) == groups.end()) groups.push_back(m.group);
+    }
+    std::string list;
+    for (const auto& n : groups) list += (list.empty() ? "" : ", ") + n;
+    throw Error(ErrorKind::usage, "E_OPTION",
+                flag + ": no measurement has group '" + group + "' and no input is that file (groups in the inputs: " +
+                    (list.empty() ? "none" : list) + ")");
+  }
+  std::optional<Frame> frame;
+  std::string frame_at;
+  for (std::size_t mi : g.measurements) {
+    const auto& m = net.measurements[mi];
+    if (m.kind != MeasurementKind::gnss_baselines && m.kind != MeasurementKind::gnss_points) {
+      throw Error(ErrorKind::input, "E_HELMERT_GROUP",
+                  m.source + ": " + geodesy::to_string(m.kind) + " in Helmert group " + group +
+                      ": a datum transformation relates GNSS positions and baselines only (give the terrestrial "
+                      "measurements another group, or none)");
+    }
+    const Frame f = m.frame ? *m.frame : net.frame ? *net.frame : target;
+    if (!frame) {
+      frame = f;
+      frame_at = m.source;
+    } else if (frame->name() != f.name() || (!g.rates && !(*frame == f))) {
+      throw Error(ErrorKind::input, "E_HELMERT_GROUP",
+                  m.source + ": in " + f.to_string() + ", but Helmert group " + group + " is in " + frame->to_string() + " (" +
+                      frame_at + "): one transformation relates one frame" +
+                      (frame->name() == f.name() ? " at one epoch (helmert14 relates several epochs)" : ""));
+    }
+    if (g.rates) {
+      if (!f.epoch()) {
+        throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                    m.source + ": Helmert group " + group + " with rates (helmert14): the measurement's epoch is needed (" +
+                        f.to_string() + " names none)");
+      }
+      g.epochs.push_back(f.epoch()->year);
+    }
+  }
+  if (g.rates) {
+    const auto [lo, hi] = std::minmax_element(g.epochs.begin(), g.epochs.end());
+    if (!(*hi > *lo)) {
+      throw Error(ErrorKind::input, "E_HELMERT_GROUP",
+                  flag + ": every measurement of the group is at " + format_shortest(*lo) +
+                      ": rates need two epochs or more (estimate helmert7)");
+    }
+    double sum = 0.0;
+    for (double e : g.epochs) sum += e;
+    g.reference_epoch = sum / static_cast<double>(g.epochs.size());
+  }
+  p.notes.push_back(std::to_string(g.measurements.size()) + " GNSS measurement(s) of " + (by_file ? "input " : "group ") + group +
+                    " in " + frame->to_string() + " related to " + target.to_string() + " by an estimated " + model +
+                    (g.rates ? " (reference epoch " + format_fixed(g.reference_epoch, 4) + ")" : ""));
+  p.helmert_frame = g.rates ? Frame::parse(frame->name(), flag) : *frame;
+  p.helmert_position_vector = *request.convention == "position_vector";
+  p.helmert = std::move(g);
+}
+
+}  // namespace
+
 PreparedNetwork prepare_network(const AdjustRequest& request) {
   PreparedNetwork p;
   io::NetworkReadOptions read_options;
@@ -206,10 +304,17 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
       for (auto& s : net.stations) s.position = c.map.apply(s.position);
       p.notes.push_back("stations' a-priori positions: " + c.description);
     }
+    if (request.estimate_helmert) resolve_helmert_group(request, net, *target, p);
+    std::vector<bool> in_group(net.measurements.size(), false);
+    if (p.helmert) {
+      for (std::size_t mi : p.helmert->measurements) in_group[mi] = true;
+    }
     std::size_t moved = 0;
     std::string first;
-    for (auto& m : net.measurements) {
+    for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+      auto& m = net.measurements[mi];
       if (m.kind != MeasurementKind::gnss_baselines && m.kind != MeasurementKind::gnss_points) continue;
+      if (in_group[mi]) continue;  // in its own datum: the estimated Helmert relates it
       const Frame from = m.frame ? *m.frame : net.frame ? *net.frame : *target;
       if (from == *target) continue;
       const FrameChange c = frame_change(from, *target, m.source);
@@ -233,6 +338,8 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
     net.frame = target;
   } else if (request.frame) {
     throw Error(ErrorKind::usage, "E_OPTION", "--frame " + *request.frame + ": the network is local (" + net.source_name + "): it has no frame");
+  } else if (request.estimate_helmert) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--estimate-helmert: the network is local (" + net.source_name + "): it has no frame to relate a datum to");
   }
   for (const auto& text : request.constrain) {
     std::string id;
@@ -370,6 +477,37 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
   return out.str();
 }
 
+namespace {
+
+// The estimated Helmert in the transform file's units (m, arcsec, ppm and
+// per year) and convention (rotations negated for coordinate_frame).
+struct HelmertInFileUnits {
+  std::vector<std::string> names;
+  Eigen::VectorXd value;
+  Eigen::MatrixXd covariance;
+};
+
+HelmertInFileUnits helmert_in_file_units(const PreparedNetwork& prepared, const solver::AdjustmentResult& r) {
+  static const char* const kNames[14] = {"tx_m",           "ty_m",           "tz_m",           "rx_arcsec",
+                                         "ry_arcsec",      "rz_arcsec",      "ds_ppm",         "dtx_m_per_year",
+                                         "dty_m_per_year", "dtz_m_per_year", "drx_arcsec_per_year",
+                                         "dry_arcsec_per_year", "drz_arcsec_per_year", "dds_ppm_per_year"};
+  constexpr double kArcsecPerRad = 180.0 / std::numbers::pi * 3600.0;
+  const Eigen::Index n = r.helmert->parameters.size();
+  Eigen::VectorXd factor(n);
+  HelmertInFileUnits u;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Eigen::Index j = k % 7;
+    factor(k) = j < 3 ? 1.0 : j < 6 ? (prepared.helmert_position_vector ? 1.0 : -1.0) * kArcsecPerRad : 1e6;
+    u.names.emplace_back(kNames[k]);
+  }
+  u.value = factor.cwiseProduct(r.helmert->parameters);
+  u.covariance = factor.asDiagonal() * r.helmert->covariance * factor.asDiagonal();
+  return u;
+}
+
+}  // namespace
+
 std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
   const auto& net = prepared.network;
   std::ostringstream out;
@@ -393,6 +531,20 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
         << (g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED (high)" : "FAILED (low)") << "\n";
   }
   out << "  w-tests: critical |w| = " << format_fixed(r.w_critical, 2) << " (alpha " << format_shortest(o.alpha_point) << ")\n\n";
+  if (prepared.helmert && r.helmert) {
+    const HelmertInFileUnits u = helmert_in_file_units(prepared, r);
+    out << "Helmert of group " << prepared.helmert->name << ": " << prepared.helmert_frame->to_string() << " -> "
+        << net.frame->to_string() << ", " << (prepared.helmert->rates ? "helmert14 at reference epoch " + format_fixed(prepared.helmert->reference_epoch, 4) : "helmert7")
+        << ", " << (prepared.helmert_position_vector ? "position_vector" : "coordinate_frame")
+        << " (sigmas from the a-priori weights)\n";
+    for (std::size_t k = 0; k < u.names.size(); ++k) {
+      const auto i = static_cast<Eigen::Index>(k);
+      char line[160];
+      std::snprintf(line, sizeof line, "  %-22s %14.6f  ± %.6f\n", u.names[k].c_str(), u.value(i), std::sqrt(std::max(0.0, u.covariance(i, i))));
+      out << line;
+    }
+    out << "\n";
+  }
   out << "Stations (sigmas from the a-priori weights; ellipse 1 sigma)\n";
   const bool ellipsoidal = net.space == NetworkSpace::ellipsoidal;
   out << "  id            " << (ellipsoidal ? "sigma_e  sigma_n  sigma_u" : "sigma_x  sigma_y  sigma_z") << "  (mm)   ellipse a/b (mm) az (deg)  constraint\n";
@@ -456,6 +608,24 @@ std::string report_json(const PreparedNetwork& prepared, const solver::Adjustmen
                       {"passed", r.global_test.passed},
                       {"verdict", verdict(r.global_test)},
                       {"confidence", 1.0 - o.alpha}};
+  if (prepared.helmert && r.helmert) {
+    const HelmertInFileUnits u = helmert_in_file_units(prepared, r);
+    ordered_json values, sigmas;
+    for (std::size_t k = 0; k < u.names.size(); ++k) {
+      const auto i = static_cast<Eigen::Index>(k);
+      values[u.names[k]] = num(u.value(i));
+      sigmas[u.names[k]] = num(std::sqrt(std::max(0.0, u.covariance(i, i))));
+    }
+    j["helmert"] = {{"group", prepared.helmert->name},
+                    {"model", prepared.helmert->rates ? "helmert14" : "helmert7"},
+                    {"convention", prepared.helmert_position_vector ? "position_vector" : "coordinate_frame"},
+                    {"source_frame", prepared.helmert_frame->to_string()},
+                    {"target_frame", net.frame->to_string()},
+                    {"reference_epoch", prepared.helmert->rates ? num(prepared.helmert->reference_epoch) : ordered_json(nullptr)},
+                    {"measurements", prepared.helmert->measurements.size()},
+                    {"parameters", values},
+                    {"sigmas", sigmas}};
+  }
   j["w_critical"] = r.w_critical;
   j["iterations"] = r.iterations;
   j["converged"] = r.converged;
@@ -520,6 +690,101 @@ std::string report_json(const PreparedNetwork& prepared, const solver::Adjustmen
   j["warnings"] = r.warnings;
   if (!r.refused_because.empty()) j["refused_because"] = r.refused_because;
   return j.dump(2) + "\n";
+}
+
+}  // namespace geoanchor::workflow
+
+namespace geoanchor::workflow {
+
+
+io::TransformFile helmert_transform_file(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
+                                         const solver::AdjustOptions& o, const std::string& generator) {
+  if (!prepared.helmert || !r.helmert) throw std::logic_error("helmert_transform_file: no Helmert was estimated");
+  const solver::HelmertGroup& g = *prepared.helmert;
+  const bool pv = prepared.helmert_position_vector;
+  const HelmertInFileUnits u = helmert_in_file_units(prepared, r);
+  const Eigen::Index n = u.value.size();
+  const Eigen::VectorXd& value = u.value;
+  const Eigen::MatrixXd& cov = u.covariance;
+  io::TransformFile t;
+  t.model = g.rates ? io::TransformModel::helmert14 : io::TransformModel::helmert7;
+  t.rotation_model = geodesy::RotationModel::small_angle;
+  t.source_frame = prepared.helmert_frame;
+  t.target_frame = prepared.network.frame;
+  auto seven = [&](Eigen::Index at, auto h) {
+    h.t_m = value.segment<3>(at);
+    h.rx = geodesy::Angle::arcseconds(value(at + 3));
+    h.ry = geodesy::Angle::arcseconds(value(at + 4));
+    h.rz = geodesy::Angle::arcseconds(value(at + 5));
+    h.ds = geodesy::ScaleDifference::ppm(value(at + 6));
+    return h;
+  };
+  auto rates = [&](auto h) {
+    h.dt_m_per_year = value.segment<3>(7);
+    h.drx_per_year = geodesy::Angle::arcseconds(value(10));
+    h.dry_per_year = geodesy::Angle::arcseconds(value(11));
+    h.drz_per_year = geodesy::Angle::arcseconds(value(12));
+    h.dds_per_year = geodesy::ScaleDifference::ppm(value(13));
+    return h;
+  };
+  if (g.rates) {
+    t.reference_epoch = geodesy::DecimalYear{g.reference_epoch};
+    if (pv) {
+      geodesy::Helmert14<geodesy::PositionVector> h;
+      h.at_reference_epoch = seven(0, geodesy::Helmert7<geodesy::PositionVector>{});
+      h.rates = rates(geodesy::Helmert7Rates<geodesy::PositionVector>{});
+      h.reference_epoch = *t.reference_epoch;
+      t.helmert = h;
+    } else {
+      geodesy::Helmert14<geodesy::CoordinateFrame> h;
+      h.at_reference_epoch = seven(0, geodesy::Helmert7<geodesy::CoordinateFrame>{});
+      h.rates = rates(geodesy::Helmert7Rates<geodesy::CoordinateFrame>{});
+      h.reference_epoch = *t.reference_epoch;
+      t.helmert = h;
+    }
+  } else if (pv) {
+    t.helmert = seven(0, geodesy::Helmert7<geodesy::PositionVector>{});
+  } else {
+    t.helmert = seven(0, geodesy::Helmert7<geodesy::CoordinateFrame>{});
+  }
+  io::FitRecord f;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    f.sigmas.emplace_back(u.names[static_cast<std::size_t>(k)], std::sqrt(std::max(0.0, cov(k, k))));
+    f.correlation_names.push_back(u.names[static_cast<std::size_t>(k)]);
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    std::vector<double> row;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double d = std::sqrt(cov(i, i) * cov(j, j));
+      row.push_back(i == j ? 1.0 : d > 0.0 ? std::clamp(cov(i, j) / d, -1.0, 1.0) : 0.0);
+    }
+    f.correlation.push_back(row);
+  }
+  f.sigmas_scaled_by_sigma0 = false;
+  f.sigma0 = r.sigma0;
+  f.dof = r.dof;
+  f.alpha = o.alpha;
+  f.alpha_point = o.alpha_point;
+  f.global_statistic = r.global_test.statistic;
+  f.global_critical_lower = r.global_test.critical_lower;
+  f.global_critical_upper = r.global_test.critical_upper;
+  f.global_passed = r.global_test.passed;
+  f.global_applicable = r.global_test.applicable;
+  f.warnings = r.warnings;
+  f.generator = generator;
+  // The group's stations: where the transformation was observed.
+  std::vector<geodesy::EcefPosition> marks;
+  std::vector<bool> seen(r.stations.size(), false);
+  for (std::size_t mi : g.measurements) {
+    for (std::size_t s : prepared.network.measurements[mi].stations) {
+      if (seen[s]) continue;
+      seen[s] = true;
+      marks.emplace_back(r.stations[s].position);
+    }
+  }
+  if (!marks.empty()) f.extent = io::ControlExtent::of(marks);
+  t.fit = std::move(f);
+  return t;
 }
 
 }  // namespace geoanchor::workflow

@@ -46,6 +46,24 @@ namespace geoanchor::solver {
 
 inline constexpr std::size_t kMaxJointCovarianceStations = 5000;
 
+// Combined datum estimation (adjust --estimate-helmert): a group of GNSS
+// measurements is in a datum of its own, related to the network's frame by
+// a Helmert transformation whose parameters are unknowns of the same
+// adjustment. The model, position-vector convention, small-angle EPSG
+// rotation matrix R = I + [r]×:
+//   X_network = T(t) + (1 + s(t)) R(t) X_group,   p(t) = p0 + (t − t0) ṗ
+// so a member's computed values are the stations' positions taken back
+// into the group's datum (X_group = R⁻¹ (X_network − T) / (1 + s); for
+// baselines the translation cancels). t is each member's epoch, t0 the
+// reference epoch (rates only).
+struct HelmertGroup {
+  std::vector<std::size_t> measurements;  // GNSS baselines and point clusters (indices into Network::measurements)
+  bool rates = false;                     // 14 parameters: the 7 at reference_epoch and their rates per year
+  double reference_epoch = 0.0;           // decimal year (rates)
+  std::vector<double> epochs;             // rates: each member's epoch (decimal year), as `measurements`
+  std::string name;                       // for messages
+};
+
 struct AdjustOptions {
   double alpha = 0.05;          // the global test
   double alpha_point = 0.001;   // w-tests, measurement tests and data snooping
@@ -69,6 +87,16 @@ struct AdjustOptions {
   // (AdjustmentResult::station_covariance_m2): one solve per coordinate,
   // for SINEX output; refused above kMaxJointCovarianceStations.
   bool joint_covariance = false;
+  // A Helmert transformation estimated with the stations (above).
+  std::optional<HelmertGroup> helmert;
+};
+
+// The estimated Helmert of AdjustOptions::helmert: p0 then the rates, in
+// SI (tx, ty, tz m; rx, ry, rz rad; ds unitless; the rates per year), and
+// their covariance from the a-priori weights (σ0 = 1).
+struct EstimatedHelmert {
+  Eigen::VectorXd parameters;
+  Eigen::MatrixXd covariance;
 };
 
 struct ErrorEllipse {
@@ -143,6 +171,7 @@ struct AdjustmentResult {
   std::vector<std::size_t> covariance_stations;
   Eigen::MatrixXd station_covariance_m2;
   std::int64_t factor_nonzeros = 0;
+  std::optional<EstimatedHelmert> helmert;
 };
 
 // Throws geoanchor::Error (input) naming the station or measurement: an

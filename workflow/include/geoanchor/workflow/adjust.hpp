@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/network.hpp"
+#include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 
 namespace geoanchor::workflow {
@@ -20,14 +21,29 @@ struct AdjustRequest {
   std::optional<std::string> frame;     // --frame NAME[@EPOCH]
   std::optional<std::string> sinex_frame;  // --sinex-frame NAME: the frame of SINEX inputs
   std::vector<std::string> constrain;   // --constrain ID=CCC[,SIGMA_M]
+  // --estimate-helmert GROUP[:helmert7|helmert14] and its --convention
+  // (position_vector | coordinate_frame: the written file's; required).
+  std::optional<std::string> estimate_helmert;
+  std::optional<std::string> convention;
   solver::AdjustOptions options;
 };
 
 struct PreparedNetwork {
   geodesy::Network network;
   std::vector<std::string> notes;  // what was done to it (frame changes, constraints), for the report
+  // --estimate-helmert: the group (its measurements stay in their own
+  // datum: no frame step), the frame they are in, the written convention.
+  std::optional<solver::HelmertGroup> helmert;
+  std::optional<geodesy::Frame> helmert_frame;
+  bool helmert_position_vector = true;
 };
 
+// The group of --estimate-helmert GROUP: the measurements whose `group`
+// is GROUP, else those of the input file GROUP. Each must be a GNSS
+// baseline or point cluster, all in one frame (helmert7: at one epoch;
+// helmert14: each with its epoch, at two epochs or more; the reference
+// epoch is their mean).
+//
 // Throws geoanchor::Error: reading (io::read_network), a --frame or
 // measurement frame the catalog cannot reach (naming the measurement), a
 // change of epoch in a dynamic frame (which needs velocities: refused
@@ -51,6 +67,13 @@ std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentRe
 std::string stations_sinex(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const std::string& software);
 
 std::string measurements_csv(const geodesy::Network& net, const solver::AdjustmentResult& r);
+
+// The estimated Helmert of --estimate-helmert as a transform file
+// (docs/transform-file.md): from the group's frame to the network's, with
+// its sigmas and correlations (σ0 = 1), the adjustment's statistics, and
+// as control extent the hull of the group's stations.
+io::TransformFile helmert_transform_file(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
+                                         const solver::AdjustOptions& o, const std::string& generator);
 
 // The report as text, and as JSON (schema geoanchor.adjust-report/1).
 std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
