@@ -18,6 +18,7 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/network_input.hpp"
 #include "geoanchor/io/sinex.hpp"
+#include "geoanchor/workflow/fit_export.hpp"
 
 namespace geoanchor::workflow {
 namespace {
@@ -761,15 +762,7 @@ io::TransformFile helmert_transform_file(const PreparedNetwork& prepared, const 
     f.correlation.push_back(row);
   }
   f.sigmas_scaled_by_sigma0 = false;
-  f.sigma0 = r.sigma0;
-  f.dof = r.dof;
-  f.alpha = o.alpha;
-  f.alpha_point = o.alpha_point;
-  f.global_statistic = r.global_test.statistic;
-  f.global_critical_lower = r.global_test.critical_lower;
-  f.global_critical_upper = r.global_test.critical_upper;
-  f.global_passed = r.global_test.passed;
-  f.global_applicable = r.global_test.applicable;
+  record_statistics(f, r.sigma0, r.dof, o.alpha, o.alpha_point, r.global_test);
   f.warnings = r.warnings;
   f.generator = generator;
   // The group's stations: where the transformation was observed.

@@ -158,6 +158,19 @@ void point_record(const solver::PointResult& p, const std::vector<std::string>& 
 
 }  // namespace
 
+void record_statistics(io::FitRecord& f, std::optional<double> sigma0, int dof, double alpha, double alpha_point,
+                       const solver::GlobalTest& global_test) {
+  f.sigma0 = sigma0;
+  f.dof = dof;
+  f.alpha = alpha;
+  f.alpha_point = alpha_point;
+  f.global_statistic = global_test.statistic;
+  f.global_critical_lower = global_test.critical_lower;
+  f.global_critical_upper = global_test.critical_upper;
+  f.global_passed = global_test.passed;
+  f.global_applicable = global_test.applicable;
+}
+
 io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geodesy::ControlSet& set,
                                           const solver::FitOptions& o, const std::vector<std::string>& left_out,
                                           const std::string& generator) {
@@ -252,15 +265,7 @@ StreamedTransformFile streamed_file(const solver::FitResult& r, const geodesy::C
     f.correlation.push_back(row);
   }
   f.sigmas_scaled_by_sigma0 = r.covariance_scaled_by_sigma0;
-  f.sigma0 = r.sigma0;
-  f.dof = r.dof;
-  f.alpha = o.alpha;
-  f.alpha_point = o.alpha_point;
-  f.global_statistic = r.global_test.statistic;
-  f.global_critical_lower = r.global_test.critical_lower;
-  f.global_critical_upper = r.global_test.critical_upper;
-  f.global_passed = r.global_test.passed;
-  f.global_applicable = r.global_test.applicable;
+  record_statistics(f, r.sigma0, r.dof, o.alpha, o.alpha_point, r.global_test);
   f.warnings = r.warnings;
   f.variance_factors = r.variance_factors;
   f.extent = std::move(extent);  // the network's, source frame: the marks the fit used

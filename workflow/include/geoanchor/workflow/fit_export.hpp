@@ -20,6 +20,12 @@ namespace geoanchor::workflow {
 // per-point records; fit_choices_from_transform() reads it back.
 inline constexpr const char* kLeftOutInWorkbench = "left out in the workbench";
 
+// The statistics a transform file records of the adjustment that gave it
+// (fit's, or adjust --estimate-helmert's): σ0, dof, the significance
+// levels and the global test.
+void record_statistics(io::FitRecord& f, std::optional<double> sigma0, int dof, double alpha, double alpha_point,
+                       const solver::GlobalTest& global_test);
+
 // The transform file for `fit` of `control` under `options` (alpha,
 // alpha_point recorded). `left_out` names points the user left out: their
 // records say so. `generator` is recorded as is ("geoanchor 0.1.0: ...").
