@@ -422,6 +422,11 @@ class Reader final : public XmlHandler {
         p.m.kind = MeasurementKind::horizontal_angle;
         fallback = defaults_.angle;
       } else if (name == "z-angle") {
+        // From the zenith down to the nadir: 0–200 gon (0–180°); anything else
+        // is no zenith angle (a vertical angle, or a face-II reading unreduced).
+        if (!(value >= 0.0 && value <= std::numbers::pi)) {
+          fail(line(), "<z-angle> val=\"" + a.at("val") + "\": a zenith angle lies in 0–200 gon (0–180°)");
+        }
         p.m.kind = MeasurementKind::zenith_angle;
         fallback = defaults_.zenith;
         three_d_.push_back({p.m.stations, line()});
