@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 
@@ -12,6 +13,7 @@
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/workflow/adjust.hpp"
+#include "geoanchor/workflow/transform_checks.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
 
@@ -179,7 +181,18 @@ int run_adjust(const AdjustCommandOptions& o) {
   if (helmert) {
     std::string cmd;
     for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
-    helmert_text = io::to_json_text(workflow::helmert_transform_file(prepared, r, so, "geoanchor " GEOANCHOR_VERSION ": " + cmd));
+    io::TransformFile file = workflow::helmert_transform_file(prepared, r, so, "geoanchor " GEOANCHOR_VERSION ": " + cmd);
+    // Parameters past the plausibility limits (RELIABILITY 15): printed and recorded.
+    std::optional<workflow::EpochSpan> span;
+    if (prepared.helmert->rates) {
+      const auto [lo, hi] = std::minmax_element(prepared.helmert->epochs.begin(), prepared.helmert->epochs.end());
+      span = workflow::EpochSpan{geodesy::DecimalYear{*lo}, geodesy::DecimalYear{*hi}};
+    }
+    for (const auto& w : workflow::implausible_transform_warnings(file, *helmert_path, span)) {
+      std::cerr << "geoanchor: warning: " << w << '\n';
+      file.fit->warnings.push_back(w);
+    }
+    helmert_text = io::to_json_text(file);
   }
   stations.stream() << workflow::stations_csv(prepared.network, r, so);
   if (!stations.is_standard_output()) {

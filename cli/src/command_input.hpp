@@ -137,7 +137,7 @@ inline ControlInput read_control_input(const std::string& path, const io::Contro
 
 // A control set from two files, one frame each (io::read_control_pair).
 inline ControlInput read_control_pair_input(const std::string& source, const std::string& target,
-                                            const io::ControlReadOptions& options, bool hash = false) {
+                                            const io::ControlReadOptions& options, bool unmatched_allowed, bool hash = false) {
   for (const auto* path : {&source, &target}) {
     if (*path == "-") {
       throw Error(ErrorKind::usage, "E_OPTION", "--src/--dst: give files (standard input holds one file; a control set with "
@@ -145,7 +145,7 @@ inline ControlInput read_control_pair_input(const std::string& source, const std
     }
   }
   ControlInput c;
-  c.set = io::read_control_pair(source, target, options, &c.notes);
+  c.set = io::read_control_pair(source, target, options, unmatched_allowed, &c.notes);
   c.name = c.set.source_name;
   c.role_files = {{"source", source, hash ? io::sha256_file_hex(source) : std::string()},
                   {"target", target, hash ? io::sha256_file_hex(target) : std::string()}};

@@ -34,6 +34,7 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON), or - for standard input");
   cmd->add_option("--src", o.src, "Instead of CONTROL: the source frame's coordinates (CSV without roles, e.g. adjust's stations), joined by id with --dst");
   cmd->add_option("--dst", o.dst, "Instead of CONTROL: the target frame's coordinates (CSV without roles, e.g. adjust's stations), joined by id with --src");
+  cmd->add_flag("--allow-unmatched", o.allow_unmatched, "With --src/--dst: leave out --src marks that --dst lacks (else refused)");
   cmd->add_option("--model", o.model,
                   "translation3|helmert6|helmert7|helmert14|molodensky-badekas|enu-origin|site-calibration");
   cmd->add_flag("--compare", o.compare, "Fit every applicable model on the same points and compare them");
@@ -199,6 +200,7 @@ int run_fit(const FitCommandOptions& o) {
                 "the control: give CONTROL (one file with both frames' columns) or --src FILE --dst FILE (one frame each, "
                 "joined by id)");
   }
+  if (o.allow_unmatched && o.src.empty()) throw Error(ErrorKind::usage, "E_OPTION", "--allow-unmatched: only with --src/--dst");
   if (o.model.empty() && !o.compare) {
     throw Error(ErrorKind::usage, "E_OPTION", "--model: required (or --compare to fit every applicable model)");
   }
@@ -296,8 +298,7 @@ int run_fit(const FitCommandOptions& o) {
   ro.src_geoid = ro.dst_geoid = geoid;
   if (o.source_frame) ro.source_frame.replace = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) ro.target_frame.replace = geodesy::Frame::parse(*o.target_frame, "--target-frame");
-  ControlInput in = o.control.empty() ? read_control_pair_input(o.src, o.dst, ro, o.json) : read_control_input(o.control, ro, o.json);
-  for (const auto& n : in.notes) std::cerr << "geoanchor: note: " << n << '\n';
+  ControlInput in = o.control.empty() ? read_control_pair_input(o.src, o.dst, ro, o.allow_unmatched, o.json) : read_control_input(o.control, ro, o.json);
   geodesy::ControlSet& set = in.set;
   if (fo.nominal_origin && set.origin) fo.nominal_origin->ellipsoid = set.origin->ellipsoid;
   if (fo.site_grid) fo.site_grid->ellipsoid = set.target_input.ellipsoid;
@@ -320,7 +321,9 @@ int run_fit(const FitCommandOptions& o) {
     std::cerr << "geoanchor: warning: --geoid " << *o.geoid << " unused: the control set gives ellipsoidal heights (h)\n";
   }
   if (const auto swap = workflow::likely_lat_lon_swap(set)) throw Error(ErrorKind::input, "E_AXIS_SWAP", *swap);
-  const std::vector<std::string> set_warnings = workflow::control_set_warnings(set);
+  std::vector<std::string> set_warnings = workflow::control_set_warnings(set);
+  // What the join of --src and --dst left out: printed and recorded with the fit.
+  set_warnings.insert(set_warnings.end(), in.notes.begin(), in.notes.end());
   if (o.compare) {
     for (const auto& w : set_warnings) std::cerr << "geoanchor: warning: " << w << '\n';
     const int code = run_compare(in, fo, o.json, set_warnings);

@@ -17,6 +17,7 @@ namespace geoanchor::cli {
 struct FitCommandOptions {
   std::string control;  // a path, or "-" for standard input
   std::string src, dst;  // or two files, one frame each (--src, --dst)
+  bool allow_unmatched = false;  // --src marks without a counterpart in --dst are left out, not refused
   std::string model;
   std::optional<std::string> convention;
   std::string rotation_model = "small_angle";

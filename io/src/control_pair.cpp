@@ -94,7 +94,6 @@ struct RoleRow {
 // "# crs = CRS"; the two-role keys of a control set are refused here, and so
 // is a local network's stations file (its axes are on no frame).
 std::optional<Crs> read_role_comments(RoleFile& f, const std::optional<Crs>& flag_crs, const std::string& flag) {
-  std::optional<Crs> crs = flag_crs;
   for (const auto& c : f.reader->leading_comments()) {
     const std::string where =
         f.name + ": comment '" + c + "' (above the header on line " + std::to_string(f.reader->header_line()) + ")";
@@ -105,7 +104,7 @@ std::optional<Crs> read_role_comments(RoleFile& f, const std::optional<Crs>& fla
                     "or its CRS as '# crs = CRS'; " + two_role + " belongs to a control set with both frames' columns");
       }
     }
-    if (c.find("local network") != std::string::npos) {
+    if (c.rfind("# local network:", 0) == 0) {
       throw Error(ErrorKind::input, "E_FRAME_MISSING",
                   where + ": the stations of a local network are on the network's own axes, not on a frame of the Earth: "
                   "fit needs each frame's coordinates on the Earth");
@@ -118,17 +117,16 @@ std::optional<Crs> read_role_comments(RoleFile& f, const std::optional<Crs>& fla
       if (f.stated_ellipsoid) throw Error(ErrorKind::input, "E_COMMENT", where + ": a second '# ellipsoid =' comment; give one");
       f.stated_ellipsoid = *e;
       f.ellipsoid_where = where;
-    } else if (const auto text = comment_value(c, "crs")) {
-      const Crs stated = Crs::parse(*text, where);
-      if (crs && !crs->same_as(stated)) {
-        throw Error(ErrorKind::input, "E_CRS_CONFLICT",
-                    flag + " " + crs->display_name() + " contradicts " + where + " (" + stated.display_name() +
-                        "); drop the flag or fix the file");
-      }
-      crs = stated;
     }
   }
-  return crs;
+  // "# crs = …" with its "# coordinate_epoch = …", as convert writes them.
+  const std::optional<Crs> stated = crs_from_comments(f.reader->leading_comments(), f.name);
+  if (flag_crs && stated && !flag_crs->same_as(*stated)) {
+    throw Error(ErrorKind::input, "E_CRS_CONFLICT",
+                flag + " " + flag_crs->display_name() + " contradicts " + f.name + "'s '# crs =' (" + stated->display_name() +
+                    "); drop the flag or fix the file");
+  }
+  return flag_crs ? flag_crs : stated;
 }
 
 // What each column of a role file is. Every column is read, derived from
@@ -290,7 +288,8 @@ std::unordered_map<std::string, RoleRow> read_role_rows(RoleFile& f, const detai
   while (f.reader->next(r)) {
     if (r.is_comment) continue;
     const auto fail_at = [&](std::size_t col, const std::string& what) -> void {
-      throw Error(ErrorKind::input, "E_VALUE", f.name + ":" + std::to_string(r.line) + ": " + header[col] + "=" + r.values[col] + ": " + what);
+      throw Error(ErrorKind::input, "E_VALUE",
+                  f.name + ":" + std::to_string(r.line) + ": " + header[col] + "='" + r.values[col] + "': " + what);
     };
     const auto number = [&](std::size_t col) { return number_cell(r, col, header, f.name); };
     const std::string& id = r.values[*f.id];
@@ -324,6 +323,9 @@ std::unordered_map<std::string, RoleRow> read_role_rows(RoleFile& f, const detai
     if (f.has_enu_sigma) {
       std::array<double, 3> s{};
       const std::string held = f.constraint ? r.values[*f.constraint] : std::string();
+      if (f.constraint && !(held.size() == 3 && std::all_of(held.begin(), held.end(), [](char ch) { return ch == 'C' || ch == 'F'; }))) {
+        fail_at(*f.constraint, "expected three letters C (held) or F (free): latitude, longitude, height");
+      }
       // Held components: constraint letters are latitude, longitude, height (north, east, up).
       const std::array<std::size_t, 3> letter_of = {1, 0, 2};
       for (std::size_t k = 0; k < 3; ++k) {
@@ -345,10 +347,11 @@ std::unordered_map<std::string, RoleRow> read_role_rows(RoleFile& f, const detai
       local << s[0] * s[0], rho[0] * s[0] * s[1], rho[1] * s[0] * s[2],  //
           rho[0] * s[0] * s[1], s[1] * s[1], rho[2] * s[1] * s[2],       //
           rho[1] * s[0] * s[2], rho[2] * s[1] * s[2], s[2] * s[2];
+      if (!local.allFinite()) fail_at(*f.enu_sigma[0], "sigma_e_m, sigma_n_m, sigma_u_m give no finite covariance");
       // Positive semi-definite (zeros only where held), to the rounding of six decimals of a correlation.
       const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(local, Eigen::EigenvaluesOnly).eigenvalues()(0);
       if (!(smallest >= -1e-6 * local.diagonal().maxCoeff())) {
-        fail_at(*f.enu_corr[0], "sigmas and correlations make no covariance (smallest eigenvalue " +
+        fail_at(f.enu_corr[0] ? *f.enu_corr[0] : *f.enu_sigma[0], "sigmas and correlations make no covariance (smallest eigenvalue " +
                                     format_shortest(smallest) + " m²)");
       }
       Eigen::Matrix3d enu_from_ecef;
@@ -382,7 +385,9 @@ std::unordered_map<std::string, RoleRow> read_role_rows(RoleFile& f, const detai
     const auto [at, inserted] = rows.emplace(id, row);
     if (!inserted) {
       throw Error(ErrorKind::input, "E_DUPLICATE_ID",
-                  f.name + ":" + std::to_string(r.line) + ": id '" + id + "' is also on line " + std::to_string(at->second.line));
+                  f.name + ":" + std::to_string(r.line) + ": id '" + id + "' is also on line " + std::to_string(at->second.line) +
+                      " (the two are " + format_shortest((row.position.m - at->second.position.m).norm()) +
+                      " m apart); each mark once");
     }
     order.push_back(id);
   }
@@ -392,7 +397,7 @@ std::unordered_map<std::string, RoleRow> read_role_rows(RoleFile& f, const detai
 }  // namespace
 
 ControlSet read_control_pair(const std::filesystem::path& source, const std::filesystem::path& target,
-                             const ControlReadOptions& o, std::vector<std::string>* notes) {
+                             const ControlReadOptions& o, bool unmatched_source_allowed, std::vector<std::string>* notes) {
   RoleFile files[2] = {open_role_file(source, "src", o.src_crs), open_role_file(target, "dst", o.dst_crs)};
   ControlSet set;
   set.source_name = files[0].name + " + " + files[1].name;
@@ -424,6 +429,23 @@ ControlSet read_control_pair(const std::filesystem::path& source, const std::fil
   };
   const bool uses_ellipsoid[2] = {uses(files[0]), uses(files[1])};
   detail::resolve_ellipsoids(set, o, uses_ellipsoid);
+  // A file on a frame that implies no ellipsoid (outside the catalog) is
+  // read on the one its '# ellipsoid =' states, unless --ellipsoid says.
+  for (const RoleFile& f : files) {
+    const std::optional<geodesy::Frame>& frame = f.source ? set.source_frame : set.target_frame;
+    if (!f.stated_ellipsoid || f.crs || o.ellipsoid || (frame && geodesy::implied_ellipsoid(*frame))) continue;
+    std::string name = *f.stated_ellipsoid;
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
+    geodesy::ControlInputForm& form = f.source ? set.source_input : set.target_input;
+    if (name == "GRS80") {
+      form.ellipsoid = geodesy::Ellipsoid::grs80();
+    } else if (name == "WGS84") {
+      form.ellipsoid = geodesy::Ellipsoid::wgs84();
+    } else {
+      throw Error(ErrorKind::input, "E_ELLIPSOID", f.ellipsoid_where + ": '" + *f.stated_ellipsoid + "': expected GRS80 or WGS84");
+    }
+    if (form.projection) form.projection->ellipsoid = form.ellipsoid;
+  }
   for (const RoleFile& f : files) {
     const geodesy::ControlInputForm& form = f.source ? set.source_input : set.target_input;
     if (f.stated_ellipsoid && !f.crs) {
@@ -434,7 +456,7 @@ ControlSet read_control_pair(const std::filesystem::path& source, const std::fil
       if (stated != resolved) {
         throw Error(ErrorKind::input, "E_ELLIPSOID",
                     f.ellipsoid_where + ": the file's coordinates are on " + *f.stated_ellipsoid + ", but they would be read on " +
-                        form.ellipsoid.name() + (o.ellipsoid ? " (--ellipsoid)" : " (the frame's)") +
+                        form.ellipsoid.name() + (o.ellipsoid ? " (--ellipsoid)" : " (the frame's, or the other file's)") +
                         "; drop --ellipsoid or correct the frame");
       }
     }
@@ -479,14 +501,40 @@ ControlSet read_control_pair(const std::filesystem::path& source, const std::fil
                 files[0].name + " and " + files[1].name + " have no id in common (" + std::to_string(order[0].size()) +
                     " and " + std::to_string(order[1].size()) + " marks): the two files are joined by id");
   }
+  auto listed = [](const std::vector<std::string>& ids) {
+    std::string list;
+    for (std::size_t i = 0; i < ids.size() && i < 10; ++i) list += (i ? ", " : "") + ids[i];
+    if (ids.size() > 10) list += ", … (" + std::to_string(ids.size()) + " in all)";
+    return list;
+  };
+  // Every source mark is control: one the target lacks is a typo or a
+  // missing station (RELIABILITY 8), unless the caller allows it. The
+  // target may hold more (the other stations of an adjusted network).
+  if (!only[0].empty() && !unmatched_source_allowed) {
+    throw Error(ErrorKind::input, "E_UNMATCHED_ID",
+                files[0].name + ": " + std::to_string(only[0].size()) + " mark(s) have no counterpart in " + files[1].name +
+                    ": " + listed(only[0]) + "; correct the ids, or give --allow-unmatched to fit without them");
+  }
   if (notes) {
     for (std::size_t k = 0; k < 2; ++k) {
       if (only[k].empty()) continue;
-      std::string list;
-      for (std::size_t i = 0; i < only[k].size() && i < 10; ++i) list += (i ? ", " : "") + only[k][i];
-      if (only[k].size() > 10) list += ", …";
       notes->push_back(std::to_string(only[k].size()) + " mark(s) of " + files[k].name + " are not in " + files[1 - k].name +
-                       " and are not part of the control: " + list);
+                       " and are not part of the control: " + listed(only[k]));
+    }
+  }
+  // Each joined mark's two covariances together must weigh it: a station
+  // held by the adjustment (zero sigma) needs the other file's sigma.
+  if (set.has_a_priori_sigmas) {
+    for (const ControlPoint& p : set.points) {
+      const Eigen::Matrix3d both = p.source_cov_m2 + p.target_cov_m2;
+      const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(both, Eigen::EigenvaluesOnly).eigenvalues()(0);
+      if (!(smallest > 1e-12 * std::max(both.trace(), 1e-300))) {
+        throw Error(ErrorKind::input, "E_SIGMA",
+                    p.id + " (" + files[0].name + ":" + std::to_string(p.line) + ", " + files[1].name + ":" +
+                        std::to_string(rows[1].at(p.id).line) + "): the two files' covariances together leave a direction "
+                        "without uncertainty (smallest eigenvalue " + format_shortest(smallest) +
+                        " m²): a held station's zero sigma needs a sigma in the other file");
+      }
     }
   }
   for (const RoleFile& f : files) {

@@ -214,6 +214,24 @@ TEST_F(AdjustHelmertCli, Issue14_Helmert14IsRecoveredWithItsRatesAtTheMeanEpoch)
     SCOPED_TRACE(key);
     EXPECT_WORST_WITHIN(std::abs(p.at(key).get<double>() - planted), tolerance);
   }
+  // convert at an epoch five years from the reference epoch: the group's
+  // 2010 coordinates of M6 onto the network's.
+  const auto x = truth();
+  const testing::ProjPipeline h(
+      "+proj=helmert +convention=position_vector +x=" + number(kTx) + " +y=" + number(kTy) + " +z=" + number(kTz) +
+      " +rx=" + number(kRx) + " +ry=" + number(kRy) + " +rz=" + number(kRz) + " +s=" + number(kDs) + " +dx=" + number(kDtx) +
+      " +dy=" + number(kDty) + " +dz=" + number(kDtz) + " +drx=" + number(kDrx) + " +dry=" + number(kDry) + " +drz=" +
+      number(kDrz) + " +ds=" + number(kDds) + " +t_epoch=2015");
+  const Eigen::Vector3d g = exact_inverse(h, x[5], 2010.0);
+  write("in.csv", "id,x_m,y_m,z_m\nM6," + number(g.x()) + "," + number(g.y()) + "," + number(g.z()) + "\n");
+  const RunResult c = run("convert '" + path("in.csv").string() + "' --transform '" + path("h14.json").string() +
+                          "' --epoch 2010.0 --to ecef --precision 6");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const auto table = testing::parse_csv_table(c.out);
+  ASSERT_EQ(table.rows.size(), 1u);
+  const Eigen::Vector3d got(std::stod(table.rows[0][table.col("x_m")]), std::stod(table.rows[0][table.col("y_m")]),
+                            std::stod(table.rows[0][table.col("z_m")]));
+  EXPECT_WORST_WITHIN((got - x[5]).norm(), kConvertToleranceM);
 }
 
 TEST_F(AdjustHelmertCli, Issue14_BadHelmertGroupsAreRefusedByNameWithNoOutput) {
@@ -232,12 +250,42 @@ TEST_F(AdjustHelmertCli, Issue14_BadHelmertGroupsAreRefusedByNameWithNoOutput) {
       {"with --free", "--estimate-helmert legacy --convention position_vector --free", 2, {"E_OPTION", "--free"}},
       {"a convention without a group", "--convention position_vector", 2, {"E_OPTION", "only with --estimate-helmert"}},
   };
+  // Geometry: two stations, and stations along one line (a runway).
+  {
+    const auto x = truth();
+    auto cluster = [&](const std::vector<Eigen::Vector3d>& points) {
+      std::string stations, list;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const std::string id = "R" + std::to_string(i);
+        stations += std::string(i ? "," : "") + R"({"id": ")" + id + R"(", "x_m": )" + number(points[i].x()) + R"(, "y_m": )" +
+                    number(points[i].y()) + R"(, "z_m": )" + number(points[i].z()) + R"(, "constraint": "CCC"})";
+        list += std::string(i ? "," : "") + R"({"id": ")" + id + R"(", "x_m": )" + number(points[i].x() + 1.0) +
+                R"(, "y_m": )" + number(points[i].y()) + R"(, "z_m": )" + number(points[i].z()) + R"(, "sigma_m": 0.005})";
+      }
+      return R"({"schema": "geoanchor.network/1", "frame": "ITRF2014@2024.5", "stations": [)" + stations +
+             R"(], "measurements": [{"kind": "gnss_point_cluster", "group": "legacy", "frame": "LEGACY", "points": [)" + list +
+             "]}]}";
+    };
+    const Eigen::Vector3d along = (x[1] - x[0]).normalized();
+    write("two.json", cluster({x[0], x[1]}));
+    write("line.json", cluster({x[0], x[0] + 1000.0 * along, x[0] + 2000.0 * along + Eigen::Vector3d(0.0, 0.0, 1e-3)}));
+    for (const auto& [file, piece] : {std::pair<std::string, std::string>{"two.json", "reaches 2 station(s)"},
+                                      std::pair<std::string, std::string>{"line.json", "lie on one line"}}) {
+      SCOPED_TRACE(file);
+      const RunResult r = run("adjust '" + path(file).string() + "' -o '" + path("st.csv").string() +
+                              "' --estimate-helmert legacy --convention position_vector");
+      EXPECT_EQ(r.exit_code, 3) << r.err;
+      EXPECT_NE(r.err.find("E_HELMERT_GROUP"), std::string::npos) << r.err;
+      EXPECT_NE(r.err.find(piece), std::string::npos) << r.err;
+      EXPECT_EQ(leftovers({"net.json", "two.json", "line.json"}), std::vector<std::string>{});
+    }
+  }
   for (const auto& c : cases) {
     SCOPED_TRACE(c.name);
     const RunResult r = run("adjust '" + path("net.json").string() + "' -o '" + path("st.csv").string() + "' " + c.args);
     EXPECT_EQ(r.exit_code, c.exit_code) << r.err;
     for (const auto& piece : c.message) EXPECT_NE(r.err.find(piece), std::string::npos) << piece << " in: " << r.err;
-    EXPECT_EQ(leftovers({"net.json"}), std::vector<std::string>{});
+    EXPECT_EQ(leftovers({"net.json", "two.json", "line.json"}), std::vector<std::string>{});
   }
 }
 

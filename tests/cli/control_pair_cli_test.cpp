@@ -203,7 +203,7 @@ TEST_F(ControlPairCli, Issue14_TwoFilesAreJoinedByIdWithEachFramesCovariance) {
   }
   write("st.csv", st);
   const RunResult r = run("fit --src '" + path("map.csv").string() + "' --dst '" + path("st.csv").string() +
-                          "' --model translation3 --origin " + kOrigin + " --json");
+                          "' --model translation3 --origin " + kOrigin + " --allow-unmatched --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j.at("control").at("points"), 3);
@@ -221,6 +221,33 @@ TEST_F(ControlPairCli, Issue14_TwoFilesAreJoinedByIdWithEachFramesCovariance) {
   EXPECT_NE(r.err.find("1 mark(s) of " + path("map.csv").string()), std::string::npos) << r.err;
   EXPECT_NE(r.err.find(": X"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find(": Y"), std::string::npos) << r.err;
+  int recorded = 0;  // both notes recorded with the fit
+  for (const auto& w : j.at("transform").at("statistics").at("warnings")) {
+    recorded += w.get<std::string>().find("are not part of the control") != std::string::npos ? 1 : 0;
+  }
+  EXPECT_EQ(recorded, 2);
+
+  // The target in a CRS stated above its header with its coordinate epoch,
+  // as convert writes them (EPSG:7912, ITRF2014 geographic 3-D).
+  std::string crs_file = "# crs = EPSG:7912\n# coordinate_epoch = 2024.5\nid,lat_deg,lon_deg,h_m,sigma_m\n";
+  for (const auto& [id, e] : marks) {
+    if (id == "Y") continue;
+    const Eigen::Vector3d g = geo.forward(e);
+    char line[200];
+    std::snprintf(line, sizeof line, "%s,%.11f,%.11f,%.5f,0.003\n", id.c_str(), g(1) * 180.0 / std::numbers::pi,
+                  g(0) * 180.0 / std::numbers::pi, g(2));
+    crs_file += line;
+  }
+  write("crs.csv", crs_file);
+  write("map3.csv", "# frame = ITRF2014@2024.5\nid,e_m,n_m,u_m,sigma_m\nB,100.0,0.0,1.0,0.01\nA,0.0,0.0,0.0,0.01\nC,0.0,100.0,2.0,0.01\n");
+  const RunResult c = run("fit --src '" + path("map3.csv").string() + "' --dst '" + path("crs.csv").string() +
+                          "' --model translation3 --origin " + kOrigin + " --json");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const auto jc = nlohmann::json::parse(c.out);
+  EXPECT_EQ(jc.at("transform").at("target_frame"), "ITRF2014@2024.5");
+  for (const char* key : {"tx_m", "ty_m", "tz_m"}) {
+    EXPECT_WORST_WITHIN(std::abs(jc.at("transform").at("parameters").at(key).get<double>()), kRoundingM) << key;
+  }
 }
 
 struct BadPair {
@@ -243,7 +270,7 @@ TEST_F(ControlPairCli, Issue14_BadRoleFilesAreRefusedByNameWithNoOutput) {
        head + "A,4272081.94754,642215.27325,4677200.77799,47.464722,8.549167,480.0,0.002,0.002,0.004,FFF\n", "", 3,
        {"dst.csv:4", "x_m", "two different points"}},
       {"a zero sigma on a free component", map, head + a + "0.002,0,0.004,FFF\n", "", 3,
-       {"dst.csv:4", "sigma_n_m=0", "constraint column holds"}},
+       {"dst.csv:4", "sigma_n_m='0'", "constraint column holds"}},
       {"an ellipsoid the frame contradicts", map,
        "# frame = ITRF2014@2024.5\n# ellipsoid = WGS84\nid,lat_deg,lon_deg,h_m,sigma_m\nA,47.464722,8.549167,480.0,0.01\n", "", 3,
        {"E_ELLIPSOID", "dst.csv", "WGS84", "GRS80"}},
@@ -257,6 +284,12 @@ TEST_F(ControlPairCli, Issue14_BadRoleFilesAreRefusedByNameWithNoOutput) {
       {"a JSON role file", "{\"points\": []}\n", head + a + "0.002,0.002,0.004,FFF\n", "", 3, {"src.csv", "JSON"}},
       {"CONTROL beside --src", map, head + a + "0.002,0.002,0.004,FFF\n", "'" + path("src.csv").string() + "'", 2,
        {"E_OPTION", "--src FILE --dst FILE"}},
+      {"a source mark the target lacks", map, head + a + "0.002,0.002,0.004,FFF\n" + "B" + a.substr(1) + "0.002,0.002,0.004,FFF\n",
+       "", 3, {"E_UNMATCHED_ID", "src.csv", "1 mark(s)", ": C", "--allow-unmatched"}},
+      {"a held station against a mark without sigma", "# frame = ITRF2014@2024.5\nid,e_m,n_m,u_m\nA,0,0,0\n",
+       head + a + "0,0,0,CCC\n", "", 3, {"E_SIGMA", "src.csv:3", "dst.csv:4", "held station"}},
+      {"a constraint that is not C/F", map, head + a + "0.002,0.002,0.004,ccf\n", "--allow-unmatched", 3,
+       {"dst.csv:4", "constraint='ccf'", "three letters"}},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.name);

@@ -2,6 +2,7 @@
 
 #include "geoanchor/workflow/adjust.hpp"
 
+#include <Eigen/SVD>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -227,6 +228,45 @@ void resolve_helmert_group(const AdjustRequest& request, const geodesy::Network&
                         f.to_string() + " names none)");
       }
       g.epochs.push_back(f.epoch()->year);
+    }
+  }
+  // The group's stations must span what seven parameters need (fit's
+  // rules, RELIABILITY 1, 3, 4): three or more, not on one line, not in one place.
+  {
+    std::vector<std::size_t> stations;
+    for (std::size_t mi : g.measurements) {
+      for (std::size_t s : net.measurements[mi].stations) {
+        if (std::find(stations.begin(), stations.end(), s) == stations.end()) stations.push_back(s);
+      }
+    }
+    if (stations.size() < 3) {
+      throw Error(ErrorKind::input, "E_HELMERT_GROUP",
+                  flag + ": the group reaches " + std::to_string(stations.size()) +
+                      " station(s); a Helmert needs >= 3 non-collinear stations");
+    }
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (std::size_t s : stations) centroid += net.stations[s].position;
+    centroid /= static_cast<double>(stations.size());
+    Eigen::MatrixXd spread(static_cast<Eigen::Index>(stations.size()), 3);
+    for (std::size_t k = 0; k < stations.size(); ++k) {
+      spread.row(static_cast<Eigen::Index>(k)) = (net.stations[stations[k]].position - centroid).transpose();
+    }
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(spread);
+    const Eigen::Vector3d sv = svd.singularValues();
+    constexpr double kCoincidentM = 1.0;  // RMS spread below which only a translation is observed
+    constexpr double kCollinearRatio = 1e-3;
+    const double rms = std::sqrt(sv.squaredNorm() / static_cast<double>(stations.size()));
+    if (!(rms >= kCoincidentM)) {
+      throw Error(ErrorKind::input, "E_HELMERT_GROUP",
+                  flag + ": the group's " + std::to_string(stations.size()) + " stations lie within " + format_fixed(rms, 3) +
+                      " m (RMS) of their centroid: only a translation is observable, not rotations and scale");
+    }
+    if (!(sv(1) >= kCollinearRatio * sv(0))) {
+      throw Error(ErrorKind::input, "E_HELMERT_GROUP",
+                  flag + ": the group's " + std::to_string(stations.size()) +
+                      " stations lie on one line (singular values of their spread " + format_shortest(sv(0)) + ", " +
+                      format_shortest(sv(1)) + " m; ratio " + format_shortest(sv(1) / sv(0)) + " < " +
+                      format_shortest(kCollinearRatio) + "): the rotation about that line is not observable");
     }
   }
   if (g.rates) {
@@ -764,15 +804,24 @@ io::TransformFile helmert_transform_file(const PreparedNetwork& prepared, const 
   f.sigmas_scaled_by_sigma0 = false;
   record_statistics(f, r.sigma0, r.dof, o.alpha, o.alpha_point, r.global_test);
   f.warnings = r.warnings;
+  for (const auto& note : prepared.notes) {
+    if (note.rfind("warning: ", 0) == 0) f.warnings.push_back(note.substr(9));
+  }
   f.generator = generator;
-  // The group's stations: where the transformation was observed.
+  // The group's stations that the final adjustment used, in the group's
+  // datum (taken back through the estimate, at the reference epoch): where
+  // the transformation was observed, in its source frame.
+  std::vector<bool> used(prepared.network.measurements.size(), false);
+  for (const auto& am : r.measurements) used[am.index] = am.used;
   std::vector<geodesy::EcefPosition> marks;
   std::vector<bool> seen(r.stations.size(), false);
+  const std::optional<geodesy::DecimalYear> at = t.reference_epoch;
   for (std::size_t mi : g.measurements) {
+    if (!used[mi]) continue;
     for (std::size_t s : prepared.network.measurements[mi].stations) {
       if (seen[s]) continue;
       seen[s] = true;
-      marks.emplace_back(r.stations[s].position);
+      marks.push_back(t.apply(geodesy::EcefPosition(r.stations[s].position), at, true, "the group's stations"));
     }
   }
   if (!marks.empty()) f.extent = io::ControlExtent::of(marks);

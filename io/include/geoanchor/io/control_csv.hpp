@@ -102,21 +102,27 @@ geodesy::ControlSet read_control_csv(const std::filesystem::path& path, const Co
 geodesy::ControlSet read_control_json(std::istream& in, const std::string& source_name, const ControlReadOptions& o);
 
 // A control set from two CSV files, one frame each (fit --src/--dst): the
-// marks whose ids are in both, in the source file's order; `notes` (when
-// given) receives, per file, the ids the other lacks. Each file's columns
+// marks whose ids are in both, in the source file's order. A source mark
+// the target lacks is refused (E_UNMATCHED_ID, listing them) unless
+// `unmatched_source_allowed`; the target may hold more marks. `notes` (when
+// given) receives, per file, the ids the other lacks. A joined mark whose
+// two covariances together are singular is refused naming both lines;
+// other messages name the source file's line. Each file's columns
 // name no role: id; x_m,y_m,z_m | lat_deg,lon_deg,h_m | e_m,n_m,u_m |
 // easting_m,northing_m,h_m (H_m with a geoid) or its CRS's columns; sigma_m,
 // or cov_xx_m2 … cov_zz_m2, or sigma_e_m,sigma_n_m,sigma_u_m with
 // corr_en,corr_eu,corr_nu (the local east, north, up of geodetic or ENU
 // coordinates); use. Comments above the header state "# frame = NAME@EPOCH",
-// "# ellipsoid = NAME" (checked against the frame's) and "# crs = CRS".
+// "# ellipsoid = NAME" (checked against the frame's; adopted where the
+// frame implies none) and "# crs = CRS" with "# coordinate_epoch = YEAR".
 // The stations CSV of `geoanchor adjust` is such a file: its x_m,y_m,z_m
 // are checked against its lat_deg,lon_deg,h_m, its ellipses are derived
 // from the sigmas read, and a component its constraint column holds (C)
 // may have a zero sigma. A per-point epoch, velocities, a role in a column
 // name, a local network's stations, or no id in common are refused by name.
 geodesy::ControlSet read_control_pair(const std::filesystem::path& source, const std::filesystem::path& target,
-                                      const ControlReadOptions& o, std::vector<std::string>* notes = nullptr);
+                                      const ControlReadOptions& o, bool unmatched_source_allowed = false,
+                                      std::vector<std::string>* notes = nullptr);
 
 // CSV or JSON, by content (a file whose first non-blank character is '{' is JSON).
 geodesy::ControlSet read_control_set(const std::filesystem::path& path, const ControlReadOptions& o);
