@@ -84,21 +84,59 @@ Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
   return m;
 }
 
-// A Helmert group member's values taken back into the group's datum (the
-// model of AdjustOptions::helmert): `computed` (positions or baseline
-// differences in the network's frame) becomes y = R⁻¹ (X − T) / (1 + s),
-// d_local its derivatives through R⁻¹ / (1 + s), and `d_parameters` (rows
-// × 7 or 14) receives ∂y / ∂(each parameter).
-void into_group_datum(Evaluation& ev, bool points, const Eigen::VectorXd& params, bool rates, double dt,
+// The Helmert of AdjustOptions::helmert is estimated about `pivot` (the
+// group's stations' a-priori centroid c): X = c + T_c + (1 + s) R (y − c).
+// Over a small group a geocentric translation is correlated with the
+// rotations to 1 − 10⁻⁸, which would cost the factor its digits; about the
+// centroid they are nearly independent. The model itself is the
+// geocentric one (AdjustOptions::helmert): these are its parameters,
+// T = c + T_c − (1 + s) R c and, with rates, Ṫ = Ṫ_c − ṡ R c + (1 + s) [c]× ṙ
+// (rotations, scale and their rates are the same in both forms), and J
+// their derivatives with respect to the parameters about the pivot.
+struct GeocentricForm {
+  Eigen::VectorXd parameters;
+  Eigen::MatrixXd j;
+};
+
+GeocentricForm geocentric_form(const Eigen::VectorXd& about_pivot, const Eigen::Vector3d& c, bool rates) {
+  const Eigen::Index n = about_pivot.size();
+  const Eigen::Vector3d r = about_pivot.segment<3>(3);
+  const double scale = 1.0 + about_pivot(6);
+  const Eigen::Vector3d rc = (Eigen::Matrix3d::Identity() + cross_matrix(r)) * c;
+  GeocentricForm g;
+  g.parameters = about_pivot;
+  g.parameters.head<3>() = c + about_pivot.head<3>() - scale * rc;
+  g.j = Eigen::MatrixXd::Identity(n, n);
+  g.j.block<3, 3>(0, 3) = scale * cross_matrix(c);  // ∂T/∂r = −(1 + s) ∂(R c)/∂r = (1 + s) [c]×
+  g.j.block<3, 1>(0, 6) = -rc;
+  if (rates) {
+    const Eigen::Vector3d dr = about_pivot.segment<3>(10);
+    const double ds = about_pivot(13);
+    g.parameters.segment<3>(7) = about_pivot.segment<3>(7) - ds * rc + scale * cross_matrix(c) * dr;
+    g.j.block<3, 3>(7, 3) = ds * cross_matrix(c);  // −ṡ ∂(R c)/∂r
+    g.j.block<3, 1>(7, 6) = cross_matrix(c) * dr;  // ∂/∂s of (1 + s) [c]× ṙ
+    g.j.block<3, 3>(7, 10) = scale * cross_matrix(c);
+    g.j.block<3, 1>(7, 13) = -rc;
+  }
+  return g;
+}
+
+// A Helmert group member's values taken back into the group's datum:
+// `computed` (positions or baseline differences in the network's frame)
+// becomes y = R⁻¹ (X − T) / (1 + s) (for a baseline R⁻¹ Δ / (1 + s)) with
+// the geocentric parameters at the member's epoch (dt years from the
+// reference epoch), d_local its derivatives through R⁻¹ / (1 + s), and
+// `d_parameters` (rows × 7 or 14) ∂y / ∂(each parameter about the pivot).
+void into_group_datum(Evaluation& ev, bool points, const GeocentricForm& g, bool rates, double dt,
                       Eigen::MatrixXd& d_parameters) {
-  Eigen::Matrix<double, 7, 1> q = params.head<7>();
-  if (rates) q += dt * params.segment<7>(7);
+  Eigen::Matrix<double, 7, 1> q = g.parameters.head<7>();
+  if (rates) q += dt * g.parameters.segment<7>(7);
   const Eigen::Vector3d t = q.head<3>(), r = q.segment<3>(3);
   const double scale = 1.0 + q(6);
   const Eigen::Matrix3d r_inv = (Eigen::Matrix3d::Identity() + cross_matrix(r)).inverse();
   const Eigen::Matrix3d a = r_inv / scale;
   const Eigen::Index rows = ev.computed.size();
-  d_parameters = Eigen::MatrixXd::Zero(rows, rates ? 14 : 7);
+  Eigen::MatrixXd d_geocentric = Eigen::MatrixXd::Zero(rows, rates ? 14 : 7);
   for (Eigen::Index k = 0; k + 2 < rows; k += 3) {
     const Eigen::Vector3d x = ev.computed.segment<3>(k);
     const Eigen::Vector3d y = a * (points ? Eigen::Vector3d(x - t) : x);
@@ -108,9 +146,20 @@ void into_group_datum(Evaluation& ev, bool points, const Eigen::VectorXd& params
     if (points) d.leftCols<3>() = -a;
     d.middleCols<3>(3) = r_inv * cross_matrix(y);  // ∂y/∂r = −R⁻¹ (∂R/∂r_i) y, ∂R/∂r_i = [e_i]×
     d.col(6) = -y / scale;
-    d_parameters.block(k, 0, 3, 7) = d;
-    if (rates) d_parameters.block(k, 7, 3, 7) = dt * d;
+    d_geocentric.block(k, 0, 3, 7) = d;
+    if (rates) d_geocentric.block(k, 7, 3, 7) = dt * d;
   }
+  d_parameters = d_geocentric * g.j;
+}
+
+// The estimate in the geocentric form, its covariance carried by J.
+EstimatedHelmert geocentric_helmert(const Eigen::VectorXd& about_pivot, const Eigen::MatrixXd& covariance,
+                                    const Eigen::Vector3d& c, bool rates) {
+  const GeocentricForm g = geocentric_form(about_pivot, c, rates);
+  EstimatedHelmert h;
+  h.parameters = g.parameters;
+  h.covariance = g.j * covariance * g.j.transpose();
+  return h;
 }
 
 // One measurement's rows, linearized: its unknowns and the whitened design
@@ -128,7 +177,8 @@ struct Problem {
   geodesy::GeocentricConverter geocentric;
   std::vector<StationState> states;
   std::vector<double> orientations;
-  Eigen::VectorXd helmert;        // AdjustOptions::helmert's parameters (SI), p0 then the rates
+  Eigen::VectorXd helmert;        // AdjustOptions::helmert's parameters (SI) about helmert_pivot, p0 then the rates
+  Eigen::Vector3d helmert_pivot = Eigen::Vector3d::Zero();  // the group's stations' a-priori centroid
   std::vector<int> helmert_slot;  // per measurement: its place in the group, −1 outside it
   std::vector<Eigen::MatrixXd> whitening;  // per measurement: W with Wᵀ W = C⁻¹
   std::vector<bool> active;                // measurements in the adjustment
@@ -152,7 +202,7 @@ struct Problem {
     const int member = helmert_slot.empty() ? -1 : helmert_slot[mi];
     if (member >= 0) {
       const HelmertGroup& g = *o.helmert;
-      into_group_datum(ev, m.kind == geodesy::MeasurementKind::gnss_points, helmert, g.rates,
+      into_group_datum(ev, m.kind == geodesy::MeasurementKind::gnss_points, geocentric_form(helmert, helmert_pivot, g.rates), g.rates,
                        g.rates ? g.epochs[static_cast<std::size_t>(member)] - g.reference_epoch : 0.0, d_helmert);
     }
     Rows r;
@@ -399,7 +449,7 @@ DatumVectors datum_vectors(const Problem& p) {
     // as they are: its translation, rotation and scale take up the motion
     // (to first order), the rates none of it.
     if (ellipsoidal && !p.layout.helmert.empty()) {
-      const Eigen::Vector3d t = p.helmert.head<3>();
+      const Eigen::Vector3d t = p.helmert_pivot + p.helmert.head<3>();  // where the pivot lies in the network's frame
       Eigen::Matrix<double, 7, 1> d = Eigen::Matrix<double, 7, 1>::Zero();
       if (k < 3) {
         d.head<3>() = Eigen::Vector3d::Unit(static_cast<int>(k));
@@ -720,6 +770,17 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       }
       p.helmert_slot[mi] = static_cast<int>(k);
     }
+    std::size_t count = 0;
+    std::vector<bool> seen(net.stations.size(), false);
+    for (std::size_t mi : o.helmert->measurements) {
+      for (std::size_t st : net.measurements[mi].stations) {
+        if (seen[st]) continue;
+        seen[st] = true;
+        p.helmert_pivot += net.stations[st].position;
+        ++count;
+      }
+    }
+    if (count > 0) p.helmert_pivot /= static_cast<double>(count);
   }
   {
     std::vector<bool> seeded(net.direction_sets.size(), false);
@@ -1208,16 +1269,14 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       result.orientation_sigmas_rad.push_back(std::sqrt(std::max(0.0, f.inverse(p.layout.orientation[k], p.layout.orientation[k]))));
     }
     if (!p.layout.helmert.empty()) {
-      EstimatedHelmert h;
-      h.parameters = p.helmert;
       const auto n_par = static_cast<Eigen::Index>(p.layout.helmert.size());
-      h.covariance.resize(n_par, n_par);
+      Eigen::MatrixXd covariance(n_par, n_par);
       for (Eigen::Index i = 0; i < n_par; ++i) {
         for (Eigen::Index j = 0; j < n_par; ++j) {
-          h.covariance(i, j) = f.inverse(p.layout.helmert[static_cast<std::size_t>(i)], p.layout.helmert[static_cast<std::size_t>(j)]);
+          covariance(i, j) = f.inverse(p.layout.helmert[static_cast<std::size_t>(i)], p.layout.helmert[static_cast<std::size_t>(j)]);
         }
       }
-      result.helmert = std::move(h);
+      result.helmert = geocentric_helmert(p.helmert, covariance, p.helmert_pivot, o.helmert->rates);
     }
     // Relative precision between stations that share a measurement.
     result.relative.clear();

@@ -16,6 +16,7 @@
 #include <random>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 
 #include "test_support.hpp"
 #include "geoanchor/geodesy/error.hpp"
@@ -394,6 +395,122 @@ TEST(NetworkAdjustment, APlantedBlunderOfTheMdbIsFoundAtTheMdbsPower) {
   const double rate = static_cast<double>(found) / kTrials;
   EXPECT_GE(rate, 0.72);  // 0.80 ± 3.4 standard errors of 300 trials
   EXPECT_LE(rate, 0.88);
+}
+
+// A legacy survey of every station in a datum of its own: the truth
+// through the inverse of a planted Helmert (position vector, EPSG
+// small-angle: x = T + (1 + ds)(I + [r]×) y), observed with 5 mm per axis.
+constexpr double kLegacySigma_m = 0.005;
+const Eigen::Matrix<double, 7, 1> kPlantedHelmert =
+    (Eigen::Matrix<double, 7, 1>() << 1.234, -0.567, 0.89, 0.7 * kArcsec, -0.4 * kArcsec, 1.1 * kArcsec, 2.5e-6).finished();
+
+void add_legacy_cluster(Network& net, const Site& s, std::mt19937* rng) {
+  const Eigen::Matrix<double, 7, 1>& h = kPlantedHelmert;
+  Eigen::Matrix3d r;
+  r << 1.0, -h(5), h(4), h(5), 1.0, -h(3), -h(4), h(3), 1.0;
+  NetworkMeasurement m;
+  m.kind = MeasurementKind::gnss_points;
+  const auto n = static_cast<Eigen::Index>(s.ecef.size());
+  m.value.resize(3 * n);
+  m.covariance = Eigen::MatrixXd::Identity(3 * n, 3 * n) * kLegacySigma_m * kLegacySigma_m;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    m.stations.push_back(static_cast<std::size_t>(i));
+    m.value.segment<3>(3 * i) = r.inverse() * (s.ecef[static_cast<std::size_t>(i)] - h.head<3>()) / (1.0 + h(6));
+  }
+  if (rng) m.value += draw(m.covariance, *rng);
+  m.group = "legacy";
+  m.source = "legacy survey";
+  net.measurements.push_back(m);
+}
+
+HelmertGroup legacy_group(const Network& net) {
+  HelmertGroup g;
+  g.name = "legacy";
+  g.measurements = {net.measurements.size() - 1};
+  return g;
+}
+
+TEST(NetworkAdjustment, HelmertGroupSparseAndDenseAgreeAndRedundancyNumbersSumToTheDegreesOfFreedom) {
+  std::mt19937 rng(31);
+  const Site s = make_site(16, rng);
+  Network net = mixed_network(s, &rng);
+  net.stations[0].constraint.code = {'C', 'C', 'C'};
+  add_legacy_cluster(net, s, &rng);
+  AdjustOptions o = options(false);
+  o.helmert = legacy_group(net);
+  const AdjustmentResult sparse = adjust_network(net, o);
+  o.dense = true;
+  const AdjustmentResult dense = adjust_network(net, o);
+  ASSERT_TRUE(sparse.helmert && dense.helmert);
+  testing::WorstCase position, covariance, redundancy, parameters;
+  for (std::size_t i = 0; i < sparse.stations.size(); ++i) {
+    position.add((sparse.stations[i].position - dense.stations[i].position).norm(), i);
+    const double scale = dense.stations[i].covariance_m2.cwiseAbs().maxCoeff();
+    if (scale > 0.0) covariance.add((sparse.stations[i].covariance_m2 - dense.stations[i].covariance_m2).cwiseAbs().maxCoeff() / scale, i);
+  }
+  const Eigen::MatrixXd& hc = dense.helmert->covariance;
+  for (Eigen::Index i = 0; i < 7; ++i) {
+    for (Eigen::Index j = 0; j < 7; ++j) {
+      covariance.add(std::abs(sparse.helmert->covariance(i, j) - hc(i, j)) / std::sqrt(hc(i, i) * hc(j, j)), 100 + static_cast<std::size_t>(i));
+    }
+  }
+  // The two estimates move the stations alike (the geocentric parameters of
+  // a group a few kilometres across are determined only together, to
+  // micrometres each, as their σ of metres says).
+  auto moved = [](const Eigen::VectorXd& h, const Eigen::Vector3d& y) {
+    Eigen::Matrix3d r;
+    r << 1.0, -h(5), h(4), h(5), 1.0, -h(3), -h(4), h(3), 1.0;
+    return Eigen::Vector3d(h.head<3>() + (1.0 + h(6)) * r * y);
+  };
+  for (std::size_t i = 0; i < s.ecef.size(); ++i) {
+    parameters.add((moved(sparse.helmert->parameters, s.ecef[i]) - moved(dense.helmert->parameters, s.ecef[i])).norm(), i);
+  }
+  double sum = 0.0;
+  for (std::size_t k = 0; k < sparse.measurements.size(); ++k) {
+    redundancy.add((sparse.measurements[k].redundancy - dense.measurements[k].redundancy).cwiseAbs().maxCoeff(), k);
+    sum += sparse.measurements[k].redundancy.sum();
+  }
+  EXPECT_WORST_WITHIN(position, kSparseVsDense_m);
+  EXPECT_WORST_WITHIN(covariance, kSparseVsDenseRelative);
+  EXPECT_WORST_WITHIN(redundancy, kSparseVsDenseRelative);
+  // The points are evaluated from geocentric parameters: sums of terms of
+  // 6.4e6 m, whose float64 spacing is 9.3e-10 m (RELIABILITY, round trip).
+  constexpr double kMovedByBothEstimates_m = 1e-8;
+  EXPECT_WORST_WITHIN(parameters, kMovedByBothEstimates_m);
+  EXPECT_NEAR(sum, static_cast<double>(sparse.dof), 1e-8);
+  EXPECT_EQ(sparse.unknowns, dense.unknowns);
+}
+
+// Monte Carlo: the planted Helmert within ±1.96σ of its estimate in 93–97 %
+// of the parameters (RELIABILITY 2), the mean variance factor 1 ± 0.05.
+TEST(NetworkAdjustment, MonteCarloCoverageOfAnEstimatedHelmert) {
+  constexpr int kTrials = 200;
+  std::mt19937 rng(77);
+  const Site s = make_site(12, rng, 1500.0);
+  std::size_t inside = 0, total = 0;
+  double factor_sum = 0.0;
+  for (int t = 0; t < kTrials; ++t) {
+    Network net = network_of(s);
+    for (std::size_t i = 0; i + 1 < s.ecef.size(); ++i) add_baseline(net, s, i, i + 1, &rng);
+    for (std::size_t i = 0; i + 4 < s.ecef.size(); ++i) add_baseline(net, s, i, i + 4, &rng);
+    net.stations[0].constraint.code = {'C', 'C', 'C'};
+    add_legacy_cluster(net, s, &rng);
+    AdjustOptions o = options(false);
+    o.helmert = legacy_group(net);
+    const AdjustmentResult r = adjust_network(net, o);
+    ASSERT_TRUE(r.helmert);
+    factor_sum += *r.variance_factor;
+    for (Eigen::Index k = 0; k < 7; ++k) {
+      inside += std::abs(r.helmert->parameters(k) - kPlantedHelmert(k)) <= 1.96 * std::sqrt(r.helmert->covariance(k, k)) ? 1u : 0u;
+      ++total;
+    }
+  }
+  const double coverage = static_cast<double>(inside) / static_cast<double>(total);
+  RecordProperty("coverage", std::to_string(coverage));
+  RecordProperty("mean_variance_factor", std::to_string(factor_sum / kTrials));
+  EXPECT_GE(coverage, 0.93);
+  EXPECT_LE(coverage, 0.97);
+  EXPECT_NEAR(factor_sum / kTrials, 1.0, 0.05);
 }
 
 TEST(NetworkAdjustment, AnUndefinedDatumIsNamedAndAFreeNetworkHeldByInnerConstraints) {
