@@ -218,6 +218,27 @@ TEST(NetworkAdjustment, NoiseFreeObservationsOfEveryKindGiveBackTheTruth) {
   }
 }
 
+// The sparse and the dense solve of one network, station by station and
+// measurement by measurement: positions (m), covariances (relative to each
+// station's largest entry), redundancy numbers; and Σ r of the measurements.
+struct SparseVsDense {
+  testing::WorstCase position, covariance, redundancy;
+  double redundancy_sum = 0.0;
+};
+SparseVsDense compare_sparse_dense(const AdjustmentResult& sparse, const AdjustmentResult& dense) {
+  SparseVsDense c;
+  for (std::size_t i = 0; i < sparse.stations.size(); ++i) {
+    c.position.add((sparse.stations[i].position - dense.stations[i].position).norm(), i);
+    const double scale = dense.stations[i].covariance_m2.cwiseAbs().maxCoeff();
+    if (scale > 0.0) c.covariance.add((sparse.stations[i].covariance_m2 - dense.stations[i].covariance_m2).cwiseAbs().maxCoeff() / scale, i);
+  }
+  for (std::size_t k = 0; k < sparse.measurements.size(); ++k) {
+    c.redundancy.add((sparse.measurements[k].redundancy - dense.measurements[k].redundancy).cwiseAbs().maxCoeff(), k);
+    c.redundancy_sum += sparse.measurements[k].redundancy.sum();
+  }
+  return c;
+}
+
 TEST(NetworkAdjustment, SparseAndDenseSolvesAgreeAndRedundancyNumbersSumToTheDegreesOfFreedom) {
   std::mt19937 rng(11);
   const Site s = make_site(16, rng);
@@ -228,20 +249,11 @@ TEST(NetworkAdjustment, SparseAndDenseSolvesAgreeAndRedundancyNumbersSumToTheDeg
   const AdjustmentResult sparse = adjust_network(net, options(false));
   const AdjustmentResult dense = adjust_network(net, options(true));
   ASSERT_EQ(sparse.stations.size(), dense.stations.size());
-  testing::WorstCase position, covariance, redundancy;
-  for (std::size_t i = 0; i < sparse.stations.size(); ++i) {
-    position.add((sparse.stations[i].position - dense.stations[i].position).norm(), i);
-    const double scale = dense.stations[i].covariance_m2.cwiseAbs().maxCoeff();
-    if (scale > 0.0) covariance.add((sparse.stations[i].covariance_m2 - dense.stations[i].covariance_m2).cwiseAbs().maxCoeff() / scale, i);
-  }
-  double sum = 0.0;
-  for (std::size_t k = 0; k < sparse.measurements.size(); ++k) {
-    redundancy.add((sparse.measurements[k].redundancy - dense.measurements[k].redundancy).cwiseAbs().maxCoeff(), k);
-    sum += sparse.measurements[k].redundancy.sum();
-  }
-  EXPECT_WORST_WITHIN(position, kSparseVsDense_m);
-  EXPECT_WORST_WITHIN(covariance, kSparseVsDenseRelative);
-  EXPECT_WORST_WITHIN(redundancy, kSparseVsDenseRelative);
+  const SparseVsDense c = compare_sparse_dense(sparse, dense);
+  EXPECT_WORST_WITHIN(c.position, kSparseVsDense_m);
+  EXPECT_WORST_WITHIN(c.covariance, kSparseVsDenseRelative);
+  EXPECT_WORST_WITHIN(c.redundancy, kSparseVsDenseRelative);
+  double sum = c.redundancy_sum;
   // Σ r over the measurements and the held station's two constraints = dof.
   // The constraints' share: r of a pseudo-observation is 1 − σ_x²/σ_c².
   const auto& held = sparse.stations[5];
@@ -442,16 +454,11 @@ TEST(NetworkAdjustment, HelmertGroupSparseAndDenseAgreeAndRedundancyNumbersSumTo
   o.dense = true;
   const AdjustmentResult dense = adjust_network(net, o);
   ASSERT_TRUE(sparse.helmert && dense.helmert);
-  testing::WorstCase position, covariance, redundancy, parameters;
-  for (std::size_t i = 0; i < sparse.stations.size(); ++i) {
-    position.add((sparse.stations[i].position - dense.stations[i].position).norm(), i);
-    const double scale = dense.stations[i].covariance_m2.cwiseAbs().maxCoeff();
-    if (scale > 0.0) covariance.add((sparse.stations[i].covariance_m2 - dense.stations[i].covariance_m2).cwiseAbs().maxCoeff() / scale, i);
-  }
+  SparseVsDense c = compare_sparse_dense(sparse, dense);
   const Eigen::MatrixXd& hc = dense.helmert->covariance;
   for (Eigen::Index i = 0; i < 7; ++i) {
     for (Eigen::Index j = 0; j < 7; ++j) {
-      covariance.add(std::abs(sparse.helmert->covariance(i, j) - hc(i, j)) / std::sqrt(hc(i, i) * hc(j, j)), 100 + static_cast<std::size_t>(i));
+      c.covariance.add(std::abs(sparse.helmert->covariance(i, j) - hc(i, j)) / std::sqrt(hc(i, i) * hc(j, j)), 100 + static_cast<std::size_t>(i));
     }
   }
   // The two estimates move the stations alike (the geocentric parameters of
@@ -462,21 +469,18 @@ TEST(NetworkAdjustment, HelmertGroupSparseAndDenseAgreeAndRedundancyNumbersSumTo
     r << 1.0, -h(5), h(4), h(5), 1.0, -h(3), -h(4), h(3), 1.0;
     return Eigen::Vector3d(h.head<3>() + (1.0 + h(6)) * r * y);
   };
+  testing::WorstCase parameters;
   for (std::size_t i = 0; i < s.ecef.size(); ++i) {
     parameters.add((moved(sparse.helmert->parameters, s.ecef[i]) - moved(dense.helmert->parameters, s.ecef[i])).norm(), i);
   }
-  double sum = 0.0;
-  for (std::size_t k = 0; k < sparse.measurements.size(); ++k) {
-    redundancy.add((sparse.measurements[k].redundancy - dense.measurements[k].redundancy).cwiseAbs().maxCoeff(), k);
-    sum += sparse.measurements[k].redundancy.sum();
-  }
-  EXPECT_WORST_WITHIN(position, kSparseVsDense_m);
-  EXPECT_WORST_WITHIN(covariance, kSparseVsDenseRelative);
-  EXPECT_WORST_WITHIN(redundancy, kSparseVsDenseRelative);
+  EXPECT_WORST_WITHIN(c.position, kSparseVsDense_m);
+  EXPECT_WORST_WITHIN(c.covariance, kSparseVsDenseRelative);
+  EXPECT_WORST_WITHIN(c.redundancy, kSparseVsDenseRelative);
   // The points are evaluated from geocentric parameters: sums of terms of
   // 6.4e6 m, whose float64 spacing is 9.3e-10 m (RELIABILITY, round trip).
   constexpr double kMovedByBothEstimates_m = 1e-8;
   EXPECT_WORST_WITHIN(parameters, kMovedByBothEstimates_m);
+  const double sum = c.redundancy_sum;
   EXPECT_NEAR(sum, static_cast<double>(sparse.dof), 1e-8);
   EXPECT_EQ(sparse.unknowns, dense.unknowns);
 }
