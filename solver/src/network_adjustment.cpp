@@ -314,8 +314,17 @@ Layout make_layout(const Problem& p) {
       l.owner.emplace_back(s, c);
     }
   }
+  // One orientation per direction set that has a direction in the
+  // adjustment (a set whose directions are all left out, ignored or
+  // removed as outliers has none to determine it).
+  std::vector<bool> observed(net.direction_sets.size(), false);
+  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+    const auto& m = net.measurements[mi];
+    if (m.set && p.active[mi]) observed[*m.set] = true;
+  }
   l.orientation.assign(net.direction_sets.size(), -1);
   for (std::size_t k = 0; k < net.direction_sets.size(); ++k) {
+    if (!observed[k]) continue;
     l.orientation[k] = l.count++;
     l.owner.emplace_back(k, 3);
   }
@@ -467,6 +476,7 @@ DatumVectors datum_vectors(const Problem& p) {
     // the local vertical: the set's orientation turns with them.
     if (motions[k].rotation_axis.squaredNorm() > 0.0) {
       for (std::size_t set = 0; set < net.direction_sets.size(); ++set) {
+        if (p.layout.orientation[set] < 0) continue;
         const auto& st = p.states[net.direction_sets[set].station];
         const double about_up = motions[k].rotation_axis.dot(st.local_from_xyz.row(2).transpose());
         dv.g(p.layout.orientation[set], static_cast<Eigen::Index>(k)) =
@@ -668,7 +678,9 @@ std::pair<double, std::size_t> apply_corrections(Problem& p, const Eigen::Vector
     }
     p.states[s] = station_state(net, p.geocentric, x);
   }
-  for (std::size_t k = 0; k < p.orientations.size(); ++k) p.orientations[k] += dx(p.layout.orientation[k]);
+  for (std::size_t k = 0; k < p.orientations.size(); ++k) {
+    if (p.layout.orientation[k] >= 0) p.orientations[k] += dx(p.layout.orientation[k]);
+  }
   // A Helmert parameter's correction counts by how far it moves a point
   // of the Earth's surface (a rate's over a year).
   for (std::size_t k = 0; k < p.layout.helmert.size(); ++k) {
@@ -1059,7 +1071,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       if (was_outlier) {
         testable = true;
         for (std::size_t s : m.stations) testable = testable && p.station_used[s];
-        if (m.set && p.layout.orientation.size() > *m.set) testable = testable && true;
+        if (m.set) testable = testable && p.layout.orientation[*m.set] >= 0;  // its set still has an orientation
       }
       AdjustedMeasurement am;
       am.index = mi;
@@ -1266,7 +1278,8 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     result.orientations_rad = p.orientations;
     result.orientation_sigmas_rad.clear();
     for (std::size_t k = 0; k < p.orientations.size(); ++k) {
-      result.orientation_sigmas_rad.push_back(std::sqrt(std::max(0.0, f.inverse(p.layout.orientation[k], p.layout.orientation[k]))));
+      const Index u = p.layout.orientation[k];
+      result.orientation_sigmas_rad.push_back(u >= 0 ? std::sqrt(std::max(0.0, f.inverse(u, u))) : kNaN);
     }
     if (!p.layout.helmert.empty()) {
       const auto n_par = static_cast<Eigen::Index>(p.layout.helmert.size());

@@ -517,6 +517,30 @@ TEST(NetworkAdjustment, MonteCarloCoverageOfAnEstimatedHelmert) {
   EXPECT_NEAR(factor_sum / kTrials, 1.0, 0.05);
 }
 
+// A direction set whose every direction is set aside (ignored in the input,
+// left out in the workbench) has no orientation unknown: the adjustment is
+// the one without those directions, with one unknown fewer.
+TEST(NetworkAdjustment, ADirectionSetWithNoDirectionLeftHasNoOrientationUnknown) {
+  std::mt19937 rng(5);
+  const Site s = make_site(12, rng);
+  Network net = mixed_network(s, &rng);
+  net.stations[0].constraint.code = {'C', 'C', 'C'};
+  ASSERT_FALSE(net.direction_sets.empty());
+  const AdjustmentResult all = adjust_network(net, options(false));
+  int rows = 0;
+  for (auto& m : net.measurements) {
+    if (m.kind == MeasurementKind::direction && m.set == 0u) {
+      m.ignore = true;
+      ++rows;
+    }
+  }
+  ASSERT_GT(rows, 0);
+  const AdjustmentResult without = adjust_network(net, options(false));
+  EXPECT_EQ(without.dof, all.dof - rows + 1);
+  EXPECT_EQ(without.unknowns, all.unknowns - 1);
+  EXPECT_TRUE(std::isnan(without.orientation_sigmas_rad[0]));
+}
+
 TEST(NetworkAdjustment, AnUndefinedDatumIsNamedAndAFreeNetworkHeldByInnerConstraints) {
   std::mt19937 rng(5);
   const Site s = make_site(9, rng);

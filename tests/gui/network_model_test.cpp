@@ -1,0 +1,132 @@
+// The network view's model driven without a window (issue 14 point 10):
+// leaving a station or a measurement out re-adjusts, and the degrees of
+// freedom change by what the left-out measurements and unknowns count; the
+// plan, the lines and the worker-thread path agree with a direct adjustment.
+// The network is the bundled airport network (fixtures/airport_network),
+// whose layout the generator states (make_airport_network.py).
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "geoanchor/gui/network_model.hpp"
+#include "geoanchor/workflow/adjust.hpp"
+#include "test_support.hpp"
+
+namespace geoanchor::gui {
+namespace {
+
+using geodesy::MeasurementKind;
+
+geodesy::Network airport_network() {
+  workflow::AdjustRequest request;
+  request.inputs = {std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_network/lszh_network.json"};
+  return workflow::prepare_network(request).network;
+}
+
+solver::AdjustOptions no_snooping() {
+  solver::AdjustOptions o;
+  o.data_snooping = false;
+  return o;
+}
+
+std::size_t rows_of(const geodesy::NetworkMeasurement& m) { return static_cast<std::size_t>(m.value.size()); }
+
+TEST(NetworkModel, LinesAndPlanAreTheNetworksAndTheAdjustmentsOwn) {
+  const geodesy::Network net = airport_network();
+  NetworkModel model(net, no_snooping());
+  ASSERT_TRUE(model.result()) << model.error();
+  const solver::AdjustmentResult direct = solver::adjust_network(net, no_snooping());
+  EXPECT_EQ(model.result()->dof, direct.dof);
+  EXPECT_DOUBLE_EQ(model.result()->vtpv, direct.vtpv);
+  // The generator's layout: 16 baselines, 24 slope distances, 24 zenith
+  // angles and 24 directions are lines; the reference stations' cluster is none.
+  const auto lines = model.lines();
+  EXPECT_EQ(lines.size(), 16u + 24u + 24u + 24u);
+  for (const auto& l : lines) {
+    EXPECT_TRUE(l.used);
+    EXPECT_TRUE(std::isfinite(l.w_max));
+  }
+  // The plan: P02 − P01 as the generator placed them (ENU at the aerodrome
+  // reference point: 246 m east, 19 m south); the plan's east and north are
+  // at the network's centroid a few kilometres away, whose tangent plane
+  // turns the 250 m difference by less than 0.1 m.
+  constexpr double kTangentPlanesM = 0.1;
+  const auto stations = model.stations();
+  const auto at = [&](const std::string& id) {
+    return std::find_if(stations.begin(), stations.end(), [&](const auto& r) { return r.id == id; })->plan_m;
+  };
+  const Eigen::Vector2d d = at("P02") - at("P01");
+  EXPECT_WORST_WITHIN((d - Eigen::Vector2d(246.0, -19.0)).norm(), kTangentPlanesM);
+  for (const auto& s : stations) {
+    EXPECT_TRUE(s.used) << s.id;
+    EXPECT_GT(s.ellipse.semi_major_m, 0.0) << s.id;
+  }
+}
+
+TEST(NetworkModel, LeavingOutReadjustsWithTheDegreesOfFreedomItCounts) {
+  const geodesy::Network net = airport_network();
+  NetworkModel model(net, no_snooping());
+  ASSERT_TRUE(model.result()) << model.error();
+  const int dof0 = model.result()->dof;
+  // One slope distance: one row less.
+  std::size_t distance = 0;
+  while (net.measurements[distance].kind != MeasurementKind::slope_distance) ++distance;
+  const unsigned before = model.generation();
+  model.set_measurement_left_out(distance, true);
+  ASSERT_TRUE(model.result()) << model.error();
+  EXPECT_GT(model.generation(), before);
+  EXPECT_EQ(model.result()->dof, dof0 - 1);
+  EXPECT_EQ(model.measurements_left_out(), std::vector<std::size_t>{distance});
+  model.set_measurement_left_out(distance, false);
+  EXPECT_EQ(model.result()->dof, dof0);
+
+  // T1, the traverse's centre: every measurement naming it goes (its rows),
+  // and so do its three coordinates and its direction set's orientation.
+  const auto t1 = *net.find("T1");
+  std::size_t rows = 0;
+  for (const auto& m : net.measurements) {
+    if (std::find(m.stations.begin(), m.stations.end(), t1) != m.stations.end()) rows += rows_of(m);
+  }
+  model.set_station_left_out("T1", true);
+  ASSERT_TRUE(model.result()) << model.error();
+  EXPECT_EQ(model.result()->dof, dof0 - static_cast<int>(rows) + 3 + 1);
+  const auto stations = model.stations();
+  const auto t1_row = std::find_if(stations.begin(), stations.end(), [](const auto& r) { return r.id == "T1"; });
+  EXPECT_TRUE(t1_row->left_out);
+  EXPECT_FALSE(t1_row->used);
+  for (const auto& l : model.lines()) {
+    if (l.from == t1 || l.to == t1) {
+      EXPECT_TRUE(l.left_out && !l.used);
+    }
+  }
+
+  // REFA: the point cluster of both reference stations goes with it, and
+  // with it the network's only datum: refused, saying so.
+  model.set_station_left_out("REFA", true);
+  EXPECT_FALSE(model.result());
+  EXPECT_NE(model.error().find("E_DATUM_DEFECT"), std::string::npos) << model.error();
+  model.set_station_left_out("REFA", false);
+  model.set_station_left_out("T1", false);
+  ASSERT_TRUE(model.result()) << model.error();
+  EXPECT_EQ(model.result()->dof, dof0);
+}
+
+TEST(NetworkModel, TheWorkerThreadGivesTheSameAdjustment) {
+  const geodesy::Network net = airport_network();
+  NetworkModel direct(net, no_snooping(), 1'000'000);
+  NetworkModel worker(net, no_snooping(), 0);  // every network on the worker
+  worker.set_station_left_out("P05", true);
+  worker.set_station_left_out("P05", false);  // changes while one runs: the last choice wins
+  worker.wait();
+  ASSERT_TRUE(worker.result()) << worker.error();
+  EXPECT_FALSE(worker.busy());
+  EXPECT_EQ(worker.result()->dof, direct.result()->dof);
+  EXPECT_DOUBLE_EQ(worker.result()->vtpv, direct.result()->vtpv);
+}
+
+}  // namespace
+}  // namespace geoanchor::gui
