@@ -1,6 +1,5 @@
 #include "geoanchor/gui/network_model.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -30,9 +29,7 @@ NetworkModel::NetworkModel(geodesy::Network network, solver::AdjustOptions optio
   readjust();
 }
 
-NetworkModel::~NetworkModel() {
-  if (pending_.valid()) pending_.wait();
-}
+NetworkModel::~NetworkModel() = default;
 
 NetworkModel::Outcome NetworkModel::run(const geodesy::Network& network, const solver::AdjustOptions& options) {
   Outcome o;
@@ -56,16 +53,11 @@ geodesy::Network NetworkModel::chosen() const {
 }
 
 void NetworkModel::readjust() {
-  if (pending_.valid()) {
-    dirty_ = true;  // started again when the running one is taken
-    return;
-  }
-  dirty_ = false;
   if (network_.stations.size() < async_from_stations_) {
     take(run(chosen(), options_));
     return;
   }
-  pending_ = std::async(std::launch::async, [network = chosen(), options = options_] { return run(network, options); });
+  worker_.start([network = chosen(), options = options_] { return run(network, options); });
 }
 
 void NetworkModel::take(Outcome outcome) {
@@ -75,15 +67,17 @@ void NetworkModel::take(Outcome outcome) {
 }
 
 bool NetworkModel::poll() {
-  if (!pending_.valid() || pending_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
-  take(pending_.get());
-  if (dirty_) readjust();
+  bool again = false;
+  auto outcome = worker_.take_ready(again);
+  if (!outcome) return false;
+  take(std::move(*outcome));
+  if (again) readjust();
   return true;
 }
 
 void NetworkModel::wait() {
   while (busy()) {
-    if (pending_.valid()) pending_.wait();
+    worker_.wait_running();
     poll();
   }
 }

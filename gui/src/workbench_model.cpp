@@ -42,9 +42,7 @@ WorkbenchModel::WorkbenchModel(geodesy::ControlSet control, solver::FitOptions o
   refit();
 }
 
-WorkbenchModel::~WorkbenchModel() {
-  if (pending_.valid()) pending_.wait();  // the worker holds copies only, but finish it
-}
+WorkbenchModel::~WorkbenchModel() = default;  // the worker finishes first (LatestOnWorker)
 
 void WorkbenchModel::set_left_out(std::string_view id, bool left_out) {
   bool changed = false;
@@ -95,24 +93,21 @@ void WorkbenchModel::refit() {
     take(run_fit(control_, options_));
     return;
   }
-  if (pending_.valid()) {  // one at a time: the latest choices run next
-    dirty_ = true;
-    return;
-  }
-  dirty_ = false;
-  pending_ = std::async(std::launch::async, [control = control_, options = options_] { return run_fit(control, options); });
+  worker_.start([control = control_, options = options_] { return run_fit(control, options); });
 }
 
 bool WorkbenchModel::poll() {
-  if (!pending_.valid() || pending_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
-  take(pending_.get());
-  if (dirty_) refit();
+  bool again = false;
+  auto outcome = worker_.take_ready(again);
+  if (!outcome) return false;
+  take(std::move(*outcome));
+  if (again) refit();
   return true;
 }
 
 void WorkbenchModel::wait() {
   while (busy()) {
-    if (pending_.valid()) pending_.wait();
+    worker_.wait_running();
     poll();
   }
 }

@@ -13,13 +13,13 @@
 #include <Eigen/Core>
 
 #include <cstddef>
-#include <future>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "geoanchor/geodesy/network.hpp"
+#include "geoanchor/gui/latest_on_worker.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 
 namespace geoanchor::gui {
@@ -73,7 +73,7 @@ class NetworkModel {
   std::vector<std::string> stations_left_out() const;
   std::vector<std::size_t> measurements_left_out() const;
 
-  bool busy() const { return pending_.valid() || dirty_; }
+  bool busy() const { return worker_.busy(); }
   // Takes a finished adjustment, if any, and starts the next one if the
   // choices changed meanwhile; true when the shown result changed.
   bool poll();
@@ -98,8 +98,7 @@ class NetworkModel {
   Eigen::Vector3d plan_origin_ = Eigen::Vector3d::Zero();  // ECEF centroid (ellipsoidal)
   Eigen::Matrix3d plan_rotation_ = Eigen::Matrix3d::Identity();  // ENU from ECEF at it
   std::size_t async_from_stations_;
-  std::future<Outcome> pending_;
-  bool dirty_ = false;
+  LatestOnWorker<Outcome> worker_;
 };
 
 }  // namespace geoanchor::gui

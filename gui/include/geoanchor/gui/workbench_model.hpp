@@ -15,6 +15,7 @@
 
 #include "geoanchor/geodesy/control_point.hpp"
 #include "geoanchor/geodesy/positions.hpp"
+#include "geoanchor/gui/latest_on_worker.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 #include "geoanchor/solver/model_comparison.hpp"
 
@@ -114,7 +115,7 @@ class WorkbenchModel {
   const geodesy::LocalOrigin& plan_origin() const { return plan_origin_; }
 
   // A refit is running or waiting to run.
-  bool busy() const { return pending_.valid() || dirty_; }
+  bool busy() const { return worker_.busy(); }
   // Takes a finished refit, if any, and starts the next one if the choices
   // changed meanwhile; true when the shown fit changed. Call once a frame.
   bool poll();
@@ -140,8 +141,7 @@ class WorkbenchModel {
   geodesy::LocalOrigin plan_origin_;
   std::vector<Eigen::Vector2d> plan_en_m_;
   std::size_t async_from_points_;
-  std::future<Outcome> pending_;
-  bool dirty_ = false;  // the choices changed while a refit was running
+  LatestOnWorker<Outcome> worker_;
 };
 
 }  // namespace geoanchor::gui
