@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,15 @@ std::string number(double v) {
   return b;
 }
 
+// PROJ's helmert with the planted parameters (and rates, about 2015.0).
+std::string planted_helmert(bool rates) {
+  return "+proj=helmert +convention=position_vector +x=" + number(kTx) + " +y=" + number(kTy) + " +z=" + number(kTz) +
+         " +rx=" + number(kRx) + " +ry=" + number(kRy) + " +rz=" + number(kRz) + " +s=" + number(kDs) +
+         (rates ? " +dx=" + number(kDtx) + " +dy=" + number(kDty) + " +dz=" + number(kDtz) + " +drx=" + number(kDrx) +
+                      " +dry=" + number(kDry) + " +drz=" + number(kDrz) + " +ds=" + number(kDds) + " +t_epoch=2015"
+                : std::string());
+}
+
 // The point PROJ's forward helmert takes onto `x`: PROJ's inverse of a
 // small-angle Helmert is the transposed rotation (exact to O(r²), 0.2 mm
 // at 1″ on the Earth), so its result is refined through the forward
@@ -65,6 +75,21 @@ Eigen::Vector3d exact_inverse(const testing::ProjPipeline& h, const Eigen::Vecto
 
 class AdjustHelmertCli : public CliTest {
  protected:
+  // `convert --transform FILE` of one ECEF point (with `args`), read back.
+  Eigen::Vector3d converted(const Eigen::Vector3d& g, const std::string& file, const std::string& args) {
+    write("in.csv", "id,x_m,y_m,z_m\nP," + number(g.x()) + "," + number(g.y()) + "," + number(g.z()) + "\n");
+    const RunResult c = run("convert '" + path("in.csv").string() + "' --transform '" + path(file).string() + "' " + args +
+                            " --to ecef --precision 6");
+    EXPECT_EQ(c.exit_code, 0) << c.err;
+    const auto table = testing::parse_csv_table(c.out);
+    if (table.rows.size() != 1) {
+      ADD_FAILURE() << "convert gave " << table.rows.size() << " rows: " << c.out << c.err;
+      return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    }
+    return {std::stod(table.rows[0][table.col("x_m")]), std::stod(table.rows[0][table.col("y_m")]),
+            std::stod(table.rows[0][table.col("z_m")])};
+  }
+
   // The marks' true ECEF positions (PROJ).
   std::vector<Eigen::Vector3d> truth() const {
     const testing::ProjPipeline to_ecef(
@@ -79,14 +104,7 @@ class AdjustHelmertCli : public CliTest {
   // point cluster per epoch in group "legacy", frame LEGACY, made by PROJ's
   // inverse helmert (with rates when `rates`).
   std::string network(const std::vector<double>& epochs, bool rates) const {
-    const std::string helmert = "+proj=helmert +convention=position_vector +x=" + number(kTx) + " +y=" + number(kTy) + " +z=" +
-                                number(kTz) + " +rx=" + number(kRx) + " +ry=" + number(kRy) + " +rz=" + number(kRz) + " +s=" +
-                                number(kDs) +
-                                (rates ? " +dx=" + number(kDtx) + " +dy=" + number(kDty) + " +dz=" + number(kDtz) +
-                                             " +drx=" + number(kDrx) + " +dry=" + number(kDry) + " +drz=" + number(kDrz) +
-                                             " +ds=" + number(kDds) + " +t_epoch=2015"
-                                       : "");
-    const testing::ProjPipeline h(helmert);
+    const testing::ProjPipeline h(planted_helmert(rates));
     const auto x = truth();
     std::string stations, measurements;
     for (std::size_t i = 0; i < kMarks.size(); ++i) {
@@ -145,9 +163,7 @@ TEST_F(AdjustHelmertCli, Issue14_Helmert7IsRecoveredExactlyInBothConventions) {
   // fixed stations as the target.
   {
     const auto x_true = truth();
-    const testing::ProjPipeline h7("+proj=helmert +convention=position_vector +x=" + number(kTx) + " +y=" + number(kTy) +
-                                   " +z=" + number(kTz) + " +rx=" + number(kRx) + " +ry=" + number(kRy) + " +rz=" +
-                                   number(kRz) + " +s=" + number(kDs));
+    const testing::ProjPipeline h7(planted_helmert(false));
     std::string control = "# source_frame = LEGACY@2010.0\n# target_frame = ITRF2014@2024.5\n"
                           "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m\n";
     for (std::size_t i = 0; i < kMarks.size(); ++i) {
@@ -173,18 +189,8 @@ TEST_F(AdjustHelmertCli, Issue14_Helmert7IsRecoveredExactlyInBothConventions) {
   }
   // convert with the file: a group coordinate onto the network's.
   const auto x = truth();
-  const testing::ProjPipeline h("+proj=helmert +convention=position_vector +x=" + number(kTx) + " +y=" + number(kTy) + " +z=" +
-                                number(kTz) + " +rx=" + number(kRx) + " +ry=" + number(kRy) + " +rz=" + number(kRz) + " +s=" +
-                                number(kDs));
-  const Eigen::Vector3d g = exact_inverse(h, x[3]);
-  write("in.csv", "id,x_m,y_m,z_m\nM4," + number(g.x()) + "," + number(g.y()) + "," + number(g.z()) + "\n");
-  const RunResult c = run("convert '" + path("in.csv").string() + "' --transform '" + path("st.helmert.json").string() +
-                          "' --to ecef --precision 6");
-  ASSERT_EQ(c.exit_code, 0) << c.err;
-  const auto table = testing::parse_csv_table(c.out);
-  ASSERT_EQ(table.rows.size(), 1u);
-  const Eigen::Vector3d got(std::stod(table.rows[0][table.col("x_m")]), std::stod(table.rows[0][table.col("y_m")]),
-                            std::stod(table.rows[0][table.col("z_m")]));
+  const testing::ProjPipeline h(planted_helmert(false));
+  const Eigen::Vector3d got = converted(exact_inverse(h, x[3]), "st.helmert.json", "");
   EXPECT_WORST_WITHIN((got - x[3]).norm(), kConvertToleranceM);
 }
 
@@ -217,20 +223,8 @@ TEST_F(AdjustHelmertCli, Issue14_Helmert14IsRecoveredWithItsRatesAtTheMeanEpoch)
   // convert at an epoch five years from the reference epoch: the group's
   // 2010 coordinates of M6 onto the network's.
   const auto x = truth();
-  const testing::ProjPipeline h(
-      "+proj=helmert +convention=position_vector +x=" + number(kTx) + " +y=" + number(kTy) + " +z=" + number(kTz) +
-      " +rx=" + number(kRx) + " +ry=" + number(kRy) + " +rz=" + number(kRz) + " +s=" + number(kDs) + " +dx=" + number(kDtx) +
-      " +dy=" + number(kDty) + " +dz=" + number(kDtz) + " +drx=" + number(kDrx) + " +dry=" + number(kDry) + " +drz=" +
-      number(kDrz) + " +ds=" + number(kDds) + " +t_epoch=2015");
-  const Eigen::Vector3d g = exact_inverse(h, x[5], 2010.0);
-  write("in.csv", "id,x_m,y_m,z_m\nM6," + number(g.x()) + "," + number(g.y()) + "," + number(g.z()) + "\n");
-  const RunResult c = run("convert '" + path("in.csv").string() + "' --transform '" + path("h14.json").string() +
-                          "' --epoch 2010.0 --to ecef --precision 6");
-  ASSERT_EQ(c.exit_code, 0) << c.err;
-  const auto table = testing::parse_csv_table(c.out);
-  ASSERT_EQ(table.rows.size(), 1u);
-  const Eigen::Vector3d got(std::stod(table.rows[0][table.col("x_m")]), std::stod(table.rows[0][table.col("y_m")]),
-                            std::stod(table.rows[0][table.col("z_m")]));
+  const testing::ProjPipeline h(planted_helmert(true));
+  const Eigen::Vector3d got = converted(exact_inverse(h, x[5], 2010.0), "h14.json", "--epoch 2010.0");
   EXPECT_WORST_WITHIN((got - x[5]).norm(), kConvertToleranceM);
 }
 
