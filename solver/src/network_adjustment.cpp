@@ -493,7 +493,7 @@ DatumVectors datum_vectors(const Problem& p) {
     if (rms2 > 0.0) dv.g.col(k) /= std::sqrt(rms2 / static_cast<double>(std::max<std::size_t>(n, 1)));
   }
   dv.basis = Eigen::MatrixXd::Identity(dv.g.cols(), dv.g.cols());
-  if (dv.g.cols() > 0) {
+  if (dv.g.cols() > 0 && dv.g.rows() > 0) {
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(dv.g, Eigen::ComputeThinV);
     const Eigen::VectorXd& sv = svd.singularValues();
     Eigen::Index keep = 0;
@@ -700,23 +700,40 @@ NormalFactor factor_or_explain(const Problem& p, const Normal& n) {
   return std::move(*f);
 }
 
-ErrorEllipse ellipse_of(const Eigen::Matrix2d& c) {
-  // c in (first, second) = (east, north) or (x, y); azimuth from the second
-  // axis (north) towards the first (east); local: from +x towards +y.
-  const double a = c(0, 0), b = c(1, 1), ab = c(0, 1);
+ErrorEllipse ellipse_of(const Eigen::Matrix2d& en) {
+  // en in (east, north); azimuth clockwise from north.
+  const double a = en(0, 0), b = en(1, 1), ab = en(0, 1);
   const double mean = 0.5 * (a + b), diff = 0.5 * (a - b);
   const double root = std::sqrt(diff * diff + ab * ab);
   ErrorEllipse e;
   e.semi_major_m = std::sqrt(std::max(0.0, mean + root));
   e.semi_minor_m = std::sqrt(std::max(0.0, mean - root));
-  e.azimuth_rad = 0.5 * std::atan2(2.0 * ab, b - a);  // from the second axis towards the first
+  e.azimuth_rad = 0.5 * std::atan2(2.0 * ab, b - a);  // from north towards east
   if (e.azimuth_rad < 0.0) e.azimuth_rad += std::numbers::pi;
   return e;
+}
+
+// The horizontal ellipse of a station's covariance in its local components:
+// east, north (ellipsoidal: azimuth from north towards east) or x, y (local:
+// from +x towards +y, a bearing when x is north and y east, as GNU Gama
+// orients its ellipses). ellipse_of measures from its second axis towards
+// its first, so a local network's x, y go in swapped.
+ErrorEllipse horizontal_ellipse(const Eigen::Matrix2d& c, geodesy::NetworkSpace space) {
+  if (space == geodesy::NetworkSpace::ellipsoidal) return ellipse_of(c);
+  Eigen::Matrix2d yx;
+  yx << c(1, 1), c(1, 0), c(0, 1), c(0, 0);
+  return ellipse_of(yx);
 }
 
 }  // namespace
 
 AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOptions& o) {
+  if (network.stations.empty()) throw Error(ErrorKind::input, "E_NETWORK_EMPTY", network.source_name + ": no stations");
+  if (std::all_of(network.measurements.begin(), network.measurements.end(), [](const auto& m) { return m.ignore; })) {
+    throw Error(ErrorKind::input, "E_NETWORK_EMPTY",
+                network.source_name + ": no measurement to adjust (" + std::to_string(network.measurements.size()) +
+                    " read; each is ignored by its input or left out)");
+  }
   std::size_t unplaced = 0;
   for (const auto& s : network.stations) unplaced += s.position_known ? 0u : 1u;
   if (unplaced > 0) {
@@ -731,7 +748,6 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   const auto& net = network;
   AdjustmentResult result;
   const std::string where = net.source_name;
-  if (net.stations.empty()) throw Error(ErrorKind::input, "E_NETWORK_EMPTY", where + ": no stations");
 
   // Whitening of each measurement's covariance.
   p.whitening.resize(net.measurements.size());
@@ -1228,7 +1244,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       if (as.used) {
         as.covariance_local_m2 = q_block(s, s);
         as.covariance_m2 = p.states[s].local_from_xyz.transpose() * as.covariance_local_m2 * p.states[s].local_from_xyz;
-        as.ellipse = ellipse_of(as.covariance_local_m2.topLeftCorner<2, 2>());
+        as.ellipse = horizontal_ellipse(as.covariance_local_m2.topLeftCorner<2, 2>(), net.space);
         as.ellipse_confidence = as.ellipse;
         as.ellipse_confidence.semi_major_m *= confidence_scale;
         as.ellipse_confidence.semi_minor_m *= confidence_scale;
@@ -1322,7 +1338,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       rp.distance_m = dxyz.norm();
       const Eigen::Vector3d unit_local = r1 * dxyz / std::max(rp.distance_m, 1e-12);
       rp.sigma_distance_m = std::sqrt(std::max(0.0, unit_local.dot(diff * unit_local)));
-      rp.ellipse = ellipse_of(diff.topLeftCorner<2, 2>());
+      rp.ellipse = horizontal_ellipse(diff.topLeftCorner<2, 2>(), net.space);
       result.relative.push_back(rp);
     }
 

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <GeographicLib/Geocentric.hpp>
 #include <GeographicLib/Geodesic.hpp>
 #include <GeographicLib/LocalCartesian.hpp>
@@ -541,6 +543,45 @@ TEST(NetworkAdjustment, ADirectionSetWithNoDirectionLeftHasNoOrientationUnknown)
   EXPECT_TRUE(std::isnan(without.orientation_sigmas_rad[0]));
 }
 
+// A local network's error ellipse is oriented from +x towards +y (a bearing
+// when x is north and y east, as GNU Gama gives it). B is placed by two
+// horizontal distances from held stations, A (along +x, σ 1 mm) and C
+// (along the diagonal, σ 20 mm): its covariance is the inverse of
+// Σ u uᵀ / σ², whose eigenvectors Eigen gives independently of the solver.
+TEST(NetworkAdjustment, ALocalNetworksEllipseIsOrientedFromXTowardsY) {
+  constexpr double kAzimuthTol_rad = 1e-6;
+  constexpr double kAxisTol_m = 1e-9;
+  Network net;
+  net.space = geodesy::NetworkSpace::local;
+  net.local_dimensions = 2;
+  net.source_name = "local";
+  const auto station = [&](const char* id, double x, double y, bool held) {
+    NetworkStation st;
+    st.id = id;
+    st.position = Eigen::Vector3d(x, y, 0.0);
+    if (held) st.constraint.code = {'C', 'C', 'F'};
+    net.stations.push_back(st);
+  };
+  station("A", 0.0, 0.0, true);
+  station("C", 0.0, 100.0, true);
+  station("B", 100.0, 0.0, false);
+  const double sigma_ab = 0.001, sigma_cb = 0.020;
+  net.measurements.push_back(scalar(MeasurementKind::horizontal_distance, {0, 2}, 100.0, sigma_ab, "AB"));
+  net.measurements.push_back(scalar(MeasurementKind::horizontal_distance, {1, 2}, 100.0 * std::sqrt(2.0), sigma_cb, "CB"));
+  const AdjustmentResult r = adjust_network(net, options(false));
+  ASSERT_EQ(r.dof, 0);
+  const Eigen::Vector2d u1(1.0, 0.0), u2 = Eigen::Vector2d(100.0, -100.0).normalized();
+  const Eigen::Matrix2d n = u1 * u1.transpose() / (sigma_ab * sigma_ab) + u2 * u2.transpose() / (sigma_cb * sigma_cb);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(n.inverse());
+  const Eigen::Vector2d major = eig.eigenvectors().col(1);  // (x, y) of the larger eigenvalue
+  double expected = std::atan2(major.y(), major.x());       // from +x towards +y
+  if (expected < 0.0) expected += std::numbers::pi;
+  const auto& b = r.stations[2].ellipse;
+  EXPECT_NEAR(b.semi_major_m, std::sqrt(eig.eigenvalues()(1)), kAxisTol_m);
+  EXPECT_NEAR(b.semi_minor_m, std::sqrt(eig.eigenvalues()(0)), kAxisTol_m);
+  EXPECT_NEAR(std::remainder(b.azimuth_rad - expected, std::numbers::pi), 0.0, kAzimuthTol_rad);
+}
+
 TEST(NetworkAdjustment, AnUndefinedDatumIsNamedAndAFreeNetworkHeldByInnerConstraints) {
   std::mt19937 rng(5);
   const Site s = make_site(9, rng);
@@ -615,6 +656,15 @@ TEST(NetworkAdjustment, BadNetworksAreRefusedByName) {
   const std::string disconnected = code_of(split, options(false));
   EXPECT_EQ(disconnected.rfind("E_NETWORK_DISCONNECTED", 0), 0u) << disconnected;
   EXPECT_NE(disconnected.find("S2"), std::string::npos) << disconnected;
+  // Every measurement ignored or left out: nothing to adjust (the network
+  // view can leave every station out).
+  Network idle = split;
+  for (auto& m : idle.measurements) m.ignore = true;
+  const std::string empty = code_of(idle, options(false));
+  EXPECT_EQ(empty.rfind("E_NETWORK_EMPTY", 0), 0u) << empty;
+  EXPECT_NE(empty.find("no measurement to adjust (2 read"), std::string::npos) << empty;
+  idle.measurements.clear();
+  EXPECT_EQ(code_of(idle, options(false)).rfind("E_NETWORK_EMPTY", 0), 0u);
   // A covariance that is not positive definite, named with its smallest eigenvalue.
   Network bad = network_of(s);
   add_baseline(bad, s, 0, 1, &rng);
