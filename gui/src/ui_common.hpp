@@ -148,4 +148,19 @@ inline void header_row(TextAudit& audit, std::string_view where) {
   }
 }
 
+constexpr ImGuiWindowFlags kPanelFlags = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
+                                         ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoBringToFrontOnFocus;
+
+// A fixed window at x, y of w × h pixels titled `title` (the title checked
+// against the width), with `body` drawn inside.
+template <class Fn>
+void panel(TextAudit& audit, const char* title, float x, float y, float w, float h, Fn&& body) {
+  ImGui::SetNextWindowPos(ImVec2(x, y), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(w, h), ImGuiCond_Always);
+  // The title bar shows the title between the frame paddings.
+  audit.check_width(title, std::string(title) + ": title", ImGui::CalcTextSize(title).x + 2.0f * ImGui::GetStyle().FramePadding.x, w);
+  if (ImGui::Begin(title, nullptr, kPanelFlags)) body();
+  ImGui::End();
+}
+
 }  // namespace geoanchor::gui::detail
