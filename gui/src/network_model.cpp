@@ -3,6 +3,7 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <numbers>
 #include <utility>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -111,8 +112,27 @@ std::vector<std::size_t> NetworkModel::measurements_left_out() const {
   return out;
 }
 
+bool NetworkModel::schematic_plan() const {
+  return network_.space == geodesy::NetworkSpace::local && network_.local_dimensions == 1;
+}
+
+namespace {
+
+// East, north of a local axis direction (n, e, s or w).
+Eigen::Vector2d east_north(char axis) {
+  switch (axis) {
+    case 'n': return {0.0, 1.0};
+    case 's': return {0.0, -1.0};
+    case 'e': return {1.0, 0.0};
+    default: return {-1.0, 0.0};  // w
+  }
+}
+
+}  // namespace
+
 std::vector<NetworkStationRow> NetworkModel::stations() const {
   const bool ellipsoidal = network_.space == geodesy::NetworkSpace::ellipsoidal;
+  const Eigen::Vector2d x_en = east_north(network_.axes.x), y_en = east_north(network_.axes.y);
   std::vector<NetworkStationRow> out;
   for (std::size_t s = 0; s < network_.stations.size(); ++s) {
     NetworkStationRow row;
@@ -127,9 +147,18 @@ std::vector<NetworkStationRow> NetworkModel::stations() const {
       if (a.used) {
         x = a.position;
         row.ellipse = a.ellipse;
+        row.ellipse_confidence = a.ellipse_confidence;
+        row.sigma_m = a.covariance_local_m2.diagonal().cwiseMax(0.0).cwiseSqrt();
       }
     }
-    row.plan_m = ellipsoidal ? Eigen::Vector2d((plan_rotation_ * (x - plan_origin_)).head<2>()) : Eigen::Vector2d(x.head<2>());
+    if (schematic_plan()) {
+      const double t = 2.0 * std::numbers::pi * static_cast<double>(s) / static_cast<double>(network_.stations.size());
+      row.plan_m = Eigen::Vector2d(std::sin(t), std::cos(t));
+    } else if (ellipsoidal) {
+      row.plan_m = (plan_rotation_ * (x - plan_origin_)).head<2>();
+    } else {
+      row.plan_m = x.x() * x_en + x.y() * y_en;
+    }
     out.push_back(row);
   }
   return out;

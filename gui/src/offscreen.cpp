@@ -64,12 +64,12 @@ OffscreenRenderer::~OffscreenRenderer() {
   OSMesaDestroyContext(context_->gl);
 }
 
-void OffscreenRenderer::render_frame(WorkbenchUi& ui, View view) {
+void OffscreenRenderer::frame(const DrawFrame& draw) {
   OSMesaMakeCurrent(context_->gl, context_->buffer.data(), GL_UNSIGNED_BYTE, width_, height_);
   ImGui::SetCurrentContext(context_->imgui);
   ImGui_ImplOpenGL3_NewFrame();
   ImGui::NewFrame();
-  ui.draw(view, static_cast<float>(width_), static_cast<float>(height_));
+  draw(static_cast<float>(width_), static_cast<float>(height_));
   ImGui::Render();
   glViewport(0, 0, width_, height_);
   const Rgb bg = palette::kBackground;
@@ -79,13 +79,37 @@ void OffscreenRenderer::render_frame(WorkbenchUi& ui, View view) {
   glFinish();
 }
 
-RgbImage OffscreenRenderer::render(WorkbenchUi& ui, View view, std::optional<std::array<float, 2>> mouse_px) {
+void OffscreenRenderer::render_frame(WorkbenchUi& ui, View view) {
+  frame([&](float w, float h) { ui.draw(view, w, h); });
+}
+
+RgbImage OffscreenRenderer::render(const DrawFrame& draw, std::optional<std::array<float, 2>> mouse_px) {
   ImGui::SetCurrentContext(context_->imgui);
   ImGui::GetIO().MousePos = mouse_px ? ImVec2((*mouse_px)[0], (*mouse_px)[1]) : ImVec2(-FLT_MAX, -FLT_MAX);
   // Auto-sized windows and tables measure in their first frame.
-  for (int i = 0; i < 3; ++i) render_frame(ui, view);
+  for (int i = 0; i < 3; ++i) frame(draw);
   ImGui::GetIO().MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
   return RgbImage::from_gl_rgba(width_, height_, context_->buffer);
+}
+
+RgbImage OffscreenRenderer::render(WorkbenchUi& ui, View view, std::optional<std::array<float, 2>> mouse_px) {
+  return render([&](float w, float h) { ui.draw(view, w, h); }, mouse_px);
+}
+
+RgbImage OffscreenRenderer::render(NetworkUi& ui, std::optional<std::array<float, 2>> mouse_px) {
+  return render([&](float w, float h) { ui.draw(w, h); }, mouse_px);
+}
+
+void OffscreenRenderer::click(const DrawFrame& draw, float x, float y) {
+  ImGui::SetCurrentContext(context_->imgui);
+  ImGuiIO& io = ImGui::GetIO();
+  io.MousePos = ImVec2(x, y);
+  frame(draw);  // the mouse arrives: hover is known
+  io.MouseDown[0] = true;
+  frame(draw);
+  io.MouseDown[0] = false;
+  frame(draw);
+  io.MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
 }
 
 }  // namespace geoanchor::gui

@@ -12,6 +12,7 @@
 namespace geoanchor::gui {
 
 using detail::col4;
+using detail::panel;
 
 std::string_view to_string(View v) {
   switch (v) {
@@ -77,10 +78,11 @@ void WorkbenchUi::configure_context(float display_height_px) {
   ImGuiIO& io = ImGui::GetIO();
   io.IniFilename = nullptr;  // no saved window state: every frame from the same inputs is the same
   io.LogFilename = nullptr;
-  // Latin-1, Greek (σ, χ, Δ), punctuation (–, …, ′, ″), super- and
-  // subscripts, arrows, mathematical operators (±, ≤, ≈) and shapes (■, ▲).
-  static const ImWchar kRanges[] = {0x0020, 0x00FF, 0x0370, 0x03FF, 0x2000, 0x206F, 0x2070, 0x209F, 0x2190,
-                                    0x21FF, 0x2200, 0x22FF, 0x25A0, 0x25FF, 0};
+  // Latin-1, Greek (σ, χ, Δ), modifier letters (the ᵀ of vᵀPv),
+  // punctuation (–, …, ′, ″), super- and subscripts, arrows, mathematical
+  // operators (±, ≤, ≈) and shapes (■, ▲, ●, ○).
+  static const ImWchar kRanges[] = {0x0020, 0x00FF, 0x0370, 0x03FF, 0x1D2C, 0x1D6A, 0x2000, 0x206F, 0x2070, 0x209F,
+                                    0x2190, 0x21FF, 0x2200, 0x22FF, 0x25A0, 0x25FF, 0};
   const float px = std::clamp(std::round(display_height_px / 55.0f), 13.0f, 24.0f);
   io.Fonts->Clear();
   io.Fonts->AddFontFromFileTTF(kRegular, px, nullptr, kRanges);
@@ -110,19 +112,6 @@ void WorkbenchUi::refresh() {
 }
 
 namespace {
-
-constexpr ImGuiWindowFlags kPanelFlags = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
-                                         ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoBringToFrontOnFocus;
-
-template <class Fn>
-void panel(TextAudit& audit, const char* title, float x, float y, float w, float h, Fn&& body) {
-  ImGui::SetNextWindowPos(ImVec2(x, y), ImGuiCond_Always);
-  ImGui::SetNextWindowSize(ImVec2(w, h), ImGuiCond_Always);
-  // The title bar shows the title between the frame paddings.
-  audit.check_width(title, std::string(title) + ": title", ImGui::CalcTextSize(title).x + 2.0f * ImGui::GetStyle().FramePadding.x, w);
-  if (ImGui::Begin(title, nullptr, kPanelFlags)) body();
-  ImGui::End();
-}
 
 const char* panel_title(View v) {
   switch (v) {

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "geoanchor/gui/network_model.hpp"
@@ -126,6 +127,37 @@ TEST(NetworkModel, TheWorkerThreadGivesTheSameAdjustment) {
   EXPECT_FALSE(worker.busy());
   EXPECT_EQ(worker.result()->dof, direct.result()->dof);
   EXPECT_DOUBLE_EQ(worker.result()->vtpv, direct.result()->vtpv);
+}
+
+// A local network's x, y go onto the plan by its axis convention: with x
+// north and y east (GNU Gama's default), a station 100 m along +x is 100 m
+// north; with x east and y south, 100 m along +y is 100 m south.
+TEST(NetworkModel, ALocalNetworksAxesTurnItsPlanToEastAndNorth) {
+  constexpr double kExact_m = 1e-12;
+  const auto plan_of = [](char x, char y) {
+    geodesy::Network net;
+    net.space = geodesy::NetworkSpace::local;
+    net.local_dimensions = 2;
+    net.axes.x = x;
+    net.axes.y = y;
+    for (const auto& [id, px, py] : {std::tuple{"A", 0.0, 0.0}, std::tuple{"B", 100.0, 0.0}, std::tuple{"C", 0.0, 100.0}}) {
+      geodesy::NetworkStation st;
+      st.id = id;
+      st.position = Eigen::Vector3d(px, py, 0.0);
+      net.stations.push_back(st);
+    }
+    NetworkModel model(net, solver::AdjustOptions{});  // nothing to adjust: the a-priori plan
+    EXPECT_FALSE(model.result());
+    EXPECT_TRUE(model.error().starts_with("E_NETWORK_EMPTY: ")) << model.error();
+    const auto rows = model.stations();
+    return std::pair{Eigen::Vector2d(rows[1].plan_m - rows[0].plan_m), Eigen::Vector2d(rows[2].plan_m - rows[0].plan_m)};
+  };
+  const auto [ne_b, ne_c] = plan_of('n', 'e');
+  EXPECT_LE((ne_b - Eigen::Vector2d(0.0, 100.0)).norm(), kExact_m);
+  EXPECT_LE((ne_c - Eigen::Vector2d(100.0, 0.0)).norm(), kExact_m);
+  const auto [es_b, es_c] = plan_of('e', 's');
+  EXPECT_LE((es_b - Eigen::Vector2d(100.0, 0.0)).norm(), kExact_m);
+  EXPECT_LE((es_c - Eigen::Vector2d(0.0, -100.0)).norm(), kExact_m);
 }
 
 }  // namespace

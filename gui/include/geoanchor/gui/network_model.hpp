@@ -29,9 +29,15 @@ struct NetworkStationRow {
   std::string id;
   // Adjusted (a-priori when there is no adjustment) position on the plan:
   // east, north at the network's centroid on the ellipsoid; a local
-  // network's own x, y.
+  // network's x, y turned to east, north by its axis convention (x north,
+  // y east: east = y). A levelling network (1-D) has no plan positions:
+  // its stations stand on a circle of unit radius in their order
+  // (NetworkModel::schematic_plan()).
   Eigen::Vector2d plan_m = Eigen::Vector2d::Zero();
-  solver::ErrorEllipse ellipse;  // 1σ, from the a-priori weights (zero without an adjustment)
+  // From the a-priori weights (σ0 = 1); zero without an adjustment.
+  solver::ErrorEllipse ellipse;             // 1σ
+  solver::ErrorEllipse ellipse_confidence;  // at AdjustOptions::confidence
+  Eigen::Vector3d sigma_m = Eigen::Vector3d::Zero();  // east, north, up (local: x, y, z)
   std::string constraint;        // "CCF"
   bool left_out = false;         // by the user
   bool used = false;             // in the shown adjustment
@@ -64,6 +70,9 @@ class NetworkModel {
   void set_measurement_left_out(std::size_t measurement, bool left_out);
 
   const geodesy::Network& network() const { return network_; }
+  const solver::AdjustOptions& options() const { return options_; }
+  // True for a levelling network, whose plan is a schematic circle.
+  bool schematic_plan() const;
   const std::optional<solver::AdjustmentResult>& result() const { return result_; }
   const std::string& error() const { return error_; }  // "E_CODE: message" of a refused adjustment
   unsigned generation() const { return generation_; }  // increments with every new result

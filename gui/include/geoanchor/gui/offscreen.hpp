@@ -6,10 +6,12 @@
 // `geoanchor report` and the pixel tests. One renderer per thread.
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <optional>
 
 #include "geoanchor/gui/image.hpp"
+#include "geoanchor/gui/network_ui.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
 
 namespace geoanchor::gui {
@@ -28,13 +30,24 @@ class OffscreenRenderer {
   // resting at `mouse_px` (x, y from the top-left corner) for the hover
   // tests; it never clicks.
   RgbImage render(WorkbenchUi& ui, View view, std::optional<std::array<float, 2>> mouse_px = std::nullopt);
+  // The network view, likewise.
+  RgbImage render(NetworkUi& ui, std::optional<std::array<float, 2>> mouse_px = std::nullopt);
   // One more frame, without reading it back (for benchmarks).
   void render_frame(WorkbenchUi& ui, View view);
+
+  // Any frame: `draw(width, height)` between ImGui's NewFrame and Render.
+  using DrawFrame = std::function<void(float width, float height)>;
+  RgbImage render(const DrawFrame& draw, std::optional<std::array<float, 2>> mouse_px = std::nullopt);
+  // A left click at (x, y) pixels from the top-left: the button goes down in
+  // one frame and up in the next, as a user's click (for the tests of what
+  // a click changes).
+  void click(const DrawFrame& draw, float x, float y);
 
   int width() const { return width_; }
   int height() const { return height_; }
 
  private:
+  void frame(const DrawFrame& draw);
   struct Context;
   int width_, height_;
   std::unique_ptr<Context> context_;

@@ -17,6 +17,7 @@ inline constexpr Rgb kOutlier{213, 94, 0};       // Okabe–Ito vermillion: outl
 inline constexpr Rgb kBar{86, 180, 233};         // Okabe–Ito sky blue: histogram bars
 inline constexpr Rgb kCritical{204, 121, 167};   // Okabe–Ito reddish purple: critical values
 inline constexpr Rgb kPass{0, 158, 115};         // Okabe–Ito bluish green: passed tests
+inline constexpr Rgb kWarning{230, 159, 0};      // Okabe–Ito orange: w-tests near their critical value
 inline constexpr Rgb kLeftOut{140, 140, 140};    // points the user left out
 inline constexpr Rgb kEllipse{0, 114, 178};      // Okabe–Ito blue: residual ellipses
 inline constexpr Rgb kGrid{215, 215, 215};

@@ -1,0 +1,128 @@
+#pragma once
+// The workbench's network view (issue 14 point 10), drawn with Dear ImGui
+// from a NetworkModel: the one code path that the GLFW window
+// (`geoanchor gui --view network`) and the off-screen shell (`snapshot
+// --view network`, `report --view network`) both show.
+//
+// Left, the plan (east, north at the network's centroid, north up, equal
+// scale, scale bar): each station a mark (a triangle where the datum holds
+// a component, a circle where it is free, hollow grey where it is not in
+// the adjustment), labelled with its id where there is room; each
+// measurement between two stations a line coloured and thickened by its
+// largest |w| (LineClass); each station's error ellipse at the
+// adjustment's confidence, exaggerated by a stated factor; outliers
+// (removed by data snooping) and measurements failing their w-test
+// labelled on the plan with their number, |w| and kind. Right, the
+// adjustment's statistics, the legend and two tables, stations and
+// measurements, whose check boxes leave a station (with every measurement
+// naming it) or one measurement out; a click on a station in the plan does
+// the same. Each choice re-adjusts (NetworkModel: on a worker thread for
+// large networks).
+//
+// Like the fit's views, no text is clipped: clipped_text() lists any text
+// that does not fit in the room it is drawn in (the tests require none at
+// the documented sizes); a table's rows scroll, and the line under each
+// table says which rows are in view.
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "geoanchor/gui/network_model.hpp"
+#include "geoanchor/gui/workbench_ui.hpp"
+
+namespace geoanchor::gui {
+
+// How a measurement's line is drawn, from its largest |w| against the
+// critical value w_c of the w-test at AdjustOptions::alpha_point.
+enum class LineClass {
+  small,        // |w| ≤ 2: bluish green, thin
+  elevated,     // 2 < |w| ≤ w_c: orange, medium
+  failing,      // |w| > w_c and kept (data snooping off, or its limit): vermillion, thick, labelled
+  outlier,      // removed by data snooping: vermillion, dashed, labelled
+  untestable,   // no redundancy (w undefined): black, thin, dashed
+  left_out,     // by the user, or not in the adjustment: grey, thin, dashed
+};
+inline constexpr std::size_t kLineClasses = 6;
+LineClass line_class(const NetworkLine& line, double w_critical);
+const char* to_string(LineClass c);
+
+// Above this many stations the plan is dense: no ellipses, and only the
+// outliers and failing measurements are labelled.
+inline constexpr std::size_t kDenseNetworkStations = 1500;
+
+// Where the last frame drew the network's plan (pixels from the top-left):
+// pixel = area centre + px_per_m · (e − ē, −(n − n̄)), (ē, n̄) the centre of
+// the stations' bounding box and px_per_m the largest scale at which the box
+// fits with kPlanMarginPx free on every side (spans below 1 m count as 1 m).
+struct NetworkGeometry {
+  bool drawn = false;
+  float left = 0, top = 0, right = 0, bottom = 0;  // plotting area
+  Eigen::Vector2d center_m = Eigen::Vector2d::Zero();
+  double px_per_m = 0.0;
+  double scale_bar_m = 0.0;
+  // Ellipses: a station's ellipse at the adjustment's confidence (from the
+  // a-priori weights, σ0 = 1), drawn × ellipse_exaggeration on the plan's
+  // scale: the largest at most a twentieth of the plan's short side and
+  // the stations' median nearest-neighbour spacing (1, 2 or 5 × 10^k, at
+  // least 1); none on a dense plan or a levelling network's schematic.
+  double ellipse_exaggeration = 1.0;
+  double confidence = 0.95;
+  std::size_t ellipses_drawn = 0;
+  std::array<std::size_t, kLineClasses> lines_by_class{};  // lines drawn, by LineClass
+  std::vector<PlanLabel> labels;            // station ids, and measurement labels ("#12 …")
+  std::vector<std::size_t> labelled_measurements;  // indices of the measurements labelled on the plan
+  std::vector<std::string> unlabelled;      // stations whose id found no room (named under the plan)
+  std::string hovered;                      // the station id or measurement ("#12") under the mouse
+  bool schematic = false;                   // a levelling network: stations on a circle
+  Eigen::Vector2d pixel_of(const Eigen::Vector2d& en_m) const;
+};
+
+// What a table drew: the rows wholly in view.
+struct NetworkTableGeometry {
+  bool drawn = false;
+  std::size_t total = 0, first = 0, shown = 0;
+  // The first row wholly in view: its top, the rows' height and the
+  // table's left edge (pixels; the check box is the first column).
+  float left = 0, first_row_top = 0, row_height_px = 0;
+};
+
+class NetworkUi {
+ public:
+  explicit NetworkUi(NetworkModel& model);
+
+  // One frame filling width × height pixels (the context configured by
+  // WorkbenchUi::configure_context).
+  void draw(float width, float height);
+
+  const NetworkGeometry& plan() const { return plan_; }
+  const NetworkTableGeometry& station_table() const { return station_table_; }
+  const NetworkTableGeometry& measurement_table() const { return measurement_table_; }
+  const std::vector<DrawnText>& drawn_text() const { return audit_.drawn; }
+  const std::vector<ClippedText>& clipped_text() const { return audit_.clipped; }
+
+  // A measurement's short name on the plan and in the table: "#12" (its
+  // 1-based position in the network's measurements, as the measurements
+  // CSV lists them).
+  static std::string measurement_name(std::size_t index);
+
+ private:
+  void refresh();
+  void draw_plan();
+  void draw_side();
+  void draw_station_table(float height);
+  void draw_measurement_table(float height);
+
+  NetworkModel& model_;
+  unsigned shown_generation_ = ~0u;
+  std::vector<NetworkStationRow> stations_;
+  std::vector<NetworkLine> lines_;
+  NetworkGeometry plan_;
+  NetworkTableGeometry station_table_, measurement_table_;
+  TextAudit audit_;
+};
+
+}  // namespace geoanchor::gui
