@@ -31,24 +31,7 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_option("--report", o.report, "Write the text report to this file (else it goes to standard output, or standard error with -o -)");
   cmd->add_flag("--json", o.json, "Print the report as JSON (schema geoanchor.adjust-report/1) on standard output");
   cmd->add_option("--sinex", o.sinex, "Write the adjusted stations with their covariance as SINEX");
-  cmd->add_option("--sinex-frame", o.sinex_frame, "The frame of SINEX inputs' estimates (SINEX names none), a catalog frame, e.g. ITRF2014; their epoch is REF_EPOCH");
-  cmd->add_option("--frame", o.frame, "The adjustment's frame and epoch, e.g. GDA2020, ITRF2020@2024.5 (default: the inputs')");
-  cmd->add_option("--constrain", o.constrain, "ID=CCC[,SIGMA_M]: hold station ID's latitude, longitude, height (C) or leave them free (F); with SIGMA_M held with that standard deviation");
-  cmd->add_flag("--free", o.free, "Free network: the datum by inner constraints (no station held)");
-  cmd->add_option("--inner-constraints", o.inner, "With --free: the stations the inner constraints are over, ID,ID,... (default: all)");
-  cmd->add_option("--confidence", o.confidence, "Confidence of the global test and of the error ellipses (default 0.95)")
-      ->check(finite_range(0.5, 0.9999));
-  cmd->add_option("--alpha", o.alpha, "Significance of the w-tests and data snooping (default 0.001)")->check(finite_range(1e-9, 0.5));
-  cmd->add_option("--max-outlier-share", o.max_outlier_share, "Refuse when data snooping would remove more than this share of the measurements (default 0.10)")
-      ->check(finite_range(0.0, 0.5));
-  cmd->add_flag("--no-snooping", o.no_snooping, "Report failing measurements but remove none");
-  cmd->add_option("--geoid", o.geoid, "Geoid for orthometric heights and levelled height differences: EGM96, EGM96-NGA, a grid name PROJ finds or a PATH");
-  cmd->add_option("--refraction", o.refraction, "Coefficient of refraction for zenith angles (default 0; 0.13 is typical by day)")
-      ->check(finite_range(-1.0, 1.0));
-  cmd->add_option("--convergence", o.convergence_m, "Stop when no station moves more than this (m; default 1e-5)")->check(finite_range(1e-9, 1.0));
-  cmd->add_option("--max-iterations", o.max_iterations, "Iteration limit (default 25)")->check(integer_range(1, 1000));
-  cmd->add_option("--estimate-helmert", o.estimate_helmert,
-                  "GROUP[:helmert7|helmert14]: a Helmert from the datum of a group of GNSS measurements (their 'group', or an input file) to the network's frame, estimated with the stations");
+  add_network_options(cmd, o.network);
   cmd->add_option("--convention", o.convention, "--estimate-helmert: position_vector|coordinate_frame, the convention of the written transform (required)");
   cmd->add_option("--helmert-output", o.helmert_output, "--estimate-helmert: the transform file (default: STATIONS less .csv, plus .helmert.json)");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
@@ -57,12 +40,12 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
 }
 
 int run_adjust(const AdjustCommandOptions& o) {
-  if (!o.estimate_helmert && (o.convention || o.helmert_output)) {
+  if (!o.network.estimate_helmert && (o.convention || o.helmert_output)) {
     throw Error(ErrorKind::usage, "E_OPTION", std::string(o.convention ? "--convention" : "--helmert-output") + ": only with --estimate-helmert");
   }
   // The estimated Helmert's transform file.
   std::optional<std::string> helmert_path;
-  if (o.estimate_helmert) {
+  if (o.network.estimate_helmert) {
     if (o.helmert_output) {
       helmert_path = *o.helmert_output;
     } else if (o.output == "-") {
@@ -72,38 +55,9 @@ int run_adjust(const AdjustCommandOptions& o) {
       helmert_path = (out.parent_path() / (out.extension() == ".csv" ? out.stem() : out.filename())).string() + ".helmert.json";
     }
   }
-  if (o.inner && !o.free) throw Error(ErrorKind::usage, "E_OPTION", "--inner-constraints: only with --free");
-  if (o.free && !o.constrain.empty()) throw Error(ErrorKind::usage, "E_OPTION", "--free with --constrain: give one datum");
-  workflow::AdjustRequest request;
-  request.inputs = o.inputs;
-  request.frame = o.frame;
-  request.sinex_frame = o.sinex_frame;
-  request.constrain = o.constrain;
-  request.estimate_helmert = o.estimate_helmert;
-  request.convention = o.convention;
+  workflow::AdjustRequest request = network_request(o.inputs, o.network, o.convention);
   auto& so = request.options;
-  so.alpha = 1.0 - o.confidence;
-  so.confidence = o.confidence;
-  so.alpha_point = o.alpha;
-  so.max_outlier_share = o.max_outlier_share;
-  so.data_snooping = !o.no_snooping;
-  so.refraction_k = o.refraction;
-  so.convergence_m = o.convergence_m;
-  so.max_iterations = o.max_iterations;
-  so.free = o.free;
   so.joint_covariance = o.sinex.has_value();
-  if (o.inner) {
-    std::string id;
-    for (char c : *o.inner + ",") {
-      if (c == ',') {
-        if (!id.empty()) so.inner_constraint_stations.push_back(id);
-        id.clear();
-      } else {
-        id += c;
-      }
-    }
-  }
-  if (o.geoid) so.geoid = &parse_geoid(*o.geoid, "--geoid");
 
   // Every output its own file (the stations' sidecar included).
   {

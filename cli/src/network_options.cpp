@@ -1,0 +1,86 @@
+#include "network_options.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include "geoanchor/geodesy/error.hpp"
+#include "option_parsing.hpp"
+
+namespace geoanchor::cli {
+
+std::vector<CLI::Option*> add_network_options(CLI::App* cmd, NetworkOptions& o) {
+  return {
+      cmd->add_option("--sinex-frame", o.sinex_frame,
+                      "The frame of SINEX inputs' estimates (SINEX names none), a catalog frame, e.g. ITRF2014; their epoch is REF_EPOCH"),
+      cmd->add_option("--frame", o.frame, "The adjustment's frame and epoch, e.g. GDA2020, ITRF2020@2024.5 (default: the inputs')"),
+      cmd->add_option("--constrain", o.constrain,
+                      "ID=CCC[,SIGMA_M]: hold station ID's latitude, longitude, height (C) or leave them free (F); with SIGMA_M held "
+                      "with that standard deviation"),
+      cmd->add_flag("--free", o.free, "Free network: the datum by inner constraints (no station held)"),
+      cmd->add_option("--inner-constraints", o.inner, "With --free: the stations the inner constraints are over, ID,ID,... (default: all)"),
+      cmd->add_option("--confidence", o.confidence, "Confidence of the global test and of the error ellipses (default 0.95)")
+          ->check(finite_range(0.5, 0.9999)),
+      cmd->add_option("--alpha", o.alpha, "Significance of the w-tests and data snooping (default 0.001)")->check(finite_range(1e-9, 0.5)),
+      cmd->add_option("--max-outlier-share", o.max_outlier_share,
+                      "Refuse when data snooping would remove more than this share of the measurements (default 0.10)")
+          ->check(finite_range(0.0, 0.5)),
+      cmd->add_flag("--no-snooping", o.no_snooping, "Report failing measurements but remove none"),
+      cmd->add_option("--geoid", o.geoid,
+                      "Geoid for orthometric heights and levelled height differences: EGM96, EGM96-NGA, a grid name PROJ finds or a PATH"),
+      cmd->add_option("--refraction", o.refraction, "Coefficient of refraction for zenith angles (default 0; 0.13 is typical by day)")
+          ->check(finite_range(-1.0, 1.0)),
+      cmd->add_option("--convergence", o.convergence_m, "Stop when no station moves more than this (m; default 1e-5)")
+          ->check(finite_range(1e-9, 1.0)),
+      cmd->add_option("--max-iterations", o.max_iterations, "Iteration limit (default 25)")->check(integer_range(1, 1000)),
+      cmd->add_option("--estimate-helmert", o.estimate_helmert,
+                      "GROUP[:helmert7|helmert14]: a Helmert from the datum of a group of GNSS measurements (their 'group', or an input "
+                      "file) to the network's frame, estimated with the stations"),
+  };
+}
+
+workflow::AdjustRequest network_request(const std::vector<std::string>& inputs, const NetworkOptions& o,
+                                        const std::optional<std::string>& helmert_convention) {
+  if (o.inner && !o.free) throw Error(ErrorKind::usage, "E_OPTION", "--inner-constraints: only with --free");
+  if (o.free && !o.constrain.empty()) throw Error(ErrorKind::usage, "E_OPTION", "--free with --constrain: give one datum");
+  workflow::AdjustRequest request;
+  request.inputs = inputs;
+  request.frame = o.frame;
+  request.sinex_frame = o.sinex_frame;
+  request.constrain = o.constrain;
+  request.estimate_helmert = o.estimate_helmert;
+  request.convention = helmert_convention;
+  auto& so = request.options;
+  so.alpha = 1.0 - o.confidence;
+  so.confidence = o.confidence;
+  so.alpha_point = o.alpha;
+  so.max_outlier_share = o.max_outlier_share;
+  so.data_snooping = !o.no_snooping;
+  so.refraction_k = o.refraction;
+  so.convergence_m = o.convergence_m;
+  so.max_iterations = o.max_iterations;
+  so.free = o.free;
+  if (o.inner) {
+    std::string id;
+    for (char c : *o.inner + ",") {
+      if (c == ',') {
+        if (!id.empty()) so.inner_constraint_stations.push_back(id);
+        id.clear();
+      } else {
+        id += c;
+      }
+    }
+  }
+  if (o.geoid) so.geoid = &parse_geoid(*o.geoid, "--geoid");
+  return request;
+}
+
+NetworkSession open_network(const std::vector<std::string>& inputs, const NetworkOptions& o,
+                            const std::optional<std::string>& helmert_convention) {
+  const workflow::AdjustRequest request = network_request(inputs, o, helmert_convention);
+  NetworkSession s{workflow::prepare_network(request), request.options, nullptr};
+  s.options.helmert = s.prepared.helmert;
+  s.model = std::make_unique<gui::NetworkModel>(s.prepared.network, s.options);
+  s.model->wait();
+  return s;
+}
+
+}  // namespace geoanchor::cli
