@@ -11,11 +11,13 @@
 
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/gui/image.hpp"
 #include "geoanchor/gui/palette.hpp"
+#include "geoanchor/gui/network_ui.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
@@ -36,11 +38,21 @@ struct WindowOptions {
 
 void glfw_error(int code, const char* what) { std::cerr << "geoanchor-gui: GLFW error " << code << ": " << what << '\n'; }
 
-int run(const WindowOptions& o) {
-  const geoanchor::gui::View view = geoanchor::cli::parse_view(o.view, "--view");
+int run(WindowOptions o) {
+  const bool network = o.view == geoanchor::cli::kNetworkView;
+  geoanchor::cli::check_workbench_inputs(o.workbench, network);
+  const geoanchor::gui::View view = network ? geoanchor::gui::View::workbench : geoanchor::cli::parse_view(o.view, "--view");
   const auto [width, height] = geoanchor::cli::parse_size(o.size, "--size");
-  geoanchor::cli::WorkbenchSession s = geoanchor::cli::open_workbench(o.workbench);
-  for (const auto& n : s.notes) std::cerr << "geoanchor-gui: note: " << n << '\n';
+  std::optional<geoanchor::cli::WorkbenchSession> s;
+  std::optional<geoanchor::cli::NetworkSession> ns;
+  if (network) {
+    ns = geoanchor::cli::open_network(o.workbench.inputs, o.workbench.network, o.workbench.convention);
+    for (const auto& n : ns->prepared.notes) std::cerr << "geoanchor-gui: note: " << n << '\n';
+    if (!ns->model->result()) std::cerr << "geoanchor-gui: warning: no adjustment: " << ns->model->error() << '\n';
+  } else {
+    s = geoanchor::cli::open_workbench(o.workbench);
+    for (const auto& n : s->notes) std::cerr << "geoanchor-gui: note: " << n << '\n';
+  }
 
   glfwSetErrorCallback(glfw_error);
   if (!glfwInit()) {
@@ -51,7 +63,9 @@ int run(const WindowOptions& o) {
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  const std::string title = "geoanchor workbench — " + o.workbench.control;
+  std::string inputs;
+  for (const auto& in : o.workbench.inputs) inputs += (inputs.empty() ? "" : ", ") + in;
+  const std::string title = (network ? "geoanchor network — " : "geoanchor workbench — ") + inputs;
   GLFWwindow* window = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
   if (!window) {
     glfwTerminate();
@@ -65,7 +79,13 @@ int run(const WindowOptions& o) {
     geoanchor::gui::WorkbenchUi::configure_context(static_cast<float>(height));
     ImGui_ImplGlfw_InitForOpenGL(window, true);
     ImGui_ImplOpenGL3_Init("#version 330 core");
-    geoanchor::gui::WorkbenchUi ui(*s.model, {s.save_path, s.generator});
+    std::optional<geoanchor::gui::WorkbenchUi> ui;
+    std::optional<geoanchor::gui::NetworkUi> network_ui;
+    if (network) {
+      network_ui.emplace(*ns->model);
+    } else {
+      ui.emplace(*s->model, geoanchor::gui::UiOptions{s->save_path, s->generator});
+    }
     std::vector<std::uint8_t> pixels;
     for (int frame = 0; !glfwWindowShouldClose(window) && (o.frames == 0 || frame < o.frames); ++frame) {
       glfwPollEvents();
@@ -73,7 +93,11 @@ int run(const WindowOptions& o) {
       ImGui_ImplGlfw_NewFrame();
       ImGui::NewFrame();
       const ImVec2 size = ImGui::GetIO().DisplaySize;
-      ui.draw(view, size.x, size.y);
+      if (network) {
+        network_ui->draw(size.x, size.y);
+      } else {
+        ui->draw(view, size.x, size.y);
+      }
       ImGui::Render();
       int fw = 0, fh = 0;
       glfwGetFramebufferSize(window, &fw, &fh);
@@ -113,7 +137,8 @@ int main(int argc, char** argv) {
   WindowOptions o;
   o.workbench.argv.assign(argv, argv + argc);
   geoanchor::cli::add_workbench_options(&app, o.workbench);
-  app.add_option("--view", o.view, "workbench|plan|histogram|table|parameters|comparison (default workbench)");
+  app.add_option("--view", o.view,
+                 "workbench|plan|histogram|table|parameters|comparison (default workbench), or network: a survey network adjusted as by adjust");
   app.add_option("--size", o.size, "Window WIDTHxHEIGHT in pixels (default 1600x1000)");
   app.add_option("--frames", o.frames, "Render this many frames, then exit (0: until closed)")->check(geoanchor::cli::integer_range(0, std::numeric_limits<int>::max()));
   app.add_option("--screenshot", o.screenshot, "With --frames: write the last frame to this PNG");

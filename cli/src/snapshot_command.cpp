@@ -58,6 +58,64 @@ bool is_later_table_page(const std::string& name) {
   return std::all_of(n.begin(), n.end(), [](char c) { return c >= '0' && c <= '9'; }) && n.front() != '0';
 }
 
+std::string joined(const std::vector<std::string>& ids);
+
+// The network view's notes and warnings: what was done to the inputs, and
+// why there is no adjustment.
+std::vector<std::string> network_notes(const NetworkSession& s) {
+  std::vector<std::string> out;
+  for (const auto& n : s.prepared.notes) {
+    if (!n.starts_with("warning: ")) out.push_back(n);
+  }
+  return out;
+}
+
+std::vector<std::string> network_warnings(const NetworkSession& s) {
+  std::vector<std::string> out;
+  for (const auto& n : s.prepared.notes) {
+    if (n.starts_with("warning: ")) out.push_back(n.substr(9));
+  }
+  if (!s.model->result()) {
+    out.push_back("no adjustment: " + s.model->error());
+    return out;
+  }
+  const auto& r = *s.model->result();
+  for (const auto& w : r.warnings) out.push_back(w);
+  if (!r.refused_because.empty() && std::find(out.begin(), out.end(), r.refused_because) == out.end()) out.push_back(r.refused_because);
+  const auto& g = r.global_test;
+  if (g.applicable && !g.passed) {
+    out.push_back("the global test fails " + std::string(g.statistic > g.critical_upper ? "high" : "low") + " (" +
+                  format_fixed(g.statistic, 3) + " outside [" + format_fixed(g.critical_lower, 3) + ", " +
+                  format_fixed(g.critical_upper, 3) + "]): `geoanchor adjust` would refuse to write its results");
+  }
+  return out;
+}
+
+void print_network_notes(const NetworkSession& s) {
+  for (const auto& n : network_notes(s)) std::cerr << "geoanchor: note: " << n << '\n';
+  for (const auto& w : network_warnings(s)) std::cerr << "geoanchor: warning: " << w << '\n';
+}
+
+// What the picture of the network view shows, in one line.
+std::string network_figure_line(const gui::NetworkUi& ui, const NetworkSession& s) {
+  const gui::NetworkGeometry& g = ui.plan();
+  std::string line = std::to_string(s.model->network().stations.size()) + " stations, ";
+  std::size_t lines = 0;
+  for (std::size_t n : g.lines_by_class) lines += n;
+  line += std::to_string(lines) + " measurement lines (";
+  const char* names[] = {"|w| ≤ 2", "2 < |w| ≤ critical", "failing, kept", "outliers", "no redundancy", "left out or not adjusted"};
+  for (std::size_t c = 0; c < gui::kLineClasses; ++c) line += (c ? ", " : "") + std::to_string(g.lines_by_class[c]) + " " + names[c];
+  line += ")";
+  if (g.ellipses_drawn > 0) {
+    line += "; " + std::to_string(g.ellipses_drawn) + " error ellipses at " + format_shortest(100.0 * g.confidence) + " % × " +
+            format_shortest(g.ellipse_exaggeration);
+  }
+  if (!g.schematic) line += "; scale bar " + format_shortest(g.scale_bar_m) + " m";
+  line += "; " + std::to_string(g.labelled_measurements.size()) + " outliers and failing measurements labelled";
+  if (!g.unlabelled.empty()) line += "; no room for the ids of " + joined(g.unlabelled);
+  return line;
+}
+
 std::string joined(const std::vector<std::string>& ids) {
   std::string out;
   for (const auto& id : ids) out += (out.empty() ? "" : ", ") + id;
@@ -69,7 +127,9 @@ std::string joined(const std::vector<std::string>& ids) {
 CLI::App* add_snapshot_command(CLI::App& app, SnapshotOptions& o) {
   auto* cmd = app.add_subcommand("snapshot", "Render a workbench view to a PNG, off-screen (no display, no GPU)");
   add_workbench_options(cmd, o.workbench);
-  cmd->add_option("--view", o.view, "workbench|plan|histogram|table|parameters|comparison (default workbench)");
+  cmd->add_option("--view", o.view,
+                  "workbench|plan|histogram|table|parameters|comparison (default workbench), or network: a survey network "
+                  "adjusted as by adjust");
   cmd->add_option("--size", o.size, "WIDTHxHEIGHT in pixels (default 1600x1000)");
   cmd->add_option("-o,--output", o.output, "PNG to write, or - for standard output")->required();
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output");
@@ -80,6 +140,7 @@ CLI::App* add_snapshot_command(CLI::App& app, SnapshotOptions& o) {
 CLI::App* add_report_command(CLI::App& app, ReportOptions& o) {
   auto* cmd = app.add_subcommand("report", "Write a fit's text report and a PNG of every workbench view into a folder");
   add_workbench_options(cmd, o.workbench);
+  cmd->add_option("--view", o.view, "network: report on a survey network (adjust's text report and the network view)");
   cmd->add_option("--size", o.size, "WIDTHxHEIGHT of the pictures (default 1600x1000)");
   cmd->add_option("-o,--output", o.output, "Folder to write (created; refused if it holds report files, unless --overwrite)")
       ->required();
@@ -88,8 +149,11 @@ CLI::App* add_report_command(CLI::App& app, ReportOptions& o) {
   return cmd;
 }
 
-int run_snapshot(const SnapshotOptions& o) {
-  const gui::View view = parse_view(o.view, "--view");
+int run_snapshot(const SnapshotOptions& options) {
+  SnapshotOptions o = options;
+  const bool network = o.view == kNetworkView;
+  check_workbench_inputs(o.workbench, network);
+  const gui::View view = network ? gui::View::workbench : parse_view(o.view, "--view");
   const auto [w, h] = parse_size(o.size, "--size");
   // -o -: the PNG on standard output, what was written on standard error.
   const bool to_stdout = o.output == "-";
@@ -99,46 +163,82 @@ int run_snapshot(const SnapshotOptions& o) {
   if (!to_stdout && fs::path(o.output).extension() != ".png") {
     throw Error(ErrorKind::usage, "E_OPTION", "-o " + o.output + ": expected a file name ending in .png, or - for standard output");
   }
-  if (!to_stdout && o.workbench.control != "-") io::refuse_same_file(o.workbench.control, o.output);
+  if (!to_stdout) {
+    for (const auto& in : o.workbench.inputs) {
+      if (in != "-") io::refuse_same_file(in, o.output);
+    }
+  }
   // A FIFO, a device or a folder is refused even with --overwrite.
   if (!to_stdout) io::check_output_path(o.output, io::Overwrite::allow);
   if (!to_stdout && !o.overwrite && fs::exists(fs::symlink_status(o.output))) {
     throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", o.output + ": exists (use --overwrite to replace it)");
   }
-  WorkbenchSession s = open_workbench(o.workbench);
-  print_notes(s);
+  std::optional<WorkbenchSession> s;
+  std::optional<NetworkSession> ns;
+  if (network) {
+    ns = open_network(o.workbench.inputs, o.workbench.network, o.workbench.convention);
+    print_network_notes(*ns);
+  } else {
+    s = open_workbench(o.workbench);
+    print_notes(*s);
+  }
   gui::OffscreenRenderer renderer(w, h);
-  gui::WorkbenchUi ui(*s.model, {s.save_path, s.generator});
+  std::optional<gui::WorkbenchUi> ui;
+  std::optional<gui::NetworkUi> network_ui;
+  if (network) {
+    network_ui.emplace(*ns->model);
+  } else {
+    ui.emplace(*s->model, gui::UiOptions{s->save_path, s->generator});
+  }
   std::size_t bytes = 0;
   {
-    const std::string png = gui::encode_png(renderer.render(ui, view), to_stdout ? "<stdout>" : o.output);
+    const std::string where = to_stdout ? "<stdout>" : o.output;
+    const std::string png = gui::encode_png(network ? renderer.render(*network_ui) : renderer.render(*ui, view), where);
     bytes = png.size();
     CommandOutput out(o.output, o.overwrite);
     out.stream().write(png.data(), static_cast<std::streamsize>(png.size()));
     out.commit();
   }
-  const gui::TableGeometry& t = ui.table();
+  const gui::TableGeometry t = network ? gui::TableGeometry{} : ui->table();
   const bool partial_table = t.drawn && t.total > 0 && t.shown_ids.size() < t.total;
   if (o.json) {
     ordered_json j;
     j["schema"] = "geoanchor.snapshot/1";
-    j["control"] = s.control_name;
+    j["control"] = network ? ordered_json(nullptr) : ordered_json(s->control_name);
+    if (network) j["inputs"] = o.workbench.inputs;
     j["output"] = o.output;
     j["bytes"] = bytes;
-    j["view"] = std::string(gui::to_string(view));
+    j["view"] = network ? std::string(kNetworkView) : std::string(gui::to_string(view));
     j["width_px"] = w;
     j["height_px"] = h;
     j["table"] = t.drawn ? ordered_json{{"first", t.total > 0 && !t.shown_ids.empty() ? t.first + 1 : 0},
                                         {"shown", t.shown_ids.size()},
                                         {"total", t.total}}
                          : ordered_json(nullptr);
-    j["notes"] = s.notes;
-    j["warnings"] = session_warnings(s);
+    if (network) {
+      const gui::NetworkGeometry& g = network_ui->plan();
+      ordered_json classes;
+      for (std::size_t c = 0; c < gui::kLineClasses; ++c) classes[gui::to_string(static_cast<gui::LineClass>(c))] = g.lines_by_class[c];
+      ordered_json labelled = ordered_json::array();
+      for (std::size_t m : g.labelled_measurements) labelled.push_back(m + 1);
+      j["network"] = {{"stations", ns->model->network().stations.size()},
+                      {"measurements", ns->model->network().measurements.size()},
+                      {"adjusted", ns->model->result().has_value()},
+                      {"lines", classes},
+                      {"ellipses", g.ellipses_drawn},
+                      {"ellipse_exaggeration", g.ellipse_exaggeration},
+                      {"confidence", g.confidence},
+                      {"labelled_measurements", labelled}};
+    }
+    j["notes"] = network ? network_notes(*ns) : s->notes;
+    j["warnings"] = network ? network_warnings(*ns) : session_warnings(*s);
     print_json(j);
     return 0;
   }
   std::ostream& said = to_stdout ? std::cerr : std::cout;
-  said << "wrote " << (to_stdout ? "<stdout>" : o.output) << " (" << w << "x" << h << ", view " << gui::to_string(view);
+  said << "wrote " << (to_stdout ? "<stdout>" : o.output) << " (" << w << "x" << h << ", view "
+       << (network ? std::string(kNetworkView) : std::string(gui::to_string(view)));
+  if (network) said << ": " << network_figure_line(*network_ui, *ns);
   if (partial_table) {
     said << "; the table shows " << (t.shown_ids.empty() ? "no whole row" : "marks " + std::to_string(t.first + 1) + "–" +
                                                              std::to_string(t.first + t.shown_ids.size()))
@@ -149,47 +249,60 @@ int run_snapshot(const SnapshotOptions& o) {
   return 0;
 }
 
-int run_report(const ReportOptions& o) {
-  if (o.output == "-") {
-    throw Error(ErrorKind::usage, "E_OPTION",
-                "-o -: report writes a folder (report.txt and a PNG per view), which standard output cannot hold; give "
-                "a folder (snapshot -o - writes one view's PNG on standard output)");
+namespace {
+
+// A report made in memory first, then written file by file (each
+// atomically; a failure removes what the run wrote).
+struct ReportContents {
+  std::ostringstream text;
+  std::vector<std::pair<std::string, std::string>> images;  // file name, PNG (encoded at once: a 10⁴-mark report has some 300 table pages)
+  ordered_json about;    // --json: what the report is about (control, inputs, transform, view)
+  ordered_json outcome;  // --json: fit or adjusted, notes, warnings
+  std::string figures;   // "wrote …: report.txt and N" + this
+};
+
+// report --view network: adjust's text report and the network view.
+void network_report(const ReportOptions& o, int w, int h, ReportContents& out) {
+  std::ostringstream& text = out.text;
+  auto& images = out.images;
+  const NetworkSession ns = open_network(o.workbench.inputs, o.workbench.network, o.workbench.convention);
+  print_network_notes(ns);
+  std::string cmd;
+  for (const auto& a : o.workbench.argv) cmd += (cmd.empty() ? "" : " ") + a;
+  text << "geoanchor report\n"
+       << "  generator: geoanchor " GEOANCHOR_VERSION ": " << cmd << "\n";
+  for (const auto& in : o.workbench.inputs) {
+    text << "  input:     " << (in == "-" ? std::string("<stdin>") : in)
+         << (in == "-" ? std::string() : " (sha256 " + io::sha256_file_hex(in) + ")") << "\n";
   }
-  const auto [w, h] = parse_size(o.size, "--size");
-  if (o.workbench.transform.empty()) {
-    throw Error(ErrorKind::usage, "E_OPTION", "--transform: required (the transform file the report is about)");
+  for (const auto& warning : network_warnings(ns)) text << "  warning: " << warning << "\n";
+  text << "\n";
+  if (ns.model->result()) {
+    text << workflow::report_text(ns.prepared, *ns.model->result(), ns.options);
+  } else {
+    text << "No adjustment: " << ns.model->error() << "\n";
   }
-  const fs::path dir(o.output);
-  std::vector<std::string> names{"report.txt"};
-  for (gui::View v : gui::kAllViews) names.push_back(std::string(gui::to_string(v)) + ".png");
-  if (fs::exists(dir) && !fs::is_directory(dir)) {
-    throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", o.output + ": exists and is not a folder");
-  }
-  // The table's later pages (table-2.png, …) are report files too.
-  std::vector<fs::path> earlier_pages;
-  if (fs::is_directory(dir)) {
-    for (const auto& e : fs::directory_iterator(dir)) {
-      if (is_later_table_page(e.path().filename().string())) earlier_pages.push_back(e.path());
-    }
-    std::sort(earlier_pages.begin(), earlier_pages.end());
-  }
-  for (const auto& n : names) {
-    io::check_output_path(dir / n, io::Overwrite::allow);  // a FIFO, a device or a folder is refused even with --overwrite
-    if (!o.overwrite && fs::exists(fs::symlink_status(dir / n))) {
-      throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", (dir / n).string() + ": exists (use --overwrite to replace the report)");
-    }
-  }
-  if (!o.overwrite && !earlier_pages.empty()) {
-    throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", earlier_pages.front().string() + ": exists (use --overwrite to replace the report)");
-  }
+  text << "\nFigures (" << w << "x" << h << " px)\n";
+  gui::OffscreenRenderer renderer(w, h);
+  gui::NetworkUi ui(*ns.model);
+  const std::string name = std::string(kNetworkView) + ".png";
+  images.emplace_back(name, gui::encode_png(renderer.render(ui), name));
+  text << "  " << name << ": " << network_figure_line(ui, ns) << "\n";
+  out.about = {{"control", nullptr}, {"inputs", o.workbench.inputs}, {"transform", nullptr}, {"view", kNetworkView}};
+  out.outcome = {{"table_pages", 0}, {"adjusted", ns.model->result().has_value()}, {"notes", network_notes(ns)}, {"warnings", network_warnings(ns)}};
+  out.figures = " PNG view (the network)";
+}
+
+// A fit's report: the fit's text report, the model comparison and every
+// workbench view (the table on as many pages as its marks need).
+void fit_report(const ReportOptions& o, int w, int h, ReportContents& out) {
+  std::ostringstream& text = out.text;
+  auto& images = out.images;
   WorkbenchOptions wo = o.workbench;
   wo.hash_control = true;
   WorkbenchSession s = open_workbench(wo);
   print_notes(s);
 
-  // Everything is made in memory first, then written file by file
-  // (each atomically); a failure removes what this run wrote.
-  std::ostringstream text;
   text << "geoanchor report\n"
        << "  generator: " << s.generator << "\n"
        << "  control:   " << s.control_name << " (sha256 " << s.control_sha256 << ")\n"
@@ -231,8 +344,6 @@ int run_report(const ReportOptions& o) {
   text << "\nFigures (" << w << "x" << h << " px)\n";
   gui::OffscreenRenderer renderer(w, h);
   gui::WorkbenchUi ui(*s.model, {s.save_path, s.generator});
-  // PNG-encoded at once: a 10⁴-mark report has some 300 table pages.
-  std::vector<std::pair<std::string, std::string>> images;
   for (gui::View v : gui::kAllViews) {
     if (v == gui::View::table) {
       // As many pages as the marks need: each holds the rows wholly in view.
@@ -287,6 +398,74 @@ int run_report(const ReportOptions& o) {
     }
     text << "\n";
   }
+  std::size_t pages = 0;
+  for (const auto& i : images) pages += i.first.starts_with("table") ? 1u : 0u;
+  out.about = {{"control", s.control_name}, {"transform", o.workbench.transform}, {"view", nullptr}};
+  out.outcome = {{"table_pages", pages}, {"fit", s.model->fit().has_value()}, {"notes", s.notes}, {"warnings", session_warnings(s)}};
+  out.figures = " PNG views (the table on " + std::to_string(pages) + (pages == 1 ? " page)" : " pages)");
+}
+
+}  // namespace
+
+int run_report(const ReportOptions& options) {
+  ReportOptions o = options;
+  if (!o.view.empty() && o.view != kNetworkView) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--view " + o.view + ": expected network (without --view, report writes every view of a fit)");
+  }
+  const bool network = o.view == kNetworkView;
+  check_workbench_inputs(o.workbench, network);
+  if (o.output == "-") {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "-o -: report writes a folder (report.txt and a PNG per view), which standard output cannot hold; give "
+                "a folder (snapshot -o - writes one view's PNG on standard output)");
+  }
+  const auto [w, h] = parse_size(o.size, "--size");
+  if (!network && o.workbench.transform.empty()) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--transform: required (the transform file the report is about)");
+  }
+  const fs::path dir(o.output);
+  // Every name a report of either kind writes: an earlier report's files
+  // that this one does not replace would be read as this one's.
+  std::vector<std::string> names{"report.txt"};
+  if (network) {
+    names.push_back(std::string(kNetworkView) + ".png");
+  } else {
+    for (gui::View v : gui::kAllViews) names.push_back(std::string(gui::to_string(v)) + ".png");
+  }
+  if (fs::exists(dir) && !fs::is_directory(dir)) {
+    throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", o.output + ": exists and is not a folder");
+  }
+  std::vector<fs::path> earlier_files;  // report files of an earlier report that this one may not write
+  if (fs::is_directory(dir)) {
+    std::vector<std::string> any_report{std::string(kNetworkView) + ".png"};
+    for (gui::View v : gui::kAllViews) any_report.push_back(std::string(gui::to_string(v)) + ".png");
+    for (const auto& e : fs::directory_iterator(dir)) {
+      const std::string name = e.path().filename().string();
+      const bool ours = std::find(names.begin(), names.end(), name) != names.end();
+      const bool other = std::find(any_report.begin(), any_report.end(), name) != any_report.end() || is_later_table_page(name);
+      if (!ours && other) earlier_files.push_back(e.path());
+    }
+    std::sort(earlier_files.begin(), earlier_files.end());
+  }
+  for (const auto& n : names) {
+    io::check_output_path(dir / n, io::Overwrite::allow);  // a FIFO, a device or a folder is refused even with --overwrite
+    if (!o.overwrite && fs::exists(fs::symlink_status(dir / n))) {
+      throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", (dir / n).string() + ": exists (use --overwrite to replace the report)");
+    }
+  }
+  if (!o.overwrite && !earlier_files.empty()) {
+    throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", earlier_files.front().string() + ": exists (use --overwrite to replace the report)");
+  }
+
+  ReportContents c;
+  if (network) {
+    network_report(o, w, h, c);
+  } else {
+    fit_report(o, w, h, c);
+  }
+  const auto& images = c.images;
+  const std::string text = c.text.str();
 
   const bool created = !fs::exists(dir);
   std::error_code ec;
@@ -296,7 +475,7 @@ int run_report(const ReportOptions& o) {
   try {
     {
       io::AtomicOutputFile out(dir / "report.txt", o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
-      out.stream() << text.str();
+      out.stream() << text;
       out.commit();
       written.push_back(dir / "report.txt");
     }
@@ -311,32 +490,24 @@ int run_report(const ReportOptions& o) {
     if (created) fs::remove(dir, ec);
     throw;
   }
-  // An earlier report's table pages beyond this one's would be read as this one's.
-  for (const auto& p : earlier_pages) {
+  // An earlier report's files beyond this one's would be read as this one's.
+  for (const auto& p : earlier_files) {
     if (std::none_of(images.begin(), images.end(), [&](const auto& i) { return dir / i.first == p; })) fs::remove(p, ec);
   }
-  std::size_t pages = 0;
-  for (const auto& i : images) pages += i.first.starts_with("table") ? 1u : 0u;
   if (o.json) {
     ordered_json j;
     j["schema"] = "geoanchor.report/1";
-    j["control"] = s.control_name;
-    j["transform"] = o.workbench.transform;
+    for (const auto& [k, v] : c.about.items()) j[k] = v;
     j["folder"] = o.output;
     ordered_json files = ordered_json::array();
-    files.push_back({{"name", "report.txt"}, {"bytes", text.str().size()}});
+    files.push_back({{"name", "report.txt"}, {"bytes", text.size()}});
     for (const auto& [name, png] : images) files.push_back({{"name", name}, {"bytes", png.size()}});
     j["files"] = std::move(files);
-    j["table_pages"] = pages;
-    j["fit"] = s.model->fit().has_value();
-    j["notes"] = s.notes;
-    j["warnings"] = session_warnings(s);
+    for (const auto& [k, v] : c.outcome.items()) j[k] = v;
     print_json(j);
     return 0;
   }
-  std::cout << "wrote " << o.output << (o.output.ends_with('/') ? "" : "/") << ": report.txt and " << images.size()
-            << " PNG views (the table on " << pages
-            << (pages == 1 ? " page" : " pages") << ")\n";
+  std::cout << "wrote " << o.output << (o.output.ends_with('/') ? "" : "/") << ": report.txt and " << images.size() << c.figures << "\n";
   io::finish_standard_output("the line \"wrote " + o.output + "\"", "; the report was written");
   return 0;
 }

@@ -25,6 +25,7 @@ struct SnapshotOptions {
 
 struct ReportOptions {
   WorkbenchOptions workbench;
+  std::string view;  // empty: a fit's report; "network": a survey network's
   std::string size = "1600x1000";
   std::string output;  // a folder
   bool overwrite = false;

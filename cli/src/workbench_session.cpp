@@ -16,13 +16,46 @@
 namespace geoanchor::cli {
 
 void add_workbench_options(CLI::App* cmd, WorkbenchOptions& o) {
-  cmd->add_option("CONTROL", o.control, "Control set (CSV or JSON), or - for standard input")->required();
+  cmd->add_option("CONTROL", o.inputs,
+                  "Control set (CSV or JSON), or - for standard input; with --view network the network's inputs, as for adjust")
+      ->required();
   cmd->add_option("--transform", o.transform,
                   "Transform file: its model, convention and recorded choices (and the points left out) start the fit");
   cmd->add_option("--model", o.model, "Model to fit (overrides the transform file's; default helmert7)");
   cmd->add_option("--convention", o.convention, "position_vector|coordinate_frame (default: the file's, else position_vector)");
   cmd->add_option("--origin", o.origin, "Nominal origin LAT,LON,H of ENU control coordinates");
   cmd->add_option("--ellipsoid", o.ellipsoid, "Ellipsoid of geodetic/ENU control coordinates (default: each frame's own; WGS84 for an unnamed frame)");
+  o.network_flags = add_network_options(cmd, o.network);
+}
+
+void check_workbench_inputs(WorkbenchOptions& o, bool network_view) {
+  if (network_view) {
+    const std::pair<bool, const char*> fit_only[] = {
+        {!o.transform.empty(), "--transform"}, {o.model.has_value(), "--model"}, {o.origin.has_value(), "--origin"},
+        {o.ellipsoid.has_value(), "--ellipsoid"}};
+    for (const auto& [given, flag] : fit_only) {
+      if (given) {
+        throw Error(ErrorKind::usage, "E_OPTION",
+                    std::string(flag) + ": not with --view network (the network view adjusts a survey network; it fits no transform)");
+      }
+    }
+    if (o.convention && !o.network.estimate_helmert) {
+      throw Error(ErrorKind::usage, "E_OPTION", "--convention: with --view network only with --estimate-helmert");
+    }
+    return;
+  }
+  for (const CLI::Option* flag : o.network_flags) {
+    if (flag->count() > 0) {
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  flag->get_name() + ": only with --view network (a survey network's view; a control set's views fit a transform)");
+    }
+  }
+  if (o.inputs.size() != 1) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "CONTROL: expected one control set, got " + std::to_string(o.inputs.size()) +
+                    " files (several inputs make a survey network: --view network)");
+  }
+  o.control = o.inputs.front();
 }
 
 namespace {
@@ -48,7 +81,7 @@ double largest_difference_m(const io::TransformFile& file, const io::TransformFi
 gui::View parse_view(const std::string& text, std::string_view flag) {
   if (const auto view = gui::view_from_string(text)) return *view;
   throw Error(ErrorKind::usage, "E_OPTION",
-              std::string(flag) + " " + text + ": expected workbench, plan, histogram, table, parameters or comparison");
+              std::string(flag) + " " + text + ": expected workbench, plan, histogram, table, parameters, comparison or network");
 }
 
 std::pair<int, int> parse_size(const std::string& text, std::string_view flag) {

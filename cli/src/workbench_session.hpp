@@ -13,6 +13,7 @@
 #include "geoanchor/gui/workbench_model.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
 #include "geoanchor/io/transform_file.hpp"
+#include "network_options.hpp"
 
 namespace CLI {
 class App;
@@ -21,16 +22,33 @@ class App;
 namespace geoanchor::cli {
 
 struct WorkbenchOptions {
+  // CONTROL: one control set; with --view network, the network's inputs
+  // (as `adjust` takes them). check_workbench_inputs() sets `control`.
+  std::vector<std::string> inputs;
   std::string control;    // a path, or "-" for standard input
   std::string transform;  // empty: none
   std::optional<std::string> model, convention, origin;
   std::optional<std::string> ellipsoid;  // default: each frame's (io::ControlReadOptions::ellipsoid)
   std::vector<std::string> argv;
   bool hash_control = false;  // fill WorkbenchSession::control_sha256 (report)
+  // --view network: adjust's datum and statistics options.
+  NetworkOptions network;
+  std::vector<CLI::Option*> network_flags;
 };
 
-// CONTROL, --transform, --model, --convention, --origin, --ellipsoid.
+// CONTROL, --transform, --model, --convention, --origin, --ellipsoid, and
+// for the network view adjust's --frame, --constrain, … (network_options.hpp).
 void add_workbench_options(CLI::App* cmd, WorkbenchOptions& o);
+
+// The view named on the command line, "network" among them.
+inline constexpr const char* kNetworkView = "network";
+
+// Checks that the inputs and flags belong to the view asked for (a fit's
+// views: one control set and the fit's options; the network view: the
+// network's inputs and adjust's options, --convention only with
+// --estimate-helmert) and sets `control`. Throws geoanchor::Error (usage)
+// naming the flag.
+void check_workbench_inputs(WorkbenchOptions& o, bool network_view);
 
 struct WorkbenchSession {
   std::optional<io::TransformFile> transform;

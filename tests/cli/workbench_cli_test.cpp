@@ -26,6 +26,11 @@ using testing::CliTest;
 using testing::slurp;
 
 const std::string kControl = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv";
+// The bundled airport network: 11 stations; 16 baselines, 24 slope
+// distances, 24 zenith angles and 24 directions are lines, the reference
+// stations' point cluster is none (make_airport_network.py).
+const std::string kNetwork = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_network/lszh_network.json";
+constexpr std::size_t kNetworkStations = 11, kNetworkLines = 16 + 24 + 24 + 24;
 // The window (GLFW under Xvfb, Mesa llvmpipe) and OSMesa rasterize the same
 // draw lists; allow a small difference per channel on a few pixels anyway
 // (../shared/NOTES.md).
@@ -58,7 +63,7 @@ TEST_F(WorkbenchCli, SnapshotRefusesBadOptionsAndLeavesNothing) {
     std::string args, message;
     int exit_code;
   } cases[] = {
-      {"--view map -o a.png", "--view map: expected workbench, plan, histogram, table, parameters or comparison", 2},
+      {"--view map -o a.png", "--view map: expected workbench, plan, histogram, table, parameters, comparison or network", 2},
       {"--size 1600 -o a.png", "--size 1600: expected WIDTHxHEIGHT in pixels", 2},
       {"--size 10x10 -o a.png", "--size 10x10: expected WIDTHxHEIGHT in pixels, 1280 … 8192 wide and 800 … 8192 tall", 2},
       {"--size 1279x800 -o a.png", "--size 1279x800: expected WIDTHxHEIGHT in pixels, 1280 … 8192 wide", 2},
@@ -82,6 +87,91 @@ TEST_F(WorkbenchCli, SnapshotRefusesBadOptionsAndLeavesNothing) {
   EXPECT_EQ(missing.exit_code, 5) << missing.err;
   EXPECT_NE(missing.err.find("none.csv: cannot open control set"), std::string::npos) << missing.err;
   EXPECT_FALSE(fs::exists(path("b.png")));
+}
+
+// issue 14 point 10
+TEST_F(WorkbenchCli, Issue14_SnapshotDrawsANetworkAndSaysWhatItShows) {
+  const auto out = path("net.png");
+  const auto r = shell(kNoDisplay + exe() + " snapshot " + kNetwork + " --view network --json -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["view"], "network");
+  EXPECT_TRUE(j["control"].is_null());
+  EXPECT_EQ(j["inputs"].size(), 1u);
+  EXPECT_EQ(j["network"]["stations"], kNetworkStations);
+  EXPECT_TRUE(j["network"]["adjusted"].get<bool>());
+  std::size_t lines = 0;
+  for (const auto& [cls, n] : j["network"]["lines"].items()) lines += n.get<std::size_t>();
+  EXPECT_EQ(lines, kNetworkLines);
+  EXPECT_EQ(j["network"]["lines"]["outlier"], 0);
+  EXPECT_EQ(j["network"]["ellipses"], kNetworkStations);
+  EXPECT_GE(j["network"]["ellipse_exaggeration"].get<double>(), 1.0);
+  const gui::RgbImage image = gui::read_png(out);
+  EXPECT_EQ(image.width, 1600);
+  // The text form says the same in words; the DynAdjust sample's two files make one network.
+  const std::string n = std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/dynadjust/";
+  const auto d = shell(kNoDisplay + exe() + " snapshot " + n + "gnss-networkstn.xml " + n + "gnss-networkmsr.xml --view network --size 1280x800 -o " +
+                       path("dyn.png").string());
+  ASSERT_EQ(d.exit_code, 0) << d.err;
+  EXPECT_NE(d.out.find("view network: 43 stations"), std::string::npos) << d.out;
+  EXPECT_NE(d.out.find("error ellipses at 95 %"), std::string::npos) << d.out;
+}
+
+// issue 14 point 10
+TEST_F(WorkbenchCli, Issue14_NetworkAndFitOptionsBelongToTheirViewsAndABadNetworkLeavesNothing) {
+  const struct {
+    std::string args, message;
+    int exit_code;
+  } cases[] = {
+      {kControl + " --frame GDA2020 -o a.png", "--frame: only with --view network", 2},
+      {kControl + " --no-snooping -o a.png", "--no-snooping: only with --view network", 2},
+      {kControl + " " + kControl + " -o a.png", "CONTROL: expected one control set, got 2 files", 2},
+      {kNetwork + " --view network --model helmert7 -o a.png", "--model: not with --view network", 2},
+      {kNetwork + " --view network --transform t.json -o a.png", "--transform: not with --view network", 2},
+      {kNetwork + " --view network --convention position_vector -o a.png", "--convention: with --view network only with --estimate-helmert", 2},
+      {kNetwork + " --view network --free --constrain P01=CCC -o a.png", "--free with --constrain: give one datum", 2},
+      {kNetwork + " --view network --constrain NOPE=CCC -o a.png", "--constrain NOPE=CCC: no station NOPE", 2},
+  };
+  for (const auto& c : cases) {
+    const auto r = shell("cd '" + dir_.string() + "' && " + kNoDisplay + exe() + " snapshot " + c.args);
+    EXPECT_EQ(r.exit_code, c.exit_code) << c.args << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_TRUE(leftovers({}).empty()) << c.args;
+  }
+  const auto r = shell("cd '" + dir_.string() + "' && " + kNoDisplay + exe() + " report " + kNetwork + " --view plan -o rep");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--view plan: expected network"), std::string::npos) << r.err;
+  EXPECT_TRUE(leftovers({}).empty());
+}
+
+// issue 14 point 10
+TEST_F(WorkbenchCli, Issue14_ANetworkReportHoldsAdjustsReportAndThePictureAndReplacesAFitReportOnlyWhenAsked) {
+  const auto dir = path("report");
+  const auto r = shell(kNoDisplay + exe() + " report " + kNetwork + " --view network -o " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(files(dir), (std::vector<std::string>{"network.png", "report.txt"}));
+  const std::string text = slurp(dir / "report.txt");
+  // adjust's own report, for the same inputs.
+  const auto adjust = run("adjust " + kNetwork + " -o " + path("stations.csv").string() + " --report " + path("adjust.txt").string());
+  ASSERT_EQ(adjust.exit_code, 0) << adjust.err;
+  const std::string adjust_text = slurp(path("adjust.txt"));
+  EXPECT_NE(text.find(adjust_text), std::string::npos) << "adjust wrote:\n" << adjust_text << "\nthe report has:\n" << text;
+  EXPECT_NE(text.find("network.png: " + std::to_string(kNetworkStations) + " stations, " + std::to_string(kNetworkLines) + " measurement lines"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("sha256"), std::string::npos);
+  // A fit's report in the same folder: refused, then replacing the network's files with --overwrite.
+  const auto t = path("t.json");
+  ASSERT_EQ(run("fit " + kControl + " --model helmert7 --convention position_vector -o " + t.string()).exit_code, 0);
+  const auto fit = run("report " + kControl + " --transform " + t.string() + " -o " + dir.string());
+  EXPECT_EQ(fit.exit_code, 5);
+  EXPECT_NE(fit.err.find("exists (use --overwrite to replace the report)"), std::string::npos) << fit.err;
+  EXPECT_EQ(files(dir), (std::vector<std::string>{"network.png", "report.txt"}));
+  ASSERT_EQ(run("report " + kControl + " --transform " + t.string() + " -o " + dir.string() + " --overwrite").exit_code, 0);
+  EXPECT_FALSE(fs::exists(dir / "network.png"));
+  // And back: the fit report's pictures go.
+  ASSERT_EQ(shell(kNoDisplay + exe() + " report " + kNetwork + " --view network --overwrite -o " + dir.string()).exit_code, 0);
+  EXPECT_EQ(files(dir), (std::vector<std::string>{"network.png", "report.txt"}));
 }
 
 TEST_F(WorkbenchCli, ReportWritesTheFitReportAndEveryViewAndReopensTheTransformsChoices) {
@@ -314,6 +404,29 @@ TEST_F(WorkbenchCli, TheWindowRendersUnderXvfbTheSameFramesAsTheOffScreenShell) 
   // `geoanchor gui` starts the same window.
   const auto g = shell(kWindow + exe() + " gui " + kControl + " --frames 2");
   EXPECT_EQ(g.exit_code, 0) << g.err;
+}
+
+// issue 14 point 10
+TEST_F(WorkbenchCli, Issue14_TheWindowDrawsTheNetworkViewAsTheOffScreenShellDoes) {
+  const auto window_png = path("window.png"), snapshot_png = path("snapshot.png");
+  const auto w = shell(kWindow + std::string(GEOANCHOR_GUI_EXE) + " " + kNetwork +
+                       " --view network --size 1600x1000 --frames 4 --screenshot " + window_png.string());
+  ASSERT_EQ(w.exit_code, 0) << w.err;
+  const auto s = shell(kNoDisplay + exe() + " snapshot " + kNetwork + " --view network --size 1600x1000 -o " + snapshot_png.string());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const gui::RgbImage a = gui::read_png(window_png), b = gui::read_png(snapshot_png);
+  ASSERT_EQ(a.width, b.width);
+  ASSERT_EQ(a.height, b.height);
+  std::size_t different = 0;
+  for (int y = 0; y < a.height; ++y) {
+    for (int x = 0; x < a.width; ++x) {
+      const gui::Rgb p = a.at(x, y), q = b.at(x, y);
+      if (std::abs(p.r - q.r) > kWindowColourTol || std::abs(p.g - q.g) > kWindowColourTol || std::abs(p.b - q.b) > kWindowColourTol) {
+        ++different;
+      }
+    }
+  }
+  EXPECT_LE(static_cast<double>(different), kWindowDifferentPixelsMax * a.width * a.height) << different << " pixels differ";
 }
 
 TEST_F(WorkbenchCli, TheWindowWithoutADisplaySaysSoAndPointsToSnapshot) {
