@@ -314,15 +314,7 @@ void NetworkUi::draw_plan() {
       caption += "\n" + std::to_string(flagged_count - g.labelled_measurements.size()) + " of " + std::to_string(flagged_count) +
                  " outliers and failing measurements found no room for their label: see the measurements table";
     }
-    if (!unlabelled.empty()) {
-      std::string ids;
-      for (const auto& id : unlabelled) ids += (ids.empty() ? "" : ", ") + id;
-      const std::string list = "no room on the plan for the id of " + ids;
-      caption += detail::text_size(list, regular, font, wrap_w).y <= 3.2f * font
-                     ? "\n" + list
-                     : "\nno room on the plan for the ids of " + std::to_string(unlabelled.size()) + " of " +
-                           std::to_string(stations_.size()) + " stations (hover over a station, or see the table)";
-    }
+    if (!unlabelled.empty()) caption += "\n" + detail::unlabelled_caption(unlabelled, stations_.size(), "station", regular, font, wrap_w);
     const float needed = std::ceil(font * 1.5f + detail::text_size(caption, regular, font, wrap_w).y + font * 0.2f);
     if (needed <= footer_h) break;
     footer_h = needed;
@@ -605,6 +597,34 @@ std::string rows_line(const NetworkTableGeometry& t, const char* what) {
 constexpr ImGuiTableFlags kTableFlags = ImGuiTableFlags_ScrollY | ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersOuter |
                                         ImGuiTableFlags_BordersV | ImGuiTableFlags_SizingFixedFit;
 
+// The rows of the table just begun, `n` of them, clipped to its view:
+// `row(i)` fills row i after the row is begun; `t` learns the rows wholly
+// in view.
+template <class Row>
+void clipped_rows(NetworkTableGeometry& t, std::size_t n, Row&& row) {
+  ImGuiTable* table = ImGui::GetCurrentTable();
+  const float row_h = ImGui::GetFrameHeight() + 2.0f * ImGui::GetStyle().CellPadding.y;
+  t.left = table->OuterRect.Min.x;
+  t.row_height_px = row_h;
+  bool first = true;
+  ImGuiListClipper clipper;
+  clipper.Begin(static_cast<int>(n), row_h);
+  while (clipper.Step()) {
+    for (int i = clipper.DisplayStart; i < clipper.DisplayEnd; ++i) {
+      ImGui::TableNextRow(ImGuiTableRowFlags_None, row_h);
+      const float top = table->RowPosY1;
+      if (top >= table->BgClipRect.Min.y - 0.5f && top + row_h <= table->BgClipRect.Max.y + 0.5f) {
+        if (first) t.first = static_cast<std::size_t>(i), t.first_row_top = top;
+        first = false;
+        ++t.shown;
+      }
+      ImGui::PushID(i);
+      row(static_cast<std::size_t>(i));
+      ImGui::PopID();
+    }
+  }
+}
+
 }  // namespace
 
 void NetworkUi::draw_station_table(float height) {
@@ -614,7 +634,6 @@ void NetworkUi::draw_station_table(float height) {
   t = NetworkTableGeometry{};
   t.drawn = true;
   t.total = stations_.size();
-  bool first = true;
   std::optional<std::pair<std::string, bool>> toggle;
   if (ImGui::BeginTable("stations", 7, kTableFlags, ImVec2(0.0f, height))) {
     ImGui::TableSetupScrollFreeze(0, 1);
@@ -626,47 +645,30 @@ void NetworkUi::draw_station_table(float height) {
     ImGui::TableSetupColumn("datum");
     ImGui::TableSetupColumn("status", ImGuiTableColumnFlags_WidthStretch);
     detail::header_row(audit_, "stations: header");
-    ImGuiTable* table = ImGui::GetCurrentTable();
-    const float row_h = ImGui::GetFrameHeight() + 2.0f * ImGui::GetStyle().CellPadding.y;
-    t.left = table->OuterRect.Min.x;
-    t.row_height_px = row_h;
-    ImGuiListClipper clipper;
-    clipper.Begin(static_cast<int>(stations_.size()), row_h);
-    while (clipper.Step()) {
-      for (int i = clipper.DisplayStart; i < clipper.DisplayEnd; ++i) {
-        const NetworkStationRow& s = stations_[static_cast<std::size_t>(i)];
-        ImGui::TableNextRow(ImGuiTableRowFlags_None, row_h);
-        const float top = table->RowPosY1;
-        if (top >= table->BgClipRect.Min.y - 0.5f && top + row_h <= table->BgClipRect.Max.y + 0.5f) {
-          if (first) t.first = static_cast<std::size_t>(i), t.first_row_top = top;
-          first = false;
-          ++t.shown;
-        }
+    clipped_rows(t, stations_.size(), [&](std::size_t i) {
+      const NetworkStationRow& s = stations_[i];
+      ImGui::TableNextColumn();
+      bool use = !s.left_out;
+      if (ImGui::Checkbox("##use", &use)) toggle = {s.id, !use};
+      ImGui::TableNextColumn();
+      cell(audit_, s.id, "stations: id");
+      for (int k = 0; k < 3; ++k) {
         ImGui::TableNextColumn();
-        ImGui::PushID(i);
-        bool use = !s.left_out;
-        if (ImGui::Checkbox("##use", &use)) toggle = {s.id, !use};
-        ImGui::PopID();
-        ImGui::TableNextColumn();
-        cell(audit_, s.id, "stations: id");
-        for (int k = 0; k < 3; ++k) {
-          ImGui::TableNextColumn();
-          // A levelling network has no x, y; a 2-D network no z.
-          const bool absent = local && (dimensions == 1 ? k < 2 : dimensions == 2 && k == 2);
-          cell(audit_, s.used && !absent ? detail::fmt("%.1f", 1e3 * s.sigma_m(k)) : std::string("-"), "stations: sigma");
-        }
-        ImGui::TableNextColumn();
-        cell(audit_, s.constraint, "stations: datum");
-        ImGui::TableNextColumn();
-        if (s.left_out) {
-          cell(audit_, "left out", "stations: status", palette::kLeftOut);
-        } else if (!s.used) {
-          cell(audit_, "not adjusted", "stations: status", palette::kLeftOut);
-        } else {
-          cell(audit_, "adjusted", "stations: status");
-        }
+        // A levelling network has no x, y; a 2-D network no z.
+        const bool absent = local && (dimensions == 1 ? k < 2 : dimensions == 2 && k == 2);
+        cell(audit_, s.used && !absent ? detail::fmt("%.1f", 1e3 * s.sigma_m(k)) : std::string("-"), "stations: sigma");
       }
-    }
+      ImGui::TableNextColumn();
+      cell(audit_, s.constraint, "stations: datum");
+      ImGui::TableNextColumn();
+      if (s.left_out) {
+        cell(audit_, "left out", "stations: status", palette::kLeftOut);
+      } else if (!s.used) {
+        cell(audit_, "not adjusted", "stations: status", palette::kLeftOut);
+      } else {
+        cell(audit_, "adjusted", "stations: status");
+      }
+    });
     ImGui::EndTable();
   }
   detail::text(audit_, rows_line(t, "stations"), "stations: rows");
@@ -694,7 +696,6 @@ void NetworkUi::draw_measurement_table(float height) {
   t = NetworkTableGeometry{};
   t.drawn = true;
   t.total = net.measurements.size();
-  bool first = true;
   std::optional<std::pair<std::size_t, bool>> toggle;
   if (ImGui::BeginTable("measurements", 6, kTableFlags, ImVec2(0.0f, height))) {
     ImGui::TableSetupScrollFreeze(0, 1);
@@ -705,63 +706,45 @@ void NetworkUi::draw_measurement_table(float height) {
     ImGui::TableSetupColumn("max |w|");
     ImGui::TableSetupColumn("status", ImGuiTableColumnFlags_WidthStretch);
     detail::header_row(audit_, "measurements: header");
-    ImGuiTable* table = ImGui::GetCurrentTable();
-    const float row_h = ImGui::GetFrameHeight() + 2.0f * ImGui::GetStyle().CellPadding.y;
-    t.left = table->OuterRect.Min.x;
-    t.row_height_px = row_h;
-    ImGuiListClipper clipper;
-    clipper.Begin(static_cast<int>(net.measurements.size()), row_h);
-    while (clipper.Step()) {
-      for (int i = clipper.DisplayStart; i < clipper.DisplayEnd; ++i) {
-        const std::size_t mi = static_cast<std::size_t>(i);
-        const auto& m = net.measurements[mi];
-        const solver::AdjustedMeasurement* am = adjusted[mi];
-        ImGui::TableNextRow(ImGuiTableRowFlags_None, row_h);
-        const float top = table->RowPosY1;
-        if (top >= table->BgClipRect.Min.y - 0.5f && top + row_h <= table->BgClipRect.Max.y + 0.5f) {
-          if (first) t.first = mi, t.first_row_top = top;
-          first = false;
-          ++t.shown;
-        }
-        ImGui::TableNextColumn();
-        ImGui::PushID(i);
-        bool use = !out_by_choice[mi] && !out_by_station[mi];
-        // Out through a station, or ignored by its input: not the user's to take back here.
-        const bool fixed = (out_by_station[mi] && !out_by_choice[mi]) || (m.ignore && !out_by_choice[mi]);
-        if (fixed) ImGui::BeginDisabled();
-        if (ImGui::Checkbox("##use", &use)) toggle = {mi, !use};
-        if (fixed) ImGui::EndDisabled();
-        ImGui::PopID();
-        ImGui::TableNextColumn();
-        cell(audit_, measurement_name(mi), "measurements: #");
-        ImGui::TableNextColumn();
-        cell(audit_, geodesy::to_string(m.kind), "measurements: kind");
-        ImGui::TableNextColumn();
-        cell(audit_, stations_text(net, m), "measurements: stations");
-        ImGui::TableNextColumn();
-        const bool testable = am && std::isfinite(am->w_max);
-        const std::string w = testable ? detail::fmt("%.2f", am->w_max) : std::string("-");
-        cell(audit_, w, "measurements: w", testable && am->w_max > w_critical ? std::optional<Rgb>(palette::kOutlier) : std::nullopt);
-        ImGui::TableNextColumn();
-        if (out_by_choice[mi]) {
-          cell(audit_, "left out", "measurements: status", palette::kLeftOut);
-        } else if (out_by_station[mi]) {
-          cell(audit_, "left out with its station", "measurements: status", palette::kLeftOut);
-        } else if (m.ignore) {
-          cell(audit_, "ignored by its input", "measurements: status", palette::kLeftOut);
-        } else if (!am) {
-          cell(audit_, "not adjusted", "measurements: status", palette::kLeftOut);
-        } else if (am->outlier) {
-          cell(audit_, "OUTLIER (removed)", "measurements: status", palette::kOutlier);
-        } else if (testable && am->w_max > w_critical) {
-          cell(audit_, "fails its w-test", "measurements: status", palette::kOutlier);
-        } else if (!testable) {
-          cell(audit_, "used (no redundancy)", "measurements: status");
-        } else {
-          cell(audit_, "used", "measurements: status");
-        }
+    clipped_rows(t, net.measurements.size(), [&](std::size_t mi) {
+      const auto& m = net.measurements[mi];
+      const solver::AdjustedMeasurement* am = adjusted[mi];
+      ImGui::TableNextColumn();
+      bool use = !out_by_choice[mi] && !out_by_station[mi];
+      // Out through a station, or ignored by its input: not the user's to take back here.
+      const bool fixed = (out_by_station[mi] && !out_by_choice[mi]) || (m.ignore && !out_by_choice[mi]);
+      if (fixed) ImGui::BeginDisabled();
+      if (ImGui::Checkbox("##use", &use)) toggle = {mi, !use};
+      if (fixed) ImGui::EndDisabled();
+      ImGui::TableNextColumn();
+      cell(audit_, measurement_name(mi), "measurements: #");
+      ImGui::TableNextColumn();
+      cell(audit_, geodesy::to_string(m.kind), "measurements: kind");
+      ImGui::TableNextColumn();
+      cell(audit_, stations_text(net, m), "measurements: stations");
+      ImGui::TableNextColumn();
+      const bool testable = am && std::isfinite(am->w_max);
+      const std::string w = testable ? detail::fmt("%.2f", am->w_max) : std::string("-");
+      cell(audit_, w, "measurements: w", testable && am->w_max > w_critical ? std::optional<Rgb>(palette::kOutlier) : std::nullopt);
+      ImGui::TableNextColumn();
+      if (out_by_choice[mi]) {
+        cell(audit_, "left out", "measurements: status", palette::kLeftOut);
+      } else if (out_by_station[mi]) {
+        cell(audit_, "left out with its station", "measurements: status", palette::kLeftOut);
+      } else if (m.ignore) {
+        cell(audit_, "ignored by its input", "measurements: status", palette::kLeftOut);
+      } else if (!am) {
+        cell(audit_, "not adjusted", "measurements: status", palette::kLeftOut);
+      } else if (am->outlier) {
+        cell(audit_, "OUTLIER (removed)", "measurements: status", palette::kOutlier);
+      } else if (testable && am->w_max > w_critical) {
+        cell(audit_, "fails its w-test", "measurements: status", palette::kOutlier);
+      } else if (!testable) {
+        cell(audit_, "used (no redundancy)", "measurements: status");
+      } else {
+        cell(audit_, "used", "measurements: status");
       }
-    }
+    });
     ImGui::EndTable();
   }
   detail::text(audit_, rows_line(t, "measurements"), "measurements: rows");

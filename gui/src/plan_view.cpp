@@ -156,16 +156,7 @@ void WorkbenchUi::draw_plan() {
                  "the fit, the prediction's), " + detail::fmt("%.4f", g.ellipse_k) + " σ, × " + detail::fmt("%g", g.arrow_exaggeration) +
                  " as the arrows";
     }
-    if (!unlabelled.empty()) {
-      // Listed while the list takes at most three lines, else counted.
-      std::string ids;
-      for (const auto& id : unlabelled) ids += (ids.empty() ? "" : ", ") + id;
-      const std::string list = "no room on the plan for the id of " + ids;
-      caption += detail::text_size(list, regular, font, wrap_w).y <= 3.2f * font
-                     ? "\n" + list
-                     : "\nno room on the plan for the ids of " + std::to_string(unlabelled.size()) + " of " +
-                           std::to_string(rows_.size()) + " marks (hover over a mark, or see the table)";
-    }
+    if (!unlabelled.empty()) caption += "\n" + detail::unlabelled_caption(unlabelled, rows_.size(), "mark", regular, font, wrap_w);
     const float needed = std::ceil(font * 1.5f + detail::text_size(caption, regular, font, wrap_w).y + font * 0.2f);
     if (needed <= footer_h) break;
     footer_h = needed;

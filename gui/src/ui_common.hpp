@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "geoanchor/gui/palette.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
@@ -146,6 +147,19 @@ inline void header_row(TextAudit& audit, std::string_view where) {
     ImGui::PopID();
     audit.check_width(name, where, ImGui::CalcTextSize(name).x + arrow, available);
   }
+}
+
+// A plan's caption line for the ids that found no room on it: listed while
+// the list takes at most three lines, else counted ("… of N marks" for
+// thing "mark").
+inline std::string unlabelled_caption(const std::vector<std::string>& unlabelled, std::size_t total, const std::string& thing,
+                                      ImFont* font, float size, float wrap_px) {
+  std::string ids;
+  for (const auto& id : unlabelled) ids += (ids.empty() ? "" : ", ") + id;
+  const std::string list = "no room on the plan for the id of " + ids;
+  if (text_size(list, font, size, wrap_px).y <= 3.2f * size) return list;
+  return "no room on the plan for the ids of " + std::to_string(unlabelled.size()) + " of " + std::to_string(total) + " " + thing +
+         "s (hover over a " + thing + ", or see the table)";
 }
 
 constexpr ImGuiWindowFlags kPanelFlags = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
