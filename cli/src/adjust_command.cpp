@@ -115,7 +115,7 @@ int run_adjust(const AdjustCommandOptions& o) {
     std::cerr << "geoanchor: error[E_ADJUST_SNOOPING_LIMIT]: " << r.refused_because << "; nothing written\n";
     return exit_code(ErrorKind::rejected);
   }
-  if (g.applicable && !g.passed && g.statistic > g.critical_upper && !o.accept_failed_global_test) {
+  if (g.failed_high() && !o.accept_failed_global_test) {
     std::string worst;
     double w = 0.0;
     for (const auto& am : r.measurements) {
@@ -164,23 +164,26 @@ int run_adjust(const AdjustCommandOptions& o) {
     side["inputs"] = inputs;
     stations.sidecar() << side.dump(2) << "\n";
   }
+  // One group (RELIABILITY 41): every output written before any is
+  // published, the stations' CSV last; a failure leaves none of them.
+  std::vector<io::AtomicOutputFile*> group;
   if (sinex) {
     sinex->stream() << sinex_text;
-    sinex->commit();
+    group.push_back(sinex.get());
   }
   if (helmert) {
     helmert->stream() << helmert_text;
-    helmert->commit();
+    group.push_back(helmert.get());
   }
   if (measurements) {
     measurements->stream() << workflow::measurements_csv(prepared.network, r);
-    measurements->commit();
+    group.push_back(measurements.get());
   }
   if (report) {
     report->stream() << text;
-    report->commit();
+    group.push_back(report.get());
   }
-  stations.commit("the adjusted stations");
+  stations.commit_with(group, "the adjusted stations");
   if (o.json) io::finish_standard_output("the report (--json)");
   return 0;
 }

@@ -399,16 +399,21 @@ std::ostream& AtomicOutputFile::stream() { return s_->out; }
 
 void AtomicOutputFile::commit() { publish_together({this}); }
 
-void publish_together(std::initializer_list<AtomicOutputFile*> outputs) {
-  std::vector<AtomicOutputFile*> v(outputs);
+void publish_together(std::initializer_list<AtomicOutputFile*> outputs) { publish_together(std::vector<AtomicOutputFile*>(outputs)); }
+
+void publish_together(const std::vector<AtomicOutputFile*>& outputs) {
+  const std::vector<AtomicOutputFile*>& v = outputs;
   for (const auto* f : v) {
     if (f->committed_ || f->s_->published || f->s_->removed) throw std::logic_error("publish_together: an output was already committed");
   }
   std::string names;
+  const char* last_joint = v.size() == 2 ? " nor " : " and ";
   for (std::size_t k = 0; k < v.size(); ++k) {
-    names += (k == 0 ? "" : k + 1 == v.size() ? " nor " : ", ") + v[k]->final_path_.string();
+    names += (k == 0 ? "" : k + 1 == v.size() ? last_joint : ", ") + v[k]->final_path_.string();
   }
-  const std::string none_left = v.size() > 1 ? "neither " + names + " was written" : "no output was left";
+  const std::string none_left = v.size() > 2 ? "none of " + names + " was written"
+                                : v.size() == 2 ? "neither " + names + " was written"
+                                                : "no output was left";
   // Temporaries removed and published outputs taken back: nothing of this group remains.
   auto roll_back = [&] {
     for (auto* f : v) {
@@ -544,6 +549,16 @@ void DataOutput::commit(std::string_view what_for_standard_output) {
     return;
   }
   publish_together({sidecar_.get(), data_.get()});
+}
+
+void DataOutput::commit_with(const std::vector<AtomicOutputFile*>& others, std::string_view what_for_standard_output) {
+  std::vector<AtomicOutputFile*> group = others;
+  if (data_) {
+    group.push_back(sidecar_.get());
+    group.push_back(data_.get());
+  }
+  if (!group.empty()) publish_together(group);
+  if (!data_) finish_standard_output(what_for_standard_output);
 }
 
 void finish_standard_output(std::string_view what, std::string_view consequence) {

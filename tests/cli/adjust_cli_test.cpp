@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -15,6 +18,7 @@ namespace {
 
 using testing::CliTest;
 using testing::RunResult;
+using testing::slurp;
 
 class AdjustCli : public CliTest {};
 
@@ -180,6 +184,45 @@ TEST_F(AdjustCli, Issue14_PublishedSamplesWriteEveryOutput) {
   const RunResult g = run("adjust '" + f + "gama/tst-tetrahedron-1.gkf' -o '" + path("t.csv").string() + "' --no-snooping");
   EXPECT_EQ(g.exit_code, 4) << g.err;  // Gama's own result fails its global test (m0/σ = 5.97)
   EXPECT_NE(g.err.find("E_ADJUST_GLOBAL_TEST"), std::string::npos) << g.err;
+}
+
+// RELIABILITY 41: adjust's outputs (stations CSV and sidecar, SINEX,
+// measurements, report) are one group: all are written before any is
+// published, so a write that fails leaves none of them, and the rerun
+// writes them all. The file-size limit (ulimit -f, 512-byte blocks) is set
+// below the largest output's size from a run without it, so one write
+// fails with EFBIG as on a full disk.
+TEST_F(AdjustCli, Reliability41_AFailedWriteLeavesNoneOfTheOutputsAndARerunWritesThemAll) {
+  const std::string network = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_network/lszh_network.json";
+  const auto args = [&](const std::filesystem::path& dir) {
+    return "adjust '" + network + "' -o '" + (dir / "st.csv").string() + "' --measurements '" + (dir / "m.csv").string() +
+           "' --sinex '" + (dir / "s.snx").string() + "' --report '" + (dir / "r.txt").string() + "'";
+  };
+  const std::vector<std::string> all{"m.csv", "r.txt", "s.snx", "st.csv", "st.csv.geoanchor.json"};
+  const auto whole = path("whole");
+  std::filesystem::create_directories(whole);
+  ASSERT_EQ(run(args(whole)).exit_code, 0);
+  ASSERT_EQ(files(whole), all);
+  std::uintmax_t smallest = UINTMAX_MAX, largest = 0;
+  for (const auto& f : all) {
+    smallest = std::min(smallest, std::filesystem::file_size(whole / f));
+    largest = std::max(largest, std::filesystem::file_size(whole / f));
+  }
+  const std::uintmax_t blocks = (largest - 1) / 512;
+  ASSERT_GE(blocks * 512, smallest) << "the limit must let some output through for the group to matter";
+
+  const auto cut = path("cut");
+  std::filesystem::create_directories(cut);
+  const RunResult failed = shell("trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; exec " + exe() + " " + args(cut));
+  EXPECT_EQ(failed.exit_code, 5) << failed.err;
+  EXPECT_NE(failed.err.find("error[E_WRITE]: "), std::string::npos) << failed.err;
+  EXPECT_NE(failed.err.find("(File too large); none of "), std::string::npos) << failed.err;
+  EXPECT_EQ(files(cut), std::vector<std::string>{}) << "left behind";
+
+  const RunResult rerun = run(args(cut));
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
+  EXPECT_EQ(files(cut), all);
+  EXPECT_EQ(slurp(cut / "m.csv"), slurp(whole / "m.csv"));
 }
 
 }  // namespace

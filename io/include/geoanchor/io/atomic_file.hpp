@@ -65,7 +65,7 @@ class AtomicOutputFile {
   void commit();
 
  private:
-  friend void publish_together(std::initializer_list<AtomicOutputFile*> outputs);
+  friend void publish_together(const std::vector<AtomicOutputFile*>& outputs);
   struct State;
   std::filesystem::path final_path_;
   std::filesystem::path temp_path_;
@@ -88,6 +88,8 @@ class AtomicOutputFile {
 // (apply gives the sidecar first and the tile last). Throws std::logic_error
 // if an output was already committed.
 void publish_together(std::initializer_list<AtomicOutputFile*> outputs);
+// The same for a group assembled at run time (a command's optional outputs).
+void publish_together(const std::vector<AtomicOutputFile*>& outputs);
 
 // The check AtomicOutputFile's constructor makes on its final path, for a
 // command that wants to refuse before doing its work. Throws as it does
@@ -150,6 +152,9 @@ class DataOutput {
   // Publishes the file and its sidecar together (publish_together), or
   // flushes standard output (finish_standard_output); throws Error (io).
   void commit(std::string_view what_for_standard_output);
+  // The same, published with `others` as one group (`others` first, the
+  // sidecar, the file last): a command's outputs that belong together.
+  void commit_with(const std::vector<AtomicOutputFile*>& others, std::string_view what_for_standard_output);
 
  private:
   std::unique_ptr<AtomicOutputFile> sidecar_, data_;

@@ -112,6 +112,9 @@ struct GlobalTest {
   double critical_upper = 0.0;  // χ²(dof) at 1 − α/2
   bool passed = false;          // statistic within [lower, upper]
   bool applicable = true;       // false without a-priori sigmas
+  // Above the upper bound: the measurements disagree more than their
+  // sigmas allow (what fit and adjust refuse to write unless accepted).
+  bool failed_high() const { return applicable && !passed && statistic > critical_upper; }
 };
 
 struct PointResult {
