@@ -27,10 +27,20 @@
 
 namespace geoanchor::cli {
 
+// How an input path is named in reports and JSON: "<stdin>" for "-".
+inline std::string input_name(const std::string& path) { return path == "-" ? "<stdin>" : path; }
+
+// The same for a command's list of inputs.
+inline std::vector<std::string> input_names(const std::vector<std::string>& paths) {
+  std::vector<std::string> out;
+  for (const auto& p : paths) out.push_back(input_name(p));
+  return out;
+}
+
 class CommandInput {
  public:
   // Throws geoanchor::Error (io) naming the path when it cannot be opened.
-  explicit CommandInput(const std::string& path) : from_stdin_(path == "-"), name_(from_stdin_ ? "<stdin>" : path) {
+  explicit CommandInput(const std::string& path) : from_stdin_(path == "-"), name_(input_name(path)) {
     if (from_stdin_) return;
     file_.open(path, std::ios::binary);
     if (!file_) throw Error(ErrorKind::io, "E_READ", path + ": cannot open input: " + std::strerror(errno));
@@ -116,7 +126,7 @@ struct ControlInput {
 inline ControlInput read_control_input(const std::string& path, const io::ControlReadOptions& options, bool hash = false) {
   ControlInput c;
   c.from_stdin = path == "-";
-  c.name = c.from_stdin ? "<stdin>" : path;
+  c.name = input_name(path);
   if (!c.from_stdin) {
     c.set = io::read_control_set(path, options);
     if (hash) c.sha256 = io::sha256_file_hex(path);

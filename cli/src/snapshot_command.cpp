@@ -84,9 +84,9 @@ std::vector<std::string> network_warnings(const NetworkSession& s) {
   if (!r.refused_because.empty() && std::find(out.begin(), out.end(), r.refused_because) == out.end()) out.push_back(r.refused_because);
   const auto& g = r.global_test;
   if (g.applicable && !g.passed) {
-    out.push_back("the global test fails " + std::string(g.statistic > g.critical_upper ? "high" : "low") + " (" +
-                  format_fixed(g.statistic, 3) + " outside [" + format_fixed(g.critical_lower, 3) + ", " +
-                  format_fixed(g.critical_upper, 3) + "]): `geoanchor adjust` would refuse to write its results");
+    out.push_back("the global test fails " + std::string(g.failed_high() ? "high" : "low") + " (" + format_fixed(g.statistic, 3) +
+                  " outside [" + format_fixed(g.critical_lower, 3) + ", " + format_fixed(g.critical_upper, 3) + "])" +
+                  (g.failed_high() ? ": `geoanchor adjust` would refuse to write its results" : ""));
   }
   return out;
 }
@@ -99,13 +99,16 @@ void print_network_notes(const NetworkSession& s) {
 // What the picture of the network view shows, in one line.
 std::string network_figure_line(const gui::NetworkUi& ui, const NetworkSession& s) {
   const gui::NetworkGeometry& g = ui.plan();
-  std::string line = std::to_string(s.model->network().stations.size()) + " stations, ";
+  const double w_critical = s.model->result() ? s.model->result()->w_critical : std::numeric_limits<double>::infinity();
+  std::string line = std::to_string(s.model->network().stations.size()) + " stations, " +
+                     std::to_string(s.model->network().measurements.size()) + " measurements (";
+  for (std::size_t c = 0; c < gui::kMeasurementClasses; ++c) {
+    line += (c ? ", " : "") + std::to_string(g.measurements_by_class[c]) + " " +
+            gui::describe(static_cast<gui::MeasurementClass>(c), w_critical);
+  }
   std::size_t lines = 0;
   for (std::size_t n : g.lines_by_class) lines += n;
-  line += std::to_string(lines) + " measurement lines (";
-  const char* names[] = {"|w| ≤ 2", "2 < |w| ≤ critical", "failing, kept", "outliers", "no redundancy", "left out or not adjusted"};
-  for (std::size_t c = 0; c < gui::kLineClasses; ++c) line += (c ? ", " : "") + std::to_string(g.lines_by_class[c]) + " " + names[c];
-  line += ")";
+  line += "), drawn as " + std::to_string(lines) + " lines";
   if (g.ellipses_drawn > 0) {
     line += "; " + std::to_string(g.ellipses_drawn) + " error ellipses at " + format_shortest(100.0 * g.confidence) + " % × " +
             format_shortest(g.ellipse_exaggeration);
@@ -205,7 +208,7 @@ int run_snapshot(const SnapshotOptions& options) {
     ordered_json j;
     j["schema"] = "geoanchor.snapshot/1";
     j["control"] = network ? ordered_json(nullptr) : ordered_json(s->control_name);
-    if (network) j["inputs"] = o.workbench.inputs;
+    if (network) j["inputs"] = input_names(o.workbench.inputs);
     j["output"] = o.output;
     j["bytes"] = bytes;
     j["view"] = network ? std::string(kNetworkView) : std::string(gui::to_string(view));
@@ -217,13 +220,18 @@ int run_snapshot(const SnapshotOptions& options) {
                          : ordered_json(nullptr);
     if (network) {
       const gui::NetworkGeometry& g = network_ui->plan();
-      ordered_json classes;
-      for (std::size_t c = 0; c < gui::kLineClasses; ++c) classes[gui::to_string(static_cast<gui::LineClass>(c))] = g.lines_by_class[c];
+      ordered_json classes, measurement_classes;
+      for (std::size_t c = 0; c < gui::kMeasurementClasses; ++c) {
+        const char* name = gui::to_string(static_cast<gui::MeasurementClass>(c));
+        classes[name] = g.lines_by_class[c];
+        measurement_classes[name] = g.measurements_by_class[c];
+      }
       ordered_json labelled = ordered_json::array();
       for (std::size_t m : g.labelled_measurements) labelled.push_back(m + 1);
       j["network"] = {{"stations", ns->model->network().stations.size()},
                       {"measurements", ns->model->network().measurements.size()},
                       {"adjusted", ns->model->result().has_value()},
+                      {"measurements_by_class", measurement_classes},
                       {"lines", classes},
                       {"ellipses", g.ellipses_drawn},
                       {"ellipse_exaggeration", g.ellipse_exaggeration},
@@ -272,7 +280,7 @@ void network_report(const ReportOptions& o, int w, int h, ReportContents& out) {
   text << "geoanchor report\n"
        << "  generator: geoanchor " GEOANCHOR_VERSION ": " << cmd << "\n";
   for (const auto& in : o.workbench.inputs) {
-    text << "  input:     " << (in == "-" ? std::string("<stdin>") : in)
+    text << "  input:     " << input_name(in)
          << (in == "-" ? std::string() : " (sha256 " + io::sha256_file_hex(in) + ")") << "\n";
   }
   for (const auto& warning : network_warnings(ns)) text << "  warning: " << warning << "\n";
@@ -288,8 +296,8 @@ void network_report(const ReportOptions& o, int w, int h, ReportContents& out) {
   const std::string name = std::string(kNetworkView) + ".png";
   images.emplace_back(name, gui::encode_png(renderer.render(ui), name));
   text << "  " << name << ": " << network_figure_line(ui, ns) << "\n";
-  out.about = {{"control", nullptr}, {"inputs", o.workbench.inputs}, {"transform", nullptr}, {"view", kNetworkView}};
-  out.outcome = {{"table_pages", 0}, {"adjusted", ns.model->result().has_value()}, {"notes", network_notes(ns)}, {"warnings", network_warnings(ns)}};
+  out.about = {{"control", nullptr}, {"inputs", input_names(o.workbench.inputs)}, {"transform", nullptr}, {"view", kNetworkView}};
+  out.outcome = {{"table_pages", 0}, {"fit", nullptr}, {"adjusted", ns.model->result().has_value()}, {"notes", network_notes(ns)}, {"warnings", network_warnings(ns)}};
   out.figures = " PNG view (the network)";
 }
 

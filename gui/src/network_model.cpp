@@ -1,6 +1,8 @@
 #include "geoanchor/gui/network_model.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <limits>
 #include <numbers>
@@ -46,9 +48,7 @@ geodesy::Network NetworkModel::chosen() const {
   geodesy::Network n = network_;
   for (std::size_t mi = 0; mi < n.measurements.size(); ++mi) {
     auto& m = n.measurements[mi];
-    bool out = measurement_out_[mi];
-    for (std::size_t s : m.stations) out = out || station_out_[s];
-    if (out) m.ignore = true;
+    if (measurement_out_[mi] || measurement_out_through_station(mi)) m.ignore = true;
   }
   return n;
 }
@@ -112,6 +112,53 @@ std::vector<std::size_t> NetworkModel::measurements_left_out() const {
   return out;
 }
 
+bool NetworkModel::measurement_out_through_station(std::size_t measurement) const {
+  for (std::size_t s : network_.measurements.at(measurement).stations) {
+    if (station_out_[s]) return true;
+  }
+  return false;
+}
+
+const char* to_string(MeasurementClass c) {
+  switch (c) {
+    case MeasurementClass::small: return "small";
+    case MeasurementClass::elevated: return "elevated";
+    case MeasurementClass::failing: return "failing";
+    case MeasurementClass::outlier: return "outlier";
+    case MeasurementClass::untestable: return "untestable";
+    case MeasurementClass::left_out: return "left_out";
+  }
+  return "?";
+}
+
+const char* status_text(MeasurementClass c) {
+  switch (c) {
+    case MeasurementClass::small: return "used";
+    case MeasurementClass::elevated: return "used";  // the |w| column is orange
+    case MeasurementClass::failing: return "FAILS its test";
+    case MeasurementClass::outlier: return "OUTLIER (removed)";
+    case MeasurementClass::untestable: return "used (no redundancy)";
+    case MeasurementClass::left_out: return "not adjusted";
+  }
+  return "?";
+}
+
+double elevated_w(double w_critical) { return std::isfinite(w_critical) ? std::min(2.0, w_critical) : 2.0; }
+
+std::string describe(MeasurementClass c, double w_critical) {
+  char w[32];
+  std::snprintf(w, sizeof w, "%.2f", elevated_w(w_critical));
+  switch (c) {
+    case MeasurementClass::small: return std::string("test passes, |w| ≤ ") + w;
+    case MeasurementClass::elevated: return std::string("test passes, |w| > ") + w;
+    case MeasurementClass::failing: return "test fails (kept)";
+    case MeasurementClass::outlier: return "outlier (removed)";
+    case MeasurementClass::untestable: return "no redundancy";
+    case MeasurementClass::left_out: return "left out / not adjusted";
+  }
+  return "?";
+}
+
 bool NetworkModel::schematic_plan() const {
   return network_.space == geodesy::NetworkSpace::local && network_.local_dimensions == 1;
 }
@@ -151,6 +198,16 @@ std::vector<NetworkStationRow> NetworkModel::stations() const {
         row.sigma_m = a.covariance_local_m2.diagonal().cwiseMax(0.0).cwiseSqrt();
       }
     }
+    if (!ellipsoidal && !schematic_plan()) {
+      // The solver's azimuth runs from +x towards +y; the plan is drawn east,
+      // north, so the major axis is turned by the axes as the positions are.
+      const Eigen::Vector2d d = std::cos(row.ellipse.azimuth_rad) * x_en + std::sin(row.ellipse.azimuth_rad) * y_en;
+      double az = std::atan2(d.x(), d.y());
+      if (az < 0.0) az += std::numbers::pi;
+      if (az >= std::numbers::pi) az -= std::numbers::pi;
+      row.ellipse.azimuth_rad = az;
+      row.ellipse_confidence.azimuth_rad = az;
+    }
     if (schematic_plan()) {
       const double t = 2.0 * std::numbers::pi * static_cast<double>(s) / static_cast<double>(network_.stations.size());
       row.plan_m = Eigen::Vector2d(std::sin(t), std::cos(t));
@@ -164,50 +221,76 @@ std::vector<NetworkStationRow> NetworkModel::stations() const {
   return out;
 }
 
-std::vector<NetworkLine> NetworkModel::lines() const {
-  // Each measurement's result, by its index in the network.
-  std::vector<const solver::AdjustedMeasurement*> adjusted(network_.measurements.size(), nullptr);
-  if (result_) {
-    for (const auto& am : result_->measurements) {
-      if (am.index < adjusted.size()) adjusted[am.index] = &am;
-    }
+namespace {
+
+// The station pairs a measurement is drawn between, or none (a point, a
+// height: at the stations themselves).
+std::vector<std::pair<std::size_t, std::size_t>> line_ends(const geodesy::NetworkMeasurement& m) {
+  std::vector<std::pair<std::size_t, std::size_t>> out;
+  const auto add = [&](std::size_t from, std::size_t to) { out.emplace_back(from, to); };
+  switch (m.kind) {
+    case MeasurementKind::gnss_baselines:
+      for (std::size_t k = 0; k + 1 < m.stations.size(); k += 2) add(m.stations[k], m.stations[k + 1]);
+      break;
+    case MeasurementKind::horizontal_angle:  // at, backsight, foresight: the two sights
+      if (m.stations.size() == 3) {
+        add(m.stations[0], m.stations[1]);
+        add(m.stations[0], m.stations[2]);
+      }
+      break;
+    case MeasurementKind::gnss_points:
+    case MeasurementKind::ellipsoidal_height:
+    case MeasurementKind::orthometric_height:
+    case MeasurementKind::geodetic_latitude:
+    case MeasurementKind::geodetic_longitude:
+      break;  // at the stations themselves: no line
+    default:
+      if (m.stations.size() == 2) add(m.stations[0], m.stations[1]);
+      break;
   }
+  return out;
+}
+
+}  // namespace
+
+std::vector<NetworkMeasurementRow> NetworkModel::measurement_rows() const {
+  std::vector<NetworkMeasurementRow> out(network_.measurements.size());
+  for (std::size_t mi = 0; mi < out.size(); ++mi) {
+    out[mi].index = mi;
+    out[mi].w_max = std::numeric_limits<double>::quiet_NaN();
+    out[mi].has_line = !line_ends(network_.measurements[mi]).empty();
+  }
+  if (!result_) return out;
+  for (std::size_t k = 0; k < result_->measurements.size(); ++k) {
+    const auto& am = result_->measurements[k];
+    if (am.index >= out.size()) continue;
+    NetworkMeasurementRow& row = out[am.index];
+    row.adjusted = k;
+    if (std::isfinite(am.w_max)) row.w_max = am.w_max;
+    row.shown_as = am.outlier                           ? MeasurementClass::outlier
+                   : !am.used                           ? MeasurementClass::left_out
+                   : am.test_dof <= 0 || !std::isfinite(am.w_max) ? MeasurementClass::untestable
+                   : am.fails_test(options_.alpha_point) ? MeasurementClass::failing
+                   : am.w_max > elevated_w(result_->w_critical) ? MeasurementClass::elevated
+                                                                 : MeasurementClass::small;
+  }
+  return out;
+}
+
+std::vector<NetworkLine> NetworkModel::lines() const {
+  const std::vector<NetworkMeasurementRow> rows = measurement_rows();
   std::vector<NetworkLine> out;
-  for (std::size_t mi = 0; mi < network_.measurements.size(); ++mi) {
-    const auto& m = network_.measurements[mi];
-    bool out_by_choice = measurement_out_[mi];
-    for (std::size_t s : m.stations) out_by_choice = out_by_choice || station_out_[s];
-    const solver::AdjustedMeasurement* am = adjusted[mi];
-    auto add = [&](std::size_t from, std::size_t to) {
+  for (const auto& row : rows) {
+    for (const auto& [from, to] : line_ends(network_.measurements[row.index])) {
       NetworkLine l;
       l.from = from;
       l.to = to;
-      l.measurement = mi;
-      l.left_out = out_by_choice;
-      l.used = am && am->used;
-      l.outlier = am && am->outlier;
-      l.w_max = am && std::isfinite(am->w_max) ? am->w_max : std::numeric_limits<double>::quiet_NaN();
+      l.measurement = row.index;
+      l.w_max = row.w_max;
+      l.shown_as = row.shown_as;
+      l.used = row.adjusted && result_->measurements[*row.adjusted].used;
+      l.left_out = measurement_out_[row.index] || measurement_out_through_station(row.index);
       out.push_back(l);
-    };
-    switch (m.kind) {
-      case MeasurementKind::gnss_baselines:
-        for (std::size_t k = 0; k + 1 < m.stations.size(); k += 2) add(m.stations[k], m.stations[k + 1]);
-        break;
-      case MeasurementKind::horizontal_angle:  // at, backsight, foresight: the two sights
-        if (m.stations.size() == 3) {
-          add(m.stations[0], m.stations[1]);
-          add(m.stations[0], m.stations[2]);
-        }
-        break;
-      case MeasurementKind::gnss_points:
-      case MeasurementKind::ellipsoidal_height:
-      case MeasurementKind::orthometric_height:
-      case MeasurementKind::geodetic_latitude:
-      case MeasurementKind::geodetic_longitude:
-        break;  // at the stations themselves: no line
-      default:
-        if (m.stations.size() == 2) add(m.stations[0], m.stations[1]);
-        break;
     }
   }
   return out;

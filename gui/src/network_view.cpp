@@ -25,27 +25,6 @@ using detail::iv;
 using detail::Obstacles;
 using detail::panel;
 
-LineClass line_class(const NetworkLine& l, double w_critical) {
-  if (l.outlier) return LineClass::outlier;
-  if (l.left_out || !l.used) return LineClass::left_out;
-  if (!std::isfinite(l.w_max)) return LineClass::untestable;
-  if (l.w_max > w_critical) return LineClass::failing;
-  if (l.w_max > 2.0) return LineClass::elevated;
-  return LineClass::small;
-}
-
-const char* to_string(LineClass c) {
-  switch (c) {
-    case LineClass::small: return "small";
-    case LineClass::elevated: return "elevated";
-    case LineClass::failing: return "failing";
-    case LineClass::outlier: return "outlier";
-    case LineClass::untestable: return "untestable";
-    case LineClass::left_out: return "left_out";
-  }
-  return "?";
-}
-
 Eigen::Vector2d NetworkGeometry::pixel_of(const Eigen::Vector2d& en_m) const {
   const Eigen::Vector2d c(0.5 * (left + right), 0.5 * (top + bottom));
   return c + px_per_m * Eigen::Vector2d(en_m.x() - center_m.x(), -(en_m.y() - center_m.y()));
@@ -63,21 +42,28 @@ struct LineStyle {
   bool dashed;
 };
 
-LineStyle style_of(LineClass c) {
+LineStyle style_of(MeasurementClass c) {
   switch (c) {
-    case LineClass::small: return {palette::kPass, 1.5f, false};
-    case LineClass::elevated: return {palette::kWarning, 2.5f, false};
-    case LineClass::failing: return {palette::kOutlier, 3.5f, false};
-    case LineClass::outlier: return {palette::kOutlier, 3.0f, true};
-    case LineClass::untestable: return {palette::kInk, 1.0f, true};
-    case LineClass::left_out: return {palette::kLeftOut, 1.0f, true};
+    case MeasurementClass::small: return {palette::kPass, 1.5f, false};
+    case MeasurementClass::elevated: return {palette::kWarning, 2.5f, false};
+    case MeasurementClass::failing: return {palette::kOutlier, 3.5f, false};
+    case MeasurementClass::outlier: return {palette::kOutlier, 3.0f, true};
+    case MeasurementClass::untestable: return {palette::kInk, 1.0f, true};
+    case MeasurementClass::left_out: return {palette::kLeftOut, 1.0f, true};
   }
   return {palette::kInk, 1.0f, false};
 }
 
 // Drawn from the least to the most telling, so that the worst is on top.
-constexpr std::array<LineClass, kLineClasses> kDrawOrder{LineClass::left_out, LineClass::untestable, LineClass::small,
-                                                         LineClass::elevated, LineClass::failing,    LineClass::outlier};
+constexpr std::array<MeasurementClass, kMeasurementClasses> kDrawOrder{MeasurementClass::left_out, MeasurementClass::untestable,
+                                                                       MeasurementClass::small,    MeasurementClass::elevated,
+                                                                       MeasurementClass::failing,  MeasurementClass::outlier};
+
+// A length in millimetres for the caption: whole millimetres from 10 mm,
+// two significant digits below.
+std::string mm_text(double mm) { return mm >= 10.0 ? detail::fmt("%.0f", mm) : detail::fmt("%.2g", mm); }
+
+bool flagged(MeasurementClass c) { return c == MeasurementClass::outlier || c == MeasurementClass::failing; }
 
 void line(ImDrawList* dl, const Eigen::Vector2d& a, const Eigen::Vector2d& b, const LineStyle& s) {
   if (!s.dashed) {
@@ -131,6 +117,7 @@ void NetworkUi::refresh() {
   if (model_.generation() == shown_generation_) return;
   shown_generation_ = model_.generation();
   stations_ = model_.stations();
+  measurements_ = model_.measurement_rows();
   lines_ = model_.lines();
 }
 
@@ -141,9 +128,12 @@ void NetworkUi::draw(float width, float height) {
   measurement_table_.drawn = false;
   audit_ = TextAudit{};
   const float font = ImGui::GetFontSize();
-  const float side = std::round(std::clamp(width * 0.38f, font * 30.0f, width * 0.5f));
-  panel(audit_, model_.schematic_plan() ? "Levelling network (schematic)" : "Network plan (east, north at the centroid)", 0, 0,
-        width - side, height, [this] { draw_plan(); });
+  // The side panel: 38 % of the width, at least 30 ems, at most half.
+  const float side = std::round(std::min(std::max(width * 0.38f, font * 30.0f), width * 0.5f));
+  const char* title = model_.schematic_plan() ? "Levelling network (schematic)"
+                      : model_.network().space == geodesy::NetworkSpace::local ? "Network plan (local x, y turned to east, north)"
+                                                                                : "Network plan (east, north at the centroid)";
+  panel(audit_, title, 0, 0, width - side, height, [this] { draw_plan(); });
   panel(audit_, "Adjustment", width - side, 0, side, height, [this] { draw_side(); });
 }
 
@@ -179,7 +169,7 @@ void NetworkUi::draw_plan() {
   const Eigen::Vector2d span = (hi - lo).cwiseMax(g.schematic ? 0.5 : 1.0);
   const bool ellipses = !dense && !g.schematic && max_a_m > 0.0;
   // The median distance from a station to its nearest neighbour: ellipses
-  // drawn much larger than half of it would cover their neighbours.
+  // whose semi-major axis is drawn longer than it reach their neighbours.
   double spacing_m = std::numeric_limits<double>::infinity();
   if (ellipses) {
     std::vector<double> nearest;
@@ -198,33 +188,26 @@ void NetworkUi::draw_plan() {
   }
 
   // The measurements labelled on the plan: outliers and failing ones,
-  // worst first.
-  std::vector<std::pair<double, std::size_t>> flagged;  // (|w|, line index), lines only
-  for (std::size_t i = 0; i < lines_.size(); ++i) {
-    const LineClass c = line_class(lines_[i], w_critical);
-    if (c != LineClass::outlier && c != LineClass::failing) continue;
-    bool first_of_measurement = true;
-    for (const auto& [w, j] : flagged) first_of_measurement = first_of_measurement && lines_[j].measurement != lines_[i].measurement;
-    if (first_of_measurement) flagged.push_back({std::isfinite(lines_[i].w_max) ? lines_[i].w_max : 0.0, i});
-  }
-  std::stable_sort(flagged.begin(), flagged.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-  // Flagged measurements with no line (point clusters, heights): at their stations.
-  std::vector<std::size_t> flagged_at_stations;
-  if (result) {
-    for (const auto& am : result->measurements) {
-      const bool has_line = std::any_of(lines_.begin(), lines_.end(), [&](const NetworkLine& l) { return l.measurement == am.index; });
-      if (has_line) continue;
-      if (am.outlier || (am.used && std::isfinite(am.w_max) && am.w_max > w_critical)) flagged_at_stations.push_back(am.index);
+  // worst first; those with lines at their first line's middle, the others
+  // (points, heights) at their first station.
+  std::vector<std::pair<double, std::size_t>> flagged_lines;  // (|w|, line index), a measurement's first line
+  {
+    std::vector<bool> seen(measurements_.size(), false);
+    for (std::size_t i = 0; i < lines_.size(); ++i) {
+      if (!flagged(lines_[i].shown_as) || seen[lines_[i].measurement]) continue;
+      seen[lines_[i].measurement] = true;
+      flagged_lines.push_back({std::isfinite(lines_[i].w_max) ? lines_[i].w_max : 0.0, i});
     }
+  }
+  std::stable_sort(flagged_lines.begin(), flagged_lines.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<std::size_t> flagged_at_stations;
+  for (const auto& row : measurements_) {
+    if (!row.has_line && flagged(row.shown_as)) flagged_at_stations.push_back(row.index);
   }
   const auto measurement_label = [&](std::size_t index) {
-    const solver::AdjustedMeasurement* am = nullptr;
-    if (!result) return measurement_name(index);
-    for (const auto& x : result->measurements) {
-      if (x.index == index) am = &x;
-    }
-    const std::string w = am && std::isfinite(am->w_max) ? detail::fmt("%.2f", am->w_max) : std::string("-");
-    return measurement_name(index) + (am && am->outlier ? " outlier" : " fails") + ", |w| " + w + " (" +
+    const NetworkMeasurementRow& row = measurements_[index];
+    const std::string w = std::isfinite(row.w_max) ? detail::fmt("%.2f", row.w_max) : std::string("-");
+    return measurement_name(index) + (row.shown_as == MeasurementClass::outlier ? " outlier" : " fails") + ", |w| " + w + " (" +
            geodesy::to_string(net.measurements[index].kind) + ")";
   };
 
@@ -265,51 +248,49 @@ void NetworkUi::draw_plan() {
       obstacles.add(Box{static_cast<float>(p.x()) - e, static_cast<float>(p.y()) - e, static_cast<float>(p.x()) + e,
                         static_cast<float>(p.y()) + e});
     }
-    const auto place = [&](const std::string& key, const std::string& text, const Eigen::Vector2d& p, ImFont* f, float size) {
+    const auto place = [&](const std::string& text, std::optional<std::size_t> measurement, const Eigen::Vector2d& p, ImFont* f,
+                           float size) {
       const ImVec2 ts = detail::text_size(text, f, size);
       for (const auto& [box, leader] : candidates(p, r_px, ts.x + 2.0f, ts.y, Eigen::Vector2d::Zero(), size)) {
         if (!box.inside(area) || !obstacles.free(box)) continue;
         obstacles.add(box);
-        labels.push_back({key, box.x0, box.y0, box.x1, box.y1, p, leader});
+        const std::string key = measurement ? measurement_name(*measurement) : text;
+        labels.push_back({key, box.x0, box.y0, box.x1, box.y1, p, leader, measurement});
+        if (measurement) g.labelled_measurements.push_back(*measurement);
         return true;
       }
       return false;
     };
-    for (const auto& [w, i] : flagged) {
+    for (const auto& [w, i] : flagged_lines) {
       const NetworkLine& l = lines_[i];
       const Eigen::Vector2d mid = 0.5 * (g.pixel_of(stations_[l.from].plan_m) + g.pixel_of(stations_[l.to].plan_m));
-      if (place(measurement_name(l.measurement), measurement_label(l.measurement), mid, bold, font)) {
-        g.labelled_measurements.push_back(l.measurement);
-      }
+      place(measurement_label(l.measurement), l.measurement, mid, bold, font);
     }
     for (std::size_t index : flagged_at_stations) {
       const auto& m = net.measurements[index];
-      if (m.stations.empty()) continue;
-      if (place(measurement_name(index), measurement_label(index), g.pixel_of(stations_[m.stations[0]].plan_m), bold, font)) {
-        g.labelled_measurements.push_back(index);
-      }
+      if (!m.stations.empty()) place(measurement_label(index), index, g.pixel_of(stations_[m.stations[0]].plan_m), bold, font);
     }
     if (!dense) {
       for (const auto& s : stations_) {
-        if (!place(s.id, s.id, g.pixel_of(s.plan_m), regular, id_size)) unlabelled.push_back(s.id);
+        if (!place(s.id, std::nullopt, g.pixel_of(s.plan_m), regular, id_size)) unlabelled.push_back(s.id);
       }
     }
 
     if (g.schematic) {
       caption = "a levelling network has no plan positions: its stations stand on a circle in their order (a schematic); "
-                "lines: each measurement's largest |w|";
+                "lines: each measurement's test and largest |w|";
     } else {
-      caption = "lines: each measurement's largest |w| (see the legend)";
+      caption = "lines: each measurement's test and largest |w| (see the legend)";
       if (ellipses) {
         caption += "; ellipses: each station's " + detail::fmt("%g", 100.0 * g.confidence) +
                    " % error ellipse (a-priori weights, σ0 = 1) × " + detail::fmt("%g", g.ellipse_exaggeration) + " (10 px = " +
-                   detail::fmt("%.2g", 10.0 / k * 1e3) + " mm)";
+                   mm_text(10.0 / k * 1e3) + " mm)";
       } else if (dense) {
         caption += "\nmore than " + std::to_string(kDenseNetworkStations) +
                    " stations: no ellipses and no ids (hover over a station, or see the tables)";
       }
     }
-    const std::size_t flagged_count = flagged.size() + flagged_at_stations.size();
+    const std::size_t flagged_count = flagged_lines.size() + flagged_at_stations.size();
     if (g.labelled_measurements.size() < flagged_count) {
       caption += "\n" + std::to_string(flagged_count - g.labelled_measurements.size()) + " of " + std::to_string(flagged_count) +
                  " outliers and failing measurements found no room for their label: see the measurements table";
@@ -345,10 +326,10 @@ void NetworkUi::draw_plan() {
     }
   }
   // Lines, the least telling first.
-  for (const LineClass c : kDrawOrder) {
+  for (const MeasurementClass c : kDrawOrder) {
     const LineStyle st = style_of(c);
     for (const auto& l : lines_) {
-      if (line_class(l, w_critical) != c) continue;
+      if (l.shown_as != c) continue;
       line(dl, g.pixel_of(stations_[l.from].plan_m), g.pixel_of(stations_[l.to].plan_m), st);
       ++g.lines_by_class[static_cast<std::size_t>(c)];
     }
@@ -381,16 +362,14 @@ void NetworkUi::draw_plan() {
   }
   // Labels where the placement put them.
   for (const auto& l : g.labels) {
-    const bool measurement = l.id.starts_with("#");
-    const Rgb c = measurement ? palette::kOutlier : palette::kInk;
+    const Rgb c = l.measurement ? palette::kOutlier : palette::kInk;
     if (l.leader) {
       const Eigen::Vector2d nearest(std::clamp(l.mark_px.x(), double(l.x0), double(l.x1)), std::clamp(l.mark_px.y(), double(l.y0), double(l.y1)));
       const Eigen::Vector2d d = nearest - l.mark_px;
       if (d.norm() > r_px + 2.0) dl->AddLine(iv(l.mark_px + (r_px + 1.0) * d.normalized()), iv(nearest), col(c, 160), 1.0f);
     }
-    if (measurement) {
-      const std::size_t index = std::stoul(l.id.substr(1)) - 1;
-      detail::label(audit_, dl, ImVec2(l.x0 + 1.0f, l.y0), col(c), measurement_label(index), "network: measurement label",
+    if (l.measurement) {
+      detail::label(audit_, dl, ImVec2(l.x0 + 1.0f, l.y0), col(c), measurement_label(*l.measurement), "network: measurement label",
                     ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), bold, font);
     } else {
       detail::label(audit_, dl, ImVec2(l.x0 + 1.0f, l.y0), col(c), l.id, "network: id", ImVec2(g.left, g.top), ImVec2(g.right, g.bottom),
@@ -433,6 +412,7 @@ void NetworkUi::draw_plan() {
   }
   if (best) {
     g.hovered = best->id;
+    const bool left_out = model_.station_left_out(static_cast<std::size_t>(best - stations_.data()));
     if (hovered) {
       ImGui::BeginTooltip();
       ImGui::PushFont(bold);
@@ -450,12 +430,12 @@ void NetworkUi::draw_plan() {
                                    .c_str());
       }
       ImGui::TextUnformatted(("datum " + best->constraint).c_str());
-      ImGui::TextUnformatted(best->left_out ? "left out (click to take it back)"
+      ImGui::TextUnformatted(left_out ? "left out (click to take it back)"
                              : best->used   ? "adjusted (click to leave it and its measurements out)"
                                             : "not adjusted: no measurement reaches it");
       ImGui::EndTooltip();
     }
-    if (clicked) model_.set_station_left_out(best->id, !best->left_out);
+    if (clicked) model_.set_station_left_out(best->id, !left_out);
     return;
   }
   const NetworkLine* near = nullptr;
@@ -473,11 +453,11 @@ void NetworkUi::draw_plan() {
   for (const auto& l : lines_) {
     const bool same = (l.from == near->from && l.to == near->to) || (l.from == near->to && l.to == near->from);
     if (!same) continue;
-    const LineClass c = line_class(l, w_critical);
+    const MeasurementClass c = l.shown_as;
     const std::string w = std::isfinite(l.w_max) ? detail::fmt("%.2f", l.w_max) : std::string("-");
-    ImGui::PushStyleColor(ImGuiCol_Text, detail::col4(c == LineClass::small ? palette::kInk : style_of(c).colour));
+    ImGui::PushStyleColor(ImGuiCol_Text, detail::col4(c == MeasurementClass::small ? palette::kInk : style_of(c).colour));
     ImGui::TextUnformatted((measurement_name(l.measurement) + " " + geodesy::to_string(net.measurements[l.measurement].kind) + ", |w| " + w +
-                            (c == LineClass::outlier ? ", outlier (removed)" : c == LineClass::left_out ? ", left out" : ""))
+                            ", " + describe(c, w_critical))
                                .c_str());
     ImGui::PopStyleColor();
   }
@@ -541,25 +521,27 @@ void NetworkUi::draw_side() {
     detail::wrapped_coloured(audit_, palette::kLeftOut, s, "adjustment: left out");
   }
 
-  // The legend: each line class with its count, and the station symbols.
+  // The legend: each class with its count of measurements, and the station
+  // symbols.
   ImDrawList* dl = ImGui::GetWindowDrawList();
   const double w_critical = result ? result->w_critical : std::numeric_limits<double>::infinity();
-  std::array<std::size_t, kLineClasses> counts{};
-  for (const auto& l : lines_) ++counts[static_cast<std::size_t>(line_class(l, w_critical))];
+  std::array<std::size_t, kMeasurementClasses>& counts = plan_.measurements_by_class;
+  counts = {};
+  for (const auto& row : measurements_) ++counts[static_cast<std::size_t>(row.shown_as)];
   const std::string wc = std::isfinite(w_critical) ? detail::fmt("%.2f", w_critical) : std::string("w_c");
-  const std::array<std::string, kLineClasses> names{"|w| ≤ 2", "2 < |w| ≤ " + wc, "|w| > " + wc + " (kept)", "outlier (removed)",
-                                                    "no redundancy", "left out / not adjusted"};
   ImGui::Spacing();
   detail::wrapped(audit_,
-                  "Lines: a measurement's largest |w| (critical " + wc + " at α " + detail::fmt("%g", model_.options().alpha_point) + ")",
+                  "Measurements, by their measurement test at α " + detail::fmt("%g", model_.options().alpha_point) + " (critical |w| " +
+                      wc + ") and largest |w|; drawn as lines, points and heights framed at their station",
                   "adjustment: legend");
   const float swatch = font * 2.0f;
-  for (std::size_t i = 0; i < kLineClasses; ++i) {
+  for (std::size_t i = 0; i < kMeasurementClasses; ++i) {
     const ImVec2 p = ImGui::GetCursorScreenPos();
     const float y = p.y + ImGui::GetTextLineHeight() * 0.5f;
-    line(dl, Eigen::Vector2d(p.x, y), Eigen::Vector2d(p.x + swatch, y), style_of(static_cast<LineClass>(i)));
+    const auto c = static_cast<MeasurementClass>(i);
+    line(dl, Eigen::Vector2d(p.x, y), Eigen::Vector2d(p.x + swatch, y), style_of(c));
     ImGui::SetCursorScreenPos(ImVec2(p.x + swatch + font * 0.4f, p.y));
-    detail::text(audit_, names[i] + ": " + std::to_string(counts[i]), "adjustment: legend");
+    detail::text(audit_, describe(c, w_critical) + ": " + std::to_string(counts[i]), "adjustment: legend");
   }
   detail::wrapped(audit_, "Stations: ▲ datum holds a component, ● free, ○ not adjusted; click one on the plan to leave it out",
                   "adjustment: legend");
@@ -647,8 +629,9 @@ void NetworkUi::draw_station_table(float height) {
     detail::header_row(audit_, "stations: header");
     clipped_rows(t, stations_.size(), [&](std::size_t i) {
       const NetworkStationRow& s = stations_[i];
+      const bool left_out = model_.station_left_out(i);  // the choice as it stands, not as last adjusted
       ImGui::TableNextColumn();
-      bool use = !s.left_out;
+      bool use = !left_out;
       if (ImGui::Checkbox("##use", &use)) toggle = {s.id, !use};
       ImGui::TableNextColumn();
       cell(audit_, s.id, "stations: id");
@@ -661,7 +644,7 @@ void NetworkUi::draw_station_table(float height) {
       ImGui::TableNextColumn();
       cell(audit_, s.constraint, "stations: datum");
       ImGui::TableNextColumn();
-      if (s.left_out) {
+      if (left_out) {
         cell(audit_, "left out", "stations: status", palette::kLeftOut);
       } else if (!s.used) {
         cell(audit_, "not adjusted", "stations: status", palette::kLeftOut);
@@ -677,21 +660,6 @@ void NetworkUi::draw_station_table(float height) {
 
 void NetworkUi::draw_measurement_table(float height) {
   const geodesy::Network& net = model_.network();
-  const auto& result = model_.result();
-  const double w_critical = result ? result->w_critical : std::numeric_limits<double>::infinity();
-  std::vector<const solver::AdjustedMeasurement*> adjusted(net.measurements.size(), nullptr);
-  if (result) {
-    for (const auto& am : result->measurements) adjusted[am.index] = &am;
-  }
-  std::vector<bool> out_by_station(net.measurements.size(), false), out_by_choice(net.measurements.size(), false);
-  for (std::size_t m : model_.measurements_left_out()) out_by_choice[m] = true;
-  {
-    std::vector<bool> station_out(net.stations.size(), false);
-    for (std::size_t s = 0; s < stations_.size(); ++s) station_out[s] = stations_[s].left_out;
-    for (std::size_t m = 0; m < net.measurements.size(); ++m) {
-      for (std::size_t s : net.measurements[m].stations) out_by_station[m] = out_by_station[m] || station_out[s];
-    }
-  }
   NetworkTableGeometry& t = measurement_table_;
   t = NetworkTableGeometry{};
   t.drawn = true;
@@ -708,11 +676,13 @@ void NetworkUi::draw_measurement_table(float height) {
     detail::header_row(audit_, "measurements: header");
     clipped_rows(t, net.measurements.size(), [&](std::size_t mi) {
       const auto& m = net.measurements[mi];
-      const solver::AdjustedMeasurement* am = adjusted[mi];
+      const NetworkMeasurementRow& row = measurements_[mi];
+      // The choices as they stand, not as last adjusted.
+      const bool by_choice = model_.measurement_left_out(mi), by_station = model_.measurement_out_through_station(mi);
       ImGui::TableNextColumn();
-      bool use = !out_by_choice[mi] && !out_by_station[mi];
+      bool use = !by_choice && !by_station;
       // Out through a station, or ignored by its input: not the user's to take back here.
-      const bool fixed = (out_by_station[mi] && !out_by_choice[mi]) || (m.ignore && !out_by_choice[mi]);
+      const bool fixed = (by_station || m.ignore) && !by_choice;
       if (fixed) ImGui::BeginDisabled();
       if (ImGui::Checkbox("##use", &use)) toggle = {mi, !use};
       if (fixed) ImGui::EndDisabled();
@@ -723,26 +693,24 @@ void NetworkUi::draw_measurement_table(float height) {
       ImGui::TableNextColumn();
       cell(audit_, stations_text(net, m), "measurements: stations");
       ImGui::TableNextColumn();
-      const bool testable = am && std::isfinite(am->w_max);
-      const std::string w = testable ? detail::fmt("%.2f", am->w_max) : std::string("-");
-      cell(audit_, w, "measurements: w", testable && am->w_max > w_critical ? std::optional<Rgb>(palette::kOutlier) : std::nullopt);
+      const MeasurementClass c = row.shown_as;
+      const std::string w = std::isfinite(row.w_max) ? detail::fmt("%.2f", row.w_max) : std::string("-");
+      cell(audit_, w, "measurements: w",
+           flagged(c)                          ? std::optional<Rgb>(palette::kOutlier)
+           : c == MeasurementClass::elevated ? std::optional<Rgb>(palette::kWarning)
+                                             : std::nullopt);
       ImGui::TableNextColumn();
-      if (out_by_choice[mi]) {
+      if (by_choice) {
         cell(audit_, "left out", "measurements: status", palette::kLeftOut);
-      } else if (out_by_station[mi]) {
+      } else if (by_station) {
         cell(audit_, "left out with its station", "measurements: status", palette::kLeftOut);
       } else if (m.ignore) {
         cell(audit_, "ignored by its input", "measurements: status", palette::kLeftOut);
-      } else if (!am) {
-        cell(audit_, "not adjusted", "measurements: status", palette::kLeftOut);
-      } else if (am->outlier) {
-        cell(audit_, "OUTLIER (removed)", "measurements: status", palette::kOutlier);
-      } else if (testable && am->w_max > w_critical) {
-        cell(audit_, "fails its w-test", "measurements: status", palette::kOutlier);
-      } else if (!testable) {
-        cell(audit_, "used (no redundancy)", "measurements: status");
       } else {
-        cell(audit_, "used", "measurements: status");
+        cell(audit_, status_text(c), "measurements: status",
+             flagged(c)                          ? std::optional<Rgb>(palette::kOutlier)
+             : c == MeasurementClass::left_out ? std::optional<Rgb>(palette::kLeftOut)
+                                               : std::nullopt);
       }
     });
     ImGui::EndTable();

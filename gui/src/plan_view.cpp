@@ -137,7 +137,7 @@ void WorkbenchUi::draw_plan() {
         for (const auto& [box, leader] : candidates(p, r.outlier ? r_px + 3.0f : r_px, ts.x + 2.0f, ts.y, drawn_arrow_px(r), id_size)) {
           if (!box.inside(area) || !obstacles.free(box)) continue;
           obstacles.add(box);
-          labels.push_back({r.id, box.x0, box.y0, box.x1, box.y1, p, leader});
+          labels.push_back({r.id, box.x0, box.y0, box.x1, box.y1, p, leader, std::nullopt});
           placed = true;
           break;
         }

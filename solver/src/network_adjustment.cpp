@@ -1160,7 +1160,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     if (o.data_snooping && result.dof > 0) {
       std::vector<std::pair<std::size_t, SnoopCandidate>> failing;  // measurement index, candidate
       for (const auto& am : result.measurements) {
-        if (!am.used || am.test_dof <= 0 || !(am.p_value < o.alpha_point)) continue;
+        if (!am.fails_test(o.alpha_point)) continue;
         if (am.test_dof < am.observed.size()) {
           // Some of its components are redundant and some not: without it
           // part of the network would be undetermined; it stays, named.
@@ -1386,7 +1386,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     const auto& g = result.global_test;
     if (g.applicable && !g.passed) {
       result.warnings.push_back(std::string("global test ") +
-                                (g.statistic > g.critical_upper ? "FAILED high: the residuals are larger than the a-priori "
+                                (g.failed_high() ? "FAILED high: the residuals are larger than the a-priori "
                                                                   "standard deviations allow"
                                                                 : "low: the residuals are smaller than the a-priori standard "
                                                                   "deviations suggest (too pessimistic?)") +

@@ -171,7 +171,7 @@ SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions
     const auto& g = r.global_test;
     std::string global;
     if (g.applicable) {
-      global = std::string("; the global test ") + (g.passed ? "passes" : g.statistic > g.critical_upper ? "fails high" : "fails low") +
+      global = std::string("; the global test ") + (g.passed ? "passes" : g.failed_high() ? "fails high" : "fails low") +
                " (" + fmt(g.statistic, 4) + " vs [" + fmt(g.critical_lower, 4) + ", " + fmt(g.critical_upper, 4) +
                "], σ0 = " + fmt(r.sigma0.value_or(0.0), 4) + ")";
     }
@@ -254,7 +254,7 @@ void add_statistics_warnings(FitResult& r, const FitOptions& o) {
   }
   if (g.applicable && !g.passed) {
     r.warnings.push_back(std::string("global test ") +
-                         (g.statistic > g.critical_upper ? "FAILED high: residuals are larger than the a-priori sigmas allow"
+                         (g.failed_high() ? "FAILED high: residuals are larger than the a-priori sigmas allow"
                                                          : "low: residuals are smaller than the a-priori sigmas suggest "
                                                            "(sigmas too pessimistic?)") +
                          " (σ0 = " + fmt(r.sigma0.value_or(0.0), 4) + ")" +

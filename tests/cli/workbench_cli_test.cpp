@@ -30,7 +30,7 @@ const std::string kControl = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_con
 // distances, 24 zenith angles and 24 directions are lines, the reference
 // stations' point cluster is none (make_airport_network.py).
 const std::string kNetwork = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_network/lszh_network.json";
-constexpr std::size_t kNetworkStations = 11, kNetworkLines = 16 + 24 + 24 + 24;
+constexpr std::size_t kNetworkStations = 11, kNetworkLines = 16 + 24 + 24 + 24, kNetworkMeasurements = kNetworkLines + 1;
 // The window (GLFW under Xvfb, Mesa llvmpipe) and OSMesa rasterize the same
 // draw lists; allow a small difference per channel on a few pixels anyway
 // (../shared/NOTES.md).
@@ -104,6 +104,11 @@ TEST_F(WorkbenchCli, Issue14_SnapshotDrawsANetworkAndSaysWhatItShows) {
   for (const auto& [cls, n] : j["network"]["lines"].items()) lines += n.get<std::size_t>();
   EXPECT_EQ(lines, kNetworkLines);
   EXPECT_EQ(j["network"]["lines"]["outlier"], 0);
+  // The legend's classes count measurements: each in one class.
+  EXPECT_EQ(j["network"]["measurements"], kNetworkMeasurements);
+  std::size_t classified = 0;
+  for (const auto& [cls, n] : j["network"]["measurements_by_class"].items()) classified += n.get<std::size_t>();
+  EXPECT_EQ(classified, kNetworkMeasurements);
   EXPECT_EQ(j["network"]["ellipses"], kNetworkStations);
   EXPECT_GE(j["network"]["ellipse_exaggeration"].get<double>(), 1.0);
   const gui::RgbImage image = gui::read_png(out);
@@ -156,8 +161,10 @@ TEST_F(WorkbenchCli, Issue14_ANetworkReportHoldsAdjustsReportAndThePictureAndRep
   ASSERT_EQ(adjust.exit_code, 0) << adjust.err;
   const std::string adjust_text = slurp(path("adjust.txt"));
   EXPECT_NE(text.find(adjust_text), std::string::npos) << "adjust wrote:\n" << adjust_text << "\nthe report has:\n" << text;
-  EXPECT_NE(text.find("network.png: " + std::to_string(kNetworkStations) + " stations, " + std::to_string(kNetworkLines) + " measurement lines"),
+  EXPECT_NE(text.find("network.png: " + std::to_string(kNetworkStations) + " stations, " + std::to_string(kNetworkMeasurements) + " measurements ("),
             std::string::npos)
+      << text;
+  EXPECT_NE(text.find("drawn as " + std::to_string(kNetworkLines) + " lines"), std::string::npos)
       << text;
   EXPECT_NE(text.find("sha256"), std::string::npos);
   // A fit's report in the same folder: refused, then replacing the network's files with --overwrite.

@@ -160,5 +160,97 @@ TEST(NetworkModel, ALocalNetworksAxesTurnItsPlanToEastAndNorth) {
   EXPECT_LE((es_c - Eigen::Vector2d(0.0, -100.0)).norm(), kExact_m);
 }
 
+// The solver gives a local ellipse's azimuth from +x towards +y; the plan
+// is east, north, so the model turns the major axis with the positions. A
+// point measured twice with σx = 20 mm, σy = σz = 1 mm has its major axis
+// along +x: north when x is north, east when x is east, south (azimuth 180°,
+// i.e. 0° for an axis) when x is south.
+TEST(NetworkModel, ALocalNetworksEllipsesTurnWithItsAxes) {
+  constexpr double kAzimuth_rad = 1e-9;
+  constexpr double kPi = 3.14159265358979323846;
+  const auto ellipse_of = [](char x, char y) {
+    geodesy::Network net;
+    net.space = geodesy::NetworkSpace::local;
+    net.local_dimensions = 3;
+    net.axes.x = x;
+    net.axes.y = y;
+    geodesy::NetworkStation p;
+    p.id = "P";
+    p.position = Eigen::Vector3d(10.0, 20.0, 5.0);
+    net.stations.push_back(p);
+    for (int k = 0; k < 2; ++k) {
+      geodesy::NetworkMeasurement m;
+      m.kind = MeasurementKind::gnss_points;
+      m.stations = {0};
+      m.value = Eigen::Vector3d(10.0, 20.0, 5.0);
+      m.covariance = Eigen::Vector3d(4e-4, 1e-6, 1e-6).asDiagonal();
+      m.source = "test";
+      net.measurements.push_back(m);
+    }
+    NetworkModel model(net, no_snooping());
+    EXPECT_TRUE(model.result()) << model.error();
+    return model.stations().at(0).ellipse;
+  };
+  // Azimuths of an axis are taken modulo 180°.
+  const auto axis_gap = [&](double a, double b) {
+    const double d = std::fmod(std::abs(a - b), kPi);
+    return std::min(d, kPi - d);
+  };
+  const auto ne = ellipse_of('n', 'e');
+  EXPECT_NEAR(ne.semi_major_m, 0.02 / std::sqrt(2.0), 1e-9);
+  EXPECT_LE(axis_gap(ne.azimuth_rad, 0.0), kAzimuth_rad) << ne.azimuth_rad;
+  const auto en = ellipse_of('e', 'n');
+  EXPECT_LE(axis_gap(en.azimuth_rad, kPi / 2.0), kAzimuth_rad) << en.azimuth_rad;
+  const auto ws = ellipse_of('w', 's');
+  EXPECT_LE(axis_gap(ws.azimuth_rad, kPi / 2.0), kAzimuth_rad) << ws.azimuth_rad;
+  const auto sw = ellipse_of('s', 'w');
+  EXPECT_LE(axis_gap(sw.azimuth_rad, 0.0), kAzimuth_rad) << sw.azimuth_rad;
+}
+
+// The class a measurement is shown in follows the solver's measurement test
+// (the one data snooping uses), not its largest |w| alone. P is measured
+// twice, σ 1 mm per component: with the two differing by d along x, each
+// residual is d/2 with σ_v = σ/√2, so w_x = d/(σ√2) and the measurement's
+// χ²(3) statistic is w_x². At α = 0.001: w_c = 3.2905, χ²₃ critical 16.266
+// (tables). w_x = 3.5: |w| above w_c but the test passes (12.25): elevated.
+// w_x = 4.5: the test fails (20.25): failing, kept with snooping off.
+TEST(NetworkModel, AMeasurementsClassFollowsItsMeasurementTest) {
+  constexpr double kSigma_m = 1e-3;
+  const auto rows_for = [&](double w_x) {
+    geodesy::Network net;
+    net.space = geodesy::NetworkSpace::local;
+    net.local_dimensions = 3;
+    geodesy::NetworkStation p;
+    p.id = "P";
+    p.position = Eigen::Vector3d(10.0, 20.0, 5.0);
+    net.stations.push_back(p);
+    for (int k = 0; k < 2; ++k) {
+      geodesy::NetworkMeasurement m;
+      m.kind = MeasurementKind::gnss_points;
+      m.stations = {0};
+      m.value = Eigen::Vector3d(10.0 + (k == 0 ? 0.0 : w_x * kSigma_m * std::sqrt(2.0)), 20.0, 5.0);
+      m.covariance = Eigen::Matrix3d::Identity() * kSigma_m * kSigma_m;
+      m.source = "test";
+      net.measurements.push_back(m);
+    }
+    NetworkModel model(net, no_snooping());
+    EXPECT_TRUE(model.result()) << model.error();
+    return model.measurement_rows();
+  };
+  const auto elevated = rows_for(3.5);
+  ASSERT_EQ(elevated.size(), 2u);
+  for (const auto& r : elevated) {
+    EXPECT_NEAR(r.w_max, 3.5, 1e-6);
+    EXPECT_FALSE(r.has_line);
+    EXPECT_EQ(r.shown_as, MeasurementClass::elevated);
+  }
+  for (const auto& r : rows_for(4.5)) EXPECT_EQ(r.shown_as, MeasurementClass::failing);
+  for (const auto& r : rows_for(1.0)) EXPECT_EQ(r.shown_as, MeasurementClass::small);
+  // Orange starts at 2, or at w_c when a larger α makes it smaller.
+  EXPECT_EQ(elevated_w(3.2905), 2.0);
+  EXPECT_EQ(elevated_w(1.96), 1.96);
+  EXPECT_NE(describe(MeasurementClass::small, 1.96).find("1.96"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace geoanchor::gui

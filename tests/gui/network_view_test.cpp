@@ -123,8 +123,13 @@ TEST(NetworkView, APlantedBlunderIsDrawnAndLabelledAsAnOutlier) {
   OffscreenRenderer renderer(1600, 1000);
   const RgbImage image = renderer.render(ui);
   const NetworkGeometry& g = ui.plan();
-  EXPECT_EQ(g.lines_by_class[static_cast<std::size_t>(LineClass::outlier)], 1u);
-  EXPECT_EQ(g.lines_by_class[static_cast<std::size_t>(LineClass::failing)], 0u);
+  EXPECT_EQ(g.lines_by_class[static_cast<std::size_t>(MeasurementClass::outlier)], 1u);
+  EXPECT_EQ(g.lines_by_class[static_cast<std::size_t>(MeasurementClass::failing)], 0u);
+  // The legend counts measurements: one outlier, and every measurement in one class.
+  EXPECT_EQ(g.measurements_by_class[static_cast<std::size_t>(MeasurementClass::outlier)], 1u);
+  std::size_t counted = 0;
+  for (std::size_t n : g.measurements_by_class) counted += n;
+  EXPECT_EQ(counted, net.measurements.size());
   ASSERT_EQ(g.labelled_measurements.size(), 1u);
   EXPECT_EQ(g.labelled_measurements.front(), planted);
   const std::string name = NetworkUi::measurement_name(planted) + " outlier";
@@ -157,8 +162,9 @@ TEST(NetworkView, WithoutSnoopingTheBlunderIsKeptAndDrawnAsFailing) {
   OffscreenRenderer renderer(1600, 1000);
   renderer.render(ui);
   const NetworkGeometry& g = ui.plan();
-  EXPECT_EQ(g.lines_by_class[static_cast<std::size_t>(LineClass::outlier)], 0u);
-  EXPECT_GE(g.lines_by_class[static_cast<std::size_t>(LineClass::failing)], 1u);
+  EXPECT_EQ(g.lines_by_class[static_cast<std::size_t>(MeasurementClass::outlier)], 0u);
+  EXPECT_GE(g.lines_by_class[static_cast<std::size_t>(MeasurementClass::failing)], 1u);
+  EXPECT_EQ(model.measurement_rows().at(planted).shown_as, MeasurementClass::failing);
   EXPECT_NE(std::find(g.labelled_measurements.begin(), g.labelled_measurements.end(), planted), g.labelled_measurements.end());
 }
 
@@ -241,7 +247,7 @@ TEST(NetworkView, TheMeasurementTablesCheckBoxLeavesAMeasurementOut) {
   const auto lines = model.lines();
   const auto of_row = std::count_if(lines.begin(), lines.end(), [&](const NetworkLine& l) { return l.measurement == row; });
   EXPECT_GT(of_row, 0);
-  EXPECT_EQ(ui.plan().lines_by_class[static_cast<std::size_t>(LineClass::left_out)], static_cast<std::size_t>(of_row));
+  EXPECT_EQ(ui.plan().lines_by_class[static_cast<std::size_t>(MeasurementClass::left_out)], static_cast<std::size_t>(of_row));
 }
 
 }  // namespace

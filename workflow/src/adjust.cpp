@@ -149,7 +149,7 @@ double correlation(const Eigen::Matrix3d& c, int a, int b) {
 }
 
 const char* verdict(const solver::GlobalTest& g) {
-  return !g.applicable ? "not applicable" : g.passed ? "passed" : g.statistic > g.critical_upper ? "failed high" : "failed low";
+  return !g.applicable ? "not applicable" : g.passed ? "passed" : g.failed_high() ? "failed high" : "failed low";
 }
 
 }  // namespace
@@ -569,7 +569,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
   if (r.dof > 0) {
     out << "  global test (chi-squared, " << format_shortest(100.0 * (1.0 - o.alpha)) << " %): " << format_fixed(g.statistic, 3)
         << " in [" << format_fixed(g.critical_lower, 3) << ", " << format_fixed(g.critical_upper, 3) << "]: "
-        << (g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED (high)" : "FAILED (low)") << "\n";
+        << (g.passed ? "PASSED" : g.failed_high() ? "FAILED (high)" : "FAILED (low)") << "\n";
   }
   out << "  w-tests: critical |w| = " << format_fixed(r.w_critical, 2) << " (alpha " << format_shortest(o.alpha_point) << ")\n\n";
   if (prepared.helmert && r.helmert) {

@@ -176,7 +176,7 @@ std::optional<FitRefusal> fit_refusal(const solver::FitResult& r, const std::str
     return FitRefusal{"E_FIT_SNOOPING_LIMIT", source_name + ": " + r.refused_because + "; no transform was written"};
   }
   const auto& g = r.global_test;
-  if (g.applicable && g.statistic > g.critical_upper && !accept_failed_global_test) {
+  if (g.failed_high() && !accept_failed_global_test) {
     return FitRefusal{
         "E_FIT_GLOBAL_TEST",
         source_name + ": global test failed high (" + format_fixed(g.statistic, 2) + " > " + format_fixed(g.critical_upper, 2) +

@@ -55,7 +55,7 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
   if (g.applicable) {
     out << "  global test (χ², α = " << o.alpha << "): " << format_fixed(g.statistic, 2) << " in [" << format_fixed(g.critical_lower, 2)
         << ", " << format_fixed(g.critical_upper, 2) << "]: "
-        << (g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED (high)" : "FAILED (low)") << "\n";
+        << (g.passed ? "PASSED" : g.failed_high() ? "FAILED (high)" : "FAILED (low)") << "\n";
   } else {
     out << "  global test: not applicable (no a-priori sigmas, or no redundancy)\n";
   }

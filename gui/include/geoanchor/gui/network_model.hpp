@@ -35,7 +35,7 @@ struct NetworkStationRow {
   // (NetworkModel::schematic_plan()).
   Eigen::Vector2d plan_m = Eigen::Vector2d::Zero();
   // From the a-priori weights (σ0 = 1); zero without an adjustment.
-  solver::ErrorEllipse ellipse;             // 1σ
+  solver::ErrorEllipse ellipse;             // 1σ; azimuth clockwise from north in the plan (local axes turned)
   solver::ErrorEllipse ellipse_confidence;  // at AdjustOptions::confidence
   Eigen::Vector3d sigma_m = Eigen::Vector3d::Zero();  // east, north, up (local: x, y, z)
   std::string constraint;        // "CCF"
@@ -43,13 +43,45 @@ struct NetworkStationRow {
   bool used = false;             // in the shown adjustment
 };
 
+// How the view shows a measurement in the shown adjustment: by its
+// measurement test at AdjustOptions::alpha_point (the test data snooping
+// uses, AdjustedMeasurement::fails_test) and its largest |w| against
+// elevated_w().
+enum class MeasurementClass {
+  small,       // its test passes, |w| ≤ elevated_w: bluish green, thin
+  elevated,    // its test passes, |w| > elevated_w: orange, medium
+  failing,     // its test fails and it was kept (data snooping off, at its limit, or not removable): vermillion, thick, labelled
+  outlier,     // removed by data snooping: vermillion, dashed, labelled
+  untestable,  // no redundancy (w undefined): black, thin, dashed
+  left_out,    // not in the shown adjustment (left out by the user or ignored by its input): grey, thin, dashed
+};
+inline constexpr std::size_t kMeasurementClasses = 6;
+const char* to_string(MeasurementClass c);  // "small", "elevated", … (the JSON keys)
+// The legend's words for a class: "test passes, |w| ≤ 2.00", "test fails (kept)", …
+std::string describe(MeasurementClass c, double w_critical);
+// A measurement table's status for a class, short: "used", "FAILS its test", …
+const char* status_text(MeasurementClass c);
+// The |w| above which a measurement whose test passes is shown elevated:
+// 2, or the critical value w_c when that is smaller (alpha_point > 0.0455).
+double elevated_w(double w_critical);
+
+// A measurement as the view shows it, in the network's order.
+struct NetworkMeasurementRow {
+  std::size_t index = 0;                 // into the network's measurements
+  std::optional<std::size_t> adjusted;   // into result()->measurements; nullopt: not in the shown adjustment
+  double w_max = 0.0;                    // its largest |w| (NaN: not testable or not adjusted)
+  MeasurementClass shown_as = MeasurementClass::left_out;
+  bool has_line = false;                 // drawn as one or more lines on the plan
+};
+
 // A line between two stations that a measurement joins (a baseline, a
-// distance, a direction, an angle's two sights), coloured by its w-test.
+// distance, a direction, an angle's two sights), drawn by its measurement's
+// class.
 struct NetworkLine {
   std::size_t from = 0, to = 0;  // indices into stations()
   std::size_t measurement = 0;   // into the network's measurements
   double w_max = 0.0;            // the measurement's largest |w| (NaN: not testable or not adjusted)
-  bool outlier = false;          // removed by data snooping
+  MeasurementClass shown_as = MeasurementClass::left_out;
   bool used = false;             // in the shown adjustment
   bool left_out = false;         // by the user, or through a station left out
 };
@@ -78,9 +110,16 @@ class NetworkModel {
   unsigned generation() const { return generation_; }  // increments with every new result
 
   std::vector<NetworkStationRow> stations() const;
+  std::vector<NetworkMeasurementRow> measurement_rows() const;
   std::vector<NetworkLine> lines() const;
   std::vector<std::string> stations_left_out() const;
   std::vector<std::size_t> measurements_left_out() const;
+  // The user's choices as they stand now (the shown adjustment may still be
+  // the previous one while a worker re-adjusts). A measurement naming a
+  // station left out is out through it.
+  bool station_left_out(std::size_t station) const { return station_out_.at(station); }
+  bool measurement_left_out(std::size_t measurement) const { return measurement_out_.at(measurement); }
+  bool measurement_out_through_station(std::size_t measurement) const;
 
   bool busy() const { return worker_.busy(); }
   // Takes a finished adjustment, if any, and starts the next one if the

@@ -9,10 +9,11 @@
 // a component, a circle where it is free, hollow grey where it is not in
 // the adjustment), labelled with its id where there is room; each
 // measurement between two stations a line coloured and thickened by its
-// largest |w| (LineClass); each station's error ellipse at the
-// adjustment's confidence, exaggerated by a stated factor; outliers
-// (removed by data snooping) and measurements failing their w-test
-// labelled on the plan with their number, |w| and kind. Right, the
+// measurement test and largest |w| (MeasurementClass); each station's error
+// ellipse at the adjustment's confidence, exaggerated by a stated factor;
+// outliers (removed by data snooping) and measurements failing their
+// measurement test labelled on the plan with their number, |w| and kind
+// (points and heights at their station, framed). Right, the
 // adjustment's statistics, the legend and two tables, stations and
 // measurements, whose check boxes leave a station (with every measurement
 // naming it) or one measurement out; a click on a station in the plan does
@@ -36,20 +37,6 @@
 
 namespace geoanchor::gui {
 
-// How a measurement's line is drawn, from its largest |w| against the
-// critical value w_c of the w-test at AdjustOptions::alpha_point.
-enum class LineClass {
-  small,        // |w| ≤ 2: bluish green, thin
-  elevated,     // 2 < |w| ≤ w_c: orange, medium
-  failing,      // |w| > w_c and kept (data snooping off, or its limit): vermillion, thick, labelled
-  outlier,      // removed by data snooping: vermillion, dashed, labelled
-  untestable,   // no redundancy (w undefined): black, thin, dashed
-  left_out,     // by the user, or not in the adjustment: grey, thin, dashed
-};
-inline constexpr std::size_t kLineClasses = 6;
-LineClass line_class(const NetworkLine& line, double w_critical);
-const char* to_string(LineClass c);
-
 // Above this many stations the plan is dense: no ellipses, and only the
 // outliers and failing measurements are labelled.
 inline constexpr std::size_t kDenseNetworkStations = 1500;
@@ -72,7 +59,8 @@ struct NetworkGeometry {
   double ellipse_exaggeration = 1.0;
   double confidence = 0.95;
   std::size_t ellipses_drawn = 0;
-  std::array<std::size_t, kLineClasses> lines_by_class{};  // lines drawn, by LineClass
+  std::array<std::size_t, kMeasurementClasses> lines_by_class{};         // lines drawn, by their measurement's class
+  std::array<std::size_t, kMeasurementClasses> measurements_by_class{};  // every measurement (with a line or not), by class
   std::vector<PlanLabel> labels;            // station ids, and measurement labels ("#12 …")
   std::vector<std::size_t> labelled_measurements;  // indices of the measurements labelled on the plan
   std::vector<std::string> unlabelled;      // stations whose id found no room (named under the plan)
@@ -119,6 +107,7 @@ class NetworkUi {
   NetworkModel& model_;
   unsigned shown_generation_ = ~0u;
   std::vector<NetworkStationRow> stations_;
+  std::vector<NetworkMeasurementRow> measurements_;
   std::vector<NetworkLine> lines_;
   NetworkGeometry plan_;
   NetworkTableGeometry station_table_, measurement_table_;

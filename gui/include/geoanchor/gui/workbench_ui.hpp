@@ -76,6 +76,7 @@ struct PlanLabel {
   float x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   Eigen::Vector2d mark_px = Eigen::Vector2d::Zero();
   bool leader = false;
+  std::optional<std::size_t> measurement;  // the network view's measurement labels: its index (id is "#12")
 };
 
 // Where the last frame drew the plan (pixels from the top-left corner).

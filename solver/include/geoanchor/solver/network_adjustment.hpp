@@ -137,6 +137,9 @@ struct AdjustedMeasurement {
   double statistic = 0.0;  // the measurement test: χ²(dof) under H0
   int test_dof = 0;
   double p_value = 1.0;
+  // In the adjustment, redundant, and its measurement test's p-value below
+  // alpha_point: what data snooping removes and the reports flag.
+  bool fails_test(double alpha_point) const { return used && test_dof > 0 && p_value < alpha_point; }
 };
 
 struct RelativePrecision {
