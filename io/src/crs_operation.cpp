@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include <proj_experimental.h>
@@ -271,8 +272,28 @@ struct CrsOperation::Impl {
   // Whether every point of a batch in a projected source lies inside each
   // of `areas` (see the definition).
   bool batch_inside(const std::vector<const CrsArea*>& areas, const std::vector<double>& a, const std::vector<double>& b) const;
-  std::optional<std::size_t> uniform_choice(const std::vector<double>& lon, const std::vector<double>& lat, double a0,
-                                            double b0, double c0) const;
+  // The one candidate every point in a longitude/latitude box takes (see
+  // the definition), from PROJ's choice at one of them: a0, b0, c0 in the
+  // source's coordinates, at lon0, lat0.
+  struct Box {
+    double west, south, east, north;
+  };
+  std::optional<std::size_t> uniform_choice(const Box& box, double a0, double b0, double c0, double lon0, double lat0) const;
+  // A batch's box, when it has one (nullopt if a point's longitude or
+  // latitude is not finite).
+  static std::optional<Box> box_of(const std::vector<double>& lon, const std::vector<double>& lat);
+  // Which of the candidates' areas (areas_chosen_by) hold a point, a bit
+  // each: PROJ's choice and choose()'s checks depend on nothing else, so
+  // points with one signature share one Choice (choices_by_signature).
+  using Signature = std::vector<std::uint64_t>;
+  std::vector<const CrsArea*> areas_chosen_by;
+  std::vector<std::pair<Signature, Choice>> choices_by_signature;
+  void signature(double lon, double lat, Signature& bits) const {
+    bits.assign((areas_chosen_by.size() + 63) / 64, 0);
+    for (std::size_t k = 0; k < areas_chosen_by.size(); ++k) {
+      bits[k / 64] |= static_cast<std::uint64_t>(areas_chosen_by[k]->contains(lon, lat)) << (k % 64);
+    }
+  }
 };
 
 CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_view where, Options options)
@@ -569,31 +590,38 @@ bool CrsOperation::Impl::batch_inside(const std::vector<const CrsArea*>& areas, 
   return true;
 }
 
-// The one candidate every point of a batch takes, when each candidate's
-// area holds the batch's longitude/latitude box whole or not at all (and no
-// better candidate with a missing grid touches it); nullopt otherwise.
-std::optional<std::size_t> CrsOperation::Impl::uniform_choice(const std::vector<double>& lon, const std::vector<double>& lat,
-                                                                double a0, double b0, double c0) const {
-  double w = lon[0], e = lon[0], s = lat[0], nn = lat[0];
-  for (std::size_t i = 0; i < lon.size(); ++i) {
-    if (!std::isfinite(lon[i]) || !std::isfinite(lat[i])) return std::nullopt;
-    w = std::min(w, lon[i]), e = std::max(e, lon[i]), s = std::min(s, lat[i]), nn = std::max(nn, lat[i]);
-  }
+// The one candidate every point of a box takes, when each candidate's area
+// holds the box whole or not at all (and no better candidate with a missing
+// grid touches it); nullopt otherwise. PROJ's choice depends only on which
+// candidates' areas hold a point (PROJ tests each candidate's area, as a
+// box, and ranks those that hold the point), so it is the same for every
+// point of such a box.
+std::optional<std::size_t> CrsOperation::Impl::uniform_choice(const Box& box, double a0, double b0, double c0, double lon0,
+                                                                double lat0) const {
   for (const auto& c : all) {
     std::vector<const CrsArea*> areas;
     if (c.info.area) areas.push_back(&*c.info.area);
     for (const auto& d : c.datum_areas) areas.push_back(&d);
     for (const CrsArea* a : areas) {
       if (a->west_deg > a->east_deg) return std::nullopt;  // across the antimeridian: point by point
-      const bool whole = w >= a->west_deg && e <= a->east_deg && s >= a->south_deg && nn <= a->north_deg;
-      const bool none = e < a->west_deg || w > a->east_deg || nn < a->south_deg || s > a->north_deg;
+      const bool whole = box.west >= a->west_deg && box.east <= a->east_deg && box.south >= a->south_deg && box.north <= a->north_deg;
+      const bool none = box.east < a->west_deg || box.west > a->east_deg || box.north < a->south_deg || box.south > a->north_deg;
       if (!whole && !none) return std::nullopt;
     }
   }
-  // Every point holds the same candidates: PROJ's choice for the first is every point's.
-  const Choice choice = choose(a0, b0, c0, lon[0], lat[0], true);
+  const Choice choice = choose(a0, b0, c0, lon0, lat0, true);
   if (choice.missing_better) return std::nullopt;  // the per-point path names the point, or counts the fallback
   return choice.use;
+}
+
+std::optional<CrsOperation::Impl::Box> CrsOperation::Impl::box_of(const std::vector<double>& lon, const std::vector<double>& lat) {
+  if (lon.empty()) return std::nullopt;
+  Box box{lon[0], lat[0], lon[0], lat[0]};
+  for (std::size_t i = 0; i < lon.size(); ++i) {
+    if (!std::isfinite(lon[i]) || !std::isfinite(lat[i])) return std::nullopt;
+    box = {std::min(box.west, lon[i]), std::min(box.south, lat[i]), std::max(box.east, lon[i]), std::max(box.north, lat[i])};
+  }
+  return box;
 }
 
 namespace {
@@ -665,10 +693,22 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   }
   const std::vector<double>& lon = m.source_is_lonlat ? in_a : lon_store;
   const std::vector<double>& lat = m.source_is_lonlat ? in_b : lat_store;
+  const std::optional<Impl::Box> box = Impl::box_of(lon, lat);  // of the longitudes and latitudes
   if (!lon.empty()) {
-    for (std::size_t i = 0; i < n; ++i) {
-      m.source_area.check(lon[i], lat[i], [&] { return point_name(i); });
-      m.target_area.check(lon[i], lat[i], [&] { return point_name(i); });
+    // A batch whose box both areas hold is counted whole; otherwise point by point.
+    const auto holds_box = [&](const AreaTally& t) {
+      const auto& r = t.area;
+      return !r || (box && r->west_deg <= r->east_deg && box->west >= r->west_deg && box->east <= r->east_deg &&
+                    box->south >= r->south_deg && box->north <= r->north_deg);
+    };
+    if (holds_box(m.source_area) && holds_box(m.target_area)) {
+      m.source_area.seen += n;
+      m.target_area.seen += n;
+    } else {
+      for (std::size_t i = 0; i < n; ++i) {
+        m.source_area.check(lon[i], lat[i], [&] { return point_name(i); });
+        m.target_area.check(lon[i], lat[i], [&] { return point_name(i); });
+      }
     }
     tallied = true;
   }
@@ -754,13 +794,39 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
     // grid) one by one.
     std::vector<std::size_t> use(n);
     // A batch whose longitude/latitude box every candidate's area holds
-    // whole or misses whole has one choice for all its points.
-    const std::optional<std::size_t> uniform =
-        lon.empty() ? std::nullopt : m.uniform_choice(lon, lat, in_a[0], in_b[0], c ? in_c[0] : 0.0);
+    // whole or misses whole has one choice for all its points. Only for a
+    // source in longitude and latitude: PROJ tests a projected source's
+    // point against the box of each area's image in the plane, which holds
+    // points outside the area too.
+    const std::optional<std::size_t> uniform = m.source_is_lonlat && box
+                                                   ? m.uniform_choice(*box, in_a[0], in_b[0], c ? in_c[0] : 0.0, lon[0], lat[0])
+                                                   : std::nullopt;
     if (uniform) std::fill(use.begin(), use.end(), *uniform);
+    // Otherwise each point's, once per signature (the areas that hold it).
+    if (m.areas_chosen_by.empty()) {
+      for (const auto& k : m.all) {
+        if (k.info.area) m.areas_chosen_by.push_back(&*k.info.area);
+        for (const auto& d : k.datum_areas) m.areas_chosen_by.push_back(&d);
+      }
+    }
+    const bool by_signature = m.source_is_lonlat;
+    Impl::Signature bits;
     for (std::size_t i = 0; i < n && !uniform; ++i) {
       const double plon = lon.empty() ? 0.0 : lon[i], plat = lat.empty() ? 0.0 : lat[i];
-      Impl::Choice choice = m.choose(in_a[i], in_b[i], c ? in_c[i] : 0.0, plon, plat, !lon.empty());
+      Impl::Choice choice;
+      if (by_signature && std::isfinite(plon) && std::isfinite(plat)) {
+        m.signature(plon, plat, bits);
+        const auto known = std::find_if(m.choices_by_signature.begin(), m.choices_by_signature.end(),
+                                        [&](const auto& e) { return e.first == bits; });
+        if (known != m.choices_by_signature.end()) {
+          choice = known->second;
+        } else {
+          choice = m.choose(in_a[i], in_b[i], c ? in_c[i] : 0.0, plon, plat, true);
+          m.choices_by_signature.emplace_back(bits, choice);
+        }
+      } else {
+        choice = m.choose(in_a[i], in_b[i], c ? in_c[i] : 0.0, plon, plat, !lon.empty());
+      }
       if (choice.missing_better && !m.options.allow_fallback) {
         const auto& op = m.all[*choice.missing_better];
         std::vector<std::string> grids;

@@ -850,6 +850,19 @@ TEST_F(CrsCli, Issue13_TheOperationPerPointIsProjsOwnChoice) {
        2024.3, ""},
       // Two static frames with a time-dependent operation between them: the epoch given on either.
       {"ETRF2000@2020.0 -> ETRF2014", "EPSG:7931@2020.0", "EPSG:8403", {{8.0, 50.0, 100.0}, {15.0, 45.0, 300.0}}, 2020.0, ""},
+      // One batch across ED50's national operations (EPSG 1133-1989, each
+      // for its country: Norway, Denmark, Türkiye, France, Sicily, Portugal,
+      // Greece, Malta, Sardinia, Cyprus; not Spain, whose best needs a grid
+      // that is not here), cities repeated in between: each point takes its
+      // own country's, as proj_trans does.
+      {"ED50 -> WGS 84 (G1762) across Europe in one batch",
+       "EPSG:4230",
+       "EPSG:9057@2024.5",
+       {{10.75, 59.91, 0.0}, {12.57, 55.68, 0.0}, {32.85, 39.93, 0.0}, {2.35, 48.85, 0.0}, {13.36, 38.12, 0.0},
+        {-9.14, 38.72, 0.0}, {23.73, 37.98, 0.0}, {10.75, 59.91, 0.0}, {14.51, 35.90, 0.0}, {9.11, 39.22, 0.0},
+        {33.36, 35.17, 0.0}, {12.57, 55.68, 0.0}, {2.35, 48.85, 0.0}},
+       2024.5,
+       ""},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.what);
