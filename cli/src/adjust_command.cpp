@@ -40,6 +40,9 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
 }
 
 int run_adjust(const AdjustCommandOptions& o) {
+  if (o.json && o.output == "-") {
+    throw Error(ErrorKind::usage, "E_OPTION", "--json and -o -: both would go to standard output; give -o STATIONS.csv");
+  }
   if (!o.network.estimate_helmert && (o.convention || o.helmert_output)) {
     throw Error(ErrorKind::usage, "E_OPTION", std::string(o.convention ? "--convention" : "--helmert-output") + ": only with --estimate-helmert");
   }
@@ -183,8 +186,9 @@ int run_adjust(const AdjustCommandOptions& o) {
     report->stream() << text;
     group.push_back(report.get());
   }
-  stations.commit_with(group, "the adjusted stations");
+  // Standard output first: a report that could not be printed leaves no file.
   if (o.json) io::finish_standard_output("the report (--json)");
+  stations.commit_with(group, "the adjusted stations");
   return 0;
 }
 

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cerrno>
 #include <csignal>
+#include <signal.h>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -248,6 +249,13 @@ struct AtomicOutputFile::State {
 
 void install_signal_cleanup() {
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, cleanup_and_reraise);
+  // A closed pipe (`| head`) and a file-size limit kill by default too; a
+  // parent that ignores them (the writes then fail and are reported) keeps
+  // its choice.
+  for (int sig : {SIGPIPE, SIGXFSZ}) {
+    struct sigaction current {};
+    if (::sigaction(sig, nullptr, &current) == 0 && current.sa_handler == SIG_DFL) std::signal(sig, cleanup_and_reraise);
+  }
 }
 
 void refuse_same_file(const std::filesystem::path& input, const std::filesystem::path& output) {
@@ -556,9 +564,12 @@ void DataOutput::commit_with(const std::vector<AtomicOutputFile*>& others, std::
   if (data_) {
     group.push_back(sidecar_.get());
     group.push_back(data_.get());
+  } else {
+    // Standard output first: if it fails, the others are still temporaries
+    // (removed as they are destroyed), so none of the group is left.
+    finish_standard_output(what_for_standard_output, others.empty() ? "" : "; no other output was written");
   }
   if (!group.empty()) publish_together(group);
-  if (!data_) finish_standard_output(what_for_standard_output);
 }
 
 void finish_standard_output(std::string_view what, std::string_view consequence) {

@@ -2,10 +2,14 @@
 // docs/network-format.md). Every key is known or refused; units are in the
 // key names.
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <set>
+#include <string>
+#include <string_view>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
@@ -206,8 +210,10 @@ void read_network_json(std::string_view text_in, std::string_view source_in, geo
     const std::string at = source + ".local";
     only_keys(l, at, {"axes", "angles", "dimensions"});
     const std::string axes = text(l, "axes", at);
-    const std::string valid = "ne en nw wn se es sw ws";
-    if (axes.size() != 2 || valid.find(axes) == std::string::npos) fail(at + ".axes", "'" + axes + "': expected one of " + valid);
+    constexpr std::array<std::string_view, 8> kAxes{"ne", "en", "nw", "wn", "se", "es", "sw", "ws"};
+    if (std::find(kAxes.begin(), kAxes.end(), axes) == kAxes.end()) {
+      fail(at + ".axes", "'" + axes + "': expected one of ne en nw wn se es sw ws");
+    }
     net.axes.x = axes[0];
     net.axes.y = axes[1];
     const std::string angles = text(l, "angles", at);

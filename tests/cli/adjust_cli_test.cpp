@@ -139,6 +139,11 @@ TEST_F(AdjustCli, Issue14_FormatFaultsAreRefusedByNameWithNoOutput) {
       {"SINEX: a matrix element given twice", "s.snx", replace(good_snx, "-SOLUTION/MATRIX_ESTIMATE L COVA\n%", "     1     1 0.1E-06\n-SOLUTION/MATRIX_ESTIMATE L COVA\n%"),
        "--sinex-frame ITRF2005", 3, {"E_SINEX", "(1, 1) given twice"}},
       {"SINEX: a frame the catalog does not know", "s.snx", good_snx, "--sinex-frame ITRF1066", 2, {"--sinex-frame", "ITRF1066"}},
+      {"JSON: local axes with a blank ('e ' is no pair of directions)", "l.json",
+       R"({"schema": "geoanchor.network/1", "space": "local", "local": {"axes": "e ", "angles": "clockwise", "dimensions": 2},
+           "stations": [{"id": "A", "x_m": 0, "y_m": 0, "constraint": "CCC"}, {"id": "B", "x_m": 100, "y_m": 0}],
+           "measurements": [{"kind": "horizontal_distance", "from": "A", "to": "B", "value_m": 100.0, "sigma_m": 0.001}]})",
+       "", 3, {"local.axes", "'e '", "expected one of ne en"}},
       {"two outputs on one file", "s.snx", good_snx, "--sinex-frame ITRF2005 --sinex '" + path("m.csv").string() + "'", 2,
        {"--measurements", "--sinex", "same file"}},
   };
@@ -223,6 +228,27 @@ TEST_F(AdjustCli, Reliability41_AFailedWriteLeavesNoneOfTheOutputsAndARerunWrite
   ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
   EXPECT_EQ(files(cut), all);
   EXPECT_EQ(slurp(cut / "m.csv"), slurp(whole / "m.csv"));
+
+  // Standard output is one of the group: when it cannot be written (a full
+  // device), no file is left either, whether it carries the stations (-o -)
+  // or the JSON report.
+  const auto full = path("full");
+  std::filesystem::create_directories(full);
+  const std::string others = " --sinex '" + (full / "s.snx").string() + "' --report '" + (full / "r.txt").string() + "'";
+  // (In braces: the helper redirects the group's output; the command's own goes to /dev/full.)
+  const RunResult to_full = shell("{ " + exe() + " adjust '" + network + "' -o -" + others + " > /dev/full; }");
+  EXPECT_EQ(to_full.exit_code, 5) << to_full.err;
+  EXPECT_NE(to_full.err.find("error[E_WRITE]: standard output: the adjusted stations could not be written"), std::string::npos)
+      << to_full.err;
+  EXPECT_EQ(files(full), std::vector<std::string>{}) << "left behind";
+  const RunResult json_to_full =
+      shell("{ " + exe() + " adjust '" + network + "' -o '" + (full / "st.csv").string() + "' --json" + others + " > /dev/full; }");
+  EXPECT_EQ(json_to_full.exit_code, 5) << json_to_full.err;
+  EXPECT_EQ(files(full), std::vector<std::string>{}) << "left behind";
+  // Both on standard output would interleave: refused.
+  const RunResult both = run("adjust '" + network + "' -o - --json");
+  EXPECT_EQ(both.exit_code, 2);
+  EXPECT_NE(both.err.find("--json and -o -: both would go to standard output"), std::string::npos) << both.err;
 }
 
 }  // namespace

@@ -27,8 +27,8 @@
 // first is published.
 //
 // Cleaning up. On an exception the destructor removes the temporary; on
-// SIGINT, SIGTERM or SIGHUP the handler installed by install_signal_cleanup()
-// removes every temporary still open. A process killed by SIGKILL (or a
+// SIGINT, SIGTERM, SIGHUP, SIGPIPE or SIGXFSZ the handler installed by
+// install_signal_cleanup() removes every temporary still open. A process killed by SIGKILL (or a
 // power cut) leaves its temporaries: the first output a later process opens
 // in that folder removes the stale ones (remove_stale_temporaries()).
 
@@ -153,7 +153,10 @@ class DataOutput {
   // flushes standard output (finish_standard_output); throws Error (io).
   void commit(std::string_view what_for_standard_output);
   // The same, published with `others` as one group (`others` first, the
-  // sidecar, the file last): a command's outputs that belong together.
+  // sidecar, the file last): a command's outputs that belong together. To
+  // standard output: flushed first, then `others` published, so that a
+  // failed write to it leaves none of them (what was printed stays
+  // printed).
   void commit_with(const std::vector<AtomicOutputFile*>& others, std::string_view what_for_standard_output);
 
  private:
@@ -165,8 +168,9 @@ class DataOutput {
 // "standard output: WHAT could not be written (REASON)CONSEQUENCE".
 void finish_standard_output(std::string_view what, std::string_view consequence = {});
 
-// Installs handlers for SIGINT, SIGTERM and SIGHUP that unlink open
-// temporaries and then re-raise the signal with its default action.
+// Installs handlers for SIGINT, SIGTERM and SIGHUP (and SIGPIPE and
+// SIGXFSZ unless they are ignored) that unlink open temporaries and then
+// re-raise the signal with its default action.
 void install_signal_cleanup();
 
 // Throws geoanchor::Error (usage) if `output` names the same file as `input`.
