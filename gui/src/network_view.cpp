@@ -425,7 +425,7 @@ void NetworkUi::draw_plan() {
                                    .c_str());
         const auto& e = best->ellipse_confidence;
         ImGui::TextUnformatted((detail::fmt("%g", 100.0 * g.confidence) + " % ellipse " + detail::fmt("%.1f", 1e3 * e.semi_major_m) + " × " +
-                                detail::fmt("%.1f", 1e3 * e.semi_minor_m) + " mm, azimuth " +
+                                detail::fmt("%.1f", 1e3 * e.semi_minor_m) + " mm, azimuth from north " +
                                 detail::fmt("%.0f", e.azimuth_rad * 180.0 / std::numbers::pi) + "°")
                                    .c_str());
       }

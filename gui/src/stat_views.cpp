@@ -329,7 +329,7 @@ void WorkbenchUi::draw_parameters() {
     detail::text(audit_, "at α = " + detail::fmt("%g", model_.options().alpha) + ":", "parameters: global test");
     ImGui::SameLine();
     detail::text_coloured(audit_, g.passed ? palette::kPass : palette::kOutlier,
-                          g.passed ? "PASSED" : g.statistic > g.critical_upper ? "FAILED (high)" : "FAILED (low)", "parameters: verdict");
+                          g.passed ? "PASSED" : g.failed_high() ? "FAILED (high)" : "FAILED (low)", "parameters: verdict");
   } else {
     detail::wrapped(audit_, "global test: not applicable (no a-priori sigmas, or no redundancy)", "parameters: global test");
   }

@@ -162,12 +162,15 @@ TEST(NetworkModel, ALocalNetworksAxesTurnItsPlanToEastAndNorth) {
 
 // The solver gives a local ellipse's azimuth from +x towards +y; the plan
 // is east, north, so the model turns the major axis with the positions. A
-// point measured twice with σx = 20 mm, σy = σz = 1 mm has its major axis
-// along +x: north when x is north, east when x is east, south (azimuth 180°,
-// i.e. 0° for an axis) when x is south.
+// point measured twice with a covariance whose major axis (σ 20 mm, minor
+// 1 mm) points 30° from +x towards +y: on the plan, clockwise from north,
+// that axis is at 30° for axes ne (x north, y east), 60° for en, 120° for
+// es (x east, y south: 0.866 E − 0.5 N), 150° for nw (0.866 N − 0.5 E) and
+// 30° for sw (−0.866 N − 0.5 E, an axis taken modulo 180°).
 TEST(NetworkModel, ALocalNetworksEllipsesTurnWithItsAxes) {
   constexpr double kAzimuth_rad = 1e-9;
   constexpr double kPi = 3.14159265358979323846;
+  constexpr double kDeg = kPi / 180.0;
   const auto ellipse_of = [](char x, char y) {
     geodesy::Network net;
     net.space = geodesy::NetworkSpace::local;
@@ -178,12 +181,16 @@ TEST(NetworkModel, ALocalNetworksEllipsesTurnWithItsAxes) {
     p.id = "P";
     p.position = Eigen::Vector3d(10.0, 20.0, 5.0);
     net.stations.push_back(p);
+    const double t = 30.0 * kDeg;
+    Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+    r.topLeftCorner<2, 2>() << std::cos(t), -std::sin(t), std::sin(t), std::cos(t);
+    const Eigen::Matrix3d cov = r * Eigen::Vector3d(4e-4, 1e-6, 1e-6).asDiagonal() * r.transpose();
     for (int k = 0; k < 2; ++k) {
       geodesy::NetworkMeasurement m;
       m.kind = MeasurementKind::gnss_points;
       m.stations = {0};
       m.value = Eigen::Vector3d(10.0, 20.0, 5.0);
-      m.covariance = Eigen::Vector3d(4e-4, 1e-6, 1e-6).asDiagonal();
+      m.covariance = cov;
       m.source = "test";
       net.measurements.push_back(m);
     }
@@ -198,13 +205,11 @@ TEST(NetworkModel, ALocalNetworksEllipsesTurnWithItsAxes) {
   };
   const auto ne = ellipse_of('n', 'e');
   EXPECT_NEAR(ne.semi_major_m, 0.02 / std::sqrt(2.0), 1e-9);
-  EXPECT_LE(axis_gap(ne.azimuth_rad, 0.0), kAzimuth_rad) << ne.azimuth_rad;
-  const auto en = ellipse_of('e', 'n');
-  EXPECT_LE(axis_gap(en.azimuth_rad, kPi / 2.0), kAzimuth_rad) << en.azimuth_rad;
-  const auto ws = ellipse_of('w', 's');
-  EXPECT_LE(axis_gap(ws.azimuth_rad, kPi / 2.0), kAzimuth_rad) << ws.azimuth_rad;
-  const auto sw = ellipse_of('s', 'w');
-  EXPECT_LE(axis_gap(sw.azimuth_rad, 0.0), kAzimuth_rad) << sw.azimuth_rad;
+  for (const auto& [x, y, expected_deg] : {std::tuple{'n', 'e', 30.0}, std::tuple{'e', 'n', 60.0}, std::tuple{'e', 's', 120.0},
+                                            std::tuple{'n', 'w', 150.0}, std::tuple{'s', 'w', 30.0}}) {
+    const auto e = ellipse_of(x, y);
+    EXPECT_LE(axis_gap(e.azimuth_rad, expected_deg * kDeg), kAzimuth_rad) << x << y << ": " << e.azimuth_rad / kDeg << "°";
+  }
 }
 
 // The class a measurement is shown in follows the solver's measurement test

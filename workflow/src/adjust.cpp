@@ -148,9 +148,6 @@ double correlation(const Eigen::Matrix3d& c, int a, int b) {
   return d > 0.0 ? c(a, b) / d : 0.0;
 }
 
-const char* verdict(const solver::GlobalTest& g) {
-  return !g.applicable ? "not applicable" : g.passed ? "passed" : g.failed_high() ? "failed high" : "failed low";
-}
 
 }  // namespace
 
@@ -647,7 +644,7 @@ std::string report_json(const PreparedNetwork& prepared, const solver::Adjustmen
                       {"lower", r.global_test.critical_lower},
                       {"upper", r.global_test.critical_upper},
                       {"passed", r.global_test.passed},
-                      {"verdict", verdict(r.global_test)},
+                      {"verdict", r.global_test.verdict()},
                       {"confidence", 1.0 - o.alpha}};
   if (prepared.helmert && r.helmert) {
     const HelmertInFileUnits u = helmert_in_file_units(prepared, r);

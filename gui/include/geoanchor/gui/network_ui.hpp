@@ -4,7 +4,8 @@
 // (`geoanchor gui --view network`) and the off-screen shell (`snapshot
 // --view network`, `report --view network`) both show.
 //
-// Left, the plan (east, north at the network's centroid, north up, equal
+// Left, the plan (east, north at the network's centroid; a local network's
+// x, y turned to east, north by its axes; north up, equal
 // scale, scale bar): each station a mark (a triangle where the datum holds
 // a component, a circle where it is free, hollow grey where it is not in
 // the adjustment), labelled with its id where there is room; each

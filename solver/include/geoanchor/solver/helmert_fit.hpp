@@ -115,6 +115,8 @@ struct GlobalTest {
   // Above the upper bound: the measurements disagree more than their
   // sigmas allow (what fit and adjust refuse to write unless accepted).
   bool failed_high() const { return applicable && !passed && statistic > critical_upper; }
+  // "passed", "failed high", "failed low" or "not applicable" (the reports' JSON).
+  const char* verdict() const { return !applicable ? "not applicable" : passed ? "passed" : failed_high() ? "failed high" : "failed low"; }
 };
 
 struct PointResult {
