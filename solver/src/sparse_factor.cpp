@@ -20,10 +20,13 @@ struct NormalFactor::Impl {
   cholmod_common common{};
   bool started = false;
   cholmod_factor* factor = nullptr;
-  // The selected inverse Z = N⁻¹ in the permuted order of the simplicial
-  // LDLᵀ factor, on its pattern: column j holds rows `rows[col[j]..col[j+1])`
-  // (the diagonal first, then rows > j ascending) and their values `z`.
-  std::vector<std::int64_t> col, rows, inverse_permutation;
+  // The selected inverse Z = N⁻¹ in the permuted order of the supernodal
+  // factor, on its pattern and in its layout: supernode k's columns
+  // super[k] … super[k+1]−1 hold the rows of its pattern, L->s[pi[k] …
+  // pi[k+1]) (its own columns first, then the rows below, ascending), and
+  // `z` holds Z at those rows and columns, column-major from px[k] as L->x
+  // holds L (the diagonal block whole).
+  std::vector<std::int64_t> inverse_permutation, super_of;
   std::vector<double> z;
   // dense
   Eigen::MatrixXd dense;
@@ -36,13 +39,27 @@ struct NormalFactor::Impl {
     if (factor) cholmod_l_free_factor(&factor, &common);
     if (started) cholmod_l_finish(&common);
   }
-  // Position of Z(row, column) for row >= column in the permuted order; -1 when off the pattern.
+  // Position in `z` of Z(row, column) for row >= column in the permuted
+  // order; -1 when off the pattern.
   std::int64_t find(std::int64_t row, std::int64_t column) const {
-    const std::int64_t begin = col[static_cast<std::size_t>(column)], end = col[static_cast<std::size_t>(column) + 1];
-    if (row == column) return begin;
-    const auto first = rows.begin() + begin + 1, last = rows.begin() + end;
-    const auto it = std::lower_bound(first, last, row);
-    return it != last && *it == row ? static_cast<std::int64_t>(it - rows.begin()) : -1;
+    const auto* super = static_cast<const SuiteSparse_long*>(factor->super);
+    const auto* pi = static_cast<const SuiteSparse_long*>(factor->pi);
+    const auto* px = static_cast<const SuiteSparse_long*>(factor->px);
+    const auto* rows = static_cast<const SuiteSparse_long*>(factor->s);
+    const std::int64_t k = super_of[static_cast<std::size_t>(column)];
+    const std::int64_t nscol = super[k + 1] - super[k], nsrow = pi[k + 1] - pi[k];
+    const std::int64_t j = column - super[k];
+    std::int64_t i = -1;
+    if (row < super[k + 1]) {
+      i = row - super[k];
+    } else {
+      const SuiteSparse_long* first = rows + pi[k] + nscol;
+      const SuiteSparse_long* last = rows + pi[k + 1];
+      const SuiteSparse_long* it = std::lower_bound(first, last, static_cast<SuiteSparse_long>(row));
+      if (it == last || *it != row) return -1;
+      i = it - (rows + pi[k]);
+    }
+    return px[k] + i + j * nsrow;
   }
 };
 
@@ -88,7 +105,8 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
   impl->started = true;
   c->print = 0;
   c->error_handler = nullptr;
-  c->final_ll = 1;  // keep LLᵀ: the solves are the same, the selected inversion converts a copy
+  c->final_ll = 1;                      // LLᵀ, which the selected inversion works on
+  c->supernodal = CHOLMOD_SUPERNODAL;   // dense blocks for the selected inversion, at every size
   cholmod_triplet* t = cholmod_l_allocate_triplet(static_cast<std::size_t>(n), static_cast<std::size_t>(n), entries.size(),
                                                   1, CHOLMOD_REAL, c);
   if (!t) throw std::bad_alloc();
@@ -151,81 +169,77 @@ void NormalFactor::select_inverse() {
     m.dense_inverse = m.llt.solve(Eigen::MatrixXd::Identity(m.n, m.n));
     return;
   }
-  cholmod_common* c = &m.common;
-  // A simplicial LDLᵀ copy of the factor: L unit lower triangular with D on
-  // its diagonal entries, N(P, P) = L D Lᵀ.
-  cholmod_factor* s = cholmod_l_copy_factor(m.factor, c);
-  if (!s) throw std::bad_alloc();
-  if (!cholmod_l_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, s, c)) {
-    cholmod_l_free_factor(&s, c);
-    throw std::bad_alloc();
-  }
+  const cholmod_factor* f = m.factor;
+  if (!f->is_super || !f->is_ll) throw std::logic_error("selected inversion: the factor is not a supernodal LLᵀ");
   const std::size_t n = static_cast<std::size_t>(m.n);
-  const auto* lp = static_cast<const SuiteSparse_long*>(s->p);
-  const auto* li = static_cast<const SuiteSparse_long*>(s->i);
-  const auto* lx = static_cast<const double*>(s->x);
-  const auto* lnz = static_cast<const SuiteSparse_long*>(s->nz);
-  const auto* perm = static_cast<const SuiteSparse_long*>(s->Perm);
+  const auto nsuper = static_cast<std::int64_t>(f->nsuper);
+  const auto* super = static_cast<const SuiteSparse_long*>(f->super);
+  const auto* pi = static_cast<const SuiteSparse_long*>(f->pi);
+  const auto* px = static_cast<const SuiteSparse_long*>(f->px);
+  const auto* rows = static_cast<const SuiteSparse_long*>(f->s);
+  const auto* lx = static_cast<const double*>(f->x);
+  const auto* perm = static_cast<const SuiteSparse_long*>(f->Perm);
   m.inverse_permutation.assign(n, 0);
   for (std::size_t k = 0; k < n; ++k) m.inverse_permutation[static_cast<std::size_t>(perm[k])] = static_cast<std::int64_t>(k);
-  // The pattern, each column's rows below the diagonal sorted, with L's values.
-  m.col.assign(n + 1, 0);
-  for (std::size_t j = 0; j < n; ++j) m.col[j + 1] = m.col[j] + lnz[j];
-  m.rows.assign(static_cast<std::size_t>(m.col[n]), 0);
-  std::vector<double> l(m.rows.size(), 0.0), d(n, 0.0);
-  std::vector<std::pair<std::int64_t, double>> below;
-  for (std::size_t j = 0; j < n; ++j) {
-    const SuiteSparse_long p0 = lp[j];
-    d[j] = lx[p0];  // the first entry of a simplicial column is its diagonal
-    below.clear();
-    for (SuiteSparse_long p = p0 + 1; p < p0 + lnz[j]; ++p) below.emplace_back(li[p], lx[p]);
-    std::sort(below.begin(), below.end());
-    const std::size_t at = static_cast<std::size_t>(m.col[j]);
-    m.rows[at] = static_cast<std::int64_t>(j);
-    for (std::size_t k = 0; k < below.size(); ++k) {
-      m.rows[at + 1 + k] = below[k].first;
-      l[at + 1 + k] = below[k].second;
+  m.super_of.assign(n, 0);
+  for (std::int64_t k = 0; k < nsuper; ++k) {
+    for (SuiteSparse_long j = super[k]; j < super[k + 1]; ++j) m.super_of[static_cast<std::size_t>(j)] = k;
+    for (SuiteSparse_long p = pi[k] + (super[k + 1] - super[k]) + 1; p < pi[k + 1]; ++p) {
+      if (rows[p - 1] >= rows[p]) throw std::logic_error("selected inversion: a supernode's rows are not ascending");
     }
   }
-  cholmod_l_free_factor(&s, c);
-  // Takahashi: Z = D⁻¹L⁻¹ + (I − Lᵀ) Z, from the last column to the first;
-  // every Z(k, i) it needs has k and i in one column's pattern, which the
-  // elimination tree closes under.
-  m.z.assign(m.rows.size(), 0.0);
-  // For column j with the rows r_1 < … < r_k below its diagonal:
-  // Z(r_a, j) = −Σ_b L(r_b, j) Z(r_b, r_a). Each pair a < b reads
-  // Z(r_b, r_a) once, from column r_a (whose pattern holds r_b: the
-  // elimination tree closes it), by a merge of two sorted row lists, and
-  // adds it to both sums; Z(r_a, r_a) is column r_a's first entry.
-  std::vector<double> sum;
-  for (std::size_t jj = n; jj-- > 0;) {
-    const std::int64_t begin = m.col[jj] + 1, end = m.col[jj + 1];
-    const std::size_t k = static_cast<std::size_t>(end - begin);
-    sum.assign(k, 0.0);
-    for (std::size_t a = 0; a < k; ++a) {
-      const std::int64_t ra = m.rows[static_cast<std::size_t>(begin) + a];
-      const double la = l[static_cast<std::size_t>(begin) + a];
-      std::int64_t q = m.col[static_cast<std::size_t>(ra)];
-      const std::int64_t q_end = m.col[static_cast<std::size_t>(ra) + 1];
-      sum[a] += la * m.z[static_cast<std::size_t>(q)];  // Z(r_a, r_a)
-      ++q;
-      for (std::size_t b = a + 1; b < k; ++b) {
-        const std::int64_t rb = m.rows[static_cast<std::size_t>(begin) + b];
-        while (q < q_end && m.rows[static_cast<std::size_t>(q)] < rb) ++q;
-        if (q == q_end || m.rows[static_cast<std::size_t>(q)] != rb) {
-          throw std::logic_error("selected inversion: an entry off the factor's pattern");
-        }
-        const double w = m.z[static_cast<std::size_t>(q)];  // Z(r_b, r_a)
-        sum[a] += l[static_cast<std::size_t>(begin) + b] * w;
-        sum[b] += la * w;
+  m.z.resize(static_cast<std::size_t>(px[nsuper]));  // every block is written below
+
+  // Supernode by supernode from the last (the root) to the first. With J
+  // its columns and R the rows below them, L_JJ lower triangular and L_RJ
+  // below it, and U = L_RJ L_JJ⁻¹, the Takahashi equations Lᵀ Z = L⁻¹ give
+  //   Z_RJ = −Z_RR U,   Z_JJ = L_JJ⁻ᵀ L_JJ⁻¹ − Uᵀ Z_RJ.
+  // R is a clique of the factor's graph, so Z_RR lies on the pattern of
+  // the supernodes that hold R's columns, already computed.
+  using Matrix = Eigen::MatrixXd;
+  using ConstMap = Eigen::Map<const Matrix>;
+  using Map = Eigen::Map<Matrix>;
+  // Work space for the largest supernode, allocated once (a fresh
+  // allocation per supernode costs more in page faults than the work).
+  std::int64_t max_r = 0, max_c = 0;
+  for (std::int64_t k = 0; k < nsuper; ++k) {
+    max_c = std::max<std::int64_t>(max_c, super[k + 1] - super[k]);
+    max_r = std::max<std::int64_t>(max_r, (pi[k + 1] - pi[k]) - (super[k + 1] - super[k]));
+  }
+  std::vector<double> zrr_space(static_cast<std::size_t>(max_r * max_r)), u_space(static_cast<std::size_t>(max_r * max_c)),
+      zrj_space(static_cast<std::size_t>(max_r * max_c)), linv_space(static_cast<std::size_t>(max_c * max_c));
+  for (std::int64_t k = nsuper; k-- > 0;) {
+    const std::int64_t nscol = super[k + 1] - super[k], nsrow = pi[k + 1] - pi[k], r = nsrow - nscol;
+    const ConstMap lk(lx + px[k], nsrow, nscol);
+    const auto ljj = lk.topRows(nscol).triangularView<Eigen::Lower>();
+    const SuiteSparse_long* below = rows + pi[k] + nscol;  // R, ascending
+    Map zrr(zrr_space.data(), r, r), u(u_space.data(), r, nscol), zrj(zrj_space.data(), r, nscol),
+        linv(linv_space.data(), nscol, nscol);
+    // Z_RR (its lower triangle), gathered column by column: column R[a]
+    // lies in supernode t, whose rows, from R[a] on, hold R[a..] in order.
+    for (std::int64_t a = 0; a < r; ++a) {
+      const std::int64_t c = below[a];
+      const std::int64_t t = m.super_of[static_cast<std::size_t>(c)];
+      const std::int64_t t_nsrow = pi[t + 1] - pi[t];
+      const SuiteSparse_long* t_rows = rows + pi[t];
+      const double* t_z = m.z.data() + px[t] + (c - super[t]) * t_nsrow;
+      std::int64_t q = c - super[t];  // the diagonal's row within t
+      for (std::int64_t b = a; b < r; ++b) {
+        while (q < t_nsrow && t_rows[q] < below[b]) ++q;
+        if (q == t_nsrow || t_rows[q] != below[b]) throw std::logic_error("selected inversion: an entry off the factor's pattern");
+        zrr(b, a) = t_z[q];
       }
     }
-    double diagonal = 1.0 / d[jj];
-    for (std::size_t a = 0; a < k; ++a) {
-      m.z[static_cast<std::size_t>(begin) + a] = -sum[a];
-      diagonal += l[static_cast<std::size_t>(begin) + a] * sum[a];
-    }
-    m.z[static_cast<std::size_t>(m.col[jj])] = diagonal;
+    linv.setIdentity();
+    ljj.solveInPlace(linv);  // L_JJ⁻¹
+    Eigen::Map<Matrix> zk(m.z.data() + px[k], nsrow, nscol);
+    zk.topRows(nscol).noalias() = linv.transpose() * linv;
+    if (r == 0) continue;  // a root: nothing below (Eigen's blocked kernels want no empty operand)
+    u = lk.bottomRows(r);
+    ljj.solveInPlace<Eigen::OnTheRight>(u);  // U L_JJ = L_RJ
+    zrj.noalias() = -(zrr.selfadjointView<Eigen::Lower>() * u);
+    zk.topRows(nscol).noalias() -= u.transpose() * zrj;
+    zk.bottomRows(r) = zrj;
   }
 }
 
@@ -234,7 +248,7 @@ double NormalFactor::inverse(std::int64_t a, std::int64_t b) const {
   if (m.mode == Mode::dense) return m.dense_inverse(a, b);
   const std::int64_t pa = m.inverse_permutation[static_cast<std::size_t>(a)];
   const std::int64_t pb = m.inverse_permutation[static_cast<std::size_t>(b)];
-  const std::int64_t p = pa >= pb ? m.find(pa, pb) : m.find(pb, pa);
+  const std::int64_t p = pa >= pb ? m.find(pa, pb) : m.find(pb, pa);  // the lower triangle
   if (p < 0) throw std::logic_error("NormalFactor::inverse: (" + std::to_string(a) + ", " + std::to_string(b) +
                                     ") is off the factor's pattern");
   return m.z[static_cast<std::size_t>(p)];
