@@ -590,27 +590,39 @@ bool CrsOperation::Impl::batch_inside(const std::vector<const CrsArea*>& areas, 
   return true;
 }
 
-// The one candidate every point of a box takes, when each candidate's area
-// holds the box whole or not at all (and no better candidate with a missing
-// grid touches it); nullopt otherwise. PROJ's choice depends only on which
+// The one candidate every point of a box takes, when each available
+// candidate's area holds the box whole or not at all, and so does each
+// candidate with a missing grid that would be better than the choice;
+// nullopt otherwise. PROJ's choice depends only on which
 // candidates' areas hold a point (PROJ tests each candidate's area, as a
 // box, and ranks those that hold the point), so it is the same for every
 // point of such a box.
 std::optional<std::size_t> CrsOperation::Impl::uniform_choice(const Box& box, double a0, double b0, double c0, double lon0,
                                                                 double lat0) const {
-  for (const auto& c : all) {
+  const auto whole_or_none = [&](const Candidate& c) {
     std::vector<const CrsArea*> areas;
     if (c.info.area) areas.push_back(&*c.info.area);
     for (const auto& d : c.datum_areas) areas.push_back(&d);
     for (const CrsArea* a : areas) {
-      if (a->west_deg > a->east_deg) return std::nullopt;  // across the antimeridian: point by point
+      if (a->west_deg > a->east_deg) return false;  // across the antimeridian: point by point
       const bool whole = box.west >= a->west_deg && box.east <= a->east_deg && box.south >= a->south_deg && box.north <= a->north_deg;
       const bool none = box.east < a->west_deg || box.west > a->east_deg || box.north < a->south_deg || box.south > a->north_deg;
-      if (!whole && !none) return std::nullopt;
+      if (!whole && !none) return false;
     }
+    return true;
+  };
+  for (std::size_t i = 0; i < available_count; ++i) {
+    if (!whole_or_none(all[i])) return std::nullopt;
   }
   const Choice choice = choose(a0, b0, c0, lon0, lat0, true);
-  if (choice.missing_better) return std::nullopt;  // the per-point path names the point, or counts the fallback
+  if (choice.missing_better || !choice.use) return std::nullopt;  // the per-point path names the point, or counts the fallback
+  // A candidate whose grid is missing matters only where it would be
+  // better than the choice (choose() then names it): its area must hold
+  // the box whole or not at all only if it is.
+  const auto better = [](const std::optional<double>& x, const std::optional<double>& y) { return x && (!y || *x < *y); };
+  for (std::size_t i = available_count; i < all.size(); ++i) {
+    if (better(all[i].info.accuracy_m, all[*choice.use].info.accuracy_m) && !whole_or_none(all[i])) return std::nullopt;
+  }
   return choice.use;
 }
 

@@ -916,6 +916,18 @@ TEST_F(CrsCli, Issue13_AFallbackPastAMissingGridIsRefusedOrCounted) {
                                 path("o.csv").string() + "' --allow-fallback");
   ASSERT_EQ(allowed.exit_code, 0) << allowed.err;
   EXPECT_NE(allowed.err.find("2 points were moved by a worse operation"), std::string::npos) << allowed.err;
+
+  // One batch whose first point (Cabo da Roca, west of 9.37°W) lies outside
+  // the area of the better operation with the missing grid (EPSG:15932,
+  // Spain's box) and whose second (Lisbon) inside it: the second is still
+  // judged on its own, as PROJ judges each point.
+  write("pt.csv", "id,lat_deg,lon_deg\nCABO,38.78,-9.50\nLIS,38.72,-9.14\n");
+  const RunResult mixed = run("convert '" + path("pt.csv").string() + "' --crs EPSG:4230 --to-crs EPSG:4258 -o '" +
+                              path("p.csv").string() + "'");
+  EXPECT_EQ(mixed.exit_code, 3) << mixed.err;
+  EXPECT_NE(mixed.err.find("E_CRS_GRID_MISSING"), std::string::npos) << mixed.err;
+  EXPECT_NE(mixed.err.find("pt.csv:3"), std::string::npos) << mixed.err;
+  EXPECT_FALSE(fs::exists(path("p.csv")));
 }
 
 }  // namespace
