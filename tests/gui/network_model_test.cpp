@@ -36,6 +36,31 @@ solver::AdjustOptions no_snooping() {
 
 std::size_t rows_of(const geodesy::NetworkMeasurement& m) { return static_cast<std::size_t>(m.value.size()); }
 
+// A local 3-D network of one station P at (10, 20, 5) m measured twice as a
+// GNSS point with covariance `cov`, the second value `shift_x_m` further
+// along x; axes x, y as given.
+geodesy::Network point_measured_twice(char x, char y, const Eigen::Matrix3d& cov, double shift_x_m = 0.0) {
+  geodesy::Network net;
+  net.space = geodesy::NetworkSpace::local;
+  net.local_dimensions = 3;
+  net.axes.x = x;
+  net.axes.y = y;
+  geodesy::NetworkStation p;
+  p.id = "P";
+  p.position = Eigen::Vector3d(10.0, 20.0, 5.0);
+  net.stations.push_back(p);
+  for (int k = 0; k < 2; ++k) {
+    geodesy::NetworkMeasurement m;
+    m.kind = MeasurementKind::gnss_points;
+    m.stations = {0};
+    m.value = Eigen::Vector3d(10.0 + (k == 0 ? 0.0 : shift_x_m), 20.0, 5.0);
+    m.covariance = cov;
+    m.source = "test";
+    net.measurements.push_back(m);
+  }
+  return net;
+}
+
 TEST(NetworkModel, LinesAndPlanAreTheNetworksAndTheAdjustmentsOwn) {
   const geodesy::Network net = airport_network();
   NetworkModel model(net, no_snooping());
@@ -171,30 +196,11 @@ TEST(NetworkModel, ALocalNetworksEllipsesTurnWithItsAxes) {
   constexpr double kAzimuth_rad = 1e-9;
   constexpr double kPi = 3.14159265358979323846;
   constexpr double kDeg = kPi / 180.0;
-  const auto ellipse_of = [](char x, char y) {
-    geodesy::Network net;
-    net.space = geodesy::NetworkSpace::local;
-    net.local_dimensions = 3;
-    net.axes.x = x;
-    net.axes.y = y;
-    geodesy::NetworkStation p;
-    p.id = "P";
-    p.position = Eigen::Vector3d(10.0, 20.0, 5.0);
-    net.stations.push_back(p);
+  const auto ellipse_of = [&](char x, char y) {
     const double t = 30.0 * kDeg;
     Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
     r.topLeftCorner<2, 2>() << std::cos(t), -std::sin(t), std::sin(t), std::cos(t);
-    const Eigen::Matrix3d cov = r * Eigen::Vector3d(4e-4, 1e-6, 1e-6).asDiagonal() * r.transpose();
-    for (int k = 0; k < 2; ++k) {
-      geodesy::NetworkMeasurement m;
-      m.kind = MeasurementKind::gnss_points;
-      m.stations = {0};
-      m.value = Eigen::Vector3d(10.0, 20.0, 5.0);
-      m.covariance = cov;
-      m.source = "test";
-      net.measurements.push_back(m);
-    }
-    NetworkModel model(net, no_snooping());
+    NetworkModel model(point_measured_twice(x, y, r * Eigen::Vector3d(4e-4, 1e-6, 1e-6).asDiagonal() * r.transpose()), no_snooping());
     EXPECT_TRUE(model.result()) << model.error();
     return model.stations().at(0).ellipse;
   };
@@ -222,23 +228,8 @@ TEST(NetworkModel, ALocalNetworksEllipsesTurnWithItsAxes) {
 TEST(NetworkModel, AMeasurementsClassFollowsItsMeasurementTest) {
   constexpr double kSigma_m = 1e-3;
   const auto rows_for = [&](double w_x) {
-    geodesy::Network net;
-    net.space = geodesy::NetworkSpace::local;
-    net.local_dimensions = 3;
-    geodesy::NetworkStation p;
-    p.id = "P";
-    p.position = Eigen::Vector3d(10.0, 20.0, 5.0);
-    net.stations.push_back(p);
-    for (int k = 0; k < 2; ++k) {
-      geodesy::NetworkMeasurement m;
-      m.kind = MeasurementKind::gnss_points;
-      m.stations = {0};
-      m.value = Eigen::Vector3d(10.0 + (k == 0 ? 0.0 : w_x * kSigma_m * std::sqrt(2.0)), 20.0, 5.0);
-      m.covariance = Eigen::Matrix3d::Identity() * kSigma_m * kSigma_m;
-      m.source = "test";
-      net.measurements.push_back(m);
-    }
-    NetworkModel model(net, no_snooping());
+    NetworkModel model(point_measured_twice('n', 'e', Eigen::Matrix3d::Identity() * kSigma_m * kSigma_m, w_x * kSigma_m * std::sqrt(2.0)),
+                       no_snooping());
     EXPECT_TRUE(model.result()) << model.error();
     return model.measurement_rows();
   };
