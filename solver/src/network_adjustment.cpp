@@ -692,10 +692,10 @@ std::pair<double, std::size_t> apply_corrections(Problem& p, const Eigen::Vector
   return {largest, at};
 }
 
-NormalFactor factor_or_explain(const Problem& p, const Normal& n) {
+NormalFactor factor_or_explain(const Problem& p, const Normal& n, std::optional<NormalFactor> previous = std::nullopt) {
   Index failed = -1;
   auto f = NormalFactor::factor(p.layout.count, n.entries, p.o.dense ? NormalFactor::Mode::dense : NormalFactor::Mode::sparse,
-                                &failed);
+                                &failed, std::move(previous));
   if (!f) singular(p, failed);
   return std::move(*f);
 }
@@ -933,7 +933,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       }
     }
 
-    // Gauss–Newton.
+    // Gauss–Newton. Each factorization hands its analysis to the next (the
+    // pattern is the pass's).
+    std::optional<NormalFactor> last_factor;
     bool converged = false;
     double largest = 0.0;
     std::size_t largest_at = 0;
@@ -1021,9 +1023,10 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         if (weak.cols() == p.defect.cols()) p.defect = dv.g * weak;
       }
       hold_defect(p, n);
-      const NormalFactor f = factor_or_explain(p, n);
+      NormalFactor f = factor_or_explain(p, n, std::move(last_factor));
       const Eigen::VectorXd dx = f.solve(n.b);
       if (!dx.allFinite()) singular(p, -1);
+      last_factor = std::move(f);
       const auto [moved, at] = apply_corrections(p, dx);
       largest = moved;
       largest_at = at;
@@ -1065,7 +1068,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     // The statistics at the solution.
     Normal n = assemble(p);
     hold_defect(p, n);
-    NormalFactor f = factor_or_explain(p, n);
+    NormalFactor f = factor_or_explain(p, n, std::move(last_factor));
     f.select_inverse();
     result.factor_nonzeros = f.factor_nonzeros();
     result.unknowns = static_cast<std::size_t>(p.layout.count);

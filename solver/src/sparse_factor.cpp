@@ -27,6 +27,8 @@ struct NormalFactor::Impl {
   // `z` holds Z at those rows and columns, column-major from px[k] as L->x
   // holds L (the diagonal block whole).
   std::vector<std::int64_t> inverse_permutation, super_of;
+  // The pattern the analysis was made for (column pointers, row indices).
+  std::vector<SuiteSparse_long> pattern_p, pattern_i;
   std::vector<double> z;
   // dense
   Eigen::MatrixXd dense;
@@ -69,8 +71,16 @@ NormalFactor::NormalFactor(NormalFactor&&) noexcept = default;
 NormalFactor& NormalFactor::operator=(NormalFactor&&) noexcept = default;
 
 std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
-                                                 std::int64_t* failed_column) {
-  auto impl = std::make_unique<Impl>();
+                                                 std::int64_t* failed_column, std::optional<NormalFactor> previous) {
+  const bool reuse =
+      previous && mode == Mode::sparse && previous->impl_->mode == Mode::sparse && previous->impl_->n == n && previous->impl_->factor;
+  auto impl = reuse ? std::move(previous->impl_) : std::make_unique<Impl>();
+  previous.reset();
+  if (reuse) {  // what the last factor gave no longer holds
+    impl->z.clear();
+    impl->super_of.clear();
+    impl->inverse_permutation.clear();
+  }
   impl->mode = mode;
   impl->n = n;
   if (failed_column) *failed_column = -1;
@@ -101,7 +111,7 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
   }
 
   cholmod_common* c = &impl->common;
-  cholmod_l_start(c);
+  if (!impl->started) cholmod_l_start(c);
   impl->started = true;
   c->print = 0;
   c->error_handler = nullptr;
@@ -122,11 +132,22 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
   cholmod_sparse* a = cholmod_l_triplet_to_sparse(t, entries.size(), c);
   cholmod_l_free_triplet(&t, c);
   if (!a) throw std::bad_alloc();
-  impl->factor = cholmod_l_analyze(a, c);
-  if (!impl->factor) {
-    cholmod_l_free_sparse(&a, c);
-    throw std::bad_alloc();
-  }
+  const auto* ap = static_cast<const SuiteSparse_long*>(a->p);
+  const auto* ai = static_cast<const SuiteSparse_long*>(a->i);
+  const bool same_pattern = impl->factor && impl->pattern_p.size() == static_cast<std::size_t>(n) + 1 &&
+                            std::equal(ap, ap + n + 1, impl->pattern_p.begin()) &&
+                            impl->pattern_i.size() == static_cast<std::size_t>(ap[n]) &&
+                            std::equal(ai, ai + ap[n], impl->pattern_i.begin());
+  if (!same_pattern) {
+    if (impl->factor) cholmod_l_free_factor(&impl->factor, c);
+    impl->pattern_p.assign(ap, ap + n + 1);
+    impl->pattern_i.assign(ai, ai + ap[n]);
+    impl->factor = cholmod_l_analyze(a, c);
+    if (!impl->factor) {
+      cholmod_l_free_sparse(&a, c);
+      throw std::bad_alloc();
+    }
+  }  // else: the same ordering and supernodes, refactored in place
   cholmod_l_factorize(a, impl->factor, c);
   cholmod_l_free_sparse(&a, c);
   if (c->status == CHOLMOD_OUT_OF_MEMORY) throw std::bad_alloc();

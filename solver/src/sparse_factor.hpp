@@ -34,8 +34,13 @@ class NormalFactor {
   // Factors the n × n matrix the entries sum to. When it is not positive
   // definite, nullopt, and `failed_column` the first unknown (in the
   // caller's order) at which the factorization broke down.
+  // With `previous` (a sparse factor of a matrix of the same size), its
+  // analysis (ordering and supernodal pattern) is reused when the entries
+  // have the same pattern: only the numeric factorization is redone
+  // (`previous` is consumed either way). Gauss–Newton iterations refactor
+  // one pattern several times.
   static std::optional<NormalFactor> factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
-                                            std::int64_t* failed_column);
+                                            std::int64_t* failed_column, std::optional<NormalFactor> previous = std::nullopt);
   ~NormalFactor();
   NormalFactor(NormalFactor&&) noexcept;
   NormalFactor& operator=(NormalFactor&&) noexcept;
