@@ -826,7 +826,8 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
     for (std::size_t i = 0; i < n && !uniform; ++i) {
       const double plon = lon.empty() ? 0.0 : lon[i], plat = lat.empty() ? 0.0 : lat[i];
       Impl::Choice choice;
-      if (by_signature && std::isfinite(plon) && std::isfinite(plat)) {
+      // (Only in the ranges where CrsArea::contains and PROJ's boxes agree.)
+      if (by_signature && plon >= -180.0 && plon <= 180.0 && plat >= -90.0 && plat <= 90.0) {
         m.signature(plon, plat, bits);
         const auto known = std::find_if(m.choices_by_signature.begin(), m.choices_by_signature.end(),
                                         [&](const auto& e) { return e.first == bits; });

@@ -72,8 +72,9 @@ NormalFactor& NormalFactor::operator=(NormalFactor&&) noexcept = default;
 
 std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
                                                  std::int64_t* failed_column, std::optional<NormalFactor> previous) {
-  const bool reuse =
-      previous && mode == Mode::sparse && previous->impl_->mode == Mode::sparse && previous->impl_->n == n && previous->impl_->factor;
+  // (A moved-from factor has no Impl: no previous.)
+  const bool reuse = previous && previous->impl_ && mode == Mode::sparse && previous->impl_->mode == Mode::sparse &&
+                     previous->impl_->n == n && previous->impl_->factor;
   auto impl = reuse ? std::move(previous->impl_) : std::make_unique<Impl>();
   previous.reset();
   if (reuse) {  // what the last factor gave no longer holds
@@ -267,6 +268,7 @@ void NormalFactor::select_inverse() {
 double NormalFactor::inverse(std::int64_t a, std::int64_t b) const {
   const Impl& m = *impl_;
   if (m.mode == Mode::dense) return m.dense_inverse(a, b);
+  if (m.z.empty()) throw std::logic_error("NormalFactor::inverse: select_inverse() was not called on this factor");
   const std::int64_t pa = m.inverse_permutation[static_cast<std::size_t>(a)];
   const std::int64_t pb = m.inverse_permutation[static_cast<std::size_t>(b)];
   const std::int64_t p = pa >= pb ? m.find(pa, pb) : m.find(pb, pa);  // the lower triangle

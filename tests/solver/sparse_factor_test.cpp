@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "sparse_factor.hpp"
@@ -111,6 +112,12 @@ TEST(NormalFactor, ARefactorizationReusesTheAnalysisOnlyForTheSamePattern) {
   std::int64_t failed = -1;
   EXPECT_FALSE(NormalFactor::factor(bad.dense.rows(), bad.entries, NormalFactor::Mode::sparse, &failed, std::move(h)));
   EXPECT_GE(failed, 0);
+  // A factor already handed on is no previous one: analysed afresh.
+  auto again = NormalFactor::factor(first.dense.rows(), first.entries, NormalFactor::Mode::sparse, nullptr, std::move(h));
+  ASSERT_TRUE(again);
+  EXPECT_THROW((void)again->inverse(0, 0), std::logic_error);  // before select_inverse()
+  again->select_inverse();
+  EXPECT_LE(worst_difference(*again, first), kRelative);
 }
 
 }  // namespace
