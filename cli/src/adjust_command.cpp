@@ -103,11 +103,11 @@ int run_adjust(const AdjustCommandOptions& o) {
   const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
 
   const std::string text = workflow::report_text(prepared, r, so);
-  const std::string json = workflow::report_json(prepared, r, so);
+  nlohmann::ordered_json report_document = workflow::report_document(prepared, r, so);
   // The report is shown whether or not the results are written.
   std::ostream& shown = stations.is_standard_output() || o.json ? std::cerr : std::cout;
   if (!report) shown << text;
-  if (o.json) std::cout << json;
+  if (o.json) std::cout << report_document.dump(2) << "\n";
   for (const auto& n : prepared.notes) {
     if (n.rfind("warning: ", 0) == 0) std::cerr << "geoanchor: " << n << '\n';
   }
@@ -153,7 +153,7 @@ int run_adjust(const AdjustCommandOptions& o) {
   }
   stations.stream() << workflow::stations_csv(prepared.network, r, so);
   if (!stations.is_standard_output()) {
-    nlohmann::ordered_json side = nlohmann::ordered_json::parse(json);
+    nlohmann::ordered_json side = std::move(report_document);  // (printed above if asked for)
     side.erase("measurements");
     side["schema"] = "geoanchor.stations/1";
     side["report_schema"] = "geoanchor.adjust-report/1";

@@ -624,7 +624,8 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
   return out.str();
 }
 
-std::string report_json(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
+nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
+                                       const solver::AdjustOptions& o) {
   using nlohmann::ordered_json;
   const auto& net = prepared.network;
   auto num = [](double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); };
@@ -727,7 +728,7 @@ std::string report_json(const PreparedNetwork& prepared, const solver::Adjustmen
   j["outliers"] = outliers;
   j["warnings"] = r.warnings;
   if (!r.refused_because.empty()) j["refused_because"] = r.refused_because;
-  return j.dump(2) + "\n";
+  return j;
 }
 
 }  // namespace geoanchor::workflow

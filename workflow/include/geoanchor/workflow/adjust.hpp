@@ -6,6 +6,8 @@
 // the adjusted stations as a control set CSV with its sidecar, the
 // measurements with their statistics, the report as text and JSON.
 
+#include <nlohmann/json.hpp>
+
 #include <optional>
 #include <string>
 #include <vector>
@@ -75,8 +77,11 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
 io::TransformFile helmert_transform_file(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
                                          const solver::AdjustOptions& o, const std::string& generator);
 
-// The report as text, and as JSON (schema geoanchor.adjust-report/1).
+// The report as text, and as a JSON document (schema
+// geoanchor.adjust-report/1; `adjust --json` prints it, the stations'
+// sidecar holds it without its measurements).
 std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
-std::string report_json(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
+nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
+                                       const solver::AdjustOptions& o);
 
 }  // namespace geoanchor::workflow
