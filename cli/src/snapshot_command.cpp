@@ -99,7 +99,7 @@ void print_network_notes(const NetworkSession& s) {
 // What the picture of the network view shows, in one line.
 std::string network_figure_line(const gui::NetworkUi& ui, const NetworkSession& s) {
   const gui::NetworkGeometry& g = ui.plan();
-  const double w_critical = s.model->result() ? s.model->result()->w_critical : std::numeric_limits<double>::infinity();
+  const double w_critical = s.model->w_critical();
   std::string line = std::to_string(s.model->network().stations.size()) + " stations, " +
                      std::to_string(s.model->network().measurements.size()) + " measurements (";
   for (std::size_t c = 0; c < gui::kMeasurementClasses; ++c) {

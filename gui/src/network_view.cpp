@@ -147,14 +147,13 @@ void NetworkUi::draw_plan() {
   const float id_size = std::round(font * 0.8f);
   const ImVec2 c0 = ImGui::GetCursorScreenPos();
   const ImVec2 avail = ImGui::GetContentRegionAvail();
-  const auto& result = model_.result();
   const geodesy::Network& net = model_.network();
   NetworkGeometry& g = plan_;
   g = NetworkGeometry{};
   g.schematic = model_.schematic_plan();
   g.confidence = model_.options().confidence;
   const bool dense = stations_.size() > kDenseNetworkStations;
-  const double w_critical = result ? result->w_critical : std::numeric_limits<double>::infinity();
+  const double w_critical = model_.w_critical();
   const float r_px = std::max(3.0f, std::round(font * 0.25f));
 
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -524,7 +523,7 @@ void NetworkUi::draw_side() {
   // The legend: each class with its count of measurements, and the station
   // symbols.
   ImDrawList* dl = ImGui::GetWindowDrawList();
-  const double w_critical = result ? result->w_critical : std::numeric_limits<double>::infinity();
+  const double w_critical = model_.w_critical();
   std::array<std::size_t, kMeasurementClasses>& counts = plan_.measurements_by_class;
   counts = {};
   for (const auto& row : measurements_) ++counts[static_cast<std::size_t>(row.shown_as)];

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -106,7 +107,9 @@ class NetworkModel {
   // True for a levelling network, whose plan is a schematic circle.
   bool schematic_plan() const;
   const std::optional<solver::AdjustmentResult>& result() const { return result_; }
-  const std::string& error() const { return error_; }  // "E_CODE: message" of a refused adjustment
+  const std::string& error() const { return error_; }
+  // The shown adjustment's critical |w| (infinity without one).
+  double w_critical() const { return result_ ? result_->w_critical : std::numeric_limits<double>::infinity(); }  // "E_CODE: message" of a refused adjustment
   unsigned generation() const { return generation_; }  // increments with every new result
 
   std::vector<NetworkStationRow> stations() const;
