@@ -182,6 +182,10 @@ struct Problem {
   std::vector<int> helmert_slot;  // per measurement: its place in the group, −1 outside it
   std::vector<Eigen::MatrixXd> whitening;  // per measurement: W with Wᵀ W = C⁻¹
   std::vector<bool> active;                // measurements in the adjustment
+  // Measurements removed by data snooping whose entries stay in the normal
+  // matrix as zeros, so that its pattern (and CHOLMOD's analysis) is the
+  // first pass's: the next pass refactors numerically only.
+  std::vector<bool> pattern_only;
   std::vector<bool> station_used;
   Layout layout;
   bool aside = false;  // --free: the input's station constraints are set aside
@@ -254,7 +258,7 @@ struct Problem {
       for (int k = 0; k < 3; ++k) {
         if (con.code[static_cast<std::size_t>(k)] != 'C' || con.sigma_m[static_cast<std::size_t>(k)] <= 0.0) continue;
         const int c = constrained_component(net.space, k);
-        const Eigen::Vector3d d = states[s].local_from_xyz * (net.stations[s].position - states[s].x);
+        const Eigen::Vector3d d = states[s].axes * (net.stations[s].position - states[s].x);
         out.push_back({layout.station[s][static_cast<std::size_t>(c)], d(c) / con.sigma_m[static_cast<std::size_t>(k)]});
       }
     }
@@ -345,30 +349,119 @@ struct Normal {
   std::size_t rows = 0;
 };
 
-Normal assemble(const Problem& p) {
+// The upper triangle of a measurement's AᵀA over its unknowns.
+void push_upper(Normal& n, const std::vector<Index>& unknowns, const Eigen::MatrixXd& ata) {
+  for (std::size_t i = 0; i < unknowns.size(); ++i) {
+    for (std::size_t j = 0; j < unknowns.size(); ++j) {
+      if (unknowns[i] > unknowns[j]) continue;
+      n.entries.push_back({unknowns[i], unknowns[j], ata(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j))});
+    }
+  }
+}
+
+// With `matrix` false only b and the rows (the matrix is known not to have
+// changed: constant_jacobian()).
+Normal assemble(const Problem& p, bool matrix = true) {
   Normal n;
   n.b = Eigen::VectorXd::Zero(p.layout.count);
   for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
     if (!p.active[mi]) continue;
     const Rows r = p.linearize(mi);
     n.rows += static_cast<std::size_t>(r.l.size());
-    const Eigen::MatrixXd ata = r.a.transpose() * r.a;
     const Eigen::VectorXd atl = r.a.transpose() * r.l;
-    for (std::size_t i = 0; i < r.unknowns.size(); ++i) {
-      n.b(r.unknowns[i]) += atl(static_cast<Eigen::Index>(i));
-      for (std::size_t j = 0; j < r.unknowns.size(); ++j) {
-        if (r.unknowns[i] > r.unknowns[j]) continue;
-        n.entries.push_back({r.unknowns[i], r.unknowns[j], ata(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j))});
-      }
+    for (std::size_t i = 0; i < r.unknowns.size(); ++i) n.b(r.unknowns[i]) += atl(static_cast<Eigen::Index>(i));
+    if (!matrix) continue;
+    const Eigen::MatrixXd ata = r.a.transpose() * r.a;
+    push_upper(n, r.unknowns, ata);
+  }
+  if (matrix && !p.pattern_only.empty()) {
+    for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
+      if (!p.pattern_only[mi] || p.active[mi]) continue;
+      const auto& st = p.net.measurements[mi].stations;
+      if (!std::all_of(st.begin(), st.end(), [&](std::size_t s) { return p.station_used[s]; })) continue;
+      const Rows r = p.linearize(mi);
+      push_upper(n, r.unknowns, Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(r.unknowns.size()), static_cast<Eigen::Index>(r.unknowns.size())));
     }
   }
   for (const auto& q : p.pseudo_observations()) {
     const double w = p.pseudo_weight(q.unknown);
-    n.entries.push_back({q.unknown, q.unknown, w * w});
+    if (matrix) n.entries.push_back({q.unknown, q.unknown, w * w});
     n.b(q.unknown) += w * q.l;
     ++n.rows;
   }
   return n;
+}
+
+// Whether the normal matrix is the same at every state: every measurement
+// in the adjustment is linear in the positions (GNSS baselines and points;
+// the unknowns' axes are fixed, StationState::axes), no Helmert is
+// estimated with them, and the datum is held by constraints (inner
+// constraints move with the positions).
+bool constant_jacobian(const Problem& p) {
+  if (p.free || p.o.helmert) return false;
+  for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
+    if (!p.active[mi]) continue;
+    const auto k = p.net.measurements[mi].kind;
+    if (k != MeasurementKind::gnss_baselines && k != MeasurementKind::gnss_points) return false;
+  }
+  return true;
+}
+
+// The failing measurements (indices into the network, worst first) that
+// may go in the same snooping pass as those at `taken` (positions in
+// `failing`), in order: none of their stations is within
+// kSnoopSeparationHops measurements of a station of one taken, or of one
+// added before them. Positions in `failing`.
+constexpr int kSnoopSeparationHops = 2;
+std::vector<std::size_t> separated_failures(const Problem& p, const std::vector<std::size_t>& failing,
+                                            const std::vector<std::size_t>& taken) {
+  const auto& net = p.net;
+  const std::size_t ns = net.stations.size();
+  // Stations joined by a measurement in the adjustment (compressed rows).
+  std::vector<std::size_t> start(ns + 1, 0), next;
+  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+    if (!p.active[mi]) continue;
+    const auto& st = net.measurements[mi].stations;
+    for (std::size_t s : st) start[s + 1] += st.size() - 1;
+  }
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  next.resize(start[ns]);
+  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+    if (!p.active[mi]) continue;
+    const auto& st = net.measurements[mi].stations;
+    for (std::size_t a : st) {
+      for (std::size_t b : st) {
+        if (a != b) next[fill[a]++] = b;
+      }
+    }
+  }
+  std::vector<bool> near(ns, false);
+  std::vector<std::size_t> ring, further;
+  const auto mark = [&](std::size_t mi) {
+    ring.assign(net.measurements[mi].stations.begin(), net.measurements[mi].stations.end());
+    for (std::size_t s : ring) near[s] = true;
+    for (int hop = 0; hop < kSnoopSeparationHops; ++hop) {
+      further.clear();
+      for (std::size_t s : ring) {
+        for (std::size_t k = start[s]; k < start[s + 1]; ++k) {
+          if (!near[next[k]]) near[next[k]] = true, further.push_back(next[k]);
+        }
+      }
+      ring.swap(further);
+    }
+  };
+  std::vector<bool> is_taken(failing.size(), false);
+  for (std::size_t k : taken) mark(failing[k]), is_taken[k] = true;
+  std::vector<std::size_t> out;
+  for (std::size_t k = 0; k < failing.size(); ++k) {
+    if (is_taken[k]) continue;
+    const auto& st = net.measurements[failing[k]].stations;
+    if (std::any_of(st.begin(), st.end(), [&](std::size_t s) { return near[s]; })) continue;
+    mark(failing[k]);
+    out.push_back(k);
+  }
+  return out;
 }
 
 // The datum parameters as motions of the unknowns, each scaled to move the
@@ -448,7 +541,7 @@ DatumVectors datum_vectors(const Problem& p) {
     dv.names.push_back(motions[k].name);
     for (std::size_t s = 0; s < net.stations.size(); ++s) {
       if (!p.station_used[s]) continue;
-      const Eigen::Vector3d local = p.states[s].local_from_xyz * motions[k].move(p.states[s].x);
+      const Eigen::Vector3d local = p.states[s].axes * motions[k].move(p.states[s].x);
       for (int c = 0; c < 3; ++c) {
         const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
         if (u >= 0) dv.g(u, static_cast<Eigen::Index>(k)) = local(c);
@@ -663,7 +756,7 @@ std::pair<double, std::size_t> apply_corrections(Problem& p, const Eigen::Vector
       if (u >= 0) local(c) = dx(u);
     }
     if (local.norm() > largest) largest = local.norm(), at = s;
-    Eigen::Vector3d x = p.states[s].x + p.states[s].local_from_xyz.transpose() * local;
+    Eigen::Vector3d x = p.states[s].x + p.states[s].axes.transpose() * local;
     if (net.space == NetworkSpace::ellipsoidal && !p.aside && net.stations[s].constraint.any()) {
       // Components held fixed stay at their a-priori geodetic values.
       const auto& con = net.stations[s].constraint;
@@ -676,7 +769,9 @@ std::pair<double, std::size_t> apply_corrections(Problem& p, const Eigen::Vector
       if (con.code[2] == 'C' && con.sigma_m[2] <= 0.0) g.h = a.h, changed = true;
       if (changed) x = p.geocentric.ecef_from_geodetic(g).m;
     }
+    const Eigen::Matrix3d axes = p.states[s].axes;
     p.states[s] = station_state(net, p.geocentric, x);
+    p.states[s].axes = axes;
   }
   for (std::size_t k = 0; k < p.orientations.size(); ++k) {
     if (p.layout.orientation[k] >= 0) p.orientations[k] += dx(p.layout.orientation[k]);
@@ -752,6 +847,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   // Whitening of each measurement's covariance.
   p.whitening.resize(net.measurements.size());
   p.active.assign(net.measurements.size(), false);
+  p.pattern_only.assign(net.measurements.size(), false);
   for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
     const auto& m = net.measurements[mi];
     if (m.ignore) continue;
@@ -887,8 +983,10 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   std::vector<std::string> outlier_why = gross_why;
 
   const std::vector<std::string> base_warnings = result.warnings;
+  std::optional<NormalFactor> last_factor;
   for (;;) {
     result.warnings = base_warnings;  // each pass states its own
+    ++result.passes;
     // Stations reached by the measurements; the rest are left out.
     p.station_used.assign(net.stations.size(), false);
     for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
@@ -934,14 +1032,16 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     }
 
     // Gauss–Newton. Each factorization hands its analysis to the next (the
-    // pattern is the pass's).
-    std::optional<NormalFactor> last_factor;
+    // pattern is the first pass's, while the measurements snooping removes
+    // keep their place as zeros).
     bool converged = false;
     double largest = 0.0;
     std::size_t largest_at = 0;
     int iteration = 0;
     for (iteration = 1; iteration <= o.max_iterations; ++iteration) {
-      Normal n = assemble(p);
+      // A normal matrix that cannot have changed is not factored again.
+      const bool same_matrix = iteration > 1 && last_factor && constant_jacobian(p);
+      Normal n = assemble(p, !same_matrix);
       if (iteration == 1) {
         // The datum. First what the measurements leave undefined (every
         // component an unknown, no constraint), then whether the
@@ -1023,10 +1123,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         if (weak.cols() == p.defect.cols()) p.defect = dv.g * weak;
       }
       hold_defect(p, n);
-      NormalFactor f = factor_or_explain(p, n, std::move(last_factor));
-      const Eigen::VectorXd dx = f.solve(n.b);
+      if (!same_matrix) last_factor = factor_or_explain(p, n, std::move(last_factor));
+      const Eigen::VectorXd dx = last_factor->solve(n.b);
       if (!dx.allFinite()) singular(p, -1);
-      last_factor = std::move(f);
       const auto [moved, at] = apply_corrections(p, dx);
       largest = moved;
       largest_at = at;
@@ -1055,7 +1154,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       inner_m = (inner_e.transpose() * p.defect).inverse();
       Eigen::VectorXd corrections = Eigen::VectorXd::Zero(p.layout.count);
       for (std::size_t s : p.inner) {
-        const Eigen::Vector3d d = p.states[s].local_from_xyz * (p.states[s].x - net.stations[s].position);
+        const Eigen::Vector3d d = p.states[s].axes * (p.states[s].x - net.stations[s].position);
         for (int c = 0; c < 3; ++c) {
           const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
           if (u >= 0) corrections(u) = d(c);
@@ -1065,10 +1164,12 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       apply_corrections(p, p.defect * t);
     }
 
-    // The statistics at the solution.
-    Normal n = assemble(p);
+    // The statistics at the solution (with the last iteration's factor
+    // when the matrix is the same).
+    const bool same_matrix = last_factor && constant_jacobian(p);
+    Normal n = assemble(p, !same_matrix);
     hold_defect(p, n);
-    NormalFactor f = factor_or_explain(p, n, std::move(last_factor));
+    NormalFactor f = same_matrix ? std::move(*last_factor) : factor_or_explain(p, n, std::move(last_factor));
     f.select_inverse();
     result.factor_nonzeros = f.factor_nonzeros();
     result.unknowns = static_cast<std::size_t>(p.layout.count);
@@ -1180,9 +1281,10 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         const std::size_t limit = std::max<std::size_t>(
             1, static_cast<std::size_t>(std::floor(o.max_outlier_share * static_cast<double>(countable))));
         const auto& worst = net.measurements[failing.front().first];
+        std::vector<std::size_t> position(net.measurements.size(), 0);  // in result.measurements
+        for (std::size_t k = 0; k < result.measurements.size(); ++k) position[result.measurements[k].index] = k;
         const auto describe = [&](std::size_t mi) {
-          const auto it = std::find_if(result.measurements.begin(), result.measurements.end(),
-                                       [&](const AdjustedMeasurement& am) { return am.index == mi; });
+          const auto it = result.measurements.begin() + static_cast<std::ptrdiff_t>(position[mi]);
           return "measurement test " + format_shortest(it->statistic) + " (χ²(" + std::to_string(it->test_dof) +
                  "), p = " + format_shortest(it->p_value) + " < " + format_shortest(o.alpha_point) + "); max |w| " +
                  format_fixed(it->w_max, 2);
@@ -1199,13 +1301,25 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         } else {
           std::vector<SnoopCandidate> candidates;
           for (const auto& x : failing) candidates.push_back(x.second);
-          const auto take = snoop_selection(candidates, [&](std::size_t count) { return removed + count <= limit; });
+          std::vector<std::size_t> take = snoop_selection(candidates, [&](std::size_t count) { return removed + count <= limit; });
+          // In a large network a blunder's w-tests spill over only onto
+          // measurements near it: failing measurements far from every one
+          // taken go in the same pass (kSnoopSeparationHops).
+          std::vector<std::size_t> failing_index;
+          for (const auto& x : failing) failing_index.push_back(x.first);
+          for (std::size_t k : separated_failures(p, failing_index, take)) {
+            if (removed + take.size() + 1 > limit) break;
+            take.push_back(k);
+          }
           for (std::size_t k : take) {
             const std::size_t mi = failing[k].first;
             outlier_why[mi] = "data snooping: " + describe(mi);
             p.active[mi] = false;
+            const auto kind = net.measurements[mi].kind;
+            p.pattern_only[mi] = kind == MeasurementKind::gnss_baselines || kind == MeasurementKind::gnss_points;
             ++removed;
           }
+          last_factor = std::move(f);  // its analysis serves the next pass (the same pattern)
           continue;  // adjust again without them
         }
       }
@@ -1245,8 +1359,11 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       as.constraint = p.aside ? "FFF" : net.stations[s].constraint.text();
       as.used = p.station_used[s];
       if (as.used) {
-        as.covariance_local_m2 = q_block(s, s);
-        as.covariance_m2 = p.states[s].local_from_xyz.transpose() * as.covariance_local_m2 * p.states[s].local_from_xyz;
+        // q_block is along the unknowns' axes; the local ones are those at the adjusted position.
+        const Eigen::Matrix3d& axes = p.states[s].axes;
+        const Eigen::Matrix3d& local = p.states[s].local_from_xyz;
+        as.covariance_m2 = axes.transpose() * q_block(s, s) * axes;
+        as.covariance_local_m2 = local * as.covariance_m2 * local.transpose();
         as.ellipse = horizontal_ellipse(as.covariance_local_m2.topLeftCorner<2, 2>(), net.space);
         as.ellipse_confidence = as.ellipse;
         as.ellipse_confidence.semi_major_m *= confidence_scale;
@@ -1286,9 +1403,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       // To ECEF (ellipsoidal) per station block: Rᵢᵀ Q Rⱼ.
       result.station_covariance_m2.resize(static_cast<Eigen::Index>(3 * m), static_cast<Eigen::Index>(3 * m));
       for (std::size_t i = 0; i < m; ++i) {
-        const Eigen::Matrix3d ri = p.states[result.covariance_stations[i]].local_from_xyz;
+        const Eigen::Matrix3d ri = p.states[result.covariance_stations[i]].axes;
         for (std::size_t j = 0; j < m; ++j) {
-          const Eigen::Matrix3d rj = p.states[result.covariance_stations[j]].local_from_xyz;
+          const Eigen::Matrix3d rj = p.states[result.covariance_stations[j]].axes;
           result.station_covariance_m2.block<3, 3>(static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * j)) =
               ri.transpose() * q.block<3, 3>(static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * j)) * rj;
         }
@@ -1330,9 +1447,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     }
     for (const auto& [s1, s2] : pairs) {
       // In the axes of the first station; a local network's axes are one.
-      const Eigen::Matrix3d r1 = p.states[s1].local_from_xyz, r2 = p.states[s2].local_from_xyz;
-      const Eigen::Matrix3d c11 = r1.transpose() * q_block(s1, s1) * r1, c22 = r2.transpose() * q_block(s2, s2) * r2;
-      const Eigen::Matrix3d c12 = r1.transpose() * q_block(s1, s2) * r2;
+      const Eigen::Matrix3d a1 = p.states[s1].axes, a2 = p.states[s2].axes, r1 = p.states[s1].local_from_xyz;
+      const Eigen::Matrix3d c11 = a1.transpose() * q_block(s1, s1) * a1, c22 = a2.transpose() * q_block(s2, s2) * a2;
+      const Eigen::Matrix3d c12 = a1.transpose() * q_block(s1, s2) * a2;
       const Eigen::Matrix3d diff = r1 * (c11 + c22 - c12 - c12.transpose()) * r1.transpose();
       RelativePrecision rp;
       rp.from = s1;

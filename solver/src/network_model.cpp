@@ -64,9 +64,9 @@ double bearing(const Sight& s, const geodesy::Network& net, Eigen::Vector3d& gra
   return sign * std::atan2(s.north, s.east);
 }
 
-// The gradient g of f with respect to a station's position, as ∂f/∂(local axes).
+// The gradient g of f with respect to a station's position, as ∂f/∂(its unknowns' axes).
 Eigen::RowVector3d to_local(const Eigen::Vector3d& g, const StationState& st) {
-  return (st.local_from_xyz * g).transpose();
+  return (st.axes * g).transpose();
 }
 
 }  // namespace
@@ -96,6 +96,7 @@ StationState station_state(const geodesy::Network& net, const geodesy::Geocentri
   s.lon_rad = g.lon.rad();
   s.h_m = g.h.m;
   s.local_from_xyz = geodesy::enu_from_ecef_rotation(g.lat, g.lon);
+  s.axes = s.local_from_xyz;
   return s;
 }
 

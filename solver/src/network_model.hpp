@@ -26,6 +26,12 @@ struct StationState {
   // Rows: the local axes in the position's axes (east, north, up at the
   // geodetic position; the identity in a local network).
   Eigen::Matrix3d local_from_xyz = Eigen::Matrix3d::Identity();
+  // Rows: the axes the station's unknowns (its corrections) are taken
+  // along: the local axes at the a-priori position, kept through the
+  // iterations. Fixed axes keep a model that is linear in the positions
+  // (GNSS baselines and points) linear in the unknowns: its normal matrix
+  // does not change from one iteration to the next.
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
   double lat_rad = 0.0, lon_rad = 0.0, h_m = 0.0;  // ellipsoidal
 };
 

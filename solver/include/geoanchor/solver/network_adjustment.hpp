@@ -160,7 +160,10 @@ struct AdjustmentResult {
   std::optional<double> sigma0;
   GlobalTest global_test;
   double w_critical = 0.0;
-  int iterations = 0;
+  int iterations = 0;  // Gauss–Newton iterations over every pass
+  // Adjustments in all: 1, plus one per data-snooping step (a step removes
+  // the worst failing measurement and any failing far from it).
+  int passes = 0;
   bool converged = false;
   double largest_correction_m = 0.0;  // of the last iteration
   std::string datum;                  // how the datum is defined, in words
