@@ -13,6 +13,7 @@
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/workflow/adjust.hpp"
+#include "geoanchor/workflow/network_generator.hpp"
 #include "geoanchor/workflow/transform_checks.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
@@ -23,10 +24,8 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   auto* cmd = app.add_subcommand("adjust", "Least-squares adjustment of a survey network (GNSS and terrestrial)");
   cmd->add_option("INPUT", o.inputs,
                   "Network inputs, detected from their content: geoanchor network JSON, DynaML station and measurement "
-                  "files, SINEX, GNU Gama local XML; - for standard input")
-      ->required();
-  cmd->add_option("-o,--output", o.output, "Adjusted stations as a control-set CSV (with its sidecar OUT.geoanchor.json); - for standard output")
-      ->required();
+                  "files, SINEX, GNU Gama local XML; - for standard input");
+  cmd->add_option("-o,--output", o.output, "Adjusted stations as a control-set CSV (with its sidecar OUT.geoanchor.json); - for standard output");
   cmd->add_option("--measurements", o.measurements, "Write the measurements with their statistics as CSV");
   cmd->add_option("--report", o.report, "Write the text report to this file (else it goes to standard output, or standard error with -o -)");
   cmd->add_flag("--json", o.json, "Print the report as JSON (schema geoanchor.adjust-report/1) on standard output");
@@ -36,10 +35,61 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_option("--helmert-output", o.helmert_output, "--estimate-helmert: the transform file (default: STATIONS less .csv, plus .helmert.json)");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
+  // Generated networks (planning, benchmarks): docs/commands/adjust.md#generated-networks.
+  cmd->add_option("--generate", o.generate, "Write a generated GNSS network of N stations (DynaML, network JSON, truth, blunders) to --out-dir instead of adjusting");
+  cmd->add_option("--out-dir", o.out_dir, "--generate: the folder for network.stn.xml, network.msr.xml, network.json, network.truth.csv, network.blunders.csv");
+  cmd->add_option("--seed", o.seed, "--generate: the random seed (default 1)");
+  cmd->add_option("--held", o.held, "--generate: stations held fixed at their true positions (default 3)");
+  cmd->add_option("--blunders", o.blunders, "--generate: baselines with a planted blunder (default N/1000, 1 to 10)");
+  cmd->add_option("--blunder", o.blunder_m, "--generate: the planted blunders' length in metres (default 0.10)");
+  cmd->add_option("--center", o.center, "--generate: the region's centre LAT,LON in degrees (default 47,8)");
+  cmd->add_option("--side-km", o.side_km, "--generate: the square region's side in km (default 1000)");
   return cmd;
 }
 
+namespace {
+
+int run_generate(const AdjustCommandOptions& o) {
+  if (!o.out_dir) throw Error(ErrorKind::usage, "E_OPTION", "--generate: give the folder for the network with --out-dir");
+  if (!o.inputs.empty() || !o.output.empty() || o.measurements || o.report || o.sinex || o.json) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--generate writes a network and adjusts nothing: give no INPUT, -o, --measurements, --report, --sinex or --json");
+  }
+  workflow::NetworkGeneratorOptions g;
+  g.stations = *o.generate;
+  if (o.seed) g.seed = *o.seed;
+  if (o.held) g.held = *o.held;
+  g.blunders = o.blunders;
+  if (o.blunder_m) g.blunder_m = *o.blunder_m;
+  if (o.side_km) g.side_km = *o.side_km;
+  if (o.center) {
+    const auto comma = o.center->find(',');
+    const auto lat = comma == std::string::npos ? std::nullopt : parse_finite_double(o.center->substr(0, comma));
+    const auto lon = comma == std::string::npos ? std::nullopt : parse_finite_double(o.center->substr(comma + 1));
+    if (!lat || !lon) throw Error(ErrorKind::usage, "E_OPTION", "--center '" + *o.center + "': expected LAT,LON in degrees");
+    g.center_lat_deg = *lat;
+    g.center_lon_deg = *lon;
+  }
+  if (!std::filesystem::is_directory(*o.out_dir)) {
+    throw Error(ErrorKind::usage, "E_OUTPUT_DIR", "--out-dir " + *o.out_dir + ": not a folder");
+  }
+  const workflow::GeneratedNetwork net = workflow::generate_network(g);
+  const auto paths = workflow::write_generated_network(net, *o.out_dir, "network", o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+  std::cout << "generated " << net.network.stations.size() << " stations, " << net.network.measurements.size() << " baselines, "
+            << g.held << " held, " << net.blunders.size() << " planted blunder" << (net.blunders.size() == 1 ? "" : "s") << " of "
+            << format_shortest(g.blunder_m) << " m (seed " << g.seed << ")\n";
+  for (const auto& p : paths) std::cout << "  " << p.string() << '\n';
+  return 0;
+}
+
+}  // namespace
+
 int run_adjust(const AdjustCommandOptions& o) {
+  if (o.generate) return run_generate(o);
+  if (o.out_dir || o.seed || o.held || o.blunders || o.blunder_m || o.center || o.side_km) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--out-dir, --seed, --held, --blunders, --blunder, --center and --side-km go with --generate");
+  }
+  if (o.inputs.empty()) throw Error(ErrorKind::usage, "E_OPTION", "INPUT is required: the network's files (or --generate N --out-dir DIR)");
+  if (o.output.empty()) throw Error(ErrorKind::usage, "E_OPTION", "-o STATIONS.csv is required (or - for standard output)");
   if (o.json && o.output == "-") {
     throw Error(ErrorKind::usage, "E_OPTION", "--json and -o -: both would go to standard output; give -o STATIONS.csv");
   }

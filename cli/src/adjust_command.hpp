@@ -2,6 +2,8 @@
 // `geoanchor adjust`: least-squares adjustment of a survey network. See
 // docs/commands/adjust.md.
 
+#include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,6 +27,13 @@ struct AdjustCommandOptions {
   bool accept_failed_global_test = false;
   bool overwrite = false;
   std::vector<std::string> argv;
+  // --generate N: write a generated network instead of adjusting one.
+  std::optional<std::size_t> generate;
+  std::optional<std::string> out_dir;
+  std::optional<std::uint64_t> seed;
+  std::optional<std::size_t> held, blunders;
+  std::optional<std::string> center;
+  std::optional<double> side_km, blunder_m;
 };
 
 CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& options);

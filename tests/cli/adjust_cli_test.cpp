@@ -251,5 +251,46 @@ TEST_F(AdjustCli, Reliability41_AFailedWriteLeavesNoneOfTheOutputsAndARerunWrite
   EXPECT_NE(both.err.find("--json and -o -: both would go to standard output"), std::string::npos) << both.err;
 }
 
+// Issue 17 point 1: `adjust --generate N --out-dir DIR` writes a network
+// that `adjust` reads; misuse is refused by name and writes nothing.
+TEST_F(AdjustCli, Issue17_GenerateWritesANetworkThatAdjustReads) {
+  const RunResult g = run("adjust --generate 300 --out-dir '" + path("").string() + "' --seed 4 --blunders 2");
+  ASSERT_EQ(g.exit_code, 0) << g.err;
+  EXPECT_NE(g.out.find("generated 300 stations"), std::string::npos) << g.out;
+  EXPECT_NE(g.out.find("2 planted blunders"), std::string::npos) << g.out;
+  const RunResult a = run("adjust '" + path("network.stn.xml").string() + "' '" + path("network.msr.xml").string() + "' -o '" +
+                          path("st.csv").string() + "' --report '" + path("r.txt").string() + "'");
+  EXPECT_EQ(a.exit_code, 0) << a.err;
+  const RunResult j = run("adjust '" + path("network.json").string() + "' -o '" + path("st2.csv").string() + "' --report '" +
+                          path("r2.txt").string() + "'");
+  EXPECT_EQ(j.exit_code, 0) << j.err;
+  // Again into the same folder: every file exists, none is replaced.
+  const std::string before = testing::slurp(path("network.json"));
+  const RunResult again = run("adjust --generate 300 --out-dir '" + path("").string() + "' --seed 5");
+  EXPECT_EQ(again.exit_code, 5) << again.err;
+  EXPECT_NE(again.err.find("E_OUTPUT_EXISTS"), std::string::npos) << again.err;
+  EXPECT_EQ(testing::slurp(path("network.json")), before);
+}
+
+TEST_F(AdjustCli, Issue17_GenerateMisuseIsRefusedByName) {
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"adjust --generate 100", {"E_OPTION", "--out-dir"}},
+      {"adjust --generate 100 --out-dir '" + path("").string() + "' -o st.csv", {"E_OPTION", "adjusts nothing"}},
+      {"adjust --generate 2 --out-dir '" + path("").string() + "'", {"E_OPTION", "at least 4 stations"}},
+      {"adjust --generate 100 --out-dir '" + path("").string() + "' --center 95,8", {"E_OPTION", "--center 95,8"}},
+      {"adjust --generate 100 --out-dir '" + path("").string() + "' --center north", {"E_OPTION", "LAT,LON"}},
+      {"adjust --generate 100 --out-dir '" + path("nowhere").string() + "'", {"E_OUTPUT_DIR", "nowhere"}},
+      {"adjust --seed 3 net.json -o st.csv", {"E_OPTION", "go with --generate"}},
+      {"adjust -o st.csv", {"E_OPTION", "INPUT is required"}},
+  };
+  for (const auto& [args, pieces] : cases) {
+    SCOPED_TRACE(args);
+    const RunResult r = run(args);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    for (const auto& piece : pieces) EXPECT_NE(r.err.find(piece), std::string::npos) << piece << " in: " << r.err;
+    EXPECT_EQ(leftovers({}), std::vector<std::string>{});
+  }
+}
+
 }  // namespace
 }  // namespace geoanchor
