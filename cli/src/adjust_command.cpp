@@ -35,6 +35,8 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_option("--helmert-output", o.helmert_output, "--estimate-helmert: the transform file (default: STATIONS less .csv, plus .helmert.json)");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
+  cmd->add_option("--jobs", o.jobs, "Threads for the assembly and the statistics (default: the machine's cores); the results do not depend on it")
+      ->check(CLI::Range(1, 256));
   // Generated networks (planning, benchmarks): docs/commands/adjust.md#generated-networks.
   cmd->add_option("--generate", o.generate, "Write a generated GNSS network of N stations (DynaML, network JSON, truth, blunders) to --out-dir instead of adjusting");
   cmd->add_option("--out-dir", o.out_dir, "--generate: the folder for network.stn.xml, network.msr.xml, network.json, network.truth.csv, network.blunders.csv");
@@ -111,6 +113,7 @@ int run_adjust(const AdjustCommandOptions& o) {
   workflow::AdjustRequest request = network_request(o.inputs, o.network, o.convention);
   auto& so = request.options;
   so.joint_covariance = o.sinex.has_value();
+  so.jobs = o.jobs;
 
   // Every output its own file (the stations' sidecar included).
   {
@@ -153,7 +156,7 @@ int run_adjust(const AdjustCommandOptions& o) {
   const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
 
   const std::string text = workflow::report_text(prepared, r, so);
-  nlohmann::ordered_json report_document = workflow::report_document(prepared, r, so);
+  nlohmann::ordered_json report_document = workflow::report_document(prepared, r, so, o.json);
   // The report is shown whether or not the results are written.
   std::ostream& shown = stations.is_standard_output() || o.json ? std::cerr : std::cout;
   if (!report) shown << text;

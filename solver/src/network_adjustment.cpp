@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -20,6 +21,7 @@
 #include "network_approximate.hpp"
 #include "network_model.hpp"
 #include "point_statistics.hpp"
+#include "parallel.hpp"
 #include "sparse_factor.hpp"
 #include "statistics.hpp"
 
@@ -31,6 +33,8 @@ using geodesy::NetworkSpace;
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 // A combination of datum parameters (translations, rotations, scale, each
 // scaled to move the stations by a metre) that the measurements and
 // constraints determine worse than this is undefined: a network whose
@@ -349,6 +353,9 @@ struct Normal {
   std::size_t rows = 0;
 };
 
+// Measurements per chunk of work shared among threads (parallel.hpp).
+constexpr std::size_t kMeasurementChunk = 512;
+
 // The upper triangle of a measurement's AᵀA over its unknowns.
 void push_upper(Normal& n, const std::vector<Index>& unknowns, const Eigen::MatrixXd& ata) {
   for (std::size_t i = 0; i < unknowns.size(); ++i) {
@@ -360,19 +367,43 @@ void push_upper(Normal& n, const std::vector<Index>& unknowns, const Eigen::Matr
 }
 
 // With `matrix` false only b and the rows (the matrix is known not to have
-// changed: constant_jacobian()).
-Normal assemble(const Problem& p, bool matrix = true) {
+// changed: constant_jacobian()). The measurements are linearized on `jobs`
+// threads a block at a time and summed on this one in their order, so the
+// entries and b do not depend on the threads.
+constexpr std::size_t kAssemblyBlock = 1 << 16;
+Normal assemble(const Problem& p, bool matrix = true, int jobs = 1) {
   Normal n;
   n.b = Eigen::VectorXd::Zero(p.layout.count);
+  struct Contribution {
+    std::vector<Index> unknowns;
+    Eigen::MatrixXd ata;
+    Eigen::VectorXd atl;
+    std::size_t rows = 0;
+  };
+  std::vector<std::size_t> active;
   for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
-    if (!p.active[mi]) continue;
-    const Rows r = p.linearize(mi);
-    n.rows += static_cast<std::size_t>(r.l.size());
-    const Eigen::VectorXd atl = r.a.transpose() * r.l;
-    for (std::size_t i = 0; i < r.unknowns.size(); ++i) n.b(r.unknowns[i]) += atl(static_cast<Eigen::Index>(i));
-    if (!matrix) continue;
-    const Eigen::MatrixXd ata = r.a.transpose() * r.a;
-    push_upper(n, r.unknowns, ata);
+    if (p.active[mi]) active.push_back(mi);
+  }
+  if (matrix) n.entries.reserve(21 * active.size());  // a baseline's 6 unknowns: 21 entries
+  std::vector<Contribution> block;
+  for (std::size_t first = 0; first < active.size(); first += kAssemblyBlock) {
+    const std::size_t count = std::min(kAssemblyBlock, active.size() - first);
+    block.resize(count);
+    for_chunks(count, kMeasurementChunk, jobs, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t k = begin; k < end; ++k) {
+        Rows r = p.linearize(active[first + k]);
+        Contribution& c = block[k];
+        c.rows = static_cast<std::size_t>(r.l.size());
+        c.atl = r.a.transpose() * r.l;
+        if (matrix) c.ata = r.a.transpose() * r.a;
+        c.unknowns = std::move(r.unknowns);
+      }
+    });
+    for (const Contribution& c : block) {
+      n.rows += c.rows;
+      for (std::size_t i = 0; i < c.unknowns.size(); ++i) n.b(c.unknowns[i]) += c.atl(static_cast<Eigen::Index>(i));
+      if (matrix) push_upper(n, c.unknowns, c.ata);
+    }
   }
   if (matrix && !p.pattern_only.empty()) {
     for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
@@ -842,6 +873,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   Problem p(network, o);
   const auto& net = network;
   AdjustmentResult result;
+  const int jobs = resolve_jobs(o.jobs);
   const std::string where = net.source_name;
 
   // Whitening of each measurement's covariance.
@@ -1041,7 +1073,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     for (iteration = 1; iteration <= o.max_iterations; ++iteration) {
       // A normal matrix that cannot have changed is not factored again.
       const bool same_matrix = iteration > 1 && last_factor && constant_jacobian(p);
-      Normal n = assemble(p, !same_matrix);
+      auto t0 = Clock::now();
+      Normal n = assemble(p, !same_matrix, jobs);
+      result.seconds.assemble += since(t0);
       if (iteration == 1) {
         // The datum. First what the measurements leave undefined (every
         // component an unknown, no constraint), then whether the
@@ -1123,8 +1157,12 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         if (weak.cols() == p.defect.cols()) p.defect = dv.g * weak;
       }
       hold_defect(p, n);
+      t0 = Clock::now();
       if (!same_matrix) last_factor = factor_or_explain(p, n, std::move(last_factor));
+      result.seconds.factor += since(t0);
+      t0 = Clock::now();
       const Eigen::VectorXd dx = last_factor->solve(n.b);
+      result.seconds.solve += since(t0);
       if (!dx.allFinite()) singular(p, -1);
       const auto [moved, at] = apply_corrections(p, dx);
       largest = moved;
@@ -1167,23 +1205,37 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     // The statistics at the solution (with the last iteration's factor
     // when the matrix is the same).
     const bool same_matrix = last_factor && constant_jacobian(p);
-    Normal n = assemble(p, !same_matrix);
+    auto t0 = Clock::now();
+    Normal n = assemble(p, !same_matrix, jobs);
+    result.seconds.assemble += since(t0);
     hold_defect(p, n);
+    t0 = Clock::now();
     NormalFactor f = same_matrix ? std::move(*last_factor) : factor_or_explain(p, n, std::move(last_factor));
+    result.seconds.factor += since(t0);
+    t0 = Clock::now();
     f.select_inverse();
+    result.seconds.select_inverse += since(t0);
+    t0 = Clock::now();
     result.factor_nonzeros = f.factor_nonzeros();
     result.unknowns = static_cast<std::size_t>(p.layout.count);
     result.observations = n.rows;
     const int defect = p.free ? static_cast<int>(p.defect.cols()) : 0;
     result.dof = static_cast<int>(n.rows) - static_cast<int>(p.layout.count) + defect;
 
-    // Per measurement.
-    result.measurements.clear();
-    double vtpv = 0.0;
-    std::vector<std::pair<std::size_t, AdjustedMeasurement>> tested;
+    // Per measurement, on `jobs` threads: each measurement's results are
+    // its own, so they do not depend on the threads. A measurement left out
+    // is tested by solves with the factor (CHOLMOD's solve is not shared
+    // between threads): after the others, on this thread.
+    std::vector<std::size_t> listed;  // the measurements reported (ignored ones left out)
     for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+      if (!net.measurements[mi].ignore) listed.push_back(mi);
+    }
+    std::vector<AdjustedMeasurement> measured(listed.size());
+    std::vector<char> deferred(listed.size(), 0);
+    const auto measure = [&](std::size_t slot, bool defer_left_out) {
+      const std::size_t mi = listed[slot];
       const auto& m = net.measurements[mi];
-      if (m.ignore) continue;
+      AdjustedMeasurement& am = measured[slot];
       const bool in = p.active[mi];
       const bool was_outlier = !in && !outlier_why[mi].empty();
       // An outlier is tested against the adjustment (its prediction) where its stations are in it.
@@ -1193,7 +1245,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         for (std::size_t s : m.stations) testable = testable && p.station_used[s];
         if (m.set) testable = testable && p.layout.orientation[*m.set] >= 0;  // its set still has an orientation
       }
-      AdjustedMeasurement am;
+      am = AdjustedMeasurement{};
       am.index = mi;
       am.used = in;
       am.outlier = was_outlier;
@@ -1204,8 +1256,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       if (!testable) {
         am.adjusted = am.residual = am.residual_sigma = am.w = am.mdb = Eigen::VectorXd::Constant(k, kNaN);
         am.redundancy = Eigen::VectorXd::Zero(k);
-        result.measurements.push_back(std::move(am));
-        continue;
+        return;
       }
       const Rows r = p.linearize(mi);
       am.adjusted = r.computed;
@@ -1213,9 +1264,26 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       // A Q Aᵀ over the measurement's unknowns, from the selected inverse.
       const std::size_t nu = r.unknowns.size();
       Eigen::MatrixXd q(static_cast<Eigen::Index>(nu), static_cast<Eigen::Index>(nu));
+      bool on_pattern = in;
       if (!in) {
-        // A measurement left out joins unknowns that may share no other
-        // measurement (off the factor's pattern): solve for its columns.
+        // A measurement left out keeps its place in the pattern while
+        // snooping reuses the analysis (Problem::pattern_only): read there.
+        on_pattern = true;
+        for (std::size_t a = 0; on_pattern && a < nu; ++a) {
+          for (std::size_t b = a; on_pattern && b < nu; ++b) {
+            const auto z = f.inverse_on_pattern(r.unknowns[a], r.unknowns[b]);
+            if (z) q(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = q(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(a)) = *z;
+            on_pattern = z.has_value();
+          }
+        }
+        if (!on_pattern && defer_left_out) {
+          deferred[slot] = 1;
+          return;
+        }
+      }
+      if (!on_pattern) {
+        // Its unknowns may share no other measurement (off the factor's
+        // pattern): solve for its columns.
         Eigen::MatrixXd e = Eigen::MatrixXd::Zero(p.layout.count, static_cast<Eigen::Index>(nu));
         for (std::size_t a = 0; a < nu; ++a) e(r.unknowns[a], static_cast<Eigen::Index>(a)) = 1.0;
         const Eigen::MatrixXd z = f.solve(e);
@@ -1247,17 +1315,26 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       // σ of the residual: W⁻¹ Q_v W⁻ᵀ.
       const Eigen::MatrixXd w_inv = p.whitening[mi].inverse();
       am.residual_sigma = (w_inv * qv * w_inv.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
-      if (in) {
-        const Eigen::VectorXd vw = p.whitening[mi] * am.residual;
-        vtpv += vw.squaredNorm();
-      }
-      result.measurements.push_back(std::move(am));
+    };
+    for_chunks(listed.size(), kMeasurementChunk, jobs, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t slot = begin; slot < end; ++slot) measure(slot, true);
+    });
+    for (std::size_t slot = 0; slot < listed.size(); ++slot) {
+      if (deferred[slot]) measure(slot, false);
     }
+    // vᵀPv in the measurements' order.
+    double vtpv = 0.0;
+    for (const auto& am : measured) {
+      if (am.used) vtpv += (p.whitening[am.index] * am.residual).squaredNorm();
+    }
+    result.measurements = std::move(measured);
     for (const auto& q : p.pseudo_observations()) vtpv += q.l * q.l;
     result.vtpv = vtpv;
     result.variance_factor = result.dof > 0 ? std::optional<double>(vtpv / result.dof) : std::nullopt;
     result.sigma0 = result.variance_factor ? std::optional<double>(std::sqrt(*result.variance_factor)) : std::nullopt;
     result.global_test = global_test(vtpv, result.dof, o.alpha, true);
+
+    result.seconds.measurements += since(t0);
 
     // Data snooping: the measurement with the smallest p-value below
     // alpha_point goes, within the share; then the network is adjusted again.
@@ -1325,6 +1402,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       }
     }
 
+    t0 = Clock::now();
     // Stations: coordinates and covariances (S-transformed for a free network).
     const std::size_t d = static_cast<std::size_t>(p.defect.cols());
     Eigen::MatrixXd ze, eze;  // Z E (u × d) and Eᵀ Z E
@@ -1461,6 +1539,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       rp.ellipse = horizontal_ellipse(diff.topLeftCorner<2, 2>(), net.space);
       result.relative.push_back(rp);
     }
+    result.seconds.stations += since(t0);
 
     // The datum in words.
     std::size_t fixed = 0, weighted = 0;

@@ -277,6 +277,17 @@ double NormalFactor::inverse(std::int64_t a, std::int64_t b) const {
   return m.z[static_cast<std::size_t>(p)];
 }
 
+std::optional<double> NormalFactor::inverse_on_pattern(std::int64_t a, std::int64_t b) const {
+  const Impl& m = *impl_;
+  if (m.mode == Mode::dense) return m.dense_inverse(a, b);
+  if (m.z.empty()) throw std::logic_error("NormalFactor::inverse: select_inverse() was not called on this factor");
+  const std::int64_t pa = m.inverse_permutation[static_cast<std::size_t>(a)];
+  const std::int64_t pb = m.inverse_permutation[static_cast<std::size_t>(b)];
+  const std::int64_t p = pa >= pb ? m.find(pa, pb) : m.find(pb, pa);
+  if (p < 0) return std::nullopt;
+  return m.z[static_cast<std::size_t>(p)];
+}
+
 std::int64_t NormalFactor::factor_nonzeros() const { return impl_->lnz; }
 double NormalFactor::factor_flops() const { return impl_->flops; }
 

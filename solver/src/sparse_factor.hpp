@@ -58,6 +58,9 @@ class NormalFactor {
   // (N⁻¹)(a, b). Throws std::logic_error for an entry off the pattern (a
   // pair of unknowns that share no measurement): a caller bug.
   double inverse(std::int64_t a, std::int64_t b) const;
+  // The same, or nullopt for an entry off the pattern (the caller solves
+  // for it instead).
+  std::optional<double> inverse_on_pattern(std::int64_t a, std::int64_t b) const;
 
   // The factor's size: nonzeros of L, and floating-point work of the
   // factorization (CHOLMOD's flop count; 0 in dense mode).

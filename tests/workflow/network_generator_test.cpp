@@ -189,6 +189,50 @@ TEST(NetworkGenerator, AdjustedAsReadItCoversTheTruthAndSnoopingFindsThePlantedB
   EXPECT_LT((q - r.stations[probe].covariance_m2).cwiseAbs().maxCoeff(), kCovarianceRelative * q.cwiseAbs().maxCoeff());
 }
 
+// Issue 17 point 3: the threads share out measurements and sum in one
+// order, so one thread and two give the same bits.
+void expect_identical(const solver::AdjustmentResult& a, const solver::AdjustmentResult& b) {
+  EXPECT_EQ(a.vtpv, b.vtpv);
+  EXPECT_EQ(a.passes, b.passes);
+  ASSERT_EQ(a.stations.size(), b.stations.size());
+  for (std::size_t i = 0; i < a.stations.size(); ++i) {
+    EXPECT_EQ(a.stations[i].position, b.stations[i].position) << a.stations[i].id;
+    EXPECT_EQ(a.stations[i].covariance_m2, b.stations[i].covariance_m2) << a.stations[i].id;
+  }
+  ASSERT_EQ(a.measurements.size(), b.measurements.size());
+  for (std::size_t k = 0; k < a.measurements.size(); ++k) {
+    const auto& x = a.measurements[k];
+    const auto& y = b.measurements[k];
+    EXPECT_EQ(x.outlier, y.outlier) << k;
+    EXPECT_EQ(x.residual, y.residual) << k;
+    EXPECT_EQ(x.redundancy, y.redundancy) << k;
+    // NaN (no redundancy) compares unequal to itself: compare the bits' meaning.
+    for (Eigen::Index c = 0; c < x.w.size(); ++c) {
+      EXPECT_TRUE(x.w(c) == y.w(c) || (std::isnan(x.w(c)) && std::isnan(y.w(c)))) << k;
+    }
+    EXPECT_EQ(x.p_value, y.p_value) << k;
+  }
+  ASSERT_EQ(a.relative.size(), b.relative.size());
+  for (std::size_t k = 0; k < a.relative.size(); ++k) EXPECT_EQ(a.relative[k].sigma_distance_m, b.relative[k].sigma_distance_m);
+}
+
+TEST(NetworkGenerator, Issue17_OneThreadAndTwoGiveTheSameBits) {
+  NetworkGeneratorOptions o;
+  o.stations = 2000;
+  o.blunders = 4;
+  const GeneratedNetwork g = generate_network(o);
+  solver::AdjustOptions one, two;
+  one.jobs = 1;
+  two.jobs = 2;
+  expect_identical(solver::adjust_network(g.network, one), solver::adjust_network(g.network, two));
+  // A terrestrial 3-D network with a gross error and a datum defect (GNU
+  // Gama's tetrahedron): every other path through the adjustment.
+  AdjustRequest request;
+  request.inputs = {std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/gama/tst-tetrahedron-1.gkf"};
+  const PreparedNetwork prepared = prepare_network(request);
+  expect_identical(solver::adjust_network(prepared.network, one), solver::adjust_network(prepared.network, two));
+}
+
 TEST(NetworkGenerator, RefusesWhatItCannotMakeByName) {
   NetworkGeneratorOptions o;
   o.stations = 3;

@@ -625,7 +625,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
 }
 
 nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
-                                       const solver::AdjustOptions& o) {
+                                       const solver::AdjustOptions& o, bool with_measurements) {
   using nlohmann::ordered_json;
   const auto& net = prepared.network;
   auto num = [](double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); };
@@ -699,10 +699,12 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
     st["constraint"] = s.constraint;
     stations.push_back(st);
   }
-  j["stations"] = stations;
+  j["stations"] = std::move(stations);
   ordered_json measurements = ordered_json::array(), outliers = ordered_json::array();
   for (const auto& am : r.measurements) {
     const auto& m = net.measurements[am.index];
+    if (am.outlier) outliers.push_back({{"source", m.source}, {"because", am.removed_because}});
+    if (!with_measurements) continue;
     ordered_json x = {{"source", m.source}, {"kind", kind_key(m.kind)}, {"stations", stations_of(net, m)},
                       {"unit", angular(m.kind) ? "rad" : "m"}};
     auto vec = [&](const Eigen::VectorXd& v) {
@@ -721,10 +723,9 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
     x["test"] = {{"statistic", am.statistic}, {"dof", am.test_dof}, {"p_value", am.p_value}};
     x["status"] = am.outlier ? "outlier" : am.used ? "used" : "not used";
     if (!m.frame_step.empty()) x["frame_step"] = m.frame_step;
-    if (am.outlier) outliers.push_back({{"source", m.source}, {"because", am.removed_because}});
-    measurements.push_back(x);
+    measurements.push_back(std::move(x));
   }
-  j["measurements"] = measurements;
+  if (with_measurements) j["measurements"] = std::move(measurements);
   j["outliers"] = outliers;
   j["warnings"] = r.warnings;
   if (!r.refused_because.empty()) j["refused_because"] = r.refused_because;

@@ -87,6 +87,10 @@ struct AdjustOptions {
   // (AdjustmentResult::station_covariance_m2): one solve per coordinate,
   // for SINEX output; refused above kMaxJointCovarianceStations.
   bool joint_covariance = false;
+  // Threads for the assembly, the selected inversion and the
+  // per-measurement statistics (0: the machine's cores). The results do not
+  // depend on it: every sum is taken in the same order.
+  int jobs = 0;
   // A Helmert transformation estimated with the stations (above).
   std::optional<HelmertGroup> helmert;
 };
@@ -149,6 +153,18 @@ struct RelativePrecision {
   ErrorEllipse ellipse;           // of their horizontal difference, 1σ
 };
 
+// Wall seconds of the adjustment's parts, summed over every pass (for the
+// benchmarks and docs/scale.md; never part of a report, which must not
+// change from run to run).
+struct AdjustmentTimings {
+  double assemble = 0.0;        // linearization and the normal matrix's entries
+  double factor = 0.0;          // CHOLMOD: analysis (first pass) and numeric factorizations
+  double solve = 0.0;           // Gauss–Newton solves
+  double select_inverse = 0.0;  // N⁻¹ on the factor's pattern
+  double measurements = 0.0;    // per measurement: residuals, redundancy, tests
+  double stations = 0.0;        // covariances, ellipses, relative precision
+};
+
 struct AdjustmentResult {
   std::vector<AdjustedStation> stations;          // in the network's order
   std::vector<AdjustedMeasurement> measurements;  // in the network's order (ignored ones left out)
@@ -177,6 +193,7 @@ struct AdjustmentResult {
   std::vector<std::size_t> covariance_stations;
   Eigen::MatrixXd station_covariance_m2;
   std::int64_t factor_nonzeros = 0;
+  AdjustmentTimings seconds;
   std::optional<EstimatedHelmert> helmert;
 };
 

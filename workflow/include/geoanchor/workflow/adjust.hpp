@@ -79,9 +79,10 @@ io::TransformFile helmert_transform_file(const PreparedNetwork& prepared, const 
 
 // The report as text, and as a JSON document (schema
 // geoanchor.adjust-report/1; `adjust --json` prints it, the stations'
-// sidecar holds it without its measurements).
+// sidecar holds it without its measurements: `with_measurements` false
+// leaves them out, which at 10⁵ measurements saves seconds).
 std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
 nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
-                                       const solver::AdjustOptions& o);
+                                       const solver::AdjustOptions& o, bool with_measurements = true);
 
 }  // namespace geoanchor::workflow
