@@ -37,6 +37,8 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
   cmd->add_option("--jobs", o.jobs, "Threads for the assembly and the statistics (default: the machine's cores); the results do not depend on it")
       ->check(CLI::Range(1, 256));
+  cmd->add_option("--max-memory", o.max_memory_gb, "GB the factor and its selected inverse may take (default: what the machine has available); above it E_MEMORY before any is taken")
+      ->check(CLI::PositiveNumber);
   // Generated networks (planning, benchmarks): docs/commands/adjust.md#generated-networks.
   cmd->add_option("--generate", o.generate, "Write a generated GNSS network of N stations (DynaML, network JSON, truth, blunders) to --out-dir instead of adjusting");
   cmd->add_option("--out-dir", o.out_dir, "--generate: the folder for network.stn.xml, network.msr.xml, network.json, network.truth.csv, network.blunders.csv");
@@ -114,6 +116,7 @@ int run_adjust(const AdjustCommandOptions& o) {
   auto& so = request.options;
   so.joint_covariance = o.sinex.has_value();
   so.jobs = o.jobs;
+  if (o.max_memory_gb) so.memory_budget_bytes = static_cast<std::uint64_t>(std::max(1.0, *o.max_memory_gb * 1e9));
 
   // Every output its own file (the stations' sidecar included).
   {

@@ -27,6 +27,7 @@ struct AdjustCommandOptions {
   bool accept_failed_global_test = false;
   bool overwrite = false;
   int jobs = 0;  // threads; 0: the machine's cores
+  std::optional<double> max_memory_gb;
   std::vector<std::string> argv;
   // --generate N: write a generated network instead of adjusting one.
   std::optional<std::size_t> generate;

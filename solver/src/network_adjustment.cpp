@@ -821,7 +821,7 @@ std::pair<double, std::size_t> apply_corrections(Problem& p, const Eigen::Vector
 NormalFactor factor_or_explain(const Problem& p, const Normal& n, std::optional<NormalFactor> previous = std::nullopt) {
   Index failed = -1;
   auto f = NormalFactor::factor(p.layout.count, n.entries, p.o.dense ? NormalFactor::Mode::dense : NormalFactor::Mode::sparse,
-                                &failed, std::move(previous));
+                                &failed, std::move(previous), p.o.memory_budget_bytes);
   if (!f) singular(p, failed);
   return std::move(*f);
 }
@@ -1213,7 +1213,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     NormalFactor f = same_matrix ? std::move(*last_factor) : factor_or_explain(p, n, std::move(last_factor));
     result.seconds.factor += since(t0);
     t0 = Clock::now();
-    f.select_inverse();
+    f.select_inverse(jobs);
     result.seconds.select_inverse += since(t0);
     t0 = Clock::now();
     result.factor_nonzeros = f.factor_nonzeros();

@@ -3,13 +3,22 @@
 #include "sparse_factor.hpp"
 
 #include <cholmod.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <atomic>
+#include <exception>
+#include <functional>
+#include <thread>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <stdexcept>
 #include <string>
+
+#include "geoanchor/geodesy/error.hpp"
 
 namespace geoanchor::solver {
 
@@ -70,8 +79,45 @@ NormalFactor::~NormalFactor() = default;
 NormalFactor::NormalFactor(NormalFactor&&) noexcept = default;
 NormalFactor& NormalFactor::operator=(NormalFactor&&) noexcept = default;
 
+namespace {
+
+// Bytes this process may still take: the machine's MemAvailable, within
+// the address-space limit (ulimit -v) less what is mapped already. 0: unknown.
+std::uint64_t available_memory_bytes() {
+  std::uint64_t available = 0;
+  if (std::FILE* f = std::fopen("/proc/meminfo", "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, f)) {
+      unsigned long long kb = 0;
+      if (std::sscanf(line, "MemAvailable: %llu kB", &kb) == 1) available = kb * 1024ull;
+    }
+    std::fclose(f);
+  }
+  struct rlimit limit {};
+  if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
+    unsigned long long pages = 0;
+    std::uint64_t mapped = 0;
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+      if (std::fscanf(f, "%llu", &pages) == 1) mapped = pages * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
+      std::fclose(f);
+    }
+    const std::uint64_t left = limit.rlim_cur > mapped ? limit.rlim_cur - mapped : 0;
+    available = available == 0 ? left : std::min(available, left);
+  }
+  return available;
+}
+
+std::string gigabytes(double bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f GB", bytes / 1e9);
+  return text;
+}
+
+}  // namespace
+
 std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
-                                                 std::int64_t* failed_column, std::optional<NormalFactor> previous) {
+                                                 std::int64_t* failed_column, std::optional<NormalFactor> previous,
+                                                 std::uint64_t memory_budget_bytes) {
   // (A moved-from factor has no Impl: no previous.)
   const bool reuse = previous && previous->impl_ && mode == Mode::sparse && previous->impl_->mode == Mode::sparse &&
                      previous->impl_->n == n && previous->impl_->factor;
@@ -148,6 +194,19 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
       cholmod_l_free_sparse(&a, c);
       throw std::bad_alloc();
     }
+    // L's values and the selected inverse's, the same size.
+    const double need = 2.0 * 8.0 * static_cast<double>(impl->factor->xsize);
+    const std::uint64_t budget = memory_budget_bytes ? memory_budget_bytes : available_memory_bytes();
+    if (budget > 0 && need > static_cast<double>(budget)) {
+      const double values = static_cast<double>(impl->factor->xsize);
+      cholmod_l_free_sparse(&a, c);
+      throw Error(ErrorKind::rejected, "E_MEMORY",
+                  "the normal matrix of " + std::to_string(n) + " unknowns: its Cholesky factor holds " +
+                      std::to_string(static_cast<long long>(values)) + " values (CHOLMOD's analysis), so the factor and its "
+                      "selected inverse need " + gigabytes(need) + ", and " + gigabytes(static_cast<double>(budget)) +
+                      (memory_budget_bytes ? " are allowed (--max-memory)" : " are available") +
+                      "; nothing was factored. Split the network (docs/scale.md) or run it where more memory is free");
+    }
   }  // else: the same ordering and supernodes, refactored in place
   cholmod_l_factorize(a, impl->factor, c);
   cholmod_l_free_sparse(&a, c);
@@ -185,7 +244,7 @@ Eigen::MatrixXd NormalFactor::solve(const Eigen::MatrixXd& b) const {
   return out;
 }
 
-void NormalFactor::select_inverse() {
+void NormalFactor::select_inverse(int jobs) {
   Impl& m = *impl_;
   if (m.mode == Mode::dense) {
     m.dense_inverse = m.llt.solve(Eigen::MatrixXd::Identity(m.n, m.n));
@@ -221,22 +280,26 @@ void NormalFactor::select_inverse() {
   using Matrix = Eigen::MatrixXd;
   using ConstMap = Eigen::Map<const Matrix>;
   using Map = Eigen::Map<Matrix>;
-  // Work space for the largest supernode, allocated once (a fresh
-  // allocation per supernode costs more in page faults than the work).
+  // Work space for the largest supernode, allocated once per thread (a
+  // fresh allocation per supernode costs more in page faults than the work).
   std::int64_t max_r = 0, max_c = 0;
   for (std::int64_t k = 0; k < nsuper; ++k) {
     max_c = std::max<std::int64_t>(max_c, super[k + 1] - super[k]);
     max_r = std::max<std::int64_t>(max_r, (pi[k + 1] - pi[k]) - (super[k + 1] - super[k]));
   }
-  std::vector<double> zrr_space(static_cast<std::size_t>(max_r * max_r)), u_space(static_cast<std::size_t>(max_r * max_c)),
-      zrj_space(static_cast<std::size_t>(max_r * max_c)), linv_space(static_cast<std::size_t>(max_c * max_c));
-  for (std::int64_t k = nsuper; k-- > 0;) {
+  struct Workspace {
+    std::vector<double> zrr, u, zrj, linv;
+  };
+  const auto workspace = [&] {
+    return Workspace{std::vector<double>(static_cast<std::size_t>(max_r * max_r)), std::vector<double>(static_cast<std::size_t>(max_r * max_c)),
+                     std::vector<double>(static_cast<std::size_t>(max_r * max_c)), std::vector<double>(static_cast<std::size_t>(max_c * max_c))};
+  };
+  const auto process = [&](std::int64_t k, Workspace& w) {
     const std::int64_t nscol = super[k + 1] - super[k], nsrow = pi[k + 1] - pi[k], r = nsrow - nscol;
     const ConstMap lk(lx + px[k], nsrow, nscol);
     const auto ljj = lk.topRows(nscol).triangularView<Eigen::Lower>();
     const SuiteSparse_long* below = rows + pi[k] + nscol;  // R, ascending
-    Map zrr(zrr_space.data(), r, r), u(u_space.data(), r, nscol), zrj(zrj_space.data(), r, nscol),
-        linv(linv_space.data(), nscol, nscol);
+    Map zrr(w.zrr.data(), r, r), u(w.u.data(), r, nscol), zrj(w.zrj.data(), r, nscol), linv(w.linv.data(), nscol, nscol);
     // Z_RR (its lower triangle), gathered column by column: column R[a]
     // lies in supernode t, whose rows, from R[a] on, hold R[a..] in order.
     for (std::int64_t a = 0; a < r; ++a) {
@@ -256,12 +319,85 @@ void NormalFactor::select_inverse() {
     ljj.solveInPlace(linv);  // L_JJ⁻¹
     Eigen::Map<Matrix> zk(m.z.data() + px[k], nsrow, nscol);
     zk.topRows(nscol).noalias() = linv.transpose() * linv;
-    if (r == 0) continue;  // a root: nothing below (Eigen's blocked kernels want no empty operand)
+    if (r == 0) return;  // a root: nothing below (Eigen's blocked kernels want no empty operand)
     u = lk.bottomRows(r);
     ljj.solveInPlace<Eigen::OnTheRight>(u);  // U L_JJ = L_RJ
     zrj.noalias() = -(zrr.selfadjointView<Eigen::Lower>() * u);
     zk.topRows(nscol).noalias() -= u.transpose() * zrj;
     zk.bottomRows(r) = zrj;
+  };
+
+  // A supernode needs only its ancestors (R's columns lie in them), so
+  // disjoint subtrees of the supernodal elimination tree go to threads:
+  // the largest subtrees are split (their roots done here first, parents
+  // before children) until there are enough to share out; each thread then
+  // does whole subtrees, each from its root down. Every supernode's numbers
+  // are the same whichever thread computes them.
+  std::vector<std::int64_t> parent(static_cast<std::size_t>(nsuper), -1);
+  std::vector<std::vector<std::int64_t>> children(static_cast<std::size_t>(nsuper));
+  std::vector<double> cost(static_cast<std::size_t>(nsuper), 0.0);
+  for (std::int64_t k = 0; k < nsuper; ++k) {
+    const std::int64_t nscol = super[k + 1] - super[k], r = (pi[k + 1] - pi[k]) - nscol;
+    cost[static_cast<std::size_t>(k)] += static_cast<double>(nscol) * static_cast<double>((r + nscol) * (r + nscol));
+    if (r > 0) {
+      const std::int64_t up = m.super_of[static_cast<std::size_t>(rows[pi[k] + nscol])];
+      parent[static_cast<std::size_t>(k)] = up;
+      children[static_cast<std::size_t>(up)].push_back(k);
+    }
+  }
+  std::vector<double> subtree = cost;  // children before parents: a child's index is lower
+  for (std::int64_t k = 0; k < nsuper; ++k) {
+    if (parent[static_cast<std::size_t>(k)] >= 0) subtree[static_cast<std::size_t>(parent[static_cast<std::size_t>(k)])] += subtree[static_cast<std::size_t>(k)];
+  }
+  const int threads = std::max(1, jobs);
+  std::vector<std::int64_t> pending;  // roots of subtrees not yet done
+  for (std::int64_t k = nsuper; k-- > 0;) {
+    if (parent[static_cast<std::size_t>(k)] < 0) pending.push_back(k);
+  }
+  double total = 0.0;
+  for (std::int64_t k : pending) total += subtree[static_cast<std::size_t>(k)];
+  Workspace here = workspace();
+  const auto by_cost = [&](std::int64_t a, std::int64_t b) { return subtree[static_cast<std::size_t>(a)] < subtree[static_cast<std::size_t>(b)]; };
+  if (threads > 1) {
+    std::make_heap(pending.begin(), pending.end(), by_cost);
+    while (!pending.empty() && subtree[static_cast<std::size_t>(pending.front())] > total / (4.0 * threads)) {
+      std::pop_heap(pending.begin(), pending.end(), by_cost);
+      const std::int64_t k = pending.back();
+      pending.pop_back();
+      process(k, here);
+      for (std::int64_t c : children[static_cast<std::size_t>(k)]) {
+        pending.push_back(c);
+        std::push_heap(pending.begin(), pending.end(), by_cost);
+      }
+    }
+    std::sort(pending.begin(), pending.end(), [&](std::int64_t a, std::int64_t b) { return by_cost(b, a); });
+  }
+  const auto do_subtree = [&](std::int64_t root, Workspace& w) {
+    std::vector<std::int64_t> nodes{root};
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      for (std::int64_t c : children[static_cast<std::size_t>(nodes[i])]) nodes.push_back(c);
+    }
+    std::sort(nodes.begin(), nodes.end(), std::greater<>());
+    for (std::int64_t k : nodes) process(k, w);
+  };
+  std::atomic<std::size_t> next{0};
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));
+  const auto run = [&](int t, Workspace& w) {
+    try {
+      for (std::size_t i = next++; i < pending.size(); i = next++) do_subtree(pending[i], w);
+    } catch (...) {
+      errors[static_cast<std::size_t>(t)] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> pool;
+  std::vector<Workspace> spaces;
+  spaces.reserve(static_cast<std::size_t>(threads));
+  for (int t = 1; t < threads && static_cast<std::size_t>(t) < pending.size(); ++t) spaces.push_back(workspace());
+  for (std::size_t t = 0; t < spaces.size(); ++t) pool.emplace_back(run, static_cast<int>(t) + 1, std::ref(spaces[t]));
+  run(0, here);
+  for (auto& t : pool) t.join();
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
   }
 }
 

@@ -39,8 +39,14 @@ class NormalFactor {
   // have the same pattern: only the numeric factorization is redone
   // (`previous` is consumed either way). Gauss–Newton iterations refactor
   // one pattern several times.
+  // A fresh analysis states the memory the factor and its selected inverse
+  // will need (2 × L's values, from CHOLMOD's symbolic factorization)
+  // before any of it is taken: above `memory_budget_bytes` (0: what the
+  // machine has available, MemAvailable, within the address-space limit)
+  // it throws geoanchor::Error (rejected, E_MEMORY) naming both.
   static std::optional<NormalFactor> factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
-                                            std::int64_t* failed_column, std::optional<NormalFactor> previous = std::nullopt);
+                                            std::int64_t* failed_column, std::optional<NormalFactor> previous = std::nullopt,
+                                            std::uint64_t memory_budget_bytes = 0);
   ~NormalFactor();
   NormalFactor(NormalFactor&&) noexcept;
   NormalFactor& operator=(NormalFactor&&) noexcept;
@@ -54,7 +60,9 @@ class NormalFactor {
 
   // Computes the entries of N⁻¹ on the factor's pattern (sparse), or the
   // whole inverse (dense). Call once before inverse().
-  void select_inverse();
+  // On `jobs` threads (disjoint subtrees of the supernodal elimination
+  // tree); the numbers do not depend on them.
+  void select_inverse(int jobs = 1);
   // (N⁻¹)(a, b). Throws std::logic_error for an entry off the pattern (a
   // pair of unknowns that share no measurement): a caller bug.
   double inverse(std::int64_t a, std::int64_t b) const;

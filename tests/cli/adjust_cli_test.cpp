@@ -272,6 +272,22 @@ TEST_F(AdjustCli, Issue17_GenerateWritesANetworkThatAdjustReads) {
   EXPECT_EQ(testing::slurp(path("network.json")), before);
 }
 
+// Issue 17 point 4: the memory the factor needs is stated before it is
+// taken; above the budget nothing is factored and nothing written.
+TEST_F(AdjustCli, Issue17_AFactorLargerThanTheMemoryIsRefusedBeforeItIsTaken) {
+  ASSERT_EQ(run("adjust --generate 2000 --out-dir '" + path("").string() + "'").exit_code, 0);
+  const std::string in = "'" + path("network.stn.xml").string() + "' '" + path("network.msr.xml").string() + "'";
+  const RunResult r = run("adjust " + in + " -o '" + path("st.csv").string() + "' --report '" + path("r.txt").string() +
+                          "' --max-memory 0.001");
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  for (const char* piece : {"E_MEMORY", "5991 unknowns", "selected inverse need", "0.00 GB are allowed (--max-memory)"}) {
+    EXPECT_NE(r.err.find(piece), std::string::npos) << piece << " in: " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("st.csv")));
+  EXPECT_FALSE(std::filesystem::exists(path("r.txt")));
+  EXPECT_EQ(run("adjust " + in + " -o '" + path("st.csv").string() + "' --report '" + path("r.txt").string() + "' --max-memory 1").exit_code, 0);
+}
+
 TEST_F(AdjustCli, Issue17_GenerateMisuseIsRefusedByName) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
       {"adjust --generate 100", {"E_OPTION", "--out-dir"}},

@@ -34,6 +34,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -91,6 +92,10 @@ struct AdjustOptions {
   // per-measurement statistics (0: the machine's cores). The results do not
   // depend on it: every sum is taken in the same order.
   int jobs = 0;
+  // The memory the factor and its selected inverse may take (bytes; 0: what
+  // the machine has available). Checked after CHOLMOD's analysis, before
+  // the numbers: E_MEMORY (rejected) names what is needed.
+  std::uint64_t memory_budget_bytes = 0;
   // A Helmert transformation estimated with the stations (above).
   std::optional<HelmertGroup> helmert;
 };
