@@ -217,8 +217,12 @@ int run_adjust(const AdjustCommandOptions& o) {
     side["command"] = o.argv;
     nlohmann::ordered_json inputs = nlohmann::ordered_json::array();
     for (const auto& in : o.inputs) {
+      // A pipe or FIFO cannot be read again for its hash (a FIFO would wait
+      // for a writer): like standard input, no hash.
+      std::error_code ec;
+      const bool hashable = in != "-" && std::filesystem::is_regular_file(in, ec);
       inputs.push_back({{"path", in == "-" ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(in)},
-                        {"sha256", in == "-" ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(io::sha256_file_hex(in))}});
+                        {"sha256", hashable ? nlohmann::ordered_json(io::sha256_file_hex(in)) : nlohmann::ordered_json(nullptr)}});
     }
     side["inputs"] = inputs;
     stations.sidecar() << side.dump(2) << "\n";

@@ -5,6 +5,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <numbers>
@@ -210,19 +211,24 @@ geodesy::Network read_network(const std::vector<std::string>& inputs, const Netw
       s << std::cin.rdbuf();
       text = s.str();
     } else {
-      // One allocation of the file's size and one read (a stream copy of a
-      // file of 10⁶ measurements grew its buffer through seconds of copies).
-      std::ifstream f(input, std::ios::binary | std::ios::ate);
+      // A regular file: one allocation of its size and one read (a stream
+      // copy of a file of 10⁶ measurements grew its buffer through seconds
+      // of copies). A pipe or FIFO (`<(…)`) has no size: copied as a stream.
+      std::error_code ec;
+      const bool regular = std::filesystem::is_regular_file(input, ec);
+      std::ifstream f(input, std::ios::binary);
       if (!f) throw Error(ErrorKind::io, "E_READ", input + ": cannot be read");
-      const std::streamoff size = f.tellg();
-      if (size < 0) throw Error(ErrorKind::io, "E_READ", input + ": cannot be read");
-      text.resize(static_cast<std::size_t>(size));
-      f.seekg(0);
-      if (!f.read(text.data(), static_cast<std::streamsize>(size)) || f.gcount() != static_cast<std::streamsize>(size)) {
-        throw Error(ErrorKind::io, "E_READ", input + ": cannot be read whole (" + std::to_string(size) + " bytes expected)");
-      }
-      if (f.peek() != std::char_traits<char>::eof()) {
-        throw Error(ErrorKind::io, "E_READ", input + ": it grew while being read");
+      const auto size = regular ? std::filesystem::file_size(input, ec) : std::uintmax_t{0};
+      if (regular && !ec) {
+        text.resize(static_cast<std::size_t>(size));
+        if (!f.read(text.data(), static_cast<std::streamsize>(size)) || f.gcount() != static_cast<std::streamsize>(size)) {
+          throw Error(ErrorKind::io, "E_READ", input + ": cannot be read whole (" + std::to_string(size) + " bytes expected)");
+        }
+        if (f.peek() != std::char_traits<char>::eof()) throw Error(ErrorKind::io, "E_READ", input + ": it grew while being read");
+      } else {
+        std::ostringstream s;
+        s << f.rdbuf();
+        text = s.str();
       }
     }
     net.source_name += (net.source_name.empty() ? "" : ", ") + (input == "-" ? std::string("standard input") : input);

@@ -444,6 +444,10 @@ bool constant_jacobian(const Problem& p) {
 // kSnoopSeparationHops measurements of a station of one taken, or of one
 // added before them. Positions in `failing`.
 constexpr int kSnoopSeparationHops = 2;
+// The least mean redundancy of a measurement that goes in a pass besides the
+// worst: below it a measurement's test is tied to far-away ones (a loop
+// with little redundancy fails as a whole).
+constexpr double kSnoopExtraMinRedundancy = 0.2;
 std::vector<std::size_t> separated_failures(const Problem& p, const std::vector<std::size_t>& failing,
                                             const std::vector<std::size_t>& taken) {
   const auto& net = p.net;
@@ -453,7 +457,9 @@ std::vector<std::size_t> separated_failures(const Problem& p, const std::vector<
   for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
     if (!p.active[mi]) continue;
     const auto& st = net.measurements[mi].stations;
-    for (std::size_t s : st) start[s + 1] += st.size() - 1;
+    for (std::size_t a : st) {
+      for (std::size_t b : st) start[a + 1] += a != b ? 1u : 0u;
+    }
   }
   std::partial_sum(start.begin(), start.end(), start.begin());
   next.resize(start[ns]);
@@ -821,7 +827,7 @@ std::pair<double, std::size_t> apply_corrections(Problem& p, const Eigen::Vector
 NormalFactor factor_or_explain(const Problem& p, const Normal& n, std::optional<NormalFactor> previous = std::nullopt) {
   Index failed = -1;
   auto f = NormalFactor::factor(p.layout.count, n.entries, p.o.dense ? NormalFactor::Mode::dense : NormalFactor::Mode::sparse,
-                                &failed, std::move(previous), p.o.memory_budget_bytes);
+                                &failed, std::move(previous), p.o.memory_budget_bytes, resolve_jobs(p.o.jobs));
   if (!f) singular(p, failed);
   return std::move(*f);
 }
@@ -1379,14 +1385,40 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           std::vector<SnoopCandidate> candidates;
           for (const auto& x : failing) candidates.push_back(x.second);
           std::vector<std::size_t> take = snoop_selection(candidates, [&](std::size_t count) { return removed + count <= limit; });
-          // In a large network a blunder's w-tests spill over only onto
-          // measurements near it: failing measurements far from every one
-          // taken go in the same pass (kSnoopSeparationHops).
-          std::vector<std::size_t> failing_index;
-          for (const auto& x : failing) failing_index.push_back(x.first);
-          for (std::size_t k : separated_failures(p, failing_index, take)) {
-            if (removed + take.size() + 1 > limit) break;
-            take.push_back(k);
+          // In a large, well-determined GNSS network a blunder's w-tests
+          // spill over only onto measurements near it: failing measurements
+          // far from every one taken (kSnoopSeparationHops), each redundant
+          // enough that its test is not tied to distant ones
+          // (kSnoopExtraMinRedundancy), go in the same pass, unless together
+          // they would split the network. In a weak loop one blunder makes
+          // every leg fail alike: those legs are low in redundancy and go
+          // one pass at a time, as before.
+          if (constant_jacobian(p)) {
+            std::vector<std::size_t> failing_index;
+            for (const auto& x : failing) failing_index.push_back(x.first);
+            std::vector<std::size_t> extras;
+            for (std::size_t k : separated_failures(p, failing_index, take)) {
+              if (removed + take.size() + extras.size() + 1 > limit) break;
+              if (1.0 - failing[k].second.leverage >= kSnoopExtraMinRedundancy) extras.push_back(k);
+            }
+            if (!extras.empty()) {
+              for (std::size_t k : take) p.active[failing[k].first] = false;
+              for (std::size_t k : extras) p.active[failing[k].first] = false;
+              std::size_t parts = 0;
+              components_of(p, parts);
+              bool every_station_kept = true;
+              {
+                std::vector<bool> reached(net.stations.size(), false);
+                for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+                  if (!p.active[mi]) continue;
+                  for (std::size_t st : net.measurements[mi].stations) reached[st] = true;
+                }
+                for (std::size_t st = 0; st < net.stations.size(); ++st) every_station_kept = every_station_kept && (!p.station_used[st] || reached[st]);
+              }
+              for (std::size_t k : take) p.active[failing[k].first] = true;
+              for (std::size_t k : extras) p.active[failing[k].first] = true;
+              if (parts == 1 && every_station_kept) take.insert(take.end(), extras.begin(), extras.end());
+            }
           }
           for (std::size_t k : take) {
             const std::size_t mi = failing[k].first;

@@ -11,6 +11,7 @@
 #include <atomic>
 #include <cstddef>
 #include <exception>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -39,7 +40,13 @@ void for_chunks(std::size_t count, std::size_t chunk, int jobs, const Work& work
     }
   };
   std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(run);
+  for (std::size_t t = 1; t < threads; ++t) {
+    try {
+      pool.emplace_back(run);
+    } catch (const std::system_error&) {
+      break;  // no more threads to be had: those started and this one share the chunks
+    }
+  }
   run();
   for (auto& t : pool) t.join();
   for (const auto& e : errors) {

@@ -11,6 +11,7 @@
 #include <atomic>
 #include <exception>
 #include <functional>
+#include <system_error>
 #include <thread>
 #include <cmath>
 #include <cstdio>
@@ -82,7 +83,8 @@ NormalFactor& NormalFactor::operator=(NormalFactor&&) noexcept = default;
 namespace {
 
 // Bytes this process may still take: the machine's MemAvailable, within
-// the address-space limit (ulimit -v) less what is mapped already. 0: unknown.
+// what is left of a cgroup v2 limit (a container's) and of the
+// address-space limit (ulimit -v). 0: unknown.
 std::uint64_t available_memory_bytes() {
   std::uint64_t available = 0;
   if (std::FILE* f = std::fopen("/proc/meminfo", "r")) {
@@ -92,6 +94,20 @@ std::uint64_t available_memory_bytes() {
       if (std::sscanf(line, "MemAvailable: %llu kB", &kb) == 1) available = kb * 1024ull;
     }
     std::fclose(f);
+  }
+  // A cgroup v2 limit (a container's): what is left of it.
+  const auto read_number = [](const char* path) -> std::optional<std::uint64_t> {
+    std::FILE* f = std::fopen(path, "r");
+    if (!f) return std::nullopt;
+    unsigned long long v = 0;
+    const bool ok = std::fscanf(f, "%llu", &v) == 1;  // "max" reads as no number: no limit
+    std::fclose(f);
+    return ok ? std::optional<std::uint64_t>(v) : std::nullopt;
+  };
+  if (const auto max = read_number("/sys/fs/cgroup/memory.max")) {
+    const std::uint64_t current = read_number("/sys/fs/cgroup/memory.current").value_or(0);
+    const std::uint64_t left = *max > current ? *max - current : 0;
+    available = available == 0 ? left : std::min(available, left);
   }
   struct rlimit limit {};
   if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
@@ -117,7 +133,7 @@ std::string gigabytes(double bytes) {
 
 std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
                                                  std::int64_t* failed_column, std::optional<NormalFactor> previous,
-                                                 std::uint64_t memory_budget_bytes) {
+                                                 std::uint64_t memory_budget_bytes, int jobs_hint) {
   // (A moved-from factor has no Impl: no previous.)
   const bool reuse = previous && previous->impl_ && mode == Mode::sparse && previous->impl_->mode == Mode::sparse &&
                      previous->impl_->n == n && previous->impl_->factor;
@@ -194,8 +210,17 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
       cholmod_l_free_sparse(&a, c);
       throw std::bad_alloc();
     }
-    // L's values and the selected inverse's, the same size.
-    const double need = 2.0 * 8.0 * static_cast<double>(impl->factor->xsize);
+    // L's values and the selected inverse's, the same size, and a
+    // supernode's work space per thread (select_inverse) and CHOLMOD's for
+    // the factorization (about the largest supernode's update block).
+    const auto* lsuper = static_cast<const SuiteSparse_long*>(impl->factor->super);
+    const auto* lpi = static_cast<const SuiteSparse_long*>(impl->factor->pi);
+    double block = 0.0;
+    for (std::size_t k = 0; impl->factor->is_super && k < impl->factor->nsuper; ++k) {
+      const double cols = static_cast<double>(lsuper[k + 1] - lsuper[k]), rows_below = static_cast<double>(lpi[k + 1] - lpi[k]) - cols;
+      block = std::max(block, rows_below * rows_below + 2.0 * rows_below * cols + cols * cols);
+    }
+    const double need = 8.0 * (2.0 * static_cast<double>(impl->factor->xsize) + (1.0 + static_cast<double>(std::max(1, jobs_hint))) * block);
     const std::uint64_t budget = memory_budget_bytes ? memory_budget_bytes : available_memory_bytes();
     if (budget > 0 && need > static_cast<double>(budget)) {
       const double values = static_cast<double>(impl->factor->xsize);
@@ -393,7 +418,13 @@ void NormalFactor::select_inverse(int jobs) {
   std::vector<Workspace> spaces;
   spaces.reserve(static_cast<std::size_t>(threads));
   for (int t = 1; t < threads && static_cast<std::size_t>(t) < pending.size(); ++t) spaces.push_back(workspace());
-  for (std::size_t t = 0; t < spaces.size(); ++t) pool.emplace_back(run, static_cast<int>(t) + 1, std::ref(spaces[t]));
+  for (std::size_t t = 0; t < spaces.size(); ++t) {
+    try {
+      pool.emplace_back(run, static_cast<int>(t) + 1, std::ref(spaces[t]));
+    } catch (const std::system_error&) {
+      break;  // no more threads to be had: those started and this one share the subtrees
+    }
+  }
   run(0, here);
   for (auto& t : pool) t.join();
   for (const auto& e : errors) {

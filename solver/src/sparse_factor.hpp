@@ -44,9 +44,11 @@ class NormalFactor {
   // before any of it is taken: above `memory_budget_bytes` (0: what the
   // machine has available, MemAvailable, within the address-space limit)
   // it throws geoanchor::Error (rejected, E_MEMORY) naming both.
+  // `jobs_hint`: the threads select_inverse will run on (each has a work
+  // space of the largest supernode's size).
   static std::optional<NormalFactor> factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
                                             std::int64_t* failed_column, std::optional<NormalFactor> previous = std::nullopt,
-                                            std::uint64_t memory_budget_bytes = 0);
+                                            std::uint64_t memory_budget_bytes = 0, int jobs_hint = 1);
   ~NormalFactor();
   NormalFactor(NormalFactor&&) noexcept;
   NormalFactor& operator=(NormalFactor&&) noexcept;

@@ -288,6 +288,23 @@ TEST_F(AdjustCli, Issue17_AFactorLargerThanTheMemoryIsRefusedBeforeItIsTaken) {
   EXPECT_EQ(run("adjust " + in + " -o '" + path("st.csv").string() + "' --report '" + path("r.txt").string() + "' --max-memory 1").exit_code, 0);
 }
 
+// The inputs are read in one piece when they are files; a FIFO (a shell's
+// `<(…)`) has no size and is read as a stream.
+TEST_F(AdjustCli, Issue17_AnInputFromAFifoIsReadWhole) {
+  ASSERT_EQ(run("adjust --generate 200 --out-dir '" + path("").string() + "'").exit_code, 0);
+  const RunResult r = shell("mkfifo '" + path("fifo").string() + "' && { cat '" + path("network.json").string() + "' > '" +
+                            path("fifo").string() + "' & } && " + exe() + " adjust '" + path("fifo").string() + "' -o '" +
+                            path("st.csv").string() + "' --report '" + path("r.txt").string() + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const RunResult direct = run("adjust '" + path("network.json").string() + "' -o '" + path("st2.csv").string() + "' --report '" +
+                               path("r2.txt").string() + "'");
+  EXPECT_EQ(direct.exit_code, 0) << direct.err;
+  EXPECT_EQ(testing::slurp(path("st.csv")), testing::slurp(path("st2.csv")));
+  // A FIFO cannot be read twice: its hash is null (as standard input's), never that of nothing.
+  const std::string side = testing::slurp(path("st.csv.geoanchor.json"));
+  EXPECT_NE(side.find("\"sha256\": null"), std::string::npos) << side.substr(0, 400);
+}
+
 TEST_F(AdjustCli, Issue17_GenerateMisuseIsRefusedByName) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
       {"adjust --generate 100", {"E_OPTION", "--out-dir"}},

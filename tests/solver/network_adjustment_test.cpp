@@ -522,6 +522,35 @@ TEST(NetworkAdjustment, MonteCarloCoverageOfAnEstimatedHelmert) {
 // A direction set whose every direction is set aside (ignored in the input,
 // left out in the workbench) has no orientation unknown: the adjustment is
 // the one without those directions, with one unknown fewer.
+// Issue 17 point 5 (review): data snooping takes failing measurements far
+// apart in one pass only where their tests are not tied together. In a
+// single loop of 20 baselines one blunder makes every leg fail alike (a
+// redundancy of 3/20 each); taking the legs 4 hops apart together split the
+// network (E_NETWORK_DISCONNECTED). One leg goes, and the loop stays whole.
+TEST(NetworkAdjustment, AWeakLoopLosesOneLegPerSnoopingPassNotTheLoop) {
+  std::mt19937 rng(20);
+  Site s;
+  for (int i = 0; i < 20; ++i) {
+    const double angle = 2.0 * std::numbers::pi * i / 20.0;
+    const double lat = 47.45 + 3000.0 * std::sin(angle) / 111200.0;
+    const double lon = 8.54 + 3000.0 * std::cos(angle) / (111200.0 * std::cos(47.45 * std::numbers::pi / 180.0));
+    double x = 0, y = 0, z = 0;
+    grs80().Forward(lat, lon, 450.0, x, y, z);
+    s.ecef.emplace_back(x, y, z);
+    s.geodetic.push_back({lat, lon, 450.0});
+  }
+  Network net = network_of(s);
+  net.stations[0].constraint.code = {'C', 'C', 'C'};
+  for (std::size_t i = 0; i < 20; ++i) add_baseline(net, s, i, (i + 1) % 20, &rng);
+  net.measurements[7].value += Eigen::Vector3d(0.06, -0.05, 0.05);  // 10 cm
+  AdjustOptions o;
+  const AdjustmentResult r = adjust_network(net, o);
+  std::size_t removed = 0;
+  for (const auto& m : r.measurements) removed += m.outlier ? 1u : 0u;
+  EXPECT_EQ(removed, 1u);
+  EXPECT_TRUE(r.converged);
+}
+
 TEST(NetworkAdjustment, ADirectionSetWithNoDirectionLeftHasNoOrientationUnknown) {
   std::mt19937 rng(5);
   const Site s = make_site(12, rng);
