@@ -22,7 +22,15 @@
 // Ratios are against the bare factor-and-solve. Never part of the test
 // run's pass/fail.
 //
-//   geoanchor_adjust_bench [--sizes 1000,10000,100000] [--repetitions 3] [--command-max 100000] [--kernel-max 1000000]
+//   geoanchor_adjust_bench [--sizes 1000,10000,100000] [--repetitions 3] [--command-max 100000] [--kernel-max 1000000] [--dense-max 2000] [--threads-max 100000]
+//
+// Up to --threads-max stations the adjustment runs once more on one thread:
+// the speed-up of two threads is printed with the parts.
+//
+// Up to --dense-max stations the stations' covariances are also checked
+// against a dense inverse of the normal matrix (Eigen's LLᵀ, built from the
+// baselines kept): the worst difference relative to each block's largest
+// entry is printed (issue 17: 1e-9 up to 2·10³ stations).
 
 #include <cholmod.h>
 #include <Eigen/Cholesky>
@@ -127,7 +135,43 @@ struct KernelRun {
   std::size_t found = 0, others_removed = 0;
   solver::AdjustmentTimings parts;
   std::int64_t factor_nonzeros = 0;
+  double dense_difference = -1.0;  // worst station block against a dense inverse, relative (-1: not checked)
+  double one_thread_seconds = 0.0, two_thread_seconds = 0.0;  // filled by main
 };
+
+// The stations' covariance blocks against the dense inverse of the normal
+// matrix built here from the baselines the adjustment kept (ECEF, held
+// stations out): the worst difference relative to the block's largest
+// entry. O(n³): for networks of a few thousand stations.
+double dense_check(const GeneratedNetwork& g, const solver::AdjustmentResult& r) {
+  std::vector<Eigen::Index> unknown(r.stations.size(), -1);
+  Eigen::Index count = 0;
+  for (std::size_t i = 0; i < r.stations.size(); ++i) {
+    if (r.stations[i].constraint != "CCC") unknown[i] = count, count += 3;
+  }
+  Eigen::MatrixXd n = Eigen::MatrixXd::Zero(count, count);
+  for (const auto& am : r.measurements) {
+    if (!am.used) continue;
+    const auto& m = g.network.measurements[am.index];
+    const Eigen::Matrix3d w = m.covariance.inverse();
+    const Eigen::Index ends[2] = {unknown[m.stations[0]], unknown[m.stations[1]]};
+    for (int a = 0; a < 2; ++a) {
+      for (int b = 0; b < 2; ++b) {
+        if (ends[a] >= 0 && ends[b] >= 0) n.block<3, 3>(ends[a], ends[b]) += (a == b ? 1.0 : -1.0) * w;
+      }
+    }
+  }
+  const Eigen::MatrixXd inverse = n.llt().solve(Eigen::MatrixXd::Identity(count, count));
+  double worst = 0.0;
+  for (std::size_t i = 0; i < r.stations.size(); ++i) {
+    if (unknown[i] < 0) continue;
+    const Eigen::Matrix3d q = inverse.block<3, 3>(unknown[i], unknown[i]);
+    const double d = (q - r.stations[i].covariance_m2).cwiseAbs().maxCoeff() / q.cwiseAbs().maxCoeff();
+    worst = std::isnan(d) ? d : std::max(worst, d);  // NaN stays
+    if (std::isnan(worst)) break;
+  }
+  return worst;
+}
 
 // What the adjustment found against the generator's truth.
 void check_against_truth(const GeneratedNetwork& g, const solver::AdjustmentResult& r, KernelRun& k) {
@@ -167,7 +211,7 @@ void check_against_truth(const GeneratedNetwork& g, const solver::AdjustmentResu
 
 // The adjustment in a child process: its numbers through a pipe, its peak
 // resident set from wait4.
-std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g) {
+std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t dense_max, int jobs = 0) {
   int fds[2];
   if (pipe(fds) != 0) std::exit(1);
   const pid_t pid = fork();
@@ -175,10 +219,13 @@ std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g) {
     close(fds[0]);
     KernelRun k;
     const auto t0 = Clock::now();
-    const solver::AdjustmentResult r = solver::adjust_network(g.network, solver::AdjustOptions{});
+    solver::AdjustOptions options;
+    options.jobs = jobs;
+    const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
     k.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     if (!r.converged) k.seconds = -1.0;
     check_against_truth(g, r, k);
+    if (g.network.stations.size() <= dense_max) k.dense_difference = dense_check(g, r);
     if (write(fds[1], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) _exit(1);
     _exit(0);
   }
@@ -201,15 +248,17 @@ std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g) {
 int main(int argc, char** argv) {
   std::vector<std::size_t> sizes{1000, 10000, 100000};
   int repetitions = 3;
-  std::size_t command_max = 100000, kernel_max = 1000000;
+  std::size_t command_max = 100000, kernel_max = 1000000, dense_max = 2000, threads_max = 100000;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--sizes") sizes = parse_sizes(argv[i + 1]);
+    else if (flag == "--threads-max") threads_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
+    else if (flag == "--dense-max") dense_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
     else if (flag == "--kernel-max") kernel_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
     else if (flag == "--repetitions") repetitions = std::max(1, std::atoi(argv[i + 1]));
     else if (flag == "--command-max") command_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
     else {
-      std::fprintf(stderr, "usage: %s [--sizes N,N...] [--repetitions R] [--command-max N] [--kernel-max N]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--sizes N,N...] [--repetitions R] [--command-max N] [--kernel-max N] [--dense-max N] [--threads-max N]\n", argv[0]);
       return 2;
     }
   }
@@ -229,7 +278,7 @@ int main(int argc, char** argv) {
     double peak = 0.0, bare_peak = 0.0;
     KernelRun k;
     for (int rep = 0; rep < (n <= kernel_max ? repetitions : 0); ++rep) {
-      const auto [kr, r] = adjust_in_child(g);
+      const auto [kr, r] = adjust_in_child(g, dense_max, 2);
       if (r.status != 0 || r.seconds < 0.0) {
         std::fprintf(stderr, "the adjustment of %zu stations failed (status %d)\n", n, r.status);
         return 1;
@@ -237,6 +286,14 @@ int main(int argc, char** argv) {
       k = kr;
       adjust_s.push_back(r.seconds);
       peak = std::max(peak, r.peak_mb);
+    }
+    // The same on one thread: the speed-up of --jobs 2 (the results are
+    // the same bits, tests/workflow/network_generator_test.cpp).
+    double one_thread = 0.0;
+    if (n <= kernel_max && n <= threads_max) {
+      const auto [k1, r1] = adjust_in_child(g, 0, 1);
+      if (r1.status != 0 || r1.seconds < 0.0) return 1;
+      one_thread = r1.seconds;
     }
     // The bare factor-and-solve in a child too: CHOLMOD's OpenMP threads in
     // this process would deadlock a child forked later (libgomp after fork).
@@ -302,13 +359,24 @@ int main(int argc, char** argv) {
                 command[0][2].c_str(), command[1][0].c_str(), command[1][1].c_str(), command[1][2].c_str(), k.sigma0, k.passes,
                 blunders, k.coverage, k.chi2_ratio);
     std::fflush(stdout);
+    k.one_thread_seconds = one_thread;
+    k.two_thread_seconds = a;
     kernels.push_back({n, k});
   }
-  std::printf("\nthe adjustment's parts (seconds over every pass; solver::AdjustmentTimings)\n%-8s %10s %9s %9s %9s %9s %9s %9s\n",
-              "stations", "nnz(L)", "assemble", "factor", "solve", "sel.inv", "per-meas", "stations");
+  std::printf("\nthe adjustment's parts (seconds over every pass; solver::AdjustmentTimings)\n%-8s %10s %9s %9s %9s %9s %9s %9s %12s\n",
+              "stations", "nnz(L)", "assemble", "factor", "solve", "sel.inv", "per-meas", "stations", "vs dense");
+  // (then, per size, the adjustment on one thread and the speed-up of two)
   for (const auto& [n, k] : kernels) {
-    std::printf("%-8zu %10.3g %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f\n", n, static_cast<double>(k.factor_nonzeros), k.parts.assemble,
-                k.parts.factor, k.parts.solve, k.parts.select_inverse, k.parts.measurements, k.parts.stations);
+    char dense[32] = "-";
+    if (k.dense_difference >= 0.0 || std::isnan(k.dense_difference)) std::snprintf(dense, sizeof dense, "%.1e", k.dense_difference);
+    std::printf("%-8zu %10.3g %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %12s\n", n, static_cast<double>(k.factor_nonzeros), k.parts.assemble,
+                k.parts.factor, k.parts.solve, k.parts.select_inverse, k.parts.measurements, k.parts.stations, dense);
+  }
+  std::printf("\n%-8s %12s %12s %9s\n", "stations", "1 thread s", "2 threads s", "speed-up");
+  for (const auto& [n, k] : kernels) {
+    if (k.one_thread_seconds > 0.0) {
+      std::printf("%-8zu %12.2f %12.2f %9.2f\n", n, k.one_thread_seconds, k.two_thread_seconds, k.one_thread_seconds / k.two_thread_seconds);
+    }
   }
   std::printf("\nblunders: planted found / planted + other measurements removed (alpha 0.001 removes about 0.1 %% of good ones)\n"
               "cover: station components within 1.96 sigma of the truth; eNe/n: e'Ne / n over the free stations' components\n");
