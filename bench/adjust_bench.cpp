@@ -53,6 +53,7 @@
 #include <string>
 #include <vector>
 
+#include "accuracy.hpp"
 #include "bench_process.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/network.hpp"
@@ -166,9 +167,7 @@ double dense_check(const GeneratedNetwork& g, const solver::AdjustmentResult& r)
   for (std::size_t i = 0; i < r.stations.size(); ++i) {
     if (unknown[i] < 0) continue;
     const Eigen::Matrix3d q = inverse.block<3, 3>(unknown[i], unknown[i]);
-    const double d = (q - r.stations[i].covariance_m2).cwiseAbs().maxCoeff() / q.cwiseAbs().maxCoeff();
-    worst = std::isnan(d) ? d : std::max(worst, d);  // NaN stays
-    if (std::isnan(worst)) break;
+    worst = testing::nan_max(worst, testing::max_abs_component(q - r.stations[i].covariance_m2) / testing::max_abs_component(q));
   }
   return worst;
 }

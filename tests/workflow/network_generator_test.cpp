@@ -19,6 +19,7 @@
 #include <sstream>
 #include <string>
 
+#include "accuracy.hpp"
 #include "temp_folder.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
@@ -69,14 +70,20 @@ void expect_same_network(const geodesy::Network& a, const geodesy::Network& b) {
   }
 }
 
+// A network generated and written into `dir` as PREFIX.*.
+GeneratedNetwork generated_in(const TempFolder& dir, NetworkGeneratorOptions o, const std::string& prefix) {
+  GeneratedNetwork g = generate_network(o);
+  const auto paths = write_generated_network(g, dir.path(), prefix, io::Overwrite::refuse);
+  EXPECT_EQ(paths.size(), 5u);
+  return g;
+}
+
 TEST(NetworkGenerator, WrittenFilesReadBackToTheSameNetworkInBothFormats) {
   TempFolder dir;
   NetworkGeneratorOptions o;
   o.stations = 150;
   o.seed = 7;
-  const GeneratedNetwork g = generate_network(o);
-  const auto paths = write_generated_network(g, dir.path(), "net", io::Overwrite::refuse);
-  ASSERT_EQ(paths.size(), 5u);
+  const GeneratedNetwork g = generated_in(dir, o, "net");
   expect_same_network(g.network, io::read_network({(dir.path() / "net.stn.xml").string(), (dir.path() / "net.msr.xml").string()}));
   expect_same_network(g.network, io::read_network({(dir.path() / "net.json").string()}));
   // The truth and the blunders as written.
@@ -116,8 +123,7 @@ TEST(NetworkGenerator, AdjustedAsReadItCoversTheTruthAndSnoopingFindsThePlantedB
   NetworkGeneratorOptions o;
   o.stations = 1000;
   o.blunders = 6;
-  const GeneratedNetwork g = generate_network(o);
-  write_generated_network(g, dir.path(), "network", io::Overwrite::refuse);
+  const GeneratedNetwork g = generated_in(dir, o, "network");
   AdjustRequest request;
   request.inputs = {(dir.path() / "network.stn.xml").string(), (dir.path() / "network.msr.xml").string()};
   const PreparedNetwork prepared = prepare_network(request);
@@ -186,7 +192,7 @@ TEST(NetworkGenerator, AdjustedAsReadItCoversTheTruthAndSnoopingFindsThePlantedB
   Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(count, 3);
   unit.block<3, 3>(unknown[probe], 0).setIdentity();
   const Eigen::Matrix3d q = llt.solve(unit).block<3, 3>(unknown[probe], 0);
-  EXPECT_LT((q - r.stations[probe].covariance_m2).cwiseAbs().maxCoeff(), kCovarianceRelative * q.cwiseAbs().maxCoeff());
+  EXPECT_LT(testing::max_abs_component(q - r.stations[probe].covariance_m2), kCovarianceRelative * testing::max_abs_component(q));
 }
 
 // Issue 17 point 3: the threads share out measurements and sum in one
