@@ -36,18 +36,19 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
   cmd->add_option("--jobs", o.jobs, "Threads for the assembly and the statistics (default: the machine's cores); the results do not depend on it")
-      ->check(CLI::Range(1, 256));
+      ->check(integer_range(1, 256));
   cmd->add_option("--max-memory", o.max_memory_gb, "GB the factor and its selected inverse may take (default: what the machine has available); above it E_MEMORY before any is taken")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive());
   // Generated networks (planning, benchmarks): docs/commands/adjust.md#generated-networks.
-  cmd->add_option("--generate", o.generate, "Write a generated GNSS network of N stations (DynaML, network JSON, truth, blunders) to --out-dir instead of adjusting");
+  cmd->add_option("--generate", o.generate, "Write a generated GNSS network of N stations (DynaML, network JSON, truth, blunders) to --out-dir instead of adjusting")
+      ->check(integer_range(0, 100000000));  // fewer than 4: the generator says why
   cmd->add_option("--out-dir", o.out_dir, "--generate: the folder for network.stn.xml, network.msr.xml, network.json, network.truth.csv, network.blunders.csv");
-  cmd->add_option("--seed", o.seed, "--generate: the random seed (default 1)");
-  cmd->add_option("--held", o.held, "--generate: stations held fixed at their true positions (default 3)");
-  cmd->add_option("--blunders", o.blunders, "--generate: baselines with a planted blunder (default N/1000, 1 to 10)");
-  cmd->add_option("--blunder", o.blunder_m, "--generate: the planted blunders' length in metres (default 0.10)");
+  cmd->add_option("--seed", o.seed, "--generate: the random seed (default 1)")->check(integer_range(0, 1LL << 62));
+  cmd->add_option("--held", o.held, "--generate: stations held fixed at their true positions (default 3)")->check(integer_range(1, 100000000));
+  cmd->add_option("--blunders", o.blunders, "--generate: baselines with a planted blunder (default N/1000, 1 to 10)")->check(integer_range(0, 100000000));
+  cmd->add_option("--blunder", o.blunder_m, "--generate: the planted blunders' length in metres (default 0.10)")->check(finite_positive());
   cmd->add_option("--center", o.center, "--generate: the region's centre LAT,LON in degrees (default 47,8)");
-  cmd->add_option("--side-km", o.side_km, "--generate: the square region's side in km (default 1000)");
+  cmd->add_option("--side-km", o.side_km, "--generate: the square region's side in km (default 1000)")->check(finite_positive());
   return cmd;
 }
 
@@ -66,12 +67,9 @@ int run_generate(const AdjustCommandOptions& o) {
   if (o.blunder_m) g.blunder_m = *o.blunder_m;
   if (o.side_km) g.side_km = *o.side_km;
   if (o.center) {
-    const auto comma = o.center->find(',');
-    const auto lat = comma == std::string::npos ? std::nullopt : parse_finite_double(o.center->substr(0, comma));
-    const auto lon = comma == std::string::npos ? std::nullopt : parse_finite_double(o.center->substr(comma + 1));
-    if (!lat || !lon) throw Error(ErrorKind::usage, "E_OPTION", "--center '" + *o.center + "': expected LAT,LON in degrees");
-    g.center_lat_deg = *lat;
-    g.center_lon_deg = *lon;
+    const std::vector<double> c = split_numbers(*o.center, "--center", 2, "LAT,LON in degrees");
+    g.center_lat_deg = c[0];
+    g.center_lon_deg = c[1];
   }
   if (!std::filesystem::is_directory(*o.out_dir)) {
     throw Error(ErrorKind::usage, "E_OUTPUT_DIR", "--out-dir " + *o.out_dir + ": not a folder");

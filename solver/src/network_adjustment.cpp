@@ -1404,20 +1404,12 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
             if (!extras.empty()) {
               for (std::size_t k : take) p.active[failing[k].first] = false;
               for (std::size_t k : extras) p.active[failing[k].first] = false;
+              // One part: a station left with no measurement counts as a part of its own.
               std::size_t parts = 0;
               components_of(p, parts);
-              bool every_station_kept = true;
-              {
-                std::vector<bool> reached(net.stations.size(), false);
-                for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
-                  if (!p.active[mi]) continue;
-                  for (std::size_t st : net.measurements[mi].stations) reached[st] = true;
-                }
-                for (std::size_t st = 0; st < net.stations.size(); ++st) every_station_kept = every_station_kept && (!p.station_used[st] || reached[st]);
-              }
               for (std::size_t k : take) p.active[failing[k].first] = true;
               for (std::size_t k : extras) p.active[failing[k].first] = true;
-              if (parts == 1 && every_station_kept) take.insert(take.end(), extras.begin(), extras.end());
+              if (parts == 1) take.insert(take.end(), extras.begin(), extras.end());
             }
           }
           for (std::size_t k : take) {

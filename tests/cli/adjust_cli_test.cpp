@@ -315,6 +315,9 @@ TEST_F(AdjustCli, Issue17_GenerateMisuseIsRefusedByName) {
       {"adjust --generate 100 --out-dir '" + path("nowhere").string() + "'", {"E_OUTPUT_DIR", "nowhere"}},
       {"adjust --seed 3 net.json -o st.csv", {"E_OPTION", "go with --generate"}},
       {"adjust -o st.csv", {"E_OPTION", "INPUT is required"}},
+      {"adjust --generate 100 --out-dir '" + path("").string() + "' --side-km nan", {"--side-km", "not a finite number"}},
+      {"adjust net.json -o st.csv --jobs nan", {"--jobs", "expected an integer in [1, 256]"}},
+      {"adjust net.json -o st.csv --max-memory -1", {"--max-memory"}},
   };
   for (const auto& [args, pieces] : cases) {
     SCOPED_TRACE(args);
