@@ -4,35 +4,26 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "las_internal.hpp"
 
 namespace geoanchor::io {
 namespace {
 
-static_assert(std::endian::native == std::endian::little, "LAS is little-endian; this code reads it with memcpy");
-
-constexpr std::size_t kVlrHeaderSize = 54;
-constexpr std::size_t kEvlrHeaderSize = 60;
-constexpr std::uint16_t kHeaderSize12 = 227;
-constexpr std::uint16_t kHeaderSize13 = 235;
-constexpr std::uint16_t kHeaderSize14 = 375;
-
-template <class T>
-T get(const std::uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-
-template <class T>
-void put(std::vector<std::uint8_t>& b, std::size_t at, T v) {
-  std::memcpy(b.data() + at, &v, sizeof v);
-}
+using las_internal::get;
+using las_internal::kEvlrHeaderSize;
+using las_internal::kHeaderSize12;
+using las_internal::kHeaderSize13;
+using las_internal::kHeaderSize14;
+using las_internal::kVlrHeaderSize;
+using las_internal::malformed;
+using las_internal::put;
+using las_internal::read_at;
 
 std::string fixed_text(const std::uint8_t* p, std::size_t n) {
   std::size_t len = 0;
@@ -45,21 +36,7 @@ void put_text(std::vector<std::uint8_t>& b, std::size_t at, const std::string& s
   std::memcpy(b.data() + at, s.data(), std::min(n, s.size()));
 }
 
-Error malformed(const std::filesystem::path& p, std::uint64_t offset, const std::string& what) {
-  return Error(ErrorKind::input, "E_LAS", p.string() + ": byte " + std::to_string(offset) + ": " + what);
-}
-
-// Reads exactly n bytes at `offset`; false at end of file.
-bool read_at(int fd, std::uint64_t offset, std::uint8_t* out, std::size_t n) {
-  std::size_t done = 0;
-  while (done < n) {
-    const ssize_t r = ::pread(fd, out + done, n - done, static_cast<off_t>(offset + done));
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0) return false;
-    done += static_cast<std::size_t>(r);
-  }
-  return true;
-}
+bool is_laz_vlr(const LasVlr& v) { return !v.extended && v.user_id == kLazVlrUserId && v.record_id == kLazVlrRecordId; }
 
 }  // namespace
 
@@ -102,6 +79,7 @@ LasReader::LasReader(const std::filesystem::path& path) : path_(path) {
     }
     if (std::memcmp(b.data(), "LASF", 4) != 0) throw malformed(path, 0, "not a LAS file (signature is not 'LASF')");
     LasHeader& h = header_;
+    std::optional<LasVlr> laz_vlr;
     h.file_source_id = get<std::uint16_t>(&b[4]);
     h.global_encoding = get<std::uint16_t>(&b[6]);
     std::memcpy(h.project_guid.data(), &b[8], 16);
@@ -140,24 +118,34 @@ LasReader::LasReader(const std::filesystem::path& path) : path_(path) {
       throw malformed(path, file_size, "truncated LAS header: header size is " + std::to_string(h.header_size) +
                                            " bytes, the file has " + std::to_string(file_size));
     }
-    if ((raw_format & 0xC0) != 0) {
-      throw malformed(path, 104, "point data record format byte " + std::to_string(raw_format) +
-                                     " marks compressed (LAZ) points; decompress the tile first (laszip)");
+    // LAZ: bit 7 (or 6, in early LASzip files) set on the format; the
+    // laszip VLR, read below, says how.
+    const bool compressed = (raw_format & 0xC0) != 0;
+    h.point_format = compressed ? static_cast<std::uint8_t>(raw_format & 0x3F) : raw_format;
+    const std::size_t min_len = las_min_record_length(h.point_format);
+    if (min_len == 0 && compressed) {
+      const std::uint8_t f = h.point_format;
+      const bool waveform = f == 4 || f == 5 || f == 9 || f == 10;
+      throw Error(ErrorKind::input, waveform ? "E_LAZ_UNSUPPORTED" : "E_LAS",
+                  path.string() + ": byte 104: LAZ point data record format " + std::to_string(f) +
+                      (waveform ? std::string(" (waveform packets, ") + (f < 6 ? "WAVEPACKET13" : "WAVEPACKET14") +
+                                      " items) is not supported"
+                                : std::string(" is unknown")) +
+                      "; expected 0, 1, 2, 3, 6, 7 or 8");
     }
-    h.point_format = raw_format;
-    const std::size_t min_len = las_min_record_length(raw_format);
     if (min_len == 0) {
       throw malformed(path, 104, "point data record format " + std::to_string(raw_format) +
                                      (raw_format <= 10 ? " (waveform) is not supported" : " is unknown") +
                                      "; expected 0, 1, 2, 3, 6, 7 or 8");
     }
-    if (raw_format >= 6 && h.version_minor < 4) {
-      throw malformed(path, 104, "point data record format " + std::to_string(raw_format) + " needs LAS 1.4, the file says 1." +
+    const std::uint8_t format = h.point_format;
+    if (format >= 6 && h.version_minor < 4) {
+      throw malformed(path, 104, "point data record format " + std::to_string(format) + " needs LAS 1.4, the file says 1." +
                                      std::to_string(h.version_minor));
     }
     if (h.record_length < min_len) {
       throw malformed(path, 105, "point data record length " + std::to_string(h.record_length) +
-                                     " is shorter than format " + std::to_string(raw_format) + "'s " +
+                                     " is shorter than format " + std::to_string(format) + "'s " +
                                      std::to_string(min_len) + " bytes");
     }
     for (std::size_t a = 0; a < 3; ++a) {
@@ -176,8 +164,10 @@ LasReader::LasReader(const std::filesystem::path& path) : path_(path) {
         throw malformed(path, 107, "legacy point count " + std::to_string(legacy_count) +
                                        " disagrees with the 64-bit point count " + std::to_string(count64));
       }
-      if (raw_format >= 6 && legacy_count != 0) {
-        throw malformed(path, 107, "legacy point count must be 0 for point format " + std::to_string(raw_format));
+      // PDAL's COPC writer fills the legacy count of formats 6-8 (equal to
+      // the 64-bit one, checked above); LAZ readers accept it, so does this one.
+      if (format >= 6 && legacy_count != 0 && !compressed) {
+        throw malformed(path, 107, "legacy point count must be 0 for point format " + std::to_string(format));
       }
       h.point_count = count64;
     }
@@ -211,27 +201,51 @@ LasReader::LasReader(const std::filesystem::path& path) : path_(path) {
       v.data.resize(len);
       if (len && !read_at(fd_, at + kVlrHeaderSize, v.data.data(), len)) throw malformed(path, at, "cannot read VLR");
       at += kVlrHeaderSize + len;
+      if (is_laz_vlr(v)) {  // kept apart: a compression record is not passed through
+        if (compressed && laz_vlr) {
+          throw Error(ErrorKind::input, "E_LAZ_VLR",
+                      path.string() + ": byte " + std::to_string(v.file_offset) + ": a second laszip VLR (the first is at byte " +
+                          std::to_string(laz_vlr->file_offset) + ")");
+        }
+        laz_vlr = std::move(v);
+        continue;
+      }
       vlrs_.push_back(std::move(v));
     }
+    if (compressed && !laz_vlr) {
+      throw Error(ErrorKind::input, "E_LAZ_VLR",
+                  path.string() + ": byte 104: point data record format byte " + std::to_string(raw_format) +
+                      " marks compressed (LAZ) points, but there is no laszip VLR ('" + kLazVlrUserId + "' " +
+                      std::to_string(kLazVlrRecordId) + ") saying how");
+    }
+    if (compressed) {
+      if (h.evlr_count > 0 && (h.evlr_start < h.offset_to_points || h.evlr_start > file_size)) {
+        throw malformed(path, 235, "start of the EVLRs " + std::to_string(h.evlr_start) + " is outside [offset to point data " +
+                                       std::to_string(h.offset_to_points) + ", file size " + std::to_string(file_size) + "]");
+      }
+    }
 
-    // Point data against the file size (and the EVLRs that follow it).
-    const std::uint64_t points_bytes = h.point_count * h.record_length;
-    if (h.record_length != 0 && points_bytes / h.record_length != h.point_count) {
-      throw malformed(path, 247, "point count " + std::to_string(h.point_count) + " overflows the file size");
-    }
-    const std::uint64_t points_end = h.offset_to_points + points_bytes;
-    const std::uint64_t data_end = h.evlr_count > 0 ? h.evlr_start : file_size;
-    if (points_end > file_size) {
-      throw malformed(path, file_size, "truncated point data: " + std::to_string(h.point_count) + " points of " +
-                                           std::to_string(h.record_length) + " bytes need " +
-                                           std::to_string(points_end) + " bytes, the file has " +
-                                           std::to_string(file_size));
-    }
-    if (points_end != data_end) {
-      throw malformed(path, points_end, "point count " + std::to_string(h.point_count) + " disagrees with the " +
-                                            (h.evlr_count > 0 ? "start of the EVLRs at byte " : "file size ") +
-                                            std::to_string(data_end) + ": the points end at byte " +
-                                            std::to_string(points_end));
+    // Point data against the file size (and the EVLRs that follow it); a
+    // LAZ file's chunk table is checked once the EVLRs are read.
+    if (!compressed) {
+      const std::uint64_t points_bytes = h.point_count * h.record_length;
+      if (h.record_length != 0 && points_bytes / h.record_length != h.point_count) {
+        throw malformed(path, 247, "point count " + std::to_string(h.point_count) + " overflows the file size");
+      }
+      const std::uint64_t points_end = h.offset_to_points + points_bytes;
+      const std::uint64_t data_end = h.evlr_count > 0 ? h.evlr_start : file_size;
+      if (points_end > file_size) {
+        throw malformed(path, file_size, "truncated point data: " + std::to_string(h.point_count) + " points of " +
+                                             std::to_string(h.record_length) + " bytes need " +
+                                             std::to_string(points_end) + " bytes, the file has " +
+                                             std::to_string(file_size));
+      }
+      if (points_end != data_end) {
+        throw malformed(path, points_end, "point count " + std::to_string(h.point_count) + " disagrees with the " +
+                                              (h.evlr_count > 0 ? "start of the EVLRs at byte " : "file size ") +
+                                              std::to_string(data_end) + ": the points end at byte " +
+                                              std::to_string(points_end));
+      }
     }
     at = h.evlr_start;
     for (std::uint32_t i = 0; i < h.evlr_count; ++i) {
@@ -260,6 +274,7 @@ LasReader::LasReader(const std::filesystem::path& path) : path_(path) {
       at += kEvlrHeaderSize + len;
       vlrs_.push_back(std::move(v));
     }
+    if (compressed) open_laz(file_size, *laz_vlr);
   } catch (...) {
     ::close(fd_);
     fd_ = -1;
@@ -283,6 +298,7 @@ std::optional<std::string> LasReader::wkt() const {
 }
 
 std::size_t LasReader::read_records(std::vector<std::uint8_t>& buffer, std::size_t max_points) {
+  if (laz_) return read_laz_records(buffer, max_points);
   const std::uint64_t left = header_.point_count - next_point_;
   const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(left, max_points));
   buffer.resize(n * header_.record_length);
@@ -296,7 +312,12 @@ std::size_t LasReader::read_records(std::vector<std::uint8_t>& buffer, std::size
   return n;
 }
 
-void LasReader::rewind() { next_point_ = 0; }
+void LasReader::rewind() {
+  next_point_ = 0;
+  chunk_next_ = 0;
+  chunk_used_ = 0;
+  chunk_records_.clear();
+}
 
 std::vector<std::uint8_t> encode_las14_header(const LasHeader& h) {
   std::vector<std::uint8_t> b(kHeaderSize14, 0);
@@ -315,8 +336,9 @@ std::vector<std::uint8_t> encode_las14_header(const LasHeader& h) {
   put(b, 100, h.vlr_count);
   b[104] = h.point_format;
   put(b, 105, h.record_length);
-  // Legacy counts: only for formats 0–5 and counts that fit 32 bits.
-  const bool legacy = h.point_format < 6 && h.point_count <= UINT32_MAX;
+  // Legacy counts: only for formats 0–5 (a LAZ format byte has bit 7 set)
+  // and counts that fit 32 bits.
+  const bool legacy = (h.point_format & 0x3F) < 6 && h.point_count <= UINT32_MAX;
   put(b, 107, static_cast<std::uint32_t>(legacy ? h.point_count : 0));
   for (std::size_t i = 0; i < 5; ++i) {
     const bool fits = legacy && h.points_by_return[i] <= UINT32_MAX;
@@ -337,8 +359,19 @@ std::vector<std::uint8_t> encode_las14_header(const LasHeader& h) {
 }
 
 LasWriter::LasWriter(std::ostream& out, const LasHeader& header, std::vector<LasVlr> vlrs, std::vector<LasVlr> evlrs,
-                     std::string name)
+                     std::string name, LasCompression compression)
     : out_(out), header_(header), evlrs_(std::move(evlrs)), name_(std::move(name)) {
+  std::erase_if(vlrs, is_laz_vlr);
+  if (compression.laz) {
+    laz_ = LazVlr::for_format(header_.point_format, header_.record_length, compression.chunk_points);
+    LasVlr v;
+    v.user_id = kLazVlrUserId;
+    v.record_id = kLazVlrRecordId;
+    v.description = "LASzip format, by geoanchor";
+    v.data = laz_->bytes();
+    vlrs.push_back(std::move(v));
+    encoder_.emplace(*laz_);
+  }
   header_.version_major = 1;
   header_.version_minor = 4;
   header_.header_size = kHeaderSize14;
@@ -358,7 +391,9 @@ LasWriter::LasWriter(std::ostream& out, const LasHeader& header, std::vector<Las
   }
   if (offset > UINT32_MAX) throw Error(ErrorKind::input, "E_LAS", name_ + ": VLRs exceed 4 GiB");
   header_.offset_to_points = static_cast<std::uint32_t>(offset);
-  const auto h = encode_las14_header(header_);
+  LasHeader stored = header_;
+  if (laz_) stored.point_format = static_cast<std::uint8_t>(stored.point_format | 0x80);
+  const auto h = encode_las14_header(stored);
   out_.write(reinterpret_cast<const char*>(h.data()), static_cast<std::streamsize>(h.size()));
   for (const auto& v : vlrs) {
     std::vector<std::uint8_t> vh(kVlrHeaderSize, 0);
@@ -369,14 +404,35 @@ LasWriter::LasWriter(std::ostream& out, const LasHeader& header, std::vector<Las
     out_.write(reinterpret_cast<const char*>(vh.data()), static_cast<std::streamsize>(vh.size()));
     out_.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size()));
   }
+  if (laz_) {
+    // The chunk table's offset; until finish() it points at itself, which
+    // tells a reader that the table was never written.
+    const std::uint64_t self = header_.offset_to_points;
+    out_.write(reinterpret_cast<const char*>(&self), sizeof self);
+  }
 }
 
+LasWriter::~LasWriter() = default;
+
 void LasWriter::write_records(const std::uint8_t* data, std::size_t n) {
-  out_.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(n * header_.record_length));
-  written_ += n;
+  if (!laz_) {
+    out_.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(n * header_.record_length));
+    written_ += n;
+    return;
+  }
+  const std::size_t len = header_.record_length;
+  const std::size_t per_chunk = laz_->chunk_size;
+  while (n > 0) {
+    const std::size_t take = std::min(n, per_chunk - gathered_.size() / len);
+    gathered_.insert(gathered_.end(), data, data + take * len);
+    data += take * len;
+    n -= take;
+    if (gathered_.size() / len == per_chunk) flush_gathered();
+  }
 }
 
 void LasWriter::restart(const std::array<double, 3>& offset) {
+  if (laz_) throw std::logic_error(name_ + ": a LAZ output cannot be rewritten in place; write it again to a new stream");
   header_.offset = offset;
   written_ = 0;
   out_.seekp(static_cast<std::streamoff>(header_.offset_to_points));
@@ -384,11 +440,13 @@ void LasWriter::restart(const std::array<double, 3>& offset) {
 
 void LasWriter::finish(const std::array<std::uint64_t, 15>& points_by_return, const std::array<double, 3>& min,
                        const std::array<double, 3>& max) {
+  std::uint64_t points_end = header_.offset_to_points + written_ * header_.record_length;
+  if (laz_) points_end = finish_laz_chunks();
   header_.point_count = written_;
   header_.points_by_return = points_by_return;
   header_.min = min;
   header_.max = max;
-  header_.evlr_start = evlrs_.empty() ? 0 : header_.offset_to_points + written_ * header_.record_length;
+  header_.evlr_start = evlrs_.empty() ? 0 : points_end;
   for (const auto& v : evlrs_) {
     std::vector<std::uint8_t> eh(kEvlrHeaderSize, 0);
     put_text(eh, 2, v.user_id, 16);
@@ -398,7 +456,9 @@ void LasWriter::finish(const std::array<std::uint64_t, 15>& points_by_return, co
     out_.write(reinterpret_cast<const char*>(eh.data()), static_cast<std::streamsize>(eh.size()));
     out_.write(reinterpret_cast<const char*>(v.data.data()), static_cast<std::streamsize>(v.data.size()));
   }
-  const auto h = encode_las14_header(header_);
+  LasHeader stored = header_;
+  if (laz_) stored.point_format = static_cast<std::uint8_t>(stored.point_format | 0x80);
+  const auto h = encode_las14_header(stored);
   out_.seekp(0);
   out_.write(reinterpret_cast<const char*>(h.data()), static_cast<std::streamsize>(h.size()));
   out_.seekp(0, std::ios::end);
