@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (clang, ASan + UBSan; CMake preset "fuzz") and
-# runs each for SECONDS (default 150, so 10 minutes for the four), growing the
+# runs each for SECONDS (default 150, so 12.5 minutes for the five), growing the
 # committed corpus in fuzz/corpus/<target>/. Any crash, hang, leak or
 # sanitizer report stops that target with its input saved as
 # build/fuzz/<target>-crash-*; replay it with build/fuzz/fuzz/fuzz_<target> FILE.
@@ -11,10 +11,10 @@ seconds="${1:-150}"
 
 bash scripts/setup.sh
 cmake --preset fuzz >/dev/null
-cmake --build --preset fuzz --target fuzz_las fuzz_ply fuzz_csv fuzz_sidecar
+cmake --build --preset fuzz --target fuzz_las fuzz_laz fuzz_ply fuzz_csv fuzz_sidecar
 
 status=0
-for target in las ply csv sidecar; do
+for target in las laz ply csv sidecar; do
   echo "== fuzz_${target}: ${seconds} s =="
   # New inputs go to a scratch folder first; -merge keeps only those that add coverage.
   scratch="build/fuzz/new-${target}"

@@ -149,6 +149,7 @@ void LasReader::open_laz(std::uint64_t file_size, const LasVlr& vlr) {
     const std::string which = "chunk " + std::to_string(i) + " of " + std::to_string(count);
     if (c.bytes == 0) throw table_error(path_, offset, which + " has 0 bytes in the chunk table");
     if (c.points == 0) throw table_error(path_, offset, which + " has 0 points in the chunk table");
+    check_chunk_points(c.points, offset, which);
     if (offset + c.bytes > table) {
       throw table_error(path_, offset, which + " (" + std::to_string(c.bytes) + " bytes) runs past the chunk table at byte " +
                                            std::to_string(table) + ": the chunk sizes do not add up to the point data");
@@ -173,8 +174,18 @@ void LasReader::open_laz(std::uint64_t file_size, const LasVlr& vlr) {
   }
 }
 
+void LasReader::check_chunk_points(std::uint64_t points, std::uint64_t offset, const std::string& which) const {
+  if (points <= kLazMaxChunkPoints) return;
+  throw Error(ErrorKind::input, "E_LAZ_UNSUPPORTED",
+              path_.string() + ": byte " + std::to_string(offset) + ": " + which + " holds " + plural(points, "point") +
+                  "; chunks of more than " + std::to_string(kLazMaxChunkPoints) +
+                  " points are not supported (a chunk is decoded whole, in memory)");
+}
+
 void LasReader::scan_laz_chunks(std::uint64_t data_end) {
   const LasHeader& h = header_;
+  check_chunk_points(std::min<std::uint64_t>(laz_->chunk_size, h.point_count), std::uint64_t{h.offset_to_points} + 8,
+                     "chunk 0 (no chunk table)");
   laz::ChunkDecoder decoder(layout_of(*laz_, h.record_length));
   const std::uint64_t count = (h.point_count + laz_->chunk_size - 1) / laz_->chunk_size;
   std::uint64_t offset = std::uint64_t{h.offset_to_points} + 8, first = 0;

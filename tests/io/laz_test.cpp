@@ -474,6 +474,10 @@ struct RoundTripCase {
   Content content;
 };
 
+void PrintTo(const RoundTripCase& c, std::ostream* os) {
+  *os << "format " << int{c.format} << ", " << c.extra << " extra bytes, " << content_name(c.content);
+}
+
 class LazRoundTrip : public LazTest, public ::testing::WithParamInterface<RoundTripCase> {};
 
 TEST_P(LazRoundTrip, DecodesToTheRecordsGivenHereAndInLazPerf) {
@@ -646,7 +650,8 @@ TEST_F(LazTest, LasToLazToLasKeepsEveryByteOfThePoints) {
 
 // A writer that stopped before the chunk table leaves the table offset
 // pointing at itself: LASzip then walks fixed-size chunks; so does geoanchor.
-// Variable-size chunks cannot be found that way: an error.
+// Variable-size chunks cannot be found that way: an error. A table offset of
+// -1 means "at the end of the file".
 TEST_F(LazTest, MissingChunkTableIsWalkedForFixedChunksOnly) {
   const Bytes records = make_records(3, 0, 9000, Content::realistic, 5);
   write_tile(path("t.laz"), 3, 0, records, true, 2500);
@@ -657,6 +662,17 @@ TEST_F(LazTest, MissingChunkTableIsWalkedForFixedChunksOnly) {
   LasReader r(path("crashed.laz"));
   EXPECT_EQ(r.chunk_count(), 4u);
   EXPECT_TRUE(SameRecords(records_of(r), records, 34));
+
+  // Written to a stream that could not seek back: offset -1, the table's
+  // offset in the file's last 8 bytes.
+  Bytes s = slurp(path("t.laz"));
+  const auto table = get<std::uint64_t>(s, at);
+  put<std::int64_t>(s, at, -1);
+  s.resize(s.size() + 8);
+  put<std::uint64_t>(s, s.size() - 8, table);
+  write_file(path("streamed.laz"), s);
+  LasReader streamed(path("streamed.laz"));
+  EXPECT_TRUE(SameRecords(records_of(streamed), records, 34));
 
   Bytes c = slurp(kData / "1.2-with-color.copc.laz");
   const auto cat = get<std::uint32_t>(c, 96);
@@ -813,6 +829,18 @@ TEST_F(LazMalformed, PointCountsDisagreeWithTheHeader) {
   put<std::uint64_t>(c, 247, 1066);
   expect("count_variable.laz", c, "E_LAZ_CHUNK_TABLE",
          {"byte " + std::to_string(table) + ": the chunk table counts 1065 points, the header 1066"});
+}
+
+TEST_F(LazMalformed, ChunkTooLargeToDecodeWhole) {
+  // Chunks of 2^23 points and a header to match: two chunks, the first too large.
+  Bytes b = good_;
+  std::size_t at = get<std::uint16_t>(b, 94);
+  while (std::string(reinterpret_cast<const char*>(b.data() + at + 2)) != kLazVlrUserId) at += 54u + get<std::uint16_t>(b, at + 20);
+  put<std::uint32_t>(b, at + 54 + 12, 1u << 23);
+  put<std::uint32_t>(b, 107, (1u << 23) + 5);
+  put<std::uint64_t>(b, 247, (1u << 23) + 5);
+  expect("huge_chunk.laz", b, "E_LAZ_UNSUPPORTED",
+         {"byte " + std::to_string(offset_ + 8) + ": chunk 0 of 2 holds 8388608 points; chunks of more than 4194304 points"});
 }
 
 // The laszip VLR of point10.las.laz: where it is and its payload.

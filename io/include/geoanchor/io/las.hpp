@@ -82,6 +82,10 @@ std::size_t las_min_record_length(std::uint8_t point_format);
 // The records per chunk LasReader reports for an uncompressed file (a LAZ
 // file has the chunks it was written with).
 inline constexpr std::uint32_t kLasChunkPoints = 50000;
+// The most points a LAZ chunk may hold for LasReader: a chunk is decoded
+// whole, so this bounds the memory a (malformed) chunk table can ask for
+// (LASzip's default is 50 000; COPC nodes hold some 10^5).
+inline constexpr std::uint32_t kLazMaxChunkPoints = 1u << 22;
 
 class LasReader {
  public:
@@ -99,7 +103,8 @@ class LasReader {
   // A LAZ file whose writer stopped before the chunk table (the table offset
   // still points at itself) is read by walking its chunks, as LASzip does,
   // when the chunks have a fixed size; with variable-size chunks it is an
-  // error.
+  // error. A chunk of more than kLazMaxChunkPoints points is refused
+  // (E_LAZ_UNSUPPORTED).
   explicit LasReader(const std::filesystem::path& path);
   ~LasReader();
   LasReader(const LasReader&) = delete;
@@ -156,6 +161,7 @@ class LasReader {
   };
   void open_laz(std::uint64_t file_size, const LasVlr& vlr);
   void scan_laz_chunks(std::uint64_t data_end);
+  void check_chunk_points(std::uint64_t points, std::uint64_t offset, const std::string& which) const;
   std::size_t read_laz_records(std::vector<std::uint8_t>& buffer, std::size_t max_points);
 
   std::filesystem::path path_;
