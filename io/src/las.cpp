@@ -11,6 +11,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "las_internal.hpp"
+#include "laz_chunk.hpp"  // LasReader's decoders, destroyed here
 
 namespace geoanchor::io {
 namespace {

@@ -257,9 +257,25 @@ void LasReader::decode_chunk(std::size_t i, std::vector<std::uint8_t>& records) 
   records.resize(std::size_t{c.points} * len);
   const std::string which = "chunk " + std::to_string(i) + " of " + std::to_string(chunks_.size()) + " (" +
                             plural(c.points, "point") + ", " + std::to_string(c.bytes) + " bytes)";
+  // A decoder from the pool (returned whatever happens: every chunk starts afresh).
+  struct Borrowed {
+    const LasReader& reader;
+    std::unique_ptr<laz::ChunkDecoder> decoder;
+    ~Borrowed() {
+      const std::lock_guard<std::mutex> lock(reader.decoders_mutex_);
+      reader.decoders_.push_back(std::move(decoder));
+    }
+  } borrowed{*this, nullptr};
+  {
+    const std::lock_guard<std::mutex> lock(decoders_mutex_);
+    if (!decoders_.empty()) {
+      borrowed.decoder = std::move(decoders_.back());
+      decoders_.pop_back();
+    }
+  }
+  if (!borrowed.decoder) borrowed.decoder = std::make_unique<laz::ChunkDecoder>(layout_of(*laz_, header_.record_length));
   try {
-    laz::ChunkDecoder decoder(layout_of(*laz_, header_.record_length));
-    decoder.decode(coded.data(), coded.size(), c.points, records.data());
+    borrowed.decoder->decode(coded.data(), coded.size(), c.points, records.data());
   } catch (const laz::StreamOverrun&) {
     throw Error(ErrorKind::input, "E_LAZ_CHUNK",
                 path_.string() + ": byte " + std::to_string(c.offset) + ": " + which +

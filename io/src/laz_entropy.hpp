@@ -112,11 +112,20 @@ class SymbolModel {
     cdf_ = storage_.get();
     counts_ = cdf_ + symbols;
     lookup_ = table_size_ ? counts_ + symbols : nullptr;
-    reset();
   }
 
   // Every symbol counted once; updates come every (symbols + 6) / 2 symbols.
-  void reset() {
+  // Done on the model's next use: a chunk resets every model, most of them
+  // unused in a small chunk (a COPC node), and the state is the same.
+  void reset() { stale_ = true; }
+  std::uint32_t symbols() const { return symbols_; }
+
+ private:
+  friend class RangeEncoder;
+  friend class RangeDecoder;
+
+  void refresh() {
+    stale_ = false;
     for (std::uint32_t k = 0; k < symbols_; ++k) counts_[k] = 1;
     total_ = 0;
     cycle_ = symbols_;
@@ -124,11 +133,6 @@ class SymbolModel {
     cycle_ = (symbols_ + 6) >> 1;
     until_update_ = cycle_;
   }
-  std::uint32_t symbols() const { return symbols_; }
-
- private:
-  friend class RangeEncoder;
-  friend class RangeDecoder;
 
   // Adds the symbols counted since the last update, halves the counts past
   // the limit, rebuilds the cumulative distribution (scaled to 2^15) and,
@@ -178,6 +182,7 @@ class SymbolModel {
   std::uint32_t* cdf_ = nullptr;     // cumulative counts, scaled to 2^15; cdf_[0] = 0
   std::uint32_t* counts_ = nullptr;  // per symbol, at least 1
   std::uint32_t* lookup_ = nullptr;  // decoding only: table_size_ + 2 entries
+  bool stale_ = true;                // reset() pending
 };
 
 // Appends the coded bytes of one stream to a byte vector.
@@ -200,6 +205,7 @@ class RangeEncoder {
   }
 
   void encode_symbol(SymbolModel& m, std::uint32_t symbol) {
+    if (m.stale_) m.refresh();
     if (symbol == m.last_) {
       const std::uint32_t x = m.cdf_[symbol] * (length_ >> kSymbolScaleBits);
       add_to_base(x);
@@ -322,6 +328,7 @@ class RangeDecoder {
   }
 
   std::uint32_t decode_symbol(SymbolModel& m) {
+    if (m.stale_) m.refresh();
     std::uint32_t symbol, low, high = length_;
     length_ >>= kSymbolScaleBits;
     if (m.lookup_) {

@@ -22,6 +22,8 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -30,6 +32,10 @@
 #include "geoanchor/io/laz.hpp"
 
 namespace geoanchor::io {
+
+namespace laz {
+class ChunkDecoder;
+}
 
 struct LasVlr {
   std::string user_id;  // up to 16 characters ("LASF_Projection", "LASF_Spec")
@@ -175,6 +181,11 @@ class LasReader {
   std::vector<std::uint8_t> chunk_records_;
   std::size_t chunk_next_ = 0;
   std::size_t chunk_used_ = 0;
+  // Decoders for reuse by decode_chunk on any thread (a decoder's models
+  // take some 0.5 MB per scanner channel; allocating them for every small
+  // chunk of a COPC file cost more than decoding it).
+  mutable std::mutex decoders_mutex_;
+  mutable std::vector<std::unique_ptr<laz::ChunkDecoder>> decoders_;
 };
 
 // How LasWriter stores the points.
