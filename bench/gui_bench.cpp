@@ -1,7 +1,10 @@
 // Frame time of the off-screen workbench shell (OSMesa llvmpipe, 1600×1000)
 // with 10², 10³ and 10⁴ control points, per view, against the 50 ms frame
-// budget of the issue; and a whole snapshot (context, fonts, three frames,
-// PNG) of the bundled example. Never part of the test run's pass/fail.
+// budget of the issue; the network view (issue 17 point 6) on generated
+// networks of 10³, 10⁴ and 10⁵ stations, whole, zoomed in ×16, and while
+// the view changes every frame (level of detail recomputed); and a whole
+// snapshot (context, fonts, three frames, PNG) of the bundled example.
+// Never part of the test run's pass/fail.
 
 #include <benchmark/benchmark.h>
 
@@ -15,9 +18,12 @@
 #include <random>
 #include <string>
 
+#include <imgui.h>
+
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/gui/offscreen.hpp"
 #include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/workflow/network_generator.hpp"
 #include "median_reporter.hpp"
 
 namespace {
@@ -87,6 +93,58 @@ void frame(benchmark::State& state, gui::View view) {
   for (auto _ : state) renderer().render_frame(*s.ui, view);
 }
 
+struct NetworkScene {
+  std::unique_ptr<gui::NetworkModel> model;
+  std::unique_ptr<gui::NetworkUi> ui;
+  Eigen::Vector2d centre_m = Eigen::Vector2d::Zero();
+};
+
+// A generated network (bench/adjust_bench's generator), adjusted without
+// data snooping (its planted blunders are drawn as failing: one by one,
+// labelled), kept for every benchmark of its size.
+NetworkScene& network_scene(std::size_t n) {
+  static std::map<std::size_t, NetworkScene> scenes;
+  auto it = scenes.find(n);
+  if (it == scenes.end()) {
+    workflow::NetworkGeneratorOptions g;
+    g.stations = n;
+    solver::AdjustOptions o;
+    o.data_snooping = false;
+    NetworkScene s;
+    s.model = std::make_unique<gui::NetworkModel>(workflow::generate_network(g).network, o);
+    s.model->wait();
+    s.ui = std::make_unique<gui::NetworkUi>(*s.model);
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300), hi = -lo;
+    for (const auto& r : s.model->stations()) lo = lo.cwiseMin(r.plan_m), hi = hi.cwiseMax(r.plan_m);
+    s.centre_m = 0.5 * (lo + hi);
+    it = scenes.emplace(n, std::move(s)).first;
+  }
+  return it->second;
+}
+
+enum class NetworkFrame { whole, zoomed, moving };
+
+void network_frame(benchmark::State& state, NetworkFrame kind) {
+  NetworkScene& s = network_scene(static_cast<std::size_t>(state.range(0)));
+  if (!s.model->result()) {
+    state.SkipWithError(s.model->error().c_str());
+    return;
+  }
+  if (kind == NetworkFrame::zoomed) s.ui->set_plan_view(16.0, s.centre_m);
+  else s.ui->reset_plan_view();
+  renderer().render(*s.ui);  // settle
+  int k = 0;
+  for (auto _ : state) {
+    // A view that moves by a metre each frame: nothing can be reused.
+    if (kind == NetworkFrame::moving) s.ui->set_plan_view(1.0, s.centre_m + Eigen::Vector2d(++k % 2, 0.0));
+    renderer().render_frame(*s.ui);
+  }
+  state.counters["in_view"] = static_cast<double>(s.ui->plan().stations_in_view);
+  // What the rasterizer gets: llvmpipe's time goes with the triangles.
+  state.counters["triangles"] = static_cast<double>(ImGui::GetDrawData()->TotalIdxCount / 3);
+  s.ui->reset_plan_view();
+}
+
 void snapshot_total(benchmark::State& state) {
   const auto set = io::read_control_set(std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv", io::ControlReadOptions{});
   // A name of this run's own (mkstemps): two runs at once must not share one.
@@ -124,6 +182,14 @@ void print_table(const bench::MedianReporter& r) {
     for (int k = 0; k < 3; ++k) ms[k] = 1e3 * r.median_s("frame_" + name + "/" + std::to_string(k == 0 ? 100 : k == 1 ? 1000 : 10000));
     std::printf("%-10s %10.2f %10.2f %10.2f %16.2f\n", name.c_str(), ms[0], ms[1], ms[2], ms[2] / kFrameBudget_ms);
   }
+  std::printf("\nnetwork view, frame time, %dx%d, OSMesa llvmpipe (median ms; budget %.0f ms)\n", kWidth_px, kHeight_px, kFrameBudget_ms);
+  std::printf("%-44s %10s %10s %10s %16s\n", "view", "10³ stns", "10⁴ stns", "10⁵ stns", "10⁵ / budget");
+  for (const char* name : {"whole network", "zoomed ×16", "view moving every frame (no reuse)"}) {
+    const std::string key = std::string(name) == "whole network" ? "network_whole" : std::string(name) == "zoomed ×16" ? "network_zoomed" : "network_moving";
+    double ms[3];
+    for (int k = 0; k < 3; ++k) ms[k] = 1e3 * r.median_s(key + "/" + std::to_string(k == 0 ? 1000 : k == 1 ? 10000 : 100000));
+    std::printf("%-44s %10.2f %10.2f %10.2f %16.2f\n", name, ms[0], ms[1], ms[2], ms[2] / kFrameBudget_ms);
+  }
   std::printf("whole snapshot of the bundled example (context, fonts, fit, 3 frames, PNG): %.0f ms\n",
               1e3 * r.median_s("snapshot_total"));
 }
@@ -134,6 +200,11 @@ int main(int argc, char** argv) {
   for (const auto& [name, v] : kViews) {
     benchmark::RegisterBenchmark(("frame_" + name).c_str(), frame, v)
         ->Arg(100)->Arg(1000)->Arg(10000)->Repetitions(5)->ReportAggregatesOnly(true)->Unit(benchmark::kMillisecond);
+  }
+  for (const auto& [name, kind] : {std::pair{"network_whole", NetworkFrame::whole}, std::pair{"network_zoomed", NetworkFrame::zoomed},
+                                   std::pair{"network_moving", NetworkFrame::moving}}) {
+    benchmark::RegisterBenchmark(name, network_frame, kind)
+        ->Arg(1000)->Arg(10000)->Arg(100000)->Repetitions(5)->ReportAggregatesOnly(true)->Unit(benchmark::kMillisecond);
   }
   benchmark::RegisterBenchmark("snapshot_total", snapshot_total)->Repetitions(5)->ReportAggregatesOnly(true)->Unit(benchmark::kMillisecond);
   return bench::run_and_tabulate(argc, argv, print_table);

@@ -10,6 +10,7 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
 #include <utility>
 
 #include "geoanchor/gui/network_ui.hpp"
@@ -32,7 +33,49 @@ Eigen::Vector2d NetworkGeometry::pixel_of(const Eigen::Vector2d& en_m) const {
 
 std::string NetworkUi::measurement_name(std::size_t index) { return "#" + std::to_string(index + 1); }
 
+namespace {
+// A station the datum holds in some component: drawn as a triangle of its
+// own, never merged into a cell's mark.
+bool held(const NetworkStationRow& s) { return s.constraint.find('C') != std::string::npos; }
+}  // namespace
+
 NetworkUi::NetworkUi(NetworkModel& model) : model_(model) {}
+
+void NetworkUi::set_plan_view(double zoom, const Eigen::Vector2d& center_m) {
+  if (!std::isfinite(zoom) || zoom < 1.0 || !center_m.allFinite()) {
+    throw std::invalid_argument("NetworkUi::set_plan_view: zoom=" + std::to_string(zoom) + ", centre " + std::to_string(center_m.x()) +
+                                ", " + std::to_string(center_m.y()) + " m: expected a finite zoom of at least 1 and a finite centre");
+  }
+  zoom_ = zoom;
+  view_center_m_ = center_m;
+}
+
+void NetworkUi::reset_plan_view() {
+  zoom_ = 1.0;
+  view_center_m_.reset();
+}
+
+const PlanLod& NetworkUi::level_of_detail() {
+  const NetworkGeometry& g = plan_;
+  LodCache& c = lod_cache_;
+  if (c.valid && c.generation == shown_generation_ && c.px_per_m == g.px_per_m && c.center_m == g.center_m && c.left == g.left &&
+      c.top == g.top && c.right == g.right && c.bottom == g.bottom) {
+    return c.lod;
+  }
+  std::vector<Eigen::Vector2d> px(stations_.size());
+  std::vector<bool> own(stations_.size());
+  for (std::size_t s = 0; s < stations_.size(); ++s) {
+    px[s] = g.pixel_of(stations_[s].plan_m);
+    own[s] = held(stations_[s]);
+  }
+  c.lod = plan_level_of_detail(px, own, lines_, LodArea{g.left, g.top, g.right, g.bottom});
+  c.valid = true;
+  c.generation = shown_generation_;
+  c.px_per_m = g.px_per_m;
+  c.center_m = g.center_m;
+  c.left = g.left, c.top = g.top, c.right = g.right, c.bottom = g.bottom;
+  return c.lod;
+}
 
 namespace {
 
@@ -152,29 +195,51 @@ void NetworkUi::draw_plan() {
   g = NetworkGeometry{};
   g.schematic = model_.schematic_plan();
   g.confidence = model_.options().confidence;
-  const bool dense = stations_.size() > kDenseNetworkStations;
   const double w_critical = model_.w_critical();
   const float r_px = std::max(3.0f, std::round(font * 0.25f));
 
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  double max_a_m = 0.0;
   for (const auto& s : stations_) {
     lo = lo.cwiseMin(s.plan_m);
     hi = hi.cwiseMax(s.plan_m);
-    if (s.used) max_a_m = std::max(max_a_m, s.ellipse_confidence.semi_major_m);
   }
   if (stations_.empty()) lo = hi = Eigen::Vector2d::Zero();
-  g.center_m = 0.5 * (lo + hi);
+  g.zoom = zoom_;
+  g.center_m = view_center_m_ ? *view_center_m_ : Eigen::Vector2d(0.5 * (lo + hi));
   const Eigen::Vector2d span = (hi - lo).cwiseMax(g.schematic ? 0.5 : 1.0);
+  // The plotting area and scale for a footer of `footer_px`.
+  const auto settle = [&](float footer_px) {
+    g.left = c0.x;
+    g.top = c0.y;
+    g.right = c0.x + std::max(avail.x, 4 * kPlanMarginPx);
+    g.bottom = c0.y + std::max(avail.y - footer_px, 4 * kPlanMarginPx);
+    g.px_per_m = zoom_ * std::min((g.right - g.left - 2 * kPlanMarginPx) / span.x(), (g.bottom - g.top - 2 * kPlanMarginPx) / span.y());
+  };
+  float footer_h = std::round(font * 3.0f);
+  settle(footer_h);
+  // The stations in view (at the first footer's area: what is dense does
+  // not change with the caption's height).
+  std::vector<std::size_t> visible;
+  for (std::size_t s = 0; s < stations_.size(); ++s) {
+    const Eigen::Vector2d p = g.pixel_of(stations_[s].plan_m);
+    if (p.x() >= g.left && p.x() <= g.right && p.y() >= g.top && p.y() <= g.bottom) visible.push_back(s);
+  }
+  g.stations_in_view = visible.size();
+  const bool dense = visible.size() > kDenseNetworkStations;
+  g.aggregated = dense;
+  double max_a_m = 0.0;
+  for (std::size_t s : visible) {
+    if (stations_[s].used) max_a_m = std::max(max_a_m, stations_[s].ellipse_confidence.semi_major_m);
+  }
   const bool ellipses = !dense && !g.schematic && max_a_m > 0.0;
   // The median distance from a station to its nearest neighbour: ellipses
   // whose semi-major axis is drawn longer than it reach their neighbours.
   double spacing_m = std::numeric_limits<double>::infinity();
   if (ellipses) {
     std::vector<double> nearest;
-    for (std::size_t a = 0; a < stations_.size(); ++a) {
+    for (std::size_t a : visible) {
       double d = std::numeric_limits<double>::infinity();
-      for (std::size_t b = 0; b < stations_.size(); ++b) {
+      for (std::size_t b : visible) {
         const double ab = (stations_[a].plan_m - stations_[b].plan_m).norm();
         if (b != a && ab > 0.0) d = std::min(d, ab);
       }
@@ -213,17 +278,12 @@ void NetworkUi::draw_plan() {
   // The footer (scale bar and caption) wraps at the panel's width; its
   // height follows from the caption: settle both in up to three passes.
   const float wrap_w = std::max(avail.x - font * 0.5f, font * 4.0f);
-  float footer_h = std::round(font * 3.0f);
   std::string caption;
   std::vector<PlanLabel> labels;
   std::vector<std::string> unlabelled;
   double k = 1.0;  // pixels per metre of ellipse
   for (int pass = 0; pass < 3; ++pass) {
-    g.left = c0.x;
-    g.top = c0.y;
-    g.right = c0.x + std::max(avail.x, 4 * kPlanMarginPx);
-    g.bottom = c0.y + std::max(avail.y - footer_h, 4 * kPlanMarginPx);
-    g.px_per_m = std::min((g.right - g.left - 2 * kPlanMarginPx) / span.x(), (g.bottom - g.top - 2 * kPlanMarginPx) / span.y());
+    settle(footer_h);
     const double short_side_px = std::min(g.right - g.left, g.bottom - g.top);
     // The largest ellipse at most a twentieth of the plan's short side and
     // the stations' median spacing, the factor rounded down to 1, 2
@@ -241,11 +301,25 @@ void NetworkUi::draw_plan() {
     const Box area{g.left + 2.0f, g.top + 2.0f, g.right - 2.0f, g.bottom - 2.0f};
     Obstacles obstacles(area, font * 2.0f);
     obstacles.add(Box{g.left, g.top, g.left + font * 2.0f, g.top + font * 4.2f});  // the north arrow
-    for (const auto& s : stations_) {
-      const Eigen::Vector2d p = g.pixel_of(s.plan_m);
+    const auto mark = [&](const Eigen::Vector2d& p) {
       const float e = r_px + 2.0f;
       obstacles.add(Box{static_cast<float>(p.x()) - e, static_cast<float>(p.y()) - e, static_cast<float>(p.x()) + e,
                         static_cast<float>(p.y()) + e});
+    };
+    if (dense) {
+      // Labels go over the cells' marks (on a background of their own),
+      // never over a held station or a flagged measurement's stations.
+      // (The held stations in view are the level of detail's own marks;
+      // the level of detail itself is taken once, at the settled area.)
+      for (std::size_t s : visible) {
+        if (held(stations_[s])) mark(g.pixel_of(stations_[s].plan_m));
+      }
+      for (const auto& [w, i] : flagged_lines) {
+        mark(g.pixel_of(stations_[lines_[i].from].plan_m));
+        mark(g.pixel_of(stations_[lines_[i].to].plan_m));
+      }
+    } else {
+      for (std::size_t s : visible) mark(g.pixel_of(stations_[s].plan_m));
     }
     const auto place = [&](const std::string& text, std::optional<std::size_t> measurement, const Eigen::Vector2d& p, ImFont* f,
                            float size) {
@@ -260,18 +334,26 @@ void NetworkUi::draw_plan() {
       }
       return false;
     };
+    // A flagged measurement out of view is not labelled (nor counted as
+    // finding no room).
+    const auto in_area = [&](const Eigen::Vector2d& p) { return p.x() >= g.left && p.x() <= g.right && p.y() >= g.top && p.y() <= g.bottom; };
+    std::size_t flagged_in_view = 0;
     for (const auto& [w, i] : flagged_lines) {
       const NetworkLine& l = lines_[i];
       const Eigen::Vector2d mid = 0.5 * (g.pixel_of(stations_[l.from].plan_m) + g.pixel_of(stations_[l.to].plan_m));
+      if (!in_area(mid)) continue;
+      ++flagged_in_view;
       place(measurement_label(l.measurement), l.measurement, mid, bold, font);
     }
     for (std::size_t index : flagged_at_stations) {
       const auto& m = net.measurements[index];
-      if (!m.stations.empty()) place(measurement_label(index), index, g.pixel_of(stations_[m.stations[0]].plan_m), bold, font);
+      if (m.stations.empty() || !in_area(g.pixel_of(stations_[m.stations[0]].plan_m))) continue;
+      ++flagged_in_view;
+      place(measurement_label(index), index, g.pixel_of(stations_[m.stations[0]].plan_m), bold, font);
     }
     if (!dense) {
-      for (const auto& s : stations_) {
-        if (!place(s.id, std::nullopt, g.pixel_of(s.plan_m), regular, id_size)) unlabelled.push_back(s.id);
+      for (std::size_t s : visible) {
+        if (!place(stations_[s].id, std::nullopt, g.pixel_of(stations_[s].plan_m), regular, id_size)) unlabelled.push_back(stations_[s].id);
       }
     }
 
@@ -285,14 +367,19 @@ void NetworkUi::draw_plan() {
                    " % error ellipse (a-priori weights, σ0 = 1) × " + detail::fmt("%g", g.ellipse_exaggeration) + " (10 px = " +
                    mm_text(10.0 / k * 1e3) + " mm)";
       } else if (dense) {
-        caption += "\nmore than " + std::to_string(kDenseNetworkStations) +
-                   " stations: no ellipses and no ids (hover over a station, or see the tables)";
+        caption += "\n" + std::to_string(visible.size()) + " stations in view (more than " + std::to_string(kDenseNetworkStations) +
+                   "): lines between the same two " + detail::fmt("%g", kLodCell_px) +
+                   " px cells drawn as one, in their most telling class; outliers and failing measurements each drawn on their own, ringed, and labelled where there is room; "
+                   "no ellipses and no ids (zoom in, hover over a station, or see the tables)";
+      }
+      if (zoom_ != 1.0 || view_center_m_) {
+        caption += "\nzoomed × " + detail::fmt("%.3g", zoom_) + " (mouse wheel; right-drag pans, right double-click shows the whole network)";
       }
     }
-    const std::size_t flagged_count = flagged_lines.size() + flagged_at_stations.size();
+    const std::size_t flagged_count = flagged_in_view;
     if (g.labelled_measurements.size() < flagged_count) {
       caption += "\n" + std::to_string(flagged_count - g.labelled_measurements.size()) + " of " + std::to_string(flagged_count) +
-                 " outliers and failing measurements found no room for their label: see the measurements table";
+                 " outliers and failing measurements in view found no room for their label: see the measurements table";
     }
     if (!unlabelled.empty()) caption += "\n" + detail::unlabelled_caption(unlabelled, stations_.size(), "station", regular, font, wrap_w);
     const float needed = std::ceil(font * 1.5f + detail::text_size(caption, regular, font, wrap_w).y + font * 0.2f);
@@ -302,45 +389,99 @@ void NetworkUi::draw_plan() {
   g.drawn = true;
   g.labels = labels;
   g.unlabelled = unlabelled;
+  // Each station's pixel at the settled geometry, once (a 10⁵-station
+  // network's lines would otherwise project their ends a million times).
+  std::vector<Eigen::Vector2d> px(stations_.size());
+  for (std::size_t s = 0; s < stations_.size(); ++s) px[s] = g.pixel_of(stations_[s].plan_m);
 
   dl->AddRectFilled(ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), col(palette::kBackground));
   dl->AddRect(ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), col(palette::kGrid));
   dl->PushClipRect(ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), true);
   // Ellipses under everything.
   if (ellipses) {
-    constexpr int kSegments = 32;
-    for (const auto& s : stations_) {
+    // Segments of about 3 px along the drawn ellipse (8 to 32): a small
+    // ellipse's 32 segments cost the rasterizer without showing more. One
+    // pixel wide, which ImGui draws anti-aliased from its line texture (two
+    // triangles a segment, against six for a fractional width).
+    constexpr int kMinSegments = 8, kMaxSegments = 32;
+    constexpr double kSegment_px = 3.0;
+    for (std::size_t si : visible) {
+      const NetworkStationRow& s = stations_[si];
       const auto& e = s.ellipse_confidence;
       if (!s.used || !(e.semi_major_m > 0.0)) continue;
-      const Eigen::Vector2d p = g.pixel_of(s.plan_m);
+      const Eigen::Vector2d& p = px[si];
       const Eigen::Vector2d major(std::sin(e.azimuth_rad), std::cos(e.azimuth_rad)), minor(major.y(), -major.x());  // E, N
-      ImVec2 pts[kSegments];
-      for (int i = 0; i < kSegments; ++i) {
-        const double t = 2.0 * std::numbers::pi * i / kSegments;
+      const double circumference_px = 2.0 * std::numbers::pi * k * e.semi_major_m;
+      const int segments = static_cast<int>(std::clamp(std::ceil(circumference_px / kSegment_px), double{kMinSegments}, double{kMaxSegments}));
+      ImVec2 pts[kMaxSegments];
+      for (int i = 0; i < segments; ++i) {
+        const double t = 2.0 * std::numbers::pi * i / segments;
         const Eigen::Vector2d en = e.semi_major_m * std::cos(t) * major + e.semi_minor_m * std::sin(t) * minor;
         pts[i] = iv(p + k * Eigen::Vector2d(en.x(), -en.y()));
       }
-      dl->AddPolyline(pts, kSegments, col(palette::kEllipse, 170), ImDrawFlags_Closed, 1.2f);
+      dl->AddPolyline(pts, segments, col(palette::kEllipse, 170), ImDrawFlags_Closed, 1.0f);
       ++g.ellipses_drawn;
     }
   }
-  // Lines, the least telling first.
+  // Lines, the least telling first: one by one, or (dense) the bundles
+  // under the flagged lines, which are always drawn one by one.
+  const PlanLod* lod = dense ? &level_of_detail() : nullptr;
+  const auto line_in_view = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return std::max(a.x(), b.x()) >= g.left && std::min(a.x(), b.x()) <= g.right && std::max(a.y(), b.y()) >= g.top &&
+           std::min(a.y(), b.y()) <= g.bottom;
+  };
+  // The lines in view, by class, in one sweep.
+  std::array<std::vector<std::size_t>, kMeasurementClasses> by_class;
+  if (lod) {
+    for (std::size_t i : lod->lines) by_class[static_cast<std::size_t>(lines_[i].shown_as)].push_back(i);
+  } else {
+    for (std::size_t i = 0; i < lines_.size(); ++i) {
+      if (line_in_view(px[lines_[i].from], px[lines_[i].to])) by_class[static_cast<std::size_t>(lines_[i].shown_as)].push_back(i);
+    }
+  }
   for (const MeasurementClass c : kDrawOrder) {
     const LineStyle st = style_of(c);
-    for (const auto& l : lines_) {
-      if (l.shown_as != c) continue;
-      line(dl, g.pixel_of(stations_[l.from].plan_m), g.pixel_of(stations_[l.to].plan_m), st);
-      ++g.lines_by_class[static_cast<std::size_t>(c)];
+    if (lod) {
+      // Bundles a whole number of pixels wide: ImGui draws those from its
+      // line texture, two triangles each (a 10⁵-station plan has some 10⁵).
+      LineStyle bundle_style = st;
+      bundle_style.thickness = std::max(1.0f, std::floor(st.thickness));
+      for (const auto& b : lod->bundles) {
+        if (b.shown_as == c) line(dl, b.a_px, b.b_px, bundle_style);
+      }
     }
+    for (std::size_t i : by_class[static_cast<std::size_t>(c)]) line(dl, px[lines_[i].from], px[lines_[i].to], st);
+    g.lines_by_class[static_cast<std::size_t>(c)] = by_class[static_cast<std::size_t>(c)].size();
+  }
+  if (lod) {
+    g.bundles_by_class = lod->bundles_by_class;
+    g.lines_bundled = lod->lines_in_bundles;
+    g.lines_within_cells = lod->lines_within_cells;
+    // A cell's stations: a small square, ink if one of them is adjusted,
+    // faint enough that the lines' classes read through. Axis-aligned and
+    // pixel-sized: two triangles each, without the anti-aliased fringe
+    // AddRectFilled would add (ten).
+    const float h = std::max(1.0f, std::round(kLodCell_px * 0.2f));
+    dl->PrimReserve(static_cast<int>(6 * lod->marks.size()), static_cast<int>(4 * lod->marks.size()));
+    for (const auto& m : lod->marks) {
+      const ImVec2 p = iv(m.px);
+      dl->PrimRect(ImVec2(p.x - h, p.y - h), ImVec2(p.x + h, p.y + h), col(m.any_used ? palette::kInk : palette::kLeftOut, 150));
+    }
+    g.marks_drawn = lod->marks.size();
   }
   // Stations: a triangle where the datum holds a component, else a circle;
   // hollow grey when not adjusted; a vermillion square round a station
   // whose point or height measurement is flagged.
-  for (const auto& s : stations_) {
-    const Eigen::Vector2d p = g.pixel_of(s.plan_m);
-    const bool held = s.constraint.find('C') != std::string::npos;
+  std::vector<std::size_t> own_marks;
+  if (lod) own_marks = lod->stations;
+  else own_marks = visible;
+  g.stations_drawn = own_marks.size();
+  for (std::size_t si : own_marks) {
+    const NetworkStationRow& s = stations_[si];
+    const Eigen::Vector2d& p = px[si];
+    const bool is_held = held(s);
     const ImU32 ink = col(s.used ? palette::kInk : palette::kLeftOut);
-    if (held) {
+    if (is_held) {
       const float h = r_px * 1.5f;
       const ImVec2 a(static_cast<float>(p.x()), static_cast<float>(p.y()) - h), b(static_cast<float>(p.x()) - h * 0.87f, static_cast<float>(p.y()) + h * 0.5f),
           c(static_cast<float>(p.x()) + h * 0.87f, static_cast<float>(p.y()) + h * 0.5f);
@@ -351,9 +492,18 @@ void NetworkUi::draw_plan() {
       else dl->AddCircle(iv(p), r_px, ink, 12, 1.5f);
     }
   }
+  // Dense: a baseline is a few pixels long, too short to show its class;
+  // each flagged one also gets a vermillion ring at its middle, on top.
+  if (lod) {
+    const float ring = r_px + 3.0f;
+    for (std::size_t i : lod->lines) {
+      dl->AddCircle(iv(0.5 * (px[lines_[i].from] + px[lines_[i].to])), ring, col(palette::kOutlier), 12, 2.0f);
+    }
+    g.rings_drawn = lod->lines.size();
+  }
   for (std::size_t index : flagged_at_stations) {
     for (std::size_t st : net.measurements[index].stations) {
-      const Eigen::Vector2d p = g.pixel_of(stations_[st].plan_m);
+      const Eigen::Vector2d& p = px[st];
       const float e = r_px + 3.0f;
       dl->AddRect(ImVec2(static_cast<float>(p.x()) - e, static_cast<float>(p.y()) - e), ImVec2(static_cast<float>(p.x()) + e, static_cast<float>(p.y()) + e),
                   col(palette::kOutlier), 0, 0, 2.5f);
@@ -368,6 +518,7 @@ void NetworkUi::draw_plan() {
       if (d.norm() > r_px + 2.0) dl->AddLine(iv(l.mark_px + (r_px + 1.0) * d.normalized()), iv(nearest), col(c, 160), 1.0f);
     }
     if (l.measurement) {
+      if (dense) dl->AddRectFilled(ImVec2(l.x0, l.y0), ImVec2(l.x1, l.y1), col(palette::kBackground, 230));
       detail::label(audit_, dl, ImVec2(l.x0 + 1.0f, l.y0), col(c), measurement_label(*l.measurement), "network: measurement label",
                     ImVec2(g.left, g.top), ImVec2(g.right, g.bottom), bold, font);
     } else {
@@ -401,13 +552,36 @@ void NetworkUi::draw_plan() {
   ImGui::InvisibleButton("network plan", ImVec2(g.right - g.left, g.bottom - g.top));
   const bool hovered = ImGui::IsItemHovered(), clicked = ImGui::IsItemClicked();
   if (!hovered && !clicked) return;
-  const ImVec2 mouse = ImGui::GetIO().MousePos;
+  const ImGuiIO& io = ImGui::GetIO();
+  const ImVec2 mouse = io.MousePos;
   const Eigen::Vector2d m(mouse.x, mouse.y);
+  // The view: the wheel zooms about the pointer (the point under it stays
+  // there), a right-drag pans, a right double-click shows the whole network.
+  if (hovered && !g.schematic) {
+    constexpr double kZoomStep = 1.25, kMaxZoom = 1e5;
+    const Eigen::Vector2d c_px(0.5 * (g.left + g.right), 0.5 * (g.top + g.bottom));
+    const auto plan_at = [&](const Eigen::Vector2d& at_px, double px_per_m) {
+      return Eigen::Vector2d(g.center_m.x() + (at_px.x() - c_px.x()) / px_per_m, g.center_m.y() - (at_px.y() - c_px.y()) / px_per_m);
+    };
+    if (ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Right)) {
+      reset_plan_view();
+    } else if (io.MouseWheel != 0.0f) {
+      const double zoom = std::clamp(zoom_ * std::pow(kZoomStep, static_cast<double>(io.MouseWheel)), 1.0, kMaxZoom);
+      const Eigen::Vector2d at = plan_at(m, g.px_per_m);
+      const double px_per_m = g.px_per_m / zoom_ * zoom;
+      // The centre that keeps `at` under the pointer at the new scale.
+      view_center_m_ = at - Eigen::Vector2d((m.x() - c_px.x()) / px_per_m, -(m.y() - c_px.y()) / px_per_m);
+      zoom_ = zoom;
+    } else if (ImGui::IsMouseDragging(ImGuiMouseButton_Right, 0.0f)) {
+      const ImVec2 d = io.MouseDelta;
+      view_center_m_ = g.center_m - Eigen::Vector2d(d.x / g.px_per_m, -d.y / g.px_per_m);
+    }
+  }
   const NetworkStationRow* best = nullptr;
   double best_d = 2.5 * r_px;
-  for (const auto& s : stations_) {
-    const double d = (g.pixel_of(s.plan_m) - m).norm();
-    if (d < best_d) best_d = d, best = &s;
+  for (std::size_t s = 0; s < stations_.size(); ++s) {
+    const double d = (px[s] - m).norm();
+    if (d < best_d) best_d = d, best = &stations_[s];
   }
   if (best) {
     g.hovered = best->id;
@@ -440,7 +614,7 @@ void NetworkUi::draw_plan() {
   const NetworkLine* near = nullptr;
   double near_d = std::max(4.0, 0.4 * font);
   for (const auto& l : lines_) {
-    const double d = segment_distance(m, g.pixel_of(stations_[l.from].plan_m), g.pixel_of(stations_[l.to].plan_m));
+    const double d = segment_distance(m, px[l.from], px[l.to]);
     if (d < near_d) near_d = d, near = &l;
   }
   if (!near || !hovered) return;

@@ -83,6 +83,10 @@ void OffscreenRenderer::render_frame(WorkbenchUi& ui, View view) {
   frame([&](float w, float h) { ui.draw(view, w, h); });
 }
 
+void OffscreenRenderer::render_frame(NetworkUi& ui) {
+  frame([&](float w, float h) { ui.draw(w, h); });
+}
+
 RgbImage OffscreenRenderer::render(const DrawFrame& draw, std::optional<std::array<float, 2>> mouse_px) {
   ImGui::SetCurrentContext(context_->imgui);
   ImGui::GetIO().MousePos = mouse_px ? ImVec2((*mouse_px)[0], (*mouse_px)[1]) : ImVec2(-FLT_MAX, -FLT_MAX);
@@ -108,6 +112,16 @@ void OffscreenRenderer::click(const DrawFrame& draw, float x, float y) {
   io.MouseDown[0] = true;
   frame(draw);
   io.MouseDown[0] = false;
+  frame(draw);
+  io.MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
+}
+
+void OffscreenRenderer::wheel(const DrawFrame& draw, float x, float y, float steps) {
+  ImGui::SetCurrentContext(context_->imgui);
+  ImGuiIO& io = ImGui::GetIO();
+  io.MousePos = ImVec2(x, y);
+  frame(draw);  // the mouse arrives: hover is known
+  io.MouseWheel = steps;  // ImGui 1.86 (Debian 12) reads it in the next frame and clears it
   frame(draw);
   io.MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
 }

@@ -26,6 +26,7 @@
 #include "geoanchor/gui/offscreen.hpp"
 #include "geoanchor/gui/palette.hpp"
 #include "geoanchor/workflow/adjust.hpp"
+#include "geoanchor/workflow/network_generator.hpp"
 
 namespace geoanchor::gui {
 namespace {
@@ -248,6 +249,101 @@ TEST(NetworkView, TheMeasurementTablesCheckBoxLeavesAMeasurementOut) {
   const auto of_row = std::count_if(lines.begin(), lines.end(), [&](const NetworkLine& l) { return l.measurement == row; });
   EXPECT_GT(of_row, 0);
   EXPECT_EQ(ui.plan().lines_by_class[static_cast<std::size_t>(MeasurementClass::left_out)], static_cast<std::size_t>(of_row));
+}
+
+// Issue 17 point 6: a network too dense to draw station by station. The
+// generator plants blunders far beyond their MDB (10 cm on baselines of a
+// few millimetres); data snooping finds them (solver tests), and the view
+// must show each one on its own, labelled, however dense the rest.
+TEST(NetworkView, ADenseNetworkIsDrawnByCellsWithEveryOutlierOnItsOwnAndZoomingInShowsEachStation) {
+  constexpr std::size_t kStations = 3000;  // twice kDenseNetworkStations
+  constexpr double kPointerTol_px = 0.01;  // double arithmetic against float pixels
+  constexpr double kZoomTol = 1e-12;
+  constexpr double kCentreTol_m = 1e-6;     // on a plan of 100 km
+  workflow::NetworkGeneratorOptions o;
+  o.stations = kStations;
+  o.side_km = 100.0;
+  o.seed = 7;
+  const workflow::GeneratedNetwork generated = workflow::generate_network(o);
+  ASSERT_FALSE(generated.blunders.empty());
+  NetworkModel model(generated.network, solver::AdjustOptions{});
+  model.wait();
+  ASSERT_TRUE(model.result()) << model.error();
+  NetworkUi ui(model);
+  OffscreenRenderer renderer(1600, 1000);
+  const RgbImage image = renderer.render(ui);
+  const NetworkGeometry& g = ui.plan();
+  ASSERT_TRUE(g.drawn);
+  EXPECT_TRUE(g.aggregated);
+  EXPECT_EQ(g.stations_in_view, kStations);
+  EXPECT_EQ(g.ellipses_drawn, 0u);
+  EXPECT_GT(g.marks_drawn, 0u);
+  EXPECT_EQ(g.stations_drawn, o.held);  // the held stations' triangles
+  EXPECT_FALSE(std::any_of(ui.drawn_text().begin(), ui.drawn_text().end(), [](const DrawnText& t) { return t.where == "network: id"; }));
+  // Every line is drawn, bundled or inside a cell's mark.
+  std::size_t one_by_one = 0;
+  for (std::size_t n : g.lines_by_class) one_by_one += n;
+  EXPECT_EQ(one_by_one + g.lines_bundled + g.lines_within_cells, model.lines().size());
+  // Each planted blunder: an outlier line of its own, labelled, vermillion along its middle.
+  const auto rows = model.stations();
+  const auto measurements = model.measurement_rows();
+  for (const auto& b : generated.blunders) {
+    EXPECT_EQ(measurements.at(b.measurement).shown_as, MeasurementClass::outlier) << NetworkUi::measurement_name(b.measurement);
+    EXPECT_NE(std::find(g.labelled_measurements.begin(), g.labelled_measurements.end(), b.measurement), g.labelled_measurements.end())
+        << NetworkUi::measurement_name(b.measurement);
+  }
+  std::size_t outliers = 0;
+  for (const auto& m : measurements) outliers += m.shown_as == MeasurementClass::outlier ? 1u : 0u;
+  EXPECT_EQ(g.lines_by_class[static_cast<std::size_t>(MeasurementClass::outlier)], outliers);
+  EXPECT_EQ(g.rings_drawn, outliers);  // a baseline is a few pixels long here: each outlier ringed
+  const auto& first = generated.network.measurements[generated.blunders.front().measurement];
+  const Eigen::Vector2d a = g.pixel_of(rows[first.stations[0]].plan_m), b = g.pixel_of(rows[first.stations[1]].plan_m);
+  const Eigen::Vector2d mid = 0.5 * (a + b);
+  EXPECT_GT(count_near(image, static_cast<int>(std::lround(mid.x())), static_cast<int>(std::lround(mid.y())), 3, palette::kOutlier), 0);
+
+  // Zoom in about the blunder: the point under the pointer stays there,
+  // and once no more than kDenseNetworkStations are in view each station
+  // and line is drawn again, with the ids where there is room.
+  const Eigen::Vector2d mid_m = 0.5 * (rows[first.stations[0]].plan_m + rows[first.stations[1]].plan_m);
+  const auto draw = [&](float w, float h) { ui.draw(w, h); };
+  // ImGui floors the pointer to whole pixels.
+  const float mx = std::floor(static_cast<float>(mid.x())), my = std::floor(static_cast<float>(mid.y()));
+  renderer.wheel(draw, mx, my, 8.0f);  // × 1.25⁸ ≈ 6
+  // The frame that took the wheel, drawn before the zoom: the documented
+  // rule gives the plan point under the pointer and the centre that keeps
+  // it there at 1.25⁸ × the scale.
+  const NetworkGeometry before = ui.plan();
+  const double zoom = std::pow(1.25, 8.0);
+  const Eigen::Vector2d c_px(0.5 * (before.left + before.right), 0.5 * (before.top + before.bottom));
+  const Eigen::Vector2d under = before.center_m + Eigen::Vector2d((mx - c_px.x()) / before.px_per_m, -(my - c_px.y()) / before.px_per_m);
+  const double zoomed = before.px_per_m * zoom;
+  const Eigen::Vector2d centre = under - Eigen::Vector2d((mx - c_px.x()) / zoomed, -(my - c_px.y()) / zoomed);
+  renderer.render(ui);
+  const NetworkGeometry& z = ui.plan();
+  EXPECT_NEAR(z.zoom, zoom, kZoomTol);
+  EXPECT_LE((z.center_m - centre).norm(), kCentreTol_m);
+  EXPECT_FALSE(z.aggregated);
+  EXPECT_LT(z.stations_in_view, kDenseNetworkStations);
+  EXPECT_EQ(z.stations_drawn, z.stations_in_view);
+  std::size_t ids = 0;
+  for (const auto& t : ui.drawn_text()) ids += t.where == "network: id" ? 1u : 0u;
+  EXPECT_EQ(ids + z.unlabelled.size(), z.stations_in_view);
+  EXPECT_GT(ids, 0u);
+  EXPECT_NE(std::find(z.labelled_measurements.begin(), z.labelled_measurements.end(), generated.blunders.front().measurement),
+            z.labelled_measurements.end());
+  EXPECT_TRUE(clipped(ui.clipped_text()).empty()) << clipped(ui.clipped_text());
+
+  // A view set by hand, and back to the whole network.
+  ui.set_plan_view(2.0, mid_m);
+  renderer.render(ui);
+  EXPECT_LE((ui.plan().pixel_of(mid_m) - Eigen::Vector2d(0.5 * (ui.plan().left + ui.plan().right), 0.5 * (ui.plan().top + ui.plan().bottom))).norm(),
+            kPointerTol_px);
+  ui.reset_plan_view();
+  renderer.render(ui);
+  EXPECT_EQ(ui.plan().zoom, 1.0);
+  EXPECT_EQ(ui.plan().stations_in_view, kStations);
+  EXPECT_THROW(ui.set_plan_view(0.5, mid_m), std::invalid_argument);
+  EXPECT_THROW(ui.set_plan_view(std::numeric_limits<double>::quiet_NaN(), mid_m), std::invalid_argument);
 }
 
 }  // namespace

@@ -30,27 +30,41 @@
 
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "geoanchor/gui/network_lod.hpp"
 #include "geoanchor/gui/network_model.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
 
 namespace geoanchor::gui {
 
-// Above this many stations the plan is dense: no ellipses, and only the
-// outliers and failing measurements are labelled.
+// Above this many stations in view the plan is dense (issue 17 point 6):
+// no ellipses, no station ids, only the outliers and failing measurements
+// labelled, and the level of detail of network_lod.hpp: the flagged lines
+// one by one, every other line bundled with those between the same two
+// cells of kLodCell_px, the free stations as one mark per cell, the held
+// stations as their own triangles. Zooming in until no more than this many
+// stations are in view shows each station and line again.
 inline constexpr std::size_t kDenseNetworkStations = 1500;
 
 // Where the last frame drew the network's plan (pixels from the top-left):
-// pixel = area centre + px_per_m · (e − ē, −(n − n̄)), (ē, n̄) the centre of
-// the stations' bounding box and px_per_m the largest scale at which the box
-// fits with kPlanMarginPx free on every side (spans below 1 m count as 1 m).
+// pixel = area centre + px_per_m · (e − ē, −(n − n̄)). In the whole view
+// (zoom 1, the default) (ē, n̄) is the centre of the stations' bounding box
+// and px_per_m the largest scale at which the box fits with kPlanMarginPx
+// free on every side (spans below 1 m count as 1 m); a zoomed view
+// multiplies that scale by its zoom and centres on its own (ē, n̄)
+// (NetworkUi::set_plan_view). A station is in view when its pixel lies in
+// the plotting area.
 struct NetworkGeometry {
   bool drawn = false;
   float left = 0, top = 0, right = 0, bottom = 0;  // plotting area
   Eigen::Vector2d center_m = Eigen::Vector2d::Zero();
   double px_per_m = 0.0;
+  double zoom = 1.0;
+  std::size_t stations_in_view = 0;
+  bool aggregated = false;  // dense: drawn at the level of detail of network_lod.hpp
   double scale_bar_m = 0.0;
   // Ellipses: a station's ellipse at the adjustment's confidence (from the
   // a-priori weights, σ0 = 1), drawn × ellipse_exaggeration on the plan's
@@ -60,7 +74,13 @@ struct NetworkGeometry {
   double ellipse_exaggeration = 1.0;
   double confidence = 0.95;
   std::size_t ellipses_drawn = 0;
-  std::array<std::size_t, kMeasurementClasses> lines_by_class{};         // lines drawn, by their measurement's class
+  std::array<std::size_t, kMeasurementClasses> lines_by_class{};         // lines drawn one by one, by their measurement's class
+  std::array<std::size_t, kMeasurementClasses> bundles_by_class{};       // aggregated: bundles drawn, by their most telling class
+  std::size_t lines_bundled = 0;      // aggregated: lines the bundles stand for
+  std::size_t lines_within_cells = 0; // aggregated: lines shown by their cell's mark alone
+  std::size_t marks_drawn = 0;        // aggregated: cell marks
+  std::size_t stations_drawn = 0;     // stations drawn with a mark of their own
+  std::size_t rings_drawn = 0;        // aggregated: the flagged lines' rings (one each)
   std::array<std::size_t, kMeasurementClasses> measurements_by_class{};  // every measurement (with a line or not), by class
   std::vector<PlanLabel> labels;            // station ids, and measurement labels ("#12 …")
   std::vector<std::size_t> labelled_measurements;  // indices of the measurements labelled on the plan
@@ -98,6 +118,14 @@ class NetworkUi {
   // CSV lists them).
   static std::string measurement_name(std::size_t index);
 
+  // The plan's view: `zoom` (at least 1) × the scale at which the whole
+  // network fits, centred on `center_m` (plan metres, east and north). In
+  // a window the mouse wheel zooms about the pointer, a right-button drag
+  // pans and a right double-click shows the whole network again. Throws
+  // std::invalid_argument for a zoom below 1 or a value that is not finite.
+  void set_plan_view(double zoom, const Eigen::Vector2d& center_m);
+  void reset_plan_view();
+
  private:
   void refresh();
   void draw_plan();
@@ -111,6 +139,19 @@ class NetworkUi {
   std::vector<NetworkMeasurementRow> measurements_;
   std::vector<NetworkLine> lines_;
   NetworkGeometry plan_;
+  double zoom_ = 1.0;
+  std::optional<Eigen::Vector2d> view_center_m_;  // nullopt: the stations' bounding box centre
+  // The level of detail of the last dense frame, kept while the view and
+  // the shown adjustment stay as they were.
+  struct LodCache {
+    bool valid = false;
+    unsigned generation = 0;
+    double px_per_m = 0.0;
+    Eigen::Vector2d center_m = Eigen::Vector2d::Zero();
+    float left = 0, top = 0, right = 0, bottom = 0;
+    PlanLod lod;
+  } lod_cache_;
+  const PlanLod& level_of_detail();
   NetworkTableGeometry station_table_, measurement_table_;
   TextAudit audit_;
 };

@@ -34,6 +34,7 @@ class OffscreenRenderer {
   RgbImage render(NetworkUi& ui, std::optional<std::array<float, 2>> mouse_px = std::nullopt);
   // One more frame, without reading it back (for benchmarks).
   void render_frame(WorkbenchUi& ui, View view);
+  void render_frame(NetworkUi& ui);
 
   // Any frame: `draw(width, height)` between ImGui's NewFrame and Render.
   using DrawFrame = std::function<void(float width, float height)>;
@@ -42,6 +43,9 @@ class OffscreenRenderer {
   // one frame and up in the next, as a user's click (for the tests of what
   // a click changes).
   void click(const DrawFrame& draw, float x, float y);
+  // The mouse wheel turned by `steps` notches (positive: away from the
+  // user, zooming in) with the pointer at (x, y), in one frame.
+  void wheel(const DrawFrame& draw, float x, float y, float steps);
 
   int width() const { return width_; }
   int height() const { return height_; }
