@@ -775,7 +775,11 @@ void parse_sigmas(const json& doc, const TransformFile& t, const ModelParameters
   const json* sig = member(doc, "sigmas");
   if (sig) {
     if (!sig->is_object()) fail(source, "sigmas", "expected an object of parameter -> sigma");
-    for (const auto& [key, value] : sig->items()) {
+    for (const auto& item : sig->items()) {
+      // Named copies, not a structured binding: the lambdas below capture
+      // them, which clang before 16 refuses for a binding.
+      const std::string key = item.key();
+      const json& value = item.value();
       const auto e = std::find_if(mp.estimated.begin(), mp.estimated.end(), [&](const Estimated& x) { return x.key == key; });
       if (e == mp.estimated.end()) {
         const auto other = std::find_if(mp.estimated.begin(), mp.estimated.end(),
