@@ -23,14 +23,19 @@
 //    StdDev) and its <Directions> the other targets.
 
 #include <cctype>
+#include <unordered_map>
+#include <cstdint>
+#include <bitset>
+#include <array>
 #include <cmath>
-#include <map>
+
 #include <set>
 #include <sstream>
 #include <memory>
 #include <numbers>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -49,32 +54,126 @@ using geodesy::MeasurementKind;
 
 constexpr double kArcsec = std::numbers::pi / 648000.0;
 
+// DynaML's element names as small numbers: the reader compares and looks
+// up tags, not strings (a 10⁵-station file has some 5·10⁶ elements).
+enum class Tag : std::uint8_t {
+  other,  // a name DynaML.xsd puts nowhere geoanchor reads
+  DnaXmlFormat, DnaStation, DnaMeasurement, Name, Constraints, Type, StationCoord, Description, XAxis, YAxis,
+  Height, HemisphereZone, Ignore, ReferenceFrame, Epoch, First, Second, Third, Value, StdDev, InstHeight,
+  TargHeight, Total, Directions, Vscale, Pscale, Lscale, Hscale, GPSBaseline, Clusterpoint, Coords, Source,
+  MeasurementID, ClusterID, X, Y, Z, SigmaXX, SigmaXY, SigmaXZ, SigmaYY, SigmaYZ, SigmaZZ, GPSCovariance,
+  PointCovariance, m11, m12, m13, m21, m22, m23, m31, m32, m33, Target,
+  count
+};
+constexpr std::size_t kTagCount = static_cast<std::size_t>(Tag::count);
+constexpr std::array<std::string_view, kTagCount> kTagNames = {
+    "",
+    "DnaXmlFormat", "DnaStation", "DnaMeasurement", "Name", "Constraints", "Type", "StationCoord", "Description",
+    "XAxis", "YAxis", "Height", "HemisphereZone", "Ignore", "ReferenceFrame", "Epoch", "First", "Second",
+    "Third", "Value", "StdDev", "InstHeight", "TargHeight", "Total", "Directions", "Vscale", "Pscale", "Lscale",
+    "Hscale", "GPSBaseline", "Clusterpoint", "Coords", "Source", "MeasurementID", "ClusterID", "X", "Y", "Z",
+    "SigmaXX", "SigmaXY", "SigmaXZ", "SigmaYY", "SigmaYZ", "SigmaZZ", "GPSCovariance", "PointCovariance", "m11",
+    "m12", "m13", "m21", "m22", "m23", "m31", "m32", "m33", "Target"
+};
+
+Tag tag_of(std::string_view name) {
+  static const std::unordered_map<std::string_view, Tag> kByName = [] {
+    std::unordered_map<std::string_view, Tag> m;
+    for (std::size_t k = 1; k < kTagCount; ++k) m.emplace(kTagNames[k], static_cast<Tag>(k));
+    return m;
+  }();
+  const auto it = kByName.find(name);
+  return it == kByName.end() ? Tag::other : it->second;
+}
+std::string name_of(Tag t) { return std::string(kTagNames[static_cast<std::size_t>(t)]); }
+
+// The text values of one element's children, by tag. clear() keeps every
+// string's capacity: a file of 10⁶ measurements is read without an
+// allocation per value (a map node and two strings each, before).
+class Fields {
+ public:
+  // False when `key` is there already.
+  bool emplace(Tag key, std::string_view value) {
+    const auto k = static_cast<std::size_t>(key);
+    if (present_[k]) return false;
+    present_.set(k);
+    values_[k].assign(value);
+    return true;
+  }
+  const std::string* find(Tag key) const {
+    const auto k = static_cast<std::size_t>(key);
+    return present_[k] ? &values_[k] : nullptr;
+  }
+  bool count(Tag key) const { return find(key) != nullptr; }
+  void clear() { present_.reset(); }
+
+ private:
+  std::array<std::string, kTagCount> values_;
+  std::bitset<kTagCount> present_;
+};
+
+// A list whose elements are kept, cleared, for the next element of the
+// file (their strings' capacity with them).
+template <class T>
+class Reused {
+ public:
+  T& push() {
+    if (size_ == items_.size()) items_.emplace_back();
+    T& t = items_[size_++];
+    t.clear();
+    return t;
+  }
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  T& back() { return items_[size_ - 1]; }
+  const T& back() const { return items_[size_ - 1]; }
+  const T& front() const { return items_[0]; }
+  const T& operator[](std::size_t i) const { return items_[i]; }
+  auto begin() const { return items_.begin(); }
+  auto end() const { return items_.begin() + static_cast<std::ptrdiff_t>(size_); }
+  void clear() { size_ = 0; }
+
+ private:
+  std::vector<T> items_;
+  std::size_t size_ = 0;
+};
+
 // One vector of a GNSS measurement: its values, its own covariance terms
 // and the cross-covariance blocks that follow it.
 struct Item {
   std::string first, second;
-  std::map<std::string, std::string> fields;      // X, Y, Z, SigmaXX, …
-  std::vector<std::map<std::string, std::string>> blocks;  // m11 … m33
+  Fields fields;          // X, Y, Z, SigmaXX, …
+  Reused<Fields> blocks;  // m11 … m33
   std::size_t line = 0;
+  void clear() {
+    first.clear(), second.clear(), fields.clear(), blocks.clear();
+    line = 0;
+  }
 };
 
 struct Direction {
-  std::map<std::string, std::string> fields;  // Ignore, Target, Value, StdDev
+  Fields fields;  // Ignore, Target, Value, StdDev
   std::size_t line = 0;
+  void clear() { fields.clear(), line = 0; }
 };
 
 struct Measurement {
-  std::map<std::string, std::string> fields;  // Type, Ignore, First, Second, Third, Value, StdDev, …
-  std::vector<std::string> firsts, seconds;   // as they come, for X and Y clusters
-  std::vector<Item> items;
-  std::vector<Direction> directions;
+  Fields fields;                          // Type, Ignore, First, Second, Third, Value, StdDev, …
+  Reused<std::string> firsts, seconds;    // as they come, for X and Y clusters
+  Reused<Item> items;
+  Reused<Direction> directions;
   std::size_t line = 0;
+  void clear() {
+    fields.clear(), firsts.clear(), seconds.clear(), items.clear(), directions.clear();
+    line = 0;
+  }
 };
 
 struct Station {
-  std::map<std::string, std::string> fields;  // Name, Constraints, Type, Description
-  std::map<std::string, std::string> coord;   // XAxis, YAxis, Height, HemisphereZone
+  Fields fields;  // Name, Constraints, Type, Description
+  Fields coord;   // XAxis, YAxis, Height, HemisphereZone
   std::size_t line = 0;
+  void clear() { fields.clear(), coord.clear(), line = 0; }
 };
 
 class Reader final : public XmlHandler {
@@ -100,8 +199,9 @@ class Reader final : public XmlHandler {
 
   void start(const std::string& name, const XML_Char** attributes) {
     text_.clear();
-    const std::string parent = path_.empty() ? "" : path_.back();
-    path_.push_back(name);
+    const Tag tag = tag_of(name);
+    const Tag parent = path_.empty() ? Tag::other : path_.back();
+    path_.push_back(tag);
     if (path_.size() == 1) {
       if (name != "DnaXmlFormat") fail(line(), "root element <" + name + ">; expected <DnaXmlFormat>");
       root_seen_ = true;
@@ -132,12 +232,14 @@ class Reader final : public XmlHandler {
       return;
     }
     if (path_.size() == 2) {
-      if (name == "DnaStation") {
-        station_ = Station{};
-        station_->line = line();
-      } else if (name == "DnaMeasurement") {
-        measurement_ = Measurement{};
-        measurement_->line = line();
+      if (tag == Tag::DnaStation) {
+        station_.clear();
+        station_.line = line();
+        in_station_ = true;
+      } else if (tag == Tag::DnaMeasurement) {
+        measurement_.clear();
+        measurement_.line = line();
+        in_measurement_ = true;
       } else {
         fail(line(), "element <" + name + "> in <DnaXmlFormat>; expected <DnaStation> or <DnaMeasurement>");
       }
@@ -145,97 +247,111 @@ class Reader final : public XmlHandler {
     }
     // Every element where DynaML.xsd puts it, without attributes; anything
     // else is refused by name, never skipped.
-    static const std::map<std::string, std::set<std::string>> kChildren = {
-        {"DnaStation", {"Name", "Constraints", "Type", "StationCoord", "Description"}},
-        {"StationCoord", {"Name", "XAxis", "YAxis", "Height", "HemisphereZone"}},
-        {"DnaMeasurement", {"Type", "Ignore", "ReferenceFrame", "Epoch", "First", "Second", "Third", "Value", "StdDev",
-                            "InstHeight", "TargHeight", "Total", "Directions", "Vscale", "Pscale", "Lscale", "Hscale",
-                            "GPSBaseline", "Clusterpoint", "Coords", "Source", "MeasurementID", "ClusterID"}},
-        {"GPSBaseline", {"X", "Y", "Z", "MeasurementID", "SigmaXX", "SigmaXY", "SigmaXZ", "SigmaYY", "SigmaYZ", "SigmaZZ",
-                         "GPSCovariance"}},
-        {"Clusterpoint", {"X", "Y", "Z", "MeasurementID", "SigmaXX", "SigmaXY", "SigmaXZ", "SigmaYY", "SigmaYZ", "SigmaZZ",
-                          "PointCovariance"}},
-        {"GPSCovariance", {"m11", "m12", "m13", "m21", "m22", "m23", "m31", "m32", "m33"}},
-        {"PointCovariance", {"m11", "m12", "m13", "m21", "m22", "m23", "m31", "m32", "m33"}},
-        {"Directions", {"Ignore", "Target", "Value", "StdDev", "MeasurementID"}},
-    };
-    const auto allowed = kChildren.find(parent);
-    if (allowed == kChildren.end()) fail(line(), "element <" + name + "> inside <" + parent + ">, which holds a value, not elements");
-    if (!allowed->second.count(name)) {
+    using Children = std::bitset<kTagCount>;
+    static const std::array<std::optional<Children>, kTagCount> kChildren = [] {
+      std::array<std::optional<Children>, kTagCount> c;
+      const auto set = [&](Tag of, std::initializer_list<Tag> children) {
+        Children b;
+        for (Tag t : children) b.set(static_cast<std::size_t>(t));
+        c[static_cast<std::size_t>(of)] = b;
+      };
+      using enum Tag;
+      set(DnaStation, {Name, Constraints, Type, StationCoord, Description});
+      set(StationCoord, {Name, XAxis, YAxis, Height, HemisphereZone});
+      set(DnaMeasurement, {Type, Ignore, ReferenceFrame, Epoch, First, Second, Third, Value, StdDev, InstHeight, TargHeight, Total,
+                           Directions, Vscale, Pscale, Lscale, Hscale, GPSBaseline, Clusterpoint, Coords, Source, MeasurementID,
+                           ClusterID});
+      set(GPSBaseline, {X, Y, Z, MeasurementID, SigmaXX, SigmaXY, SigmaXZ, SigmaYY, SigmaYZ, SigmaZZ, GPSCovariance});
+      set(Clusterpoint, {X, Y, Z, MeasurementID, SigmaXX, SigmaXY, SigmaXZ, SigmaYY, SigmaYZ, SigmaZZ, PointCovariance});
+      set(GPSCovariance, {m11, m12, m13, m21, m22, m23, m31, m32, m33});
+      set(PointCovariance, {m11, m12, m13, m21, m22, m23, m31, m32, m33});
+      set(Directions, {Ignore, Target, Value, StdDev, MeasurementID});
+      return c;
+    }();
+    const auto& allowed = kChildren[static_cast<std::size_t>(parent)];
+    if (!allowed) fail(line(), "element <" + name + "> inside <" + name_of(parent) + ">, which holds a value, not elements");
+    if (!allowed->test(static_cast<std::size_t>(tag))) {
+      std::set<std::string> names;  // in the order of their bytes
+      for (std::size_t k = 0; k < kTagCount; ++k) {
+        if (allowed->test(k)) names.insert(std::string(kTagNames[k]));
+      }
       std::string list;
-      for (const auto& k : allowed->second) list += (list.empty() ? "" : ", ") + k;
-      fail(line(), "element <" + name + "> in <" + parent + "> is not read by geoanchor; expected one of " + list);
+      for (const auto& k : names) list += (list.empty() ? "" : ", ") + k;
+      fail(line(), "element <" + name + "> in <" + name_of(parent) + "> is not read by geoanchor; expected one of " + list);
     }
     if (*attributes) {
       fail(line(), "<" + name + "> attribute " + std::string(attributes[0]) + "=\"" + attributes[1] + "\" is not read by geoanchor");
     }
-    if (measurement_ && name == "GPSBaseline") {
-      Item item;
+    if (in_measurement_ && tag == Tag::GPSBaseline) {
+      Measurement& m = measurement_;
+      Item& item = m.items.push();
       item.line = line();
-      item.first = measurement_->firsts.empty() ? "" : measurement_->firsts.back();
-      item.second = measurement_->seconds.empty() ? "" : measurement_->seconds.back();
-      measurement_->items.push_back(item);
-    } else if (measurement_ && name == "Clusterpoint") {
-      Item item;
+      if (!m.firsts.empty()) item.first = m.firsts.back();
+      if (!m.seconds.empty()) item.second = m.seconds.back();
+    } else if (in_measurement_ && tag == Tag::Clusterpoint) {
+      Measurement& m = measurement_;
+      Item& item = m.items.push();
       item.line = line();
-      item.first = measurement_->firsts.empty() ? "" : measurement_->firsts.back();
-      measurement_->items.push_back(item);
-    } else if (measurement_ && (name == "GPSCovariance" || name == "PointCovariance")) {
-      if (measurement_->items.empty()) fail(line(), "<" + name + "> outside a baseline or cluster point");
-      measurement_->items.back().blocks.emplace_back();
-    } else if (measurement_ && name == "Directions" && path_.size() == 3) {
-      Direction d;
-      d.line = line();
-      measurement_->directions.push_back(d);
+      if (!m.firsts.empty()) item.first = m.firsts.back();
+    } else if (in_measurement_ && (tag == Tag::GPSCovariance || tag == Tag::PointCovariance)) {
+      if (measurement_.items.empty()) fail(line(), "<" + name + "> outside a baseline or cluster point");
+      measurement_.items.back().blocks.push();
+    } else if (in_measurement_ && tag == Tag::Directions && path_.size() == 3) {
+      measurement_.directions.push().line = line();
     }
   }
 
   void end(const std::string& name) {
-    const std::string value = trim(text_);
-    text_.clear();
+    // The element's text, trimmed, viewed in text_ (cleared on the way out).
+    struct ClearText {
+      std::string& t;
+      ~ClearText() { t.clear(); }
+    } clear_text{text_};
+    const std::string_view value = trim(text_);
     const std::size_t depth = path_.size();
-    const std::string parent = depth >= 2 ? path_[depth - 2] : "";
+    const Tag tag = path_.back();
+    const Tag parent = depth >= 2 ? path_[depth - 2] : Tag::other;
     path_.pop_back();
     if (depth == 2) {
-      if (name == "DnaStation") finish_station();
-      if (name == "DnaMeasurement") finish_measurement();
-      station_.reset();
-      measurement_.reset();
+      if (tag == Tag::DnaStation) finish_station();
+      if (tag == Tag::DnaMeasurement) finish_measurement();
+      in_station_ = in_measurement_ = false;
       return;
     }
     // A value given twice is refused (First and Second repeat in clusters).
-    auto put = [&](std::map<std::string, std::string>& into) {
-      if (!into.emplace(name, value).second) fail(line(), "<" + name + "> given twice in <" + parent + ">");
+    auto put = [&](Fields& into) {
+      if (!into.emplace(tag, value)) fail(line(), "<" + name + "> given twice in <" + name_of(parent) + ">");
     };
-    if (station_) {
-      if (parent == "DnaStation" && name != "StationCoord") put(station_->fields);
-      else if (parent == "StationCoord") put(station_->coord);
+    using enum Tag;
+    if (in_station_) {
+      if (parent == DnaStation && tag != StationCoord) put(station_.fields);
+      else if (parent == StationCoord) put(station_.coord);
       return;
     }
-    if (!measurement_) return;
-    Measurement& m = *measurement_;
-    if (parent == "DnaMeasurement") {
-      if (name == "First") m.firsts.push_back(value);
-      if (name == "Second") m.seconds.push_back(value);
-      if (name != "GPSBaseline" && name != "Clusterpoint" && name != "Directions") {
-        if (name == "First" || name == "Second") {
-          if (!m.fields.count(name)) m.fields[name] = value;
+    if (!in_measurement_) return;
+    Measurement& m = measurement_;
+    if (parent == DnaMeasurement) {
+      if (tag == First) m.firsts.push().assign(value);
+      if (tag == Second) m.seconds.push().assign(value);
+      if (tag != GPSBaseline && tag != Clusterpoint && tag != Directions) {
+        if (tag == First || tag == Second) {
+          m.fields.emplace(tag, value);  // the first one (clusters repeat them)
         } else {
           put(m.fields);
         }
       }
-    } else if (parent == "GPSBaseline" || parent == "Clusterpoint") {
-      if (name != "GPSCovariance" && name != "PointCovariance") put(m.items.back().fields);
-    } else if (parent == "GPSCovariance" || parent == "PointCovariance") {
+    } else if (parent == GPSBaseline || parent == Clusterpoint) {
+      if (tag != GPSCovariance && tag != PointCovariance) put(m.items.back().fields);
+    } else if (parent == GPSCovariance || parent == PointCovariance) {
       put(m.items.back().blocks.back());
-    } else if (parent == "Directions") {
+    } else if (parent == Directions) {
       put(m.directions.back().fields);
     }
   }
 
-  static std::string trim(const std::string& s) {
+  static std::string_view trim(std::string_view s) {
     const auto b = s.find_first_not_of(" \t\r\n");
-    if (b == std::string::npos) return "";
+    if (b == std::string_view::npos) return {};
     return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
   }
 
@@ -250,16 +366,17 @@ class Reader final : public XmlHandler {
     return geodesy::Frame::parse(name + "@" + geodesy::format_decimal_year(*year), where(at) + ": " + what + " reference frame");
   }
 
-  double number(const std::map<std::string, std::string>& f, const std::string& key, std::size_t at, const std::string& what) const {
-    const auto it = f.find(key);
-    if (it == f.end() || it->second.empty()) fail(at, what + ": <" + key + "> missing");
-    const auto v = parse_finite_double(it->second);
-    if (!v) fail(at, what + ": <" + key + "> '" + it->second + "' is not a number");
+  double number(const Fields& f, Tag key, std::size_t at, const std::string& what) const {
+    const std::string* t = f.find(key);
+    if (!t || t->empty()) fail(at, what + ": <" + name_of(key) + "> missing");
+    const auto v = parse_finite_double(*t);
+    if (!v) fail(at, what + ": <" + name_of(key) + "> '" + *t + "' is not a number");
     return *v;
   }
-  std::string text(const std::map<std::string, std::string>& f, const std::string& key) const {
-    const auto it = f.find(key);
-    return it == f.end() ? std::string() : it->second;
+  const std::string& text(const Fields& f, Tag key) const {
+    static const std::string kNone;
+    const std::string* t = f.find(key);
+    return t ? *t : kNone;
   }
   double positive_sigma(double v, std::size_t at, const std::string& what) const {
     if (!(v > 0.0)) fail(at, what + ": standard deviation " + format_shortest(v) + " must be > 0");
@@ -273,34 +390,34 @@ class Reader final : public XmlHandler {
   }
 
   void finish_station() {
-    const Station& s = *station_;
-    const std::string name = text(s.fields, "Name");
+    const Station& s = station_;
+    const std::string name = text(s.fields, Tag::Name);
     const std::string what = "station " + name;
     if (name.empty()) fail(s.line, "a <DnaStation> without a <Name>");
-    std::string code = text(s.fields, "Constraints");
+    std::string code = text(s.fields, Tag::Constraints);
     if (code.empty()) code = "FFF";
     if (code.size() != 3 || code.find_first_not_of("CFcf") != std::string::npos) {
       fail(s.line, what + ": <Constraints> '" + code + "': expected three letters C (constrained) or F (free)");
     }
-    const std::string type = text(s.fields, "Type");
+    const std::string type = text(s.fields, Tag::Type);
     geodesy::StationConstraint c;
     Eigen::Vector3d position;
     bool orthometric = false;
-    double lat = 0, lon = 0, height = number(s.coord, "Height", s.line, what);
+    double lat = 0, lon = 0, height = number(s.coord, Tag::Height, s.line, what);
     if (type == "XYZ") {
-      position = {number(s.coord, "XAxis", s.line, what), number(s.coord, "YAxis", s.line, what), height};
+      position = {number(s.coord, Tag::XAxis, s.line, what), number(s.coord, Tag::YAxis, s.line, what), height};
     } else if (type == "LLH" || type == "LLh") {
-      lat = packed_dms_to_rad(text(s.coord, "XAxis"), where(s.line) + ": " + what + " <XAxis> (latitude)");
-      lon = packed_dms_to_rad(text(s.coord, "YAxis"), where(s.line) + ": " + what + " <YAxis> (longitude)");
+      lat = packed_dms_to_rad(text(s.coord, Tag::XAxis), where(s.line) + ": " + what + " <XAxis> (latitude)");
+      lon = packed_dms_to_rad(text(s.coord, Tag::YAxis), where(s.line) + ": " + what + " <YAxis> (longitude)");
       if (!(std::fabs(lat) <= std::numbers::pi / 2.0)) {
-        fail(s.line, what + ": latitude <XAxis> " + text(s.coord, "XAxis") + " is not within ±90°");
+        fail(s.line, what + ": latitude <XAxis> " + text(s.coord, Tag::XAxis) + " is not within ±90°");
       }
       if (!(std::fabs(lon) <= std::numbers::pi)) {
-        fail(s.line, what + ": longitude <YAxis> " + text(s.coord, "YAxis") + " is not within ±180°");
+        fail(s.line, what + ": longitude <YAxis> " + text(s.coord, Tag::YAxis) + " is not within ±180°");
       }
       orthometric = type == "LLH";
     } else if (type == "UTM") {
-      const std::string zone_text = text(s.coord, "HemisphereZone");
+      const std::string zone_text = text(s.coord, Tag::HemisphereZone);
       std::string zone = zone_text;
       if (!zone.empty() && std::isdigit(static_cast<unsigned char>(zone.back()))) {
         // DynaML writes the zone number alone; its frames (GDA94, GDA2020) are
@@ -315,8 +432,8 @@ class Reader final : public XmlHandler {
       const auto def = geodesy::utm_projection(net_.ellipsoid, geodesy::parse_utm_zone(zone, where(s.line) + ": " + what + " <HemisphereZone>"));
       const geodesy::TransverseMercator tm(def);
       geodesy::ProjectedPosition p;
-      p.easting_m = number(s.coord, "XAxis", s.line, what);
-      p.northing_m = number(s.coord, "YAxis", s.line, what);
+      p.easting_m = number(s.coord, Tag::XAxis, s.line, what);
+      p.northing_m = number(s.coord, Tag::YAxis, s.line, what);
       p.projection = def;
       const auto g = tm.try_inverse(p);
       if (!g) fail(s.line, what + ": easting/northing outside UTM zone " + zone);
@@ -353,18 +470,26 @@ class Reader final : public XmlHandler {
   }
 
   // A GNSS measurement's frame: its own ReferenceFrame/Epoch, else the file's.
+  // The last one read is kept: a file's measurements mostly share theirs.
   geodesy::Frame measurement_frame(const Measurement& m) const {
-    const std::string f = text(m.fields, "ReferenceFrame"), e = text(m.fields, "Epoch");
+    const std::string& f = text(m.fields, Tag::ReferenceFrame);
+    const std::string& e = text(m.fields, Tag::Epoch);
     if (f.empty() && e.empty()) return *root_frame_;
-    return frame_of(f.empty() ? root_frame_->name() : f, e.empty() ? (epoch_text_.empty() ? "01.01.2020" : epoch_text_) : e, m.line,
-                    "measurement");
+    if (last_frame_ && f == last_frame_name_ && e == last_frame_epoch_) return *last_frame_;
+    const geodesy::Frame frame = frame_of(f.empty() ? root_frame_->name() : f,
+                                          e.empty() ? (epoch_text_.empty() ? "01.01.2020" : epoch_text_) : e, m.line, "measurement");
+    last_frame_name_ = f;
+    last_frame_epoch_ = e;
+    last_frame_ = frame;
+    return frame;
   }
 
   // The covariance of n GNSS items: diagonal blocks from Sigma*, cross blocks from the items' blocks.
   Eigen::MatrixXd gnss_covariance(const Measurement& m, const std::string& what) const {
     const std::size_t n = m.items.size();
     Eigen::MatrixXd v = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(3 * n), static_cast<Eigen::Index>(3 * n));
-    const char* sig[3][3] = {{"SigmaXX", "SigmaXY", "SigmaXZ"}, {"SigmaXY", "SigmaYY", "SigmaYZ"}, {"SigmaXZ", "SigmaYZ", "SigmaZZ"}};
+    using enum Tag;
+    const Tag sig[3][3] = {{SigmaXX, SigmaXY, SigmaXZ}, {SigmaXY, SigmaYY, SigmaYZ}, {SigmaXZ, SigmaYZ, SigmaZZ}};
     for (std::size_t i = 0; i < n; ++i) {
       const Item& it = m.items[i];
       for (int r = 0; r < 3; ++r) {
@@ -379,7 +504,8 @@ class Reader final : public XmlHandler {
         const std::size_t j = i + 1 + k;
         for (int r = 0; r < 3; ++r) {
           for (int c = 0; c < 3; ++c) {
-            const double x = number(it.blocks[k], "m" + std::to_string(r + 1) + std::to_string(c + 1), it.line, what);
+            static constexpr Tag kBlock[3][3] = {{m11, m12, m13}, {m21, m22, m23}, {m31, m32, m33}};
+            const double x = number(it.blocks[k], kBlock[r][c], it.line, what);
             v(static_cast<Eigen::Index>(3 * i) + r, static_cast<Eigen::Index>(3 * j) + c) = x;
             v(static_cast<Eigen::Index>(3 * j) + c, static_cast<Eigen::Index>(3 * i) + r) = x;
           }
@@ -390,15 +516,15 @@ class Reader final : public XmlHandler {
   }
 
   void finish_measurement() {
-    const Measurement& m = *measurement_;
-    const std::string type = text(m.fields, "Type");
+    const Measurement& m = measurement_;
+    const std::string type = text(m.fields, Tag::Type);
     const std::string what = "measurement " + type;
     geodesy::NetworkMeasurement x;
     x.source = where(m.line);
-    x.ignore = !text(m.fields, "Ignore").empty();
+    x.ignore = !text(m.fields, Tag::Ignore).empty();
     auto station = [&](const std::string& id, const char* role) {
       if (id.empty()) fail(m.line, what + ": <" + std::string(role) + "> missing");
-      return builder_.reference(id, where(m.line));
+      return builder_.reference(id, x.source);
     };
     const std::string first = m.firsts.empty() ? "" : m.firsts.front();
     const std::string second = m.seconds.empty() ? "" : m.seconds.front();
@@ -407,25 +533,25 @@ class Reader final : public XmlHandler {
       x.value = Eigen::VectorXd::Constant(1, value);
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sigma * sigma);
     };
-    auto angle = [&](const std::map<std::string, std::string>& f, std::size_t at) {
-      return packed_dms_to_rad(text(f, "Value"), where(at) + ": " + what + " <Value>");
+    auto angle = [&](const Fields& f, std::size_t at) {
+      return packed_dms_to_rad(text(f, Tag::Value), where(at) + ": " + what + " <Value>");
     };
-    auto angle_sigma = [&](const std::map<std::string, std::string>& f, std::size_t at) {
-      return positive_sigma(number(f, "StdDev", at, what), at, what) * kArcsec;
+    auto angle_sigma = [&](const Fields& f, std::size_t at) {
+      return positive_sigma(number(f, Tag::StdDev, at, what), at, what) * kArcsec;
     };
-    auto linear_sigma = [&]() { return positive_sigma(number(m.fields, "StdDev", m.line, what), m.line, what); };
+    auto linear_sigma = [&]() { return positive_sigma(number(m.fields, Tag::StdDev, m.line, what), m.line, what); };
     auto heights = [&]() {
-      if (m.fields.count("InstHeight") && !text(m.fields, "InstHeight").empty()) x.instrument_height_m = number(m.fields, "InstHeight", m.line, what);
-      if (m.fields.count("TargHeight") && !text(m.fields, "TargHeight").empty()) x.target_height_m = number(m.fields, "TargHeight", m.line, what);
+      if (m.fields.count(Tag::InstHeight) && !text(m.fields, Tag::InstHeight).empty()) x.instrument_height_m = number(m.fields, Tag::InstHeight, m.line, what);
+      if (m.fields.count(Tag::TargHeight) && !text(m.fields, Tag::TargHeight).empty()) x.target_height_m = number(m.fields, Tag::TargHeight, m.line, what);
     };
     if (type.size() != 1) fail(m.line, "<Type> '" + type + "': expected one letter (A, B, C, D, E, G, H, I, J, K, L, P, Q, R, S, V, X, Y, Z)");
     switch (type[0]) {
       case 'G':
       case 'X': {
         if (m.items.empty()) fail(m.line, what + ": no <GPSBaseline>");
-        if (type[0] == 'X' && !text(m.fields, "Total").empty() &&
-            number(m.fields, "Total", m.line, what) != static_cast<double>(m.items.size())) {
-          fail(m.line, what + ": <Total> " + text(m.fields, "Total") + " but " + std::to_string(m.items.size()) + " <GPSBaseline>");
+        if (type[0] == 'X' && !text(m.fields, Tag::Total).empty() &&
+            number(m.fields, Tag::Total, m.line, what) != static_cast<double>(m.items.size())) {
+          fail(m.line, what + ": <Total> " + text(m.fields, Tag::Total) + " but " + std::to_string(m.items.size()) + " <GPSBaseline>");
         }
         x.kind = MeasurementKind::gnss_baselines;
         x.value.resize(static_cast<Eigen::Index>(3 * m.items.size()));
@@ -435,7 +561,7 @@ class Reader final : public XmlHandler {
           x.stations.push_back(station(a, "First"));
           x.stations.push_back(station(b, "Second"));
           x.value.segment<3>(static_cast<Eigen::Index>(3 * i)) =
-              Eigen::Vector3d(number(it.fields, "X", it.line, what), number(it.fields, "Y", it.line, what), number(it.fields, "Z", it.line, what));
+              Eigen::Vector3d(number(it.fields, Tag::X, it.line, what), number(it.fields, Tag::Y, it.line, what), number(it.fields, Tag::Z, it.line, what));
         }
         x.covariance = gnss_covariance(m, what);
         x.frame = measurement_frame(m);
@@ -444,10 +570,10 @@ class Reader final : public XmlHandler {
       }
       case 'Y': {
         if (m.items.empty()) fail(m.line, what + ": no <Clusterpoint>");
-        if (!text(m.fields, "Total").empty() && number(m.fields, "Total", m.line, what) != static_cast<double>(m.items.size())) {
-          fail(m.line, what + ": <Total> " + text(m.fields, "Total") + " but " + std::to_string(m.items.size()) + " <Clusterpoint>");
+        if (!text(m.fields, Tag::Total).empty() && number(m.fields, Tag::Total, m.line, what) != static_cast<double>(m.items.size())) {
+          fail(m.line, what + ": <Total> " + text(m.fields, Tag::Total) + " but " + std::to_string(m.items.size()) + " <Clusterpoint>");
         }
-        const std::string coords = text(m.fields, "Coords");
+        const std::string coords = text(m.fields, Tag::Coords);
         if (coords != "XYZ" && coords != "LLH") fail(m.line, what + ": <Coords> '" + coords + "': expected XYZ or LLH");
         x.kind = MeasurementKind::gnss_points;
         const std::size_t n = m.items.size();
@@ -459,16 +585,16 @@ class Reader final : public XmlHandler {
           x.stations.push_back(station(it.first, "First"));
           if (coords == "XYZ") {
             x.value.segment<3>(static_cast<Eigen::Index>(3 * i)) =
-                Eigen::Vector3d(number(it.fields, "X", it.line, what), number(it.fields, "Y", it.line, what), number(it.fields, "Z", it.line, what));
+                Eigen::Vector3d(number(it.fields, Tag::X, it.line, what), number(it.fields, Tag::Y, it.line, what), number(it.fields, Tag::Z, it.line, what));
             continue;
           }
           // LLH: latitude and longitude (packed), orthometric height; the
           // covariance in (latitude rad, longitude rad, height m).
-          const double lat = packed_dms_to_rad(text(it.fields, "X"), where(it.line) + ": " + what + " <X> (latitude)");
-          const double lon = packed_dms_to_rad(text(it.fields, "Y"), where(it.line) + ": " + what + " <Y> (longitude)");
+          const double lat = packed_dms_to_rad(text(it.fields, Tag::X), where(it.line) + ": " + what + " <X> (latitude)");
+          const double lon = packed_dms_to_rad(text(it.fields, Tag::Y), where(it.line) + ": " + what + " <Y> (longitude)");
           const auto n_m = undulation(lat, lon, it.line);
           if (!n_m) fail(it.line, what + ": a point cluster of orthometric heights (Coords LLH) needs the geoid: give --geoid");
-          const double h = number(it.fields, "Z", it.line, what) + *n_m;
+          const double h = number(it.fields, Tag::Z, it.line, what) + *n_m;
           const geodesy::GeodeticPosition g{geodesy::Angle::radians(lat), geodesy::Angle::radians(lon), geodesy::EllipsoidalHeight{h}};
           x.value.segment<3>(static_cast<Eigen::Index>(3 * i)) = geocentric_.ecef_from_geodetic(g).m;
           // ∂(X, Y, Z) / ∂(φ, λ, h): north·(M + h), east·(N + h)·cos φ, up.
@@ -492,14 +618,14 @@ class Reader final : public XmlHandler {
       case 'C': {
         const bool slope = type[0] == 'S';
         scalar(slope ? MeasurementKind::slope_distance : type[0] == 'E' ? MeasurementKind::ellipsoid_arc : MeasurementKind::chord_distance,
-               number(m.fields, "Value", m.line, what), linear_sigma());
+               number(m.fields, Tag::Value, m.line, what), linear_sigma());
         x.stations = {station(first, "First"), station(second, "Second")};
         if (slope) heights();
         break;
       }
       case 'A': {
         scalar(MeasurementKind::horizontal_angle, angle(m.fields, m.line), angle_sigma(m.fields, m.line));
-        x.stations = {station(first, "First"), station(second, "Second"), station(text(m.fields, "Third"), "Third")};
+        x.stations = {station(first, "First"), station(second, "Second"), station(text(m.fields, Tag::Third), "Third")};
         break;
       }
       case 'B':
@@ -521,12 +647,12 @@ class Reader final : public XmlHandler {
       case 'H':
       case 'R': {
         scalar(type[0] == 'H' ? MeasurementKind::orthometric_height : MeasurementKind::ellipsoidal_height,
-               number(m.fields, "Value", m.line, what), linear_sigma());
+               number(m.fields, Tag::Value, m.line, what), linear_sigma());
         x.stations = {station(first, "First")};
         break;
       }
       case 'L': {
-        scalar(MeasurementKind::height_difference, number(m.fields, "Value", m.line, what), linear_sigma());
+        scalar(MeasurementKind::height_difference, number(m.fields, Tag::Value, m.line, what), linear_sigma());
         x.stations = {station(first, "First"), station(second, "Second")};
         break;
       }
@@ -556,18 +682,18 @@ class Reader final : public XmlHandler {
         ro.set = set;
         ro.ignore = ignored;
         net_.measurements.push_back(ro);
-        if (!text(m.fields, "Total").empty() &&
-            number(m.fields, "Total", m.line, what) != static_cast<double>(m.directions.size())) {
-          fail(m.line, what + ": <Total> " + text(m.fields, "Total") + " but " + std::to_string(m.directions.size()) + " <Directions>");
+        if (!text(m.fields, Tag::Total).empty() &&
+            number(m.fields, Tag::Total, m.line, what) != static_cast<double>(m.directions.size())) {
+          fail(m.line, what + ": <Total> " + text(m.fields, Tag::Total) + " but " + std::to_string(m.directions.size()) + " <Directions>");
         }
         for (const auto& d : m.directions) {
           geodesy::NetworkMeasurement dir = ro;
           dir.source = where(d.line);
-          dir.stations = {at, station(text(d.fields, "Target"), "Target")};
+          dir.stations = {at, station(text(d.fields, Tag::Target), "Target")};
           const double sd = angle_sigma(d.fields, d.line);
           dir.value = Eigen::VectorXd::Constant(1, angle(d.fields, d.line));
           dir.covariance = Eigen::MatrixXd::Constant(1, 1, sd * sd);
-          dir.ignore = ignored || !text(d.fields, "Ignore").empty();
+          dir.ignore = ignored || !text(d.fields, Tag::Ignore).empty();
           net_.measurements.push_back(dir);
         }
         return;
@@ -585,15 +711,15 @@ class Reader final : public XmlHandler {
   // applied when the stations are known (Network measurement's
   // local_variance_scale).
   void scale(geodesy::NetworkMeasurement& x, const Measurement& m, const std::string& what) const {
-    auto factor = [&](const char* key) {
-      const std::string t = text(m.fields, key);
+    auto factor = [&](Tag key) {
+      const std::string& t = text(m.fields, key);
       if (t.empty()) return 1.0;
       const auto v = parse_finite_double(t);
-      if (!v || !(*v > 0.0)) fail(m.line, what + ": <" + std::string(key) + "> '" + t + "': expected a factor > 0");
+      if (!v || !(*v > 0.0)) fail(m.line, what + ": <" + name_of(key) + "> '" + t + "': expected a factor > 0");
       return *v;
     };
-    x.covariance *= factor("Vscale");
-    x.local_variance_scale = Eigen::Vector3d(factor("Pscale"), factor("Lscale"), factor("Hscale"));
+    x.covariance *= factor(Tag::Vscale);
+    x.local_variance_scale = Eigen::Vector3d(factor(Tag::Pscale), factor(Tag::Lscale), factor(Tag::Hscale));
   }
 
  public:
@@ -606,13 +732,17 @@ class Reader final : public XmlHandler {
   NetworkBuilder builder_;
   geodesy::GeocentricConverter geocentric_;
   XmlStream xml_{*this};
-  std::vector<std::string> path_;
+  std::vector<Tag> path_;
   std::string text_;
   bool root_seen_ = false;
   std::string frame_name_, epoch_text_;
   std::optional<geodesy::Frame> root_frame_;
-  std::optional<Station> station_;
-  std::optional<Measurement> measurement_;
+  // The element being read, kept from one to the next (Reused, Fields).
+  Station station_;
+  Measurement measurement_;
+  bool in_station_ = false, in_measurement_ = false;
+  mutable std::string last_frame_name_, last_frame_epoch_;
+  mutable std::optional<geodesy::Frame> last_frame_;
   std::size_t approximate_heights_ = 0;
 };
 

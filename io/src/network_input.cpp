@@ -27,7 +27,9 @@ NetworkBuilder::NetworkBuilder(geodesy::Network& net) : net_(net) {
 
 std::size_t NetworkBuilder::reference(const std::string& id, const std::string& where) {
   if (id.empty()) throw Error(ErrorKind::input, "E_STATION", where + ": an empty station name");
-  const auto [it, fresh] = index_.emplace(id, net_.stations.size());
+  // try_emplace: a station named again (most references) costs a lookup,
+  // not a node built and thrown away.
+  const auto [it, fresh] = index_.try_emplace(id, net_.stations.size());
   if (fresh) {
     geodesy::NetworkStation s;
     s.id = id;
