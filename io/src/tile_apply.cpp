@@ -23,19 +23,42 @@ TileCrsAxes tile_crs_axes(const Crs& crs) {
 std::string_view to_string(TileFormat f) {
   switch (f) {
     case TileFormat::las: return "las";
+    case TileFormat::laz: return "laz";
     case TileFormat::csv: return "csv";
     case TileFormat::ply: return "ply";
   }
   return "?";
 }
 
+namespace {
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+constexpr std::string_view kCopcSuffix = ".copc.laz";
+}  // namespace
+
 std::optional<TileFormat> tile_format_of(const std::filesystem::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string ext = lower(p.extension().string());
   if (ext == ".las") return TileFormat::las;
+  if (ext == ".laz") return TileFormat::laz;
   if (ext == ".csv" || ext == ".txt") return TileFormat::csv;
   if (ext == ".ply") return TileFormat::ply;
   return std::nullopt;
+}
+
+bool is_copc_name(const std::filesystem::path& p) {
+  const std::string name = lower(p.filename().string());
+  return name.size() > kCopcSuffix.size() && name.ends_with(kCopcSuffix);
+}
+
+std::string tile_output_name(const std::filesystem::path& input, TileFormat out) {
+  const std::string name = input.filename().string();
+  const auto in = tile_format_of(input);
+  if (in == out && !is_copc_name(input)) return name;
+  const std::size_t cut =
+      is_copc_name(input) ? name.size() - kCopcSuffix.size() : name.size() - input.extension().string().size();
+  return name.substr(0, cut) + "." + std::string(to_string(out));
 }
 
 }  // namespace geoanchor::io

@@ -1,8 +1,8 @@
 #pragma once
-// One tile through a PointChain, streamed in bounded chunks: LAS, CSV or
-// PLY in, the same format out. Everything but the coordinates passes through
-// unchanged. The caller owns the output (an AtomicOutputFile) so that the
-// tile and its sidecar are committed together.
+// One tile through a PointChain, streamed in bounded chunks: LAS or LAZ in,
+// LAS or LAZ out; CSV or PLY in, the same format out. Everything but the
+// coordinates passes through unchanged. The caller owns the output (an
+// AtomicOutputFile) so that the tile and its sidecar are committed together.
 
 #include <array>
 #include <cstdint>
@@ -15,15 +15,27 @@
 
 #include "geoanchor/io/crs_operation.hpp"
 #include "geoanchor/io/crs_columns.hpp"
+#include "geoanchor/io/laz.hpp"
 #include "geoanchor/io/point_chain.hpp"
 
 namespace geoanchor::io {
 
-enum class TileFormat { las, csv, ply };
-std::string_view to_string(TileFormat f);
-// By extension (.las, .csv, .txt, .ply, case-insensitive); std::nullopt
-// for anything else.
+// A tile's file format. LAS and LAZ hold the same records (LAZ compressed,
+// io/laz.hpp); a COPC file (.copc.laz) is read as the LAZ file it is.
+enum class TileFormat { las, laz, csv, ply };
+std::string_view to_string(TileFormat f);  // "las", "laz", "csv", "ply"
+inline bool is_las_family(TileFormat f) { return f == TileFormat::las || f == TileFormat::laz; }
+// By extension, case-insensitive: .las; .laz (and .copc.laz); .csv, .txt;
+// .ply. std::nullopt for anything else.
 std::optional<TileFormat> tile_format_of(const std::filesystem::path& p);
+// Whether the name ends in .copc.laz (case-insensitive).
+bool is_copc_name(const std::filesystem::path& p);
+// The output's file name for a tile written as `out`: the input's name when
+// the format stays (x.las -> x.las, x.LAZ -> x.LAZ), else its stem with the
+// output's extension (x.las -> x.laz, x.laz -> x.las). A COPC file is never
+// written as COPC (the octree hierarchy is not rebuilt): x.copc.laz ->
+// x.laz, or x.las.
+std::string tile_output_name(const std::filesystem::path& input, TileFormat out);
 
 // The file's axes where a tile's coordinates are in a CRS that PROJ moves
 // (apply --crs/--to-crs, a LAS WKT geoanchor's own kinds do not hold): X,
@@ -67,6 +79,26 @@ struct TileApplyOptions {
   std::optional<TileCrsAxes> file_in = std::nullopt, file_out = std::nullopt;
   // CSV: the comment lines stating the output's CRS (replacing the input's).
   std::vector<std::string> crs_comments = {};
+  // LAS/LAZ: how the output is stored (LAZ output: LASzip chunks of
+  // `laz_chunk_points`, whatever the input's chunks).
+  TileFormat las_output = TileFormat::las;
+  // LAS/LAZ: the records one thread takes at a time (read or decompressed,
+  // moved, quantized, compressed), and a LAZ output's chunk size; `threads`
+  // such units run at once and are written in order, with at most
+  // 2 x threads of them in memory. The output does not depend on `threads`.
+  std::uint32_t laz_chunk_points = kLazDefaultChunkPoints;
+  unsigned threads = 1;
+  // LAS/LAZ: the output's coordinates are the tile's own (apply --crs X
+  // --to-crs X): X, Y, Z, scale and offset are kept, so every point record
+  // is copied byte for byte (a LAS <-> LAZ conversion). The chain and the
+  // CRS stages are not run.
+  bool keep_coordinates = false;
+  // LAZ output: when the header's bounds put a point beyond int32 at the
+  // offset they suggest, the tile is written again from its first byte with
+  // an offset from the true bounds; a LAZ stream cannot be rewritten in
+  // place, so this gives an empty output for that (the caller discards what
+  // was written to `out`). Without it, that retry is a std::logic_error.
+  std::function<std::ostream&()> restart_output = {};
 };
 
 struct TileApplyResult {
@@ -79,12 +111,16 @@ struct TileApplyResult {
   std::array<double, 3> scale{}, offset{};  // LAS
   std::string storage;                      // float64 | float32 | int32_scaled
   std::optional<std::array<double, 2>> epoch_range;  // per-point epochs: earliest, latest
+  std::optional<LazVlr> laz;  // a LAZ output's compression (its laszip VLR)
   std::vector<std::string> warnings;
 };
 
 // Each throws geoanchor::Error naming the file and the byte offset (LAS,
-// binary PLY) or line (CSV, ASCII PLY) of bad input, or the point whose
-// output cannot be stored. `out` must be a binary, seekable stream.
+// binary PLY), chunk and byte offset (LAZ) or line (CSV, ASCII PLY) of bad
+// input, or the point whose output cannot be stored. `out` must be a
+// binary, seekable stream. apply_las_tile reads LAS and LAZ and writes
+// either (o.las_output); the first error in point order is the one thrown,
+// whatever the threads.
 TileApplyResult apply_las_tile(const std::filesystem::path& in, std::ostream& out, const std::string& out_name,
                                const PointChain& chain, const TileApplyOptions& o);
 TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& out, const std::string& out_name,
