@@ -70,10 +70,17 @@ class Progress {
 }  // namespace
 
 CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
-  auto* cmd = app.add_subcommand("apply", "Move map tiles (LAS, CSV, PLY) into another frame, with provenance");
+  auto* cmd = app.add_subcommand("apply", "Move map tiles (LAS, LAZ, CSV, PLY) into another frame, with provenance");
   cmd->add_option("IN", o.inputs, "Tiles, folders of tiles, or manifests (.txt/.lst/.manifest: one path per line)")
       ->required();
   cmd->add_option("--out-dir", o.out_dir, "Folder for the outputs (same file names) and their sidecars")->required();
+  cmd->add_option("--format", o.format,
+                  "Output of LAS and LAZ tiles: las|laz (default: the input's; x.copc.laz is written as x.laz)");
+  cmd->add_option("--exclude", o.exclude,
+                  "Leave out files matching GLOB (their name; with a '/': their path in the folder); repeatable. A "
+                  "folder's other files that are not tiles are an error")
+      ->take_all()
+      ->allow_extra_args(false);
   cmd->add_option("--transform", o.transform, "Transform file (JSON) from geoanchor fit");
   cmd->add_flag("--inverse", o.inverse, "Apply the transform's exact inverse (target -> source)");
   cmd->add_option("--to", o.to, "Output coordinates: ecef|geodetic|enu|utm|tm (default: the tile's; or --to-crs)");
@@ -99,7 +106,7 @@ CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
   cmd->add_option("--max-extrapolation", o.max_extrapolation_m,
                   "Refuse tiles farther than this (m) outside the control network (default 10000)")
       ->check(finite_range(0.0, 1e7));
-  cmd->add_option("--jobs", o.jobs, "Tiles processed at once (threads, default 1)")->check(integer_range(1, workflow::kMaxApplyJobs));
+  cmd->add_option("--jobs", o.jobs, "Threads (default 1): tiles at once, a LAS/LAZ tile's chunks on the rest")->check(integer_range(1, workflow::kMaxApplyJobs));
   cmd->add_option("--shard", o.shard, "Process only slice I of N of the tile list (I/N, 0-based I)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
   cmd->add_flag("--quiet", o.quiet, "No progress bar and no per-tile lines");
@@ -115,7 +122,9 @@ int run_apply(const ApplyOptions& o) {
   }
   workflow::ApplyRequest request;
   request.inputs = o.inputs;
+  request.exclude = o.exclude;
   request.out_dir = o.out_dir;
+  request.format = o.format;
   request.transform = o.transform;
   request.inverse = o.inverse;
   request.to = o.to;

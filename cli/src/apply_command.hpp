@@ -1,5 +1,5 @@
 #pragma once
-// `geoanchor apply`: map tiles (LAS, CSV, PLY) from their frame into
+// `geoanchor apply`: map tiles (LAS, LAZ, CSV, PLY) from their frame into
 // another, optionally through a transform file, with a provenance sidecar
 // beside every output. See docs/commands/apply.md.
 
@@ -15,7 +15,9 @@ namespace geoanchor::cli {
 
 struct ApplyOptions {
   std::vector<std::string> inputs;  // files, folders, manifests
+  std::vector<std::string> exclude;  // globs of files that are no tiles of this run
   std::string out_dir;
+  std::optional<std::string> format;  // las | laz, for LAS and LAZ tiles
   std::optional<std::string> transform;
   bool inverse = false;
   // Output frame (as in convert); unset: the tile's own.

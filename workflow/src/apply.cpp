@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fnmatch.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -57,12 +58,39 @@ bool is_tile(const fs::path& p) {
   return io::tile_format_of(p).has_value();
 }
 
+constexpr std::string_view kSidecarSuffix = ".geoanchor.json";
+constexpr std::string_view kTileKinds = ".las, .laz, .copc.laz, .csv, .txt or .ply";
+constexpr std::size_t kUnknownListed = 20;  // names in the message; the rest counted
+
+// The inputs of a run: its tiles, in order, and the files --exclude left out.
+struct Inputs {
+  std::vector<fs::path> tiles;
+  std::vector<std::string> excluded;
+};
+
+// Whether `exclude` leaves a file out: a glob without '/' against its name,
+// one with '/' against `as_listed` (its path relative to the folder given,
+// a manifest's entry or an argument as written).
+bool excluded_by(const std::vector<std::string>& exclude, const fs::path& as_listed) {
+  const std::string name = as_listed.filename().string(), listed = as_listed.generic_string();
+  for (const auto& g : exclude) {
+    const bool path_glob = g.find('/') != std::string::npos;
+    if (::fnmatch(g.c_str(), (path_glob ? listed : name).c_str(), 0) == 0) return true;
+  }
+  return false;
+}
+
 // Files, folders (their tiles, recursively, sorted) and manifests (one path
 // per line, relative to the manifest's folder; '#' starts a comment), in
-// the order given, each tile once.
-std::vector<fs::path> expand_inputs(const std::vector<std::string>& inputs) {
-  std::vector<fs::path> tiles;
+// the order given, each tile once. A folder's files that are neither tiles
+// nor a tile's sidecar (nor geoanchor's run summaries and temporaries) are
+// an error naming them, unless --exclude leaves them out.
+Inputs expand_inputs(const std::vector<std::string>& inputs, const std::vector<std::string>& exclude) {
+  Inputs r;
   std::set<std::string> seen;
+  for (const auto& g : exclude) {
+    if (g.empty()) throw Error(ErrorKind::usage, "E_OPTION", "--exclude '': expected a glob such as '*.xyz' or 'raw/*'");
+  }
   auto add = [&](const fs::path& p, const std::string& where) {
     // A tile's path goes into its sidecar and the run summary (JSON, UTF-8
     // only); geoanchor records no name other than the file's.
@@ -73,24 +101,60 @@ std::vector<fs::path> expand_inputs(const std::vector<std::string>& inputs) {
                       "it (from Latin-1: convmv -f latin1 -t utf-8 --notest NAME)");
     }
     if (!is_tile(p)) {
-      throw Error(ErrorKind::usage, "E_INPUT", where + ": " + p.string() + ": not a tile; expected .las, .csv or .ply");
+      throw Error(ErrorKind::usage, "E_INPUT",
+                  where + ": " + p.string() + ": not a tile; expected " + std::string(kTileKinds) +
+                      " (leave it out with --exclude GLOB)");
     }
     std::error_code ec;
     if (!fs::is_regular_file(p, ec)) throw Error(ErrorKind::io, "E_READ", where + ": " + p.string() + ": no such file");
     const std::string key = fs::weakly_canonical(p, ec).string();
-    if (seen.insert(key).second) tiles.push_back(p);
+    if (seen.insert(key).second) r.tiles.push_back(p);
   };
+  std::vector<std::string> unknown;
   for (const auto& in : inputs) {
     const fs::path p(in);
     std::error_code ec;
     if (fs::is_directory(p, ec)) {
-      std::vector<fs::path> found;
-      for (const auto& e : fs::recursive_directory_iterator(p, ec)) {
-        if (e.is_regular_file() && is_tile(e.path())) found.push_back(e.path());
+      // Every entry, sorted; the folder's own file names, to tell a tile's sidecar.
+      std::vector<fs::directory_entry> entries;
+      for (const auto& e : fs::recursive_directory_iterator(p, ec)) entries.push_back(e);
+      if (ec) throw Error(ErrorKind::io, "E_READ", in + ": cannot list the folder: " + ec.message());
+      std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.path() < b.path(); });
+      std::set<fs::path> names;
+      for (const auto& e : entries) names.insert(e.path());
+      for (const auto& e : entries) {
+        std::error_code e_ec;
+        const bool link = e.is_symlink(e_ec);
+        if (e.is_directory(e_ec) && !link) continue;  // descended into
+        const fs::path& f = e.path();
+        const std::string name = f.filename().string();
+        if (excluded_by(exclude, f.lexically_relative(p))) {
+          r.excluded.push_back(f.string());
+          continue;
+        }
+        const bool regular = e.is_regular_file(e_ec);
+        if (regular && is_tile(f)) {
+          add(f, in);
+          continue;
+        }
+        // A tile's sidecar; geoanchor's own run summaries and temporaries.
+        if (regular && name.size() > kSidecarSuffix.size() && name.ends_with(kSidecarSuffix)) {
+          const fs::path tile = f.parent_path() / name.substr(0, name.size() - kSidecarSuffix.size());
+          if (is_tile(tile) && names.count(tile)) continue;
+        }
+        if (regular && name.starts_with("geoanchor-apply-summary") && name.ends_with(".json")) continue;
+        if (io::is_temporary_name(name)) continue;
+        std::string what;
+        if (e.is_directory(e_ec)) {
+          what = " (a link to a folder, not followed)";
+        } else if (!regular) {
+          what = fs::exists(e.symlink_status(e_ec)) && !fs::exists(f, e_ec) ? " (a dangling link)" : " (not a regular file)";
+        } else if (name.ends_with(kSidecarSuffix)) {
+          what = " (a sidecar without its tile)";
+        }
+        unknown.push_back(f.string() + what);
       }
-      std::sort(found.begin(), found.end());
-      for (const auto& f : found) add(f, in);
-    } else if (is_manifest(p)) {
+    } else if (is_manifest(p) && !excluded_by(exclude, p)) {
       std::ifstream m(p);
       if (!m) throw Error(ErrorKind::io, "E_READ", in + ": cannot open manifest");
       std::string line;
@@ -101,15 +165,33 @@ std::vector<fs::path> expand_inputs(const std::vector<std::string>& inputs) {
         const auto first = line.find_first_not_of(" \t");
         if (first == std::string::npos || line[first] == '#') continue;
         const auto last = line.find_last_not_of(" \t");
-        fs::path entry(line.substr(first, last - first + 1));
+        const fs::path listed(line.substr(first, last - first + 1));
+        fs::path entry = listed;
         if (entry.is_relative()) entry = p.parent_path() / entry;
+        if (excluded_by(exclude, listed)) {
+          r.excluded.push_back(entry.string());
+          continue;
+        }
         add(entry, in + ":" + std::to_string(n));
       }
+    } else if (excluded_by(exclude, p)) {
+      r.excluded.push_back(p.string());
     } else {
       add(p, "input");
     }
   }
-  return tiles;
+  if (!unknown.empty()) {
+    std::string list;
+    for (std::size_t i = 0; i < std::min(unknown.size(), kUnknownListed); ++i) list += (i ? ", " : "") + unknown[i];
+    if (unknown.size() > kUnknownListed) list += ", and " + std::to_string(unknown.size() - kUnknownListed) + " more";
+    throw Error(ErrorKind::usage, "E_INPUT_UNKNOWN",
+                std::to_string(unknown.size()) + (unknown.size() == 1 ? " file" : " files") +
+                    " in the input folders " + (unknown.size() == 1 ? "is" : "are") + " neither a tile (" +
+                    std::string(kTileKinds) + ") nor a tile's sidecar: " + list +
+                    "; leave them out with --exclude GLOB (e.g. --exclude '*.xyz'), or convert them; nothing was "
+                    "processed");
+  }
+  return r;
 }
 
 // "I/N", 0-based I.
@@ -131,7 +213,7 @@ std::pair<std::size_t, std::size_t> parse_shard(const std::string& s) {
 // ---------------------------------------------------------------- one tile
 
 // The options that decide an output's content, for the resumability check.
-json request_json(const ApplyRequest& o) {
+json request_json(const ApplyRequest& o, io::TileFormat output_format) {
   auto opt = [](const std::optional<std::string>& v) { return v ? json(*v) : json(nullptr); };
   json j{{"to", opt(o.to)},
               {"origin", opt(o.origin)},
@@ -149,6 +231,8 @@ json request_json(const ApplyRequest& o) {
   if (o.crs) j["crs"] = *o.crs;
   if (o.to_crs) j["to_crs"] = *o.to_crs;
   if (o.allow_fallback) j["allow_fallback"] = true;
+  // Added with issue 15, only for LAZ outputs (earlier LAS outputs stay up to date).
+  if (output_format == io::TileFormat::laz) j["format"] = "laz";
   return j;
 }
 
@@ -163,8 +247,9 @@ json enu_sigma_json(const Eigen::Matrix3d& cov_ecef, const geodesy::LocalOrigin&
 class TileRunner {
  public:
   TileRunner(const ApplyRequest& o, const TilePlanner& planner, const std::optional<io::TransformFile>& t,
-             const std::string& transform_sha, ApplyProgress& progress)
-      : o_(o), planner_(planner), t_(t), transform_sha_(transform_sha), progress_(progress) {}
+             const std::string& transform_sha, ApplyProgress& progress, unsigned threads_per_tile)
+      : o_(o), planner_(planner), t_(t), transform_sha_(transform_sha), progress_(progress),
+        threads_per_tile_(threads_per_tile) {}
   TileRunner(const TileRunner&) = delete;
   TileRunner& operator=(const TileRunner&) = delete;
 
@@ -177,6 +262,7 @@ class TileRunner {
   const std::optional<io::TransformFile>& t_;
   const std::string& transform_sha_;
   ApplyProgress& progress_;
+  unsigned threads_per_tile_ = 1;
   mutable io::FileHashCache grid_hashes_;  // a grid is hashed once per run, not once per tile
 };
 
@@ -211,7 +297,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   const std::string tile = p.input.string();
   io::refuse_same_file(p.input, p.output);
   const std::string input_sha = io::sha256_file_hex(p.input);
-  const json request = request_json(o_);
+  const json request = request_json(o_, p.output_format);
 
   // Resumable: an output whose provenance names this input, transform and
   // request is up to date. Only regular files (or links to them) are read: a
@@ -269,7 +355,10 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   // What is no regular file at either path is named first, with or without --overwrite.
   io::check_output_path(p.output, io::Overwrite::allow);
   io::check_output_path(p.sidecar, io::Overwrite::allow);
-  io::AtomicOutputFile out(p.output, overwrite);
+  // The tile's output; made again for the int32-overflow retry of a LAZ
+  // output, which writes the tile anew from its first byte.
+  std::optional<io::AtomicOutputFile> out;
+  out.emplace(p.output, overwrite);
   io::AtomicOutputFile side(p.sidecar, overwrite);
 
   const io::PointChain chain(p.in.coordinates, t_, o_.inverse, p.epoch, p.out.coordinates);
@@ -296,7 +385,17 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   }
   ao.resolution_m = o_.resolution_m;
   ao.epochs_from_gps_time = o_.epoch_from_gps_time && t_ && t_->time_dependent();
-  if (p.format == io::TileFormat::las) ao.output_wkt = io::tile_crs_wkt(p.out);
+  if (io::is_las_family(p.format)) {
+    ao.output_wkt = io::tile_crs_wkt(p.out);
+    ao.las_output = p.output_format;
+    ao.threads = threads_per_tile_;
+    ao.keep_coordinates = p.keep_coordinates;
+    ao.restart_output = [&]() -> std::ostream& {
+      out.reset();
+      out.emplace(p.output, overwrite);
+      return out->stream();
+    };
+  }
   // Progress in bytes of input, where the point count is known up front.
   const std::uint64_t expected = p.las_points;
   const std::uint64_t tile_bytes = fs::file_size(p.input, ec);
@@ -315,9 +414,10 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   };
   io::TileApplyResult res;
   switch (p.format) {
-    case io::TileFormat::las: res = io::apply_las_tile(p.input, out.stream(), p.output.string(), chain, ao); break;
-    case io::TileFormat::csv: res = io::apply_csv_tile(p.input, out.stream(), p.output.string(), chain, ao); break;
-    case io::TileFormat::ply: res = io::apply_ply_tile(p.input, out.stream(), p.output.string(), chain, ao); break;
+    case io::TileFormat::las:
+    case io::TileFormat::laz: res = io::apply_las_tile(p.input, out->stream(), p.output.string(), chain, ao); break;
+    case io::TileFormat::csv: res = io::apply_csv_tile(p.input, out->stream(), p.output.string(), chain, ao); break;
+    case io::TileFormat::ply: res = io::apply_ply_tile(p.input, out->stream(), p.output.string(), chain, ao); break;
   }
   r.points = res.points;
   std::vector<std::string> warnings = housekeeping;
@@ -421,14 +521,26 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   }
 
   // Flush the tile to learn its size, then the sidecar, then publish both.
-  out.stream().flush();
-  const auto output_size = static_cast<std::uint64_t>(out.stream().tellp());
+  out->stream().flush();
+  const auto output_size = static_cast<std::uint64_t>(out->stream().tellp());
   nlohmann::ordered_json prov;
   prov["tool"] = o_.tool;
   prov["command"] = o_.command;
   prov["input"] = p.input.string();
   prov["input_sha256"] = input_sha;
   prov["input_format"] = std::string(io::to_string(p.format));
+  prov["output_format"] = std::string(io::to_string(p.output_format));
+  if (res.laz) {
+    // How the LAZ output is compressed: what its laszip VLR says.
+    json items = json::array();
+    for (const auto& it : res.laz->items) items.push_back(io::laz_item_name(it.type) + " v" + std::to_string(it.version));
+    prov["compression"] = {{"format", "LASzip"},
+                           {"compressor", res.laz->compressor == 3 ? "layered chunked" : "pointwise chunked"},
+                           {"chunk_points", res.laz->chunk_size},
+                           {"items", items}};
+  } else {
+    prov["compression"] = nullptr;
+  }
   prov["input_frame"] = p.in.frame ? json(p.in.frame->to_string()) : json(nullptr);
   prov["input_coordinates"] = io::kind_name(p.in);
   if (p.in.crs) {
@@ -476,19 +588,23 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   }
   prov["points"] = res.points;
   prov["bounds"] = {{"min", res.min}, {"max", res.max}};
-  if (p.format == io::TileFormat::las) prov["las"] = {{"scale", res.scale}, {"offset", res.offset}};
+  if (io::is_las_family(p.format)) prov["las"] = {{"scale", res.scale}, {"offset", res.offset}};
+  if (p.keep_coordinates) prov["coordinates_kept"] = true;  // the tile's own CRS: every point record copied
   prov["output_size_bytes"] = output_size;
   json all_warnings = warnings;
   for (const auto& w : transform_warnings) all_warnings.push_back(w);
   prov["warnings"] = all_warnings;
   TileMetadata meta = p.out;
   meta.horizontal_crs = (meta.crs ? meta.crs->display_name() : meta.frame->to_string() + " " + io::kind_name(meta.coordinates)) +
-                        (p.format == io::TileFormat::las ? " (WKT2 in the LAS file's LASF_Projection 2112 record)" : "");
+                        (io::is_las_family(p.format)
+                             ? std::string(" (WKT2 in the ") + (p.output_format == io::TileFormat::laz ? "LAZ" : "LAS") +
+                                   " file's LASF_Projection 2112 record)"
+                             : "");
   meta.provenance_json = prov.dump();
   side.stream() << io::to_json_text(meta);
   // One output: both written and fsync'ed, then the sidecar published and
   // the tile last; a failure to write either leaves neither.
-  io::publish_together({&side, &out});
+  io::publish_together({&side, &*out});
   r.status = "done";
   r.warnings = warnings;
 }
@@ -500,6 +616,7 @@ struct ApplyRun::Impl {
   std::optional<io::TransformFile> transform;
   std::string transform_sha;
   std::vector<fs::path> tiles;
+  std::vector<std::string> excluded;
   std::string shard_text, summary_base, run_id;
   std::uint64_t total_bytes = 0;
 };
@@ -525,7 +642,9 @@ ApplyRun::ApplyRun(ApplyRequest request) : impl_(std::make_unique<Impl>()) {
   }
   // The planner parses every value flag: a bad one fails before any output.
   const TilePlanner check(o, m.transform);
-  m.tiles = expand_inputs(o.inputs);
+  Inputs inputs = expand_inputs(o.inputs, o.exclude);
+  m.tiles = std::move(inputs.tiles);
+  m.excluded = std::move(inputs.excluded);
   m.summary_base = "geoanchor-apply-summary";
   m.run_id = make_run_id();
   if (o.shard) {
@@ -536,14 +655,16 @@ ApplyRun::ApplyRun(ApplyRequest request) : impl_(std::make_unique<Impl>()) {
     m.shard_text = std::to_string(i) + "/" + std::to_string(n);
     m.summary_base = "geoanchor-apply-summary.shard-" + std::to_string(i) + "-of-" + std::to_string(n);
   }
-  // Two inputs must not write the same output.
+  // Two inputs must not write the same output (x.las and x.laz with
+  // --format, x.laz and x.copc.laz); --format is checked against each tile.
   std::map<std::string, std::string> by_name;
   for (const auto& t : m.tiles) {
-    const auto [it, fresh] = by_name.emplace(t.filename().string(), t.string());
+    const fs::path output = planned_output_path(o, t);
+    const auto [it, fresh] = by_name.emplace(output.filename().string(), t.string());
     if (!fresh) {
       throw Error(ErrorKind::usage, "E_OUTPUT_CLASH",
-                  t.string() + " and " + it->second + " would both be written to " +
-                      (fs::path(o.out_dir) / t.filename()).string() + "; process them in separate runs");
+                  t.string() + " and " + it->second + " would both be written to " + output.string() +
+                      "; process them in separate runs");
     }
   }
   if (m.tiles.empty() && !o.shard) throw Error(ErrorKind::usage, "E_INPUT", "no tiles to process");
@@ -568,10 +689,13 @@ ApplyResult ApplyRun::run(ApplyProgress& progress, const std::function<void(cons
   const Impl& m = *impl_;
   const ApplyRequest& o = m.request;
   const TilePlanner planner(o, m.transform);
-  const TileRunner runner(o, planner, m.transform, m.transform_sha, progress);
   const auto& tiles = m.tiles;
-
   ApplyResult result;
+  // Tiles at once, and each one's share of the threads for its chunks.
+  result.jobs = std::max(1u, std::min<unsigned>(o.jobs, static_cast<unsigned>(std::max<std::size_t>(tiles.size(), 1))));
+  const TileRunner runner(o, planner, m.transform, m.transform_sha, progress, std::max(1u, o.jobs / result.jobs));
+  result.excluded = m.excluded;
+
   // Temporaries a killed run left in the output folder, before any tile.
   for (const auto& t : io::remove_stale_temporaries(o.out_dir)) result.stale_temporaries_removed.push_back(t.string());
   const auto start = std::chrono::steady_clock::now();
@@ -587,7 +711,6 @@ ApplyResult ApplyRun::run(ApplyProgress& progress, const std::function<void(cons
       }
     }
   };
-  result.jobs = std::max(1u, std::min<unsigned>(o.jobs, static_cast<unsigned>(std::max<std::size_t>(tiles.size(), 1))));
   std::vector<std::thread> pool;
   for (unsigned j = 1; j < result.jobs; ++j) pool.emplace_back(worker);
   worker();
@@ -643,6 +766,7 @@ ApplyResult ApplyRun::run(ApplyProgress& progress, const std::function<void(cons
   summary["points_per_second"] = result.seconds > 0 ? static_cast<double>(result.processed) / result.seconds : 0.0;
   summary["jobs"] = result.jobs;
   summary["stale_temporaries_removed"] = result.stale_temporaries_removed;
+  summary["excluded"] = result.excluded;
   // This run's summary under its own name, never replaced (published with
   // RENAME_NOREPLACE; a name another host took in the same second gets a
   // suffix), then the same text as the latest run's summary under the

@@ -57,7 +57,33 @@ bool same_origin(const geodesy::LocalOrigin& a, const geodesy::LocalOrigin& b) {
 
 }  // namespace
 
+io::TileFormat planned_output_format(const ApplyRequest& o, const fs::path& input) {
+  const auto in = io::tile_format_of(input);
+  if (!in) throw Error(ErrorKind::usage, "E_INPUT", input.string() + ": not a tile");
+  if (!o.format) return *in;
+  const std::string& f = *o.format;
+  if (f != "las" && f != "laz") {
+    throw Error(ErrorKind::usage, "E_OPTION", "--format " + f + ": expected las or laz (the output format of LAS and LAZ tiles)");
+  }
+  if (!io::is_las_family(*in)) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--format " + f + ": " + input.string() + " is a " + std::string(io::to_string(*in)) +
+                    " tile, which is written as " + std::string(io::to_string(*in)) +
+                    "; --format chooses between LAS and LAZ for LAS and LAZ tiles (leave the others out with "
+                    "--exclude GLOB, or run them separately)");
+  }
+  return f == "laz" ? io::TileFormat::laz : io::TileFormat::las;
+}
+
+fs::path planned_output_path(const ApplyRequest& o, const fs::path& input) {
+  return fs::path(o.out_dir) / io::tile_output_name(input, planned_output_format(o, input));
+}
+
 TilePlanner::TilePlanner(const ApplyRequest& o, const std::optional<io::TransformFile>& t) : o_(o), t_(t) {
+  if (o.format && *o.format != "las" && *o.format != "laz") {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--format " + *o.format + ": expected las or laz (the output format of LAS and LAZ tiles)");
+  }
   if (o.to) {
     const std::string& k = *o.to;
     if (k == "ecef") {
@@ -138,7 +164,7 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
   std::error_code ec;
   if (fs::exists(side_path, ec)) side = io::read_tile_metadata(side_path);
   bool geotiff_only = false;
-  if (p.format == io::TileFormat::las) {
+  if (io::is_las_family(p.format)) {
     io::LasReader reader(p.input);
     p.las_points = reader.header().point_count;
     if (const auto w = reader.wkt()) {
@@ -215,7 +241,7 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
   }
   if (o_.crs) {
     TileMetadata m = io::tile_metadata_from_crs(io::Crs::parse(*o_.crs, "--crs"), tile);
-    m.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
+    m.storage = io::is_las_family(p.format) ? "int32_scaled" : "float64";
     p.in_frame_source = "--crs";
     return m;
   }
@@ -225,7 +251,7 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
   if (!from_frame_) {
     throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
                 tile + ": the tile's frame is unknown: no sidecar " + side_path.filename().string() +
-                    (p.format == io::TileFormat::las ? ", no WKT in the LAS file" : "") +
+                    (io::is_las_family(p.format) ? ", no WKT in the LAS file" : "") +
                     (geotiff_only ? " (its GeoTIFF CRS keys are not read: they cannot state a realization and "
                                     "epoch)"
                                   : "") +
@@ -265,7 +291,7 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
   if (m.coordinates.kind == CoordinateKind::geodetic || m.coordinates.kind == CoordinateKind::projected) {
     m.height_type = "ellipsoidal";  // h_m is ellipsoidal by geoanchor's column convention
   }
-  m.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
+  m.storage = io::is_las_family(p.format) ? "int32_scaled" : "float64";
   return m;
 }
 
@@ -334,7 +360,8 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
   TilePlan p;
   p.input = input;
   p.format = *io::tile_format_of(input);
-  p.output = fs::path(o_.out_dir) / input.filename();
+  p.output_format = planned_output_format(o_, input);
+  p.output = planned_output_path(o_, input);
   p.sidecar = io::sidecar_path(p.output);
   p.in = input_metadata(p);
   const std::string tile = input.string();
@@ -363,10 +390,10 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
   // time gives its epoch.
   // (A tile in a CRS moved by PROJ alone: PROJ's operation says whether it
   // needs the epoch.)
-  if (!(o_.epoch_from_gps_time && p.format == io::TileFormat::las) && in.frame && (!in.crs || t_)) {
+  if (!(o_.epoch_from_gps_time && io::is_las_family(p.format)) && in.frame && (!in.crs || t_)) {
     geodesy::require_epoch_if_dynamic(*in.frame, tile + ": " + p.in_frame_source + (p.in_frame_source.rfind("sidecar", 0) == 0 ? ": frame" : ""),
                                       ErrorKind::input,
-                                      p.format == io::TileFormat::las ? ", or --epoch-from-gps-time" : "");
+                                      io::is_las_family(p.format) ? ", or --epoch-from-gps-time" : "");
   }
   if (in.height_type == "orthometric" && !in.crs) {
     throw Error(ErrorKind::input, "E_HEIGHT_TYPE",
@@ -396,7 +423,7 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
                         src_key + " is " + src->to_string() + " (" + *o_.transform + ")");
       }
       if (t_->time_dependent() && o_.epoch_from_gps_time) {
-        if (p.format != io::TileFormat::las) {
+        if (!io::is_las_family(p.format)) {
           throw Error(ErrorKind::usage, "E_OPTION",
                       tile + ": --epoch-from-gps-time reads LAS GPS times; for per-row epochs in a CSV use "
                              "`geoanchor convert` with an epoch column");
@@ -432,7 +459,7 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
   out.frame = out_frame;
   out.survey_method = in.survey_method;
   out.rtk_fixed_percent = in.rtk_fixed_percent;
-  out.storage = p.format == io::TileFormat::las ? "int32_scaled" : "float64";
+  out.storage = io::is_las_family(p.format) ? "int32_scaled" : "float64";
   if (o_.to_crs || (in.crs && !out_.kind)) {
     plan_crs_stages(p);
     return p;
@@ -490,7 +517,7 @@ TilePlan TilePlanner::plan(const fs::path& input) const {
                   tile + (want_utm ? ": UTM output needs --zone Z (a tile has one zone)" : ": TM output needs --tm LAT0,LON0,K0,FE,FN"));
     }
   }
-  if (p.format == io::TileFormat::las &&
+  if (io::is_las_family(p.format) &&
       (out.coordinates.kind == CoordinateKind::ned || in.coordinates.kind == CoordinateKind::ned)) {
     throw Error(ErrorKind::usage, "E_TILE_KIND", tile + ": LAS tiles are ENU, not NED");
   }
@@ -534,7 +561,12 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
     // between realizations is evaluated at one epoch and keeps it.
     const auto in_epoch = in.crs ? in.crs->epoch() : in.frame->epoch();
     if (dst.description().dynamic && !dst.epoch() && in_epoch) dst = dst.at_epoch(*in_epoch, dst_flag);
-    if (in.crs) {
+    if (in.crs && io::is_las_family(p.format) && !o_.resolution_m && in.crs->same_as(dst)) {
+      // The tile's own CRS: nothing moves, and the LAS integers, scale and
+      // offset are kept (a LAS <-> LAZ conversion keeps every record).
+      p.chain_used = false;
+      p.keep_coordinates = true;
+    } else if (in.crs) {
       p.before = std::make_pair(*in.crs, dst);  // PROJ's own operation between the two
       p.chain_used = false;
     } else {
@@ -573,7 +605,7 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
       }
       // Per-point epochs (--epoch-from-gps-time) leave the output without
       // one epoch: the conversion to the CRS needs none.
-      const bool per_point = o_.epoch_from_gps_time && p.format == io::TileFormat::las;
+      const bool per_point = o_.epoch_from_gps_time && io::is_las_family(p.format);
       if (per_point && dst.epoch()) {
         throw Error(ErrorKind::usage, "E_OPTION",
                     tile + ": " + dst_flag + " names the epoch " + geodesy::format_decimal_year(*dst.epoch()) +

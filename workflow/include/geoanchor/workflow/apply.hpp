@@ -1,5 +1,5 @@
 #pragma once
-// `apply` as a library: a batch of map tiles (LAS, CSV, PLY) moved from
+// `apply` as a library: a batch of map tiles (LAS, LAZ, CSV, PLY) moved from
 // their frame into another, optionally through a transform file, each
 // written with a provenance sidecar, and the run summary. Per tile:
 //   1. plan (tile_plan.hpp): the tile's frame and coordinates from its
@@ -31,7 +31,16 @@ namespace geoanchor::workflow {
 // (and refused, naming their flag) when an ApplyRun is made.
 struct ApplyRequest {
   std::vector<std::string> inputs;  // files, folders (recursive), manifests (.txt/.lst/.manifest)
+  // Globs (fnmatch) of files that are no tiles of this run: matched against
+  // a file's name, or, for a glob with a '/', against its path relative to
+  // the folder given (a manifest's entry or an argument: as written). A
+  // folder's other files that are neither tiles nor a tile's sidecar are an
+  // error listing them (E_INPUT_UNKNOWN), never skipped silently.
+  std::vector<std::string> exclude;
   std::string out_dir;
+  // LAS and LAZ tiles: the output's format, "las" or "laz" (unset: the
+  // input's, by its extension; a .copc.laz is written as plain .laz).
+  std::optional<std::string> format;
   std::optional<std::string> transform;  // transform file path
   bool inverse = false;
   // Output coordinates; unset: the tile's own.
@@ -46,6 +55,8 @@ struct ApplyRequest {
   std::optional<double> resolution_m;  // LAS quantization of the output
   bool epoch_from_gps_time = false;    // LAS: a 14-parameter transform at each point's GPS time
   double max_extrapolation_m = 10000.0;
+  // Threads: up to this many tiles at once; a LAS or LAZ tile's chunks run
+  // on the threads its share of them gives (jobs / tiles at once).
   unsigned jobs = 1;
   std::optional<std::string> shard;  // "I/N", 0-based I
   bool overwrite = false;
@@ -91,6 +102,7 @@ struct ApplyResult {
   std::filesystem::path summary_path;      // the latest run's
   std::string summary_json;                // the text of both
   std::vector<std::string> stale_temporaries_removed;  // left in --out-dir by killed runs
+  std::vector<std::string> excluded;  // inputs --exclude left out, as found
   // About the whole run, to print once: the transform's parameters beyond
   // fit's plausibility limits (workflow/transform_checks.hpp; a 14-parameter
   // set at the first and last epoch any tile done in this run used). Also in

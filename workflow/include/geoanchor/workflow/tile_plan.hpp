@@ -33,7 +33,8 @@ namespace geoanchor::workflow {
 
 struct TilePlan {
   std::filesystem::path input, output, sidecar;
-  io::TileFormat format = io::TileFormat::las;
+  io::TileFormat format = io::TileFormat::las;         // the input's
+  io::TileFormat output_format = io::TileFormat::las;  // the output's (LAS <-> LAZ by --format)
   io::TileMetadata in;
   std::string in_frame_source;  // "sidecar PATH", "LAS WKT", "command line"
   io::TileMetadata out;
@@ -49,7 +50,18 @@ struct TilePlan {
   // output from `after[0]` to `after[1]`.
   std::optional<std::pair<io::Crs, io::Crs>> before, after;
   bool chain_used = true;
+  // A LAS/LAZ tile whose output CRS is its own (no transform, no
+  // --resolution): its X, Y, Z, scale and offset are kept (no stage runs).
+  bool keep_coordinates = false;
 };
+
+// The output format of a tile named `input` under `request` (--format for
+// LAS and LAZ tiles, else the input's own), and the output's path in
+// request.out_dir (io::tile_output_name). Throws geoanchor::Error (usage,
+// E_OPTION) for --format other than las or laz; for a CSV or PLY tile with
+// --format, naming the tile.
+io::TileFormat planned_output_format(const ApplyRequest& request, const std::filesystem::path& input);
+std::filesystem::path planned_output_path(const ApplyRequest& request, const std::filesystem::path& input);
 
 class TilePlanner {
  public:
