@@ -21,7 +21,7 @@
 #include "network_approximate.hpp"
 #include "network_model.hpp"
 #include "point_statistics.hpp"
-#include "parallel.hpp"
+#include "geoanchor/geodesy/parallel.hpp"
 #include "sparse_factor.hpp"
 #include "statistics.hpp"
 
@@ -56,6 +56,7 @@ struct Layout {
   // What each unknown is: the station (or set) and the component (3: an
   // orientation; 4: a Helmert parameter, `first` its index).
   std::vector<std::pair<std::size_t, int>> owner;
+  bool operator==(const Layout&) const = default;
 };
 
 const char* component_name(NetworkSpace space, int c) {
@@ -215,16 +216,17 @@ struct Problem {
     }
     Rows r;
     r.computed = ev.computed;
-    std::map<Index, Eigen::Index> slot;
-    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(ev.computed.size(), 0);
+    // The columns in the order their unknowns first come (a measurement has
+    // a handful: a linear search), in a matrix as wide as they can be.
+    const Eigen::Index most = static_cast<Eigen::Index>(3 * ev.stations.size()) + (ev.orientation ? 1 : 0) + d_helmert.cols();
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(ev.computed.size(), most);
+    r.unknowns.reserve(static_cast<std::size_t>(most));
     auto column = [&](Index unknown) {
-      const auto [it, fresh] = slot.emplace(unknown, static_cast<Eigen::Index>(r.unknowns.size()));
-      if (fresh) {
-        r.unknowns.push_back(unknown);
-        a.conservativeResize(Eigen::NoChange, a.cols() + 1);
-        a.col(a.cols() - 1).setZero();
+      for (std::size_t k = 0; k < r.unknowns.size(); ++k) {
+        if (r.unknowns[k] == unknown) return static_cast<Eigen::Index>(k);
       }
-      return it->second;
+      r.unknowns.push_back(unknown);
+      return static_cast<Eigen::Index>(r.unknowns.size() - 1);
     };
     for (std::size_t s = 0; s < ev.stations.size(); ++s) {
       for (int c = 0; c < 3; ++c) {
@@ -242,7 +244,7 @@ struct Problem {
       const Eigen::Index k = column(layout.helmert[static_cast<std::size_t>(j)]);
       a.col(k) += d_helmert.col(j);
     }
-    r.a = whitening[mi] * a;
+    r.a = whitening[mi] * a.leftCols(static_cast<Eigen::Index>(r.unknowns.size()));
     r.l = whitening[mi] * misclosure(m, ev.computed);
     return r;
   }
@@ -290,14 +292,17 @@ std::vector<std::size_t> components_of(const Problem& p, std::size_t& count) {
     const auto& st = p.net.measurements[mi].stations;
     for (std::size_t k = 1; k < st.size(); ++k) parent[find(st[k])] = find(st[0]);
   }
-  std::map<std::size_t, std::size_t> id;
+  // Components numbered in the order of their first station.
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> id(parent.size(), kNone);
   std::vector<std::size_t> out(parent.size(), 0);
+  count = 0;
   for (std::size_t s = 0; s < parent.size(); ++s) {
     if (!p.station_used[s]) continue;
-    const auto [it, fresh] = id.emplace(find(s), id.size());
-    out[s] = it->second;
+    std::size_t& c = id[find(s)];
+    if (c == kNone) c = count++;
+    out[s] = c;
   }
-  count = id.size();
   return out;
 }
 
@@ -882,25 +887,28 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   const int jobs = resolve_jobs(o.jobs);
   const std::string where = net.source_name;
 
-  // Whitening of each measurement's covariance.
+  // Whitening of each measurement's covariance, on threads (each its own;
+  // the first failure in the measurements' order is the one reported).
   p.whitening.resize(net.measurements.size());
   p.active.assign(net.measurements.size(), false);
   p.pattern_only.assign(net.measurements.size(), false);
-  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
-    const auto& m = net.measurements[mi];
-    if (m.ignore) continue;
-    p.active[mi] = true;
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m.covariance);
-    const double smallest = eig.eigenvalues().size() ? eig.eigenvalues()(0) : 0.0;
-    const double largest = eig.eigenvalues().size() ? eig.eigenvalues().maxCoeff() : 0.0;
-    if (!(smallest > 1e-15 * std::max(largest, 1e-300)) || !std::isfinite(largest)) {
-      throw Error(ErrorKind::input, "E_COVARIANCE",
-                  m.source + ": " + geodesy::to_string(m.kind) + ": the covariance is not positive definite (smallest "
-                  "eigenvalue " + format_shortest(smallest) + ", largest " + format_shortest(largest) + ")");
+  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) p.active[mi] = !net.measurements[mi].ignore;
+  for_chunks(net.measurements.size(), kMeasurementChunk, jobs, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t mi = begin; mi < end; ++mi) {
+      const auto& m = net.measurements[mi];
+      if (m.ignore) continue;
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m.covariance, Eigen::EigenvaluesOnly);
+      const double smallest = eig.eigenvalues().size() ? eig.eigenvalues()(0) : 0.0;
+      const double largest = eig.eigenvalues().size() ? eig.eigenvalues().maxCoeff() : 0.0;
+      if (!(smallest > 1e-15 * std::max(largest, 1e-300)) || !std::isfinite(largest)) {
+        throw Error(ErrorKind::input, "E_COVARIANCE",
+                    m.source + ": " + geodesy::to_string(m.kind) + ": the covariance is not positive definite (smallest "
+                    "eigenvalue " + format_shortest(smallest) + ", largest " + format_shortest(largest) + ")");
+      }
+      const Eigen::LLT<Eigen::MatrixXd> llt(m.covariance);
+      p.whitening[mi] = llt.matrixL().solve(Eigen::MatrixXd::Identity(m.covariance.rows(), m.covariance.cols()));
     }
-    const Eigen::LLT<Eigen::MatrixXd> llt(m.covariance);
-    p.whitening[mi] = llt.matrixL().solve(Eigen::MatrixXd::Identity(m.covariance.rows(), m.covariance.cols()));
-  }
+  });
   p.free = o.free;
   p.aside = o.free;
   if (p.free) {
@@ -1022,6 +1030,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
 
   const std::vector<std::string> base_warnings = result.warnings;
   std::optional<NormalFactor> last_factor;
+  // Data snooping: what the last pass removed, and the unknowns it had.
+  std::vector<std::size_t> removed_last_pass;
+  Layout last_layout;
   for (;;) {
     result.warnings = base_warnings;  // each pass states its own
     ++result.passes;
@@ -1048,6 +1059,34 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
                       " parts that no measurement joins: " + list + "; adjust them separately or join them");
     }
     p.layout = make_layout(p);
+    // A GNSS network (linear, its matrix the same at every state) that lost
+    // a few measurements to data snooping and no unknown: they are taken
+    // out of the last factor and its selected inverse (a downdate) instead
+    // of factoring and inverting again (NormalFactor::downdate).
+    bool downdated = false;
+    if (!removed_last_pass.empty() && o.snooping_downdates && last_factor && constant_jacobian(p) && p.layout == last_layout) {
+      const auto t0 = Clock::now();
+      std::vector<Rows> taken;
+      Eigen::Index rows = 0;
+      for (std::size_t mi : removed_last_pass) {
+        taken.push_back(p.linearize(mi));
+        rows += taken.back().l.size();
+      }
+      if (last_factor->downdated_rows() + rows <= last_factor->downdate_rows_worth()) {
+        Eigen::MatrixXd b = Eigen::MatrixXd::Zero(p.layout.count, rows);
+        Eigen::Index column = 0;
+        for (const Rows& r : taken) {
+          for (Eigen::Index i = 0; i < r.a.rows(); ++i, ++column) {
+            for (std::size_t k = 0; k < r.unknowns.size(); ++k) b(r.unknowns[k], column) = r.a(i, static_cast<Eigen::Index>(k));
+          }
+        }
+        downdated = last_factor->downdate(b, jobs);
+        result.passes_downdated += downdated ? 1 : 0;
+      }
+      result.seconds.downdate += since(t0);
+    }
+    removed_last_pass.clear();
+    last_layout = p.layout;
     p.inner.clear();
     p.inner_components.clear();
     p.free = o.free;  // a pass may find the constraints leave a defect (datum stations)
@@ -1078,11 +1117,13 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     int iteration = 0;
     for (iteration = 1; iteration <= o.max_iterations; ++iteration) {
       // A normal matrix that cannot have changed is not factored again.
-      const bool same_matrix = iteration > 1 && last_factor && constant_jacobian(p);
+      const bool same_matrix = (iteration > 1 || downdated) && last_factor && constant_jacobian(p);
       auto t0 = Clock::now();
       Normal n = assemble(p, !same_matrix, jobs);
       result.seconds.assemble += since(t0);
-      if (iteration == 1) {
+      // (A downdated pass has the last pass's unknowns and a GNSS network's
+      // translations, held as before: its datum is the last pass's.)
+      if (iteration == 1 && !downdated) {
         // The datum. First what the measurements leave undefined (every
         // component an unknown, no constraint), then whether the
         // constraints define it: a station the measurements do not fix on
@@ -1091,7 +1132,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         probe.free = true;
         probe.aside = true;  // every component an unknown
         probe.layout = make_layout(probe);
-        const Normal n0 = assemble(probe);
+        const Normal n0 = assemble(probe, true, jobs);
         const DatumVectors dv = datum_vectors(probe);
         const Eigen::MatrixXd m0 = dv.g.transpose() * times(n0.entries, dv.g);
         std::vector<std::string> unused;
@@ -1219,7 +1260,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     NormalFactor f = same_matrix ? std::move(*last_factor) : factor_or_explain(p, n, std::move(last_factor));
     result.seconds.factor += since(t0);
     t0 = Clock::now();
-    f.select_inverse(jobs);
+    if (!downdated) f.select_inverse(jobs);  // (a downdate updated it)
     result.seconds.select_inverse += since(t0);
     t0 = Clock::now();
     result.factor_nonzeros = f.factor_nonzeros();
@@ -1420,6 +1461,8 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
             p.pattern_only[mi] = kind == MeasurementKind::gnss_baselines || kind == MeasurementKind::gnss_points;
             ++removed;
           }
+          result.removed_per_pass.push_back(take.size());
+          for (std::size_t k : take) removed_last_pass.push_back(failing[k].first);
           last_factor = std::move(f);  // its analysis serves the next pass (the same pattern)
           continue;  // adjust again without them
         }

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <atomic>
 #include <exception>
@@ -20,6 +21,7 @@
 #include <string>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/parallel.hpp"
 
 namespace geoanchor::solver {
 
@@ -40,6 +42,13 @@ struct NormalFactor::Impl {
   // The pattern the analysis was made for (column pointers, row indices).
   std::vector<SuiteSparse_long> pattern_p, pattern_i;
   std::vector<double> z;
+  // Rows taken out since the factorization (downdate): N⁻¹ is the factor's
+  // L⁻ᵀ L⁻¹ plus, for each downdate s in turn, U_s M_s⁻¹ U_sᵀ.
+  struct LowRank {
+    Eigen::MatrixXd u;               // n × r_s, in the caller's order
+    Eigen::LLT<Eigen::MatrixXd> m;   // r_s × r_s
+  };
+  std::vector<LowRank> updates;
   // dense
   Eigen::MatrixXd dense;
   Eigen::LLT<Eigen::MatrixXd> llt;
@@ -141,6 +150,7 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
   previous.reset();
   if (reuse) {  // what the last factor gave no longer holds
     impl->z.clear();
+    impl->updates.clear();
     impl->super_of.clear();
     impl->inverse_permutation.clear();
   }
@@ -266,7 +276,66 @@ Eigen::MatrixXd NormalFactor::solve(const Eigen::MatrixXd& b) const {
   Eigen::MatrixXd out(b.rows(), b.cols());
   std::copy(static_cast<const double*>(x->x), static_cast<const double*>(x->x) + out.size(), out.data());
   cholmod_l_free_dense(&x, c);
+  for (const auto& up : impl_->updates) out.noalias() += up.u * up.m.solve(up.u.transpose() * b);
   return out;
+}
+
+std::int64_t NormalFactor::downdated_rows() const {
+  std::int64_t r = 0;
+  for (const auto& up : impl_->updates) r += up.u.cols();
+  return r;
+}
+
+std::int64_t NormalFactor::downdate_rows_worth() const {
+  const Impl& m = *impl_;
+  if (m.mode == Mode::dense || m.n == 0 || m.lnz == 0) return 0;
+  // A downdate of r rows: r solves (4 flops per value of L each) and 2 per
+  // value and row for the selected inverse, against a factorization (its
+  // flops) and a selected inversion (about twice them).
+  const double by_work = 3.0 * m.flops / (6.0 * static_cast<double>(m.lnz));
+  const double by_memory = static_cast<double>(m.lnz) / (2.0 * static_cast<double>(m.n));
+  return static_cast<std::int64_t>(std::max(0.0, std::min(by_work, by_memory)));
+}
+
+bool NormalFactor::downdate(const Eigen::MatrixXd& b, int jobs) {
+  Impl& m = *impl_;
+  if (m.mode == Mode::dense || b.cols() == 0) return false;
+  if (m.z.empty()) throw std::logic_error("NormalFactor::downdate: select_inverse() was not called on this factor");
+  if (b.rows() != m.n) throw std::logic_error("NormalFactor::downdate: B has the wrong number of rows");
+  constexpr double kMinPivot = 1e-6;
+  Impl::LowRank up;
+  up.u = solve(b);  // N⁻¹ B for the matrix as it is now (earlier downdates included)
+  Eigen::MatrixXd cofactor = Eigen::MatrixXd::Identity(b.cols(), b.cols()) - b.transpose() * up.u;
+  cofactor = (0.5 * (cofactor + cofactor.transpose())).eval();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(cofactor, Eigen::EigenvaluesOnly);
+  if (!(eig.eigenvalues()(0) >= kMinPivot)) return false;
+  up.m.compute(cofactor);
+  if (up.m.info() != Eigen::Success) return false;
+  // U M⁻¹ Uᵀ = W Wᵀ, W = U L_M⁻ᵀ: symmetric by construction. Each
+  // supernode's block of Z (its rows by its columns, in the permuted
+  // order) gets W_rows W_colsᵀ.
+  const Eigen::MatrixXd w = up.m.matrixL().solve(up.u.transpose()).transpose();
+  const cholmod_factor* f = m.factor;
+  const auto* super = static_cast<const SuiteSparse_long*>(f->super);
+  const auto* pi = static_cast<const SuiteSparse_long*>(f->pi);
+  const auto* px = static_cast<const SuiteSparse_long*>(f->px);
+  const auto* rows = static_cast<const SuiteSparse_long*>(f->s);
+  const auto* perm = static_cast<const SuiteSparse_long*>(f->Perm);
+  const Eigen::Index r = w.cols();
+  constexpr std::size_t kSupernodesPerChunk = 64;
+  for_chunks(f->nsuper, kSupernodesPerChunk, std::max(1, jobs), [&](std::size_t begin, std::size_t end) {
+    Eigen::MatrixXd wr, wc;
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::int64_t nscol = super[k + 1] - super[k], nsrow = pi[k + 1] - pi[k];
+      wr.resize(nsrow, r);
+      for (std::int64_t i = 0; i < nsrow; ++i) wr.row(i) = w.row(perm[rows[pi[k] + i]]);
+      wc = wr.topRows(nscol);  // the supernode's own columns are its first rows
+      Eigen::Map<Eigen::MatrixXd> zk(m.z.data() + px[k], nsrow, nscol);
+      zk.noalias() += wr * wc.transpose();
+    }
+  });
+  m.updates.push_back(std::move(up));
+  return true;
 }
 
 void NormalFactor::select_inverse(int jobs) {
@@ -319,36 +388,57 @@ void NormalFactor::select_inverse(int jobs) {
     return Workspace{std::vector<double>(static_cast<std::size_t>(max_r * max_r)), std::vector<double>(static_cast<std::size_t>(max_r * max_c)),
                      std::vector<double>(static_cast<std::size_t>(max_r * max_c)), std::vector<double>(static_cast<std::size_t>(max_c * max_c))};
   };
-  const auto process = [&](std::int64_t k, Workspace& w) {
+  // A supernode's work is cut into slices whose sizes depend on its shape
+  // alone (kSliceColumns of U and Z_RJ, kSliceRows of U, kSliceGather
+  // columns of Z_RR), so that its numbers are the same whether the slices
+  // run on one thread or on `jobs` (the supernodes above the subtrees'
+  // split are the largest, and are done with every thread).
+  constexpr std::int64_t kSliceColumns = 32, kSliceRows = 256, kSliceGather = 128;
+  const auto process = [&](std::int64_t k, Workspace& w, int jobs_here) {
     const std::int64_t nscol = super[k + 1] - super[k], nsrow = pi[k + 1] - pi[k], r = nsrow - nscol;
     const ConstMap lk(lx + px[k], nsrow, nscol);
     const auto ljj = lk.topRows(nscol).triangularView<Eigen::Lower>();
     const SuiteSparse_long* below = rows + pi[k] + nscol;  // R, ascending
     Map zrr(w.zrr.data(), r, r), u(w.u.data(), r, nscol), zrj(w.zrj.data(), r, nscol), linv(w.linv.data(), nscol, nscol);
+    const auto slices = [&](std::int64_t count, std::int64_t size, const auto& work) {
+      for_chunks(static_cast<std::size_t>(count), static_cast<std::size_t>(size), jobs_here,
+                 [&](std::size_t b, std::size_t e) { work(static_cast<std::int64_t>(b), static_cast<std::int64_t>(e - b)); });
+    };
     // Z_RR (its lower triangle), gathered column by column: column R[a]
     // lies in supernode t, whose rows, from R[a] on, hold R[a..] in order.
-    for (std::int64_t a = 0; a < r; ++a) {
-      const std::int64_t c = below[a];
-      const std::int64_t t = m.super_of[static_cast<std::size_t>(c)];
-      const std::int64_t t_nsrow = pi[t + 1] - pi[t];
-      const SuiteSparse_long* t_rows = rows + pi[t];
-      const double* t_z = m.z.data() + px[t] + (c - super[t]) * t_nsrow;
-      std::int64_t q = c - super[t];  // the diagonal's row within t
-      for (std::int64_t b = a; b < r; ++b) {
-        while (q < t_nsrow && t_rows[q] < below[b]) ++q;
-        if (q == t_nsrow || t_rows[q] != below[b]) throw std::logic_error("selected inversion: an entry off the factor's pattern");
-        zrr(b, a) = t_z[q];
+    slices(r, kSliceGather, [&](std::int64_t first, std::int64_t count) {
+      for (std::int64_t a = first; a < first + count; ++a) {
+        const std::int64_t c = below[a];
+        const std::int64_t t = m.super_of[static_cast<std::size_t>(c)];
+        const std::int64_t t_nsrow = pi[t + 1] - pi[t];
+        const SuiteSparse_long* t_rows = rows + pi[t];
+        const double* t_z = m.z.data() + px[t] + (c - super[t]) * t_nsrow;
+        std::int64_t q = c - super[t];  // the diagonal's row within t
+        for (std::int64_t b = a; b < r; ++b) {
+          while (q < t_nsrow && t_rows[q] < below[b]) ++q;
+          if (q == t_nsrow || t_rows[q] != below[b]) throw std::logic_error("selected inversion: an entry off the factor's pattern");
+          zrr(b, a) = t_z[q];
+        }
       }
-    }
+    });
     linv.setIdentity();
     ljj.solveInPlace(linv);  // L_JJ⁻¹
     Eigen::Map<Matrix> zk(m.z.data() + px[k], nsrow, nscol);
     zk.topRows(nscol).noalias() = linv.transpose() * linv;
     if (r == 0) return;  // a root: nothing below (Eigen's blocked kernels want no empty operand)
-    u = lk.bottomRows(r);
-    ljj.solveInPlace<Eigen::OnTheRight>(u);  // U L_JJ = L_RJ
-    zrj.noalias() = -(zrr.selfadjointView<Eigen::Lower>() * u);
-    zk.topRows(nscol).noalias() -= u.transpose() * zrj;
+    // U L_JJ = L_RJ, row by row.
+    slices(r, kSliceRows, [&](std::int64_t first, std::int64_t count) {
+      auto rows_of_u = u.middleRows(first, count);
+      rows_of_u = lk.bottomRows(r).middleRows(first, count);
+      ljj.solveInPlace<Eigen::OnTheRight>(rows_of_u);
+    });
+    // Z_RJ = −Z_RR U and Z_JJ −= Uᵀ Z_RJ, a slice of columns at a time.
+    slices(nscol, kSliceColumns, [&](std::int64_t first, std::int64_t count) {
+      zrj.middleCols(first, count).noalias() = -(zrr.selfadjointView<Eigen::Lower>() * u.middleCols(first, count));
+    });
+    slices(nscol, kSliceColumns, [&](std::int64_t first, std::int64_t count) {
+      zk.topRows(nscol).middleCols(first, count).noalias() -= u.transpose() * zrj.middleCols(first, count);
+    });
     zk.bottomRows(r) = zrj;
   };
 
@@ -389,7 +479,7 @@ void NormalFactor::select_inverse(int jobs) {
       std::pop_heap(pending.begin(), pending.end(), by_cost);
       const std::int64_t k = pending.back();
       pending.pop_back();
-      process(k, here);
+      process(k, here, threads);  // above the split: one supernode at a time, on every thread
       for (std::int64_t c : children[static_cast<std::size_t>(k)]) {
         pending.push_back(c);
         std::push_heap(pending.begin(), pending.end(), by_cost);
@@ -403,7 +493,7 @@ void NormalFactor::select_inverse(int jobs) {
       for (std::int64_t c : children[static_cast<std::size_t>(nodes[i])]) nodes.push_back(c);
     }
     std::sort(nodes.begin(), nodes.end(), std::greater<>());
-    for (std::int64_t k : nodes) process(k, w);
+    for (std::int64_t k : nodes) process(k, w, 1);
   };
   std::atomic<std::size_t> next{0};
   std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));

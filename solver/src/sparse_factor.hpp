@@ -65,6 +65,27 @@ class NormalFactor {
   // On `jobs` threads (disjoint subtrees of the supernodal elimination
   // tree); the numbers do not depend on them.
   void select_inverse(int jobs = 1);
+  // Takes rows out of the factored matrix without factoring it again: the
+  // matrix becomes N − B Bᵀ (B: n × r, each column a whitened observation
+  // row of a measurement taken out). By Sherman–Morrison–Woodbury,
+  //   (N − B Bᵀ)⁻¹ = N⁻¹ + U M⁻¹ Uᵀ,  U = N⁻¹ B,  M = I − Bᵀ N⁻¹ B
+  // (M is the rows' residual cofactor: positive definite while the rows are
+  // redundant), after select_inverse(): the selected inverse is updated in
+  // place, on `jobs` threads (the numbers do not depend on them), and
+  // solve() answers for the new matrix. The cost is r solves and r
+  // multiply-adds per entry of the pattern, against a numeric
+  // factorization and a selected inversion: worth it for a few rows
+  // (downdate_rows_worth()). Downdates compose. Returns false, and changes
+  // nothing, in dense mode or when M's smallest eigenvalue is below 1e-6
+  // (the rows nearly all that determines some unknown: refactor instead).
+  bool downdate(const Eigen::MatrixXd& b, int jobs = 1);
+  // The most rows (all downdates since the factorization together) a
+  // downdate is worth: where its solves and updates cost less than a
+  // factorization and a selected inversion, and its n × r vectors take at
+  // most half of what L takes.
+  std::int64_t downdate_rows_worth() const;
+  std::int64_t downdated_rows() const;
+
   // (N⁻¹)(a, b). Throws std::logic_error for an entry off the pattern (a
   // pair of unknowns that share no measurement): a caller bug.
   double inverse(std::int64_t a, std::int64_t b) const;

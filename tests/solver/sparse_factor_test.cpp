@@ -102,6 +102,80 @@ TEST(NormalFactor, SelectedInversionOnThreadsGivesTheSameBits) {
   EXPECT_LE(worst_difference(*three, b), kRelative);
 }
 
+// Issue 17 point 5: rows taken out of a factored matrix (data snooping's
+// removed measurements) by Sherman–Morrison–Woodbury, against the dense
+// inverse of the matrix without them: the selected inverse on the whole
+// pattern and the solves; twice in a row (downdates compose); on threads
+// with the same bits; and refused, with nothing changed, where the rows
+// were all that determined an unknown.
+TEST(NormalFactor, Issue17_ADowndateIsTheInverseOfTheMatrixWithoutTheRows) {
+  const Built b = network_matrix(300, 4, 21u);
+  const Eigen::Index n = b.dense.rows();
+  std::mt19937 rng(5u);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  // Rows of a measurement between two stations: whitened, 3 rows over their
+  // 6 unknowns, small enough to leave the matrix positive definite.
+  const auto rows_between = [&](int s, int t) {
+    Eigen::MatrixXd rows = Eigen::MatrixXd::Zero(n, 3);
+    for (int c = 0; c < 3; ++c) {
+      for (int k = 0; k < 3; ++k) {
+        rows(3 * s + k, c) = 0.3 * unit(rng);
+        rows(3 * t + k, c) = 0.3 * unit(rng);
+      }
+    }
+    return rows;
+  };
+  // The rows must be in the matrix to be taken out: add them, then factor.
+  Eigen::MatrixXd first(n, 6), second(n, 3);
+  first << rows_between(10, 12), rows_between(150, 151);
+  second << rows_between(290, 293);
+  Built with = b;
+  with.dense += first * first.transpose() + second * second.transpose();
+  with.entries.clear();
+  for (Eigen::Index c = 0; c < n; ++c) {
+    for (Eigen::Index r = 0; r <= c; ++r) {
+      if (with.dense(r, c) != 0.0 || b.dense(r, c) != 0.0) with.entries.push_back({r, c, with.dense(r, c)});
+    }
+  }
+  auto one = NormalFactor::factor(n, with.entries, NormalFactor::Mode::sparse, nullptr);
+  auto two = NormalFactor::factor(n, with.entries, NormalFactor::Mode::sparse, nullptr);
+  ASSERT_TRUE(one && two);
+  one->select_inverse(1);
+  two->select_inverse(2);
+  EXPECT_LE(worst_difference(*one, with), kRelative);
+  ASSERT_TRUE(one->downdate(first, 1));
+  ASSERT_TRUE(two->downdate(first, 2));
+  Built without_first = with;
+  without_first.dense -= first * first.transpose();
+  EXPECT_LE(worst_difference(*one, without_first), kRelative);
+  ASSERT_TRUE(one->downdate(second, 1));
+  ASSERT_TRUE(two->downdate(second, 2));
+  Built without_both = without_first;
+  without_both.dense -= second * second.transpose();
+  EXPECT_LE(worst_difference(*one, without_both), kRelative);
+  EXPECT_EQ(one->downdated_rows(), 9);
+  for (const auto& e : with.entries) ASSERT_EQ(one->inverse(e.row, e.col), two->inverse(e.row, e.col)) << e.row << ", " << e.col;
+  // A station held only by the rows: its unknowns' weight is all theirs.
+  Eigen::MatrixXd all = Eigen::MatrixXd::Zero(n, 3);
+  const Eigen::LLT<Eigen::MatrixXd> block(without_both.dense.block(3 * 100, 3 * 100, 3, 3));
+  ASSERT_EQ(block.info(), Eigen::Success);
+  all.block(3 * 100, 0, 3, 3) = block.matrixL();
+  EXPECT_FALSE(one->downdate(all, 1));
+  EXPECT_LE(worst_difference(*one, without_both), kRelative);  // nothing changed
+  EXPECT_EQ(one->downdated_rows(), 9);
+  // A dense factor (the tests' reference) is never downdated.
+  auto dense = NormalFactor::factor(n, with.entries, NormalFactor::Mode::dense, nullptr);
+  ASSERT_TRUE(dense);
+  dense->select_inverse();
+  EXPECT_FALSE(dense->downdate(first));
+  // A refactorization starts from no downdate.
+  auto again = NormalFactor::factor(n, with.entries, NormalFactor::Mode::sparse, nullptr, std::move(*one));
+  ASSERT_TRUE(again);
+  again->select_inverse();
+  EXPECT_EQ(again->downdated_rows(), 0);
+  EXPECT_LE(worst_difference(*again, with), kRelative);
+}
+
 TEST(NormalFactor, ARefactorizationReusesTheAnalysisOnlyForTheSamePattern) {
   const Built first = network_matrix(60, 3, 1u);
   auto f = NormalFactor::factor(first.dense.rows(), first.entries, NormalFactor::Mode::sparse, nullptr);

@@ -239,6 +239,58 @@ TEST(NetworkGenerator, Issue17_OneThreadAndTwoGiveTheSameBits) {
   expect_identical(solver::adjust_network(prepared.network, one), solver::adjust_network(prepared.network, two));
 }
 
+// Issue 17 point 5: a snooping pass that removes a few measurements takes
+// them out of the last factor and its selected inverse (Woodbury) instead
+// of factoring again. Against the same adjustment factored afresh every
+// pass: the same measurements removed, and every number within rounding.
+TEST(NetworkGenerator, Issue17_SnoopingDowndatesAgreeWithFactoringEveryPass) {
+  constexpr double kPosition_m = 1e-9;     // float64 spacing at Earth radius is 9.3e-10 m
+  constexpr double kRelative = 1e-9;       // covariances, of each station's largest entry
+  constexpr double kStatistic = 1e-9;      // w, redundancy (dimensionless)
+  NetworkGeneratorOptions o;
+  o.stations = 2000;
+  o.blunders = 4;
+  o.seed = 6;  // snooping takes 10 measurements, then 1 more: the second pass is a downdate
+  const GeneratedNetwork g = generate_network(o);
+  solver::AdjustOptions updated, afresh;
+  afresh.snooping_downdates = false;
+  const solver::AdjustmentResult a = solver::adjust_network(g.network, updated);
+  const solver::AdjustmentResult b = solver::adjust_network(g.network, afresh);
+  ASSERT_GE(a.removed_per_pass.size(), 2u);
+  EXPECT_GE(a.passes_downdated, 1);
+  EXPECT_EQ(b.passes_downdated, 0);
+  EXPECT_EQ(a.removed_per_pass, b.removed_per_pass);
+  EXPECT_EQ(a.dof, b.dof);
+  EXPECT_NEAR(a.vtpv, b.vtpv, kRelative * b.vtpv);
+  ASSERT_EQ(a.stations.size(), b.stations.size());
+  double position = 0.0, covariance = 0.0;
+  for (std::size_t i = 0; i < a.stations.size(); ++i) {
+    position = testing::nan_max(position, testing::max_abs_component(a.stations[i].position - b.stations[i].position));
+    const double scale = testing::max_abs_component(b.stations[i].covariance_m2);
+    if (scale > 0.0) {
+      covariance = testing::nan_max(covariance, testing::max_abs_component(a.stations[i].covariance_m2 - b.stations[i].covariance_m2) / scale);
+    }
+  }
+  EXPECT_LE(position, kPosition_m);
+  EXPECT_LE(covariance, kRelative);
+  ASSERT_EQ(a.measurements.size(), b.measurements.size());
+  double statistic = 0.0;
+  for (std::size_t k = 0; k < a.measurements.size(); ++k) {
+    const auto& x = a.measurements[k];
+    const auto& y = b.measurements[k];
+    ASSERT_EQ(x.outlier, y.outlier) << k;
+    for (Eigen::Index c = 0; c < x.w.size(); ++c) {
+      if (std::isnan(y.w(c))) {
+        EXPECT_TRUE(std::isnan(x.w(c))) << k;
+        continue;
+      }
+      statistic = testing::nan_max(statistic, std::abs(x.w(c) - y.w(c)));
+      statistic = testing::nan_max(statistic, std::abs(x.redundancy(c) - y.redundancy(c)));
+    }
+  }
+  EXPECT_LE(statistic, kStatistic);
+}
+
 TEST(NetworkGenerator, RefusesWhatItCannotMakeByName) {
   NetworkGeneratorOptions o;
   o.stations = 3;

@@ -92,6 +92,11 @@ struct AdjustOptions {
   // per-measurement statistics (0: the machine's cores). The results do not
   // depend on it: every sum is taken in the same order.
   int jobs = 0;
+  // Data snooping takes the few measurements a pass removes out of the
+  // last factor and its selected inverse (Sherman–Morrison–Woodbury) when
+  // that costs less than factoring again; false: every pass factors and
+  // inverts afresh (the tests' reference).
+  bool snooping_downdates = true;
   // The memory the factor and its selected inverse may take (bytes; 0: what
   // the machine has available). Checked after CHOLMOD's analysis, before
   // the numbers: E_MEMORY (rejected) names what is needed.
@@ -166,6 +171,7 @@ struct AdjustmentTimings {
   double factor = 0.0;          // CHOLMOD: analysis (first pass) and numeric factorizations
   double solve = 0.0;           // Gauss–Newton solves
   double select_inverse = 0.0;  // N⁻¹ on the factor's pattern
+  double downdate = 0.0;        // data snooping: measurements taken out of the factor and N⁻¹
   double measurements = 0.0;    // per measurement: residuals, redundancy, tests
   double stations = 0.0;        // covariances, ellipses, relative precision
 };
@@ -185,6 +191,11 @@ struct AdjustmentResult {
   // Adjustments in all: 1, plus one per data-snooping step (a step removes
   // the worst failing measurement and any failing far from it).
   int passes = 0;
+  // Measurements data snooping removed after each pass but the last, and
+  // the passes that took them out of the last factor (a downdate,
+  // AdjustOptions::snooping_downdates) instead of factoring again.
+  std::vector<std::size_t> removed_per_pass;
+  int passes_downdated = 0;
   bool converged = false;
   double largest_correction_m = 0.0;  // of the last iteration
   std::string datum;                  // how the datum is defined, in words

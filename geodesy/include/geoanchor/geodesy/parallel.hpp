@@ -1,6 +1,6 @@
 #pragma once
 // Work split over threads with results that do not depend on how many
-// (private to solver). `for_chunks` cuts [0, count) into chunks of a fixed
+// (the solver's assembly and statistics, the adjust outputs' formatting). `for_chunks` cuts [0, count) into chunks of a fixed
 // size, whatever the number of threads, and runs `work(begin, end)` on each,
 // the chunks shared out among `jobs` threads (the caller's included). Each
 // chunk must write only its own results; whatever is summed across chunks
@@ -15,7 +15,7 @@
 #include <thread>
 #include <vector>
 
-namespace geoanchor::solver {
+namespace geoanchor {
 
 // Threads for `jobs` = 0: the machine's cores.
 inline int resolve_jobs(int jobs) {
@@ -54,4 +54,4 @@ void for_chunks(std::size_t count, std::size_t chunk, int jobs, const Work& work
   }
 }
 
-}  // namespace geoanchor::solver
+}  // namespace geoanchor
