@@ -2,11 +2,15 @@
 
 #include "geoanchor/workflow/adjust.hpp"
 
+#include "geoanchor/geodesy/parallel.hpp"
+
 #include <Eigen/SVD>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <numbers>
 #include <sstream>
@@ -17,6 +21,7 @@
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/hash.hpp"
 #include "geoanchor/io/network_input.hpp"
 #include "geoanchor/io/sinex.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
@@ -140,8 +145,6 @@ std::string csv_field(const std::string& v) {
   for (char c : v) out += c == '"' ? std::string("\"\"") : std::string(1, c);
   return out + "\"";
 }
-
-std::string number_or_empty(double v) { return std::isfinite(v) ? format_shortest(v) : std::string(); }
 
 double correlation(const Eigen::Matrix3d& c, int a, int b) {
   const double d = std::sqrt(c(a, a) * c(b, b));
@@ -491,28 +494,133 @@ std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentRe
   return out.str();
 }
 
-std::string measurements_csv(const geodesy::Network& net, const solver::AdjustmentResult& r) {
-  std::ostringstream out;
-  out << "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,"
-         "mdb,status\n";
-  for (const auto& am : r.measurements) {
-    const auto& m = net.measurements[am.index];
-    const bool ang = angular(m.kind);
-    const double value_scale = ang ? kRadToDeg : 1.0, small_scale = ang ? kRadToArcsec : 1.0;
-    const std::string status = am.outlier ? "outlier" : am.used ? "used" : "not used";
-    for (Eigen::Index k = 0; k < am.observed.size(); ++k) {
-      const char* axis[] = {"x", "y", "z"};
-      const std::string component =
-          am.observed.size() == 1 ? "" : (m.kind == MeasurementKind::gnss_points ? net.stations[m.stations[static_cast<std::size_t>(k / 3)]].id + "." : std::to_string(k / 3) + ".") + axis[k % 3];
-      out << csv_field(m.source) << ',' << kind_key(m.kind) << ',' << csv_field(stations_of(net, m)) << ',' << component << ','
-          << number_or_empty(am.observed(k) * value_scale) << ',' << number_or_empty(am.adjusted(k) * value_scale) << ','
-          << (ang ? "deg" : "m") << ',' << number_or_empty(am.residual(k) * small_scale) << ','
-          << number_or_empty(am.sigma(k) * small_scale) << ',' << number_or_empty(am.residual_sigma(k) * small_scale) << ','
-          << (ang ? "arcsec" : "m") << ',' << number_or_empty(am.redundancy(k)) << ',' << number_or_empty(am.w(k)) << ','
-          << number_or_empty(am.mdb(k) * small_scale) << ',' << status << "\n";
-    }
+namespace {
+
+// nlohmann's dump(indent) of `doc`, with the elements of its top-level
+// array `key` dumped on threads and joined as dump(indent) joins them: each
+// element's lines indented by two levels more (a JSON string holds no raw
+// newline, so every newline in a dump is the layout's).
+std::string dump_with_array_on_threads(nlohmann::ordered_json doc, const std::string& key, int indent, int jobs) {
+  const auto it = doc.find(key);
+  if (it == doc.end() || !it->is_array() || it->empty()) return doc.dump(indent);
+  const nlohmann::ordered_json elements = std::move(*it);
+  const std::string marker = "\u0001geoanchor:" + key + "\u0001";  // what no report holds
+  *it = marker;
+  std::string text = doc.dump(indent);
+  const std::string quoted = nlohmann::ordered_json(marker).dump();
+  const std::size_t at = text.find(quoted);
+  if (at == std::string::npos || text.find(quoted, at + 1) != std::string::npos) {
+    throw std::logic_error("dump_with_array_on_threads: the marker is not where the array was");
   }
-  return out.str();
+  const std::string inner(static_cast<std::size_t>(2 * indent), ' ');
+  constexpr std::size_t kElementsPerChunk = 1024;
+  std::vector<std::string> parts((elements.size() + kElementsPerChunk - 1) / kElementsPerChunk);
+  for_chunks(elements.size(), kElementsPerChunk, resolve_jobs(jobs), [&](std::size_t begin, std::size_t end) {
+    std::string& out = parts[begin / kElementsPerChunk];
+    for (std::size_t i = begin; i < end; ++i) {
+      out += inner;
+      for (const char c : elements[i].dump(indent)) {
+        out += c;
+        if (c == '\n') out += inner;
+      }
+      out += i + 1 < elements.size() ? ",\n" : "\n";
+    }
+  });
+  std::string array = "[\n";
+  for (const auto& p : parts) array += p;
+  array += std::string(static_cast<std::size_t>(indent), ' ') + "]";
+  return text.replace(at, quoted.size(), array);
+}
+
+}  // namespace
+
+std::string stations_sidecar_text(nlohmann::ordered_json report, const std::vector<std::string>& argv, const std::vector<std::string>& inputs,
+                                  const std::string& version, int jobs) {
+  report.erase("measurements");
+  report["schema"] = "geoanchor.stations/1";
+  report["report_schema"] = "geoanchor.adjust-report/1";
+  report["geoanchor_version"] = version;
+  report["command"] = argv;
+  nlohmann::ordered_json listed = nlohmann::ordered_json::array();
+  for (const auto& in : inputs) {
+    std::error_code ec;
+    const bool hashable = in != "-" && std::filesystem::is_regular_file(in, ec);
+    listed.push_back({{"path", in == "-" ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(in)},
+                      {"sha256", hashable ? nlohmann::ordered_json(io::sha256_file_hex(in)) : nlohmann::ordered_json(nullptr)}});
+  }
+  report["inputs"] = listed;
+  return dump_with_array_on_threads(std::move(report), "stations", 2, jobs);
+}
+
+std::string measurements_csv(const geodesy::Network& net, const solver::AdjustmentResult& r, int jobs) {
+  // Rows of consecutive measurements formatted on threads into strings of
+  // their own and joined in order: the same text for any number of threads
+  // (10⁵ stations: 8·10⁵ rows, 200 MB).
+  constexpr std::size_t kMeasurementsPerChunk = 4096;
+  const std::size_t chunks = (r.measurements.size() + kMeasurementsPerChunk - 1) / kMeasurementsPerChunk;
+  std::vector<std::string> parts(chunks);
+  const auto number = [](std::string& out, double v) {
+    if (!std::isfinite(v)) return;  // empty field
+    char buf[32];
+    const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, v);
+    out.append(buf, ec == std::errc() ? ptr : buf);
+  };
+  for_chunks(r.measurements.size(), kMeasurementsPerChunk, resolve_jobs(jobs), [&](std::size_t begin, std::size_t end) {
+    std::string& out = parts[begin / kMeasurementsPerChunk];
+    out.reserve((end - begin) * 3 * 240);
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto& am = r.measurements[i];
+      const auto& m = net.measurements[am.index];
+      const bool ang = angular(m.kind);
+      const double value_scale = ang ? kRadToDeg : 1.0, small_scale = ang ? kRadToArcsec : 1.0;
+      const char* status = am.outlier ? "outlier" : am.used ? "used" : "not used";
+      const std::string source = csv_field(m.source), stations = csv_field(stations_of(net, m));
+      for (Eigen::Index k = 0; k < am.observed.size(); ++k) {
+        static constexpr const char* kAxis[] = {"x", "y", "z"};
+        out += source;
+        out += ',';
+        out += kind_key(m.kind);
+        out += ',';
+        out += stations;
+        out += ',';
+        if (am.observed.size() != 1) {
+          if (m.kind == MeasurementKind::gnss_points) out += net.stations[m.stations[static_cast<std::size_t>(k / 3)]].id;
+          else out += std::to_string(k / 3);
+          out += '.';
+          out += kAxis[k % 3];
+        }
+        out += ',';
+        number(out, am.observed(k) * value_scale);
+        out += ',';
+        number(out, am.adjusted(k) * value_scale);
+        out += ang ? ",deg," : ",m,";
+        number(out, am.residual(k) * small_scale);
+        out += ',';
+        number(out, am.sigma(k) * small_scale);
+        out += ',';
+        number(out, am.residual_sigma(k) * small_scale);
+        out += ang ? ",arcsec," : ",m,";
+        number(out, am.redundancy(k));
+        out += ',';
+        number(out, am.w(k));
+        out += ',';
+        number(out, am.mdb(k) * small_scale);
+        out += ',';
+        out += status;
+        out += '\n';
+      }
+    }
+  });
+  std::string out = "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,"
+                    "mdb,status\n";
+  std::size_t size = out.size();
+  for (const auto& part : parts) size += part.size();
+  out.reserve(size);
+  for (auto& part : parts) {
+    out += part;
+    std::string().swap(part);
+  }
+  return out;
 }
 
 namespace {

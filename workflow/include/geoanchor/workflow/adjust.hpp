@@ -62,13 +62,15 @@ PreparedNetwork prepare_network(const AdjustRequest& request);
 // weights (σ0 = 1). Stations no measurement reaches are left out.
 std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
 
-// One row per measurement component with its statistics.
 // The adjusted stations and their joint covariance as SINEX 2.02 (the
 // adjustment run with AdjustOptions::joint_covariance). Throws
 // geoanchor::Error (usage) for a local network or a frame without epoch.
 std::string stations_sinex(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const std::string& software);
 
-std::string measurements_csv(const geodesy::Network& net, const solver::AdjustmentResult& r);
+// One row per measurement component with its statistics, formatted on
+// `jobs` threads (0: the machine's cores); the text does not depend on how
+// many.
+std::string measurements_csv(const geodesy::Network& net, const solver::AdjustmentResult& r, int jobs = 0);
 
 // The estimated Helmert of --estimate-helmert as a transform file
 // (docs/transform-file.md): from the group's frame to the network's, with
@@ -84,5 +86,14 @@ io::TransformFile helmert_transform_file(const PreparedNetwork& prepared, const 
 std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
 nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
                                        const solver::AdjustOptions& o, bool with_measurements = true);
+
+// The stations CSV's sidecar (schema geoanchor.stations/1) as JSON text
+// (indented by 2): `report` (report_document) without its measurements,
+// the version, the command line and each input with its SHA-256 (none for
+// standard input, a pipe or a FIFO, which cannot be read again). The
+// stations are formatted on `jobs` threads (0: the machine's cores); the
+// text is nlohmann's dump(2) of the document, byte for byte, for any number.
+std::string stations_sidecar_text(nlohmann::ordered_json report, const std::vector<std::string>& argv,
+                                  const std::vector<std::string>& inputs, const std::string& version, int jobs = 0);
 
 }  // namespace geoanchor::workflow
