@@ -132,7 +132,7 @@ double bare_cholmod_seconds(const GeneratedNetwork& g) {
 
 struct KernelRun {
   double seconds = -1.0, sigma0 = 0.0, coverage = 0.0, chi2_ratio = 0.0;
-  int passes = 0;
+  int passes = 0, downdated = 0;
   std::size_t found = 0, others_removed = 0;
   solver::AdjustmentTimings parts;
   std::int64_t factor_nonzeros = 0;
@@ -204,6 +204,7 @@ void check_against_truth(const GeneratedNetwork& g, const solver::AdjustmentResu
   }
   k.sigma0 = r.sigma0.value_or(0.0);
   k.passes = r.passes;
+  k.downdated = r.passes_downdated;
   k.parts = r.seconds;
   k.factor_nonzeros = r.factor_nonzeros;
 }
@@ -362,14 +363,18 @@ int main(int argc, char** argv) {
     k.two_thread_seconds = a;
     kernels.push_back({n, k});
   }
-  std::printf("\nthe adjustment's parts (seconds over every pass; solver::AdjustmentTimings)\n%-8s %10s %9s %9s %9s %9s %9s %9s %12s\n",
-              "stations", "nnz(L)", "assemble", "factor", "solve", "sel.inv", "per-meas", "stations", "vs dense");
+  std::printf("\nthe adjustment's parts (seconds over every pass; solver::AdjustmentTimings; passes: all, and those downdated)\n"
+              "%-8s %10s %7s %9s %9s %9s %9s %9s %9s %9s %12s\n",
+              "stations", "nnz(L)", "passes", "assemble", "factor", "solve", "sel.inv", "downdate", "per-meas", "stations", "vs dense");
   // (then, per size, the adjustment on one thread and the speed-up of two)
   for (const auto& [n, k] : kernels) {
     char dense[32] = "-";
     if (k.dense_difference >= 0.0 || std::isnan(k.dense_difference)) std::snprintf(dense, sizeof dense, "%.1e", k.dense_difference);
-    std::printf("%-8zu %10.3g %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %12s\n", n, static_cast<double>(k.factor_nonzeros), k.parts.assemble,
-                k.parts.factor, k.parts.solve, k.parts.select_inverse, k.parts.measurements, k.parts.stations, dense);
+    char passes[16];
+    std::snprintf(passes, sizeof passes, "%d/%d", k.passes, k.downdated);
+    std::printf("%-8zu %10.3g %7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %12s\n", n, static_cast<double>(k.factor_nonzeros), passes,
+                k.parts.assemble, k.parts.factor, k.parts.solve, k.parts.select_inverse, k.parts.downdate, k.parts.measurements,
+                k.parts.stations, dense);
   }
   std::printf("\n%-8s %12s %12s %9s\n", "stations", "1 thread s", "2 threads s", "speed-up");
   for (const auto& [n, k] : kernels) {

@@ -665,7 +665,17 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
   for (const auto& n : prepared.notes) out << "  " << n << "\n";
   out << "  datum: " << r.datum << "\n";
   out << "  solve: " << r.iterations << " iterations, last correction " << format_fixed(r.largest_correction_m, 6) << " m; "
-      << r.unknowns << " unknowns, " << r.observations << " observations, factor " << r.factor_nonzeros << " nonzeros\n\n";
+      << r.unknowns << " unknowns, " << r.observations << " observations, factor " << r.factor_nonzeros << " nonzeros\n";
+  if (!r.removed_per_pass.empty()) {
+    std::string steps;
+    for (std::size_t k : r.removed_per_pass) steps += (steps.empty() ? "" : ", ") + std::to_string(k);
+    out << "  data snooping: " << r.passes << " adjustments, removing " << steps << " measurement(s) in turn";
+    if (r.passes_downdated > 0) {
+      out << "; " << r.passes_downdated << " of them by taking the removed measurements out of the last factor (a downdate)";
+    }
+    out << "\n";
+  }
+  out << "\n";
   out << "Statistics\n";
   out << "  vtpv = " << format_shortest(r.vtpv) << ", dof = " << r.dof;
   if (r.variance_factor) out << ", variance factor = " << format_fixed(*r.variance_factor, 4) << ", sigma0 = " << format_fixed(*r.sigma0, 4);
@@ -775,6 +785,7 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
   }
   j["w_critical"] = r.w_critical;
   j["iterations"] = r.iterations;
+  j["snooping"] = {{"adjustments", r.passes}, {"removed_per_step", r.removed_per_pass}, {"downdated", r.passes_downdated}};
   j["converged"] = r.converged;
   j["largest_correction_m"] = r.largest_correction_m;
   j["unknowns"] = r.unknowns;
