@@ -23,6 +23,10 @@
 //    StdDev) and its <Directions> the other targets.
 
 #include <cctype>
+#include <initializer_list>
+#include <thread>
+#include <system_error>
+#include <algorithm>
 #include <unordered_map>
 #include <cstdint>
 #include <bitset>
@@ -185,6 +189,16 @@ class Reader final : public XmlHandler {
     xml_.parse(text, source_, "E_DYNAML");
     if (!root_seen_) fail(1, "no <DnaXmlFormat> root element");
   }
+  // A part of a file (read_dynaml): `pieces` are the file's prologue (its
+  // root element's start tag), the part, and the root's end tag, as they
+  // apply; `line_offset` maps their lines to the file's. The root's
+  // warnings are the first part's to give.
+  void parse_part(std::initializer_list<std::string_view> pieces, std::ptrdiff_t line_offset, bool root_warnings) {
+    xml_.line_offset = line_offset;
+    root_warnings_ = root_warnings;
+    xml_.parse(pieces, source_, "E_DYNAML");
+    if (!root_seen_) fail(1, "no <DnaXmlFormat> root element");
+  }
 
   void start_element(const std::string& name, const XML_Char** attributes) override { start(name, attributes); }
   void end_element(const std::string& name) override { end(name); }
@@ -214,7 +228,7 @@ class Reader final : public XmlHandler {
                            "\" is not read by geoanchor; expected type, referenceframe, epoch");
         }
       }
-      if (frame_name_.empty() || epoch_text_.empty()) {
+      if (root_warnings_ && (frame_name_.empty() || epoch_text_.empty())) {
         net_.warnings.push_back(source_ + ": <DnaXmlFormat> names no " +
                                 std::string(frame_name_.empty() ? "referenceframe" : "epoch") +
                                 ": DynaML.xsd's default (GDA2020, 01.01.2020) applies");
@@ -734,7 +748,7 @@ class Reader final : public XmlHandler {
   XmlStream xml_{*this};
   std::vector<Tag> path_;
   std::string text_;
-  bool root_seen_ = false;
+  bool root_seen_ = false, root_warnings_ = true;
   std::string frame_name_, epoch_text_;
   std::optional<geodesy::Frame> root_frame_;
   // The element being read, kept from one to the next (Reused, Fields).
@@ -748,18 +762,160 @@ class Reader final : public XmlHandler {
 
 }  // namespace
 
+namespace {
+
+void warn_approximate_heights(std::string_view source, std::size_t count, geodesy::Network& into) {
+  if (count == 0) return;
+  into.warnings.push_back(std::string(source) + ": " + std::to_string(count) +
+                          " free station(s) have orthometric heights and there is no --geoid: each starts the iteration "
+                          "at h = H (metres off where N is metres; their adjusted heights do not depend on it)");
+}
+
+// A large file read in parts on threads (expat is one thread; a 10⁵-station
+// measurement file is 180 MB of XML). The parts are cut where a top-level
+// element (<DnaStation>, <DnaMeasurement>) starts; each is read as a
+// document of its own (the file's prologue and root start tag before it,
+// the root's end tag after it) into a network of its own, and the networks
+// are joined in the file's order by station name: the same network as one
+// reading. A cut that fell inside a comment or CDATA section leaves a part
+// that is not well-formed; then, or on any other error, nothing of the
+// parts is kept and the caller reads the file whole, which reports the
+// error as it always does. False: not read here.
+bool read_dynaml_in_parts(std::string_view text, std::string_view source, geodesy::Network& into, const NetworkReadOptions& options) {
+  if (options.geoid) return false;  // (PROJ's grids are for one thread)
+  const std::size_t cores = std::max(1u, std::thread::hardware_concurrency());
+  const std::size_t wanted = std::min<std::size_t>(cores, options.dynaml_part_bytes ? text.size() / options.dynaml_part_bytes : 1);
+  if (wanted < 2) return false;
+  // The root element's start tag (past the prologue; attribute values may
+  // hold '>', quotes not).
+  const std::size_t root = text.find("<DnaXmlFormat");
+  if (root == std::string_view::npos || text.substr(0, root).find("<!DOCTYPE") != std::string_view::npos) return false;
+  std::size_t root_end = root;
+  char quote = 0;
+  for (; root_end < text.size(); ++root_end) {
+    const char c = text[root_end];
+    if (quote) {
+      if (c == quote) quote = 0;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+    } else if (c == '>') {
+      break;
+    }
+  }
+  if (root_end >= text.size() || text[root_end - 1] == '/') return false;
+  ++root_end;
+  const std::string_view prologue = text.substr(0, root_end);
+  // The cuts: at the first top-level element at or past each share.
+  std::vector<std::size_t> cut{root_end};
+  for (std::size_t k = 1; k < wanted; ++k) {
+    std::size_t at = std::max(cut.back() + 1, root_end + k * (text.size() - root_end) / wanted);
+    for (at = text.find("<Dna", at); at != std::string_view::npos; at = text.find("<Dna", at + 1)) {
+      const std::string_view rest = text.substr(at + 4);
+      if (rest.substr(0, 12) == "Measurement>" || rest.substr(0, 8) == "Station>") break;
+    }
+    if (at == std::string_view::npos) break;
+    cut.push_back(at);
+  }
+  cut.push_back(text.size());
+  const std::size_t parts = cut.size() - 1;
+  if (parts < 2) return false;
+  const std::ptrdiff_t prologue_lines = std::count(prologue.begin(), prologue.end(), '\n');
+  std::vector<std::ptrdiff_t> line_before(parts, 0);  // newlines before each part
+  for (std::size_t k = 1; k < parts; ++k) {
+    line_before[k] = line_before[k - 1] + std::count(text.begin() + static_cast<std::ptrdiff_t>(k == 1 ? 0 : cut[k - 1]),
+                                                     text.begin() + static_cast<std::ptrdiff_t>(cut[k]), '\n');
+  }
+  struct Part {
+    geodesy::Network net;
+    std::size_t approximate_heights = 0;
+    bool ok = false;
+  };
+  std::vector<Part> read(parts);
+  const auto read_part = [&](std::size_t k) {
+    Part& part = read[k];
+    part.net.space = geodesy::NetworkSpace::ellipsoidal;
+    part.net.frame = into.frame;
+    part.net.ellipsoid = into.ellipsoid;
+    part.net.ellipsoid_stated = into.ellipsoid_stated;
+    try {
+      Reader reader(source, part.net, options);
+      constexpr std::string_view kEnd = "</DnaXmlFormat>";
+      const std::string_view body = text.substr(cut[k], cut[k + 1] - cut[k]);
+      if (k == 0) {
+        reader.parse_part({text.substr(0, cut[1]), kEnd}, 0, true);
+      } else if (k + 1 < parts) {
+        reader.parse_part({prologue, body, kEnd}, line_before[k] - prologue_lines, false);
+      } else {
+        reader.parse_part({prologue, body}, line_before[k] - prologue_lines, false);
+      }
+      part.approximate_heights = reader.approximate_heights();
+      part.ok = true;
+    } catch (...) {
+      part.ok = false;  // read whole instead, for the error as it is reported there
+    }
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t k = 1; k < parts; ++k) {
+    try {
+      pool.emplace_back(read_part, k);
+    } catch (const std::system_error&) {
+      read_part(k);
+    }
+  }
+  read_part(0);
+  for (auto& t : pool) t.join();
+  if (!std::all_of(read.begin(), read.end(), [](const Part& p) { return p.ok; })) return false;
+
+  // Joined in order: each part's stations by name (defined or referenced,
+  // in the order they came), then its measurements and direction sets.
+  geodesy::Network joined = into;
+  try {
+    NetworkBuilder builder(joined);
+    std::size_t approximate = 0;
+    for (std::size_t k = 0; k < parts; ++k) {
+      Part& part = read[k];
+      if (k == 0 && !joined.frame) {
+        joined.frame = part.net.frame;
+        joined.ellipsoid = part.net.ellipsoid;
+        joined.ellipsoid_stated = part.net.ellipsoid_stated;
+      }
+      std::vector<std::size_t> station(part.net.stations.size());
+      for (std::size_t i = 0; i < part.net.stations.size(); ++i) {
+        const geodesy::NetworkStation& s = part.net.stations[i];
+        station[i] = s.defined ? builder.define(s.id, s.position, s.constraint, s.source) : builder.reference(s.id, s.source);
+      }
+      const std::size_t sets = joined.direction_sets.size();
+      for (auto d : part.net.direction_sets) {
+        d.station = station[d.station];
+        joined.direction_sets.push_back(std::move(d));
+      }
+      for (auto& m : part.net.measurements) {
+        for (auto& st : m.stations) st = station[st];
+        if (m.set) *m.set += sets;
+        joined.measurements.push_back(std::move(m));
+      }
+      joined.warnings.insert(joined.warnings.end(), part.net.warnings.begin(), part.net.warnings.end());
+      approximate += part.approximate_heights;
+    }
+    warn_approximate_heights(source, approximate, joined);
+  } catch (const Error&) {
+    return false;  // (a station defined twice, differently: read whole, for the message as it is)
+  }
+  into = std::move(joined);
+  return true;
+}
+
+}  // namespace
+
 void read_dynaml(std::string_view text, std::string_view source, geodesy::Network& into, const NetworkReadOptions& options) {
   if (!into.stations.empty() && into.space != geodesy::NetworkSpace::ellipsoidal) {
     throw Error(ErrorKind::input, "E_NETWORK", std::string(source) + ": DynaML is a network on the ellipsoid; the other inputs are local");
   }
   into.space = geodesy::NetworkSpace::ellipsoidal;
+  if (read_dynaml_in_parts(text, source, into, options)) return;
   Reader reader(source, into, options);
   reader.parse(text);
-  if (reader.approximate_heights() > 0) {
-    into.warnings.push_back(std::string(source) + ": " + std::to_string(reader.approximate_heights()) +
-                            " free station(s) have orthometric heights and there is no --geoid: each starts the iteration "
-                            "at h = H (metres off where N is metres; their adjusted heights do not depend on it)");
-  }
+  warn_approximate_heights(source, reader.approximate_heights(), into);
 }
 
 }  // namespace geoanchor::io::detail

@@ -10,7 +10,9 @@
 
 namespace geoanchor::io::detail {
 
-void XmlStream::parse(std::string_view text, const std::string& source, const char* code) {
+void XmlStream::parse(std::string_view text, const std::string& source, const char* code) { parse({text}, source, code); }
+
+void XmlStream::parse(std::initializer_list<std::string_view> pieces, const std::string& source, const char* code) {
   std::unique_ptr<XML_ParserStruct, decltype(&XML_ParserFree)> parser(XML_ParserCreate("UTF-8"), &XML_ParserFree);
   if (!parser) throw std::bad_alloc();
   parser_ = parser.get();
@@ -18,22 +20,30 @@ void XmlStream::parse(std::string_view text, const std::string& source, const ch
   XML_SetElementHandler(parser_, &XmlStream::on_start, &XmlStream::on_end);
   XML_SetCharacterDataHandler(parser_, &XmlStream::on_text);
   constexpr std::size_t kChunk = 1 << 20;
-  for (std::size_t at = 0; at < text.size() || at == 0; at += kChunk) {
-    const std::size_t n = std::min(kChunk, text.size() - at);
-    const bool last = at + n >= text.size();
-    if (XML_Parse(parser_, text.data() + at, static_cast<int>(n), last ? 1 : 0) != XML_STATUS_OK) {
+  std::size_t left = 0;
+  for (const auto& p : pieces) left += p.size();
+  const auto feed = [&](const char* data, std::size_t n, bool last) {
+    if (XML_Parse(parser_, data, static_cast<int>(n), last ? 1 : 0) != XML_STATUS_OK) {
       if (error_) std::rethrow_exception(error_);
       throw Error(ErrorKind::input, code,
-                  source + ":" + std::to_string(XML_GetCurrentLineNumber(parser_)) +
-                      ": not well-formed XML: " + XML_ErrorString(XML_GetErrorCode(parser_)));
+                  source + ":" + std::to_string(line()) + ": not well-formed XML: " + XML_ErrorString(XML_GetErrorCode(parser_)));
     }
     if (error_) std::rethrow_exception(error_);
-    if (last) break;
+  };
+  if (left == 0) feed("", 0, true);
+  for (const auto& text : pieces) {
+    for (std::size_t at = 0; at < text.size(); at += kChunk) {
+      const std::size_t n = std::min(kChunk, text.size() - at);
+      left -= n;
+      feed(text.data() + at, n, left == 0);
+    }
   }
   parser_ = nullptr;
 }
 
-std::size_t XmlStream::line() const { return parser_ ? static_cast<std::size_t>(XML_GetCurrentLineNumber(parser_)) : 0; }
+std::size_t XmlStream::line() const {
+  return parser_ ? static_cast<std::size_t>(static_cast<std::ptrdiff_t>(XML_GetCurrentLineNumber(parser_)) + line_offset) : 0;
+}
 
 void XmlStream::on_start(void* self, const XML_Char* name, const XML_Char** attributes) {
   auto* x = static_cast<XmlStream*>(self);

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <exception>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 
@@ -31,8 +32,14 @@ class XmlStream {
   // Throws geoanchor::Error (input, `code`) "SOURCE:LINE: not well-formed
   // XML: …", or whatever the handler threw.
   void parse(std::string_view text, const std::string& source, const char* code);
-  // The line of the element being handled (1-based).
+  // The same for a text given in pieces, read in turn as one document (a
+  // part of a file between its own beginning and end; see read_dynaml).
+  void parse(std::initializer_list<std::string_view> pieces, const std::string& source, const char* code);
+  // The line of the element being handled (1-based), plus `line_offset`
+  // (a part of a file: the lines before it, less those of what was put
+  // before it).
   std::size_t line() const;
+  std::ptrdiff_t line_offset = 0;
 
  private:
   static void on_start(void* self, const XML_Char* name, const XML_Char** attributes);

@@ -37,6 +37,10 @@ struct NetworkReadOptions {
   // without an epoch: each file's REF_EPOCH is theirs. Given with no SINEX
   // input, read_network refuses it (usage).
   std::optional<geodesy::Frame> sinex_frame;
+  // A DynaML file from this size on (bytes) is parsed in parts on the
+  // machine's cores, with the same result as in one piece (0: never). Not
+  // with a geoid, whose PROJ grid is for one thread.
+  std::size_t dynaml_part_bytes = std::size_t{32} << 20;
 };
 
 // Reads `inputs` (files; "-" is standard input, read once) into one
