@@ -1059,12 +1059,17 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
                       " parts that no measurement joins: " + list + "; adjust them separately or join them");
     }
     p.layout = make_layout(p);
+    // A later pass of a GNSS network (linear, its matrix the same at every
+    // state) with the same unknowns: data snooping took measurements out,
+    // no station. Its datum is the last pass's (the translations, held by
+    // the same constraints: the network stays whole), not probed again.
+    const bool same_unknowns = result.passes > 1 && p.layout == last_layout && constant_jacobian(p);
     // A GNSS network (linear, its matrix the same at every state) that lost
     // a few measurements to data snooping and no unknown: they are taken
     // out of the last factor and its selected inverse (a downdate) instead
     // of factoring and inverting again (NormalFactor::downdate).
     bool downdated = false;
-    if (!removed_last_pass.empty() && o.snooping_downdates && last_factor && constant_jacobian(p) && p.layout == last_layout) {
+    if (!removed_last_pass.empty() && o.snooping_downdates && last_factor && same_unknowns) {
       const auto t0 = Clock::now();
       std::vector<Rows> taken;
       Eigen::Index rows = 0;
@@ -1121,9 +1126,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       auto t0 = Clock::now();
       Normal n = assemble(p, !same_matrix, jobs);
       result.seconds.assemble += since(t0);
-      // (A downdated pass has the last pass's unknowns and a GNSS network's
-      // translations, held as before: its datum is the last pass's.)
-      if (iteration == 1 && !downdated) {
+      if (iteration == 1 && !same_unknowns) {
         // The datum. First what the measurements leave undefined (every
         // component an unknown, no constraint), then whether the
         // constraints define it: a station the measurements do not fix on
@@ -1253,9 +1256,19 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     // when the matrix is the same).
     const bool same_matrix = last_factor && constant_jacobian(p);
     auto t0 = Clock::now();
-    Normal n = assemble(p, !same_matrix, jobs);
+    Normal n;
+    if (same_matrix) {
+      // Nothing to assemble: the matrix is factored, b is not needed (and a
+      // GNSS network is not free: no defect to hold).
+      for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+        if (p.active[mi]) n.rows += static_cast<std::size_t>(net.measurements[mi].value.size());
+      }
+      n.rows += p.pseudo_observations().size();
+    } else {
+      n = assemble(p, true, jobs);
+      hold_defect(p, n);
+    }
     result.seconds.assemble += since(t0);
-    hold_defect(p, n);
     t0 = Clock::now();
     NormalFactor f = same_matrix ? std::move(*last_factor) : factor_or_explain(p, n, std::move(last_factor));
     result.seconds.factor += since(t0);
