@@ -32,6 +32,10 @@ void quiet_ceres_logging();
 // Solves with tolerances at float64 noise (Ceres' defaults stop measurably
 // short of the optimum); refuses anything but CONVERGENCE.
 ceres::Solver::Summary solve_tightly(ceres::Problem& problem, ceres::LinearSolverType solver, int max_iterations);
+// Whether a FAILURE of solve_tightly's is Ceres stalling at the optimum
+// (its steps there move the cost only by its rounding), which
+// solve_tightly takes as converged.
+bool stopped_at_optimum(const ceres::Solver::Summary& summary);
 
 // (JᵀJ)⁻¹ over `blocks` (u parameters in all) by ceres::Covariance
 // (DENSE_SVD); refuses a rank-deficient problem.
