@@ -237,7 +237,8 @@ TEST_F(LazTile, Issue15_TheTilesOwnCoordinatesKeepEveryRecordBetweenLasAndLaz) {
   EXPECT_TRUE(SameRecords(stored_records(path("a.laz"), dir_), records, len)) << "LAS -> LAZ";
   EXPECT_TRUE(SameRecords(stored_records(path("b.las"), dir_), records, len)) << "LAZ -> LAS";
   EXPECT_TRUE(SameRecords(stored_records(path("c.laz"), dir_), records, len)) << "LAZ -> LAZ";
-  const LasHeader& h = LasReader(path("in.las")).header();
+  const LasReader input(path("in.las"));
+  const LasHeader& h = input.header();
   EXPECT_EQ(r.scale, h.scale);
   EXPECT_EQ(r.offset, h.offset);
   EXPECT_EQ(LasReader(path("b.las")).header().min, h.min);
