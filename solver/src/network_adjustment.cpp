@@ -12,7 +12,6 @@
 #include <limits>
 #include <map>
 #include <numeric>
-#include <set>
 
 #include "fit_common.hpp"
 #include "geoanchor/geodesy/error.hpp"
@@ -1508,27 +1507,29 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       return q;
     };
     const double confidence_scale = std::sqrt(-2.0 * std::log(1.0 - o.confidence));  // √χ²₂(p)
-    result.stations.clear();
-    for (std::size_t s = 0; s < net.stations.size(); ++s) {
-      AdjustedStation as;
-      as.id = net.stations[s].id;
-      as.position = p.states[s].x;
-      as.a_priori = net.stations[s].position;
-      as.constraint = p.aside ? "FFF" : net.stations[s].constraint.text();
-      as.used = p.station_used[s];
-      if (as.used) {
-        // q_block is along the unknowns' axes; the local ones are those at the adjusted position.
-        const Eigen::Matrix3d& axes = p.states[s].axes;
-        const Eigen::Matrix3d& local = p.states[s].local_from_xyz;
-        as.covariance_m2 = axes.transpose() * q_block(s, s) * axes;
-        as.covariance_local_m2 = local * as.covariance_m2 * local.transpose();
-        as.ellipse = horizontal_ellipse(as.covariance_local_m2.topLeftCorner<2, 2>(), net.space);
-        as.ellipse_confidence = as.ellipse;
-        as.ellipse_confidence.semi_major_m *= confidence_scale;
-        as.ellipse_confidence.semi_minor_m *= confidence_scale;
+    // Each station its own (on threads).
+    result.stations.assign(net.stations.size(), AdjustedStation{});
+    for_chunks(net.stations.size(), kMeasurementChunk, jobs, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t s = begin; s < end; ++s) {
+        AdjustedStation& as = result.stations[s];
+        as.id = net.stations[s].id;
+        as.position = p.states[s].x;
+        as.a_priori = net.stations[s].position;
+        as.constraint = p.aside ? "FFF" : net.stations[s].constraint.text();
+        as.used = p.station_used[s];
+        if (as.used) {
+          // q_block is along the unknowns' axes; the local ones are those at the adjusted position.
+          const Eigen::Matrix3d& axes = p.states[s].axes;
+          const Eigen::Matrix3d& local = p.states[s].local_from_xyz;
+          as.covariance_m2 = axes.transpose() * q_block(s, s) * axes;
+          as.covariance_local_m2 = local * as.covariance_m2 * local.transpose();
+          as.ellipse = horizontal_ellipse(as.covariance_local_m2.topLeftCorner<2, 2>(), net.space);
+          as.ellipse_confidence = as.ellipse;
+          as.ellipse_confidence.semi_major_m *= confidence_scale;
+          as.ellipse_confidence.semi_minor_m *= confidence_scale;
+        }
       }
-      result.stations.push_back(std::move(as));
-    }
+    });
     if (o.joint_covariance) {
       result.covariance_stations.clear();
       for (std::size_t s = 0; s < net.stations.size(); ++s) {
@@ -1586,8 +1587,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       result.helmert = geocentric_helmert(p.helmert, covariance, p.helmert_pivot, o.helmert->rates);
     }
     // Relative precision between stations that share a measurement.
-    result.relative.clear();
-    std::set<std::pair<std::size_t, std::size_t>> pairs;
+    std::vector<std::pair<std::size_t, std::size_t>> pairs;
     for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
       if (!p.active[mi]) continue;
       // The stations a measurement joins: a baseline's ends, a terrestrial
@@ -1599,26 +1599,32 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       for (std::size_t a = 0; a < st.size(); ++a) {
         for (std::size_t b = a + 1; b < st.size(); ++b) {
           if (m.kind == MeasurementKind::gnss_baselines && !(a % 2 == 0 && b == a + 1)) continue;
-          if (st[a] != st[b]) pairs.insert({std::min(st[a], st[b]), std::max(st[a], st[b])});
+          if (st[a] != st[b]) pairs.push_back({std::min(st[a], st[b]), std::max(st[a], st[b])});
         }
       }
     }
-    for (const auto& [s1, s2] : pairs) {
-      // In the axes of the first station; a local network's axes are one.
-      const Eigen::Matrix3d a1 = p.states[s1].axes, a2 = p.states[s2].axes, r1 = p.states[s1].local_from_xyz;
-      const Eigen::Matrix3d c11 = a1.transpose() * q_block(s1, s1) * a1, c22 = a2.transpose() * q_block(s2, s2) * a2;
-      const Eigen::Matrix3d c12 = a1.transpose() * q_block(s1, s2) * a2;
-      const Eigen::Matrix3d diff = r1 * (c11 + c22 - c12 - c12.transpose()) * r1.transpose();
-      RelativePrecision rp;
-      rp.from = s1;
-      rp.to = s2;
-      const Eigen::Vector3d dxyz = p.states[s2].x - p.states[s1].x;
-      rp.distance_m = dxyz.norm();
-      const Eigen::Vector3d unit_local = r1 * dxyz / std::max(rp.distance_m, 1e-12);
-      rp.sigma_distance_m = std::sqrt(std::max(0.0, unit_local.dot(diff * unit_local)));
-      rp.ellipse = horizontal_ellipse(diff.topLeftCorner<2, 2>(), net.space);
-      result.relative.push_back(rp);
-    }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    result.relative.assign(pairs.size(), RelativePrecision{});
+    for_chunks(pairs.size(), kMeasurementChunk, jobs, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t k = begin; k < end; ++k) {
+        const auto [s1, s2] = pairs[k];
+        // In the axes of the first station; a local network's axes are one.
+        const Eigen::Matrix3d a1 = p.states[s1].axes, a2 = p.states[s2].axes, r1 = p.states[s1].local_from_xyz;
+        const Eigen::Matrix3d c11 = a1.transpose() * q_block(s1, s1) * a1, c22 = a2.transpose() * q_block(s2, s2) * a2;
+        const Eigen::Matrix3d c12 = a1.transpose() * q_block(s1, s2) * a2;
+        const Eigen::Matrix3d diff = r1 * (c11 + c22 - c12 - c12.transpose()) * r1.transpose();
+        RelativePrecision rp;
+        rp.from = s1;
+        rp.to = s2;
+        const Eigen::Vector3d dxyz = p.states[s2].x - p.states[s1].x;
+        rp.distance_m = dxyz.norm();
+        const Eigen::Vector3d unit_local = r1 * dxyz / std::max(rp.distance_m, 1e-12);
+        rp.sigma_distance_m = std::sqrt(std::max(0.0, unit_local.dot(diff * unit_local)));
+        rp.ellipse = horizontal_ellipse(diff.topLeftCorner<2, 2>(), net.space);
+        result.relative[k] = rp;
+      }
+    });
     result.seconds.stations += since(t0);
 
     // The datum in words.

@@ -494,64 +494,6 @@ std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentRe
   return out.str();
 }
 
-namespace {
-
-// nlohmann's dump(indent) of `doc`, with the elements of its top-level
-// array `key` dumped on threads and joined as dump(indent) joins them: each
-// element's lines indented by two levels more (a JSON string holds no raw
-// newline, so every newline in a dump is the layout's).
-std::string dump_with_array_on_threads(nlohmann::ordered_json doc, const std::string& key, int indent, int jobs) {
-  const auto it = doc.find(key);
-  if (it == doc.end() || !it->is_array() || it->empty()) return doc.dump(indent);
-  const nlohmann::ordered_json elements = std::move(*it);
-  const std::string marker = "\u0001geoanchor:" + key + "\u0001";  // what no report holds
-  *it = marker;
-  std::string text = doc.dump(indent);
-  const std::string quoted = nlohmann::ordered_json(marker).dump();
-  const std::size_t at = text.find(quoted);
-  if (at == std::string::npos || text.find(quoted, at + 1) != std::string::npos) {
-    throw std::logic_error("dump_with_array_on_threads: the marker is not where the array was");
-  }
-  const std::string inner(static_cast<std::size_t>(2 * indent), ' ');
-  constexpr std::size_t kElementsPerChunk = 1024;
-  std::vector<std::string> parts((elements.size() + kElementsPerChunk - 1) / kElementsPerChunk);
-  for_chunks(elements.size(), kElementsPerChunk, resolve_jobs(jobs), [&](std::size_t begin, std::size_t end) {
-    std::string& out = parts[begin / kElementsPerChunk];
-    for (std::size_t i = begin; i < end; ++i) {
-      out += inner;
-      for (const char c : elements[i].dump(indent)) {
-        out += c;
-        if (c == '\n') out += inner;
-      }
-      out += i + 1 < elements.size() ? ",\n" : "\n";
-    }
-  });
-  std::string array = "[\n";
-  for (const auto& p : parts) array += p;
-  array += std::string(static_cast<std::size_t>(indent), ' ') + "]";
-  return text.replace(at, quoted.size(), array);
-}
-
-}  // namespace
-
-std::string stations_sidecar_text(nlohmann::ordered_json report, const std::vector<std::string>& argv, const std::vector<std::string>& inputs,
-                                  const std::string& version, int jobs) {
-  report.erase("measurements");
-  report["schema"] = "geoanchor.stations/1";
-  report["report_schema"] = "geoanchor.adjust-report/1";
-  report["geoanchor_version"] = version;
-  report["command"] = argv;
-  nlohmann::ordered_json listed = nlohmann::ordered_json::array();
-  for (const auto& in : inputs) {
-    std::error_code ec;
-    const bool hashable = in != "-" && std::filesystem::is_regular_file(in, ec);
-    listed.push_back({{"path", in == "-" ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(in)},
-                      {"sha256", hashable ? nlohmann::ordered_json(io::sha256_file_hex(in)) : nlohmann::ordered_json(nullptr)}});
-  }
-  report["inputs"] = listed;
-  return dump_with_array_on_threads(std::move(report), "stations", 2, jobs);
-}
-
 std::string measurements_csv(const geodesy::Network& net, const solver::AdjustmentResult& r, int jobs) {
   // Rows of consecutive measurements formatted on threads into strings of
   // their own and joined in order: the same text for any number of threads
@@ -743,7 +685,8 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
 }
 
 nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
-                                       const solver::AdjustOptions& o, bool with_measurements) {
+                                       const solver::AdjustOptions& o, ReportDetail detail) {
+  const bool full = detail == ReportDetail::full;
   using nlohmann::ordered_json;
   const auto& net = prepared.network;
   auto num = [](double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); };
@@ -793,7 +736,7 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
   ordered_json stations = ordered_json::array();
   const double sigma_scale = r.sigma0.value_or(1.0);
   for (const auto& s : r.stations) {
-    if (!s.used) continue;
+    if (!s.used || !full) continue;
     const Eigen::Matrix3d& c = s.covariance_local_m2;
     ordered_json st = {{"id", s.id}, {"position_m", {s.position.x(), s.position.y(), s.position.z()}}};
     if (net.space == NetworkSpace::ellipsoidal) {
@@ -818,12 +761,12 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
     st["constraint"] = s.constraint;
     stations.push_back(st);
   }
-  j["stations"] = std::move(stations);
+  if (full) j["stations"] = std::move(stations);
   ordered_json measurements = ordered_json::array(), outliers = ordered_json::array();
   for (const auto& am : r.measurements) {
     const auto& m = net.measurements[am.index];
     if (am.outlier) outliers.push_back({{"source", m.source}, {"because", am.removed_because}});
-    if (!with_measurements) continue;
+    if (!full) continue;
     ordered_json x = {{"source", m.source}, {"kind", kind_key(m.kind)}, {"stations", stations_of(net, m)},
                       {"unit", angular(m.kind) ? "rad" : "m"}};
     auto vec = [&](const Eigen::VectorXd& v) {
@@ -844,11 +787,31 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
     if (!m.frame_step.empty()) x["frame_step"] = m.frame_step;
     measurements.push_back(std::move(x));
   }
-  if (with_measurements) j["measurements"] = std::move(measurements);
+  if (full) j["measurements"] = std::move(measurements);
   j["outliers"] = outliers;
   j["warnings"] = r.warnings;
   if (!r.refused_because.empty()) j["refused_because"] = r.refused_because;
   return j;
+}
+
+std::string stations_sidecar_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o,
+                                  const std::vector<std::string>& argv, const std::vector<std::string>& inputs,
+                                  const std::string& version) {
+  nlohmann::ordered_json side = report_document(prepared, r, o, ReportDetail::summary);
+  side["schema"] = "geoanchor.stations/2";
+  side["report_schema"] = "geoanchor.adjust-report/1";
+  side["stations"] = static_cast<std::size_t>(std::count_if(r.stations.begin(), r.stations.end(), [](const auto& s) { return s.used; }));
+  side["geoanchor_version"] = version;
+  side["command"] = argv;
+  nlohmann::ordered_json listed = nlohmann::ordered_json::array();
+  for (const auto& in : inputs) {
+    std::error_code ec;
+    const bool hashable = in != "-" && std::filesystem::is_regular_file(in, ec);
+    listed.push_back({{"path", in == "-" ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(in)},
+                      {"sha256", hashable ? nlohmann::ordered_json(io::sha256_file_hex(in)) : nlohmann::ordered_json(nullptr)}});
+  }
+  side["inputs"] = listed;
+  return side.dump(2);
 }
 
 }  // namespace geoanchor::workflow

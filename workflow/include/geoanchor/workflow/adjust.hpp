@@ -80,20 +80,23 @@ io::TransformFile helmert_transform_file(const PreparedNetwork& prepared, const 
                                          const solver::AdjustOptions& o, const std::string& generator);
 
 // The report as text, and as a JSON document (schema
-// geoanchor.adjust-report/1; `adjust --json` prints it, the stations'
-// sidecar holds it without its measurements: `with_measurements` false
-// leaves them out, which at 10⁵ measurements saves seconds).
+// geoanchor.adjust-report/1; `adjust --json` prints it whole). A summary
+// leaves out the stations and the measurements, which the CSV files hold
+// row by row: the stations' sidecar holds the summary (at 10⁶ stations the
+// whole document is a gigabyte).
+enum class ReportDetail { summary, full };
 std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
 nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
-                                       const solver::AdjustOptions& o, bool with_measurements = true);
+                                       const solver::AdjustOptions& o, ReportDetail detail = ReportDetail::full);
 
-// The stations CSV's sidecar (schema geoanchor.stations/1) as JSON text
-// (indented by 2): `report` (report_document) without its measurements,
-// the version, the command line and each input with its SHA-256 (none for
-// standard input, a pipe or a FIFO, which cannot be read again). The
-// stations are formatted on `jobs` threads (0: the machine's cores); the
-// text is nlohmann's dump(2) of the document, byte for byte, for any number.
-std::string stations_sidecar_text(nlohmann::ordered_json report, const std::vector<std::string>& argv,
-                                  const std::vector<std::string>& inputs, const std::string& version, int jobs = 0);
+// The stations CSV's sidecar (schema geoanchor.stations/2) as JSON text
+// (indented by 2): the report's summary (frame, datum, statistics, data
+// snooping, outliers, warnings; report_document(…, summary)) with the
+// number of stations in the CSV, the version, the command line and each
+// input with its SHA-256 (none for standard input, a pipe or a FIFO, which
+// cannot be read again).
+std::string stations_sidecar_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o,
+                                  const std::vector<std::string>& argv, const std::vector<std::string>& inputs,
+                                  const std::string& version);
 
 }  // namespace geoanchor::workflow
