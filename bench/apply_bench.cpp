@@ -11,17 +11,26 @@
 //     encode -> write, one tile on one thread and two tiles on two threads;
 //   - a LAS tile in a CRS PROJ moves (Lambert-93 -> LAEA Europe, as `apply
 //     --to-crs` runs it: one CrsOperation per tile, proj_trans_generic over
-//     each chunk) against PROJ's proj_trans_generic on the same points.
+//     each chunk) against PROJ's proj_trans_generic on the same points;
+//   - LAZ (issue 15): a realistic tile of kLazPoints (scan lines, returns,
+//     GPS time, RGB; tests/support/laz_records.hpp) as LAZ and as LAS:
+//     LAZ -> transform -> LAZ and LAS -> transform -> LAS, one tile on one
+//     thread and on two (its chunks on both), geoanchor's decompression
+//     alone, and laz-perf's (npm, the LASzip codec as WebAssembly) in a
+//     Node child process (tests/las-verify/laz-speed.mjs, timed inside the
+//     script; the child's whole wall time printed too).
 // Prints Google Benchmark's medians (≥ 5 repetitions), then a table of
 // points/s and ratios. Never part of the test run's pass/fail.
 
 #include <benchmark/benchmark.h>
+#include <nlohmann/json.hpp>
 #include <proj.h>
 #include <unistd.h>
 
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -37,6 +46,8 @@
 #include "geoanchor/io/point_chain.hpp"
 #include "geoanchor/io/tile_apply.hpp"
 #include "accuracy.hpp"
+#include "bench_process.hpp"
+#include "laz_records.hpp"
 #include "median_reporter.hpp"
 
 namespace {
@@ -359,6 +370,132 @@ void proj_crs_kernel(benchmark::State& state) {
   set_points(state, kLasPoints);
 }
 
+// ---------------------------------------------------------------- LAZ
+
+constexpr std::size_t kLazPoints = 3'000'000;
+const fs::path kLasVerify = fs::path(__FILE__).parent_path().parent_path() / "tests" / "las-verify";
+
+// The same realistic tile (point format 7, ENU at A) as LAS and as LAZ
+// (chunks of 50 000 points, as LASzip writes them), made once.
+struct RealisticTile {
+  fs::path las, laz;
+  std::uint64_t las_bytes = 0, laz_bytes = 0;
+};
+const RealisticTile& realistic_tile() {
+  static const RealisticTile t = [] {
+    RealisticTile r{las_dir() / "realistic.las", las_dir() / "realistic.laz"};
+    const auto records = testing::make_records(7, 0, kLazPoints, testing::Content::realistic, 17);
+    io::LasHeader h;
+    h.point_format = 7;
+    h.record_length = 36;
+    h.global_encoding = 1;
+    h.offset = {-1000.0, -2000.0, -400.0};  // the generator's scan lines start near (1000, 2000, 480) m
+    std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    for (std::size_t i = 0; i < kLazPoints; ++i) {
+      for (std::size_t k = 0; k < 3; ++k) {
+        std::int32_t q;
+        std::memcpy(&q, records.data() + i * 36 + 4 * k, 4);
+        lo[k] = std::min(lo[k], q * 0.001 + h.offset[k]);
+        hi[k] = std::max(hi[k], q * 0.001 + h.offset[k]);
+      }
+    }
+    for (const bool laz : {false, true}) {
+      std::ofstream out(laz ? r.laz : r.las, std::ios::binary | std::ios::trunc);
+      io::LasWriter w(out, h, {}, {}, "bench", {laz, io::kLazDefaultChunkPoints});
+      w.write_records(records.data(), kLazPoints);
+      std::array<std::uint64_t, 15> by_return{};
+      by_return[0] = kLazPoints;
+      w.finish(by_return, lo, hi);
+    }
+    r.las_bytes = fs::file_size(r.las);
+    r.laz_bytes = fs::file_size(r.laz);
+    return r;
+  }();
+  return t;
+}
+
+// One tile through ENU(A) -> Helmert -> ENU(B) on `threads`, written as `f`.
+void realistic_to(const fs::path& in, io::TileFormat f, unsigned threads) {
+  const fs::path out_path = las_dir() / (f == io::TileFormat::laz ? "out_realistic.laz" : "out_realistic.las");
+  fs::remove(out_path);
+  std::ofstream out(out_path, std::ios::binary);
+  io::TileApplyOptions o{kA, kB, std::nullopt, "WKT", 1 << 16, {}};
+  o.las_output = f;
+  o.threads = threads;
+  io::apply_las_tile(in, out, out_path.string(), chain_to_b(), o);
+}
+
+// LAZ -> transform -> LAZ on state.range(0) threads.
+void laz_end_to_end(benchmark::State& state) {
+  const auto& t = realistic_tile();
+  for (auto _ : state) realistic_to(t.laz, io::TileFormat::laz, static_cast<unsigned>(state.range(0)));
+  set_points(state, kLazPoints);
+}
+
+// LAS -> transform -> LAS on the same tile.
+void las_realistic_end_to_end(benchmark::State& state) {
+  const auto& t = realistic_tile();
+  for (auto _ : state) realistic_to(t.las, io::TileFormat::las, static_cast<unsigned>(state.range(0)));
+  set_points(state, kLazPoints);
+}
+
+// Decompression alone, every chunk on this thread.
+void laz_decode_only(benchmark::State& state) {
+  const auto& t = realistic_tile();
+  std::vector<std::uint8_t> records;
+  for (auto _ : state) {
+    const io::LasReader r(t.laz);
+    for (std::size_t i = 0; i < r.chunk_count(); ++i) r.decode_chunk(i, records);
+    benchmark::DoNotOptimize(records.data());
+  }
+  set_points(state, kLazPoints);
+}
+
+// node on the PATH, or empty.
+std::string find_node() {
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "/usr/bin";
+  for (std::size_t at = 0; at <= dirs.size();) {
+    const std::size_t colon = std::min(dirs.find(':', at), dirs.size());
+    const fs::path candidate = fs::path(dirs.substr(at, colon - at)) / "node";
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate.string();
+    at = colon + 1;
+  }
+  return "";
+}
+
+// laz-perf's decompression of the same file in a Node child process: the
+// time its script measures around the decoding loop (manual time), and the
+// child's whole wall time (start-up included) kept for the table.
+std::vector<double> laz_perf_wall_s;
+void laz_perf_decode(benchmark::State& state) {
+  const auto& t = realistic_tile();
+  const std::string node = find_node();
+  if (node.empty() || !fs::exists(kLasVerify / "node_modules" / "laz-perf")) {
+    state.SkipWithError("node or laz-perf missing: run npm ci --prefix tests/las-verify");
+    return;
+  }
+  for (auto _ : state) {
+    const bench::Run run = bench::run_command({node, (kLasVerify / "laz-speed.mjs").string(), t.laz.string(), "1"},
+                                              las_dir(), "laz_perf.json");
+    std::ifstream in(las_dir() / "laz_perf.json");
+    nlohmann::json report;
+    try {
+      report = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception&) {
+      state.SkipWithError("laz-speed.mjs printed no JSON");
+      return;
+    }
+    if (run.status != 0 || report.value("count", 0) != static_cast<int>(kLazPoints)) {
+      state.SkipWithError("laz-perf did not read the tile");
+      return;
+    }
+    state.SetIterationTime(report["seconds"][0].get<double>());
+    laz_perf_wall_s.push_back(run.seconds);
+  }
+  set_points(state, kLazPoints);
+}
+
 #define GEOANCHOR_BENCH(f) \
   BENCHMARK(f)->Repetitions(5)->ReportAggregatesOnly(true)->Unit(benchmark::kMillisecond)->UseRealTime()
 GEOANCHOR_BENCH(fused_enu_to_enu);
@@ -371,6 +508,10 @@ GEOANCHOR_BENCH(las_end_to_end)->Iterations(1);
 GEOANCHOR_BENCH(las_end_to_end_two_jobs)->Iterations(1);
 GEOANCHOR_BENCH(las_crs_end_to_end)->Iterations(1);
 GEOANCHOR_BENCH(proj_crs_kernel)->Iterations(1);
+GEOANCHOR_BENCH(laz_end_to_end)->Arg(1)->Arg(2)->Iterations(1);
+GEOANCHOR_BENCH(las_realistic_end_to_end)->Arg(1)->Arg(2)->Iterations(1);
+GEOANCHOR_BENCH(laz_decode_only)->Iterations(1);
+BENCHMARK(laz_perf_decode)->Repetitions(5)->ReportAggregatesOnly(true)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(1);
 
 // The largest difference between the fused path and PROJ on one chain.
 double max_difference_m(const io::PointChain& chain, const std::string& proj_def, bool geodetic) {
@@ -421,6 +562,27 @@ void print_table(const bench::MedianReporter& r) {
   std::printf("  %-52s %10.1f\n", "Lambert-93 -> LAEA, PROJ proj_trans_generic (kernel)", proj_crs);
   std::printf("  %-52s %10.1f %9.2fx PROJ kernel\n", "Lambert-93 -> LAEA, LAS tile through apply's PROJ stage", las_crs,
               las_crs / proj_crs);
+  const double laz1 = mpts("laz_end_to_end/1", kLazPoints), laz2 = mpts("laz_end_to_end/2", kLazPoints);
+  const double lasr1 = mpts("las_realistic_end_to_end/1", kLazPoints), lasr2 = mpts("las_realistic_end_to_end/2", kLazPoints);
+  const double decode = mpts("laz_decode_only", kLazPoints), lazperf = mpts("laz_perf_decode", kLazPoints);
+  std::printf("\n%zu-point realistic tile (format 7): LAS %.1f MB, LAZ %.1f MB (%.1f %%)\n", kLazPoints,
+              static_cast<double>(realistic_tile().las_bytes) / 1e6, static_cast<double>(realistic_tile().laz_bytes) / 1e6,
+              100.0 * static_cast<double>(realistic_tile().laz_bytes) / static_cast<double>(realistic_tile().las_bytes));
+  std::printf("  %-52s %10s %10s\n", "path", "M pts/s", "ratio");
+  std::printf("  %-52s %10.2f\n", "LAS read->transform->write, 1 thread", lasr1);
+  std::printf("  %-52s %10.2f %9.2fx one thread\n", "LAS read->transform->write, 2 threads", lasr2, lasr2 / lasr1);
+  std::printf("  %-52s %10.2f %9.2fx LAS\n", "LAZ read->transform->write, 1 thread", laz1, laz1 / lasr1);
+  std::printf("  %-52s %10.2f %9.2fx one thread\n", "LAZ read->transform->write, 2 threads", laz2, laz2 / laz1);
+  std::printf("  %-52s %10.2f %9.2fx LAS (2 threads each)\n", "", laz2, laz2 / lasr2);
+  std::printf("  %-52s %10.2f\n", "LAZ decompression alone (geoanchor, 1 thread)", decode);
+  std::printf("  %-52s %10.2f %9.2fx geoanchor's\n", "LAZ decompression, laz-perf (WebAssembly, Node)", lazperf,
+              lazperf / decode);
+  std::printf("  %-52s %10s %9.2fx laz-perf decoding\n", "LAZ->transform->LAZ, 1 thread", "", laz1 / lazperf);
+  std::printf("  %-52s %10s %9.2fx laz-perf decoding\n", "LAZ->transform->LAZ, 2 threads", "", laz2 / lazperf);
+  if (!laz_perf_wall_s.empty()) {
+    std::printf("  laz-perf child process, whole wall time (Node start-up, WebAssembly, file read): median %.2f s\n",
+                bench::median(laz_perf_wall_s));
+  }
   const double diff_enu = max_difference_m(chain_to_b(), std::string(kProjChain) + kProjToB, false);
   const double diff_geodetic = max_difference_m(chain_to_geodetic(), std::string(kProjChain) + kProjToGeodetic, true);
   std::printf("  max |geoanchor - PROJ|: ENU(B) %.2e m, geodetic %.2e m\n", diff_enu, diff_geodetic);
