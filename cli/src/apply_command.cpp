@@ -70,8 +70,12 @@ class Progress {
 }  // namespace
 
 CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
-  auto* cmd = app.add_subcommand("apply", "Move map tiles (LAS, LAZ, CSV, PLY) into another frame, with provenance");
-  cmd->add_option("IN", o.inputs, "Tiles, folders of tiles, or manifests (.txt/.lst/.manifest: one path per line)")
+  auto* cmd = app.add_subcommand(
+      "apply", "Move map tiles (LAS, LAZ, CSV, PLY) and vector maps (GeoJSON, Lanelet2 OSM, OpenDRIVE) into another "
+               "frame, with provenance");
+  cmd->add_option("IN", o.inputs,
+                  "Tiles and vector maps (.geojson, .osm, .xodr), folders of them, or manifests (.txt/.lst/.manifest: "
+                  "one path per line)")
       ->required();
   cmd->add_option("--out-dir", o.out_dir, "Folder for the outputs (same file names) and their sidecars")->required();
   cmd->add_option("--format", o.format,
@@ -106,6 +110,16 @@ CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
   cmd->add_option("--max-extrapolation", o.max_extrapolation_m,
                   "Refuse tiles farther than this (m) outside the control network (default 10000)")
       ->check(finite_range(0.0, 1e7));
+  cmd->add_option("--local-xy", o.local_xy,
+                  "Lanelet2 OSM: the projection of the nodes' local_x/local_y tags (WGS 84): lanelet2-utm:LAT,LON "
+                  "(UtmProjector origin), utm:ZONE[,E0,N0] or tm:LAT0,LON0,K0,FE,FN");
+  cmd->add_option("--local-xy-tolerance", o.local_xy_tolerance_m,
+                  "Lanelet2 OSM: refuse a map whose local_x/local_y disagree with lat/lon by more (m; default 0.01)")
+      ->check(finite_range(0.0, 1000.0));
+  cmd->add_option("--max-deviation", o.max_deviation_m,
+                  "OpenDRIVE: refuse a re-anchoring that deviates from the exactly moved road geometry by more (m; "
+                  "default 0.001)")
+      ->check(finite_range(0.0, 1000.0));
   cmd->add_option("--jobs", o.jobs, "Threads (default 1): tiles at once, a LAS/LAZ tile's chunks on the rest")->check(integer_range(1, workflow::kMaxApplyJobs));
   cmd->add_option("--shard", o.shard, "Process only slice I of N of the tile list (I/N, 0-based I)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
@@ -142,6 +156,9 @@ int run_apply(const ApplyOptions& o) {
   request.resolution_m = o.resolution_m;
   request.epoch_from_gps_time = o.epoch_from_gps_time;
   request.max_extrapolation_m = o.max_extrapolation_m;
+  request.local_xy = o.local_xy;
+  request.local_xy_tolerance_m = o.local_xy_tolerance_m;
+  request.max_deviation_m = o.max_deviation_m;
   request.jobs = o.jobs;
   request.shard = o.shard;
   request.overwrite = o.overwrite;

@@ -1,5 +1,6 @@
 #pragma once
-// `geoanchor apply`: map tiles (LAS, LAZ, CSV, PLY) from their frame into
+// `geoanchor apply`: map tiles (LAS, LAZ, CSV, PLY) and vector maps
+// (GeoJSON, Lanelet2 OSM, OpenDRIVE) from their frame into
 // another, optionally through a transform file, with a provenance sidecar
 // beside every output. See docs/commands/apply.md.
 
@@ -29,6 +30,9 @@ struct ApplyOptions {
   std::optional<double> resolution_m;
   bool epoch_from_gps_time = false;  // LAS: a 14-parameter transform at each point's GPS time
   double max_extrapolation_m = 10000.0;
+  std::optional<std::string> local_xy;  // Lanelet2: the projection of local_x/local_y
+  double local_xy_tolerance_m = 0.01;
+  double max_deviation_m = 0.001;  // OpenDRIVE re-anchoring
   unsigned jobs = 1;
   std::optional<std::string> shard;
   bool overwrite = false;

@@ -26,6 +26,9 @@ std::string_view to_string(TileFormat f) {
     case TileFormat::laz: return "laz";
     case TileFormat::csv: return "csv";
     case TileFormat::ply: return "ply";
+    case TileFormat::geojson: return "geojson";
+    case TileFormat::osm: return "osm";
+    case TileFormat::xodr: return "xodr";
   }
   return "?";
 }
@@ -44,6 +47,9 @@ std::optional<TileFormat> tile_format_of(const std::filesystem::path& p) {
   if (ext == ".laz") return TileFormat::laz;
   if (ext == ".csv" || ext == ".txt") return TileFormat::csv;
   if (ext == ".ply") return TileFormat::ply;
+  if (ext == ".geojson") return TileFormat::geojson;
+  if (ext == ".osm") return TileFormat::osm;
+  if (ext == ".xodr") return TileFormat::xodr;
   return std::nullopt;
 }
 

@@ -45,6 +45,14 @@ std::size_t XmlStream::line() const {
   return parser_ ? static_cast<std::size_t>(static_cast<std::ptrdiff_t>(XML_GetCurrentLineNumber(parser_)) + line_offset) : 0;
 }
 
+std::uint64_t XmlStream::byte_index() const {
+  return parser_ ? static_cast<std::uint64_t>(XML_GetCurrentByteIndex(parser_)) : 0;
+}
+
+std::size_t XmlStream::byte_count() const {
+  return parser_ ? static_cast<std::size_t>(std::max(XML_GetCurrentByteCount(parser_), 0)) : 0;
+}
+
 void XmlStream::on_start(void* self, const XML_Char* name, const XML_Char** attributes) {
   auto* x = static_cast<XmlStream*>(self);
   if (x->error_) return;

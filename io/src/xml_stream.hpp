@@ -7,6 +7,7 @@
 #include <expat.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <exception>
 #include <initializer_list>
 #include <string>
@@ -40,6 +41,13 @@ class XmlStream {
   // before it).
   std::size_t line() const;
   std::ptrdiff_t line_offset = 0;
+  // Where the event being handled is in the text (bytes from the start of
+  // the whole text given to parse) and how many bytes it spans: a start
+  // tag's from its '<' to its '>' ('/>' of an empty element), an end tag's
+  // (0 for the end of an empty element). For rewriting attribute values in
+  // place (io/src/xml_edit.hpp).
+  std::uint64_t byte_index() const;
+  std::size_t byte_count() const;
 
  private:
   static void on_start(void* self, const XML_Char* name, const XML_Char** attributes);

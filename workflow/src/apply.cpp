@@ -29,6 +29,7 @@
 #include "geoanchor/io/tile_apply.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
 #include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/vector_map.hpp"
 #include "geoanchor/workflow/transform_checks.hpp"
 #include "geoanchor/workflow/tile_plan.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"
@@ -59,7 +60,7 @@ bool is_tile(const fs::path& p) {
 }
 
 constexpr std::string_view kSidecarSuffix = ".geoanchor.json";
-constexpr std::string_view kTileKinds = ".las, .laz, .copc.laz, .csv, .txt or .ply";
+constexpr std::string_view kTileKinds = ".las, .laz, .copc.laz, .csv, .txt, .ply, .geojson, .osm or .xodr";
 constexpr std::size_t kUnknownListed = 20;  // names in the message; the rest counted
 
 // The inputs of a run: its tiles, in order, and the files --exclude left out.
@@ -213,7 +214,7 @@ std::pair<std::size_t, std::size_t> parse_shard(const std::string& s) {
 // ---------------------------------------------------------------- one tile
 
 // The options that decide an output's content, for the resumability check.
-json request_json(const ApplyRequest& o, io::TileFormat output_format) {
+json request_json(const ApplyRequest& o, io::TileFormat input_format, io::TileFormat output_format) {
   auto opt = [](const std::optional<std::string>& v) { return v ? json(*v) : json(nullptr); };
   json j{{"to", opt(o.to)},
               {"origin", opt(o.origin)},
@@ -233,6 +234,12 @@ json request_json(const ApplyRequest& o, io::TileFormat output_format) {
   if (o.allow_fallback) j["allow_fallback"] = true;
   // Added with issue 15, only for LAZ outputs (earlier LAS outputs stay up to date).
   if (output_format == io::TileFormat::laz) j["format"] = "laz";
+  // Vector maps (issue 16): the options that decide their output.
+  if (input_format == io::TileFormat::osm) {
+    j["local_xy"] = o.local_xy ? json(*o.local_xy) : json(nullptr);
+    j["local_xy_tolerance_m"] = o.local_xy_tolerance_m;
+  }
+  if (input_format == io::TileFormat::xodr) j["max_deviation_m"] = o.max_deviation_m;
   return j;
 }
 
@@ -297,7 +304,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   const std::string tile = p.input.string();
   io::refuse_same_file(p.input, p.output);
   const std::string input_sha = io::sha256_file_hex(p.input);
-  const json request = request_json(o_, p.output_format);
+  const json request = request_json(o_, p.format, p.output_format);
 
   // Resumable: an output whose provenance names this input, transform and
   // request is up to date. Only regular files (or links to them) are read: a
@@ -384,6 +391,11 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
     }
   }
   ao.resolution_m = o_.resolution_m;
+  ao.local_xy = o_.local_xy;
+  ao.local_xy_tolerance_m = o_.local_xy_tolerance_m;
+  ao.max_deviation_m = o_.max_deviation_m;
+  ao.output_frame = p.out.frame ? p.out.frame->to_string() : std::string();
+  ao.output_crs = p.out.crs ? &*p.out.crs : nullptr;
   ao.epochs_from_gps_time = o_.epoch_from_gps_time && t_ && t_->time_dependent();
   if (io::is_las_family(p.format)) {
     ao.output_wkt = io::tile_crs_wkt(p.out);
@@ -418,6 +430,9 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
     case io::TileFormat::laz: res = io::apply_las_tile(p.input, out->stream(), p.output.string(), chain, ao); break;
     case io::TileFormat::csv: res = io::apply_csv_tile(p.input, out->stream(), p.output.string(), chain, ao); break;
     case io::TileFormat::ply: res = io::apply_ply_tile(p.input, out->stream(), p.output.string(), chain, ao); break;
+    case io::TileFormat::geojson: res = io::apply_geojson_map(p.input, out->stream(), p.output.string(), chain, ao); break;
+    case io::TileFormat::osm: res = io::apply_osm_map(p.input, out->stream(), p.output.string(), chain, ao); break;
+    case io::TileFormat::xodr: res = io::apply_xodr_map(p.input, out->stream(), p.output.string(), chain, ao); break;
   }
   r.points = res.points;
   std::vector<std::string> warnings = housekeeping;
@@ -589,6 +604,9 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   prov["points"] = res.points;
   prov["bounds"] = {{"min", res.min}, {"max", res.max}};
   if (io::is_las_family(p.format)) prov["las"] = {{"scale", res.scale}, {"offset", res.offset}};
+  // A vector map's own record: the OpenDRIVE re-anchoring and its deviation,
+  // the Lanelet2 local projection, the GeoJSON positions.
+  if (!res.format_record_json.empty()) prov[std::string(io::to_string(p.format))] = nlohmann::ordered_json::parse(res.format_record_json);
   if (p.keep_coordinates) prov["coordinates_kept"] = true;  // the tile's own CRS: every point record copied
   prov["output_size_bytes"] = output_size;
   json all_warnings = warnings;

@@ -8,6 +8,7 @@
 #include "geoanchor/io/crs_csv.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/las.hpp"
+#include "geoanchor/io/vector_map.hpp"
 #include "geoanchor/workflow/value_text.hpp"
 
 namespace geoanchor::workflow {
@@ -153,11 +154,13 @@ TilePlanner::TilePlanner(const ApplyRequest& o, const std::optional<io::Transfor
   if (o.from_zone) parse_zone(*o.from_zone, "--from-zone");
   if (o.tm) parse_tm(*o.tm, "--tm");
   if (o.from_tm) parse_tm(*o.from_tm, "--from-tm");
+  if (o.local_xy) (void)io::parse_local_xy(*o.local_xy, "--local-xy");
 }
 
 
 // What the flags say about a tile with no sidecar and no WKT.
 TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
+  if (io::is_vector_map(p.format)) return vector_map_metadata(p);
   const std::string tile = p.input.string();
   std::optional<TileMetadata> side, wkt;
   const fs::path side_path = io::sidecar_path(p.input);
@@ -314,6 +317,7 @@ void TilePlanner::check_flags_against(TileMetadata& m, TilePlan& p, const std::s
       stated.storage = m.storage;
       stated.survey_method = m.survey_method;
       stated.rtk_fixed_percent = m.rtk_fixed_percent;
+      stated.metadata = m.metadata;
       stated.provenance_json = m.provenance_json;
       const bool heights = two_d(*m.crs) && !two_d(*both), epoch = !m.crs->epoch() && both->epoch();
       m = std::move(stated);
@@ -357,6 +361,144 @@ void TilePlanner::check_flags_against(TileMetadata& m, TilePlan& p, const std::s
 }
 
 TilePlan TilePlanner::plan(const fs::path& input) const {
+  TilePlan p = plan_coordinates(input);
+  if (io::is_vector_map(p.format)) check_vector_output(p);
+  return p;
+}
+
+TileMetadata TilePlanner::vector_map_metadata(TilePlan& p) const {
+  const std::string tile = p.input.string();
+  const auto format = p.format;
+  const std::string what = format == io::TileFormat::geojson ? "GeoJSON"
+                           : format == io::TileFormat::osm   ? "Lanelet2 OSM"
+                                                             : "OpenDRIVE";
+  if (o_.from_origin || o_.from_zone || o_.from_tm) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                tile + ": " + (o_.from_origin ? "--from-origin" : o_.from_zone ? "--from-zone" : "--from-tm") + ": a " +
+                    what + " map's coordinates are stated by its format (" +
+                    (format == io::TileFormat::xodr ? "the header's geoReference" : "longitude and latitude") +
+                    "); give its frame with --from-frame NAME@EPOCH");
+  }
+  // --crs naming a catalog frame (ITRF2014@2024.5) names the frame of the
+  // map's longitudes and latitudes (or of its geoReference's plane); any
+  // other CRS only a GeoJSON map can be in.
+  std::optional<Frame> flag_frame = from_frame_;
+  std::optional<io::Crs> flag_crs;
+  if (o_.crs) {
+    io::Crs c = io::Crs::parse(*o_.crs, "--crs");
+    if (c.from_frame_name()) {
+      flag_frame = Frame::parse(*o_.crs, "--crs");
+    } else if (format == io::TileFormat::geojson) {
+      flag_crs = std::move(c);
+    } else {
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  tile + ": --crs " + *o_.crs + ": a " + what + " map's coordinates are " +
+                      (format == io::TileFormat::xodr ? "in the projection of its geoReference"
+                                                      : "longitudes and latitudes") +
+                      "; --crs may only name their frame (e.g. --crs ITRF2014@2024.5, as --from-frame)");
+    }
+  }
+  const std::string flag_name = from_frame_ ? "--from-frame" : "--crs";
+  const fs::path side_path = io::sidecar_path(p.input);
+  std::optional<TileMetadata> side;
+  std::error_code ec;
+  if (fs::exists(side_path, ec)) side = io::read_tile_metadata(side_path);
+  const io::VectorMapStatement st = io::read_vector_map_statement(p.input, format);
+  const std::string st_name = tile + " " + st.source;
+  if (side && st.metadata) {
+    TileMetadata stated = *st.metadata;
+    if (!stated.frame && !stated.crs) stated.frame = side->frame;  // a geoReference names no frame
+    const std::string diff = io::describe_mismatch(*side, side_path.string(), stated, st_name);
+    if (!diff.empty()) {
+      throw Error(ErrorKind::input, "E_FRAME_CONFLICT", tile + ": the sidecar and the " + st.source + " disagree: " + diff);
+    }
+  }
+  auto conflict = [&](const std::string& flag, const std::string& value, const std::string& stated, const std::string& where) {
+    throw Error(ErrorKind::usage, "E_FRAME_CONFLICT",
+                tile + ": " + flag + " " + value + " contradicts the " + where + ", which says " + stated +
+                    "; drop the flag or fix the metadata (flags are never silently preferred)");
+  };
+  TileMetadata m;
+  if (side || (st.metadata && (st.metadata->frame || st.metadata->crs))) {
+    m = side ? *side : *st.metadata;
+    p.in_frame_source = side ? "sidecar " + side_path.string() : st_name;
+    if (flag_frame && !(m.frame && *m.frame == *flag_frame)) {
+      conflict(flag_name, flag_name == "--crs" ? *o_.crs : *o_.from_frame,
+               m.frame ? m.frame->to_string() : io::kind_name(m) + " coordinates", p.in_frame_source);
+    }
+    if (flag_crs && !(m.crs && m.crs->same_as(*flag_crs))) {
+      conflict("--crs", *o_.crs, m.crs ? m.crs->display_name() : io::kind_name(m) + " coordinates", p.in_frame_source);
+    }
+    return m;
+  }
+  if (flag_crs) {
+    m = io::tile_metadata_from_crs(std::move(*flag_crs), tile);
+    m.storage = "float64";
+    p.in_frame_source = "--crs";
+    return m;
+  }
+  if (!flag_frame) {
+    throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
+                tile + ": the map's frame is unknown: no sidecar " + side_path.filename().string() +
+                    (format == io::TileFormat::geojson ? ", no 'geoanchor' member (RFC 7946 positions are WGS 84 and "
+                                                         "name no realization or epoch)"
+                     : format == io::TileFormat::osm ? " (OSM lat/lon name no realization or epoch)"
+                                                     : " (a geoReference names no realization or epoch)") +
+                    "; give --from-frame NAME@EPOCH (e.g. WGS84(G2139)@2024.5 or ITRF2014@2024.5)");
+  }
+  if (st.metadata) {
+    m = *st.metadata;  // OpenDRIVE: the geoReference's projection
+    const auto implied = geodesy::implied_ellipsoid(*flag_frame);
+    if (implied && !(*implied == m.coordinates.ellipsoid)) {
+      throw Error(ErrorKind::input, "E_ELLIPSOID",
+                  tile + ": the geoReference is on " + m.coordinates.ellipsoid.name() + " but " + flag_name + " " +
+                      flag_frame->to_string() + " is on " + implied->name() +
+                      ": the map's projection and frame contradict each other; fix the geoReference's +ellps (or "
+                      "+datum) or give the frame it is on");
+    }
+  } else {
+    m.coordinates.kind = CoordinateKind::geodetic;
+    m.coordinates.ellipsoid =
+        geodesy::implied_ellipsoid(*flag_frame).value_or(out_.ellipsoid.value_or(geodesy::Ellipsoid::wgs84()));
+    m.height_type = "ellipsoidal";
+    m.vertical_datum = "ellipsoid " + m.coordinates.ellipsoid.name();
+    m.storage = "float64";
+  }
+  m.frame = flag_frame;
+  p.in_frame_source = flag_name + (st.metadata ? " (the frame of the " + st.source + ")" : std::string());
+  return m;
+}
+
+void TilePlanner::check_vector_output(const TilePlan& p) const {
+  const std::string tile = p.input.string();
+  const auto kind = p.out.coordinates.kind;
+  switch (p.format) {
+    case io::TileFormat::geojson:
+      if (!p.out.crs && kind != CoordinateKind::geodetic) {
+        throw Error(ErrorKind::usage, "E_OPTION",
+                    tile + ": a GeoJSON map's positions are longitude, latitude and height (RFC 7946); give --to "
+                           "geodetic (or nothing), or --to-crs CRS for another CRS named in a legacy crs member");
+      }
+      return;
+    case io::TileFormat::osm:
+      if (p.out.crs || p.in.crs || kind != CoordinateKind::geodetic) {
+        throw Error(ErrorKind::usage, "E_OPTION",
+                    tile + ": a Lanelet2 OSM map's nodes have lat/lon (geodetic) coordinates; give --to geodetic (or "
+                           "nothing), without --to-crs");
+      }
+      return;
+    case io::TileFormat::xodr:
+      if (p.out.crs || kind != CoordinateKind::projected || !p.out.coordinates.projection) {
+        throw Error(ErrorKind::usage, "E_OPTION",
+                    tile + ": an OpenDRIVE map is re-anchored in a Transverse Mercator geoReference; give --to tm "
+                           "--tm ..., --to utm --zone Z, or nothing (the map's own projection), without --to-crs");
+      }
+      return;
+    default: return;
+  }
+}
+
+TilePlan TilePlanner::plan_coordinates(const fs::path& input) const {
   TilePlan p;
   p.input = input;
   p.format = *io::tile_format_of(input);

@@ -1,7 +1,8 @@
 #pragma once
 // One tile through a PointChain, streamed in bounded chunks: LAS or LAZ in,
-// LAS or LAZ out; CSV or PLY in, the same format out. Everything but the
-// coordinates passes through unchanged. The caller owns the output (an
+// LAS or LAZ out; CSV or PLY in, the same format out. Vector maps (GeoJSON,
+// Lanelet2 OSM XML, OpenDRIVE) are moved by io/vector_map.hpp with the same
+// options and result. Everything but the coordinates passes through unchanged. The caller owns the output (an
 // AtomicOutputFile) so that the tile and its sidecar are committed together.
 
 #include <array>
@@ -22,11 +23,15 @@ namespace geoanchor::io {
 
 // A tile's file format. LAS and LAZ hold the same records (LAZ compressed,
 // io/laz.hpp); a COPC file (.copc.laz) is read as the LAZ file it is.
-enum class TileFormat { las, laz, csv, ply };
-std::string_view to_string(TileFormat f);  // "las", "laz", "csv", "ply"
+// geojson, osm and xodr are vector maps (io/vector_map.hpp).
+enum class TileFormat { las, laz, csv, ply, geojson, osm, xodr };
+std::string_view to_string(TileFormat f);  // "las", "laz", "csv", "ply", "geojson", "osm", "xodr"
 inline bool is_las_family(TileFormat f) { return f == TileFormat::las || f == TileFormat::laz; }
+inline bool is_vector_map(TileFormat f) {
+  return f == TileFormat::geojson || f == TileFormat::osm || f == TileFormat::xodr;
+}
 // By extension, case-insensitive: .las; .laz (and .copc.laz); .csv, .txt;
-// .ply. std::nullopt for anything else.
+// .ply; .geojson; .osm; .xodr. std::nullopt for anything else.
 std::optional<TileFormat> tile_format_of(const std::filesystem::path& p);
 // Whether the name ends in .copc.laz (case-insensitive).
 bool is_copc_name(const std::filesystem::path& p);
@@ -99,6 +104,19 @@ struct TileApplyOptions {
   // place, so this gives an empty output for that (the caller discards what
   // was written to `out`). Without it, that retry is a std::logic_error.
   std::function<std::ostream&()> restart_output = {};
+  // Lanelet2 OSM: the local projection of the nodes' local_x/local_y tags
+  // (io/vector_map.hpp, LocalXy); needed when a node has them. The tags
+  // must agree with lat/lon within `local_xy_tolerance_m` before the move.
+  std::optional<std::string> local_xy = std::nullopt;
+  double local_xy_tolerance_m = 0.01;
+  // OpenDRIVE: the largest deviation allowed between the re-anchored map
+  // and the exactly moved road geometry.
+  double max_deviation_m = 0.001;
+  // Vector maps: the output's frame as NAME@EPOCH ("" when it has none) and
+  // its CRS when it is in one (not owned), which GeoJSON records in its
+  // foreign member (and a legacy "crs" member).
+  std::string output_frame = {};
+  const Crs* output_crs = nullptr;
 };
 
 struct TileApplyResult {
@@ -113,6 +131,10 @@ struct TileApplyResult {
   std::optional<std::array<double, 2>> epoch_range;  // per-point epochs: earliest, latest
   std::optional<LazVlr> laz;  // a LAZ output's compression (its laszip VLR)
   std::vector<std::string> warnings;
+  // Vector maps: what the output's provenance records of the format (JSON
+  // text of an object: the OpenDRIVE re-anchoring, the Lanelet2 local
+  // projection, the GeoJSON positions); "" for tiles.
+  std::string format_record_json;
 };
 
 // Each throws geoanchor::Error naming the file and the byte offset (LAS,

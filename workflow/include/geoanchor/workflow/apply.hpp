@@ -1,5 +1,6 @@
 #pragma once
-// `apply` as a library: a batch of map tiles (LAS, LAZ, CSV, PLY) moved from
+// `apply` as a library: a batch of map tiles (LAS, LAZ, CSV, PLY) and vector
+// maps (GeoJSON, Lanelet2 OSM, OpenDRIVE; io/vector_map.hpp) moved from
 // their frame into another, optionally through a transform file, each
 // written with a provenance sidecar, and the run summary. Per tile:
 //   1. plan (tile_plan.hpp): the tile's frame and coordinates from its
@@ -55,6 +56,14 @@ struct ApplyRequest {
   std::optional<double> resolution_m;  // LAS quantization of the output
   bool epoch_from_gps_time = false;    // LAS: a 14-parameter transform at each point's GPS time
   double max_extrapolation_m = 10000.0;
+  // Lanelet2 OSM maps: the projection of the nodes' local_x/local_y tags
+  // (io::parse_local_xy), and how far they may disagree with lat/lon
+  // before the move.
+  std::optional<std::string> local_xy;
+  double local_xy_tolerance_m = 0.01;
+  // OpenDRIVE maps: the largest deviation of the re-anchored map from the
+  // exactly moved road geometry.
+  double max_deviation_m = 0.001;
   // Threads: up to this many tiles at once; a LAS or LAZ tile's chunks run
   // on the threads its share of them gives (jobs / tiles at once).
   unsigned jobs = 1;

@@ -76,6 +76,14 @@ class TilePlanner {
   TilePlan plan(const std::filesystem::path& input) const;
 
  private:
+  TilePlan plan_coordinates(const std::filesystem::path& input) const;
+  // A vector map's frame and coordinates: its sidecar, what the file says
+  // (GeoJSON's 'geoanchor' or legacy 'crs' member, OpenDRIVE's
+  // geoReference) and the flags (--from-frame, or --crs naming a frame or,
+  // for GeoJSON, any CRS), which must agree.
+  io::TileMetadata vector_map_metadata(TilePlan& p) const;
+  // Refuses an output a vector map's format cannot hold.
+  void check_vector_output(const TilePlan& p) const;
   struct OutputSpec {
     std::optional<io::CoordinateKind> kind;
     bool utm = false;
