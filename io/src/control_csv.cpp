@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <exception>
@@ -65,7 +66,7 @@ std::vector<std::string> visible_for_role(const std::vector<std::string>& header
   for (std::size_t i = 0; i < header.size(); ++i) {
     const std::string& n = header[i];
     const bool other_role = n.find(role == "src" ? "_dst_" : "_src_") != std::string::npos;
-    const bool shared = n == "id" || n == "epoch" || n == "use" || n.rfind("sigma_", 0) == 0 || n.rfind("cov_", 0) == 0 ||
+    const bool shared = n == "id" || n == "epoch" || n == "use" || n == "solution" || n.rfind("sigma_", 0) == 0 || n.rfind("cov_", 0) == 0 ||
                         n.rfind("vx_", 0) == 0 || n.rfind("vy_", 0) == 0 || n.rfind("vz_", 0) == 0;
     if (!other_role && !shared) {
       visible.push_back(n);
@@ -164,7 +165,7 @@ void uncertainty_columns(const std::vector<std::string>& header, const std::stri
 
 // Every column name a control set reads, for the nearest-name hint.
 std::vector<std::string> readable_names() {
-  std::vector<std::string> out = {"id", "epoch", "use"};
+  std::vector<std::string> out = {"id", "epoch", "use", "solution"};
   for (const char* role : {"src", "dst"}) {
     for (const auto kind : {CoordinateKind::ecef, CoordinateKind::geodetic, CoordinateKind::enu, CoordinateKind::projected}) {
       for (const auto& n : coordinate_column_names(kind, role)) {
@@ -229,6 +230,14 @@ std::optional<std::string> unread_column_problem(const std::string& name, bool v
         const std::string stem = name.substr(0, under), unit = name.substr(under + 1);
         what = "a control set names each coordinate's frame: " + stem + "_src_" + unit + " or " + stem + "_dst_" + unit;
       }
+    }
+    // A misspelt or other-cased solution column would pass as an attribute
+    // and leave every mark's solution unread (float marks used as fixed).
+    std::string lower = name;
+    for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (what.empty() && name != "solution" &&
+        (lower.find("solution") != std::string::npos || edit_distance(lower, "solution") <= 2)) {
+      what = "a mark's GNSS solution type is read from the column 'solution' (" + geodesy::gnss_solution_names() + ")";
     }
     if (what.empty()) return std::nullopt;
   }
@@ -439,6 +448,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
                 source_name + ": velocities are given for one frame only; give vx/vy/vz for both src and dst");
   }
   const auto use_col = find_column(header, "use");
+  const auto solution_col = find_column(header, "solution");
   const RowReader rows(header, source_name);
 
   // Every column is read, or an attribute that passes through: a name we
@@ -452,6 +462,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     mark(id_col);
     mark(epoch_col);
     mark(use_col);
+    mark(solution_col);
     for (const RoleColumns* rc : {&src, &dst}) {
       mark(rc->coords.first);
       mark(rc->coords.second);
@@ -505,6 +516,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
     }
   }
   set.has_a_priori_sigmas = src.sigma || src.has_cov || dst.sigma || dst.has_cov;
+  set.has_solutions = solution_col.has_value();
   set.source_input = detail::input_form(src.coords.kind, o.src_projection,
                                         src.coords.orthometric ? header[*src.coords.third] : std::string(), o.src_geoid);
   set.target_input = detail::input_form(dst.coords.kind, o.dst_projection,
@@ -603,6 +615,16 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
         p.use = false;
       } else {
         rows.fail(r, *use_col, "expected 1/0, true/false or yes/no");
+      }
+    }
+    if (solution_col) {
+      // A column that is there states every mark's solution: an empty cell
+      // would be a mark of unknown quality used as if it were fixed.
+      const std::string& v = r.values[*solution_col];
+      p.solution = geodesy::parse_gnss_solution(v);
+      if (!p.solution) {
+        rows.fail(r, *solution_col, std::string(v.empty() ? "empty" : "not a GNSS solution type") + "; expected one of " +
+                                        geodesy::gnss_solution_names() + " (lower case)");
       }
     }
   };

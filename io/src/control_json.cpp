@@ -162,7 +162,8 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
       if (p.is_object() && p.contains(k)) set.has_a_priori_sigmas = true;
     }
   }
-  const std::set<std::string> known = {"id", "source", "target", "sigma_src_m", "sigma_dst_m", "cov_src_m2", "cov_dst_m2", "epoch", "use"};
+  const std::set<std::string> known = {"id", "source", "target", "sigma_src_m", "sigma_dst_m", "cov_src_m2", "cov_dst_m2", "epoch", "use",
+                                       "solution"};
   // Each frame's CRS: the option, or the file's "source_crs"/"target_crs";
   // both must say the same. Its keys are the CRS's columns without the role
   // (easting_ftus, northing_ftus, h_m; lat_deg, lon_deg, H_m for a compound
@@ -229,7 +230,7 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     for (const auto& [key, value] : jp.items()) {
       if (!known.count(key)) {
         fail(where + "." + key, "unknown key; expected id, source, target, sigma_src_m, sigma_dst_m (isotropic, metres), "
-                                "cov_src_m2, cov_dst_m2 (3×3, m²), epoch, use");
+                                "cov_src_m2, cov_dst_m2 (3×3, m²), epoch, use, solution");
       }
     }
     geodesy::ControlPoint p;
@@ -281,8 +282,25 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
       if (!jp.at("use").is_boolean()) fail(where + ".use", "expected true or false");
       p.use = jp.at("use").get<bool>();
     }
+    // The GNSS solution type: every point states it or none does (a point
+    // without it would be of unknown quality, used as if it were fixed).
+    if (jp.contains("solution")) {
+      const json& sv = jp.at("solution");
+      if (sv.is_string()) p.solution = geodesy::parse_gnss_solution(sv.get<std::string>());
+      if (!p.solution) {
+        fail(where + ".solution", "value " + sv.dump() + " is not a GNSS solution type; expected one of " +
+                                      geodesy::gnss_solution_names() + " (lower case)");
+      }
+    }
+    if (i > 0 && p.solution.has_value() != set.points.front().solution.has_value()) {
+      const std::size_t without = p.solution ? 0 : i;
+      fail(source_name + ": points[" + std::to_string(without) + "].solution",
+           "missing, but points[" + std::to_string(without == 0 ? i : 0) +
+               "] states one; give every point's GNSS solution type or none");
+    }
     set.points.push_back(std::move(p));
   }
+  set.has_solutions = !set.points.empty() && set.points.front().solution.has_value();
   detail::refuse_duplicate_ids(
       set, [&](const geodesy::ControlPoint& q) { return source_name + ": points[" + std::to_string(q.line) + "]"; },
       [&](const geodesy::ControlPoint& q) { return "points[" + std::to_string(q.line) + "]"; });

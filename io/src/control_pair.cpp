@@ -64,7 +64,7 @@ struct RoleFile {
   std::unique_ptr<CsvReader> reader;
   CoordinateColumns coords;
   std::optional<CrsColumns> crs;
-  std::optional<std::size_t> id, use, sigma, constraint;
+  std::optional<std::size_t> id, use, sigma, constraint, solution;
   std::array<std::optional<std::size_t>, 6> cov;
   std::array<std::optional<std::size_t>, 3> enu_sigma, enu_corr;
   std::array<std::optional<std::size_t>, 3> ecef_beside;  // x_m, y_m, z_m beside geodetic coordinates
@@ -83,6 +83,7 @@ struct RoleRow {
   Eigen::Matrix3d cov_m2 = Eigen::Matrix3d::Zero();
   Eigen::Vector3d as_read = Eigen::Vector3d::Zero();
   bool use = true;
+  std::optional<geodesy::GnssSolution> solution;
 };
 
 [[noreturn]] void refuse_column(const RoleFile& f, std::size_t i, const std::string& why) {
@@ -138,6 +139,7 @@ void classify_role_columns(RoleFile& f, const std::optional<Crs>& crs, const std
   if (!f.id) throw Error(ErrorKind::input, "E_COLUMN_MISSING", f.name + ": no 'id' column; the two files are joined by id");
   f.use = find_column(header, "use");
   f.constraint = find_column(header, "constraint");
+  f.solution = find_column(header, "solution");
   for (std::size_t i = 0; i < header.size(); ++i) {
     const std::string& n = header[i];
     if (n.find("_src") != std::string::npos || n.find("_dst") != std::string::npos) {
@@ -228,7 +230,7 @@ void classify_role_columns(RoleFile& f, const std::optional<Crs>& crs, const std
   auto mark = [&](std::optional<std::size_t> c) {
     if (c) read[*c] = true;
   };
-  for (auto c : {f.id, f.use, f.sigma, f.constraint, std::optional<std::size_t>(f.coords.first),
+  for (auto c : {f.id, f.use, f.sigma, f.constraint, f.solution, std::optional<std::size_t>(f.coords.first),
                  std::optional<std::size_t>(f.coords.second), f.coords.third}) {
     mark(c);
   }
@@ -244,6 +246,14 @@ void classify_role_columns(RoleFile& f, const std::optional<Crs>& crs, const std
     if (std::find(kDerivedColumns.begin(), kDerivedColumns.end(), n) != kDerivedColumns.end()) {
       if (!f.has_enu_sigma) refuse_column(f, i, "an error ellipse is read only beside the sigma_e_m, sigma_n_m, sigma_u_m it is derived from");
       continue;  // derived from sigma_e_m, sigma_n_m, corr_en: nothing more to read
+    }
+    {
+      std::string lower = n;
+      for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      if (lower.find("solution") != std::string::npos) {
+        refuse_column(f, i, "not read: a mark's GNSS solution type is read from the column 'solution' (" +
+                                geodesy::gnss_solution_names() + ")");
+      }
     }
     if (n.rfind("sigma", 0) == 0 || n.rfind("cov", 0) == 0 || n.rfind("corr", 0) == 0 || is_coordinate_column_name(n)) {
       refuse_column(f, i, "not read: a frame's uncertainty is read from sigma_m (isotropic, metres), cov_xx_m2 … cov_zz_m2 "
@@ -382,6 +392,14 @@ std::unordered_map<std::string, RoleRow> read_role_rows(RoleFile& f, const detai
         fail_at(*f.use, "expected 1/0, true/false or yes/no");
       }
     }
+    if (f.solution) {
+      const std::string& cell = r.values[*f.solution];
+      row.solution = geodesy::parse_gnss_solution(cell);
+      if (!row.solution) {
+        fail_at(*f.solution, std::string(cell.empty() ? "empty" : "not a GNSS solution type") + "; expected one of " +
+                                 geodesy::gnss_solution_names() + " (lower case)");
+      }
+    }
     const auto [at, inserted] = rows.emplace(id, row);
     if (!inserted) {
       throw Error(ErrorKind::input, "E_DUPLICATE_ID",
@@ -492,7 +510,16 @@ ControlSet read_control_pair(const std::filesystem::path& source, const std::fil
     p.target_cov_m2 = t->second.cov_m2;
     p.target_as_read = t->second.as_read;
     p.use = s.use && t->second.use;
+    // The solution type of either file; both must say the same.
+    p.solution = s.solution ? s.solution : t->second.solution;
+    if (s.solution && t->second.solution && *s.solution != *t->second.solution) {
+      throw Error(ErrorKind::input, "E_VALUE",
+                  files[0].name + ":" + std::to_string(s.line) + ": solution=" + std::string(geodesy::to_string(*s.solution)) +
+                      " for " + id + " but " + files[1].name + ":" + std::to_string(t->second.line) + " says " +
+                      std::string(geodesy::to_string(*t->second.solution)) + "; one mark has one GNSS solution type");
+    }
   }
+  set.has_solutions = files[0].solution.has_value() || files[1].solution.has_value();
   for (const auto& id : order[1]) {
     if (!rows[0].count(id)) only[1].push_back(id);
   }

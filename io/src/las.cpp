@@ -49,6 +49,67 @@ bool is_wkt_crs_vlr(const LasVlr& v) {
   return v.user_id == "LASF_Projection" && (v.record_id == kLasWktRecordId || v.record_id == 2111);
 }
 
+std::vector<LasExtraBytes> las_extra_bytes(const std::vector<LasVlr>& vlrs, std::uint8_t point_format,
+                                           std::uint16_t record_length, const std::string& file) {
+  constexpr std::size_t kDescriptor = 192;  // R15 Table 24
+  std::vector<LasExtraBytes> out;
+  const LasVlr* vlr = nullptr;
+  for (const auto& v : vlrs) {
+    if (v.user_id == "LASF_Spec" && v.record_id == kLasExtraBytesRecordId) {
+      if (vlr) {
+        throw Error(ErrorKind::input, "E_LAS_EXTRA_BYTES",
+                    file + ": byte " + std::to_string(v.file_offset) + ": a second extra-bytes VLR (LASF_Spec 4); the "
+                    "first is at byte " + std::to_string(vlr->file_offset));
+      }
+      vlr = &v;
+    }
+  }
+  if (!vlr) return out;
+  const std::string at = file + ": byte " + std::to_string(vlr->file_offset) + ": extra-bytes VLR (LASF_Spec 4): ";
+  if (vlr->data.size() % kDescriptor != 0) {
+    throw Error(ErrorKind::input, "E_LAS_EXTRA_BYTES",
+                at + std::to_string(vlr->data.size()) + " bytes, not a multiple of the 192-byte attribute descriptor");
+  }
+  // Bytes of one value of each data type 1..10 (R15 Table 25).
+  static constexpr std::size_t kSizes[] = {0, 1, 1, 2, 2, 4, 4, 8, 8, 4, 8};
+  std::size_t offset = las_min_record_length(point_format);
+  for (std::size_t k = 0; k < vlr->data.size() / kDescriptor; ++k) {
+    const std::uint8_t* d = vlr->data.data() + k * kDescriptor;
+    LasExtraBytes a;
+    a.data_type = d[2];
+    a.options = d[3];
+    const char* name = reinterpret_cast<const char*>(d + 4);
+    a.name.assign(name, strnlen(name, 32));
+    if (a.data_type == 0) {
+      a.size = a.options;  // undocumented bytes: options holds their count
+    } else if (a.data_type <= 10) {
+      a.size = kSizes[a.data_type];
+    } else if (a.data_type <= 20) {
+      a.size = 2 * kSizes[a.data_type - 10];  // deprecated two-element arrays
+    } else if (a.data_type <= 30) {
+      a.size = 3 * kSizes[a.data_type - 20];  // deprecated three-element arrays
+    } else {
+      throw Error(ErrorKind::input, "E_LAS_EXTRA_BYTES",
+                  at + "attribute " + std::to_string(k + 1) + " '" + a.name + "': data type " + std::to_string(a.data_type) +
+                      " unknown; expected 0 to 30");
+    }
+    for (const auto& b : out) {
+      if (!a.name.empty() && b.name == a.name) {
+        throw Error(ErrorKind::input, "E_LAS_EXTRA_BYTES", at + "attribute '" + a.name + "' is described twice");
+      }
+    }
+    a.offset = offset;
+    offset += a.size;
+    out.push_back(a);
+  }
+  if (offset > record_length) {
+    throw Error(ErrorKind::input, "E_LAS_EXTRA_BYTES",
+                at + "its attributes need " + std::to_string(offset) + "-byte records, the file's are " +
+                    std::to_string(record_length) + " bytes");
+  }
+  return out;
+}
+
 std::size_t las_min_record_length(std::uint8_t point_format) {
   switch (point_format) {
     case 0: return 20;

@@ -264,8 +264,16 @@ void read_network_json(std::string_view text_in, std::string_view source_in, geo
     if (kind == "gnss_baseline" || kind == "gnss_baseline_cluster" || kind == "gnss_point_cluster") {
       const bool points = kind == "gnss_point_cluster";
       const bool single = kind == "gnss_baseline";
-      only_keys(m, at, single ? with({"from", "to", "dx_m", "dy_m", "dz_m", "cov_m2", "sigma_m", "frame"})
-                              : with({points ? "points" : "baselines", "cov_m2", "frame"}));
+      only_keys(m, at, single ? with({"from", "to", "dx_m", "dy_m", "dz_m", "cov_m2", "sigma_m", "frame", "solution"})
+                              : with({points ? "points" : "baselines", "cov_m2", "frame", "solution"}));
+      if (m.contains("solution")) {
+        const json& sv = m.at("solution");
+        if (sv.is_string()) x.solution = geodesy::parse_gnss_solution(sv.get<std::string>());
+        if (!x.solution) {
+          fail(at + ".solution", "value " + sv.dump() + " is not a GNSS solution type; expected one of " +
+                                     geodesy::gnss_solution_names() + " (lower case)");
+        }
+      }
       x.kind = points ? MeasurementKind::gnss_points : MeasurementKind::gnss_baselines;
       std::vector<Eigen::Vector3d> values;
       auto read_vector = [&](const json& v, const std::string& w, const char* a, const char* bb, const char* c) {

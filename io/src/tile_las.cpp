@@ -23,6 +23,7 @@
 #include <thread>
 
 #include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/gnss_solution.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/las.hpp"
@@ -238,6 +239,7 @@ struct Unit {
   Bounds bounds;
   UtmBandTally band_in, band_out;
   std::string band_in_where, band_out_where;
+  std::array<std::uint64_t, geodesy::kGnssSolutionCount> solutions{};  // points per GNSS solution type
 };
 
 // One thread's work space, reused from unit to unit.
@@ -283,6 +285,8 @@ class LasTile {
   const std::uint32_t unit_points_;
   RecordSource source_;
   std::size_t gps_time_offset_ = 0;
+  std::optional<std::size_t> solution_offset_;  // the "gnss_solution" extra byte in a record
+  std::array<std::uint64_t, geodesy::kGnssSolutionCount> solutions_{};
   // Gathered over a pass, in point order.
   double epoch_lo_ = std::numeric_limits<double>::infinity(), epoch_hi_ = -std::numeric_limits<double>::infinity();
   Int3 in_qmin_ = kInt3Max, in_qmax_ = kInt3Min, qmin_ = kInt3Max, qmax_ = kInt3Min;
@@ -395,6 +399,21 @@ void LasTile::process(PassKind kind, const LasWriter* writer, const std::array<d
     }
   }
 
+  if (solution_offset_) {
+    // Each point's GNSS solution type (extra byte "gnss_solution"): counted,
+    // and a code outside the table refused by point.
+    const std::uint8_t* g = u.records.data() + *solution_offset_;
+    for (std::size_t i = 0; i < n; ++i, g += len) {
+      const auto solution = geodesy::gnss_solution_from_code(*g);
+      if (!solution) {
+        throw Error(ErrorKind::input, "E_GNSS_SOLUTION",
+                    reader_.path().string() + ": " + point_name(done + i) + ": extra byte gnss_solution = " +
+                        std::to_string(*g) + " is no GNSS solution code; expected 1 fixed, 2 ppk, 3 float, 4 dgps, "
+                        "5 sbas, 6 standalone, 7 dead_reckoned");
+      }
+      ++u.solutions[geodesy::solution_index(*solution)];
+    }
+  }
   if (o_.keep_coordinates) {
     // The tile's own coordinates: the records are the output.
     u.qmin = u.in_qmin;
@@ -461,6 +480,7 @@ void LasTile::pass(PassKind kind, LasWriter* writer, const std::array<double, 3>
   const unsigned threads = static_cast<unsigned>(std::clamp<std::uint64_t>(o_.threads, 1, std::max<std::uint64_t>(units, 1)));
   const std::size_t window = 2 * std::size_t{threads};
   band_in_ = band_out_ = UtmBandTally{};
+  solutions_ = {};
   bounds_ = Bounds{};
   qmin_ = kInt3Max;
   qmax_ = kInt3Min;
@@ -486,6 +506,7 @@ void LasTile::pass(PassKind kind, LasWriter* writer, const std::array<double, 3>
     }
     epoch_lo_ = std::min(epoch_lo_, u.epoch_lo);
     epoch_hi_ = std::max(epoch_hi_, u.epoch_hi);
+    for (std::size_t k = 0; k < solutions_.size(); ++k) solutions_[k] += u.solutions[k];
     band_in_.absorb(u.band_in, u.band_in_where);
     band_out_.absorb(u.band_out, u.band_out_where);
     if (kind == PassKind::write) {
@@ -518,6 +539,7 @@ void LasTile::pass(PassKind kind, LasWriter* writer, const std::array<double, 3>
         u->epoch_hi = -std::numeric_limits<double>::infinity();
         u->bounds = Bounds{};
         u->band_in = u->band_out = UtmBandTally{};
+        u->solutions = {};
       }
       try {
         process(kind, writer, scale, offset, *u, scratch);
@@ -590,6 +612,17 @@ TileApplyResult LasTile::run() {
                                             "standard GPS time");
     }
     gps_time_offset_ = h.point_format >= 6 ? 22 : 20;
+  }
+  for (const auto& a : las_extra_bytes(reader_.vlrs(), h.point_format, h.record_length, reader_.path().string())) {
+    if (a.name != kGnssSolutionAttribute) continue;
+    const bool scaled = (a.options & 0x18u) != 0;  // bits 3, 4: scale, offset
+    if (a.data_type != 1 || scaled) {
+      throw Error(ErrorKind::input, "E_LAS_EXTRA_BYTES",
+                  reader_.path().string() + ": extra-bytes attribute '" + a.name + "' has data type " +
+                      std::to_string(a.data_type) + (scaled ? " with a scale or offset" : "") +
+                      "; a GNSS solution code is an unscaled uint8 (data type 1)");
+    }
+    solution_offset_ = a.offset;
   }
 
   if (o_.keep_coordinates) {
@@ -725,6 +758,7 @@ TileApplyResult LasTile::run() {
   writer->finish(h.points_by_return, r.min, r.max);
   detail::add_band_warnings(r, reader_.path().string(), band_in_, band_out_);
   if (o_.epochs_from_gps_time && r.points) r.epoch_range = std::array<double, 2>{epoch_lo_, epoch_hi_};
+  if (solution_offset_) r.gnss_solution_counts = solutions_;
   // Input bounds in the chain's order (lat, lon, h for geodetic input).
   const bool geo_in = detail::lon_first_in_files(o_.from);
   for (std::size_t k = 0; k < 3 && r.points; ++k) {

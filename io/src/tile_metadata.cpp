@@ -117,14 +117,19 @@ TileMetadata read_tile_metadata(const std::filesystem::path& path) {
 
 TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view source) {
   const json j = parse_json_strict<json>(text_in, source);
-  only_keys(j, source, "", {"schema", "frame", "coordinates", "enu_origin", "projection", "crs", "horizontal_crs",
-                            "vertical", "survey", "provenance"});
-  TileMetadata m;
   const json* schema = member(j, "schema", source, "");
-  if (!schema || text(*schema, source, "schema") != kTileSchema) {
-    fail(source, "schema", std::string("expected \"") + std::string(kTileSchema) + "\"" +
+  const std::string schema_text = schema && schema->is_string() ? schema->get<std::string>() : std::string();
+  const bool v2 = schema_text == kTileSchema;
+  if (!v2 && schema_text != kTileSchemaV1) {
+    fail(source, "schema", std::string("expected \"") + std::string(kTileSchema) + "\" (or \"" +
+                               std::string(kTileSchemaV1) + "\")" +
                                (schema ? ", got " + schema->dump() : std::string(", the key is missing")));
   }
+  std::set<std::string> top = {"schema", "frame", "coordinates", "enu_origin", "projection", "crs", "horizontal_crs",
+                               "vertical", "survey", "provenance"};
+  if (v2) top.insert("metadata");
+  only_keys(j, source, "", top);
+  TileMetadata m;
   const json* frame = member(j, "frame", source, "");
   const json* coords_for_kind = member(j, "coordinates", source, "");
   const bool crs_kind = coords_for_kind && coords_for_kind->is_object() && coords_for_kind->contains("kind") &&
@@ -322,12 +327,69 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
     }
     m.provenance_json = p->dump();
   }
+  if (v2) {
+    const json* meta = member(j, "metadata", source, "");
+    if (!meta) fail(source, "metadata", "missing: a geoanchor.tile/2 sidecar carries the map metadata contract");
+    m.metadata = parse_map_metadata(meta->dump(), std::string(source) + ": metadata");
+    // The contract says what the sidecar's own keys say: each of those
+    // fields is the same, never "unknown" beside a stated value.
+    MapMetadataBuilder b{std::string(source)};
+    tile_contract_fields(b, m, "the sidecar's own keys");
+    const MapMetadata& own = b.metadata();
+    const MapMetadata& c = *m.metadata;
+    const auto unknown_beside = [&](bool own_known, bool contract_known, const char* key) {
+      if (own_known && !contract_known) fail(source, std::string("metadata.") + key, "\"unknown\" but the sidecar states it");
+    };
+    unknown_beside(own.frame.has_value(), c.frame.has_value(), "frame");
+    unknown_beside(own.coordinate_epoch.has_value(), c.coordinate_epoch.has_value(), "coordinate_epoch");
+    unknown_beside(own.enu_origin.has_value(), c.enu_origin.has_value(), "enu_origin");
+    unknown_beside(own.enu_origin_source.has_value(), c.enu_origin_source.has_value(), "enu_origin_source");
+    unknown_beside(own.horizontal_crs.has_value(), c.horizontal_crs.has_value(), "horizontal_crs");
+    unknown_beside(own.vertical_datum.has_value(), c.vertical_datum.has_value(), "vertical_datum");
+    unknown_beside(own.geoid_model.has_value(), c.geoid_model.has_value(), "geoid_model");
+    unknown_beside(own.rtk_fixed_percent.has_value(), c.rtk_fixed_percent.has_value(), "rtk_fixed_percent");
+    unknown_beside(own.coordinate_storage.has_value(), c.coordinate_storage.has_value(), "coordinate_storage");
+    const std::string who = "its metadata";
+    if (c.frame) b.frame(*c.frame, who);
+    if (c.coordinate_epoch) b.coordinate_epoch(*c.coordinate_epoch, who);
+    if (c.coordinate_epoch_range && own.coordinate_epoch) b.coordinate_epoch_range(*c.coordinate_epoch_range, who);
+    if (c.enu_origin && own.enu_origin) b.enu_origin(*c.enu_origin, who);
+    using T = MapMetadataBuilder::Text;
+    if (c.enu_origin_source && own.enu_origin_source) b.text(T::enu_origin_source, *c.enu_origin_source, who);
+    if (c.horizontal_crs) b.text(T::horizontal_crs, *c.horizontal_crs, who);
+    if (c.vertical_datum) b.text(T::vertical_datum, *c.vertical_datum, who);
+    if (c.geoid_model && own.geoid_model) b.text(T::geoid_model, *c.geoid_model, who);
+    if (c.coordinate_storage) b.text(T::coordinate_storage, *c.coordinate_storage, who);
+    if (c.rtk_fixed_percent) b.rtk_fixed_percent(*c.rtk_fixed_percent, who, false);
+  }
   return m;
+}
+
+bool is_origin_label(const std::string& source) {
+  return source.empty() || source == "--origin" || source == "--from-origin" || source == "LAS WKT";
+}
+
+void tile_contract_fields(MapMetadataBuilder& b, const TileMetadata& m, const std::string& who) {
+  using T = MapMetadataBuilder::Text;
+  if (m.frame) {
+    b.frame(m.frame->name(), who);
+    if (m.frame->epoch()) b.coordinate_epoch(m.frame->epoch()->year, who);
+  }
+  if (m.coordinates.origin && !m.crs) {
+    const auto& o = m.coordinates.origin->point;
+    b.enu_origin(MetadataOrigin{o.lat.deg(), o.lon.deg(), o.h.m}, who);
+    if (!is_origin_label(m.origin_source)) b.text(T::enu_origin_source, m.origin_source, who);
+  }
+  if (!m.horizontal_crs.empty()) b.text(T::horizontal_crs, m.horizontal_crs, who);
+  if (!m.vertical_datum.empty()) b.text(T::vertical_datum, m.vertical_datum, who);
+  if (m.geoid_model) b.text(T::geoid_model, *m.geoid_model, who);
+  b.text(T::coordinate_storage, coordinate_storage_text(kind_name(m), m.storage), who);
+  if (m.rtk_fixed_percent) b.rtk_fixed_percent(*m.rtk_fixed_percent, who, false);
 }
 
 std::string to_json_text(const TileMetadata& m) {
   nlohmann::ordered_json j;
-  j["schema"] = kTileSchema;
+  j["schema"] = m.metadata ? kTileSchema : kTileSchemaV1;
   if (m.frame) j["frame"] = m.frame->to_string();
   if (m.crs) {
     j["coordinates"] = {{"kind", "crs"}, {"storage", m.storage}};
@@ -387,6 +449,7 @@ std::string to_json_text(const TileMetadata& m) {
     if (m.rtk_fixed_percent) s["rtk_fixed_percent"] = *m.rtk_fixed_percent;
     j["survey"] = s;
   }
+  if (m.metadata) j["metadata"] = nlohmann::ordered_json::parse(map_metadata_json_text(*m.metadata));
   if (!m.provenance_json.empty()) j["provenance"] = nlohmann::ordered_json::parse(m.provenance_json);
   return j.dump(2) + "\n";
 }

@@ -46,7 +46,7 @@ const std::set<std::string> kTopLevelKeys = {
     "model",       "convention", "rotation_model", "source_frame", "target_frame", "reference_epoch",
     "parameters",  "sigmas",     "correlation",    "statistics",   "points",       "proj_pipeline",
     "epsg_method", "generator",  "format_version", "description",  "alternatives", "nominal_origin",
-    "wkt2",        "projjson",   "grid",          "correlation_parameters", "control_extent", "control_crs"};
+    "wkt2",        "projjson",   "grid",          "correlation_parameters", "control_extent", "control_crs", "metadata", "gnss_solutions"};
 
 [[noreturn]] void fail(std::string_view source, const std::string& key, const std::string& what) {
   throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
@@ -970,7 +970,7 @@ void parse_points(const json& pts, FitRecord& f, std::string_view source) {
     const json& jp = pts[i];
     only_keys(jp, where, source,
               {"id", "residual_enu_m", "w_test", "w_enu", "redundancy_enu", "mdb_m", "point_test", "outlier", "used", "note",
-               "robust_weight"});
+               "robust_weight", "solution"});
     FitPointRecord q;
     if (!jp.contains("id")) fail(source, where + ".id", "missing; every point record names its mark");
     q.id = string_at(jp.at("id"), where + ".id", source);
@@ -1000,8 +1000,65 @@ void parse_points(const json& pts, FitRecord& f, std::string_view source) {
         fail(source, where + ".robust_weight", "value " + v->dump() + " is not a weight in (0, 1]");
       }
     }
+    if (const json* v = member(jp, "solution")) {
+      if (v->is_string()) q.solution = geodesy::parse_gnss_solution(v->get<std::string>());
+      if (!q.solution) {
+        fail(source, where + ".solution", "value " + v->dump() + " is not a GNSS solution type; expected one of " +
+                                              geodesy::gnss_solution_names());
+      }
+    }
     f.points.push_back(q);
   }
+}
+
+GnssSolutionRecord parse_gnss_solutions(const json& g, std::string_view source) {
+  const std::string at = "gnss_solutions";
+  only_keys(g, at, source, {"policy", "classes"});
+  GnssSolutionRecord r;
+  const json* p = member(g, "policy");
+  if (!p) fail(source, at + ".policy", "missing; expected exclude or weight");
+  const std::string policy = string_at(*p, at + ".policy", source);
+  if (policy == "exclude") {
+    r.policy = geodesy::SolutionPolicy::exclude;
+  } else if (policy == "weight") {
+    r.policy = geodesy::SolutionPolicy::weight;
+  } else {
+    fail(source, at + ".policy", "value \"" + policy + "\" unknown; expected exclude or weight");
+  }
+  const json* c = member(g, "classes");
+  if (!c) fail(source, at + ".classes", "missing; expected one object per GNSS solution type");
+  std::vector<std::string> names;
+  for (const auto s : geodesy::kGnssSolutions) names.emplace_back(geodesy::to_string(s));
+  only_keys(*c, at + ".classes", source, names);
+  for (const auto s : geodesy::kGnssSolutions) {
+    const std::string name(geodesy::to_string(s));
+    const std::string w = at + ".classes." + name;
+    const json* e = member(*c, name);
+    if (!e) fail(source, w, "missing; every GNSS solution type is listed");
+    only_keys(*e, w, source, {"marks", "used", "excluded", "sigma_factor"});
+    SolutionTally& t = r.classes[geodesy::solution_index(s)];
+    for (const auto& [key, slot] : {std::pair<const char*, std::uint64_t*>{"marks", &t.marks}, {"used", &t.used}, {"excluded", &t.excluded}}) {
+      const json* v = member(*e, key);
+      if (!v || !v->is_number_unsigned()) fail(source, w + "." + key, "expected a count (an integer >= 0)");
+      *slot = v->get<std::uint64_t>();
+    }
+    t.sigma_factor = number_field(*e, "sigma_factor", w + ".", source);
+    if (t.used + t.excluded > t.marks) {
+      fail(source, w, "used " + std::to_string(t.used) + " + excluded " + std::to_string(t.excluded) + " > marks " +
+                          std::to_string(t.marks));
+    }
+    const bool used = geodesy::used_under(s, r.policy);
+    if (used ? t.excluded != 0 : t.used != 0) {
+      fail(source, w, std::string(used ? "excluded" : "used") + " is not 0, but policy " + policy + (used ? " uses " : " leaves out ") +
+                          name + " marks");
+    }
+    const double factor = geodesy::sigma_factor_under(s, r.policy);
+    if (t.sigma_factor != factor) {
+      fail(source, w + ".sigma_factor", "value " + format_shortest(t.sigma_factor) + " but policy " + policy + " gives " +
+                                            name + " marks the factor " + format_shortest(factor));
+    }
+  }
+  return r;
 }
 
 ControlExtent parse_extent(const json& e, std::string_view source) {
@@ -1042,7 +1099,7 @@ std::optional<FitRecord> parse_fit_record(const json& doc, const TransformFile& 
                                           std::string_view source) {
   bool any = false;
   for (const char* key : {"sigmas", "correlation", "correlation_parameters", "statistics", "points", "control_extent",
-                          "control_crs"}) {
+                          "control_crs", "gnss_solutions"}) {
     any = any || doc.contains(key);
   }
   if (!any) return std::nullopt;
@@ -1053,6 +1110,7 @@ std::optional<FitRecord> parse_fit_record(const json& doc, const TransformFile& 
   if (const json* st = member(doc, "statistics")) parse_statistics(*st, f, source);
   if (const json* pts = member(doc, "points")) parse_points(*pts, f, source);
   if (const json* e = member(doc, "control_extent")) f.extent = parse_extent(*e, source);
+  if (const json* g = member(doc, "gnss_solutions")) f.gnss_solutions = parse_gnss_solutions(*g, source);
   if (const json* c = member(doc, "control_crs")) {
     // A record of how the control was read, kept as it is: only its shape is checked.
     if (!c->is_object()) fail(source, "control_crs", "value is not a JSON object");
@@ -1073,6 +1131,18 @@ TransformFile parse_transform_json(std::string_view text, std::string_view sourc
   TransformFile t = parse_transform_core(text, source, doc, mp);
   check_written_keys(doc, t, source);
   t.fit = parse_fit_record(doc, t, mp, source);
+  if (const json* meta = member(doc, "metadata")) {
+    t.metadata = parse_map_metadata(meta->dump(), std::string(source) + ": metadata");
+    // The contract describes the target side: its frame and epoch are target_frame's.
+    MapMetadataBuilder b{std::string(source)};
+    if (t.target_frame) {
+      b.frame(t.target_frame->name(), "target_frame");
+      if (t.target_frame->epoch()) b.coordinate_epoch(t.target_frame->epoch()->year, "target_frame");
+    }
+    if (t.metadata->frame) b.frame(*t.metadata->frame, "metadata.frame");
+    if (t.metadata->coordinate_epoch) b.coordinate_epoch(*t.metadata->coordinate_epoch, "metadata.coordinate_epoch");
+    if (t.target_frame && !t.metadata->frame) fail(source, "metadata.frame", "\"unknown\" but target_frame states it");
+  }
   return t;
 }
 
@@ -1333,6 +1403,11 @@ void append_point_record(std::string& out, const FitPointRecord& p, bool first) 
     lit(", \"robust_weight\": ");
     num(p.robust_weight);
   }
+  if (p.solution) {
+    lit(", \"solution\": \"");
+    lit(geodesy::to_string(*p.solution));
+    *at++ = '"';
+  }
   lit(", \"used\": ");
   flag(p.used);
   // w_test is one of w_enu (the largest in magnitude): its text is copied
@@ -1522,6 +1597,7 @@ void write_json_with(std::ostream& out, const TransformFile& t, const PointRecor
     doc["parameters"] = with_pivot(std::visit([](const auto& h) { return parameters_json(h); }, t.helmert));
   }
   doc["proj_pipeline"] = proj_pipeline(t);
+  if (t.metadata) doc["metadata"] = json::parse(map_metadata_json_text(*t.metadata));
   if (t.fit) {
     if (const auto wkt = to_wkt2(t)) doc["wkt2"] = *wkt;
     if (const auto pj = to_projjson(t)) doc["projjson"] = json::parse(*pj);
@@ -1571,6 +1647,15 @@ void write_json_with(std::ostream& out, const TransformFile& t, const PointRecor
     if (f.variance_factors) {
       doc["statistics"]["variance_factors"] = {{"source", number(f.variance_factors->first)},
                                                {"target", number(f.variance_factors->second)}};
+    }
+    if (f.gnss_solutions) {
+      json classes = json::object();
+      for (const auto s : geodesy::kGnssSolutions) {
+        const SolutionTally& c = f.gnss_solutions->classes[geodesy::solution_index(s)];
+        classes[std::string(geodesy::to_string(s))] = {
+            {"marks", c.marks}, {"used", c.used}, {"excluded", c.excluded}, {"sigma_factor", number(c.sigma_factor)}};
+      }
+      doc["gnss_solutions"] = {{"policy", std::string(geodesy::to_string(f.gnss_solutions->policy))}, {"classes", classes}};
     }
     doc["points"] = nullptr;  // placeholder: the records are streamed below, one a line
   }

@@ -95,7 +95,7 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
   nominal.normal_radius_m = e.a_m() / std::sqrt(w2) + o.nominal_origin->point.h.m;
   nominal.enu_from_ecef = plane.enu_from_ecef_rotation();
 
-  std::vector<std::size_t> active = init_points(result, control);
+  std::vector<std::size_t> active = init_points(result, control, o);
   const int u = 3 + (o.enu_yaw ? 1 : 0) + (o.enu_scale ? 1 : 0);
   const PointTestLevels levels = point_test_levels(o);
   result.w_critical = levels.w_critical;

@@ -18,18 +18,26 @@ std::string fmt(double v, int precision) {
 
 Eigen::MatrixXd symmetric(const Eigen::MatrixXd& c) { return 0.5 * (c + c.transpose()); }
 
-std::vector<std::size_t> init_points(FitResult& result, const geodesy::ControlSet& control) {
+std::vector<std::size_t> init_points(FitResult& result, const geodesy::ControlSet& control, const FitOptions& options) {
   std::vector<std::size_t> active;
   result.points.resize(control.points.size());
   for (std::size_t i = 0; i < control.points.size(); ++i) {
-    result.points[i].id = control.points[i].id;
-    result.points[i].line = control.points[i].line;
-    result.points[i].used = control.points[i].use;
-    if (control.points[i].use) {
-      active.push_back(i);
-    } else {
-      result.points[i].removed_because = "use = 0 in the control set";
+    const geodesy::ControlPoint& p = control.points[i];
+    PointResult& r = result.points[i];
+    r.id = p.id;
+    r.line = p.line;
+    r.used = p.use;
+    if (!p.use) {
+      r.removed_because = "use = 0 in the control set";
+    } else if (p.solution && !geodesy::used_under(*p.solution, options.solutions)) {
+      r.used = false;
+      r.removed_because =
+          "GNSS solution " + std::string(geodesy::to_string(*p.solution)) +
+          (options.solutions == geodesy::SolutionPolicy::exclude
+               ? ": float and worse are left out (--solution-weighting weighs float, dgps, sbas and standalone)"
+               : ": a dead-reckoned position is left out even with --solution-weighting (no factor bounds its drift)");
     }
+    if (r.used) active.push_back(i);
   }
   return active;
 }

@@ -19,8 +19,9 @@ std::string fmt(double v, int precision = 3);
 // rounding; the reported one is exactly.
 Eigen::MatrixXd symmetric(const Eigen::MatrixXd& c);
 
-// Fills result.points from the control set; returns the indices in use.
-std::vector<std::size_t> init_points(FitResult& result, const geodesy::ControlSet& control);
+// Fills result.points from the control set; returns the indices in use:
+// the marks with use = 1 whose GNSS solution type options.solutions uses.
+std::vector<std::size_t> init_points(FitResult& result, const geodesy::ControlSet& control, const FitOptions& options);
 
 // Without a-priori sigmas: weights are equal, σ0 scales the sigmas, and the
 // result says so.

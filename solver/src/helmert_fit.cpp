@@ -459,6 +459,10 @@ geodesy::EcefPosition apply_fit(const FitResult& fit, const geodesy::EcefPositio
 
 namespace {
 
+// The fit of `control` as its covariances stand (the GNSS solution types'
+// sigma factors already applied by fit_helmert).
+FitResult fit_weighted(const ControlSet& control, const FitOptions& options);
+
 // Iteratively reweighted least squares for a robust loss.
 FitResult fit_robust(const ControlSet& control, const FitOptions& options) {
   constexpr int kMaxIterations = 50;
@@ -475,7 +479,7 @@ FitResult fit_robust(const ControlSet& control, const FitOptions& options) {
       weighted.points[i].target_cov_m2 /= weight[i];
     }
     if (!control.has_a_priori_sigmas) weighted.has_a_priori_sigmas = false;
-    r = fit_helmert(weighted, o);
+    r = fit_weighted(weighted, o);
     double change = 0.0;
     for (std::size_t i = 0; i < r.points.size(); ++i) {
       const auto& p = r.points[i];
@@ -498,9 +502,7 @@ FitResult fit_robust(const ControlSet& control, const FitOptions& options) {
   return r;
 }
 
-}  // namespace
-
-FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
+FitResult fit_weighted(const ControlSet& control, const FitOptions& options) {
   if (options.robust != FitOptions::Robust::none) return fit_robust(control, options);
   if (options.model == FitModel::enu_origin || options.model == FitModel::site_calibration) {
     if (options.vce) {
@@ -521,7 +523,7 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
   result.convention = o.convention.value_or(Convention::position_vector);
   result.rotation_model = o.rotation_model;
   note_missing_sigmas(result, o, control);
-  std::vector<std::size_t> active = init_points(result, control);
+  std::vector<std::size_t> active = init_points(result, control, o);
 
   const PointTestLevels levels = point_test_levels(o);
   result.w_critical = levels.w_critical;
@@ -1020,5 +1022,35 @@ FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
     return result;
   }
 }
+
+}  // namespace
+
+FitResult fit_helmert(const ControlSet& control, const FitOptions& options) {
+  // GNSS solution types weighted on request: float and worse enter with
+  // their covariances scaled by the class's factor squared (geodesy::
+  // solution_sigma_factor); excluded classes are left out by init_points.
+  bool scaled = false;
+  if (options.solutions == geodesy::SolutionPolicy::weight && control.has_solutions) {
+    for (const auto& p : control.points) {
+      scaled = scaled || (p.solution && geodesy::sigma_factor_under(*p.solution, options.solutions) != 1.0);
+    }
+  }
+  if (!scaled) return fit_weighted(control, options);
+  if (!control.has_a_priori_sigmas) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--solution-weighting: " + control.source_name +
+                    " gives no a-priori sigmas, which the GNSS solution types' factors would scale; give sigma_src_m/"
+                    "sigma_dst_m (or covariances), or leave float and worse out (the default)");
+  }
+  ControlSet weighted = control;
+  for (auto& p : weighted.points) {
+    if (!p.solution) continue;
+    const double f = geodesy::sigma_factor_under(*p.solution, options.solutions);
+    p.source_cov_m2 *= f * f;
+    p.target_cov_m2 *= f * f;
+  }
+  return fit_weighted(weighted, options);
+}
+
 
 }  // namespace geoanchor::solver

@@ -58,7 +58,7 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
   const geodesy::LocalTangentPlane plane(*o.nominal_origin);
   const geodesy::GeocentricConverter geocentric(e);
 
-  std::vector<std::size_t> active = init_points(result, control);
+  std::vector<std::size_t> active = init_points(result, control, o);
   if (active.size() < 3) {
     reject("E_FIT_TOO_FEW_POINTS", "model site-calibration: need >= 3 non-collinear points, got " + std::to_string(active.size()));
   }

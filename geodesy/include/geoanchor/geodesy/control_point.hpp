@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/gnss_solution.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/geodesy/projection.hpp"
@@ -68,6 +69,11 @@ struct ControlPoint {
   // Epoch at which the point's two coordinates are related by the transform.
   std::optional<DecimalYear> epoch;
   bool use = true;
+  // The GNSS solution type of the mark's surveyed coordinates (a `solution`
+  // column or key; docs/commands/fit.md#gnss-solution-types); nullopt when
+  // the set has none. Fits exclude float and worse by default
+  // (solver::FitOptions::solutions).
+  std::optional<GnssSolution> solution;
   // Optional: the mark's velocities in both frames. Held out of line and
   // shared between copies (never changed once read): most sets have none,
   // and in place they were 40 % of a mark (200 MB of 10⁶ marks).
@@ -88,6 +94,9 @@ struct ControlSet {
   // False when the file gave no sigmas: weights are then equal (1 m²) and
   // only σ0 estimated from the residuals gives them a scale.
   bool has_a_priori_sigmas = true;
+  // Every point carries its GNSS solution type (the set has a `solution`
+  // column or every JSON point a `solution` key); false when none does.
+  bool has_solutions = false;
   // How the coordinates were read: their forms and ellipsoids, the nominal
   // origin of ENU values (on the ellipsoid of the frame whose values are ENU).
   ControlInputForm source_input;

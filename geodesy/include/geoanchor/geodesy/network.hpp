@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "geoanchor/geodesy/gnss_solution.hpp"
 #include "geoanchor/geodesy/ellipsoid.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/units.hpp"
@@ -105,6 +106,9 @@ struct NetworkMeasurement {
   std::optional<Frame> frame;
   std::string group;                  // --estimate-helmert GROUP: measurements sharing a datum
   bool ignore = false;                // read, not adjusted (DynAdjust's Ignore)
+  // GNSS: the solution type of its positions or baselines (network JSON
+  // "solution"); adjust leaves float and worse out unless weighted.
+  std::optional<GnssSolution> solution;
   std::string source;                 // "file:line" or "file: DnaMeasurement[12]"
   // What was done to bring it to the network's frame ("ITRF2014@2020.0 ->
   // GDA2020 by ..."), filled when it was.

@@ -27,6 +27,7 @@
 #include <optional>
 #include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "geoanchor/io/laz.hpp"
@@ -84,6 +85,29 @@ struct LasHeader {
 // The smallest record length of a point data record format, or 0 for a
 // format this reader does not support.
 std::size_t las_min_record_length(std::uint8_t point_format);
+
+// One attribute of the LAS 1.4 extra-bytes VLR (user id "LASF_Spec",
+// record id 4; R15 Table 24: 192 bytes per attribute, in record order).
+struct LasExtraBytes {
+  std::string name;
+  std::uint8_t data_type = 0;  // 0 undocumented (options = size), 1 uint8, 2 int8, 3 uint16, … 10 double, 11–30 arrays
+  std::uint8_t options = 0;    // bit 0 no_data, 1 min, 2 max, 3 scale, 4 offset
+  std::size_t offset = 0;      // byte offset of the attribute in a point record
+  std::size_t size = 0;        // its bytes
+};
+inline constexpr std::uint16_t kLasExtraBytesRecordId = 4;
+// The extra-bytes attribute that carries each point's GNSS solution type
+// (uint8, the codes of geodesy::gnss_solution_from_code: 1 fixed … 7
+// dead_reckoned).
+inline constexpr std::string_view kGnssSolutionAttribute = "gnss_solution";
+
+// The attributes of `vlrs`' extra-bytes VLR for records of `point_format`
+// and `record_length` (none without that VLR). Throws geoanchor::Error
+// (input, E_LAS_EXTRA_BYTES) naming `file` and the VLR's byte offset: a
+// length that is no multiple of 192, an unknown data type, attributes
+// longer than the record's extra bytes, a name given twice.
+std::vector<LasExtraBytes> las_extra_bytes(const std::vector<LasVlr>& vlrs, std::uint8_t point_format,
+                                           std::uint16_t record_length, const std::string& file);
 
 // The records per chunk LasReader reports for an uncompressed file (a LAZ
 // file has the chunks it was written with).

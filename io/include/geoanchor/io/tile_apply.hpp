@@ -121,6 +121,9 @@ struct TileApplyOptions {
 
 struct TileApplyResult {
   std::uint64_t points = 0;
+  // LAS/LAZ with an extra-bytes attribute "gnss_solution" (las.hpp): the
+  // points of each GNSS solution type, in the order of geodesy::kGnssSolutions.
+  std::optional<std::array<std::uint64_t, 7>> gnss_solution_counts;
   // Output bounds in the file's axes (LAS: X, Y, Z; CSV/PLY: the three
   // coordinate columns in the order written).
   std::array<double, 3> min{}, max{};

@@ -1,9 +1,10 @@
 #pragma once
 // What a map tile's coordinates are: the metadata sidecar
-// `<tile>.geoanchor.json` (schema "geoanchor.tile/1", docs/tile-metadata.md)
-// and the LAS WKT2 coordinate system that says the same thing.
+// `<tile>.geoanchor.json` (schema "geoanchor.tile/2", docs/tile-metadata.md;
+// "geoanchor.tile/1", the same without "metadata", is still read) and the
+// LAS WKT2 coordinate system that says the same thing.
 //
-//   {"schema": "geoanchor.tile/1",
+//   {"schema": "geoanchor.tile/2",
 //    "frame": "ITRF2014@2024.5",
 //    "coordinates": {"kind": "enu" | "ned" | "ecef" | "geodetic" | "utm" | "tm",
 //                    "ellipsoid": "WGS84" | "GRS80" | {"a_m": A, "rf": RF},
@@ -18,6 +19,8 @@
 //    "vertical": {"datum": "...", "height_type": "ellipsoidal" | "orthometric",
 //                 "geoid_model": "EGM96" | null},
 //    "survey": {"method": "...", "rtk_fixed_percent": 97.5},
+//    "metadata": {...},       (/2: the map metadata contract, map_metadata.hpp;
+//                              checked against the keys above)
 //    "provenance": {...}}                                  (written by apply)
 //
 // Unknown keys are errors naming the file and the key: a misspelt field
@@ -34,11 +37,13 @@
 
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/io/crs.hpp"
+#include "geoanchor/io/map_metadata.hpp"
 #include "geoanchor/io/point_chain.hpp"
 
 namespace geoanchor::io {
 
-inline constexpr std::string_view kTileSchema = "geoanchor.tile/1";
+inline constexpr std::string_view kTileSchema = "geoanchor.tile/2";
+inline constexpr std::string_view kTileSchemaV1 = "geoanchor.tile/1";  // read, without "metadata"
 
 struct TileMetadata {
   std::optional<geodesy::Frame> frame;  // datum, realization, coordinate epoch
@@ -58,6 +63,9 @@ struct TileMetadata {
   // hold: other units, axis directions, prime meridians, projection
   // methods, 2-D and compound CRSs); `coordinates` then holds nothing.
   std::optional<Crs> crs;
+  // The map metadata contract (schema /2; apply always writes it). Read
+  // back, it agrees with the keys above (tile_contract_fields).
+  std::optional<MapMetadata> metadata;
 };
 
 // "crs" for a tile in a CRS, else kind_name(m.coordinates).
@@ -75,7 +83,19 @@ std::filesystem::path sidecar_path(const std::filesystem::path& tile);
 // type, a value of the wrong type or range.
 TileMetadata read_tile_metadata(const std::filesystem::path& path);
 TileMetadata parse_tile_metadata(std::string_view text, std::string_view source);
+// Schema /2 with "metadata" when m.metadata is set, else /1.
 std::string to_json_text(const TileMetadata& m);
+
+// The contract fields the tile's own keys state, into `b` as stated by
+// `who`: frame and epoch, the ENU origin (enu, ned) and its source (unless
+// it is one of geoanchor's own labels: --origin, --from-origin, LAS WKT),
+// horizontal_crs, vertical.datum, vertical.geoid_model, the storage
+// (coordinate_storage_text) and survey.rtk_fixed_percent.
+void tile_contract_fields(MapMetadataBuilder& b, const TileMetadata& m, const std::string& who);
+
+// geoanchor's labels for where an ENU origin came from ("--origin", …),
+// which say nothing of the origin's own source.
+bool is_origin_label(const std::string& source);
 
 // The tile's coordinate system as WKT2:2019. A tile in a CRS: PROJ's WKT2
 // of it, with a REMARK stating the coordinate epoch of a dynamic one where

@@ -34,7 +34,9 @@
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/gnss_solution.hpp"
 #include "geoanchor/geodesy/site_calibration.hpp"
+#include "geoanchor/io/map_metadata.hpp"
 
 namespace geoanchor::io {
 
@@ -58,6 +60,25 @@ struct FitPointRecord {
   bool used = true;
   std::string note;  // why it was not used
   double robust_weight = 1.0;  // written when < 1 (robust loss)
+  std::optional<geodesy::GnssSolution> solution;  // written when the control set states it ("solution": "float")
+};
+
+// The GNSS solution types of a fit's marks (a control set with a
+// `solution` column): the policy, and per class (every class, best first)
+// the marks read, those in the final fit, those left out for their
+// solution type, and the factor their sigmas were multiplied by.
+// "gnss_solutions": {"policy": "exclude" | "weight",
+//                    "classes": {"fixed": {"marks", "used", "excluded", "sigma_factor"}, ...}}
+// Checked when read: every class once, used + excluded <= marks, a class
+// the policy leaves out used by none and weighted by none, the factors
+// those of geodesy::sigma_factor_under.
+struct SolutionTally {
+  std::uint64_t marks = 0, used = 0, excluded = 0;
+  double sigma_factor = 1.0;
+};
+struct GnssSolutionRecord {
+  geodesy::SolutionPolicy policy = geodesy::SolutionPolicy::exclude;
+  std::array<SolutionTally, geodesy::kGnssSolutionCount> classes{};  // in the order of geodesy::kGnssSolutions
 };
 
 // The control network's horizontal extent in the source frame: the convex
@@ -110,6 +131,7 @@ struct FitRecord {
   // operation to ECEF with its grids' SHA-256), as JSON text; "" when none.
   std::string control_crs_json;
   std::optional<ControlExtent> extent;
+  std::optional<GnssSolutionRecord> gnss_solutions;  // only for a control set with solution types
 };
 
 // enu-origin: a map's ENU frame re-anchored (geodesy::enu_origin_correction).
@@ -142,6 +164,11 @@ struct TransformFile {
   // (A member added here must be added to without_fit_record() in
   // transform_file.cpp too: it copies every member by name but fit.)
   std::optional<FitRecord> fit;  // only when written by `geoanchor fit`
+  // The map metadata contract (map_metadata.hpp), written by fit and adjust
+  // --estimate-helmert: it describes the transform's target side (the
+  // frame and epoch the anchored map is in). Read back typed; its frame and
+  // epoch must be target_frame's.
+  std::optional<MapMetadata> metadata;
 
   bool time_dependent() const { return model == TransformModel::helmert14; }
   std::string_view convention_name() const;

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/control_point.hpp"
+#include "geoanchor/geodesy/gnss_solution.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/geodesy/site_calibration.hpp"
@@ -97,6 +98,12 @@ struct FitOptions {
   // Scale the parameter covariance by σ0² (a posteriori) instead of using
   // the a-priori σ0 = 1. Forced when the control set has no a-priori sigmas.
   bool scale_by_sigma0 = false;
+  // Marks with a GNSS solution type (geodesy::ControlPoint::solution):
+  // exclude (default) leaves float and worse out of the fit, tested against
+  // it as use = 0 marks are; weight uses float, dgps, sbas and standalone
+  // with their sigmas multiplied by geodesy::solution_sigma_factor
+  // (dead_reckoned stays out). Marks without a type are used as given.
+  geodesy::SolutionPolicy solutions = geodesy::SolutionPolicy::exclude;
 };
 
 struct Parameter {
