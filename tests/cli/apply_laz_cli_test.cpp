@@ -324,7 +324,7 @@ TEST_F(ApplyLaz, Issue15_AFolderOfLasAndLazReportsEveryOtherFileUnlessExcluded) 
   EXPECT_EQ(m.exit_code, 0) << m.err;
   const RunResult named = run("apply " + path("tiles/notes.md").string() + " --out-dir " + path("out5").string());
   EXPECT_EQ(named.exit_code, 2);
-  EXPECT_NE(named.err.find("not a tile; expected .las, .laz, .copc.laz, .csv, .txt or .ply"), std::string::npos) << named.err;
+  EXPECT_NE(named.err.find("not a tile; expected .las, .laz, .copc.laz, .csv, .txt, .ply, .geojson, .osm or .xodr"), std::string::npos) << named.err;
 }
 
 // issue 15 point 3: one tile's chunks on two threads give the file one
