@@ -110,6 +110,10 @@ CLI::App* add_apply_command(CLI::App& app, ApplyOptions& o) {
   cmd->add_option("--max-extrapolation", o.max_extrapolation_m,
                   "Refuse tiles farther than this (m) outside the control network (default 10000)")
       ->check(finite_range(0.0, 1e7));
+  cmd->add_option("--survey-metadata", o.survey_metadata,
+                  "Survey metadata (JSON, schema geoanchor.survey/1): the metadata contract's fields geoanchor cannot "
+                  "derive (ENU origin source, GNSS method and base, vertical datum, geoid, RTK-fixed share), checked "
+                  "against each tile and written into its sidecar");
   cmd->add_option("--local-xy", o.local_xy,
                   "Lanelet2 OSM: the projection of the nodes' local_x/local_y tags (WGS 84): lanelet2-utm:LAT,LON "
                   "(UtmProjector origin), utm:ZONE[,E0,N0] or tm:LAT0,LON0,K0,FE,FN");
@@ -156,6 +160,7 @@ int run_apply(const ApplyOptions& o) {
   request.resolution_m = o.resolution_m;
   request.epoch_from_gps_time = o.epoch_from_gps_time;
   request.max_extrapolation_m = o.max_extrapolation_m;
+  request.survey_metadata = o.survey_metadata;
   request.local_xy = o.local_xy;
   request.local_xy_tolerance_m = o.local_xy_tolerance_m;
   request.max_deviation_m = o.max_deviation_m;

@@ -30,6 +30,7 @@ struct ApplyOptions {
   std::optional<double> resolution_m;
   bool epoch_from_gps_time = false;  // LAS: a 14-parameter transform at each point's GPS time
   double max_extrapolation_m = 10000.0;
+  std::optional<std::string> survey_metadata;  // --survey-metadata FILE (geoanchor.survey/1)
   std::optional<std::string> local_xy;  // Lanelet2: the projection of local_x/local_y
   double local_xy_tolerance_m = 0.01;
   double max_deviation_m = 0.001;  // OpenDRIVE re-anchoring

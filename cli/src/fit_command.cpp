@@ -63,6 +63,12 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   cmd->add_flag("--scale-by-sigma0", o.scale_by_sigma0, "Scale parameter sigmas by the a-posteriori σ0");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test,
                 "Write the transform even if the global test fails high");
+  cmd->add_flag("--solution-weighting", o.solution_weighting,
+                "Use marks whose GNSS solution (column 'solution') is float, dgps, sbas or standalone, with their sigmas "
+                "multiplied by 10, 25, 75 or 250 (default: left out; dead_reckoned always is)");
+  cmd->add_option("--survey-metadata", o.survey_metadata,
+                  "Survey metadata (JSON, schema geoanchor.survey/1) for the transform file's metadata contract: ENU "
+                  "origin source, GNSS method and base, vertical datum, geoid, RTK-fixed share");
   cmd->add_option("-o,--output", o.output,
                   "Transform file (JSON) to write; - writes it on standard output (the report then goes to standard error)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output");
@@ -253,6 +259,11 @@ int run_fit(const FitCommandOptions& o) {
   fo.data_snooping = !o.no_snooping;
   fo.max_outlier_share = o.max_outlier_share;
   fo.scale_by_sigma0 = o.scale_by_sigma0;
+  fo.solutions = o.solution_weighting ? geodesy::SolutionPolicy::weight : geodesy::SolutionPolicy::exclude;
+  // Read before any work: a bad survey file fails before the fit.
+  std::optional<io::SurveyMetadata> survey;
+  if (o.survey_metadata) survey = io::read_survey_metadata(*o.survey_metadata);
+  const io::SurveyMetadata* survey_ptr = survey ? &*survey : nullptr;
 
   // Refuse an existing output before any work. With -o - the transform
   // file goes to standard output and the report to standard error.
@@ -355,13 +366,17 @@ int run_fit(const FitCommandOptions& o) {
   // --json embeds the file's content; otherwise the file is streamed (10⁶
   // marks' records are never held whole).
   std::string transform_text;
-  if (o.json) transform_text = io::to_json_text(workflow::transform_file_from_fit(r, set, fo, {}, generator));
+  // The metadata contract first: a survey file that contradicts the fit
+  // refuses it before anything is written.
+  const io::MapMetadata contract = workflow::transform_metadata(r, set, survey_ptr);
+  (void)contract;
+  if (o.json) transform_text = io::to_json_text(workflow::transform_file_from_fit(r, set, fo, {}, generator, survey_ptr));
   if (out && !refusal) {
     if (o.json) {
       out->stream() << transform_text;
     } else {
       const workflow::StreamedTransformFile file =
-          workflow::streamed_transform_file_from_fit(fitted, set, fo, {}, generator);
+          workflow::streamed_transform_file_from_fit(fitted, set, fo, {}, generator, survey_ptr);
       // The marks are not read again: they and the solver's freed memory
       // go back to the system before the file is written (10⁶ marks:
       // 550 MB), where the file's cache pages can reuse them (on this

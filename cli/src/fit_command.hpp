@@ -40,6 +40,10 @@ struct FitCommandOptions {
   double max_outlier_share = 0.10;
   bool scale_by_sigma0 = false;
   bool accept_failed_global_test = false;
+  // GNSS solution types (a `solution` column): float and worse are left out
+  // unless weighted (geodesy::solution_sigma_factor).
+  bool solution_weighting = false;
+  std::optional<std::string> survey_metadata;  // geoanchor.survey/1 file for the transform's metadata contract
   std::string output;  // empty: no file; "-": the transform file on standard output
   bool overwrite = false;
   bool json = false;   // the report as JSON on standard output

@@ -24,6 +24,9 @@ std::vector<CLI::Option*> add_network_options(CLI::App* cmd, NetworkOptions& o) 
                       "Refuse when data snooping would remove more than this share of the measurements (default 0.10)")
           ->check(finite_range(0.0, 0.5)),
       cmd->add_flag("--no-snooping", o.no_snooping, "Report failing measurements but remove none"),
+      cmd->add_flag("--solution-weighting", o.solution_weighting,
+                    "Adjust GNSS measurements whose 'solution' is float, dgps, sbas or standalone with their covariances "
+                    "scaled by 10², 25², 75² or 250² (default: left out; dead_reckoned always is)"),
       cmd->add_option("--geoid", o.geoid,
                       "Geoid for orthometric heights and levelled height differences: EGM96, EGM96-NGA, a grid name PROJ finds or a PATH"),
       cmd->add_option("--refraction", o.refraction, "Coefficient of refraction for zenith angles (default 0; 0.13 is typical by day)")
@@ -48,6 +51,7 @@ workflow::AdjustRequest network_request(const std::vector<std::string>& inputs, 
   request.constrain = o.constrain;
   request.estimate_helmert = o.estimate_helmert;
   request.convention = helmert_convention;
+  request.solutions = o.solution_weighting ? geodesy::SolutionPolicy::weight : geodesy::SolutionPolicy::exclude;
   auto& so = request.options;
   so.alpha = 1.0 - o.confidence;
   so.confidence = o.confidence;

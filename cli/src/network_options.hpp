@@ -29,6 +29,7 @@ struct NetworkOptions {
   double alpha = 0.001;
   double max_outlier_share = 0.10;
   bool no_snooping = false;
+  bool solution_weighting = false;  // GNSS measurements of float and worse weighted instead of left out
   std::optional<std::string> geoid;
   double refraction = 0.0;
   double convergence_m = 1e-5;

@@ -290,6 +290,33 @@ void resolve_helmert_group(const AdjustRequest& request, const geodesy::Network&
 
 }  // namespace
 
+std::optional<io::GnssSolutionRecord> adjust_solution_record(const PreparedNetwork& p, const solver::AdjustmentResult& r,
+                                                             const std::vector<std::size_t>* only) {
+  if (!p.solution_policy) return std::nullopt;
+  const auto& ms = p.network.measurements;
+  std::vector<bool> in(ms.size(), only == nullptr);
+  if (only) {
+    for (const std::size_t mi : *only) in[mi] = true;
+  }
+  io::GnssSolutionRecord rec;
+  rec.policy = *p.solution_policy;
+  for (const auto s : geodesy::kGnssSolutions) {
+    rec.classes[geodesy::solution_index(s)].sigma_factor = geodesy::sigma_factor_under(s, rec.policy);
+  }
+  for (std::size_t mi = 0; mi < ms.size(); ++mi) {
+    if (in[mi] && ms[mi].solution) ++rec.classes[geodesy::solution_index(*ms[mi].solution)].marks;
+  }
+  for (const std::size_t mi : p.solution_excluded) {
+    if (in[mi]) ++rec.classes[geodesy::solution_index(*ms[mi].solution)].excluded;
+  }
+  for (const auto& am : r.measurements) {
+    if (am.index < ms.size() && in[am.index] && am.used && ms[am.index].solution) {
+      ++rec.classes[geodesy::solution_index(*ms[am.index].solution)].used;
+    }
+  }
+  return rec;
+}
+
 PreparedNetwork prepare_network(const AdjustRequest& request) {
   PreparedNetwork p;
   io::NetworkReadOptions read_options;
@@ -306,6 +333,40 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
   p.network = io::read_network(request.inputs, read_options);
   geodesy::Network& net = p.network;
   for (const auto& w : net.warnings) p.notes.push_back("warning: " + w);
+  // GNSS solution types: float and worse left out, or weighted on request.
+  {
+    std::array<std::size_t, geodesy::kGnssSolutionCount> seen{}, left_out{}, weighted{};
+    for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+      auto& m = net.measurements[mi];
+      if (!m.solution) continue;
+      p.solution_policy = request.solutions;
+      const std::size_t k = geodesy::solution_index(*m.solution);
+      ++seen[k];
+      if (m.ignore) continue;  // its input ignores it already
+      if (!geodesy::used_under(*m.solution, request.solutions)) {
+        m.ignore = true;
+        p.solution_excluded.push_back(mi);
+        ++left_out[k];
+      } else if (const double f = geodesy::sigma_factor_under(*m.solution, request.solutions); f != 1.0) {
+        m.covariance *= f * f;
+        ++weighted[k];
+      }
+    }
+    if (p.solution_policy) {
+      std::string line;
+      for (const auto s : geodesy::kGnssSolutions) {
+        const std::size_t k = geodesy::solution_index(s);
+        if (!seen[k]) continue;
+        line += (line.empty() ? "" : ", ") + std::to_string(seen[k]) + " " + std::string(geodesy::to_string(s));
+        if (left_out[k]) line += " (" + std::to_string(left_out[k]) + " left out)";
+        if (weighted[k]) line += " (σ × " + format_shortest(geodesy::sigma_factor_under(s, request.solutions)) + ")";
+      }
+      p.notes.push_back("GNSS solution types of the measurements: " + line +
+                        (request.solutions == geodesy::SolutionPolicy::exclude
+                             ? "; float and worse are left out (--solution-weighting weighs them)"
+                             : "; float, dgps, sbas and standalone weighted, dead_reckoned left out"));
+    }
+  }
   // DynaML's Pscale, Lscale, Hscale: variances scaled along north, east and
   // up at each item's first station, now that its position is known.
   {
@@ -697,6 +758,15 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
   if (net.frame) j["frame"] = net.frame->to_string();
   j["ellipsoid"] = net.ellipsoid.name();
   j["datum"] = r.datum;
+  if (const auto rec = adjust_solution_record(prepared, r)) {
+    ordered_json classes = ordered_json::object();
+    for (const auto s : geodesy::kGnssSolutions) {
+      const io::SolutionTally& c = rec->classes[geodesy::solution_index(s)];
+      classes[std::string(geodesy::to_string(s))] = {
+          {"measurements", c.marks}, {"used", c.used}, {"excluded", c.excluded}, {"sigma_factor", c.sigma_factor}};
+    }
+    j["gnss_solutions"] = {{"policy", std::string(geodesy::to_string(rec->policy))}, {"classes", classes}};
+  }
   j["notes"] = prepared.notes;
   j["vtpv"] = r.vtpv;
   j["dof"] = r.dof;
@@ -906,7 +976,30 @@ io::TransformFile helmert_transform_file(const PreparedNetwork& prepared, const 
     }
   }
   if (!marks.empty()) f.extent = io::ControlExtent::of(marks);
+  f.gnss_solutions = adjust_solution_record(prepared, r);
   t.fit = std::move(f);
+  // The map metadata contract: the target side is the network's frame.
+  using T = io::MapMetadataBuilder::Text;
+  io::MapMetadataBuilder b("the transform file of adjust --estimate-helmert");
+  const std::string derived = "the adjustment (the network's frame)";
+  if (t.target_frame) {
+    b.frame(t.target_frame->name(), derived);
+    if (t.target_frame->epoch()) b.coordinate_epoch(t.target_frame->epoch()->year, derived);
+  }
+  const std::string& ellipsoid = prepared.network.ellipsoid.name();
+  b.text(T::horizontal_crs,
+         "geographic (latitude, longitude) on " + ellipsoid + (t.target_frame ? " in " + t.target_frame->to_string() : ""),
+         derived);
+  b.text(T::vertical_datum, "ellipsoid " + ellipsoid, derived);
+  if (prepared.solution_policy) {
+    geodesy::SolutionCounts c;
+    for (const auto& m : prepared.network.measurements) {
+      if (m.solution) ++c.count[geodesy::solution_index(*m.solution)];
+    }
+    b.gnss_solution_counts(c, "computed from the solution types of " + std::to_string(c.total()) + " GNSS measurements");
+  }
+  b.text(T::coordinate_storage, "float64 (JSON numbers at full precision)", "the transform file's format");
+  t.metadata = b.metadata();
   return t;
 }
 

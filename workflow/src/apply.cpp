@@ -30,6 +30,7 @@
 #include "geoanchor/io/tile_metadata.hpp"
 #include "geoanchor/io/transform_file.hpp"
 #include "geoanchor/io/vector_map.hpp"
+#include "geoanchor/workflow/map_contract.hpp"
 #include "geoanchor/workflow/transform_checks.hpp"
 #include "geoanchor/workflow/tile_plan.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"
@@ -240,6 +241,9 @@ json request_json(const ApplyRequest& o, io::TileFormat input_format, io::TileFo
     j["local_xy_tolerance_m"] = o.local_xy_tolerance_m;
   }
   if (input_format == io::TileFormat::xodr) j["max_deviation_m"] = o.max_deviation_m;
+  // Added with issue 16: the survey metadata written into the sidecar, by
+  // content (another file makes another sidecar), only when given.
+  if (o.survey_metadata) j["survey_metadata_sha256"] = io::sha256_file_hex(*o.survey_metadata);
   return j;
 }
 
@@ -303,6 +307,13 @@ TileOutcome TileRunner::run(const fs::path& input) const {
 void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   const std::string tile = p.input.string();
   io::refuse_same_file(p.input, p.output);
+  // The survey metadata must describe this input (its frame, origin, …)
+  // before anything is written (map_contract.hpp).
+  std::optional<io::SurveyMetadata> survey;
+  if (o_.survey_metadata) {
+    survey = io::read_survey_metadata(*o_.survey_metadata);
+    check_survey_against_input(*survey, p.in, p.in_frame_source, tile);
+  }
   const std::string input_sha = io::sha256_file_hex(p.input);
   const json request = request_json(o_, p.format, p.output_format);
 
@@ -618,6 +629,11 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
                              ? std::string(" (WKT2 in the ") + (p.output_format == io::TileFormat::laz ? "LAZ" : "LAS") +
                                    " file's LASF_Projection 2112 record)"
                              : "");
+  // The map metadata contract (docs/tile-metadata.md): derived, carried
+  // from the input, computed from the points' GNSS solutions, the survey's.
+  meta.metadata = output_map_metadata(meta, p.in, p.in_frame_source, res.epoch_range, res.gnss_solution_counts,
+                                      survey ? &*survey : nullptr, p.sidecar.string());
+  meta.rtk_fixed_percent = meta.metadata->rtk_fixed_percent;  // survey.rtk_fixed_percent says the same
   meta.provenance_json = prov.dump();
   side.stream() << io::to_json_text(meta);
   // One output: both written and fsync'ed, then the sidecar published and
@@ -685,6 +701,7 @@ ApplyRun::ApplyRun(ApplyRequest request) : impl_(std::make_unique<Impl>()) {
                       "; process them in separate runs");
     }
   }
+  if (o.survey_metadata) (void)io::read_survey_metadata(*o.survey_metadata);  // a bad file fails before any tile
   if (m.tiles.empty() && !o.shard) throw Error(ErrorKind::usage, "E_INPUT", "no tiles to process");
   std::error_code ec;
   for (const auto& t : m.tiles) m.total_bytes += fs::file_size(t, ec);

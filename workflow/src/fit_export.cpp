@@ -30,6 +30,23 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
         << (set.target_frame ? set.target_frame->to_string() : "?");
   }
   if (r.reference_epoch) out << "; reference epoch " << geodesy::format_decimal_year(*r.reference_epoch);
+  if (const auto rec = solution_record(r, set, o)) {
+    // Per GNSS solution type: marks, and how many the fit used or left out for it.
+    out << "\n  GNSS solutions (" << (rec->policy == geodesy::SolutionPolicy::exclude
+                                         ? "float and worse left out; --solution-weighting weighs them"
+                                         : "weighted: sigmas × factor; dead_reckoned left out")
+        << "):";
+    bool first = true;
+    for (const auto s : geodesy::kGnssSolutions) {
+      const io::SolutionTally& t = rec->classes[geodesy::solution_index(s)];
+      if (t.marks == 0) continue;
+      out << (first ? " " : ", ") << geodesy::to_string(s) << " " << t.marks << " (used " << t.used;
+      if (t.excluded) out << ", left out " << t.excluded;
+      if (t.sigma_factor != 1.0 && t.used) out << ", σ × " << format_shortest(t.sigma_factor);
+      out << ")";
+      first = false;
+    }
+  }
   out << "\n\nParameters (" << (r.covariance_scaled_by_sigma0 ? "σ scaled by the a-posteriori σ0" : "σ from the a-priori weights, σ0 = 1")
       << ")\n";
   for (const auto& p : r.parameters) {
@@ -173,8 +190,8 @@ void record_statistics(io::FitRecord& f, std::optional<double> sigma0, int dof, 
 
 io::TransformFile transform_file_from_fit(const solver::FitResult& r, const geodesy::ControlSet& set,
                                           const solver::FitOptions& o, const std::vector<std::string>& left_out,
-                                          const std::string& generator) {
-  StreamedTransformFile streamed = streamed_transform_file_from_fit(r, set, o, left_out, generator);
+                                          const std::string& generator, const io::SurveyMetadata* survey) {
+  StreamedTransformFile streamed = streamed_transform_file_from_fit(r, set, o, left_out, generator, survey);
   io::TransformFile& t = streamed.file;
   t.fit->points.resize(streamed.points.count);
   for (std::size_t i = 0; i < streamed.points.count; ++i) streamed.points.record(i, t.fit->points[i]);
@@ -204,7 +221,7 @@ std::optional<io::ControlExtent> used_marks_extent(const solver::FitResult& r, c
 
 StreamedTransformFile streamed_file(const solver::FitResult& r, const geodesy::ControlSet& set, const solver::FitOptions& o,
                                     const std::vector<std::string>& left_out, const std::string& generator,
-                                    std::optional<io::ControlExtent> extent) {
+                                    std::optional<io::ControlExtent> extent, const io::SurveyMetadata* survey) {
   StreamedTransformFile streamed;
   io::TransformFile& t = streamed.file;
   switch (r.model) {
@@ -279,26 +296,136 @@ StreamedTransformFile streamed_file(const solver::FitResult& r, const geodesy::C
   add_record("source", set.source_input.crs_record_json);
   add_record("target", set.target_input.crs_record_json);
   if (!f.control_crs_json.empty()) f.control_crs_json += "}";
+  f.gnss_solutions = solution_record(r, set, o);
   t.fit = std::move(f);
+  t.metadata = transform_metadata(r, set, survey);
   streamed.points.count = r.points.size();
-  streamed.points.record = [&r, left_out](std::size_t i, io::FitPointRecord& q) { point_record(r.points[i], left_out, q); };
+  // Each mark's solution type, kept here: the set may be gone when the
+  // records are written.
+  std::vector<std::optional<geodesy::GnssSolution>> solutions;
+  if (set.has_solutions) {
+    solutions.reserve(set.points.size());
+    for (const auto& p : set.points) solutions.push_back(p.solution);
+  }
+  streamed.points.record = [&r, left_out, solutions = std::move(solutions)](std::size_t i, io::FitPointRecord& q) {
+    point_record(r.points[i], left_out, q);
+    q.solution = i < solutions.size() ? solutions[i] : std::nullopt;
+  };
   return streamed;
+}
+
+// The target coordinates' horizontal CRS, as the control set read them.
+std::string horizontal_crs_text(const geodesy::ControlInputForm& form, const std::optional<geodesy::Frame>& frame,
+                                const std::optional<geodesy::LocalOrigin>& origin) {
+  std::string text;
+  switch (form.form) {
+    case geodesy::CoordinateForm::crs: return form.crs_name;
+    case geodesy::CoordinateForm::ecef: text = "geocentric (ECEF)"; break;
+    case geodesy::CoordinateForm::geodetic: text = "geographic (latitude, longitude) on " + form.ellipsoid.name(); break;
+    case geodesy::CoordinateForm::projected:
+      if (form.projection && form.projection->utm) {
+        text = "UTM zone " + form.projection->utm->to_string() + " on " + form.ellipsoid.name();
+      } else if (form.projection) {
+        const auto& tm = form.projection->tm;
+        text = "Transverse Mercator (lat0 " + format_shortest(tm.lat0.deg()) + "°, lon0 " + format_shortest(tm.lon0.deg()) +
+               "°, k0 " + format_shortest(tm.k0) + ", FE " + format_shortest(tm.false_easting_m) + " m, FN " +
+               format_shortest(tm.false_northing_m) + " m) on " + form.ellipsoid.name();
+      } else {
+        text = "projected";
+      }
+      break;
+    case geodesy::CoordinateForm::enu:
+      text = origin ? "local ENU at " + format_shortest(origin->point.lat.deg()) + "°, " +
+                          format_shortest(origin->point.lon.deg()) + "°, " + format_shortest(origin->point.h.m) + " m on " +
+                          form.ellipsoid.name()
+                    : "local ENU";
+      break;
+  }
+  return text + (frame ? " in " + frame->to_string() : "");
 }
 
 }  // namespace
 
+std::optional<io::GnssSolutionRecord> solution_record(const solver::FitResult& r, const geodesy::ControlSet& set,
+                                                      const solver::FitOptions& o) {
+  if (!set.has_solutions) return std::nullopt;
+  io::GnssSolutionRecord rec;
+  rec.policy = o.solutions;
+  for (const auto s : geodesy::kGnssSolutions) {
+    rec.classes[geodesy::solution_index(s)].sigma_factor = geodesy::sigma_factor_under(s, o.solutions);
+  }
+  for (std::size_t i = 0; i < set.points.size(); ++i) {
+    const geodesy::ControlPoint& p = set.points[i];
+    if (!p.solution) continue;
+    io::SolutionTally& t = rec.classes[geodesy::solution_index(*p.solution)];
+    ++t.marks;
+    if (i < r.points.size() && r.points[i].used) ++t.used;
+    if (p.use && !geodesy::used_under(*p.solution, o.solutions)) ++t.excluded;
+  }
+  return rec;
+}
+
+io::MapMetadata transform_metadata(const solver::FitResult& r, const geodesy::ControlSet& set,
+                                   const io::SurveyMetadata* survey) {
+  using T = io::MapMetadataBuilder::Text;
+  io::MapMetadataBuilder b("the transform file of the fit of " + set.source_name);
+  const std::string derived = "the fit of " + set.source_name;
+  if (set.target_frame) {
+    b.frame(set.target_frame->name(), derived + " (target frame)");
+    if (set.target_frame->epoch()) b.coordinate_epoch(set.target_frame->epoch()->year, derived + " (target frame)");
+  }
+  // The map's ENU frame: the nominal origin its local coordinates are read at.
+  if (r.nominal_origin && (r.model == FitModel::enu_origin || r.model == FitModel::site_calibration)) {
+    const auto& o = r.nominal_origin->point;
+    b.enu_origin(io::MetadataOrigin{o.lat.deg(), o.lon.deg(), o.h.m}, derived + " (nominal origin, --origin)");
+  }
+  const geodesy::ControlInputForm& target = set.target_input;
+  b.text(T::horizontal_crs, horizontal_crs_text(target, set.target_frame, set.origin), derived + " (target coordinates)");
+  if (target.height_type == geodesy::HeightKind::orthometric) {
+    b.text(T::vertical_datum, "orthometric heights (" + target.height_column + ") on the geoid " + target.geoid_model,
+           derived + " (target heights)");
+    b.text(T::geoid_model, target.geoid_model, derived + " (target heights)");
+  } else if (target.form != geodesy::CoordinateForm::crs) {
+    b.text(T::vertical_datum, "ellipsoid " + target.ellipsoid.name(), derived + " (target heights)");
+  }
+  if (set.has_solutions) {
+    geodesy::SolutionCounts counts;
+    for (const auto& p : set.points) {
+      if (p.solution) ++counts.count[geodesy::solution_index(*p.solution)];
+    }
+    b.gnss_solution_counts(counts, "computed from the solution column of " + set.source_name + " (" +
+                                       std::to_string(counts.total()) + " marks)");
+  }
+  b.text(T::coordinate_storage, "float64 (JSON numbers at full precision)", "the transform file's format");
+  if (survey) {
+    // A survey of the source side (its frame the set's source frame, not
+    // the target's): its frame-bound fields are checked against the source
+    // and left out of the contract, which describes the target side.
+    const bool of_source = survey->frame && set.source_frame && survey->frame->name() == set.source_frame->name() &&
+                           !(set.target_frame && set.target_frame->name() == set.source_frame->name());
+    if (of_source) {
+      io::MapMetadataBuilder source_side("the fit's source frame (" + set.source_name + ")");
+      source_side.frame(set.source_frame->name(), derived + " (source frame)");
+      if (set.source_frame->epoch()) source_side.coordinate_epoch(set.source_frame->epoch()->year, derived + " (source frame)");
+      source_side.survey(*survey, true);
+    }
+    b.survey(*survey, !of_source);
+  }
+  return b.metadata();
+}
+
 StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& r, const geodesy::ControlSet& set,
                                                        const solver::FitOptions& o,
                                                        const std::vector<std::string>& left_out,
-                                                       const std::string& generator) {
-  return streamed_file(r, set, o, left_out, generator, used_marks_extent(r, set));
+                                                       const std::string& generator, const io::SurveyMetadata* survey) {
+  return streamed_file(r, set, o, left_out, generator, used_marks_extent(r, set), survey);
 }
 
 StreamedTransformFile streamed_transform_file_from_fit(const FitForExport& fitted, const geodesy::ControlSet& set,
                                                        const solver::FitOptions& o,
                                                        const std::vector<std::string>& left_out,
-                                                       const std::string& generator) {
-  return streamed_file(fitted.fit, set, o, left_out, generator, fitted.extent);
+                                                       const std::string& generator, const io::SurveyMetadata* survey) {
+  return streamed_file(fitted.fit, set, o, left_out, generator, fitted.extent, survey);
 }
 
 FitForExport fit_for_export(const geodesy::ControlSet& set, const solver::FitOptions& o) {

@@ -27,6 +27,10 @@ struct AdjustRequest {
   // (position_vector | coordinate_frame: the written file's; required).
   std::optional<std::string> estimate_helmert;
   std::optional<std::string> convention;
+  // GNSS measurements with a solution type (network JSON "solution"):
+  // float and worse are left out (ignored), or weighted (--solution-weighting:
+  // covariance × geodesy::solution_sigma_factor²; dead_reckoned left out).
+  geodesy::SolutionPolicy solutions = geodesy::SolutionPolicy::exclude;
   solver::AdjustOptions options;
 };
 
@@ -38,7 +42,19 @@ struct PreparedNetwork {
   std::optional<solver::HelmertGroup> helmert;
   std::optional<geodesy::Frame> helmert_frame;
   bool helmert_position_vector = true;
+  // GNSS solution types: the policy (set when a measurement has a type)
+  // and the measurements it left out.
+  std::optional<geodesy::SolutionPolicy> solution_policy;
+  std::vector<std::size_t> solution_excluded;
 };
+
+// Per GNSS solution type, the measurements that state it, those adjusted
+// in the end (not left out, not removed by data snooping) and those left
+// out for their type; nullopt when no measurement states one. `only`
+// restricts it to some measurements (a Helmert group's).
+std::optional<io::GnssSolutionRecord> adjust_solution_record(const PreparedNetwork& prepared,
+                                                             const solver::AdjustmentResult& r,
+                                                             const std::vector<std::size_t>* only = nullptr);
 
 // The group of --estimate-helmert GROUP: the measurements whose `group`
 // is GROUP, else those of the input file GROUP. Each must be a GNSS

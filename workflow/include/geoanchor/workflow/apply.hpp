@@ -56,6 +56,10 @@ struct ApplyRequest {
   std::optional<double> resolution_m;  // LAS quantization of the output
   bool epoch_from_gps_time = false;    // LAS: a 14-parameter transform at each point's GPS time
   double max_extrapolation_m = 10000.0;
+  // A survey-metadata file (docs/survey-metadata.md, geoanchor.survey/1):
+  // the metadata contract's fields geoanchor cannot derive, checked against
+  // each input and written into each output's sidecar.
+  std::optional<std::string> survey_metadata;
   // Lanelet2 OSM maps: the projection of the nodes' local_x/local_y tags
   // (io::parse_local_xy), and how far they may disagree with lat/lon
   // before the move.

@@ -29,9 +29,12 @@ void record_statistics(io::FitRecord& f, std::optional<double> sigma0, int dof, 
 // The transform file for `fit` of `control` under `options` (alpha,
 // alpha_point recorded). `left_out` names points the user left out: their
 // records say so. `generator` is recorded as is ("geoanchor 0.1.0: ...").
+// The file carries the map metadata contract (transform_metadata below,
+// with `survey` when given) and, for a set with GNSS solution types, their
+// counts (gnss_solutions) and each mark's type.
 io::TransformFile transform_file_from_fit(const solver::FitResult& fit, const geodesy::ControlSet& control,
                                           const solver::FitOptions& options, const std::vector<std::string>& left_out,
-                                          const std::string& generator);
+                                          const std::string& generator, const io::SurveyMetadata* survey = nullptr);
 
 // The same file with its per-point records formed from `fit` as
 // io::write_json(out, file, points) writes them: `geoanchor fit` on 10⁶
@@ -44,12 +47,13 @@ struct StreamedTransformFile {
 StreamedTransformFile streamed_transform_file_from_fit(const solver::FitResult& fit, const geodesy::ControlSet& control,
                                                        const solver::FitOptions& options,
                                                        const std::vector<std::string>& left_out,
-                                                       const std::string& generator);
+                                                       const std::string& generator, const io::SurveyMetadata* survey = nullptr);
 // (A temporary fit would be gone before its records are written.)
 StreamedTransformFile streamed_transform_file_from_fit(solver::FitResult&& fit, const geodesy::ControlSet& control,
                                                        const solver::FitOptions& options,
                                                        const std::vector<std::string>& left_out,
-                                                       const std::string& generator) = delete;
+                                                       const std::string& generator,
+                                                       const io::SurveyMetadata* survey = nullptr) = delete;
 
 // A fit with the control network's extent its transform file records (the
 // hull, in the source frame, of the marks the fit used): fit_helmert(control,
@@ -69,11 +73,28 @@ FitForExport fit_for_export(const geodesy::ControlSet& control, const solver::Fi
 StreamedTransformFile streamed_transform_file_from_fit(const FitForExport& fitted, const geodesy::ControlSet& control,
                                                        const solver::FitOptions& options,
                                                        const std::vector<std::string>& left_out,
-                                                       const std::string& generator);
+                                                       const std::string& generator, const io::SurveyMetadata* survey = nullptr);
 StreamedTransformFile streamed_transform_file_from_fit(FitForExport&& fitted, const geodesy::ControlSet& control,
                                                        const solver::FitOptions& options,
                                                        const std::vector<std::string>& left_out,
-                                                       const std::string& generator) = delete;
+                                                       const std::string& generator,
+                                                       const io::SurveyMetadata* survey = nullptr) = delete;
+
+// The map metadata contract of a fit's transform file: the target frame
+// and epoch, the horizontal CRS and vertical datum of the target
+// coordinates (the geoid of orthometric ones), the nominal origin of an
+// enu-origin or site-calibration fit, the RTK-fixed share and counts from
+// the set's GNSS solution types, the storage; the rest from `survey`.
+// Throws geoanchor::Error (E_METADATA_CONFLICT) where `survey` contradicts
+// what the fit derives.
+io::MapMetadata transform_metadata(const solver::FitResult& fit, const geodesy::ControlSet& control,
+                                   const io::SurveyMetadata* survey);
+
+// The GNSS solution types of `control`'s marks under options.solutions:
+// per class the marks, those the fit used, those left out for their type.
+// nullopt for a set without solution types.
+std::optional<io::GnssSolutionRecord> solution_record(const solver::FitResult& fit, const geodesy::ControlSet& control,
+                                                      const solver::FitOptions& options);
 
 // The report `geoanchor fit` prints: parameters with σ, σ0, the global test
 // with its verdict, and the residual table, flagged points first.
