@@ -39,6 +39,8 @@ using detail::TextSpan;
 // every geometry's end samples hold.
 constexpr double kSampleStep_m = 1.0;
 constexpr double kPi = std::numbers::pi;
+// A longer geometry is no road (and would be a billion samples).
+constexpr double kMaxGeometryLength_m = 1e6;
 
 struct Value {
   TextSpan span;
@@ -137,7 +139,10 @@ class XodrReader : public detail::XmlHandler {
       g.y = number(attrs, "y", what).v;
       g.hdg = number(attrs, "hdg", what).v;
       g.length = number(attrs, "length", what).v;
-      if (!(g.length >= 0.0)) fail(what + ": length=" + format_shortest(g.length) + ": expected >= 0 metres");
+      if (!(g.length >= 0.0 && g.length <= kMaxGeometryLength_m)) {
+        fail(what + ": length=" + format_shortest(g.length) + ": expected 0 to 1000 km (metres); it is sampled every " +
+             format_shortest(kSampleStep_m) + " m");
+      }
       roads.back().geometries.push_back(g);
       return;
     }
