@@ -225,6 +225,30 @@ TEST_F(ApplyVectorCli, GeoJsonPositionsWithoutHeightAreWarnedOfAndACrs84MemberIs
   EXPECT_NE(side["provenance"]["warnings"].dump().find("no height"), std::string::npos);
 }
 
+TEST_F(ApplyVectorCli, GeoJsonLegacyCrsMemberIsReadThroughProj) {
+  // A GeoJSON 2008 map in ITRF2014's geographic 3D CRS, its epoch in
+  // geoanchor's member: moved into ETRF2000 longitude, latitude and height.
+  const fs::path t = transform("T.json", kGeneral);
+  write("in/legacy.geojson", R"({"type": "Feature", "id": 1, "properties": {"a": 1},
+    "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::7912"}},
+    "geoanchor": {"frame": "ITRF2014@2024.5", "coordinates": "crs"},
+    "geometry": {"type": "Point", "coordinates": [8.549167, 47.464722, 480.0]}})");
+  const RunResult r = run("apply " + path("in/legacy.geojson").string() + " --transform " + t.string() +
+                          " --to geodetic --out-dir " + path("out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json after = json::parse(slurp(path("out/legacy.geojson")));
+  EXPECT_FALSE(after.contains("crs"));  // RFC 7946 again
+  EXPECT_EQ(after["geoanchor"]["frame"], "ETRF2000@2024.5");
+  EXPECT_EQ(after["properties"], json({{"a", 1}}));
+  const ProjPipeline move(geodetic_move(kGeneralProj));
+  const ProjPipeline cart(kCart);
+  const json& p = after["geometry"]["coordinates"];
+  WorstCase worst;
+  worst.add(distance_m(cart, move.forward(Eigen::Vector3d(8.549167, 47.464722, 480.0)),
+                       Eigen::Vector3d(p[0].get<double>(), p[1].get<double>(), p[2].get<double>())));
+  EXPECT_WORST_WITHIN(worst, kVsProjTol_m);
+}
+
 // ------------------------------------------------------------- Lanelet2 OSM
 
 // A Lanelet2 map of nodes whose local_x/local_y are Lanelet2's UtmProjector
