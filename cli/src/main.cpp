@@ -14,6 +14,7 @@
 
 #include "adjust_command.hpp"
 #include "apply_command.hpp"
+#include "audit_command.hpp"
 #include "command_input.hpp"
 #include "convert_command.hpp"
 #include "crs_command.hpp"
@@ -87,6 +88,10 @@ int main(int argc, char** argv) {
   geoanchor::cli::ReportOptions report;
   report.workbench.argv.assign(argv, argv + argc);
   auto* report_cmd = geoanchor::cli::add_report_command(app, report);
+  geoanchor::cli::AuditCommandOptions audit;
+  auto* audit_cmd = geoanchor::cli::add_audit_command(app, audit);
+  geoanchor::cli::LocateCommandOptions locate;
+  auto* locate_cmd = geoanchor::cli::add_locate_command(app, locate);
   // Listed for --help; `geoanchor gui ...` is handed to geoanchor-gui above.
   app.add_subcommand("gui", "Open the residual workbench window (geoanchor-gui; same options as snapshot, no -o)");
   // Listed for --help; rewritten to --help and --version above.
@@ -129,6 +134,8 @@ int main(int argc, char** argv) {
     if (diagnose_cmd->parsed()) geoanchor::cli::run_diagnose(diagnose);
     if (snapshot_cmd->parsed()) return geoanchor::cli::run_snapshot(snapshot);
     if (report_cmd->parsed()) return geoanchor::cli::run_report(report);
+    if (audit_cmd->parsed()) return geoanchor::cli::run_audit(audit);
+    if (locate_cmd->parsed()) geoanchor::cli::run_locate(locate);
   } catch (const Error& e) {
     std::cerr << "geoanchor: error[" << e.code() << "]: " << e.what() << '\n';
     return geoanchor::exit_code(e.kind());

@@ -1,0 +1,352 @@
+// `geoanchor audit` and `geoanchor locate` on a small map made here the way
+// a user makes one (issue 16 points 4 and 5): two adjacent ENU tiles of an
+// apron with their sidecars, a transform fitted to surveyed marks, `apply`
+// with the survey's metadata file, and checkpoints. The clean map passes;
+// each planted defect fails the check it belongs to, named, with the
+// planted size in its evidence (the sizes come from the defects planted
+// here, not from what audit printed).
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "cli_support.hpp"
+#include "geoanchor/geodesy/ellipsoid.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
+#include "geoanchor/geodesy/number_text.hpp"
+
+namespace geoanchor {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CliTest;
+using testing::RunResult;
+using testing::slurp;
+using json = nlohmann::json;
+
+constexpr double kLat = 47.464722, kLon = 8.549167, kH = 480.0;  // the LSZH ARP, ellipsoidal
+const std::array<double, 3> kShift_m = {0.10, -0.05, 0.03};             // the map's error: what the fit finds (ECEF)
+constexpr int kExitFailed = 4;
+
+std::string num(double v) { return format_shortest(v); }
+
+geodesy::LocalOrigin arp() {
+  return {geodesy::GeodeticPosition{geodesy::Angle::degrees(kLat), geodesy::Angle::degrees(kLon), geodesy::EllipsoidalHeight{kH}},
+          geodesy::Ellipsoid::grs80()};
+}
+
+class Audit : public CliTest {
+ protected:
+  // The survey's metadata, every field given (or without `leave_out`).
+  fs::path survey(const std::string& leave_out = "") const {
+    json s = {{"schema", "geoanchor.survey/1"},
+              {"frame", "ITRF2014@2024.5"},
+              {"enu_origin", {{"lat_deg", kLat}, {"lon_deg", kLon}, {"h_m", kH}, {"height_type", "ellipsoidal"}}},
+              {"enu_origin_source", "ICAO AIP published; survey confirmed"},
+              {"vertical_datum", "ellipsoid GRS80"},
+              {"geoid_model", "CHGeo2004"},
+              {"gnss_method", "network RTK (VRS)"},
+              {"gnss_base", "swipos VRS"},
+              {"rtk_fixed_percent", 98.7}};
+    if (!leave_out.empty()) s.erase(leave_out);
+    return write("survey" + leave_out + ".json", s.dump(2));
+  }
+
+  // An ENU tile (CSV) over e in [e0, e1], n in [0, 200] m, with its sidecar.
+  fs::path tile(const std::string& name, double e0, double e1) const {
+    std::ostringstream csv;
+    csv << "e_m,n_m,u_m\n";
+    for (int i = 0; i <= 20; ++i) {
+      for (int j = 0; j <= 20; ++j) {
+        const double e = e0 + (e1 - e0) * i / 20.0, n = 200.0 * j / 20.0;
+        csv << num(e) << "," << num(n) << "," << num(1.0 + 0.001 * e) << "\n";
+      }
+    }
+    const fs::path p = write("raw/" + name, csv.str());
+    const json side = {{"schema", "geoanchor.tile/1"},
+                       {"frame", "ITRF2014@2024.5"},
+                       {"coordinates", {{"kind", "enu"}, {"ellipsoid", "GRS80"}, {"storage", "float64"}}},
+                       {"enu_origin",
+                        {{"lat_deg", kLat}, {"lon_deg", kLon}, {"h_m", kH}, {"height_type", "ellipsoidal"},
+                         {"source", "ICAO AIP published; survey confirmed"}}},
+                       {"horizontal_crs", "local ENU at the aerodrome reference point"},
+                       {"vertical", {{"datum", "ellipsoid GRS80"}, {"height_type", "ellipsoidal"}, {"geoid_model", "CHGeo2004"}}},
+                       {"survey", {{"method", "network RTK (VRS)"}, {"rtk_fixed_percent", 98.7}}}};
+    write("raw/" + name + ".geoanchor.json", side.dump(2));
+    return p;
+  }
+
+  // Marks around the ARP: source ECEF as the map has them, target = source
+  // + the map's shift (+ `extra_m` on the first mark's east) + ±3 mm.
+  fs::path control(const std::string& name, double extra_east_m = 0.0, double shift_x_extra_m = 0.0) const {
+    const geodesy::LocalTangentPlane plane(arp());
+    std::ostringstream out;
+    out << "# source_frame = ITRF2014@2024.5\n# target_frame = ITRF2014@2024.5\n";
+    out << "id,x_src_m,y_src_m,z_src_m,x_dst_m,y_dst_m,z_dst_m,sigma_src_m,sigma_dst_m\n";
+    const double pts[8][2] = {{-300, -200}, {0, -250}, {350, -150}, {420, 120}, {100, 300}, {-250, 250}, {-400, 0}, {50, 40}};
+    for (int i = 0; i < 8; ++i) {
+      const Eigen::Vector3d s = plane.ecef_from_enu(geodesy::EnuPosition{Eigen::Vector3d(pts[i][0], pts[i][1], 2.0), arp()}).m;
+      const double noise = 0.003 * ((i % 3) - 1.0);
+      Eigen::Vector3d t = s + Eigen::Vector3d(kShift_m[0] + shift_x_extra_m + noise, kShift_m[1] - noise, kShift_m[2] + 0.5 * noise);
+      if (i == 0) t += plane.enu_from_ecef_rotation().row(0).transpose() * extra_east_m;
+      out << "M" << i << "," << num(s.x()) << "," << num(s.y()) << "," << num(s.z()) << "," << num(t.x()) << "," << num(t.y())
+          << "," << num(t.z()) << ",0.003,0.003\n";
+    }
+    return write(name, out.str());
+  }
+
+  // The transform fitted to `control` (translation3), with the survey's metadata.
+  fs::path fit(const fs::path& control, const std::string& name) const {
+    const RunResult r = run("fit " + control.string() + " --model translation3 --survey-metadata " + survey().string() + " -o " +
+                            path(name).string());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return path(name);
+  }
+
+  fs::path apply(const std::string& inputs, const fs::path& transform, const std::string& out_dir,
+                 const std::string& extra = "") const {
+    const RunResult r = run("apply " + inputs + " --transform " + transform.string() + " --survey-metadata " + survey().string() +
+                            " --out-dir " + path(out_dir).string() + " " + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return path(out_dir);
+  }
+
+  // The clean map: two adjacent tiles 0.5 m apart, one transform.
+  void clean_map() {
+    west_ = tile("west.csv", 0.0, 200.0);
+    east_ = tile("east.csv", 200.5, 400.0);
+    transform_ = fit(control("control.csv"), "t.json");
+    apply(west_.string() + " " + east_.string(), transform_, "map");
+  }
+
+  // Edits an output sidecar's JSON.
+  void edit_sidecar(const fs::path& sidecar, const std::function<void(json&)>& change) const {
+    json j = json::parse(slurp(sidecar));
+    change(j);
+    std::ofstream(sidecar, std::ios::trunc) << j.dump(2);
+  }
+
+  RunResult audit(const std::string& args) const { return run("audit " + args); }
+
+  // The check's JSON object in an audit's --json output.
+  static json check(const RunResult& r, const std::string& name) {
+    const json j = json::parse(r.out);
+    for (const auto& c : j.at("checks")) {
+      if (c.at("name") == name) return c;
+    }
+    ADD_FAILURE() << "no check " << name;
+    return json::object();
+  }
+  static std::vector<std::string> failing(const RunResult& r) {
+    std::vector<std::string> out;
+    const json j = json::parse(r.out);  // kept: a range over a temporary's member would dangle
+    for (const auto& c : j.at("checks")) {
+      if (c.at("status") == "fail") out.push_back(c.at("name"));
+    }
+    return out;
+  }
+
+  fs::path west_, east_, transform_;
+};
+
+TEST_F(Audit, Issue16_TheCleanMapPassesEveryCheck) {
+  clean_map();
+  const RunResult text = audit(path("map").string() + " " + transform_.string() + " --checkpoints " + path("control.csv").string());
+  EXPECT_EQ(text.exit_code, 0) << text.out << text.err;
+  EXPECT_NE(text.out.find("audit: PASSED (9 of 9 checks pass)"), std::string::npos) << text.out;
+  const RunResult r =
+      audit(path("map").string() + " " + transform_.string() + " --checkpoints " + path("control.csv").string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_EQ(json::parse(r.out).at("passed"), true);
+  EXPECT_EQ(failing(r), std::vector<std::string>{});
+  // The two tiles meet; moved by one transform they have no seam.
+  EXPECT_NE(check(r, "seams").at("summary").get<std::string>().find("1 shared boundaries among 2 tiles"), std::string::npos)
+      << check(r, "seams");
+}
+
+TEST_F(Audit, Issue16_ATileInAnotherRealizationFailsOneFrameNamingIt) {
+  clean_map();
+  edit_sidecar(path("map/east.csv.geoanchor.json"), [](json& j) {
+    j["frame"] = "ITRF2020@2024.5";
+    j["metadata"]["frame"] = "ITRF2020";
+  });
+  const RunResult r = audit(path("map").string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.err;
+  EXPECT_EQ(failing(r), std::vector<std::string>{"one_frame"}) << r.out;
+  const std::string evidence = check(r, "one_frame").at("evidence").dump();
+  EXPECT_NE(evidence.find("ITRF2020 in " + path("map/east.csv").string()), std::string::npos) << evidence;
+}
+
+TEST_F(Audit, Issue16_ATileWithAnotherEnuOriginFailsOneFrame) {
+  clean_map();
+  edit_sidecar(path("map/west.csv.geoanchor.json"), [](json& j) {
+    j["enu_origin"]["lat_deg"] = kLat + 1e-5;  // 1.1 m north
+    j["metadata"]["enu_origin"]["lat_deg"] = kLat + 1e-5;
+  });
+  const RunResult r = audit(path("map").string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.err;
+  const auto f = failing(r);
+  EXPECT_NE(std::find(f.begin(), f.end(), "one_frame"), f.end()) << r.out;
+  EXPECT_NE(check(r, "one_frame").at("evidence").dump().find("ENU origin differs"), std::string::npos);
+}
+
+TEST_F(Audit, Issue16_ATileMovedByATransform3cmOffLeavesASeam) {
+  west_ = tile("west.csv", 0.0, 200.0);
+  east_ = tile("east.csv", 200.5, 400.0);
+  transform_ = fit(control("control.csv"), "t.json");
+  const fs::path off = fit(control("control_off.csv", 0.0, 0.03), "t_off.json");  // 3 cm more in ECEF x
+  apply(west_.string(), transform_, "map");
+  apply(east_.string(), off, "map");
+  const RunResult r = audit(path("map").string() + " " + transform_.string() + " " + off.string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.err;
+  EXPECT_EQ(failing(r), std::vector<std::string>{"seams"}) << r.out;
+  const json seams = check(r, "seams");
+  // The planted 3 cm, give or take the two fits' different noise (±2 mm).
+  const std::string evidence = seams.at("evidence").dump();
+  const auto at = evidence.find(" cm apart");
+  ASSERT_NE(at, std::string::npos) << evidence;
+  const double seam_cm = std::stod(evidence.substr(evidence.rfind(' ', at - 1) + 1));
+  constexpr double kFitNoise_cm = 0.2;
+  EXPECT_NEAR(seam_cm, 3.0, kFitNoise_cm) << evidence;
+}
+
+TEST_F(Audit, Issue16_ACheckpoint6cmOffFailsNamingItsResidualAndUncertainty) {
+  clean_map();
+  control("checkpoints.csv", 0.06);  // M0's target 6 cm east of where the map puts it
+  const RunResult r = audit(path("map").string() + " --checkpoints " + path("checkpoints.csv").string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.err;
+  EXPECT_EQ(failing(r), std::vector<std::string>{"checkpoints"}) << r.out;
+  const json cp = check(r, "checkpoints");
+  std::string m0;
+  for (const auto& e : cp.at("evidence")) {
+    if (e.get<std::string>().rfind("M0:", 0) == 0) m0 = e.get<std::string>();
+  }
+  ASSERT_FALSE(m0.empty()) << cp;
+  EXPECT_NE(m0.find("FAIL"), std::string::npos) << m0;
+  EXPECT_NE(m0.find("propagated σ east"), std::string::npos) << m0;
+  // The residual is map − surveyed: 6 cm west, within the fit's noise.
+  const auto h = m0.find("horizontal ");
+  const double residual_cm = std::stod(m0.substr(h + 11));
+  EXPECT_NEAR(residual_cm, 6.0, 0.5) << m0;
+}
+
+TEST_F(Audit, Issue16_AMissingGeoidNameFailsTheMetadataCheck) {
+  west_ = tile("west.csv", 0.0, 200.0);
+  json side = json::parse(slurp(path("raw/west.csv.geoanchor.json")));
+  side["vertical"]["geoid_model"] = nullptr;
+  std::ofstream(path("raw/west.csv.geoanchor.json"), std::ios::trunc) << side.dump(2);
+  transform_ = fit(control("control.csv"), "t.json");
+  const RunResult a = run("apply " + west_.string() + " --transform " + transform_.string() + " --survey-metadata " +
+                          survey("geoid_model").string() + " --out-dir " + path("map").string());
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const RunResult r = audit(path("map").string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.err;
+  EXPECT_EQ(failing(r), std::vector<std::string>{"metadata"}) << r.out;
+  EXPECT_NE(check(r, "metadata").at("evidence").dump().find("geoid_model"), std::string::npos) << check(r, "metadata");
+}
+
+TEST_F(Audit, Issue16_Float32EcefFails) {
+  clean_map();
+  edit_sidecar(path("map/east.csv.geoanchor.json"), [](json& j) {
+    j["coordinates"] = {{"kind", "ecef"}, {"storage", "float32"}};
+    j.erase("enu_origin");
+    j["metadata"]["coordinate_storage"] = "float32 ECEF";
+  });
+  const RunResult r = audit(path("map").string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.err;
+  const auto f = failing(r);
+  EXPECT_NE(std::find(f.begin(), f.end(), "no_float32_ecef"), f.end()) << r.out;
+  EXPECT_NE(check(r, "no_float32_ecef").at("evidence").dump().find("east.csv"), std::string::npos);
+}
+
+TEST_F(Audit, Issue16_AWebMercatorLayerFails) {
+  // apply refuses to move ITRF2014 into EPSG:3857 (a datum ensemble); a
+  // layer made elsewhere in Web Mercator says so in its sidecar.
+  clean_map();
+  edit_sidecar(path("map/east.csv.geoanchor.json"), [](json& j) {
+    j["horizontal_crs"] = "EPSG:3857 (WGS 84 / Pseudo-Mercator)";
+    j["metadata"]["horizontal_crs"] = "EPSG:3857 (WGS 84 / Pseudo-Mercator)";
+  });
+  const RunResult r = audit(path("map").string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.err;
+  EXPECT_EQ(failing(r), std::vector<std::string>{"no_web_mercator"}) << r.out;
+  const std::string evidence = check(r, "no_web_mercator").at("evidence").dump();
+  EXPECT_NE(evidence.find(path("map/east.csv").string()), std::string::npos) << evidence;
+  EXPECT_EQ(evidence.find(path("map/west.csv").string()), std::string::npos) << evidence;
+}
+
+TEST_F(Audit, Issue16_AMapTooLargeForItsTangentPlaneFails) {
+  clean_map();
+  const fs::path far = tile("far.csv", 5000.0, 5100.0);  // 5.1 km east: d²/2R ≈ 2.0 m
+  apply(far.string(), transform_, "map");
+  const RunResult r = audit(path("map").string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.err;
+  EXPECT_EQ(failing(r), std::vector<std::string>{"tangent_plane"}) << r.out;
+  const std::string summary = check(r, "tangent_plane").at("summary");
+  // d = |(5100, 200)| = 5103.9 m; d²/2R with R ≈ 6.38e6 m is 204 cm.
+  EXPECT_NE(summary.find("5.10"), std::string::npos) << summary;
+}
+
+TEST_F(Audit, Issue16_FilesThatAreNoPartOfAMapAreNamed) {
+  clean_map();
+  write("map/notes.md", "what is this\n");
+  const RunResult r = audit(path("map").string());
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("notes.md"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--exclude"), std::string::npos) << r.err;
+  EXPECT_EQ(audit(path("map").string() + " --exclude '*.md'").exit_code, 0);
+  // A tile without its sidecar is audited, and fails the metadata check by name.
+  write("map/extra.csv", "e_m,n_m,u_m\n1,2,3\n");
+  const RunResult no_sidecar = audit(path("map").string() + " --exclude '*.md' --json");
+  EXPECT_EQ(no_sidecar.exit_code, kExitFailed);
+  EXPECT_NE(check(no_sidecar, "metadata").at("evidence").dump().find("extra.csv: no sidecar"), std::string::npos)
+      << check(no_sidecar, "metadata");
+}
+
+TEST_F(Audit, Issue16_LocateGivesTheGeodeticPositionAndTheTransformsSigmas) {
+  clean_map();
+  write("points.csv", "id,e_m,n_m,u_m\nstand_12,120.0,80.0,2.5\n");
+  const RunResult r = run("locate " + path("map").string() + " " + path("points.csv").string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(r.out);
+  const json& p = j.at("points").at(0);
+  // ENU at the ARP -> ECEF -> geodetic, independently: PROJ's topocentric
+  // conversion is checked against geodesy elsewhere; here the geodetic
+  // position must come back to the ENU given through an independent
+  // tangent-plane rotation of the ECEF difference.
+  const geodesy::EcefPosition x(p.at("ecef_m")[0].get<double>(), p.at("ecef_m")[1].get<double>(), p.at("ecef_m")[2].get<double>());
+  const Eigen::Vector3d o = geodesy::ecef_from_geodetic(geodesy::Ellipsoid::grs80(), arp().point).m;
+  const double lat = kLat * std::numbers::pi / 180.0, lon = kLon * std::numbers::pi / 180.0;
+  const Eigen::Vector3d d = x.m - o;
+  const double e = -std::sin(lon) * d.x() + std::cos(lon) * d.y();
+  const double n = -std::sin(lat) * std::cos(lon) * d.x() - std::sin(lat) * std::sin(lon) * d.y() + std::cos(lat) * d.z();
+  const double u = std::cos(lat) * std::cos(lon) * d.x() + std::cos(lat) * std::sin(lon) * d.y() + std::sin(lat) * d.z();
+  constexpr double kRoundTrip_m = 1e-6;
+  EXPECT_NEAR(e, 120.0, kRoundTrip_m);
+  EXPECT_NEAR(n, 80.0, kRoundTrip_m);
+  EXPECT_NEAR(u, 2.5, kRoundTrip_m);
+  // The fitted translation's sigmas reach the point: a few mm, finite.
+  ASSERT_TRUE(p.at("sigma_m").is_object()) << p;
+  for (const char* k : {"east", "north", "up"}) {
+    const double s = p.at("sigma_m").at(k).get<double>();
+    EXPECT_GT(s, 0.0) << k;
+    EXPECT_LT(s, 0.01) << k;
+  }
+  // A column locate does not read is an error naming it.
+  write("bad.csv", "id,e_m,n_m,u_m,h_m\nA,1,2,3,4\n");
+  const RunResult bad = run("locate " + path("map").string() + " " + path("bad.csv").string());
+  EXPECT_EQ(bad.exit_code, 3);
+  EXPECT_NE(bad.err.find("'h_m'"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace geoanchor
