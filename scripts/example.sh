@@ -14,7 +14,12 @@
 #     (fixtures/airport_network: GNSS baselines to two reference stations
 #     and a terrestrial traverse) is adjusted in ITRF2014@2024.5; the LiDAR
 #     map's origin is corrected by fitting the marks as the map sees them to
-#     the adjusted stations (enu-origin), and the tile is moved with it.
+#     the adjusted stations (enu-origin), and the map is moved with it: the
+#     two LiDAR tiles, the GeoJSON apron layer and the Lanelet2 lane, with
+#     the survey's metadata (fixtures/lszh_survey.json);
+#  6. audit: the moved map's geodetic checks (metadata contract, one frame,
+#     seams, checkpoints, RTK-fixed share, storage, tangent plane, Web
+#     Mercator), each PASS or FAIL with its evidence.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -82,8 +87,17 @@ grep -E "vtpv|global test" "$out/lszh_adjust.txt" | sed 's/^ */  /'
 # adjusted stations: the map origin's shift and yaw (planted by the
 # generator: E 0.412, N -0.287, U 0.153 m, yaw 14.0 arcsec).
 "$geoanchor" fit --src "$net/lszh_marks_map.csv" --dst "$out/lszh_stations.csv" --model enu-origin --origin "$origin" \
-  -o "$out/lszh_map_origin.json" --overwrite | grep -E "shift_|yaw_|σ0 =|global test" | sed 's/^ */  /'
+  --survey-metadata fixtures/lszh_survey.json -o "$out/lszh_map_origin.json" --overwrite | grep -E "shift_|yaw_|σ0 =|global test" | sed 's/^ */  /'
 mkdir -p "$out/network_tiles"
-"$geoanchor" apply fixtures/airport_tile.las --transform "$out/lszh_map_origin.json" --out-dir "$out/network_tiles" --overwrite
+"$geoanchor" apply fixtures/airport_tile.las fixtures/airport_tile_east.csv fixtures/airport_apron.geojson fixtures/airport_lanes.osm \
+  --from-frame ITRF2014@2024.5 --transform "$out/lszh_map_origin.json" --survey-metadata fixtures/lszh_survey.json \
+  --out-dir "$out/network_tiles" --overwrite
 grep -E '"(transform_model|sigma_[enu]_m|distance_outside_control_m)"' "$out/network_tiles/airport_tile.las.geoanchor.json" | sed 's/^ */  /'
+
+echo
+echo "== audit =="
+# The marks as the map has them against the adjusted stations serve as
+# checkpoints here (they are the fit's own marks; a real audit uses others).
+"$geoanchor" audit "$out/network_tiles" "$out/lszh_map_origin.json" \
+  --checkpoints "$net/lszh_marks_map.csv" --checkpoints-dst "$out/lszh_stations.csv" | grep -E "^(PASS|FAIL|----)|^audit:"
 echo "outputs and their provenance sidecars (*.geoanchor.json) are in $out/"
