@@ -728,8 +728,9 @@ AuditCheck check_checkpoints(const std::vector<AuditArtifact>& arts, const Audit
     if (t) {
       const auto& from = move.inverse ? t->target_frame : t->source_frame;
       const auto& to = move.inverse ? t->source_frame : t->target_frame;
+      // The same frame, and the same coordinate epoch where both name one.
       const auto differs = [](const std::optional<geodesy::Frame>& a, const std::optional<geodesy::Frame>& b) {
-        return a && b && a->name() != b->name();
+        return a && b && (a->name() != b->name() || (a->epoch() && b->epoch() && a->epoch()->year != b->epoch()->year));
       };
       if (differs(set.source_frame, from) || differs(set.target_frame, to)) {
         throw Error(ErrorKind::input, "E_CHECKPOINT_FRAME",
@@ -761,8 +762,8 @@ AuditCheck check_checkpoints(const std::vector<AuditArtifact>& arts, const Audit
       const geodesy::GeodeticPosition g = geodesy::geodetic_from_ecef(geodesy::Ellipsoid::grs80(), p.target);
       const Eigen::Matrix3d r = geodesy::enu_from_ecef_rotation(g.lat, g.lon);
       const Eigen::Matrix3d enu = r * *cov * r.transpose();
-      sigma = "propagated σ east " + mm(std::sqrt(enu(0, 0))) + ", north " + mm(std::sqrt(enu(1, 1))) + ", up " +
-              mm(std::sqrt(enu(2, 2)));
+      const auto sd = [&](int k) { return mm(std::sqrt(std::max(0.0, enu(k, k)))); };  // a variance rounded below 0 is 0
+      sigma = "propagated σ east " + sd(0) + ", north " + sd(1) + ", up " + sd(2);
     }
     const bool bad = !(h <= l.checkpoint_horizontal_m) || !(v <= l.checkpoint_vertical_m);
     if (bad) ++failing;

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -147,6 +148,7 @@ LocateResult locate_points(const LocateRequest& request) {
         if (!cov->allFinite()) throw Error(ErrorKind::input, "E_TRANSFORM", r.map.transform_path + ": its sigmas' correlation is incomplete");
         const Eigen::Matrix3d rot = enu_rotation_at(p.geodetic);
         p.covariance_enu_m2 = rot * *cov * rot.transpose();
+        for (int k = 0; k < 3; ++k) (*p.covariance_enu_m2)(k, k) = std::max(0.0, (*p.covariance_enu_m2)(k, k));  // rounded below 0
       }
     }
     if (to_transform) {
