@@ -169,7 +169,7 @@ TEST_F(Audit, Issue16_TheCleanMapPassesEveryCheck) {
   EXPECT_EQ(json::parse(r.out).at("passed"), true);
   EXPECT_EQ(failing(r), std::vector<std::string>{});
   // The two tiles meet; moved by one transform they have no seam.
-  EXPECT_NE(check(r, "seams").at("summary").get<std::string>().find("1 shared boundaries among 2 tiles"), std::string::npos)
+  EXPECT_NE(check(r, "seams").at("summary").get<std::string>().find("1 shared boundaries or overlaps among 2 tiles and vector maps"), std::string::npos)
       << check(r, "seams");
 }
 
@@ -217,6 +217,37 @@ TEST_F(Audit, Issue16_ATileMovedByATransform3cmOffLeavesASeam) {
   const double seam_cm = std::stod(evidence.substr(evidence.rfind(' ', at - 1) + 1));
   constexpr double kFitNoise_cm = 0.2;
   EXPECT_NEAR(seam_cm, 3.0, kFitNoise_cm) << evidence;
+}
+
+TEST_F(Audit, Issue16_AVectorLayerMovedByATransform3cmOffTearsFromTheTileUnderIt) {
+  clean_map();
+  // A GeoJSON layer over the west tile (lon, lat, h on GRS80 from ENU at the ARP).
+  const geodesy::LocalTangentPlane plane(arp());
+  std::string coords;
+  for (const auto& [e, n] : std::vector<std::pair<double, double>>{{20, 20}, {180, 30}, {150, 180}}) {
+    const geodesy::GeodeticPosition g = geodesy::geodetic_from_ecef(
+        geodesy::Ellipsoid::grs80(), plane.ecef_from_enu(geodesy::EnuPosition{Eigen::Vector3d(e, n, 1.0), arp()}));
+    coords += std::string(coords.empty() ? "" : ",") + "[" + num(g.lon.deg()) + "," + num(g.lat.deg()) + "," + num(g.h.m) + "]";
+  }
+  write("raw/lines.geojson", R"({"type": "FeatureCollection", "features": [{"type": "Feature", "id": "l1", "properties": {},
+    "geometry": {"type": "LineString", "coordinates": [)" + coords + "]}}]}");
+  const fs::path off = fit(control("control_off.csv", 0.0, 0.03), "t_off.json");
+  apply(path("raw/lines.geojson").string(), off, "map", "--from-frame ITRF2014@2024.5");
+  const RunResult r = audit(path("map").string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.err;
+  EXPECT_EQ(failing(r), std::vector<std::string>{"seams"}) << r.out;
+  const std::string evidence = check(r, "seams").at("evidence").dump();
+  EXPECT_NE(evidence.find("lines.geojson | " + path("map/west.csv").string() + ": 3.0 cm apart"), std::string::npos) << evidence;
+}
+
+TEST_F(Audit, Issue16_CheckpointsWithoutTheirFramesAreRefused) {
+  clean_map();
+  std::string text = slurp(path("control.csv"));
+  text = text.substr(text.find("id,"));  // without the frame comments
+  write("bare.csv", text);
+  const RunResult r = audit(path("map").string() + " --checkpoints " + path("bare.csv").string());
+  EXPECT_EQ(r.exit_code, 3) << r.out;
+  EXPECT_NE(r.err.find("E_CHECKPOINT_FRAME"), std::string::npos) << r.err;
 }
 
 TEST_F(Audit, Issue16_ACheckpoint6cmOffFailsNamingItsResidualAndUncertainty) {

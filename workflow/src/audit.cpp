@@ -301,8 +301,8 @@ bool same_origin(const io::MetadataOrigin& a, const io::MetadataOrigin& b) {
 
 AuditCheck check_one_frame(const std::vector<AuditArtifact>& arts) {
   AuditCheck c = make_check("one_frame",
-                            "one reference: every layer of a map in the same frame, realization, coordinate epoch "
-                            "and ENU origin, or the layers tear apart",
+                            "one reference: every layer of a map in the same frame, realization, coordinate epoch, "
+                            "ENU origin and height reference (vertical datum, geoid model), or the layers tear apart",
                             "identical frame and epoch; origins within 1e-8° and 1 mm");
   // Each property: its values, with the artifacts that state each.
   const auto property = [&](const std::string& what, const auto& value_of, const auto& same) {
@@ -346,11 +346,17 @@ AuditCheck check_one_frame(const std::vector<AuditArtifact>& arts) {
         return origin_text(m);
       },
       [](const io::MapMetadata& x, const io::MapMetadata& y) { return same_origin(*x.enu_origin, *y.enu_origin); });
+  property(
+      "vertical datum", [](const io::MapMetadata& m) { return m.vertical_datum; },
+      [](const io::MapMetadata& x, const io::MapMetadata& y) { return x.vertical_datum == y.vertical_datum; });
+  property(
+      "geoid model", [](const io::MapMetadata& m) { return m.geoid_model; },
+      [](const io::MapMetadata& x, const io::MapMetadata& y) { return x.geoid_model == y.geoid_model; });
   c.status = c.evidence.empty() ? AuditStatus::pass : AuditStatus::fail;
   c.summary = c.evidence.empty() ? "frame " + (frame.empty() ? std::string("unknown") : frame) + ", epoch " +
                                        (epoch.empty() ? std::string("unknown") : epoch) + ", ENU origin " +
                                        (origin.empty() ? std::string("unknown") : origin)
-                                 : std::to_string(c.evidence.size()) + " of frame, epoch and origin differ across the map";
+                                 : std::to_string(c.evidence.size()) + " of frame, epoch, origin and height reference differ across the map";
   return c;
 }
 
@@ -363,10 +369,14 @@ struct Move {
   bool inverse = false;
   std::optional<double> epoch;
   std::string input_frame, output_frame;
+  // A tile read through PROJ: its CRS (WKT2) and PROJ's operations, which
+  // audit cannot run again; two tiles read from different CRSs are not
+  // compared by their transforms alone.
+  std::string input_crs;
   std::string path;  // as recorded
   bool operator==(const Move& o) const {
     return sha256 == o.sha256 && inverse == o.inverse && epoch == o.epoch && input_frame == o.input_frame &&
-           output_frame == o.output_frame;
+           output_frame == o.output_frame && input_crs == o.input_crs;
   }
 };
 
@@ -384,6 +394,7 @@ Move move_of(const AuditArtifact& a) {
     m.epoch = 0.5 * (p["observation_epoch_range"][0].get<double>() + p["observation_epoch_range"][1].get<double>());
   }
   if (p.contains("input_frame") && p["input_frame"].is_string()) m.input_frame = p["input_frame"].get<std::string>();
+  if (p.contains("input_crs_wkt2") && p["input_crs_wkt2"].is_string()) m.input_crs = p["input_crs_wkt2"].get<std::string>();
   if (a.meta && a.meta->frame) m.output_frame = a.meta->frame->to_string();
   return m;
 }
@@ -479,9 +490,19 @@ std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> bounds_of(const Audit
       std::string line;
       while (std::getline(in, line) && (line.empty() || line[0] == '#')) {
       }
-      const auto lat = line.find("lat"), lon = line.find("lon");
-      if (lat == std::string::npos || lon == std::string::npos) return std::nullopt;
-      lon_first = lon < lat;
+      // Whole column names: lat_deg, lon_deg (lat_rad, …), as the CSV reader names them.
+      std::optional<std::size_t> lat, lon;
+      std::size_t index = 0, start = 0;
+      while (start <= line.size()) {
+        const std::size_t end = std::min(line.find(',', start), line.size());
+        const std::string name = line.substr(start, end - start);
+        if (name.rfind("lat_", 0) == 0 && !lat) lat = index;
+        if (name.rfind("lon_", 0) == 0 && !lon) lon = index;
+        ++index;
+        start = end + 1;
+      }
+      if (!lat || !lon) return std::nullopt;
+      lon_first = *lon < *lat;
     } else if (format == io::TileFormat::ply || !format) {
       return std::nullopt;  // no stated axis order
     } else {
@@ -541,7 +562,8 @@ AuditCheck check_seams(const std::vector<AuditArtifact>& arts, const AuditLimits
   const std::optional<geodesy::LocalOrigin> origin = map_origin(arts);
   std::size_t not_checked = 0;
   for (const auto& a : arts) {
-    if (a.kind != AuditArtifactKind::tile) continue;
+    // Tiles and vector maps: a layer moved otherwise than the tiles under it tears from them.
+    if (a.kind == AuditArtifactKind::transform) continue;
     if (!a.meta) continue;  // the metadata check names it
     if (a.meta->crs) {
       c.evidence.push_back(name_of(a) + ": not checked: its coordinates are in " + a.meta->crs->display_name() +
@@ -607,6 +629,12 @@ AuditCheck check_seams(const std::vector<AuditArtifact>& arts, const AuditLimits
         const auto& f = m.inverse ? t->target_frame : t->source_frame;
         return f ? f->to_string() : std::string("?");
       };
+      if (A.move.input_crs != B.move.input_crs) {
+        c.evidence.push_back(pair_name + ": not checked: the two were read from different coordinate systems through PROJ, "
+                                         "whose operations audit cannot run again");
+        ++failing;
+        continue;
+      }
       if ((!ta && A.move.input_frame != A.move.output_frame) || (!tb && B.move.input_frame != B.move.output_frame) ||
           source_of(A.move, ta) != source_of(B.move, tb)) {
         c.evidence.push_back(pair_name + ": not checked: the tiles come from different frames (" + source_of(A.move, ta) +
@@ -652,7 +680,7 @@ AuditCheck check_seams(const std::vector<AuditArtifact>& arts, const AuditLimits
     }
   }
   c.status = failing == 0 && not_checked == 0 ? AuditStatus::pass : AuditStatus::fail;
-  c.summary = std::to_string(pairs) + " shared boundaries among " + std::to_string(tiles.size()) + " tiles; " +
+  c.summary = std::to_string(pairs) + " shared boundaries or overlaps among " + std::to_string(tiles.size()) + " tiles and vector maps; " +
               (failing ? std::to_string(failing) + " fail" : "largest separation " + mm(worst)) +
               (not_checked ? "; " + std::to_string(not_checked) + " tiles not checked" : "");
   return c;
@@ -724,13 +752,31 @@ AuditCheck check_checkpoints(const std::vector<AuditArtifact>& arts, const Audit
       c.evidence.push_back(p.id + ": not checked: " + name_of(*tile) + ": " + why);
       continue;
     }
-    // The control set's frames must be the transform's.
+    // The control set's frames must be stated, and be the transform's
+    // (without one: the map's own frame on both sides).
+    if (!set.source_frame || !set.target_frame) {
+      throw Error(ErrorKind::input, "E_CHECKPOINT_FRAME",
+                  *request.checkpoints + ": the checkpoints state no " + (!set.source_frame ? "source" : "target") +
+                      " frame ('# source_frame = NAME@EPOCH' / '# target_frame = …', or '# frame = …' in each file of a "
+                      "pair): a checkpoint compared in an unknown frame proves nothing");
+    }
+    for (const auto* f : {&set.source_frame, &set.target_frame}) {
+      geodesy::require_epoch_if_dynamic(**f, *request.checkpoints + ": the checkpoints' frame");
+    }
+    if (!t && (set.source_frame->to_string() != move.output_frame || set.target_frame->to_string() != move.output_frame)) {
+      throw Error(ErrorKind::input, "E_CHECKPOINT_FRAME",
+                  *request.checkpoints + ": its frames (" + set.source_frame->to_string() + " -> " + set.target_frame->to_string() +
+                      ") are not the map's " + (move.output_frame.empty() ? std::string("(unknown)") : move.output_frame) +
+                      ", which no transform file moved");
+    }
     if (t) {
       const auto& from = move.inverse ? t->target_frame : t->source_frame;
       const auto& to = move.inverse ? t->source_frame : t->target_frame;
       // The same frame, and the same coordinate epoch where both name one.
       const auto differs = [](const std::optional<geodesy::Frame>& a, const std::optional<geodesy::Frame>& b) {
-        return a && b && (a->name() != b->name() || (a->epoch() && b->epoch() && a->epoch()->year != b->epoch()->year));
+        if (!a || !b) return false;  // the transform names none: the set's is taken
+        if (a->name() != b->name()) return true;
+        return a->epoch().has_value() != b->epoch().has_value() || (a->epoch() && a->epoch()->year != b->epoch()->year);
       };
       if (differs(set.source_frame, from) || differs(set.target_frame, to)) {
         throw Error(ErrorKind::input, "E_CHECKPOINT_FRAME",
@@ -849,6 +895,12 @@ AuditCheck check_float32_resolution(const std::vector<AuditArtifact>& arts, cons
   for (const auto& a : arts) {
     if (!float32_storage(a) || kind_of(a) == "ecef") continue;
     ++n;
+    if (a.meta && a.meta->crs) {
+      ++bad;
+      c.evidence.push_back(name_of(a) + ": float32 in " + a.meta->crs->display_name() +
+                           " (a PROJ CRS): its units and spacing are not checked here");
+      continue;
+    }
     const auto b = bounds_of(a);
     if (!b) {
       ++bad;
@@ -898,7 +950,11 @@ AuditCheck check_tangent_plane(const std::vector<AuditArtifact>& arts, const Aud
     }
     for (const auto& corner : corners(b->first, b->second)) {
       const auto x = to_ecef(a.meta->coordinates, corner);
-      if (!x) continue;
+      if (!x) {
+        ++unknown;
+        c.evidence.push_back(name_of(a) + ": extent not known (a corner of its bounds does not convert)");
+        break;
+      }
       const Eigen::Vector3d e = plane.enu_from_ecef(geodesy::EcefPosition(*x)).enu_m;
       const double d = std::hypot(e.x(), e.y());
       if (d > far) far = d, farthest = name_of(a);
@@ -1055,14 +1111,15 @@ std::string audit_text(const AuditResult& r) {
     out << "      limit: " << c.limit << "\n      rule: " << c.rule << "\n";
     for (const auto& e : c.evidence) out << "      - " << e << "\n";
   }
-  out << "audit: " << (failed == 0 ? "PASSED" : "FAILED") << " (" << r.checks.size() - failed << " of " << r.checks.size()
-      << " checks pass" << (failed ? "; failing: " : "");
-  bool first = true;
+  std::vector<std::string> failing, not_run;
   for (const auto& c : r.checks) {
-    if (c.status != AuditStatus::fail) continue;
-    out << (first ? "" : ", ") << c.name;
-    first = false;
+    if (c.status == AuditStatus::fail) failing.push_back(c.name);
+    if (c.status == AuditStatus::not_run) not_run.push_back(c.name);
   }
+  const std::size_t ran = r.checks.size() - not_run.size();
+  out << "audit: " << (failed == 0 ? "PASSED" : "FAILED") << " (" << ran - failed << " of " << ran << " checks pass";
+  if (!failing.empty()) out << "; failing: " << join(failing);
+  if (!not_run.empty()) out << "; not run: " << join(not_run);
   out << ")\n";
   return out.str();
 }

@@ -458,8 +458,16 @@ TileMetadata TilePlanner::vector_map_metadata(TilePlan& p) const {
     }
   } else {
     m.coordinates.kind = CoordinateKind::geodetic;
-    m.coordinates.ellipsoid =
-        geodesy::implied_ellipsoid(*flag_frame).value_or(out_.ellipsoid.value_or(geodesy::Ellipsoid::wgs84()));
+    // The frame's own ellipsoid, else the one --ellipsoid names: never a
+    // default, which would put the map's latitudes on another ellipsoid.
+    const std::optional<geodesy::Ellipsoid> on = geodesy::implied_ellipsoid(*flag_frame);
+    if (!on && !out_.ellipsoid) {
+      throw Error(ErrorKind::usage, "E_ELLIPSOID",
+                  p.input.string() + ": " + flag_name + " " + flag_frame->to_string() +
+                      ": geoanchor knows no ellipsoid of this frame, and the map's latitudes and longitudes are on one; "
+                      "give it with --ellipsoid");
+    }
+    m.coordinates.ellipsoid = on ? *on : *out_.ellipsoid;
     m.height_type = "ellipsoidal";
     m.vertical_datum = "ellipsoid " + m.coordinates.ellipsoid.name();
     m.storage = "float64";
