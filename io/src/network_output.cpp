@@ -28,7 +28,7 @@ std::string dynaml_date(const geodesy::Frame& frame) {
     for (int day = 1; day <= 31; ++day) {
       const auto d = geodesy::decimal_year_from_date(y, month, day);
       if (d && d->year == year) {
-        char text[16];
+        char text[40];  // room for any int the compiler cannot rule out (-Wformat-truncation)
         std::snprintf(text, sizeof text, "%02d.%02d.%04d", day, month, y);
         return text;
       }
