@@ -213,6 +213,13 @@ VectorMapStatement geojson_statement(const std::filesystem::path& map) {
   if (kind_it != g->end() && !kind_it->is_string()) fail(source, "geoanchor.coordinates", "expected geodetic or crs");
   const std::string kind = kind_it == g->end() ? std::string("geodetic") : kind_it->get<std::string>();
   const auto f = g->find("frame");
+  if (kind == "crs") {
+    // The CRS states the ellipsoid and the heights: keys that would say so
+    // too are refused rather than read and ignored.
+    for (const char* k : {"ellipsoid", "height_type"}) {
+      if (g->contains(k)) fail(source, std::string(kMember) + "." + k, "not with coordinates 'crs': the crs member's CRS states it");
+    }
+  }
   if (kind == "crs" && f != g->end() && f->is_null()) {
     if (!from_crs) fail(source, "geoanchor.coordinates", "'crs' but the map has no legacy crs member naming it");
     s = {std::move(from_crs), "GeoJSON 'crs' member"};  // a CRS on a datum outside geoanchor's catalog

@@ -12,6 +12,7 @@
 #include <optional>
 #include <ostream>
 #include <string>
+#include <stdexcept>
 #include <string_view>
 #include <system_error>
 #include <vector>
@@ -74,6 +75,8 @@ inline void write_with_edits(std::ostream& out, std::string_view text, std::vect
   std::stable_sort(edits.begin(), edits.end(), [](const TextEdit& a, const TextEdit& b) { return a.at < b.at; });
   std::uint64_t at = 0;
   for (const auto& e : edits) {
+    // Overlapping or out-of-range edits would write from outside `text`.
+    if (e.at < at || e.at + e.length > text.size()) throw std::logic_error("write_with_edits: edits overlap or leave the text");
     out.write(text.data() + at, static_cast<std::streamsize>(e.at - at));
     out << e.text;
     at = e.at + e.length;

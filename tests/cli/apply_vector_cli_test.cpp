@@ -249,6 +249,23 @@ TEST_F(ApplyVectorCli, GeoJsonLegacyCrsMemberIsReadThroughProj) {
   EXPECT_WORST_WITHIN(worst, kVsProjTol_m);
 }
 
+// With "coordinates": "crs" the CRS states the ellipsoid and the heights: an
+// "ellipsoid" or "height_type" beside it is refused by name, not ignored.
+TEST_F(ApplyVectorCli, GeoJsonCrsCoordinatesRefuseAnEllipsoidOrHeightTypeOfTheirOwn) {
+  const fs::path t = transform("T.json", kGeneral);
+  for (const std::string key : {"\"ellipsoid\": \"WGS84\"", "\"height_type\": \"orthometric\""}) {
+    write("in/legacy.geojson", R"({"type": "Feature", "id": 1, "properties": {},
+      "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::7912"}},
+      "geoanchor": {"frame": "ITRF2014@2024.5", "coordinates": "crs", )" + key + R"(},
+      "geometry": {"type": "Point", "coordinates": [8.549167, 47.464722, 480.0]}})");
+    const RunResult r = run("apply " + path("in/legacy.geojson").string() + " --transform " + t.string() +
+                            " --to geodetic --out-dir " + path("out").string());
+    EXPECT_EQ(r.exit_code, 3) << key << r.err;
+    EXPECT_NE(r.err.find("not with coordinates 'crs'"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path("out/legacy.geojson")));
+  }
+}
+
 // ------------------------------------------------------------- Lanelet2 OSM
 
 // A Lanelet2 map of nodes whose local_x/local_y are Lanelet2's UtmProjector
