@@ -61,6 +61,24 @@ inline void add_band_warnings(TileApplyResult& r, const std::string& source, con
   if (auto w = out.warning("output")) r.warnings.push_back(source + ": " + *w);
 }
 
+// The result of a vector map moved whole in one chain pass (float64 text):
+// its point count (reported as progress), bounds and UTM band warnings,
+// the band's worst point named by `point_name`.
+inline TileApplyResult whole_map_result(const TileApplyOptions& o, const std::string& source, std::size_t n,
+                                        const ChainReport& report, const Bounds& in, const Bounds& out,
+                                        const std::function<std::string(std::size_t)>& point_name) {
+  TileApplyResult r;
+  r.points = n;
+  if (o.progress) o.progress(n);
+  r.storage = "float64";
+  set_bounds(r, in, out);
+  UtmBandTally band_in, band_out;
+  if (report.input_band.points) band_in.absorb(report.input_band, point_name(report.input_band.worst_index));
+  if (report.output_band.points) band_out.absorb(report.output_band, point_name(report.output_band.worst_index));
+  add_band_warnings(r, source, band_in, band_out);
+  return r;
+}
+
 // Geodetic coordinates are (lat, lon, h) in a PointChain but (lon, lat, h)
 // as X, Y, Z in LAS and PLY, as GIS tools store them.
 inline bool lon_first_in_files(const ArrayFrame& f) { return f.kind == CoordinateKind::geodetic; }

@@ -381,15 +381,7 @@ TileApplyResult apply_geojson_map(const std::filesystem::path& in, std::ostream&
   out << j.dump() << '\n';
   if (!out) throw Error(ErrorKind::io, "E_WRITE", out_name + ": write failed");
 
-  TileApplyResult r;
-  r.points = n;
-  if (o.progress) o.progress(n);
-  r.storage = "float64";
-  detail::set_bounds(r, in_bounds, out_bounds);
-  UtmBandTally band_in, band_out;
-  if (report.input_band.points) band_in.absorb(report.input_band, name_of(report.input_band.worst_index));
-  if (report.output_band.points) band_out.absorb(report.output_band, name_of(report.output_band.worst_index));
-  detail::add_band_warnings(r, source, band_in, band_out);
+  TileApplyResult r = detail::whole_map_result(o, source, n, report, in_bounds, out_bounds, name_of);
   if (without_height > 0) {
     r.warnings.push_back(source + ": " + std::to_string(without_height) + " of " + std::to_string(n) +
                          " positions have no height (the first " + pos.path[first_without] +

@@ -35,12 +35,7 @@ struct Node {
   Value lat, lon, x, y, ele;
 };
 
-const char* attribute(const XML_Char** attrs, std::string_view name) {
-  for (std::size_t i = 0; attrs[i]; i += 2) {
-    if (name == attrs[i]) return attrs[i + 1];
-  }
-  return nullptr;
-}
+using detail::attribute;
 
 class OsmReader : public detail::XmlHandler {
  public:
@@ -318,11 +313,7 @@ TileApplyResult apply_osm_map(const std::filesystem::path& in, std::ostream& out
   detail::write_with_edits(out, text, std::move(edits));
   if (!out) throw Error(ErrorKind::io, "E_WRITE", out_name + ": write failed");
 
-  TileApplyResult r;
-  r.points = n;
-  if (o.progress) o.progress(n);
-  r.storage = "float64";
-  detail::set_bounds(r, in_bounds, out_bounds);
+  TileApplyResult r = detail::whole_map_result(o, source, n, report, in_bounds, out_bounds, name_of);
   if (without_ele > 0) {
     r.warnings.push_back(source + ": " + std::to_string(without_ele) + " of " + std::to_string(n) +
                          " nodes have no ele tag (the first " + name_of(first_without_ele) +

@@ -72,12 +72,7 @@ struct Road {
   std::vector<Elevation> elevations;
 };
 
-const char* attribute(const XML_Char** attrs, std::string_view name) {
-  for (std::size_t i = 0; attrs[i]; i += 2) {
-    if (name == attrs[i]) return attrs[i + 1];
-  }
-  return nullptr;
-}
+using detail::attribute;
 
 class XodrReader : public detail::XmlHandler {
  public:
@@ -622,15 +617,7 @@ TileApplyResult apply_xodr_map(const std::filesystem::path& in, std::ostream& ou
   detail::write_with_edits(out, text, std::move(edits));
   if (!out) throw Error(ErrorKind::io, "E_WRITE", out_name + ": write failed");
 
-  TileApplyResult r;
-  r.points = n;
-  if (o.progress) o.progress(n);
-  r.storage = "float64";
-  detail::set_bounds(r, in_bounds, out_bounds);
-  UtmBandTally band_in, band_out;
-  if (report.input_band.points) band_in.absorb(report.input_band, name_of(report.input_band.worst_index));
-  if (report.output_band.points) band_out.absorb(report.output_band, name_of(report.output_band.worst_index));
-  detail::add_band_warnings(r, source, band_in, band_out);
+  TileApplyResult r = detail::whole_map_result(o, source, n, report, in_bounds, out_bounds, name_of);
   using J = nlohmann::ordered_json;
   const J record = {
       {"roads", reader.roads.size()},

@@ -59,4 +59,13 @@ class XmlStream {
   std::exception_ptr error_;
 };
 
+// The value of attribute `name` in expat's name, value, …, nullptr list, or
+// nullptr when the element has none.
+inline const char* attribute(const XML_Char** attributes, std::string_view name) {
+  for (std::size_t i = 0; attributes[i]; i += 2) {
+    if (name == attributes[i]) return attributes[i + 1];
+  }
+  return nullptr;
+}
+
 }  // namespace geoanchor::io::detail

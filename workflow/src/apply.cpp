@@ -2,7 +2,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include <fnmatch.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -34,6 +33,7 @@
 #include "geoanchor/workflow/transform_checks.hpp"
 #include "geoanchor/workflow/tile_plan.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"
+#include "map_files.hpp"
 
 namespace geoanchor::workflow {
 namespace {
@@ -60,7 +60,9 @@ bool is_tile(const fs::path& p) {
   return io::tile_format_of(p).has_value();
 }
 
-constexpr std::string_view kSidecarSuffix = ".geoanchor.json";
+using detail::excluded_by;
+using detail::is_run_summary;
+using detail::kSidecarSuffix;
 constexpr std::string_view kTileKinds = ".las, .laz, .copc.laz, .csv, .txt, .ply, .geojson, .osm or .xodr";
 constexpr std::size_t kUnknownListed = 20;  // names in the message; the rest counted
 
@@ -69,18 +71,6 @@ struct Inputs {
   std::vector<fs::path> tiles;
   std::vector<std::string> excluded;
 };
-
-// Whether `exclude` leaves a file out: a glob without '/' against its name,
-// one with '/' against `as_listed` (its path relative to the folder given,
-// a manifest's entry or an argument as written).
-bool excluded_by(const std::vector<std::string>& exclude, const fs::path& as_listed) {
-  const std::string name = as_listed.filename().string(), listed = as_listed.generic_string();
-  for (const auto& g : exclude) {
-    const bool path_glob = g.find('/') != std::string::npos;
-    if (::fnmatch(g.c_str(), (path_glob ? listed : name).c_str(), 0) == 0) return true;
-  }
-  return false;
-}
 
 // Files, folders (their tiles, recursively, sorted) and manifests (one path
 // per line, relative to the manifest's folder; '#' starts a comment), in
@@ -144,7 +134,7 @@ Inputs expand_inputs(const std::vector<std::string>& inputs, const std::vector<s
           const fs::path tile = f.parent_path() / name.substr(0, name.size() - kSidecarSuffix.size());
           if (is_tile(tile) && names.count(tile)) continue;
         }
-        if (regular && name.starts_with("geoanchor-apply-summary") && name.ends_with(".json")) continue;
+        if (regular && is_run_summary(name)) continue;
         if (io::is_temporary_name(name)) continue;
         std::string what;
         if (e.is_directory(e_ec)) {
@@ -183,13 +173,10 @@ Inputs expand_inputs(const std::vector<std::string>& inputs, const std::vector<s
     }
   }
   if (!unknown.empty()) {
-    std::string list;
-    for (std::size_t i = 0; i < std::min(unknown.size(), kUnknownListed); ++i) list += (i ? ", " : "") + unknown[i];
-    if (unknown.size() > kUnknownListed) list += ", and " + std::to_string(unknown.size() - kUnknownListed) + " more";
     throw Error(ErrorKind::usage, "E_INPUT_UNKNOWN",
                 std::to_string(unknown.size()) + (unknown.size() == 1 ? " file" : " files") +
                     " in the input folders " + (unknown.size() == 1 ? "is" : "are") + " neither a tile (" +
-                    std::string(kTileKinds) + ") nor a tile's sidecar: " + list +
+                    std::string(kTileKinds) + ") nor a tile's sidecar: " + detail::name_list(unknown, kUnknownListed) +
                     "; leave them out with --exclude GLOB (e.g. --exclude '*.xyz'), or convert them; nothing was "
                     "processed");
   }
@@ -679,7 +666,7 @@ ApplyRun::ApplyRun(ApplyRequest request) : impl_(std::make_unique<Impl>()) {
   Inputs inputs = expand_inputs(o.inputs, o.exclude);
   m.tiles = std::move(inputs.tiles);
   m.excluded = std::move(inputs.excluded);
-  m.summary_base = "geoanchor-apply-summary";
+  m.summary_base = std::string(detail::kRunSummaryStem);
   m.run_id = make_run_id();
   if (o.shard) {
     const auto [i, n] = parse_shard(*o.shard);
@@ -687,7 +674,7 @@ ApplyRun::ApplyRun(ApplyRequest request) : impl_(std::make_unique<Impl>()) {
     for (std::size_t k = i; k < m.tiles.size(); k += n) mine.push_back(m.tiles[k]);
     m.tiles = std::move(mine);
     m.shard_text = std::to_string(i) + "/" + std::to_string(n);
-    m.summary_base = "geoanchor-apply-summary.shard-" + std::to_string(i) + "-of-" + std::to_string(n);
+    m.summary_base = std::string(detail::kRunSummaryStem) + ".shard-" + std::to_string(i) + "-of-" + std::to_string(n);
   }
   // Two inputs must not write the same output (x.las and x.laz with
   // --format, x.laz and x.copc.laz); --format is checked against each tile.

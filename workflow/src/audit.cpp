@@ -1,6 +1,5 @@
 #include "geoanchor/workflow/audit.hpp"
 
-#include <fnmatch.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -24,6 +23,7 @@
 #include "geoanchor/io/point_chain.hpp"
 #include "geoanchor/io/tile_apply.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"
+#include "map_files.hpp"
 
 namespace geoanchor::workflow {
 
@@ -32,24 +32,16 @@ using json = nlohmann::ordered_json;
 
 namespace {
 
-constexpr std::string_view kSidecarSuffix = ".geoanchor.json";
+using detail::excluded_by;
+using detail::is_run_summary;
+using detail::kSidecarSuffix;
 constexpr std::size_t kListed = 20;  // artifacts named in one line of evidence at most
 
 std::string fixed(double v, int decimals) { return format_fixed(v, decimals); }
 std::string cm(double m) { return fixed(m * 100.0, 1) + " cm"; }
 std::string mm(double m) { return fixed(m * 1000.0, 2) + " mm"; }
 
-bool excluded_by(const std::vector<std::string>& exclude, const fs::path& as_listed) {
-  const std::string name = as_listed.filename().string(), listed = as_listed.generic_string();
-  for (const auto& g : exclude) {
-    if (::fnmatch(g.c_str(), (g.find('/') != std::string::npos ? listed : name).c_str(), 0) == 0) return true;
-  }
-  return false;
-}
-
-bool is_run_summary(const std::string& name) {
-  return name.starts_with("geoanchor-apply-summary") && name.ends_with(".json");
-}
+std::string join(const std::vector<std::string>& v) { return detail::name_list(v, kListed); }
 
 // A .json file that is no sidecar: a transform file, or GeoJSON.
 enum class JsonKind { transform, geojson, other };
@@ -161,14 +153,11 @@ Listing list_artifacts(const AuditRequest& request) {
     }
   }
   if (!unknown.empty()) {
-    std::string list;
-    for (std::size_t i = 0; i < std::min(unknown.size(), kListed); ++i) list += (i ? ", " : "") + unknown[i];
-    if (unknown.size() > kListed) list += ", and " + std::to_string(unknown.size() - kListed) + " more";
     throw Error(ErrorKind::usage, "E_INPUT_UNKNOWN",
                 std::to_string(unknown.size()) + (unknown.size() == 1 ? " file is" : " files are") +
                     " not part of a map geoanchor audits (a tile .las/.laz/.csv/.ply, a vector map "
                     ".geojson/.osm/.xodr, a sidecar, a transform file): " +
-                    list + "; leave them out with --exclude GLOB");
+                    join(unknown) + "; leave them out with --exclude GLOB");
   }
   if (r.artifacts.empty()) throw Error(ErrorKind::usage, "E_INPUT", "no tile, vector map or transform file among the inputs");
   return r;
@@ -219,13 +208,6 @@ AuditCheck make_check(std::string name, std::string rule, std::string limit) {
   c.rule = std::move(rule);
   c.limit = std::move(limit);
   return c;
-}
-
-std::string join(const std::vector<std::string>& v, std::size_t most = kListed) {
-  std::string s;
-  for (std::size_t i = 0; i < std::min(v.size(), most); ++i) s += (i ? ", " : "") + v[i];
-  if (v.size() > most) s += ", and " + std::to_string(v.size() - most) + " more";
-  return s;
 }
 
 // ----------------------------------------------------------------- metadata
