@@ -8,7 +8,9 @@
 //  - bare: CHOLMOD analyze + factorize + solve of the same normal matrix
 //    (in ECEF axes: the adjustment's is in each station's local axes, the
 //    same matrix up to a block-diagonal rotation, the same pattern and fill),
-//    CHOLMOD's default ordering;
+//    CHOLMOD's default ordering (and, as "ND", with METIS's nested
+//    dissection: the command orders the stations' graph by AMD or nested
+//    dissection, whichever costs fewer flops);
 //  - adjust: solver::adjust_network with every statistic and data snooping
 //    (the command's defaults), and what it found: σ0, snooping passes, the
 //    planted blunders found, other measurements removed, and the truth
@@ -59,6 +61,7 @@
 #include "geoanchor/geodesy/network.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/io/atomic_file.hpp"
+#include "geoanchor/io/huge_pages.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 #include "geoanchor/workflow/network_generator.hpp"
 
@@ -82,12 +85,20 @@ GeneratedNetwork make_network(std::size_t n) {
 
 // The bare baseline: N = Σ Aᵀ C⁻¹ A in ECEF (A = [−I I] per baseline), the
 // held stations' rows by a weight of 1e12, analyzed, factored, solved.
-double bare_cholmod_seconds(const GeneratedNetwork& g) {
+// With `metis`, ordered by METIS's nested dissection instead of CHOLMOD's
+// default (AMD, and METIS only when AMD's fill is high): the floor the
+// command's own ordering (AMD or nested dissection, on the stations' graph)
+// is to be read against too.
+double bare_cholmod_seconds(const GeneratedNetwork& g, bool metis) {
   const auto& net = g.network;
   const SuiteSparse_long n = static_cast<SuiteSparse_long>(3 * net.stations.size());
   cholmod_common common;
   cholmod_l_start(&common);
   common.print = 0;
+  if (metis) {
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_METIS;
+  }
   const auto t0 = Clock::now();
   cholmod_triplet* t = cholmod_l_allocate_triplet(static_cast<std::size_t>(n), static_cast<std::size_t>(n),
                                                   net.measurements.size() * 21 + 3 * net.stations.size(), 1, CHOLMOD_REAL, &common);
@@ -246,6 +257,10 @@ std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t
 }  // namespace
 
 int main(int argc, char** argv) {
+  // The bare factor-and-solve and the adjustment in the same memory setting
+  // as the command (which starts itself with huge pages for malloc: the
+  // floor is not to be measured with 4 kB page faults the command avoids).
+  io::restart_with_huge_pages(argv);
   std::vector<std::size_t> sizes{1000, 10000, 100000};
   int repetitions = 3;
   std::size_t command_max = 100000, kernel_max = 1000000, dense_max = 2000, threads_max = 100000;
@@ -265,11 +280,14 @@ int main(int argc, char** argv) {
   char folder_template[] = "/tmp/geoanchor_adjust_bench_XXXXXX";
   if (!mkdtemp(folder_template)) return 1;
   const fs::path folder = folder_template;
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  std::printf("malloc: GLIBC_TUNABLES=%s (every process below)\n", tunables ? tunables : "(not set)");
   std::printf("generated GNSS networks (adjust --generate N --seed N); median of %d; s = wall seconds, MB = peak RSS;\n"
-              "ratio = / bare CHOLMOD analyze + factor + solve of the same normal matrix\n\n",
+              "ratio = / bare CHOLMOD analyze + factor + solve of the same normal matrix (CHOLMOD's default ordering;\n"
+              "ND s: the same with METIS's nested dissection)\n\n",
               repetitions);
-  std::printf("%-8s %-8s | %7s %6s | %7s %6s %5s | %7s %6s %5s | %7s %6s %5s | %6s %6s %9s %6s %6s\n", "stations", "baselns",
-              "bare s", "MB", "adj s", "MB", "ratio", "cmd-ns", "MB", "ratio", "cmd s", "MB", "ratio", "sigma0", "passes",
+  std::printf("%-8s %-8s | %7s %6s %6s | %7s %6s %5s | %7s %6s %5s | %7s %6s %5s | %6s %6s %9s %6s %6s\n", "stations", "baselns",
+              "bare s", "MB", "ND s", "adj s", "MB", "ratio", "cmd-ns", "MB", "ratio", "cmd s", "MB", "ratio", "sigma0", "passes",
               "blunders", "cover", "eNe/n");
   std::vector<std::pair<std::size_t, KernelRun>> kernels;
   for (const std::size_t n : sizes) {
@@ -297,28 +315,35 @@ int main(int argc, char** argv) {
     }
     // The bare factor-and-solve in a child too: CHOLMOD's OpenMP threads in
     // this process would deadlock a child forked later (libgomp after fork).
+    std::vector<double> bare_nd_s;
     for (int rep = 0; rep < repetitions; ++rep) {
-      int fds[2];
-      if (pipe(fds) != 0) return 1;
-      const pid_t pid = fork();
-      if (pid == 0) {
+      for (const bool metis : {false, true}) {
+        int fds[2];
+        if (pipe(fds) != 0) return 1;
+        const pid_t pid = fork();
+        if (pid == 0) {
+          close(fds[0]);
+          const double sec = bare_cholmod_seconds(g, metis);
+          if (write(fds[1], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) _exit(1);
+          _exit(0);
+        }
+        close(fds[1]);
+        double sec = -1.0;
+        if (read(fds[0], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) sec = -1.0;
         close(fds[0]);
-        const double sec = bare_cholmod_seconds(g);
-        if (write(fds[1], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) _exit(1);
-        _exit(0);
+        struct rusage usage {};
+        int status = 0;
+        wait4(pid, &status, 0, &usage);
+        if (sec < 0.0) return 1;
+        if (metis) {
+          bare_nd_s.push_back(sec);
+        } else {
+          bare_s.push_back(sec);
+          bare_peak = std::max(bare_peak, static_cast<double>(usage.ru_maxrss) / 1024.0);
+        }
       }
-      close(fds[1]);
-      double sec = -1.0;
-      if (read(fds[0], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) sec = -1.0;
-      close(fds[0]);
-      struct rusage usage {};
-      int status = 0;
-      wait4(pid, &status, 0, &usage);
-      if (sec < 0.0) return 1;
-      bare_s.push_back(sec);
-      bare_peak = std::max(bare_peak, static_cast<double>(usage.ru_maxrss) / 1024.0);
     }
-    const double bare = median(bare_s);
+    const double bare = median(bare_s), bare_nd = median(bare_nd_s);
     // The whole command, on the DynaML files as written.
     std::string command[2][3];
     for (auto& c : command) c[0] = c[1] = c[2] = "-";
@@ -354,8 +379,8 @@ int main(int argc, char** argv) {
     const double a = adjust_s.empty() ? 0.0 : median(adjust_s);
     char blunders[32];
     std::snprintf(blunders, sizeof blunders, "%zu/%zu+%zu", k.found, g.blunders.size(), k.others_removed);
-    std::printf("%-8zu %-8zu | %7.2f %6.0f | %7.2f %6.0f %5.2f | %7s %6s %5s | %7s %6s %5s | %6.4f %6d %9s %6.4f %6.4f\n", n,
-                g.network.measurements.size(), bare, bare_peak, a, peak, a / bare, command[0][0].c_str(), command[0][1].c_str(),
+    std::printf("%-8zu %-8zu | %7.2f %6.0f %6.2f | %7.2f %6.0f %5.2f | %7s %6s %5s | %7s %6s %5s | %6.4f %6d %9s %6.4f %6.4f\n", n,
+                g.network.measurements.size(), bare, bare_peak, bare_nd, a, peak, a / bare, command[0][0].c_str(), command[0][1].c_str(),
                 command[0][2].c_str(), command[1][0].c_str(), command[1][1].c_str(), command[1][2].c_str(), k.sigma0, k.passes,
                 blunders, k.coverage, k.chi2_ratio);
     std::fflush(stdout);

@@ -871,7 +871,9 @@ bool read_dynaml_in_parts(std::string_view text, std::string_view source, geodes
   geodesy::Network joined = into;
   try {
     NetworkBuilder builder(joined);
-    std::size_t approximate = 0;
+    std::size_t approximate = 0, measurements = joined.measurements.size();
+    for (std::size_t k = 0; k < parts; ++k) measurements += read[k].net.measurements.size();
+    joined.measurements.reserve(measurements);  // moved in once, not again at each doubling
     for (std::size_t k = 0; k < parts; ++k) {
       Part& part = read[k];
       if (k == 0 && !joined.frame) {
