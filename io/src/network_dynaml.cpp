@@ -841,6 +841,15 @@ bool read_dynaml_in_parts(std::string_view text, std::string_view source, geodes
       Reader reader(source, part.net, options);
       constexpr std::string_view kEnd = "</DnaXmlFormat>";
       const std::string_view body = text.substr(cut[k], cut[k + 1] - cut[k]);
+      // Room for its measurements at once (a few hundred bytes each, moved
+      // again at every doubling otherwise): one per <DnaMeasurement>, a
+      // hint (a direction set is several).
+      {
+        const std::string_view own = k == 0 ? text.substr(0, cut[1]) : body;
+        std::size_t count = 0;
+        for (auto at = own.find("<DnaMeasurement"); at != std::string_view::npos; at = own.find("<DnaMeasurement", at + 1)) ++count;
+        part.net.measurements.reserve(count);
+      }
       if (k == 0) {
         reader.parse_part({text.substr(0, cut[1]), kEnd}, 0, true);
       } else if (k + 1 < parts) {
