@@ -147,8 +147,17 @@ std::vector<SuiteSparse_long> quotient_ordering(const cholmod_sparse* a, cholmod
   const auto* ap = static_cast<const SuiteSparse_long*>(a->p);
   const auto* ai = static_cast<const SuiteSparse_long*>(a->i);
   // The lower triangle's pattern (a's transpose): column j's rows ≥ j.
+  // (CHOLMOD's objects freed on every way out, a std::bad_alloc included.)
+  struct FreeSparse {
+    cholmod_sparse*& p;
+    cholmod_common* c;
+    ~FreeSparse() {
+      if (p) cholmod_l_free_sparse(&p, c);
+    }
+  };
   cholmod_sparse* lower = cholmod_l_transpose(const_cast<cholmod_sparse*>(a), 0, c);
   if (!lower) throw std::bad_alloc();
+  const FreeSparse free_lower{lower, c};
   const auto* lp = static_cast<const SuiteSparse_long*>(lower->p);
   const auto* li = static_cast<const SuiteSparse_long*>(lower->i);
   // Whether unknowns j and j + 1 have the same closed neighbourhood
@@ -185,6 +194,7 @@ std::vector<SuiteSparse_long> quotient_ordering(const cholmod_sparse* a, cholmod
   cholmod_sparse* q = cholmod_l_allocate_sparse(static_cast<std::size_t>(groups), static_cast<std::size_t>(groups), nz, 1, 1, 1,
                                                 CHOLMOD_PATTERN, c);
   if (!q) throw std::bad_alloc();
+  const FreeSparse free_q{q, c};
   auto* qp = static_cast<SuiteSparse_long*>(q->p);
   auto* qi = static_cast<SuiteSparse_long*>(q->i);
   SuiteSparse_long k = 0;
@@ -202,6 +212,7 @@ std::vector<SuiteSparse_long> quotient_ordering(const cholmod_sparse* a, cholmod
   // factor's column counts, no supernodes) and keep the cheaper.
   const int saved_supernodal = c->supernodal, saved_nmethods = c->nmethods, saved_ordering = c->method[0].ordering;
   std::vector<SuiteSparse_long> best;
+  best.reserve(static_cast<std::size_t>(groups));  // (assigned below without allocating, a factor in hand)
   double best_flops = 0.0;
   for (const int ordering : {CHOLMOD_AMD, CHOLMOD_METIS}) {
     c->supernodal = CHOLMOD_SIMPLICIAL;
