@@ -19,6 +19,8 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/io/point_chain.hpp"
 #include "geoanchor/io/tile_apply.hpp"
@@ -468,23 +470,16 @@ std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> bounds_of(const Audit
     const auto format = io::tile_format_of(a.path);
     bool lon_first = false;
     if (format == io::TileFormat::csv) {
-      std::ifstream in(a.path);
-      std::string line;
-      while (std::getline(in, line) && (line.empty() || line[0] == '#')) {
+      // The column order the CSV reader itself finds in the header.
+      std::ifstream in(a.path, std::ios::binary);
+      try {
+        const io::CsvReader csv(in, a.path.string());
+        const io::CoordinateColumns columns = io::classify_coordinate_header(csv.header(), a.path.string());
+        if (columns.kind != io::CoordinateKind::geodetic) return std::nullopt;
+        lon_first = columns.second < columns.first;  // (lat, lon, h) in the kind's order
+      } catch (const Error&) {
+        return std::nullopt;
       }
-      // Whole column names: lat_deg, lon_deg (lat_rad, …), as the CSV reader names them.
-      std::optional<std::size_t> lat, lon;
-      std::size_t index = 0, start = 0;
-      while (start <= line.size()) {
-        const std::size_t end = std::min(line.find(',', start), line.size());
-        const std::string name = line.substr(start, end - start);
-        if (name.rfind("lat_", 0) == 0 && !lat) lat = index;
-        if (name.rfind("lon_", 0) == 0 && !lon) lon = index;
-        ++index;
-        start = end + 1;
-      }
-      if (!lat || !lon) return std::nullopt;
-      lon_first = *lon < *lat;
     } else if (format == io::TileFormat::ply || !format) {
       return std::nullopt;  // no stated axis order
     } else {
