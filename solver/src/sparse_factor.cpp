@@ -14,6 +14,7 @@
 #include <functional>
 #include <system_error>
 #include <thread>
+#include <type_traits>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
@@ -22,8 +23,11 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/parallel.hpp"
+#include "supernodal_cholesky.hpp"
 
 namespace geoanchor::solver {
+
+static_assert(std::is_same_v<SuiteSparse_long, std::int64_t>, "CHOLMOD's long integers are the layout's");
 
 struct NormalFactor::Impl {
   Mode mode = Mode::sparse;
@@ -39,6 +43,8 @@ struct NormalFactor::Impl {
   // `z` holds Z at those rows and columns, column-major from px[k] as L->x
   // holds L (the diagonal block whole).
   std::vector<std::int64_t> inverse_permutation, super_of;
+  // The supernodal elimination tree of the analysis.
+  std::optional<SupernodalTree> tree;
   // The pattern the analysis was made for (column pointers, row indices).
   std::vector<SuiteSparse_long> pattern_p, pattern_i;
   std::vector<double> z;
@@ -132,6 +138,15 @@ std::uint64_t available_memory_bytes() {
   return available;
 }
 
+// Frees a CHOLMOD matrix on every way out, a std::bad_alloc included.
+struct FreeSparse {
+  cholmod_sparse*& p;
+  cholmod_common* c;
+  ~FreeSparse() {
+    if (p) cholmod_l_free_sparse(&p, c);
+  }
+};
+
 // A fill-reducing ordering of the symmetric matrix `a` (its upper triangle,
 // CSC with sorted rows), found on its quotient graph: consecutive unknowns
 // with the same closed neighbourhood (a station's three coordinates, say)
@@ -147,14 +162,6 @@ std::vector<SuiteSparse_long> quotient_ordering(const cholmod_sparse* a, cholmod
   const auto* ap = static_cast<const SuiteSparse_long*>(a->p);
   const auto* ai = static_cast<const SuiteSparse_long*>(a->i);
   // The lower triangle's pattern (a's transpose): column j's rows ≥ j.
-  // (CHOLMOD's objects freed on every way out, a std::bad_alloc included.)
-  struct FreeSparse {
-    cholmod_sparse*& p;
-    cholmod_common* c;
-    ~FreeSparse() {
-      if (p) cholmod_l_free_sparse(&p, c);
-    }
-  };
   cholmod_sparse* lower = cholmod_l_transpose(const_cast<cholmod_sparse*>(a), 0, c);
   if (!lower) throw std::bad_alloc();
   const FreeSparse free_lower{lower, c};
@@ -251,7 +258,7 @@ std::string gigabytes(double bytes) {
 
 std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
                                                  std::int64_t* failed_column, std::optional<NormalFactor> previous,
-                                                 std::uint64_t memory_budget_bytes, int jobs_hint) {
+                                                 std::uint64_t memory_budget_bytes, int jobs) {
   // (A moved-from factor has no Impl: no previous.)
   const bool reuse = previous && previous->impl_ && mode == Mode::sparse && previous->impl_->mode == Mode::sparse &&
                      previous->impl_->n == n && previous->impl_->factor;
@@ -314,6 +321,7 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
   cholmod_sparse* a = cholmod_l_triplet_to_sparse(t, entries.size(), c);
   cholmod_l_free_triplet(&t, c);
   if (!a) throw std::bad_alloc();
+  const FreeSparse free_a{a, c};
   const auto* ap = static_cast<const SuiteSparse_long*>(a->p);
   const auto* ai = static_cast<const SuiteSparse_long*>(a->i);
   const bool same_pattern = impl->factor && impl->pattern_p.size() == static_cast<std::size_t>(n) + 1 &&
@@ -324,20 +332,11 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
     if (impl->factor) cholmod_l_free_factor(&impl->factor, c);
     impl->pattern_p.assign(ap, ap + n + 1);
     impl->pattern_i.assign(ai, ai + ap[n]);
-    std::vector<SuiteSparse_long> ordering;
-    try {
-      ordering = quotient_ordering(a, c);
-    } catch (...) {
-      cholmod_l_free_sparse(&a, c);
-      throw;
-    }
+    std::vector<SuiteSparse_long> ordering = quotient_ordering(a, c);
     c->nmethods = 1;
     c->method[0].ordering = CHOLMOD_GIVEN;
     impl->factor = cholmod_l_analyze_p(a, ordering.data(), nullptr, 0, c);
-    if (!impl->factor) {
-      cholmod_l_free_sparse(&a, c);
-      throw std::bad_alloc();
-    }
+    if (!impl->factor) throw std::bad_alloc();
     // L's values and the selected inverse's, the same size, and a
     // supernode's work space per thread (select_inverse) and CHOLMOD's for
     // the factorization (about the largest supernode's update block).
@@ -348,11 +347,14 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
       const double cols = static_cast<double>(lsuper[k + 1] - lsuper[k]), rows_below = static_cast<double>(lpi[k + 1] - lpi[k]) - cols;
       block = std::max(block, rows_below * rows_below + 2.0 * rows_below * cols + cols * cols);
     }
-    const double need = 8.0 * (2.0 * static_cast<double>(impl->factor->xsize) + (1.0 + static_cast<double>(std::max(1, jobs_hint))) * block);
+    // The factorization's own: N's lower triangle in the factor's order
+    // (an index and a value per entry), a row map per thread.
+    const double threads = static_cast<double>(std::max(1, jobs));
+    const double need = 8.0 * (2.0 * static_cast<double>(impl->factor->xsize) + (1.0 + threads) * block) +
+                        16.0 * static_cast<double>(ap[n]) + 8.0 * (threads + 2.0) * static_cast<double>(n);
     const std::uint64_t budget = memory_budget_bytes ? memory_budget_bytes : available_memory_bytes();
     if (budget > 0 && need > static_cast<double>(budget)) {
       const double values = static_cast<double>(impl->factor->xsize);
-      cholmod_l_free_sparse(&a, c);
       throw Error(ErrorKind::rejected, "E_MEMORY",
                   "the normal matrix of " + std::to_string(n) + " unknowns: its Cholesky factor holds " +
                       std::to_string(static_cast<long long>(values)) + " values (CHOLMOD's analysis), so the factor and its "
@@ -360,13 +362,44 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
                       (memory_budget_bytes ? " are allowed (--max-memory)" : " are available") +
                       "; nothing was factored. Split the network (docs/scale.md) or run it where more memory is free");
     }
+    impl->tree.reset();
   }  // else: the same ordering and supernodes, refactored in place
-  cholmod_l_factorize(a, impl->factor, c);
-  cholmod_l_free_sparse(&a, c);
-  if (c->status == CHOLMOD_OUT_OF_MEMORY) throw std::bad_alloc();
-  if (c->status == CHOLMOD_NOT_POSDEF || impl->factor->minor < impl->factor->n) {
-    const auto* perm = static_cast<const SuiteSparse_long*>(impl->factor->Perm);
-    if (failed_column && impl->factor->minor < impl->factor->n) *failed_column = perm[impl->factor->minor];
+  cholmod_factor* f = impl->factor;
+  if (!f->is_super) throw std::logic_error("NormalFactor: CHOLMOD's analysis is not supernodal");
+  if (f->xtype == CHOLMOD_PATTERN && !cholmod_l_change_factor(CHOLMOD_REAL, 1, 1, 1, 1, f, c)) throw std::bad_alloc();  // L's values: allocated, not set
+  const auto* perm = static_cast<const SuiteSparse_long*>(f->Perm);
+  // N's lower triangle in the factor's order, compressed by column.
+  std::vector<std::int64_t> lower_p(static_cast<std::size_t>(n) + 1, 0), lower_i(static_cast<std::size_t>(ap[n])),
+      position(static_cast<std::size_t>(n));
+  std::vector<double> lower_x(static_cast<std::size_t>(ap[n]));
+  for (std::int64_t k = 0; k < n; ++k) position[static_cast<std::size_t>(perm[k])] = k;
+  const auto* ax = static_cast<const double*>(a->x);
+  for (std::int64_t j = 0; j < n; ++j) {
+    for (SuiteSparse_long q = ap[j]; q < ap[j + 1]; ++q) {
+      ++lower_p[static_cast<std::size_t>(std::min(position[static_cast<std::size_t>(ai[q])], position[static_cast<std::size_t>(j)])) + 1];
+    }
+  }
+  for (std::int64_t j = 0; j < n; ++j) lower_p[static_cast<std::size_t>(j) + 1] += lower_p[static_cast<std::size_t>(j)];
+  {
+    std::vector<std::int64_t> next(lower_p.begin(), lower_p.end() - 1);
+    for (std::int64_t j = 0; j < n; ++j) {
+      for (SuiteSparse_long q = ap[j]; q < ap[j + 1]; ++q) {
+        const std::int64_t r = position[static_cast<std::size_t>(ai[q])], s = position[static_cast<std::size_t>(j)];
+        const std::int64_t k = next[static_cast<std::size_t>(std::min(r, s))]++;
+        lower_i[static_cast<std::size_t>(k)] = std::max(r, s);
+        lower_x[static_cast<std::size_t>(k)] = ax[q];
+      }
+    }
+  }
+  cholmod_l_free_sparse(&a, c);  // (before the factorization's work space is taken)
+  const SupernodalLayout layout{n, static_cast<std::int64_t>(f->nsuper), static_cast<const std::int64_t*>(f->super),
+                                static_cast<const std::int64_t*>(f->pi), static_cast<const std::int64_t*>(f->px),
+                                static_cast<const std::int64_t*>(f->s)};
+  if (!impl->tree) impl->tree.emplace(layout);
+  const std::int64_t failed = factor_supernodal(layout, *impl->tree, lower_p.data(), lower_i.data(), lower_x.data(),
+                                                static_cast<double*>(f->x), std::max(1, jobs));
+  if (failed >= 0) {
+    if (failed_column) *failed_column = perm[failed];
     return std::nullopt;
   }
   impl->lnz = static_cast<std::int64_t>(c->lnz);

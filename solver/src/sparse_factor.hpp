@@ -31,7 +31,9 @@ class NormalFactor {
  public:
   enum class Mode { sparse, dense };
 
-  // Factors the n × n matrix the entries sum to. When it is not positive
+  // Factors the n × n matrix the entries sum to (sparse: CHOLMOD's
+  // analysis, the numeric factorization of supernodal_cholesky.hpp on `jobs`
+  // threads, the same bits on any number). When it is not positive
   // definite, nullopt, and `failed_column` the first unknown (in the
   // caller's order) at which the factorization broke down.
   // With `previous` (a sparse factor of a matrix of the same size), its
@@ -44,11 +46,11 @@ class NormalFactor {
   // before any of it is taken: above `memory_budget_bytes` (0: what the
   // machine has available, MemAvailable, within the address-space limit)
   // it throws geoanchor::Error (rejected, E_MEMORY) naming both.
-  // `jobs_hint`: the threads select_inverse will run on (each has a work
-  // space of the largest supernode's size).
+  // `jobs`: the threads the factorization runs on, and select_inverse will
+  // (each has a work space of the largest supernode's size).
   static std::optional<NormalFactor> factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
                                             std::int64_t* failed_column, std::optional<NormalFactor> previous = std::nullopt,
-                                            std::uint64_t memory_budget_bytes = 0, int jobs_hint = 1);
+                                            std::uint64_t memory_budget_bytes = 0, int jobs = 1);
   ~NormalFactor();
   NormalFactor(NormalFactor&&) noexcept;
   NormalFactor& operator=(NormalFactor&&) noexcept;

@@ -11,7 +11,9 @@
 #include <Eigen/Cholesky>
 
 #include <cmath>
+#include <optional>
 #include <random>
+#include <tuple>
 #include <stdexcept>
 #include <vector>
 
@@ -49,6 +51,50 @@ Built network_matrix(int stations, int reach, unsigned seed) {
         for (int q = 0; q < 2; ++q) b.dense.block(at[p], at[q], 3, 3) += block.block(3 * p, 3 * q, 3, 3);
       }
     }
+  }
+  b.dense += 0.1 * Eigen::MatrixXd::Identity(n, n);
+  for (int c = 0; c < n; ++c) {
+    for (int r = 0; r <= c; ++r) {
+      if (b.dense(r, c) != 0.0) b.entries.push_back({r, c, b.dense(r, c)});
+    }
+  }
+  return b;
+}
+
+// A network of width × height stations on a grid, each joined to its right,
+// lower and lower-right neighbours: its nested-dissection ordering has
+// separators of some hundred unknowns, supernodes wide enough to be cut in
+// slices and panels (supernodal_cholesky.cpp).
+// With `hubs`, that many more stations joined to every station: they are
+// ordered last, the rows below every supernode, and a supernode of their own
+// wider than a panel.
+Built grid_matrix(int width, int height, unsigned seed, int hubs = 0) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const int n = 3 * (width * height + hubs);
+  Built b;
+  b.dense = Eigen::MatrixXd::Zero(n, n);
+  const auto join = [&](int s, int t) {
+    Eigen::MatrixXd a(3, 6);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 6; ++j) a(i, j) = unit(rng);
+    }
+    const Eigen::MatrixXd block = a.transpose() * a;
+    const int at[2] = {3 * s, 3 * t};
+    for (int p = 0; p < 2; ++p) {
+      for (int q = 0; q < 2; ++q) b.dense.block(at[p], at[q], 3, 3) += block.block(3 * p, 3 * q, 3, 3);
+    }
+  };
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const int s = y * width + x;
+      if (x + 1 < width) join(s, s + 1);
+      if (y + 1 < height) join(s, s + width);
+      if (x + 1 < width && y + 1 < height) join(s, s + width + 1);
+    }
+  }
+  for (int h = width * height; h < width * height + hubs; ++h) {
+    for (int s = 0; s < h; ++s) join(s, h);
   }
   b.dense += 0.1 * Eigen::MatrixXd::Identity(n, n);
   for (int c = 0; c < n; ++c) {
@@ -100,6 +146,62 @@ TEST(NormalFactor, SelectedInversionOnThreadsGivesTheSameBits) {
     ASSERT_EQ(one->inverse(e.row, e.col), three->inverse(e.row, e.col)) << e.row << ", " << e.col;
   }
   EXPECT_LE(worst_difference(*three, b), kRelative);
+}
+
+// Issue 17 point 3: the numeric factorization on threads (subtrees, then
+// the separators' supernodes in slices) gives the same bits as on one, and
+// the factor agrees with Eigen's dense Cholesky through its solves and
+// selected inverse.
+TEST(NormalFactor, Issue17_TheFactorizationOnThreadsGivesTheSameBits) {
+  for (const auto& [width, height, hubs] : {std::tuple{24, 20, 0}, std::tuple{20, 16, 90}}) {
+    SCOPED_TRACE(::testing::Message() << width << " × " << height << " grid, " << hubs << " hubs");
+    const Built b = grid_matrix(width, height, 17u, hubs);
+    const Eigen::Index n = b.dense.rows();
+    auto one = NormalFactor::factor(n, b.entries, NormalFactor::Mode::sparse, nullptr, std::nullopt, 0, 1);
+    auto two = NormalFactor::factor(n, b.entries, NormalFactor::Mode::sparse, nullptr, std::nullopt, 0, 2);
+    auto three = NormalFactor::factor(n, b.entries, NormalFactor::Mode::sparse, nullptr, std::nullopt, 0, 3);
+    ASSERT_TRUE(one && two && three);
+    const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+    const Eigen::VectorXd x1 = one->solve(rhs), x2 = two->solve(rhs), x3 = three->solve(rhs);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      ASSERT_EQ(x1(k), x2(k)) << k;
+      ASSERT_EQ(x1(k), x3(k)) << k;
+    }
+    one->select_inverse(1);
+    two->select_inverse(2);
+    EXPECT_LE(worst_difference(*one, b), kRelative);
+    for (const auto& e : b.entries) ASSERT_EQ(one->inverse(e.row, e.col), two->inverse(e.row, e.col)) << e.row << ", " << e.col;
+    // Refactored in place (the same pattern, other values), on threads.
+    const Built other = grid_matrix(width, height, 18u, hubs);
+    auto again = NormalFactor::factor(n, other.entries, NormalFactor::Mode::sparse, nullptr, std::move(*two), 0, 2);
+    ASSERT_TRUE(again);
+    const Eigen::VectorXd expected = other.dense.llt().solve(rhs);
+    EXPECT_LE((again->solve(rhs) - expected).cwiseAbs().maxCoeff() / expected.cwiseAbs().maxCoeff(), kRelative);
+  }
+}
+
+// A matrix positive definite but for one unknown u (its diagonal lowered
+// below its Schur complement): every pivot before u's, in any order, is a
+// leading minor without u, so the factorization fails at u and nowhere
+// else — the column named, on one thread or on two, wherever u lies in
+// the elimination tree. A NaN on the diagonal fails where it is.
+TEST(NormalFactor, Issue17_TheFailedColumnIsTheUnknownThatBreaksIt) {
+  const Built b = grid_matrix(30, 24, 23u);
+  const auto n = static_cast<std::int64_t>(b.dense.rows());
+  for (const std::int64_t u : {std::int64_t{0}, std::int64_t{7}, n / 2 + 1, std::int64_t{3 * 15 + 2}, n - 1}) {
+    for (const bool nan : {false, true}) {
+      SCOPED_TRACE(::testing::Message() << "unknown " << u << (nan ? ", NaN" : ""));
+      Built bad = b;
+      for (auto& e : bad.entries) {
+        if (e.row == u && e.col == u) e.value = nan ? std::nan("") : -1.0;
+      }
+      for (const int jobs : {1, 2}) {
+        std::int64_t failed = -1;
+        EXPECT_FALSE(NormalFactor::factor(n, bad.entries, NormalFactor::Mode::sparse, &failed, std::nullopt, 0, jobs));
+        EXPECT_EQ(failed, u) << jobs << " threads";
+      }
+    }
+  }
 }
 
 // Issue 17 point 5: rows taken out of a factored matrix (data snooping's

@@ -1,0 +1,38 @@
+#pragma once
+// The dense kernels of the supernodal Cholesky factorization and of its
+// selected inversion, on column-major blocks given by pointer and leading
+// dimension. They are compiled twice — for the x86-64 baseline and for
+// AVX2 with FMA (Eigen vectorizes at compile time) — and dense_kernels()
+// gives the set this processor runs. Each kernel's numbers depend on its
+// operands' shapes alone, never on threads.
+//
+// Private to solver.
+
+#include <cstdint>
+
+namespace geoanchor::solver {
+
+struct DenseKernels {
+  const char* name;  // "avx2+fma" or "x86-64"
+  // C (m2 × m1, leading dimension m2) = A_top_m2 A_top_m1ᵀ, where A is the
+  // rows × k block at `a` (leading dimension lda) and A_top_m its first m rows.
+  void (*outer_product)(const double* a, std::int64_t lda, std::int64_t m2, std::int64_t m1, std::int64_t k, double* c);
+  // The Cholesky factor of the n × n block at `a` (its lower triangle read
+  // and overwritten; the strict upper triangle is not touched). Returns −1,
+  // or the first column whose pivot is not a positive finite number.
+  std::int64_t (*cholesky)(double* a, std::int64_t lda, std::int64_t n);
+  // X := X L⁻ᵀ: X is m × n at `x` (ldx), L n × n lower triangular at `l`.
+  void (*solve_lower_transposed_right)(const double* l, std::int64_t ldl, std::int64_t n, double* x, std::int64_t ldx,
+                                       std::int64_t m);
+  // C −= A Bᵀ: C m × n (ldc), A m × k (lda), B n × k (ldb).
+  void (*subtract_product)(const double* a, std::int64_t lda, const double* b, std::int64_t ldb, std::int64_t m, std::int64_t n,
+                           std::int64_t k, double* c, std::int64_t ldc);
+};
+
+// The AVX2+FMA set where the processor has both, else the baseline's.
+const DenseKernels& dense_kernels();
+// Both sets, for the tests (the AVX2 one is nullptr where it cannot run).
+const DenseKernels& baseline_dense_kernels();
+const DenseKernels* avx2_dense_kernels();
+
+}  // namespace geoanchor::solver
