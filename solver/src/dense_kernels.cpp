@@ -13,7 +13,8 @@ extern const DenseKernels kAvx2DenseKernels;
 
 const DenseKernels& baseline_dense_kernels() {
   static const DenseKernels kernels{"x86-64", baseline::outer_product, baseline::cholesky, baseline::solve_lower_transposed_right,
-                                    baseline::subtract_product};
+                                    baseline::subtract_product, baseline::inverse_lower, baseline::transposed_gram,
+    baseline::solve_lower_right, baseline::negative_symmetric_product, baseline::subtract_transposed_product};
   return kernels;
 }
 

@@ -27,6 +27,20 @@ struct DenseKernels {
   // C −= A Bᵀ: C m × n (ldc), A m × k (lda), B n × k (ldb).
   void (*subtract_product)(const double* a, std::int64_t lda, const double* b, std::int64_t ldb, std::int64_t m, std::int64_t n,
                            std::int64_t k, double* c, std::int64_t ldc);
+  // The selected inversion's (sparse_factor.cpp):
+  // out (n × n, ldo) = L⁻¹ for L n × n lower triangular at `l`.
+  void (*inverse_lower)(const double* l, std::int64_t ldl, std::int64_t n, double* out, std::int64_t ldo);
+  // out (n × n, ldo) = Aᵀ A, A n × n at `a`.
+  void (*transposed_gram)(const double* a, std::int64_t lda, std::int64_t n, double* out, std::int64_t ldo);
+  // X := X L⁻¹: X is m × n at `x` (ldx), L n × n lower triangular at `l`.
+  void (*solve_lower_right)(const double* l, std::int64_t ldl, std::int64_t n, double* x, std::int64_t ldx, std::int64_t m);
+  // out (r × n, ldo) = −S B: S r × r symmetric, its lower triangle at `s`;
+  // B r × n at `b`.
+  void (*negative_symmetric_product)(const double* s, std::int64_t lds, std::int64_t r, const double* b, std::int64_t ldb,
+                                     std::int64_t n, double* out, std::int64_t ldo);
+  // C −= Aᵀ B: C m × n (ldc), A k × m (lda), B k × n (ldb).
+  void (*subtract_transposed_product)(const double* a, std::int64_t lda, const double* b, std::int64_t ldb, std::int64_t m,
+                                      std::int64_t n, std::int64_t k, double* c, std::int64_t ldc);
 };
 
 // The AVX2+FMA set where the processor has both, else the baseline's.

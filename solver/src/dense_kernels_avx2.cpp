@@ -13,6 +13,7 @@
 
 namespace geoanchor::solver {
 extern const DenseKernels kAvx2DenseKernels{"avx2+fma", avx2::outer_product, avx2::cholesky, avx2::solve_lower_transposed_right,
-                                            avx2::subtract_product};
+                                            avx2::subtract_product, avx2::inverse_lower, avx2::transposed_gram,
+    avx2::solve_lower_right, avx2::negative_symmetric_product, avx2::subtract_transposed_product};
 }  // namespace geoanchor::solver
 #endif

@@ -23,6 +23,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/parallel.hpp"
+#include "dense_kernels.hpp"
 #include "supernodal_cholesky.hpp"
 
 namespace geoanchor::solver {
@@ -523,7 +524,6 @@ void NormalFactor::select_inverse(int jobs) {
   // R is a clique of the factor's graph, so Z_RR lies on the pattern of
   // the supernodes that hold R's columns, already computed.
   using Matrix = Eigen::MatrixXd;
-  using ConstMap = Eigen::Map<const Matrix>;
   using Map = Eigen::Map<Matrix>;
   // Work space for the largest supernode, allocated once per thread (a
   // fresh allocation per supernode costs more in page faults than the work).
@@ -547,8 +547,6 @@ void NormalFactor::select_inverse(int jobs) {
   constexpr std::int64_t kSliceColumns = 32, kSliceRows = 256, kSliceGather = 128;
   const auto process = [&](std::int64_t k, Workspace& w, int jobs_here) {
     const std::int64_t nscol = super[k + 1] - super[k], nsrow = pi[k + 1] - pi[k], r = nsrow - nscol;
-    const ConstMap lk(lx + px[k], nsrow, nscol);
-    const auto ljj = lk.topRows(nscol).triangularView<Eigen::Lower>();
     const SuiteSparse_long* below = rows + pi[k] + nscol;  // R, ascending
     Map zrr(w.zrr.data(), r, r), u(w.u.data(), r, nscol), zrj(w.zrj.data(), r, nscol), linv(w.linv.data(), nscol, nscol);
     const auto slices = [&](std::int64_t count, std::int64_t size, const auto& work) {
@@ -572,25 +570,27 @@ void NormalFactor::select_inverse(int jobs) {
         }
       }
     });
-    linv.setIdentity();
-    ljj.solveInPlace(linv);  // L_JJ⁻¹
-    Eigen::Map<Matrix> zk(m.z.data() + px[k], nsrow, nscol);
-    zk.topRows(nscol).noalias() = linv.transpose() * linv;
-    if (r == 0) return;  // a root: nothing below (Eigen's blocked kernels want no empty operand)
+    const DenseKernels& kernels = dense_kernels();
+    const double* l_jj = lx + px[k];
+    double* z_k = m.z.data() + px[k];
+    kernels.inverse_lower(l_jj, nsrow, nscol, linv.data(), nscol);      // L_JJ⁻¹
+    kernels.transposed_gram(linv.data(), nscol, nscol, z_k, nsrow);     // Z_JJ = L_JJ⁻ᵀ L_JJ⁻¹
+    if (r == 0) return;  // a root: nothing below
     // U L_JJ = L_RJ, row by row.
     slices(r, kSliceRows, [&](std::int64_t first, std::int64_t count) {
-      auto rows_of_u = u.middleRows(first, count);
-      rows_of_u = lk.bottomRows(r).middleRows(first, count);
-      ljj.solveInPlace<Eigen::OnTheRight>(rows_of_u);
+      for (std::int64_t c = 0; c < nscol; ++c) {
+        std::copy_n(l_jj + nscol + first + c * nsrow, count, u.data() + first + c * r);
+      }
+      kernels.solve_lower_right(l_jj, nsrow, nscol, u.data() + first, r, count);
     });
     // Z_RJ = −Z_RR U and Z_JJ −= Uᵀ Z_RJ, a slice of columns at a time.
     slices(nscol, kSliceColumns, [&](std::int64_t first, std::int64_t count) {
-      zrj.middleCols(first, count).noalias() = -(zrr.selfadjointView<Eigen::Lower>() * u.middleCols(first, count));
+      kernels.negative_symmetric_product(zrr.data(), r, r, u.data() + first * r, r, count, zrj.data() + first * r, r);
     });
     slices(nscol, kSliceColumns, [&](std::int64_t first, std::int64_t count) {
-      zk.topRows(nscol).middleCols(first, count).noalias() -= u.transpose() * zrj.middleCols(first, count);
+      kernels.subtract_transposed_product(u.data(), r, zrj.data() + first * r, r, nscol, count, r, z_k + first * nsrow, nsrow);
     });
-    zk.bottomRows(r) = zrj;
+    for (std::int64_t c = 0; c < nscol; ++c) std::copy_n(zrj.data() + c * r, r, z_k + nscol + c * nsrow);
   };
 
   // A supernode needs only its ancestors (R's columns lie in them), so

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -128,6 +129,86 @@ TEST(DenseKernels, CholeskyAndTriangularSolve) {
         }
       }
       EXPECT_LE(worst, kRelative * n) << "solve " << n;
+    }
+  }
+}
+
+// The selected inversion's kernels.
+TEST(DenseKernels, InverseGramSymmetricAndTransposedProducts) {
+  for (const DenseKernels* k : sets()) {
+    SCOPED_TRACE(k->name);
+    for (const int n : {1, 6, 45, 133}) {
+      // L lower triangular with a dominant diagonal, inside a larger array.
+      const int ld = n + 3;
+      std::vector<double> l = random_values(static_cast<std::size_t>(ld * n), 13u);
+      for (int j = 0; j < n; ++j) l[static_cast<std::size_t>(j + j * ld)] = 2.0 + std::abs(l[static_cast<std::size_t>(j + j * ld)]);
+      const auto at = [&](int i, int j) { return i < j ? 0.0 : l[static_cast<std::size_t>(i + j * ld)]; };
+      std::vector<double> inverse(static_cast<std::size_t>(n * n));
+      k->inverse_lower(l.data(), ld, n, inverse.data(), n);
+      double worst = 0.0;
+      for (int i = 0; i < n; ++i) {  // L L⁻¹ = I
+        for (int j = 0; j < n; ++j) {
+          double sum = 0.0;
+          for (int q = 0; q < n; ++q) sum += at(i, q) * inverse[static_cast<std::size_t>(q + j * n)];
+          worst = testing::nan_max(worst, std::abs(sum - (i == j ? 1.0 : 0.0)));
+        }
+      }
+      EXPECT_LE(worst, kRelative * n) << "inverse " << n;
+      std::vector<double> gram(static_cast<std::size_t>((n + 2) * n), 5.0);
+      k->transposed_gram(l.data(), ld, n, gram.data(), n + 2);
+      worst = 0.0;
+      for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+          double sum = 0.0;
+          for (int q = 0; q < n; ++q) sum += l[static_cast<std::size_t>(q + i * ld)] * l[static_cast<std::size_t>(q + j * ld)];
+          worst = testing::nan_max(worst, std::abs(gram[static_cast<std::size_t>(i + j * (n + 2))] - sum) / n);
+        }
+      }
+      EXPECT_LE(worst, kRelative) << "gram " << n;
+      // X L⁻¹: multiplied back by L it gives X.
+      const int m = n + 7, ldx = m + 2;
+      const std::vector<double> x = random_values(static_cast<std::size_t>(ldx * n), 15u);
+      std::vector<double> solved = x;
+      k->solve_lower_right(l.data(), ld, n, solved.data(), ldx, m);
+      worst = 0.0;
+      for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < n; ++j) {
+          double back = 0.0;
+          for (int q = j; q < n; ++q) back += solved[static_cast<std::size_t>(i + q * ldx)] * at(q, j);
+          worst = testing::nan_max(worst, std::abs(back - x[static_cast<std::size_t>(i + j * ldx)]));
+        }
+      }
+      EXPECT_LE(worst, kRelative * n) << "solve right " << n;
+      // −S B with S's lower triangle (its upper one holds values that must
+      // not be read), and C −= Aᵀ B.
+      const int r = n + 4, cols = n % 7 + 2;
+      std::vector<double> sym = random_values(static_cast<std::size_t>(r * r), 17u);
+      const std::vector<double> b = random_values(static_cast<std::size_t>(r * cols), 19u);
+      std::vector<double> product(static_cast<std::size_t>(r * cols));
+      k->negative_symmetric_product(sym.data(), r, r, b.data(), r, cols, product.data(), r);
+      worst = 0.0;
+      for (int i = 0; i < r; ++i) {
+        for (int j = 0; j < cols; ++j) {
+          double sum = 0.0;
+          for (int q = 0; q < r; ++q) sum -= sym[static_cast<std::size_t>(std::max(i, q) + std::min(i, q) * r)] * b[static_cast<std::size_t>(q + j * r)];
+          worst = testing::nan_max(worst, std::abs(product[static_cast<std::size_t>(i + j * r)] - sum) / r);
+        }
+      }
+      EXPECT_LE(worst, kRelative) << "symmetric " << n;
+      std::vector<double> c = random_values(static_cast<std::size_t>((cols + 1) * cols), 21u), before = c;
+      const std::vector<double> a = random_values(static_cast<std::size_t>(r * cols), 23u);
+      k->subtract_transposed_product(a.data(), r, b.data(), r, cols, cols, r, c.data(), cols + 1);
+      worst = 0.0;
+      for (int i = 0; i <= cols; ++i) {
+        for (int j = 0; j < cols; ++j) {
+          double expected = before[static_cast<std::size_t>(i + j * (cols + 1))];
+          if (i < cols) {
+            for (int q = 0; q < r; ++q) expected -= a[static_cast<std::size_t>(q + i * r)] * b[static_cast<std::size_t>(q + j * r)];
+          }
+          worst = testing::nan_max(worst, std::abs(c[static_cast<std::size_t>(i + j * (cols + 1))] - expected) / r);
+        }
+      }
+      EXPECT_LE(worst, kRelative) << "transposed product " << n;
     }
   }
 }
