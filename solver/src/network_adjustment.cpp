@@ -1327,14 +1327,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       if (!in) {
         // A measurement left out keeps its place in the pattern while
         // snooping reuses the analysis (Problem::pattern_only): read there.
-        on_pattern = true;
-        for (std::size_t a = 0; on_pattern && a < nu; ++a) {
-          for (std::size_t b = a; on_pattern && b < nu; ++b) {
-            const auto z = f.inverse_on_pattern(r.unknowns[a], r.unknowns[b]);
-            if (z) q(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = q(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(a)) = *z;
-            on_pattern = z.has_value();
-          }
-        }
+        on_pattern = f.inverse_block(r.unknowns.data(), nu, q.data());
         if (!on_pattern && defer_left_out) {
           deferred[slot] = 1;
           return;
@@ -1353,11 +1346,8 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         }
         q = (0.5 * (q + q.transpose())).eval();
       }
-      for (std::size_t a = 0; in && a < nu; ++a) {
-        for (std::size_t b = a; b < nu; ++b) {
-          q(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = q(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(a)) =
-              f.inverse(r.unknowns[a], r.unknowns[b]);
-        }
+      if (in && !f.inverse_block(r.unknowns.data(), nu, q.data())) {
+        throw std::logic_error("adjust_network: a measurement's unknowns are off the factor's pattern");
       }
       const Eigen::MatrixXd aqa = r.a * q * r.a.transpose();
       const Eigen::MatrixXd qv = in ? Eigen::MatrixXd(Eigen::MatrixXd::Identity(k, k) - aqa)

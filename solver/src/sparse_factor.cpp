@@ -158,7 +158,7 @@ struct FreeSparse {
 // spread over a region (about a third fewer flops at 10⁵ stations), AMD on
 // small and chain-like ones. Throws std::bad_alloc when CHOLMOD could not
 // order it.
-std::vector<SuiteSparse_long> quotient_ordering(const cholmod_sparse* a, cholmod_common* c) {
+std::vector<SuiteSparse_long> quotient_ordering(const cholmod_sparse* a, cholmod_common* c, int jobs) {
   const auto n = static_cast<SuiteSparse_long>(a->ncol);
   const auto* ap = static_cast<const SuiteSparse_long*>(a->p);
   const auto* ai = static_cast<const SuiteSparse_long*>(a->i);
@@ -217,28 +217,61 @@ std::vector<SuiteSparse_long> quotient_ordering(const cholmod_sparse* a, cholmod
   }
   qp[groups] = k;
   // Order it both ways (a simplicial analysis: the ordering and the
-  // factor's column counts, no supernodes) and keep the cheaper.
-  const int saved_supernodal = c->supernodal, saved_nmethods = c->nmethods, saved_ordering = c->method[0].ordering;
-  std::vector<SuiteSparse_long> best;
-  best.reserve(static_cast<std::size_t>(groups));  // (assigned below without allocating, a factor in hand)
-  double best_flops = 0.0;
-  for (const int ordering : {CHOLMOD_AMD, CHOLMOD_METIS}) {
-    c->supernodal = CHOLMOD_SIMPLICIAL;
-    c->nmethods = 1;
-    c->method[0].ordering = ordering;
-    cholmod_factor* symbolic = cholmod_l_analyze(q, c);
-    if (!symbolic) continue;  // METIS out of memory: AMD's stands
-    const auto* perm = static_cast<const SuiteSparse_long*>(symbolic->Perm);
-    if (best.empty() || c->fl < best_flops) {
-      best.assign(perm, perm + groups);
-      best_flops = c->fl;
+  // factor's column counts, no supernodes), side by side on two threads
+  // where `jobs` allows (each with a CHOLMOD workspace of its own; only
+  // METIS draws random numbers), and keep the cheaper.
+  struct Ordered {
+    std::vector<SuiteSparse_long> perm;
+    double flops = 0.0;
+    std::exception_ptr error;
+  };
+  const auto order = [&](int ordering, cholmod_sparse* graph, Ordered& out) {
+    try {
+      cholmod_common own{};
+      cholmod_l_start(&own);
+      own.print = 0;
+      own.error_handler = nullptr;
+      own.supernodal = CHOLMOD_SIMPLICIAL;
+      own.nmethods = 1;
+      own.method[0].ordering = ordering;
+      cholmod_factor* symbolic = cholmod_l_analyze(graph, &own);
+      if (symbolic) {  // (else out of memory: the other ordering stands)
+        const auto* perm = static_cast<const SuiteSparse_long*>(symbolic->Perm);
+        try {
+          out.perm.assign(perm, perm + groups);
+          out.flops = own.fl;
+        } catch (...) {
+          out.error = std::current_exception();
+        }
+        cholmod_l_free_factor(&symbolic, &own);
+      }
+      cholmod_l_finish(&own);
+    } catch (...) {
+      out.error = std::current_exception();
     }
-    cholmod_l_free_factor(&symbolic, c);
+  };
+  Ordered amd, metis;
+  std::thread beside;
+  cholmod_sparse* copy = jobs > 1 ? cholmod_l_copy_sparse(q, c) : nullptr;  // the other thread's own
+  const FreeSparse free_copy{copy, c};
+  if (copy) {
+    try {
+      beside = std::thread(order, CHOLMOD_METIS, copy, std::ref(metis));
+    } catch (const std::system_error&) {
+      // no thread to be had: both here, one after the other
+    }
   }
-  c->supernodal = saved_supernodal;
-  c->nmethods = saved_nmethods;
-  c->method[0].ordering = saved_ordering;
+  order(CHOLMOD_AMD, q, amd);
+  if (beside.joinable()) {
+    beside.join();
+  } else {
+    order(CHOLMOD_METIS, q, metis);
+  }
+  if (amd.error) std::rethrow_exception(amd.error);
+  if (metis.error) std::rethrow_exception(metis.error);
   cholmod_l_free_sparse(&q, c);
+  const std::vector<SuiteSparse_long>& best =
+      amd.perm.empty() || (!metis.perm.empty() && metis.flops < amd.flops) ? metis.perm : amd.perm;
   if (best.empty() && groups > 0) throw std::bad_alloc();
   // Each group's unknowns in their own order, the groups in the ordering's.
   std::vector<SuiteSparse_long> perm;
@@ -333,7 +366,7 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
     if (impl->factor) cholmod_l_free_factor(&impl->factor, c);
     impl->pattern_p.assign(ap, ap + n + 1);
     impl->pattern_i.assign(ai, ai + ap[n]);
-    std::vector<SuiteSparse_long> ordering = quotient_ordering(a, c);
+    std::vector<SuiteSparse_long> ordering = quotient_ordering(a, c, jobs);
     c->nmethods = 1;
     c->method[0].ordering = CHOLMOD_GIVEN;
     impl->factor = cholmod_l_analyze_p(a, ordering.data(), nullptr, 0, c);
@@ -685,15 +718,71 @@ double NormalFactor::inverse(std::int64_t a, std::int64_t b) const {
   return m.z[static_cast<std::size_t>(p)];
 }
 
-std::optional<double> NormalFactor::inverse_on_pattern(std::int64_t a, std::int64_t b) const {
+bool NormalFactor::inverse_block(const std::int64_t* u, std::size_t count, double* q) const {
   const Impl& m = *impl_;
-  if (m.mode == Mode::dense) return m.dense_inverse(a, b);
-  if (m.z.empty()) throw std::logic_error("NormalFactor::inverse: select_inverse() was not called on this factor");
-  const std::int64_t pa = m.inverse_permutation[static_cast<std::size_t>(a)];
-  const std::int64_t pb = m.inverse_permutation[static_cast<std::size_t>(b)];
-  const std::int64_t p = pa >= pb ? m.find(pa, pb) : m.find(pb, pa);
-  if (p < 0) return std::nullopt;
-  return m.z[static_cast<std::size_t>(p)];
+  const auto at = [count](std::size_t a, std::size_t b) { return a + b * count; };
+  if (m.mode == Mode::dense) {
+    for (std::size_t a = 0; a < count; ++a) {
+      for (std::size_t b = 0; b < count; ++b) q[at(a, b)] = m.dense_inverse(u[a], u[b]);
+    }
+    return true;
+  }
+  if (m.z.empty()) throw std::logic_error("NormalFactor::inverse_block: select_inverse() was not called on this factor");
+  const auto* super = static_cast<const SuiteSparse_long*>(m.factor->super);
+  const auto* pi = static_cast<const SuiteSparse_long*>(m.factor->pi);
+  const auto* px = static_cast<const SuiteSparse_long*>(m.factor->px);
+  const auto* rows = static_cast<const SuiteSparse_long*>(m.factor->s);
+  // The unknowns in the factor's order: for each as a column, the later
+  // ones are rows below it, found in ascending order from where the last
+  // one was (a station's coordinates are consecutive rows).
+  constexpr std::size_t kSmall = 16;
+  std::int64_t small_permuted[kSmall];
+  std::size_t small_order[kSmall];
+  std::vector<std::int64_t> large_permuted;
+  std::vector<std::size_t> large_order;
+  std::int64_t* permuted = small_permuted;
+  std::size_t* order = small_order;
+  if (count > kSmall) {
+    large_permuted.resize(count);
+    large_order.resize(count);
+    permuted = large_permuted.data();
+    order = large_order.data();
+  }
+  for (std::size_t a = 0; a < count; ++a) {
+    permuted[a] = m.inverse_permutation[static_cast<std::size_t>(u[a])];
+    order[a] = a;
+  }
+  std::sort(order, order + count, [&](std::size_t a, std::size_t b) { return permuted[a] < permuted[b]; });
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t a = order[i];
+    const std::int64_t column = permuted[a];
+    const std::int64_t k = m.super_of[static_cast<std::size_t>(column)];
+    const std::int64_t first = super[k], last = super[k + 1], nsrow = pi[k + 1] - pi[k];
+    const SuiteSparse_long* krows = rows + pi[k];
+    const double* z = m.z.data() + px[k] + (column - first) * nsrow;
+    std::int64_t from = last - first;  // where the search for the next row below starts
+    for (std::size_t j = i; j < count; ++j) {
+      const std::size_t b = order[j];
+      const std::int64_t row = permuted[b];
+      std::int64_t position = -1;
+      if (row < last) {
+        position = row - first;
+      } else {
+        if (from < nsrow && krows[from] == row) {
+          position = from;  // a repeated unknown
+        } else if (from + 1 < nsrow && krows[from + 1] == row) {
+          position = from + 1;  // the next coordinate of a station
+        } else {
+          const SuiteSparse_long* it = std::lower_bound(krows + from, krows + nsrow, static_cast<SuiteSparse_long>(row));
+          if (it == krows + nsrow || *it != row) return false;
+          position = it - krows;
+        }
+        from = position;
+      }
+      q[at(a, b)] = q[at(b, a)] = z[position];
+    }
+  }
+  return true;
 }
 
 std::int64_t NormalFactor::factor_nonzeros() const { return impl_->lnz; }

@@ -91,9 +91,13 @@ class NormalFactor {
   // (N⁻¹)(a, b). Throws std::logic_error for an entry off the pattern (a
   // pair of unknowns that share no measurement): a caller bug.
   double inverse(std::int64_t a, std::int64_t b) const;
-  // The same, or nullopt for an entry off the pattern (the caller solves
-  // for it instead).
-  std::optional<double> inverse_on_pattern(std::int64_t a, std::int64_t b) const;
+
+  // (N⁻¹)(u[a], u[b]) for every pair of the `count` unknowns at `u`, into
+  // `q` (count × count, column-major): the block a measurement's
+  // statistics need, found with one search of the factor's rows per
+  // station pair rather than one per entry. False (q partly written) when
+  // a pair is off the pattern.
+  bool inverse_block(const std::int64_t* u, std::size_t count, double* q) const;
 
   // The factor's size: nonzeros of L, and floating-point work of the
   // factorization (CHOLMOD's flop count; 0 in dense mode).

@@ -180,6 +180,45 @@ TEST(NormalFactor, Issue17_TheFactorizationOnThreadsGivesTheSameBits) {
   }
 }
 
+// The block a measurement's statistics read: every pair of its unknowns,
+// in any order and with repeats, as inverse() gives each entry; false for
+// unknowns that share no measurement (off the pattern). Dense: the inverse.
+TEST(NormalFactor, Issue17_AnInverseBlockIsItsEntries) {
+  const Built b = grid_matrix(20, 16, 29u);
+  const auto n = static_cast<std::int64_t>(b.dense.rows());
+  auto f = NormalFactor::factor(n, b.entries, NormalFactor::Mode::sparse, nullptr);
+  auto dense = NormalFactor::factor(n, b.entries, NormalFactor::Mode::dense, nullptr);
+  ASSERT_TRUE(f && dense);
+  f->select_inverse();
+  dense->select_inverse();
+  const auto station = [](std::int64_t s) { return std::vector<std::int64_t>{3 * s, 3 * s + 1, 3 * s + 2}; };
+  const auto join = [](std::vector<std::int64_t> a, const std::vector<std::int64_t>& c) {
+    a.insert(a.end(), c.begin(), c.end());
+    return a;
+  };
+  const std::vector<std::vector<std::int64_t>> sets{
+      station(0), join(station(5), station(6)), join(station(47), station(26)), join(station(100), station(120)),
+      {3 * 50 + 2, 3 * 71, 3 * 50 + 2, 3 * 71 + 1, 3 * 51},  // out of order, one repeated, three joined stations
+      join(station(221), join(station(200), station(201)))};
+  for (const auto& u : sets) {
+    SCOPED_TRACE(u.size());
+    std::vector<double> q(u.size() * u.size(), std::nan("")), dq = q;
+    ASSERT_TRUE(f->inverse_block(u.data(), u.size(), q.data()));
+    ASSERT_TRUE(dense->inverse_block(u.data(), u.size(), dq.data()));
+    const Eigen::MatrixXd inverse = b.dense.llt().solve(Eigen::MatrixXd::Identity(n, n));
+    for (std::size_t a = 0; a < u.size(); ++a) {
+      for (std::size_t c = 0; c < u.size(); ++c) {
+        EXPECT_EQ(q[a + c * u.size()], f->inverse(u[a], u[c])) << a << ", " << c;
+        EXPECT_NEAR(dq[a + c * u.size()], inverse(u[a], u[c]), kRelative * inverse.cwiseAbs().maxCoeff());
+      }
+    }
+  }
+  // Stations 0 and 319 (opposite corners) share no measurement.
+  const auto far = join(station(0), station(319));
+  std::vector<double> q(far.size() * far.size());
+  EXPECT_FALSE(f->inverse_block(far.data(), far.size(), q.data()));
+}
+
 // A matrix positive definite but for one unknown u (its diagonal lowered
 // below its Schur complement): every pivot before u's, in any order, is a
 // leading minor without u, so the factorization fails at u and nowhere
