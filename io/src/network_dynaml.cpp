@@ -864,10 +864,11 @@ bool read_dynaml_in_parts(std::string_view text, std::string_view source, geodes
     }
   };
   std::vector<std::thread> pool;
+  pool.reserve(parts);
   for (std::size_t k = 1; k < parts; ++k) {
     try {
       pool.emplace_back(read_part, k);
-    } catch (const std::system_error&) {
+    } catch (...) {  // std::system_error, std::bad_alloc: never unwind past running threads
       read_part(k);
     }
   }

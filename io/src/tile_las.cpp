@@ -577,10 +577,11 @@ void LasTile::pass(PassKind kind, LasWriter* writer, const std::array<double, 3>
     }
   };
   std::vector<std::thread> pool;
+  pool.reserve(threads);
   for (unsigned t = 1; t < threads; ++t) {
     try {
       pool.emplace_back(worker);
-    } catch (const std::system_error&) {
+    } catch (...) {  // std::system_error, std::bad_alloc: never unwind past running threads
       break;  // a thread that cannot start leaves its units to the others
     }
   }

@@ -8,7 +8,9 @@
 //
 // Private to solver.
 
+#include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace geoanchor::solver {
 
@@ -41,6 +43,27 @@ struct DenseKernels {
   // C −= Aᵀ B: C m × n (ldc), A k × m (lda), B k × n (ldb).
   void (*subtract_transposed_product)(const double* a, std::int64_t lda, const double* b, std::int64_t ldb, std::int64_t m,
                                       std::int64_t n, std::int64_t k, double* c, std::int64_t ldc);
+};
+
+// Work space for the kernels, 64-byte aligned. Eigen's vector loops peel
+// the elements before the first aligned address off as scalar operations;
+// with FMA in the vector part and none in the scalar one the two round
+// differently, so a block's numbers would depend on where a thread's work
+// space happens to start. Aligned, they depend on the block's shape alone.
+class KernelSpace {
+ public:
+  static constexpr std::size_t kAlignBytes = 64;
+  // `count` doubles (the contents are not kept when it grows).
+  double* take(std::size_t count) {
+    constexpr std::size_t pad = kAlignBytes / sizeof(double);
+    if (storage_.size() < count + pad) storage_.assign(count + pad, 0.0);
+    const auto address = reinterpret_cast<std::uintptr_t>(storage_.data());
+    const std::size_t skip = (kAlignBytes - address % kAlignBytes) % kAlignBytes / sizeof(double);
+    return storage_.data() + skip;
+  }
+
+ private:
+  std::vector<double> storage_;
 };
 
 // The AVX2+FMA set where the processor has both, else the baseline's.

@@ -257,7 +257,7 @@ std::vector<SuiteSparse_long> quotient_ordering(const cholmod_sparse* a, cholmod
   if (copy) {
     try {
       beside = std::thread(order, CHOLMOD_METIS, copy, std::ref(metis));
-    } catch (const std::system_error&) {
+    } catch (...) {  // std::system_error, std::bad_alloc
       // no thread to be had: both here, one after the other
     }
   }
@@ -565,13 +565,21 @@ void NormalFactor::select_inverse(int jobs) {
     max_c = std::max<std::int64_t>(max_c, super[k + 1] - super[k]);
     max_r = std::max<std::int64_t>(max_r, (pi[k + 1] - pi[k]) - (super[k + 1] - super[k]));
   }
+  // (Aligned: a block's numbers are the same whichever thread's space it is
+  // computed in, dense_kernels.hpp.)
   struct Workspace {
-    std::vector<double> zrr, u, zrj, linv;
+    KernelSpace zrr_space, u_space, zrj_space, linv_space;
+    double *zrr = nullptr, *u = nullptr, *zrj = nullptr, *linv = nullptr;
   };
   const auto workspace = [&] {
-    return Workspace{std::vector<double>(static_cast<std::size_t>(max_r * max_r)), std::vector<double>(static_cast<std::size_t>(max_r * max_c)),
-                     std::vector<double>(static_cast<std::size_t>(max_r * max_c)), std::vector<double>(static_cast<std::size_t>(max_c * max_c))};
+    Workspace w;
+    w.zrr = w.zrr_space.take(static_cast<std::size_t>(max_r * max_r));
+    w.u = w.u_space.take(static_cast<std::size_t>(max_r * max_c));
+    w.zrj = w.zrj_space.take(static_cast<std::size_t>(max_r * max_c));
+    w.linv = w.linv_space.take(static_cast<std::size_t>(max_c * max_c));
+    return w;
   };
+
   // A supernode's work is cut into slices whose sizes depend on its shape
   // alone (kSliceColumns of U and Z_RJ, kSliceRows of U, kSliceGather
   // columns of Z_RR), so that its numbers are the same whether the slices
@@ -581,7 +589,7 @@ void NormalFactor::select_inverse(int jobs) {
   const auto process = [&](std::int64_t k, Workspace& w, int jobs_here) {
     const std::int64_t nscol = super[k + 1] - super[k], nsrow = pi[k + 1] - pi[k], r = nsrow - nscol;
     const SuiteSparse_long* below = rows + pi[k] + nscol;  // R, ascending
-    Map zrr(w.zrr.data(), r, r), u(w.u.data(), r, nscol), zrj(w.zrj.data(), r, nscol), linv(w.linv.data(), nscol, nscol);
+    Map zrr(w.zrr, r, r), u(w.u, r, nscol), zrj(w.zrj, r, nscol), linv(w.linv, nscol, nscol);
     const auto slices = [&](std::int64_t count, std::int64_t size, const auto& work) {
       for_chunks(static_cast<std::size_t>(count), static_cast<std::size_t>(size), jobs_here,
                  [&](std::size_t b, std::size_t e) { work(static_cast<std::int64_t>(b), static_cast<std::int64_t>(e - b)); });
@@ -692,10 +700,11 @@ void NormalFactor::select_inverse(int jobs) {
   std::vector<Workspace> spaces;
   spaces.reserve(static_cast<std::size_t>(threads));
   for (int t = 1; t < threads && static_cast<std::size_t>(t) < pending.size(); ++t) spaces.push_back(workspace());
+  pool.reserve(spaces.size());
   for (std::size_t t = 0; t < spaces.size(); ++t) {
     try {
       pool.emplace_back(run, static_cast<int>(t) + 1, std::ref(spaces[t]));
-    } catch (const std::system_error&) {
+    } catch (...) {  // std::system_error, std::bad_alloc: never unwind past running threads
       break;  // no more threads to be had: those started and this one share the subtrees
     }
   }
@@ -783,6 +792,15 @@ bool NormalFactor::inverse_block(const std::int64_t* u, std::size_t count, doubl
     }
   }
   return true;
+}
+
+std::int64_t NormalFactor::elimination_step(std::int64_t unknown) const {
+  const Impl& m = *impl_;
+  if (m.mode == Mode::dense) return unknown;
+  const auto* perm = static_cast<const SuiteSparse_long*>(m.factor->Perm);
+  const auto* found = std::find(perm, perm + m.n, static_cast<SuiteSparse_long>(unknown));
+  if (found == perm + m.n) throw std::logic_error("NormalFactor::elimination_step: no unknown " + std::to_string(unknown));
+  return found - perm;
 }
 
 std::int64_t NormalFactor::factor_nonzeros() const { return impl_->lnz; }

@@ -99,6 +99,10 @@ class NormalFactor {
   // a pair is off the pattern.
   bool inverse_block(const std::int64_t* u, std::size_t count, double* q) const;
 
+  // Where `unknown` comes in the factor's elimination order (the tests' view
+  // of the ordering; dense: the unknown itself).
+  std::int64_t elimination_step(std::int64_t unknown) const;
+
   // The factor's size: nonzeros of L, and floating-point work of the
   // factorization (CHOLMOD's flop count; 0 in dense mode).
   std::int64_t factor_nonzeros() const;

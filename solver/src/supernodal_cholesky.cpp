@@ -93,7 +93,7 @@ std::int64_t factor_supernodal(const SupernodalLayout& l, const SupernodalTree& 
     // Its columns of N, less the updates from below, a slice at a time.
     const std::int64_t slices = (nscol + kSliceColumns - 1) / kSliceColumns;
     for_chunks(at(slices), 1, jobs_here, [&](std::size_t first, std::size_t last) {
-      thread_local std::vector<double> product;
+      thread_local KernelSpace space;  // (aligned: the same bits on any thread)
       for (auto slice = static_cast<std::int64_t>(first); slice < static_cast<std::int64_t>(last); ++slice) {
         const std::int64_t c0 = slice * kSliceColumns, c1 = std::min(nscol, c0 + kSliceColumns);
         std::fill(ls + c0 * nsrow, ls + c1 * nsrow, 0.0);
@@ -109,13 +109,13 @@ std::int64_t factor_supernodal(const SupernodalLayout& l, const SupernodalTree& 
           const std::int64_t q2 = std::lower_bound(drows + q1, drows + dnsrow, k1 + c1) - drows;
           if (q1 == q2) continue;
           const std::int64_t m1 = q2 - q1, m2 = dnsrow - q1;
-          if (product.size() < at(m1 * m2)) product.resize(at(m1 * m2));
-          kernels.outer_product(lx + l.px[d] + q1, dnsrow, m2, m1, dnscol, product.data());
+          double* product = space.take(at(m1 * m2));
+          kernels.outer_product(lx + l.px[d] + q1, dnsrow, m2, m1, dnscol, product);
           // Column jj of the product is s's column drows[q1 + jj]; its rows
           // from jj on are on or below the diagonal.
           for (std::int64_t jj = 0; jj < m1; ++jj) {
             double* column = ls + (drows[q1 + jj] - k1) * nsrow;
-            const double* from = product.data() + jj * m2;
+            const double* from = product + jj * m2;
             for (std::int64_t ii = jj; ii < m2; ++ii) column[position[drows[q1 + ii]]] -= from[ii];
           }
         }
@@ -212,11 +212,12 @@ std::int64_t factor_supernodal(const SupernodalLayout& l, const SupernodalTree& 
     }
   };
   std::vector<std::thread> pool;
+  pool.reserve(at(threads));
   for (int t = 1; t < threads && at(t) < pending.size(); ++t) {
     try {
       pool.emplace_back(run, t);
-    } catch (const std::system_error&) {
-      break;  // no more threads to be had: those started and this one share the subtrees
+    } catch (...) {
+      break;  // no more threads to be had (std::system_error, std::bad_alloc): those started and this one share the subtrees
     }
   }
   run(0);

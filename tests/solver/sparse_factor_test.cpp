@@ -243,6 +243,30 @@ TEST(NormalFactor, Issue17_TheFailedColumnIsTheUnknownThatBreaksIt) {
   }
 }
 
+// Two such unknowns far apart (opposite corners of the grid: different
+// subtrees of the elimination tree, one on each thread): the factorization
+// fails at the one eliminated first — the order read from a factor of the
+// same pattern — on one thread, two or three.
+TEST(NormalFactor, Issue17_OfTwoUnknownsThatBreakItTheFirstEliminatedIsNamed) {
+  const Built b = grid_matrix(30, 24, 31u);
+  const auto n = static_cast<std::int64_t>(b.dense.rows());
+  auto good = NormalFactor::factor(n, b.entries, NormalFactor::Mode::sparse, nullptr);
+  ASSERT_TRUE(good);
+  for (const auto& [u1, u2] : {std::pair<std::int64_t, std::int64_t>{1, n - 2}, std::pair<std::int64_t, std::int64_t>{3 * 29, 3 * (30 * 23) + 2},
+                               std::pair<std::int64_t, std::int64_t>{3 * 375, 4}}) {
+    const std::int64_t expected = good->elimination_step(u1) < good->elimination_step(u2) ? u1 : u2;
+    Built bad = b;
+    for (auto& e : bad.entries) {
+      if ((e.row == u1 && e.col == u1) || (e.row == u2 && e.col == u2)) e.value = -1.0;
+    }
+    for (const int jobs : {1, 2, 3}) {
+      std::int64_t failed = -1;
+      EXPECT_FALSE(NormalFactor::factor(n, bad.entries, NormalFactor::Mode::sparse, &failed, std::nullopt, 0, jobs));
+      EXPECT_EQ(failed, expected) << u1 << " and " << u2 << ", " << jobs << " threads";
+    }
+  }
+}
+
 // Issue 17 point 5: rows taken out of a factored matrix (data snooping's
 // removed measurements) by Sherman–Morrison–Woodbury, against the dense
 // inverse of the matrix without them: the selected inverse on the whole

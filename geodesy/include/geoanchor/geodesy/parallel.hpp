@@ -40,10 +40,11 @@ void for_chunks(std::size_t count, std::size_t chunk, int jobs, const Work& work
     }
   };
   std::vector<std::thread> pool;
+  pool.reserve(threads);
   for (std::size_t t = 1; t < threads; ++t) {
     try {
       pool.emplace_back(run);
-    } catch (const std::system_error&) {
+    } catch (...) {  // std::system_error, std::bad_alloc: never unwind past running threads
       break;  // no more threads to be had: those started and this one share the chunks
     }
   }
