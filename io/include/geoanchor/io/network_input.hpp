@@ -37,10 +37,11 @@ struct NetworkReadOptions {
   // without an epoch: each file's REF_EPOCH is theirs. Given with no SINEX
   // input, read_network refuses it (usage).
   std::optional<geodesy::Frame> sinex_frame;
-  // A DynaML file from this size on (bytes) is parsed in parts on the
-  // machine's cores, with the same result as in one piece (0: never). Not
-  // with a geoid, whose PROJ grid is for one thread.
-  std::size_t dynaml_part_bytes = std::size_t{32} << 20;
+  // A DynaML file from twice this size on (bytes) is parsed in parts of at
+  // least this size on the machine's cores, with the same result as in one
+  // piece (0: never). Not with a geoid, whose PROJ grid is for one thread.
+  // (8 MB: the stations file of 10⁵ stations, 30 MB, is read in parts too.)
+  std::size_t dynaml_part_bytes = std::size_t{8} << 20;
 };
 
 // Reads `inputs` (files; "-" is standard input, read once) into one
