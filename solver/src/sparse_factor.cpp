@@ -43,8 +43,9 @@ struct NormalFactor::Impl {
   // pi[k+1]) (its own columns first, then the rows below, ascending), and
   // `z` holds Z at those rows and columns, column-major from px[k] as L->x
   // holds L (the diagonal block whole).
-  std::vector<std::int64_t> inverse_permutation, super_of;
-  // The supernodal elimination tree of the analysis.
+  std::vector<std::int64_t> inverse_permutation;
+  // The supernodal elimination tree of the analysis (each unknown's
+  // supernode, each supernode's parent).
   std::optional<SupernodalTree> tree;
   // The pattern the analysis was made for (column pointers, row indices).
   std::vector<SuiteSparse_long> pattern_p, pattern_i;
@@ -74,7 +75,7 @@ struct NormalFactor::Impl {
     const auto* pi = static_cast<const SuiteSparse_long*>(factor->pi);
     const auto* px = static_cast<const SuiteSparse_long*>(factor->px);
     const auto* rows = static_cast<const SuiteSparse_long*>(factor->s);
-    const std::int64_t k = super_of[static_cast<std::size_t>(column)];
+    const std::int64_t k = tree->super_of[static_cast<std::size_t>(column)];
     const std::int64_t nscol = super[k + 1] - super[k], nsrow = pi[k + 1] - pi[k];
     const std::int64_t j = column - super[k];
     std::int64_t i = -1;
@@ -301,7 +302,6 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
   if (reuse) {  // what the last factor gave no longer holds
     impl->z.clear();
     impl->updates.clear();
-    impl->super_of.clear();
     impl->inverse_permutation.clear();
   }
   impl->mode = mode;
@@ -541,9 +541,9 @@ void NormalFactor::select_inverse(int jobs) {
   const auto* perm = static_cast<const SuiteSparse_long*>(f->Perm);
   m.inverse_permutation.assign(n, 0);
   for (std::size_t k = 0; k < n; ++k) m.inverse_permutation[static_cast<std::size_t>(perm[k])] = static_cast<std::int64_t>(k);
-  m.super_of.assign(n, 0);
+  const std::vector<std::int64_t>& super_of = m.tree->super_of;
+  const std::vector<std::int64_t>& parent = m.tree->parent;
   for (std::int64_t k = 0; k < nsuper; ++k) {
-    for (SuiteSparse_long j = super[k]; j < super[k + 1]; ++j) m.super_of[static_cast<std::size_t>(j)] = k;
     for (SuiteSparse_long p = pi[k] + (super[k + 1] - super[k]) + 1; p < pi[k + 1]; ++p) {
       if (rows[p - 1] >= rows[p]) throw std::logic_error("selected inversion: a supernode's rows are not ascending");
     }
@@ -599,7 +599,7 @@ void NormalFactor::select_inverse(int jobs) {
     slices(r, kSliceGather, [&](std::int64_t first, std::int64_t count) {
       for (std::int64_t a = first; a < first + count; ++a) {
         const std::int64_t c = below[a];
-        const std::int64_t t = m.super_of[static_cast<std::size_t>(c)];
+        const std::int64_t t = super_of[static_cast<std::size_t>(c)];
         const std::int64_t t_nsrow = pi[t + 1] - pi[t];
         const SuiteSparse_long* t_rows = rows + pi[t];
         const double* t_z = m.z.data() + px[t] + (c - super[t]) * t_nsrow;
@@ -640,17 +640,13 @@ void NormalFactor::select_inverse(int jobs) {
   // before children) until there are enough to share out; each thread then
   // does whole subtrees, each from its root down. Every supernode's numbers
   // are the same whichever thread computes them.
-  std::vector<std::int64_t> parent(static_cast<std::size_t>(nsuper), -1);
   std::vector<std::vector<std::int64_t>> children(static_cast<std::size_t>(nsuper));
   std::vector<double> cost(static_cast<std::size_t>(nsuper), 0.0);
   for (std::int64_t k = 0; k < nsuper; ++k) {
     const std::int64_t nscol = super[k + 1] - super[k], r = (pi[k + 1] - pi[k]) - nscol;
     cost[static_cast<std::size_t>(k)] += static_cast<double>(nscol) * static_cast<double>((r + nscol) * (r + nscol));
-    if (r > 0) {
-      const std::int64_t up = m.super_of[static_cast<std::size_t>(rows[pi[k] + nscol])];
-      parent[static_cast<std::size_t>(k)] = up;
-      children[static_cast<std::size_t>(up)].push_back(k);
-    }
+    const std::int64_t up = parent[static_cast<std::size_t>(k)];
+    if (up >= 0) children[static_cast<std::size_t>(up)].push_back(k);
   }
   std::vector<double> subtree = cost;  // children before parents: a child's index is lower
   for (std::int64_t k = 0; k < nsuper; ++k) {
@@ -765,7 +761,7 @@ bool NormalFactor::inverse_block(const std::int64_t* u, std::size_t count, doubl
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t a = order[i];
     const std::int64_t column = permuted[a];
-    const std::int64_t k = m.super_of[static_cast<std::size_t>(column)];
+    const std::int64_t k = m.tree->super_of[static_cast<std::size_t>(column)];
     const std::int64_t first = super[k], last = super[k + 1], nsrow = pi[k + 1] - pi[k];
     const SuiteSparse_long* krows = rows + pi[k];
     const double* z = m.z.data() + px[k] + (column - first) * nsrow;

@@ -15,6 +15,7 @@
 #include <random>
 #include <tuple>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "sparse_factor.hpp"
@@ -30,26 +31,24 @@ struct Built {
   Eigen::MatrixXd dense;
 };
 
-// A network of `stations` (3 unknowns each) on a line, each joined to the
-// next `reach` stations by a random positive semidefinite 6×6 block, plus
+// `stations` stations (3 unknowns each), each pair in `joins` joined by a
+// random positive semidefinite 6×6 block (drawn in the joins' order), plus
 // a small diagonal: positive definite.
-Built network_matrix(int stations, int reach, unsigned seed) {
+Built joined_matrix(int stations, const std::vector<std::pair<int, int>>& joins, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> unit(0.0, 1.0);
   const int n = 3 * stations;
   Built b;
   b.dense = Eigen::MatrixXd::Zero(n, n);
-  for (int s = 0; s < stations; ++s) {
-    for (int t = s + 1; t <= s + reach && t < stations; ++t) {
-      Eigen::MatrixXd a(3, 6);
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 6; ++j) a(i, j) = unit(rng);
-      }
-      const Eigen::MatrixXd block = a.transpose() * a;
-      const int at[2] = {3 * s, 3 * t};
-      for (int p = 0; p < 2; ++p) {
-        for (int q = 0; q < 2; ++q) b.dense.block(at[p], at[q], 3, 3) += block.block(3 * p, 3 * q, 3, 3);
-      }
+  for (const auto& [s, t] : joins) {
+    Eigen::MatrixXd a(3, 6);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 6; ++j) a(i, j) = unit(rng);
+    }
+    const Eigen::MatrixXd block = a.transpose() * a;
+    const int at[2] = {3 * s, 3 * t};
+    for (int p = 0; p < 2; ++p) {
+      for (int q = 0; q < 2; ++q) b.dense.block(at[p], at[q], 3, 3) += block.block(3 * p, 3 * q, 3, 3);
     }
   }
   b.dense += 0.1 * Eigen::MatrixXd::Identity(n, n);
@@ -61,6 +60,15 @@ Built network_matrix(int stations, int reach, unsigned seed) {
   return b;
 }
 
+// A network of `stations` on a line, each joined to the next `reach`.
+Built network_matrix(int stations, int reach, unsigned seed) {
+  std::vector<std::pair<int, int>> joins;
+  for (int s = 0; s < stations; ++s) {
+    for (int t = s + 1; t <= s + reach && t < stations; ++t) joins.emplace_back(s, t);
+  }
+  return joined_matrix(stations, joins, seed);
+}
+
 // A network of width × height stations on a grid, each joined to its right,
 // lower and lower-right neighbours: its nested-dissection ordering has
 // separators of some hundred unknowns, supernodes wide enough to be cut in
@@ -69,40 +77,19 @@ Built network_matrix(int stations, int reach, unsigned seed) {
 // ordered last, the rows below every supernode, and a supernode of their own
 // wider than a panel.
 Built grid_matrix(int width, int height, unsigned seed, int hubs = 0) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> unit(0.0, 1.0);
-  const int n = 3 * (width * height + hubs);
-  Built b;
-  b.dense = Eigen::MatrixXd::Zero(n, n);
-  const auto join = [&](int s, int t) {
-    Eigen::MatrixXd a(3, 6);
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 6; ++j) a(i, j) = unit(rng);
-    }
-    const Eigen::MatrixXd block = a.transpose() * a;
-    const int at[2] = {3 * s, 3 * t};
-    for (int p = 0; p < 2; ++p) {
-      for (int q = 0; q < 2; ++q) b.dense.block(at[p], at[q], 3, 3) += block.block(3 * p, 3 * q, 3, 3);
-    }
-  };
+  std::vector<std::pair<int, int>> joins;
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       const int s = y * width + x;
-      if (x + 1 < width) join(s, s + 1);
-      if (y + 1 < height) join(s, s + width);
-      if (x + 1 < width && y + 1 < height) join(s, s + width + 1);
+      if (x + 1 < width) joins.emplace_back(s, s + 1);
+      if (y + 1 < height) joins.emplace_back(s, s + width);
+      if (x + 1 < width && y + 1 < height) joins.emplace_back(s, s + width + 1);
     }
   }
   for (int h = width * height; h < width * height + hubs; ++h) {
-    for (int s = 0; s < h; ++s) join(s, h);
+    for (int s = 0; s < h; ++s) joins.emplace_back(s, h);
   }
-  b.dense += 0.1 * Eigen::MatrixXd::Identity(n, n);
-  for (int c = 0; c < n; ++c) {
-    for (int r = 0; r <= c; ++r) {
-      if (b.dense(r, c) != 0.0) b.entries.push_back({r, c, b.dense(r, c)});
-    }
-  }
-  return b;
+  return joined_matrix(width * height + hubs, joins, seed);
 }
 
 // The worst difference between the factor's inverse on the matrix's pattern
