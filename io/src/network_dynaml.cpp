@@ -421,8 +421,8 @@ class Reader final : public XmlHandler {
     if (type == "XYZ") {
       position = {number(s.coord, Tag::XAxis, s.line, what), number(s.coord, Tag::YAxis, s.line, what), height};
     } else if (type == "LLH" || type == "LLh") {
-      lat = packed_dms_to_rad(text(s.coord, Tag::XAxis), where(s.line) + ": " + what + " <XAxis> (latitude)");
-      lon = packed_dms_to_rad(text(s.coord, Tag::YAxis), where(s.line) + ": " + what + " <YAxis> (longitude)");
+      lat = packed_dms_to_rad(text(s.coord, Tag::XAxis), where(s.line) + ": " + what + " <XAxis> (latitude)", net_.warnings);
+      lon = packed_dms_to_rad(text(s.coord, Tag::YAxis), where(s.line) + ": " + what + " <YAxis> (longitude)", net_.warnings);
       if (!(std::fabs(lat) <= std::numbers::pi / 2.0)) {
         fail(s.line, what + ": latitude <XAxis> " + text(s.coord, Tag::XAxis) + " is not within ±90°");
       }
@@ -547,8 +547,13 @@ class Reader final : public XmlHandler {
       x.value = Eigen::VectorXd::Constant(1, value);
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sigma * sigma);
     };
-    auto angle = [&](const Fields& f, std::size_t at) {
-      return packed_dms_to_rad(text(f, Tag::Value), where(at) + ": " + what + " <Value>");
+    // A packed sexagesimal <Value> of `kind`, within its range.
+    auto angle = [&](MeasurementKind kind, const Fields& f, std::size_t at) {
+      const std::string& written = text(f, Tag::Value);
+      const std::string at_value = where(at) + ": " + what + " <Value>";
+      const double v = packed_dms_to_rad(written, at_value, net_.warnings);
+      check_angle_range(kind, v, written, AngleUnit::packed_dms, at_value);
+      return v;
     };
     auto angle_sigma = [&](const Fields& f, std::size_t at) {
       return positive_sigma(number(f, Tag::StdDev, at, what), at, what) * kArcsec;
@@ -604,8 +609,12 @@ class Reader final : public XmlHandler {
           }
           // LLH: latitude and longitude (packed), orthometric height; the
           // covariance in (latitude rad, longitude rad, height m).
-          const double lat = packed_dms_to_rad(text(it.fields, Tag::X), where(it.line) + ": " + what + " <X> (latitude)");
-          const double lon = packed_dms_to_rad(text(it.fields, Tag::Y), where(it.line) + ": " + what + " <Y> (longitude)");
+          const std::string at_lat = where(it.line) + ": " + what + " <X> (latitude)";
+          const std::string at_lon = where(it.line) + ": " + what + " <Y> (longitude)";
+          const double lat = packed_dms_to_rad(text(it.fields, Tag::X), at_lat, net_.warnings);
+          const double lon = packed_dms_to_rad(text(it.fields, Tag::Y), at_lon, net_.warnings);
+          check_angle_range(MeasurementKind::geodetic_latitude, lat, text(it.fields, Tag::X), AngleUnit::packed_dms, at_lat);
+          check_angle_range(MeasurementKind::geodetic_longitude, lon, text(it.fields, Tag::Y), AngleUnit::packed_dms, at_lon);
           const auto n_m = undulation(lat, lon, it.line);
           if (!n_m) fail(it.line, what + ": a point cluster of orthometric heights (Coords LLH) needs the geoid: give --geoid");
           const double h = number(it.fields, Tag::Z, it.line, what) + *n_m;
@@ -638,7 +647,8 @@ class Reader final : public XmlHandler {
         break;
       }
       case 'A': {
-        scalar(MeasurementKind::horizontal_angle, angle(m.fields, m.line), angle_sigma(m.fields, m.line));
+        scalar(MeasurementKind::horizontal_angle, angle(MeasurementKind::horizontal_angle, m.fields, m.line),
+               angle_sigma(m.fields, m.line));
         x.stations = {station(first, "First"), station(second, "Second"), station(text(m.fields, Tag::Third), "Third")};
         break;
       }
@@ -646,14 +656,14 @@ class Reader final : public XmlHandler {
       case 'K': {
         // K, an astronomic azimuth, is read as geodetic: the deflections of
         // the vertical are taken as zero (docs/commands/adjust.md).
-        scalar(MeasurementKind::azimuth, angle(m.fields, m.line), angle_sigma(m.fields, m.line));
+        scalar(MeasurementKind::azimuth, angle(MeasurementKind::azimuth, m.fields, m.line), angle_sigma(m.fields, m.line));
         x.stations = {station(first, "First"), station(second, "Second")};
         break;
       }
       case 'V':
       case 'Z': {
-        scalar(type[0] == 'V' ? MeasurementKind::zenith_angle : MeasurementKind::vertical_angle, angle(m.fields, m.line),
-               angle_sigma(m.fields, m.line));
+        const MeasurementKind kind = type[0] == 'V' ? MeasurementKind::zenith_angle : MeasurementKind::vertical_angle;
+        scalar(kind, angle(kind, m.fields, m.line), angle_sigma(m.fields, m.line));
         x.stations = {station(first, "First"), station(second, "Second")};
         heights();
         break;
@@ -675,8 +685,9 @@ class Reader final : public XmlHandler {
       case 'I':
       case 'J': {
         // I and J, astronomic, are read as geodetic (deflections zero).
-        scalar(type[0] == 'P' || type[0] == 'I' ? MeasurementKind::geodetic_latitude : MeasurementKind::geodetic_longitude,
-               angle(m.fields, m.line), angle_sigma(m.fields, m.line));
+        const MeasurementKind kind =
+            type[0] == 'P' || type[0] == 'I' ? MeasurementKind::geodetic_latitude : MeasurementKind::geodetic_longitude;
+        scalar(kind, angle(kind, m.fields, m.line), angle_sigma(m.fields, m.line));
         x.stations = {station(first, "First")};
         break;
       }
@@ -691,7 +702,7 @@ class Reader final : public XmlHandler {
         ro.kind = MeasurementKind::direction;
         ro.stations = {at, station(second, "Second")};
         const double s = angle_sigma(m.fields, m.line);
-        ro.value = Eigen::VectorXd::Constant(1, angle(m.fields, m.line));
+        ro.value = Eigen::VectorXd::Constant(1, angle(MeasurementKind::direction, m.fields, m.line));
         ro.covariance = Eigen::MatrixXd::Constant(1, 1, s * s);
         ro.set = set;
         ro.ignore = ignored;
@@ -705,7 +716,7 @@ class Reader final : public XmlHandler {
           dir.source = where(d.line);
           dir.stations = {at, station(text(d.fields, Tag::Target), "Target")};
           const double sd = angle_sigma(d.fields, d.line);
-          dir.value = Eigen::VectorXd::Constant(1, angle(d.fields, d.line));
+          dir.value = Eigen::VectorXd::Constant(1, angle(MeasurementKind::direction, d.fields, d.line));
           dir.covariance = Eigen::MatrixXd::Constant(1, 1, sd * sd);
           dir.ignore = ignored || !text(d.fields, Tag::Ignore).empty();
           net_.measurements.push_back(dir);

@@ -133,19 +133,20 @@ class Reader final : public XmlHandler {
     return trim(it->second);
   }
 
-  // An angle's value in radians and the SI size of one unit of its
-  // standard deviation: gon and cc, or d-m-s text and arc-seconds.
-  std::pair<double, double> angle(const std::string& element, const std::string& text) const {
+  // An angle of `kind` in radians, within the kind's range, and the SI size
+  // of one unit of its standard deviation: gon and cc, or d-m-s text and
+  // arc-seconds (seconds of 60 add a warning).
+  std::pair<double, double> angle(const std::string& element, MeasurementKind kind, const std::string& text) const {
     const std::string t = trim(text);
+    const std::string at = where(line()) + ": <" + element + "> val";
     // d-m-s text: a '-' between digits past the sign (not an exponent's).
     bool dms = false;
     for (std::size_t i = 1; i + 1 < t.size(); ++i) {
       dms = dms || (t[i] == '-' && std::isdigit(static_cast<unsigned char>(t[i - 1])) && std::isdigit(static_cast<unsigned char>(t[i + 1])));
     }
-    if (dms) {
-      return {dms_text_to_rad(t, where(line()) + ": <" + element + "> val"), kArcsec};
-    }
-    return {number(element, "val", t) * kGon, kCc};
+    const double value = dms ? dms_text_to_rad(t, at, net_.warnings) : number(element, "val", t) * kGon;
+    check_angle_range(kind, value, t, dms ? AngleUnit::dms_text : AngleUnit::gon, at);
+    return {value, dms ? kArcsec : kCc};
   }
 
   // The standard deviation from `stdev` or the group's default, in units of `unit`.
@@ -406,12 +407,15 @@ class Reader final : public XmlHandler {
       p.sigma = stdev(name, a, fallback, kMm);
       if (name == "s-distance") three_d_.push_back({p.m.stations, line()});
     } else {
-      const auto [value, unit] = angle(name, a.at("val"));
+      p.m.kind = name == "direction" ? MeasurementKind::direction
+                 : name == "angle"   ? MeasurementKind::horizontal_angle
+                 : name == "z-angle" ? MeasurementKind::zenith_angle
+                                     : MeasurementKind::azimuth;
+      const auto [value, unit] = angle(name, p.m.kind, a.at("val"));
       p.m.value = Eigen::VectorXd::Constant(1, value);
       p.sigma_unit = unit;
       std::optional<double> fallback;
       if (name == "direction") {
-        p.m.kind = MeasurementKind::direction;
         fallback = defaults_.direction;
         if (!set_) {
           set_ = net_.direction_sets.size();
@@ -419,19 +423,11 @@ class Reader final : public XmlHandler {
         }
         p.m.set = set_;
       } else if (name == "angle") {
-        p.m.kind = MeasurementKind::horizontal_angle;
         fallback = defaults_.angle;
       } else if (name == "z-angle") {
-        // From the zenith down to the nadir: 0–200 gon (0–180°); anything else
-        // is no zenith angle (a vertical angle, or a face-II reading unreduced).
-        if (!(value >= 0.0 && value <= std::numbers::pi)) {
-          fail(line(), "<z-angle> val=\"" + a.at("val") + "\": a zenith angle lies in 0–200 gon (0–180°)");
-        }
-        p.m.kind = MeasurementKind::zenith_angle;
         fallback = defaults_.zenith;
         three_d_.push_back({p.m.stations, line()});
       } else {
-        p.m.kind = MeasurementKind::azimuth;
         fallback = defaults_.azimuth;
       }
       p.sigma = stdev(name, a, fallback, unit);

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iostream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "geoanchor/geodesy/error.hpp"
@@ -78,13 +79,30 @@ void NetworkBuilder::finish() const {
 
 namespace {
 
-// Degrees, minutes and seconds to radians, checked.
+// Minutes as a sexagesimal field: two digits at least.
+std::string two_digits(double v) { return (v < 10.0 ? "0" : "") + format_shortest(v); }
+
+// Degrees, minutes and seconds to radians, checked; seconds of exactly 60
+// carried into the minutes (and degrees) with a warning.
 double sexagesimal(bool negative, double degrees, double minutes, double seconds, const std::string& text,
-                   const std::string& where) {
-  if (!(minutes >= 0.0 && minutes < 60.0 && seconds >= 0.0 && seconds < 60.0)) {
+                   const std::string& where, std::vector<std::string>& warnings) {
+  if (!(minutes >= 0.0 && minutes < 60.0)) {
     throw Error(ErrorKind::input, "E_ANGLE",
-                where + ": '" + text + "': minutes " + format_shortest(minutes) + " and seconds " + format_shortest(seconds) +
+                where + ": '" + text + "': minutes " + format_shortest(minutes) +
                     " must be below 60 (is it in decimal degrees, or another unit?)");
+  }
+  if (!(seconds >= 0.0 && seconds <= 60.0)) {
+    throw Error(ErrorKind::input, "E_ANGLE",
+                where + ": '" + text + "': seconds " + format_shortest(seconds) +
+                    " must be below 60, or exactly 60 (read as the next minute); is it in decimal degrees, or another unit?");
+  }
+  if (seconds == 60.0) {
+    // 60″ is what 59.9996″ rounded to fewer decimals writes: the next minute.
+    seconds = 0.0;
+    minutes += 1.0;
+    if (minutes >= 60.0) minutes -= 60.0, degrees += 1.0;
+    warnings.push_back(where + ": '" + text + "': seconds 60 read as " + (negative ? "-" : "") + format_shortest(degrees) +
+                       "°" + two_digits(minutes) + "'00\"");
   }
   const double deg = degrees + minutes / 60.0 + seconds / 3600.0;
   return (negative ? -deg : deg) * std::numbers::pi / 180.0;
@@ -92,7 +110,7 @@ double sexagesimal(bool negative, double degrees, double minutes, double seconds
 
 }  // namespace
 
-double dms_text_to_rad(const std::string& text, const std::string& where) {
+double dms_text_to_rad(const std::string& text, const std::string& where, std::vector<std::string>& warnings) {
   std::string t = text;
   bool negative = false;
   std::size_t at = 0;
@@ -119,10 +137,10 @@ double dms_text_to_rad(const std::string& text, const std::string& where) {
     if (!x || *x < 0.0) throw Error(ErrorKind::input, "E_ANGLE", where + ": '" + text + "': '" + parts[static_cast<std::size_t>(k)] + "' is not a number");
     v[k] = *x;
   }
-  return sexagesimal(negative, v[0], v[1], v[2], text, where);
+  return sexagesimal(negative, v[0], v[1], v[2], text, where, warnings);
 }
 
-double packed_dms_to_rad(const std::string& text, const std::string& where) {
+double packed_dms_to_rad(const std::string& text, const std::string& where, std::vector<std::string>& warnings) {
   std::string t;
   for (char c : text) {
     if (!std::isspace(static_cast<unsigned char>(c))) t += c;
@@ -143,7 +161,72 @@ double packed_dms_to_rad(const std::string& text, const std::string& where) {
   const double degrees = std::stod(whole);
   const double minutes = std::stod(fraction.substr(0, 2));
   const double seconds = std::stod(fraction.substr(2, 2) + "." + (fraction.size() > 4 ? fraction.substr(4) : "0"));
-  return sexagesimal(negative, degrees, minutes, seconds, text, where);
+  return sexagesimal(negative, degrees, minutes, seconds, text, where, warnings);
+}
+
+namespace {
+
+// The range of an angle of one kind, in degrees.
+struct AngleRange {
+  double low_deg, high_deg;
+  bool high_open;      // [low, high) rather than [low, high]
+  const char* what;    // "a direction", for the message
+  const char* in_pi;   // the range in multiples of π, beside radians
+};
+
+std::optional<AngleRange> angle_range(geodesy::MeasurementKind kind) {
+  using geodesy::MeasurementKind;
+  switch (kind) {
+    case MeasurementKind::direction: return AngleRange{0.0, 360.0, false, "a direction", "[0, 2π]"};
+    case MeasurementKind::horizontal_angle: return AngleRange{0.0, 360.0, false, "a horizontal angle", "[0, 2π]"};
+    case MeasurementKind::azimuth: return AngleRange{0.0, 360.0, false, "an azimuth", "[0, 2π]"};
+    // From the zenith down to the nadir: anything else is no zenith angle
+    // (a vertical angle, or a face-II reading not reduced).
+    case MeasurementKind::zenith_angle: return AngleRange{0.0, 180.0, false, "a zenith angle", "[0, π]"};
+    case MeasurementKind::vertical_angle: return AngleRange{-90.0, 90.0, false, "a vertical angle", "[-π/2, π/2]"};
+    case MeasurementKind::geodetic_latitude: return AngleRange{-90.0, 90.0, false, "a geodetic latitude", "[-π/2, π/2]"};
+    case MeasurementKind::geodetic_longitude: return AngleRange{-180.0, 360.0, true, "a geodetic longitude", "[-π, 2π)"};
+    default: return std::nullopt;
+  }
+}
+
+// A bound (a whole number of degrees, a multiple of 90) in `unit`.
+std::string bound_text(double deg, AngleUnit unit) {
+  switch (unit) {
+    case AngleUnit::degrees: return format_shortest(deg);
+    case AngleUnit::gon: return format_shortest(deg * 400.0 / 360.0);  // exact for multiples of 90°
+    case AngleUnit::radians: return format_shortest(deg * std::numbers::pi / 180.0);
+    case AngleUnit::dms_text: return format_shortest(deg) + "-00-00";
+    case AngleUnit::packed_dms: return format_shortest(deg) + ".0000";
+  }
+  return format_shortest(deg);
+}
+
+}  // namespace
+
+void check_angle_range(geodesy::MeasurementKind kind, double value_rad, const std::string& written, AngleUnit unit,
+                       const std::string& where) {
+  // A bound written exactly (360°, 400 gon, 2π rad, 90-00-00) comes out of
+  // its unit's conversion within a few 1e-16 rad of the bound; 1e-12 rad
+  // (2e-7″) past a nonzero bound is that rounding, not a measurement.
+  constexpr double kBoundRounding_rad = 1e-12;
+  const auto range = angle_range(kind);
+  if (!range) return;
+  const double low = range->low_deg * std::numbers::pi / 180.0, high = range->high_deg * std::numbers::pi / 180.0;
+  const bool above = range->low_deg == 0.0 ? value_rad >= 0.0 : value_rad >= low - kBoundRounding_rad;
+  const bool below = range->high_open ? value_rad < high - kBoundRounding_rad : value_rad <= high + kBoundRounding_rad;
+  if (above && below) return;
+  const std::string interval = "[" + bound_text(range->low_deg, unit) + ", " + bound_text(range->high_deg, unit) +
+                               (range->high_open ? ")" : "]");
+  std::string in_unit;
+  switch (unit) {
+    case AngleUnit::degrees: in_unit = interval + " degrees"; break;
+    case AngleUnit::gon: in_unit = interval + " gon"; break;
+    case AngleUnit::radians: in_unit = interval + " radians (" + range->in_pi + ")"; break;
+    case AngleUnit::dms_text: in_unit = interval + " degrees-minutes-seconds"; break;
+    case AngleUnit::packed_dms: in_unit = interval + " degrees (packed DDD.MMSS)"; break;
+  }
+  throw Error(ErrorKind::input, "E_ANGLE", where + "=" + written + ": " + range->what + " lies in " + in_unit);
 }
 
 }  // namespace detail

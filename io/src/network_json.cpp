@@ -10,6 +10,8 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
@@ -58,15 +60,31 @@ double positive(double v, const std::string& where) {
   return v;
 }
 
-// An angle: exactly one of value_deg, value_gon, value_rad, value_dms.
-double angle_value(const json& m, const std::string& where) {
+// An angle of `kind`: exactly one of value_deg, value_gon, value_rad,
+// value_dms, within the kind's range (check_angle_range); a value_dms with
+// seconds of 60 adds a warning to `warnings`.
+double angle_value(const json& m, MeasurementKind kind, const std::string& where, std::vector<std::string>& warnings) {
+  constexpr std::array<std::pair<const char*, AngleUnit>, 4> kKeys{{{"value_deg", AngleUnit::degrees},
+                                                                    {"value_gon", AngleUnit::gon},
+                                                                    {"value_rad", AngleUnit::radians},
+                                                                    {"value_dms", AngleUnit::dms_text}}};
+  const char* key = nullptr;
+  AngleUnit unit = AngleUnit::degrees;
   int given = 0;
-  double v = 0.0;
-  if (m.contains("value_deg")) v = number(m, "value_deg", where) * std::numbers::pi / 180.0, ++given;
-  if (m.contains("value_gon")) v = number(m, "value_gon", where) * kGon, ++given;
-  if (m.contains("value_rad")) v = number(m, "value_rad", where), ++given;
-  if (m.contains("value_dms")) v = dms_text_to_rad(text(m, "value_dms", where), where + ".value_dms"), ++given;
+  for (const auto& [k, u] : kKeys) {
+    if (m.contains(k)) key = k, unit = u, ++given;
+  }
   if (given != 1) fail(where, "expected one of value_deg, value_gon, value_rad, value_dms (\"ddd-mm-ss.s\")");
+  double v = 0.0;
+  switch (unit) {
+    case AngleUnit::degrees: v = number(m, key, where) * std::numbers::pi / 180.0; break;
+    case AngleUnit::gon: v = number(m, key, where) * kGon; break;
+    case AngleUnit::radians: v = number(m, key, where); break;
+    case AngleUnit::dms_text:
+    case AngleUnit::packed_dms: v = dms_text_to_rad(text(m, key, where), where + "." + key, warnings); break;
+  }
+  const json& written = m.at(key);
+  check_angle_range(kind, v, written.is_string() ? written.get<std::string>() : written.dump(), unit, where + "." + key);
   return v;
 }
 
@@ -361,7 +379,7 @@ void read_network_json(std::string_view text_in, std::string_view source_in, geo
         if (d.contains("ignore")) dir.ignore = d.at("ignore").is_boolean() && d.at("ignore").get<bool>();
         dir.kind = MeasurementKind::direction;
         dir.stations = {from, b.reference(text(d, "to", w), w + ".to")};
-        dir.value = Eigen::VectorXd::Constant(1, angle_value(d, w));
+        dir.value = Eigen::VectorXd::Constant(1, angle_value(d, MeasurementKind::direction, w, net.warnings));
         const double sg = angle_sigma(d, w);
         dir.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
         dir.set = set;
@@ -376,7 +394,7 @@ void read_network_json(std::string_view text_in, std::string_view source_in, geo
       only_keys(m, at, keys);
       x.kind = MeasurementKind::horizontal_angle;
       x.stations = {station("at"), station("from"), station("to")};
-      x.value = Eigen::VectorXd::Constant(1, angle_value(m, at));
+      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
       const double sg = angle_sigma(m, at);
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
       if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
@@ -388,7 +406,7 @@ void read_network_json(std::string_view text_in, std::string_view source_in, geo
                : kind == "vertical_angle" ? MeasurementKind::vertical_angle
                                           : MeasurementKind::azimuth;
       x.stations = {station("from"), station("to")};
-      x.value = Eigen::VectorXd::Constant(1, angle_value(m, at));
+      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
       const double sg = angle_sigma(m, at);
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
       if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
