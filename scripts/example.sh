@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Sets up, builds in Release and runs the main job on the bundled example:
 #  1. fit: a 7-parameter transform from the LSZH control marks known in two
-#     frames (fixtures/airport_control.csv, with a planted blunder), printing
-#     the report and writing the transform file;
+#     frames (fixtures/airport_control.csv, with a planted blunder): first as
+#     given, where the blunder is flagged and the failing global test refuses
+#     the transform (exit 4); then with --remove-outliers, which removes it by
+#     data snooping, printing the report and writing the transform file;
 #  2. apply: the fitted transform moves the bundled LiDAR tile
 #     (fixtures/airport_tile.las, ENU at the LSZH reference point in
 #     ITRF2014@2024.5, frame stated by its sidecar) into ETRF2000@2024.5,
@@ -33,7 +35,17 @@ origin=47.464722,8.549167,480   # LSZH aerodrome reference point; ellipsoidal he
 mkdir -p "$out"
 
 echo "== fit =="
-"$geoanchor" fit fixtures/airport_control.csv --model helmert7 --convention position_vector \
+# As given: every mark is tested and kept; the planted blunder is flagged,
+# and the global test failing high refuses the transform (exit 4).
+if "$geoanchor" fit fixtures/airport_control.csv --model helmert7 --convention position_vector \
+  -o "$out/lszh_helmert7.json" --overwrite >"$out/fit_as_given.txt" 2>&1; then
+  echo "unexpected: the control set with its planted blunder passed" >&2
+  exit 1
+fi
+grep -E "flagged|E_FIT_GLOBAL_TEST" "$out/fit_as_given.txt" | grep -vE "^ +P[0-9]+ .* used" | sed 's/^ */  /'
+echo
+# With --remove-outliers data snooping removes it (strongest evidence first) and fits again.
+"$geoanchor" fit fixtures/airport_control.csv --model helmert7 --convention position_vector --remove-outliers \
   -o "$out/lszh_helmert7.json" --overwrite
 echo
 echo "== apply =="
@@ -48,7 +60,7 @@ echo "== report =="
 # The fit's text report and a PNG of each workbench view, rendered off-screen
 # (no display needed); `geoanchor gui` shows the same views in a window.
 "$geoanchor" report fixtures/airport_control.csv --transform "$out/lszh_helmert7.json" -o "$out/report" --overwrite
-grep -E "differ by|σ0 =|global test|OUTLIER" "$out/report/report.txt" | sed 's/^ */  /'
+grep -E "differ by|σ0 =|global test| removed " "$out/report/report.txt" | sed 's/^ */  /'
 
 echo
 echo "== diagnose =="

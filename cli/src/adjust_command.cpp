@@ -175,16 +175,32 @@ int run_adjust(const AdjustCommandOptions& o) {
     return exit_code(ErrorKind::rejected);
   }
   if (g.failed_high() && !o.accept_failed_global_test) {
+    // The flagged measurements first, in the order data snooping would remove them.
+    const std::vector<std::size_t> failing = solver::failing_measurements(r);
+    std::string flagged;
+    constexpr std::size_t kNamed = 10;
+    for (std::size_t k = 0; k < failing.size() && k < kNamed; ++k) {
+      const auto& am = r.measurements[failing[k]];
+      const auto& m = prepared.network.measurements[am.index];
+      flagged += (k ? ", " : "") + m.source + " (" + geodesy::to_string(m.kind) + ", |w| " + format_fixed(am.w_max, 2) +
+                 (am.snooping_rank > 0 ? ", snooping rank " + std::to_string(am.snooping_rank) : std::string()) + ")";
+    }
+    if (failing.size() > kNamed) flagged += " and " + std::to_string(failing.size() - kNamed) + " more";
     std::string worst;
     double w = 0.0;
     for (const auto& am : r.measurements) {
       if (am.used && std::isfinite(am.w_max) && am.w_max > w) w = am.w_max, worst = prepared.network.measurements[am.index].source;
     }
-    std::cerr << "geoanchor: error[E_ADJUST_GLOBAL_TEST]: the global test fails high (" << format_fixed(g.statistic, 3)
-              << " > " << format_fixed(g.critical_upper, 3) << ", variance factor " << format_fixed(r.variance_factor.value_or(0.0), 4)
+    std::cerr << "geoanchor: error[E_ADJUST_GLOBAL_TEST]: "
+              << (failing.empty() ? std::string()
+                                  : std::to_string(failing.size()) + " measurement" + (failing.size() == 1 ? " fails its" : "s fail their") +
+                                        " test (flagged): " + flagged + "; ")
+              << "the global test fails high (" << format_fixed(g.statistic, 3) << " > " << format_fixed(g.critical_upper, 3)
+              << ", variance factor " << format_fixed(r.variance_factor.value_or(0.0), 4)
               << "): the measurements disagree more than their standard deviations allow"
-              << (worst.empty() ? "" : "; the worst is " + worst + " (|w| " + format_fixed(w, 2) + ")")
-              << "; nothing written (--accept-failed-global-test writes it anyway)\n";
+              << (failing.empty() && !worst.empty() ? "; the largest |w| is " + worst + " (" + format_fixed(w, 2) + ")" : std::string())
+              << "; nothing written (--remove-outliers removes the flagged measurements in that order and adjusts again; "
+                 "--accept-failed-global-test writes the results as they are)\n";
     return exit_code(ErrorKind::rejected);
   }
 

@@ -56,9 +56,12 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   cmd->add_option("--alpha", o.alpha, "Significance of the global test (default 0.05)")->check(finite_range(1e-6, 0.5));
   cmd->add_option("--alpha-point", o.alpha_point, "Significance of point tests and data snooping (default 0.001)")
       ->check(finite_range(1e-9, 0.5));
-  cmd->add_flag("--no-snooping", o.no_snooping, "Report outliers but remove none");
+  cmd->add_flag("--remove-outliers", o.remove_outliers,
+                "Remove the marks that fail their point test by iterative data snooping, strongest evidence first, and "
+                "fit again (default: flag them and remove none)");
+  cmd->add_flag("--no-snooping", o.no_snooping, "Remove no mark (the default; kept for scripts): failing marks are flagged");
   cmd->add_option("--max-outlier-share", o.max_outlier_share,
-                  "Refuse the fit when data snooping would remove more than this share of the marks (default 0.10)")
+                  "--remove-outliers: refuse the fit when data snooping would remove more than this share of the marks (default 0.10)")
       ->check(finite_range(0.0, 0.5));
   cmd->add_flag("--scale-by-sigma0", o.scale_by_sigma0, "Scale parameter sigmas by the a-posteriori σ0");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test,
@@ -256,7 +259,11 @@ int run_fit(const FitCommandOptions& o) {
   fo.vce = o.vce;
   fo.alpha = o.alpha;
   fo.alpha_point = o.alpha_point;
-  fo.data_snooping = !o.no_snooping;
+  if (o.remove_outliers && o.no_snooping) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--remove-outliers and --no-snooping: give one (--no-snooping removes none, the default)");
+  }
+  fo.data_snooping = true;
+  fo.remove_outliers = o.remove_outliers;
   fo.max_outlier_share = o.max_outlier_share;
   fo.scale_by_sigma0 = o.scale_by_sigma0;
   fo.solutions = o.solution_weighting ? geodesy::SolutionPolicy::weight : geodesy::SolutionPolicy::exclude;
@@ -405,6 +412,23 @@ int run_fit(const FitCommandOptions& o) {
     j["output"] = out && !refusal ? ordered_json(o.output) : ordered_json(nullptr);
     j["refusal"] = refusal ? ordered_json{{"code", refusal->code}, {"message", refusal->message}} : ordered_json(nullptr);
     j["global_test"] = r.global_test.verdict();
+    // The marks failing their point test: flagged (kept) and removed (by
+    // --remove-outliers), in the order data snooping removes them.
+    ordered_json flagged = ordered_json::array(), removed = ordered_json::array();
+    for (const std::size_t i : solver::failing_marks(r)) {
+      const solver::PointResult& p = r.points[i];
+      ordered_json m;
+      m["id"] = p.id;
+      m["snooping_rank"] = p.snooping_rank > 0 ? ordered_json(p.snooping_rank) : ordered_json(nullptr);
+      m["passes_after_rank"] = p.passes_after_rank > 0 ? ordered_json(p.passes_after_rank) : ordered_json(nullptr);
+      m["w_max"] = std::isfinite(p.w_max) ? ordered_json(p.w_max) : ordered_json(nullptr);
+      m["mdb_m"] = std::isfinite(p.mdb_m) ? ordered_json(p.mdb_m) : ordered_json(nullptr);
+      m["point_test"] = {{"statistic", p.point_statistic}, {"dof", p.point_dof}, {"p_value", p.point_p_value}};
+      if (p.outlier) m["because"] = p.removed_because;
+      (p.outlier ? removed : flagged).push_back(std::move(m));
+    }
+    j["flagged"] = std::move(flagged);
+    j["removed"] = std::move(removed);
     j["warnings"] = r.warnings;
     j["transform"] = ordered_json::parse(transform_text);
     print_json(j);

@@ -36,7 +36,8 @@ struct FitCommandOptions {
   std::optional<std::string> geoid;  // EGM96 | EGM96-NGA: reads H_src_m/H_dst_m (JSON H_m) as h = H + N
   double alpha = 0.05;
   double alpha_point = 0.001;
-  bool no_snooping = false;
+  bool no_snooping = false;      // the default (flag, remove none): kept for scripts
+  bool remove_outliers = false;  // iterative data snooping removes the failing marks
   double max_outlier_share = 0.10;
   bool scale_by_sigma0 = false;
   bool accept_failed_global_test = false;

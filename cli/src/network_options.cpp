@@ -21,9 +21,12 @@ std::vector<CLI::Option*> add_network_options(CLI::App* cmd, NetworkOptions& o) 
           ->check(finite_range(0.5, 0.9999)),
       cmd->add_option("--alpha", o.alpha, "Significance of the w-tests and data snooping (default 0.001)")->check(finite_range(1e-9, 0.5)),
       cmd->add_option("--max-outlier-share", o.max_outlier_share,
-                      "Refuse when data snooping would remove more than this share of the measurements (default 0.10)")
+                      "--remove-outliers: refuse when data snooping would remove more than this share of the measurements (default 0.10)")
           ->check(finite_range(0.0, 0.5)),
-      cmd->add_flag("--no-snooping", o.no_snooping, "Report failing measurements but remove none"),
+      cmd->add_flag("--remove-outliers", o.remove_outliers,
+                    "Remove the measurements that fail their test by iterative data snooping, strongest evidence first, and "
+                    "adjust again (default: flag them and remove none)"),
+      cmd->add_flag("--no-snooping", o.no_snooping, "Remove no measurement (the default; kept for scripts): failing ones are flagged"),
       cmd->add_flag("--solution-weighting", o.solution_weighting,
                     "Adjust GNSS measurements whose 'solution' is float, dgps, sbas or standalone with their covariances "
                     "scaled by 10², 25², 75² or 250² (default: left out; dead_reckoned always is)"),
@@ -57,7 +60,11 @@ workflow::AdjustRequest network_request(const std::vector<std::string>& inputs, 
   so.confidence = o.confidence;
   so.alpha_point = o.alpha;
   so.max_outlier_share = o.max_outlier_share;
-  so.data_snooping = !o.no_snooping;
+  if (o.remove_outliers && o.no_snooping) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--remove-outliers and --no-snooping: give one (--no-snooping removes none, the default)");
+  }
+  so.data_snooping = true;
+  so.remove_outliers = o.remove_outliers;
   so.refraction_k = o.refraction;
   so.convergence_m = o.convergence_m;
   so.max_iterations = o.max_iterations;

@@ -28,7 +28,8 @@ struct NetworkOptions {
   double confidence = 0.95;
   double alpha = 0.001;
   double max_outlier_share = 0.10;
-  bool no_snooping = false;
+  bool no_snooping = false;      // the default (flag, remove none): kept for scripts
+  bool remove_outliers = false;  // iterative data snooping removes the failing measurements
   bool solution_weighting = false;  // GNSS measurements of float and worse weighted instead of left out
   std::optional<std::string> geoid;
   double refraction = 0.0;
@@ -38,7 +39,8 @@ struct NetworkOptions {
 };
 
 // --frame, --sinex-frame, --constrain, --free, --inner-constraints,
-// --confidence, --alpha, --max-outlier-share, --no-snooping, --geoid,
+// --confidence, --alpha, --max-outlier-share, --remove-outliers,
+// --no-snooping, --geoid,
 // --refraction, --convergence, --max-iterations, --estimate-helmert. Returns
 // the options added (to tell which were given).
 std::vector<CLI::Option*> add_network_options(CLI::App* cmd, NetworkOptions& o);

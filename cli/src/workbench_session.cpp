@@ -45,6 +45,8 @@ void check_workbench_inputs(WorkbenchOptions& o, bool network_view) {
     return;
   }
   for (const CLI::Option* flag : o.network_flags) {
+    // A fit's data snooping, as in fit: flag (the default) or remove.
+    if (flag->get_name() == "--remove-outliers" || flag->get_name() == "--no-snooping") continue;
     if (flag->count() > 0) {
       throw Error(ErrorKind::usage, "E_OPTION",
                   flag->get_name() + ": only with --view network (a survey network's view; a control set's views fit a transform)");
@@ -111,6 +113,11 @@ WorkbenchSession open_workbench(const WorkbenchOptions& o) {
                       (s.transform->fit ? "" : " (published parameters, no fit record: the workbench fits that model to the control)"));
   }
   solver::FitOptions& fo = choices.options;
+  if (o.network.remove_outliers && o.network.no_snooping) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--remove-outliers and --no-snooping: give one (--no-snooping removes none, the default)");
+  }
+  if (o.network.remove_outliers) fo.remove_outliers = true;
+  if (o.network.no_snooping) fo.remove_outliers = false;
   if (o.model) fo.model = parse_model(*o.model, "--model");
   if (o.convention) {
     fo.convention = parse_convention(*o.convention, "--convention");

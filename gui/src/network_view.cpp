@@ -671,12 +671,15 @@ void NetworkUi::draw_side() {
     } else {
       detail::wrapped(audit_, "global test: not applicable (no redundancy)", "adjustment: global test");
     }
-    std::size_t outliers = 0;
-    for (const auto& am : r.measurements) outliers += am.outlier ? 1u : 0u;
+    std::size_t outliers = 0, flagged = 0;
+    for (const auto& am : r.measurements) {
+      outliers += am.outlier ? 1u : 0u;
+      flagged += am.status(r.alpha_point) == solver::TestStatus::flagged ? 1u : 0u;
+    }
     detail::wrapped(audit_,
                     std::to_string(r.iterations) + " iterations, " + (r.converged ? "converged" : "NOT converged") + "; " +
-                        std::to_string(outliers) + (outliers == 1 ? " outlier" : " outliers") + " removed by data snooping" +
-                        (model_.options().data_snooping ? "" : " (off)"),
+                        std::to_string(flagged) + " flagged (failing, kept), " + std::to_string(outliers) +
+                        " removed" + (model_.options().remove_outliers ? " by data snooping" : " (--remove-outliers off)"),
                     "adjustment: iterations");
   }
   const auto stations_out = model_.stations_left_out();

@@ -970,7 +970,7 @@ void parse_points(const json& pts, FitRecord& f, std::string_view source) {
     const json& jp = pts[i];
     only_keys(jp, where, source,
               {"id", "residual_enu_m", "w_test", "w_enu", "redundancy_enu", "mdb_m", "point_test", "outlier", "used", "note",
-               "robust_weight", "solution"});
+               "robust_weight", "solution", "status", "snooping_rank"});
     FitPointRecord q;
     if (!jp.contains("id")) fail(source, where + ".id", "missing; every point record names its mark");
     q.id = string_at(jp.at("id"), where + ".id", source);
@@ -999,6 +999,17 @@ void parse_points(const json& pts, FitRecord& f, std::string_view source) {
       if (!(q.robust_weight > 0.0 && q.robust_weight <= 1.0)) {
         fail(source, where + ".robust_weight", "value " + v->dump() + " is not a weight in (0, 1]");
       }
+    }
+    if (const json* v = member(jp, "status")) {
+      q.status = string_at(*v, where + ".status", source);
+      static const std::array<const char*, 5> kStatuses = {"used", "flagged", "removed", "uncontrolled", "ignored"};
+      if (std::find(kStatuses.begin(), kStatuses.end(), q.status) == kStatuses.end()) {
+        fail(source, where + ".status", "value " + v->dump() + " is not a status; expected used, flagged, removed, uncontrolled or ignored");
+      }
+    }
+    if (const json* v = member(jp, "snooping_rank")) {
+      q.snooping_rank = static_cast<std::size_t>(count_at(*v, where + ".snooping_rank", source));
+      if (q.snooping_rank == 0) fail(source, where + ".snooping_rank", "value 0: a rank counts from 1 (leave it out for none)");
     }
     if (const json* v = member(jp, "solution")) {
       if (v->is_string()) q.solution = geodesy::parse_gnss_solution(v->get<std::string>());
@@ -1403,9 +1414,18 @@ void append_point_record(std::string& out, const FitPointRecord& p, bool first) 
     lit(", \"robust_weight\": ");
     num(p.robust_weight);
   }
+  if (p.snooping_rank > 0) {
+    lit(", \"snooping_rank\": ");
+    at = std::to_chars(at, at + 24, p.snooping_rank).ptr;
+  }
   if (p.solution) {
     lit(", \"solution\": \"");
     lit(geodesy::to_string(*p.solution));
+    *at++ = '"';
+  }
+  if (!p.status.empty()) {
+    lit(", \"status\": \"");
+    lit(p.status);
     *at++ = '"';
   }
   lit(", \"used\": ");

@@ -207,7 +207,9 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
 
     // Whitened Jacobians in the scaled parameters (A N⁻¹ Aᵀ is invariant).
     std::vector<double*> pblocks = {shift, yaw, ds};
-    auto tests = [&](std::size_t i, const Eigen::Vector3d& vi, bool in_fit) {
+    FitLinearization lin;  // the failing marks, for data snooping
+    lin.n_inv = cov_scaled;
+    auto tests = [&](std::size_t i, const Eigen::Vector3d& vi, bool in_fit, std::size_t position) {
       EnuOriginCost cost{all[i].enu, all[i].target_rel, all[i].w, &nominal};
       ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1> f(new EnuOriginCost(cost));
       double res[3] = {}, j0[9] = {}, j1[3] = {}, j2[3] = {};
@@ -220,18 +222,20 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
       if (o.enu_scale) a.col(c++) = Eigen::Vector3d(j2[0], j2[1], j2[2]);
       const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() + (in_fit ? -1.0 : 1.0) * a * cov_scaled * a.transpose();
       const geodesy::GeodeticPosition at = geocentric.geodetic_from_ecef(control.points[i].target);
+      PointResult& pr = result.points[i];
       test_point(PointTestInput{vi, all[i].w, q, geodesy::enu_from_ecef_rotation(at.lat, at.lon), in_fit}, scale,
-                 levels.lambda0, result.points[i]);
+                 levels.lambda0, pr);
+      if (in_fit && pr.point_dof > 0 && pr.point_p_value < o.alpha_point) lin.add(position, a, all[i].w * vi);
     };
     for (std::size_t k = 0; k < active.size(); ++k) {
-      tests(active[k], v[k], true);
+      tests(active[k], v[k], true, k);
       result.points[active[k]].used = true;
     }
-    if (snoop(result, active, o, u, o.enu_yaw || o.enu_scale ? 2 : 1) == SnoopStep::removed) continue;
+    if (snoop(result, active, o, u, o.enu_yaw || o.enu_scale ? 2 : 1, lin) == SnoopStep::removed) continue;
     std::vector<bool> in_fit(control.points.size(), false);
     for (std::size_t i : active) in_fit[i] = true;
     for (std::size_t i = 0; i < control.points.size(); ++i) {
-      if (!in_fit[i]) tests(i, control.points[i].target.m - result.ecef_map->apply(control.points[i].source.m), false);
+      if (!in_fit[i]) tests(i, control.points[i].target.m - result.ecef_map->apply(control.points[i].source.m), false, 0);
     }
 
     // Parameters in their reporting units, covariance likewise.

@@ -20,6 +20,7 @@ Eigen::MatrixXd symmetric(const Eigen::MatrixXd& c) { return 0.5 * (c + c.transp
 
 std::vector<std::size_t> init_points(FitResult& result, const geodesy::ControlSet& control, const FitOptions& options) {
   std::vector<std::size_t> active;
+  result.alpha_point = options.alpha_point;
   result.points.resize(control.points.size());
   for (std::size_t i = 0; i < control.points.size(); ++i) {
     const geodesy::ControlPoint& p = control.points[i];

@@ -836,21 +836,29 @@ FitResult fit_weighted(const ControlSet& control, const FitOptions& options) {
     using PointJacobian = Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxParams>;
     // The whitened residual's cofactor I ∓ A N⁻¹ Aᵀ: − in the fit, + for a
     // point tested against it (a prediction).
-    auto cofactor = [&](const Observation& ob, double sign) {
+    // The whitened design rows of a point over the estimated parameters.
+    auto design = [&](const Observation& ob) {
       Eigen::Vector3d pred;
       Eigen::Matrix<double, 3, kMaxParams> jfull;
       predict(ob, sol.theta.data(), o.rotation_model, td, pred, &jfull, &final_rotation);
       PointJacobian a(3, u);
       for (int c = 0; c < u; ++c) a.col(c) = ob.w * jfull.col(sol.estimated[static_cast<std::size_t>(c)]);
+      return a;
+    };
+    auto cofactor = [&](const PointJacobian& a, double sign) {
       return Eigen::Matrix3d(Eigen::Matrix3d::Identity() + sign * (a * n_inv * a.transpose()));
     };
     std::vector<Eigen::Matrix3d> qvs(o.vce ? active.size() : 0);  // whitened Q_vv per point, kept for --vce
+    FitLinearization lin;  // the failing marks, for data snooping
+    lin.n_inv = n_inv;
     for (std::size_t k = 0; k < active.size(); ++k) {
-      const Eigen::Matrix3d qv = cofactor(obs[k], -1.0);
+      const PointJacobian a = design(obs[k]);
+      const Eigen::Matrix3d qv = cofactor(a, -1.0);
       if (o.vce) qvs[k] = qv;
       PointResult& pr = result.points[active[k]];
       pr.used = true;
       test_point(PointTestInput{v[k], obs[k].w, qv, local_axes(active[k]), true}, tau, levels.lambda0, pr);
+      if (pr.point_dof > 0 && pr.point_p_value < o.alpha_point) lin.add(k, a, vw[k]);
     }
 
     // --- variance components (--vce) -----------------------------------------
@@ -898,7 +906,7 @@ FitResult fit_weighted(const ControlSet& control, const FitOptions& options) {
     }
 
     // --- data snooping ------------------------------------------------------
-    if (snoop(result, active, o, u, min_points(o.model)) == SnoopStep::removed) continue;
+    if (snoop(result, active, o, u, min_points(o.model), lin) == SnoopStep::removed) continue;
 
     // --- points outside the final fit: tested against it ---------------------
     // Their residuals come from the final parameters, and their tests are
@@ -915,7 +923,7 @@ FitResult fit_weighted(const ControlSet& control, const FitOptions& options) {
       ob.dt = td ? p.epoch->year - o.reference_epoch->year : 0.0;
       ob.w = whitening(p, linear_part(sol.theta, ob.dt));
       const Eigen::Vector3d vi = p.target.m - apply_fit(result, p.source, td ? p.epoch : std::nullopt).m;
-      const Eigen::Matrix3d q = cofactor(ob, +1.0);
+      const Eigen::Matrix3d q = cofactor(design(ob), +1.0);
       test_point(PointTestInput{vi, ob.w, q, local_axes(i), false}, tau, levels.lambda0, result.points[i]);
     }
 

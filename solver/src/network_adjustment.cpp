@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -19,7 +20,9 @@
 #include "geoanchor/geodesy/number_text.hpp"
 #include "network_approximate.hpp"
 #include "network_model.hpp"
+#include "network_snooping.hpp"
 #include "point_statistics.hpp"
+#include "snooping.hpp"
 #include "geoanchor/geodesy/parallel.hpp"
 #include "sparse_factor.hpp"
 #include "statistics.hpp"
@@ -34,14 +37,6 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-// A combination of datum parameters (translations, rotations, scale, each
-// scaled to move the stations by a metre) that the measurements and
-// constraints determine worse than this is undefined: a network whose
-// rotation about the vertical only the convergence of the ellipsoid's
-// normals fixes (a terrestrial network with no azimuth) is refused, not
-// held to tens of metres.
-constexpr double kUndefinedDatum_m = 1.0;
-
 using Index = std::int64_t;
 
 // The stations' unknowns: per station the index of each local component's
@@ -198,11 +193,23 @@ struct Problem {
   std::vector<std::array<bool, 3>> inner_components;  // their components in the inner constraints
   Eigen::MatrixXd defect;                  // free: the undefined datum directions over the unknowns (u × d)
   std::vector<std::size_t> anchor;         // free: the stations the defect is held at while iterating
+  std::vector<std::array<bool, 3>> anchor_components;  // their components that hold it
   std::vector<std::string> defect_names;
+  Eigen::MatrixXd defect_motions;          // the defect's columns over the named motions (DatumVectors::named)
+  std::vector<std::string> motion_names;
+  // Every sum over measurements runs in this order (canonical_order: by
+  // what each is, not where it is in the input), and the direction sets'
+  // orientations are numbered in set_order: the same network in a shuffled
+  // file gives the same bits.
+  std::vector<std::size_t> order;
+  std::vector<std::size_t> set_order;
 
   Problem(const geodesy::Network& n, const AdjustOptions& opt) : net(n), o(opt), geocentric(n.ellipsoid) {}
 
-  Rows linearize(std::size_t mi) const {
+  Rows linearize(std::size_t mi) const { return linearize(mi, layout); }
+  // The rows over the unknowns of `l` (the layout, or the datum's probe of
+  // every component).
+  Rows linearize(std::size_t mi, const Layout& l) const {
     const auto& m = net.measurements[mi];
     const ModelContext ctx{net, o, states, orientations};
     Evaluation ev = evaluate(m, ctx);
@@ -229,18 +236,18 @@ struct Problem {
     };
     for (std::size_t s = 0; s < ev.stations.size(); ++s) {
       for (int c = 0; c < 3; ++c) {
-        const Index u = layout.station[ev.stations[s]][static_cast<std::size_t>(c)];
+        const Index u = l.station[ev.stations[s]][static_cast<std::size_t>(c)];
         if (u < 0) continue;
         const Eigen::Index k = column(u);
         a.col(k) += ev.d_local.col(static_cast<Eigen::Index>(3 * s + static_cast<std::size_t>(c)));
       }
     }
     if (ev.orientation) {
-      const Eigen::Index k = column(layout.orientation[*m.set]);
+      const Eigen::Index k = column(l.orientation[*m.set]);
       a.col(k).array() -= 1.0;
     }
     for (Eigen::Index j = 0; j < d_helmert.cols(); ++j) {
-      const Eigen::Index k = column(layout.helmert[static_cast<std::size_t>(j)]);
+      const Eigen::Index k = column(l.helmert[static_cast<std::size_t>(j)]);
       a.col(k) += d_helmert.col(j);
     }
     r.a = whitening[mi] * a.leftCols(static_cast<Eigen::Index>(r.unknowns.size()));
@@ -278,6 +285,69 @@ struct Problem {
   }
 };
 
+// Whether measurement a comes before b by what it is: kind, stations (by
+// name), values, then instrument and target heights and covariance; equal
+// content compares equal (such twins are interchangeable).
+bool canonical_less(const geodesy::Network& net, std::size_t a, std::size_t b) {
+  const auto& ma = net.measurements[a];
+  const auto& mb = net.measurements[b];
+  if (ma.kind != mb.kind) return ma.kind < mb.kind;
+  if (ma.stations.size() != mb.stations.size()) return ma.stations.size() < mb.stations.size();
+  for (std::size_t k = 0; k < ma.stations.size(); ++k) {
+    const int c = net.stations[ma.stations[k]].id.compare(net.stations[mb.stations[k]].id);
+    if (c != 0) return c < 0;
+  }
+  if (ma.value.size() != mb.value.size()) return ma.value.size() < mb.value.size();
+  for (Eigen::Index k = 0; k < ma.value.size(); ++k) {
+    if (ma.value(k) != mb.value(k)) return ma.value(k) < mb.value(k);
+  }
+  if (ma.instrument_height_m != mb.instrument_height_m) return ma.instrument_height_m < mb.instrument_height_m;
+  if (ma.target_height_m != mb.target_height_m) return ma.target_height_m < mb.target_height_m;
+  for (Eigen::Index k = 0; k < ma.covariance.size() && k < mb.covariance.size(); ++k) {
+    if (ma.covariance(k) != mb.covariance(k)) return ma.covariance(k) < mb.covariance(k);
+  }
+  return false;
+}
+
+std::vector<std::size_t> canonical_order(const geodesy::Network& net) {
+  std::vector<std::size_t> order(net.measurements.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return canonical_less(net, a, b); });
+  return order;
+}
+
+// Direction sets by their station's name, then by their first direction in
+// the canonical order.
+std::vector<std::size_t> canonical_set_order(const geodesy::Network& net, const std::vector<std::size_t>& order) {
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> first(net.direction_sets.size(), kNone);
+  for (std::size_t rank = 0; rank < order.size(); ++rank) {
+    const auto& m = net.measurements[order[rank]];
+    if (m.set && *m.set < first.size() && first[*m.set] == kNone) first[*m.set] = rank;
+  }
+  std::vector<std::size_t> sets(net.direction_sets.size());
+  std::iota(sets.begin(), sets.end(), std::size_t{0});
+  std::stable_sort(sets.begin(), sets.end(), [&](std::size_t a, std::size_t b) {
+    const int c = net.stations[net.direction_sets[a].station].id.compare(net.stations[net.direction_sets[b].station].id);
+    return c != 0 ? c < 0 : first[a] < first[b];
+  });
+  return sets;
+}
+
+// The text data snooping breaks exact ties with: what the measurement is
+// (kind, stations, values as exact hexadecimal), not where it is.
+std::string measurement_key(const geodesy::Network& net, const geodesy::NetworkMeasurement& m) {
+  std::string key = geodesy::to_string(m.kind);
+  for (std::size_t s : m.stations) key += "\x1f" + net.stations[s].id;
+  char buf[40];
+  for (Eigen::Index k = 0; k < m.value.size(); ++k) {
+    const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, m.value(k), std::chars_format::hex);
+    key += '\x1f';
+    key.append(buf, ec == std::errc() ? end : buf);
+  }
+  return key;
+}
+
 // Union-find over stations joined by a measurement.
 std::vector<std::size_t> components_of(const Problem& p, std::size_t& count) {
   std::vector<std::size_t> parent(p.net.stations.size());
@@ -305,7 +375,10 @@ std::vector<std::size_t> components_of(const Problem& p, std::size_t& count) {
   return out;
 }
 
-Layout make_layout(const Problem& p) {
+// The unknowns: with `all_free` every component of every station reached
+// (the datum's probe: what the measurements alone determine), else those
+// the constraints leave.
+Layout make_layout(const Problem& p, bool all_free = false) {
   Layout l;
   const auto& net = p.net;
   l.station.assign(net.stations.size(), {-1, -1, -1});
@@ -314,7 +387,7 @@ Layout make_layout(const Problem& p) {
     for (int c = 0; c < 3; ++c) {
       if (!estimated_component(net, c)) continue;
       bool fixed = false;
-      if (!p.aside) {
+      if (!p.aside && !all_free) {
         for (int k = 0; k < 3; ++k) {
           const auto& con = net.stations[s].constraint;
           fixed = fixed || (constrained_component(net.space, k) == c && con.code[static_cast<std::size_t>(k)] == 'C' &&
@@ -335,7 +408,7 @@ Layout make_layout(const Problem& p) {
     if (m.set && p.active[mi]) observed[*m.set] = true;
   }
   l.orientation.assign(net.direction_sets.size(), -1);
-  for (std::size_t k = 0; k < net.direction_sets.size(); ++k) {
+  for (std::size_t k : p.set_order) {
     if (!observed[k]) continue;
     l.orientation[k] = l.count++;
     l.owner.emplace_back(k, 3);
@@ -385,7 +458,7 @@ Normal assemble(const Problem& p, bool matrix = true, int jobs = 1) {
     std::size_t rows = 0;
   };
   std::vector<std::size_t> active;
-  for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
+  for (std::size_t mi : p.order) {
     if (p.active[mi]) active.push_back(mi);
   }
   if (matrix) n.entries.reserve(21 * active.size());  // a baseline's 6 unknowns: 21 entries
@@ -442,69 +515,6 @@ bool constant_jacobian(const Problem& p) {
   return true;
 }
 
-// The failing measurements (indices into the network, worst first) that
-// may go in the same snooping pass as those at `taken` (positions in
-// `failing`), in order: none of their stations is within
-// kSnoopSeparationHops measurements of a station of one taken, or of one
-// added before them. Positions in `failing`.
-constexpr int kSnoopSeparationHops = 2;
-// The least mean redundancy of a measurement that goes in a pass besides the
-// worst: below it a measurement's test is tied to far-away ones (a loop
-// with little redundancy fails as a whole).
-constexpr double kSnoopExtraMinRedundancy = 0.2;
-std::vector<std::size_t> separated_failures(const Problem& p, const std::vector<std::size_t>& failing,
-                                            const std::vector<std::size_t>& taken) {
-  const auto& net = p.net;
-  const std::size_t ns = net.stations.size();
-  // Stations joined by a measurement in the adjustment (compressed rows).
-  std::vector<std::size_t> start(ns + 1, 0), next;
-  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
-    if (!p.active[mi]) continue;
-    const auto& st = net.measurements[mi].stations;
-    for (std::size_t a : st) {
-      for (std::size_t b : st) start[a + 1] += a != b ? 1u : 0u;
-    }
-  }
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  next.resize(start[ns]);
-  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
-    if (!p.active[mi]) continue;
-    const auto& st = net.measurements[mi].stations;
-    for (std::size_t a : st) {
-      for (std::size_t b : st) {
-        if (a != b) next[fill[a]++] = b;
-      }
-    }
-  }
-  std::vector<bool> near(ns, false);
-  std::vector<std::size_t> ring, further;
-  const auto mark = [&](std::size_t mi) {
-    ring.assign(net.measurements[mi].stations.begin(), net.measurements[mi].stations.end());
-    for (std::size_t s : ring) near[s] = true;
-    for (int hop = 0; hop < kSnoopSeparationHops; ++hop) {
-      further.clear();
-      for (std::size_t s : ring) {
-        for (std::size_t k = start[s]; k < start[s + 1]; ++k) {
-          if (!near[next[k]]) near[next[k]] = true, further.push_back(next[k]);
-        }
-      }
-      ring.swap(further);
-    }
-  };
-  std::vector<bool> is_taken(failing.size(), false);
-  for (std::size_t k : taken) mark(failing[k]), is_taken[k] = true;
-  std::vector<std::size_t> out;
-  for (std::size_t k = 0; k < failing.size(); ++k) {
-    if (is_taken[k]) continue;
-    const auto& st = net.measurements[failing[k]].stations;
-    if (std::any_of(st.begin(), st.end(), [&](std::size_t s) { return near[s]; })) continue;
-    mark(failing[k]);
-    out.push_back(k);
-  }
-  return out;
-}
-
 // The datum parameters as motions of the unknowns, each scaled to move the
 // stations by 1 m RMS: translations along X, Y, Z (x, y, z), rotations
 // about X, Y, Z through the centroid (local: about the vertical), scale.
@@ -515,9 +525,10 @@ struct DatumVectors {
   // combination of them moves nothing, e.g. a rotation about the line
   // through the only two stations: such combinations are no datum).
   Eigen::MatrixXd basis;
+  Eigen::MatrixXd named;  // u × (named motions): each named motion, unit RMS (g = named · basis)
 };
 
-DatumVectors datum_vectors(const Problem& p) {
+DatumVectors datum_vectors(const Problem& p, const Layout& layout) {
   const auto& net = p.net;
   const bool ellipsoidal = net.space == NetworkSpace::ellipsoidal;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
@@ -561,13 +572,24 @@ DatumVectors datum_vectors(const Problem& p) {
       motions.push_back({std::string("translation along ") + local_names[k],
                          [k](const Eigen::Vector3d&) { return Eigen::Vector3d::Unit(k); }, Eigen::Vector3d::Zero()});
     }
+    if (net.local_dimensions == 3) {
+      // A 3-D network turns about its horizontal axes too (slope distances
+      // alone leave all three rotations free).
+      for (int k = 0; k < 2; ++k) {
+        motions.push_back({std::string("rotation about the ") + local_names[k] + " axis (through the network's centroid)",
+                           [k, centroid, radius](const Eigen::Vector3d& x) {
+                             return Eigen::Vector3d(Eigen::Vector3d::Unit(k).cross(x - centroid) / radius);
+                           },
+                           Eigen::Vector3d::Unit(k) / radius});
+      }
+    }
     if (net.local_dimensions >= 2) {
       motions.push_back({"rotation about the vertical",
                          [centroid, radius](const Eigen::Vector3d& x) {
                            return Eigen::Vector3d(Eigen::Vector3d::UnitZ().cross(x - centroid) / radius);
                          },
                          Eigen::Vector3d::UnitZ() / radius});
-      motions.push_back({"scale",
+      motions.push_back({net.local_dimensions == 3 ? "horizontal scale" : "scale",
                          [centroid, radius](const Eigen::Vector3d& x) {
                            Eigen::Vector3d d = (x - centroid) / radius;
                            d.z() = 0.0;
@@ -575,23 +597,44 @@ DatumVectors datum_vectors(const Problem& p) {
                          },
                          Eigen::Vector3d::Zero()});
     }
+    if (net.local_dimensions == 3) {
+      // Angles alone keep a 3-D network's shape at any size: the uniform
+      // scale is the horizontal and the vertical one together.
+      motions.push_back({"vertical scale",
+                         [centroid, radius](const Eigen::Vector3d& x) {
+                           return Eigen::Vector3d(0.0, 0.0, (x.z() - centroid.z()) / radius);
+                         },
+                         Eigen::Vector3d::Zero()});
+    }
   }
   DatumVectors dv;
-  dv.g = Eigen::MatrixXd::Zero(p.layout.count, static_cast<Eigen::Index>(motions.size()));
+  dv.g = Eigen::MatrixXd::Zero(layout.count, static_cast<Eigen::Index>(motions.size()));
   for (std::size_t k = 0; k < motions.size(); ++k) {
     dv.names.push_back(motions[k].name);
+    // Unit RMS motion over the stations reached, whatever the layout (a
+    // combination means the same motion over every layout).
+    double rms2 = 0.0;
     for (std::size_t s = 0; s < net.stations.size(); ++s) {
       if (!p.station_used[s]) continue;
-      const Eigen::Vector3d local = p.states[s].axes * motions[k].move(p.states[s].x);
+      Eigen::Vector3d moved = motions[k].move(p.states[s].x);
       for (int c = 0; c < 3; ++c) {
-        const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
+        if (!estimated_component(net, c)) moved(c) = 0.0;  // (a local network's absent axes)
+      }
+      rms2 += moved.squaredNorm();
+    }
+    const double unit = rms2 > 0.0 ? 1.0 / std::sqrt(rms2 / static_cast<double>(std::max<std::size_t>(n, 1))) : 1.0;
+    for (std::size_t s = 0; s < net.stations.size(); ++s) {
+      if (!p.station_used[s]) continue;
+      const Eigen::Vector3d local = unit * (p.states[s].axes * motions[k].move(p.states[s].x));
+      for (int c = 0; c < 3; ++c) {
+        const Index u = layout.station[s][static_cast<std::size_t>(c)];
         if (u >= 0) dv.g(u, static_cast<Eigen::Index>(k)) = local(c);
       }
     }
     // The group's datum moves with the stations, so that its values stay
     // as they are: its translation, rotation and scale take up the motion
     // (to first order), the rates none of it.
-    if (ellipsoidal && !p.layout.helmert.empty()) {
+    if (ellipsoidal && !layout.helmert.empty()) {
       const Eigen::Vector3d t = p.helmert_pivot + p.helmert.head<3>();  // where the pivot lies in the network's frame
       Eigen::Matrix<double, 7, 1> d = Eigen::Matrix<double, 7, 1>::Zero();
       if (k < 3) {
@@ -604,28 +647,21 @@ DatumVectors datum_vectors(const Problem& p) {
         d.head<3>() = (t - centroid) / radius;
         d(6) = 1.0 / radius;
       }
-      for (Eigen::Index j = 0; j < 7; ++j) dv.g(p.layout.helmert[static_cast<std::size_t>(j)], static_cast<Eigen::Index>(k)) = d(j);
+      for (Eigen::Index j = 0; j < 7; ++j) dv.g(layout.helmert[static_cast<std::size_t>(j)], static_cast<Eigen::Index>(k)) = unit * d(j);
     }
     // A rotation turns the bearings at a station by its component about
     // the local vertical: the set's orientation turns with them.
     if (motions[k].rotation_axis.squaredNorm() > 0.0) {
       for (std::size_t set = 0; set < net.direction_sets.size(); ++set) {
-        if (p.layout.orientation[set] < 0) continue;
+        if (layout.orientation[set] < 0) continue;
         const auto& st = p.states[net.direction_sets[set].station];
         const double about_up = motions[k].rotation_axis.dot(st.local_from_xyz.row(2).transpose());
-        dv.g(p.layout.orientation[set], static_cast<Eigen::Index>(k)) =
-            ellipsoidal ? -about_up : net.axes.bearing_sign() * about_up;
+        dv.g(layout.orientation[set], static_cast<Eigen::Index>(k)) =
+            unit * (ellipsoidal ? -about_up : net.axes.bearing_sign() * about_up);
       }
     }
   }
-  // Unit RMS motion over the stations.
-  for (Eigen::Index k = 0; k < dv.g.cols(); ++k) {
-    double rms2 = 0.0;
-    for (std::size_t u = 0; u < p.layout.owner.size(); ++u) {
-      if (p.layout.owner[u].second < 3) rms2 += dv.g(static_cast<Eigen::Index>(u), k) * dv.g(static_cast<Eigen::Index>(u), k);
-    }
-    if (rms2 > 0.0) dv.g.col(k) /= std::sqrt(rms2 / static_cast<double>(std::max<std::size_t>(n, 1)));
-  }
+  dv.named = dv.g;
   dv.basis = Eigen::MatrixXd::Identity(dv.g.cols(), dv.g.cols());
   if (dv.g.cols() > 0 && dv.g.rows() > 0) {
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(dv.g, Eigen::ComputeThinV);
@@ -642,35 +678,6 @@ DatumVectors datum_vectors(const Problem& p) {
   return dv;
 }
 
-// N·G from the upper-triangle entries.
-Eigen::MatrixXd times(const std::vector<SymmetricEntry>& entries, const Eigen::MatrixXd& g) {
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(g.rows(), g.cols());
-  for (const auto& e : entries) {
-    out.row(e.row) += e.value * g.row(e.col);
-    if (e.row != e.col) out.row(e.col) += e.value * g.row(e.row);
-  }
-  return out;
-}
-
-// The combinations (columns, over the datum parameters `names`) that a
-// motion matrix M (Gᵀ N G: how much vᵀPv a unit motion costs) leaves
-// undefined: its eigenvectors whose motion of kUndefinedDatum_m raises vᵀPv
-// by less than 1. Each is named by its largest parts into `described`.
-Eigen::MatrixXd weak_combinations(const Eigen::MatrixXd& m, const std::vector<std::string>& names,
-                                  std::vector<std::string>& described) {
-  described.clear();
-  if (m.rows() == 0) return Eigen::MatrixXd(0, 0);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m);
-  std::vector<Eigen::Index> weak;
-  for (Eigen::Index k = 0; k < m.rows(); ++k) {
-    if (eig.eigenvalues()(k) < 1.0 / (kUndefinedDatum_m * kUndefinedDatum_m)) weak.push_back(k);
-  }
-  Eigen::MatrixXd v(m.rows(), static_cast<Eigen::Index>(weak.size()));
-  for (std::size_t k = 0; k < weak.size(); ++k) v.col(static_cast<Eigen::Index>(k)) = eig.eigenvectors().col(weak[k]);
-  return v;
-  (void)names;
-}
-
 // Names a combination over the datum parameters by its largest parts.
 std::string name_combination(const Eigen::VectorXd& e, const std::vector<std::string>& names) {
   std::string what;
@@ -680,41 +687,174 @@ std::string name_combination(const Eigen::VectorXd& e, const std::vector<std::st
   return what;
 }
 
-// A fixed coordinate component as a constraint of this weight (1/m²): a
-// datum motion that moves it is defined.
-constexpr double kFixedWeight = 1e12;
+// How much the measurements tell of each datum motion (the columns of g,
+// unit RMS over the stations, over the unknowns of `layout`: the probe of
+// every component), against how much they could: with A_j a measurement's
+// whitened rows over its unknowns and G_j the motions there,
+//   measured  = Σ_j (A_j G_j)ᵀ (A_j G_j),
+//   reference = Σ_j ‖A_j‖²_F G_jᵀ G_j.
+// A motion the measurements cannot see makes each A_j G_j vanish to
+// rounding (10⁻¹⁶ of ‖A_j‖ ‖G_j‖): its ratio measured/reference is about
+// 10⁻³², where a motion held only by constraints of 100 m among millimetre
+// baselines is 10⁻¹¹ (the constraints join in undefined_datum). Summed in
+// the canonical order, in chunks on `jobs` threads added in turn.
+struct DatumInformation {
+  Eigen::MatrixXd measured, reference;
+};
 
-// Three stations of the inner set far apart (one for translations alone):
-// where the defect is held while iterating.
-std::vector<std::size_t> anchors(const Problem& p, bool rotations_or_scale) {
-  const auto& set = p.inner;
-  std::vector<std::size_t> out;
-  if (set.empty()) return out;
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (std::size_t s : set) centroid += p.states[s].x;
-  centroid /= static_cast<double>(set.size());
-  auto farthest = [&](const std::function<double(std::size_t)>& score) {
-    std::size_t best = set.front();
-    double top = -1.0;
-    for (std::size_t s : set) {
-      if (score(s) > top) top = score(s), best = s;
-    }
-    return best;
-  };
-  const std::size_t a = farthest([&](std::size_t s) { return (p.states[s].x - centroid).squaredNorm(); });
-  out.push_back(a);
-  if (!rotations_or_scale || set.size() < 3) {
-    if (rotations_or_scale) out = set;
-    return out;
+DatumInformation datum_information(const Problem& p, const Layout& layout, const Eigen::MatrixXd& g, int jobs) {
+  const Eigen::Index d = g.cols();
+  std::vector<std::size_t> active;
+  for (std::size_t mi : p.order) {
+    if (p.active[mi]) active.push_back(mi);
   }
-  const std::size_t b = farthest([&](std::size_t s) { return (p.states[s].x - p.states[a].x).squaredNorm(); });
-  const std::size_t c = farthest([&](std::size_t s) {
-    return (p.states[s].x - p.states[a].x).cross(p.states[b].x - p.states[a].x).squaredNorm();
+  constexpr std::size_t kChunk = 4096;
+  const std::size_t chunks = (active.size() + kChunk - 1) / kChunk;
+  std::vector<DatumInformation> parts(chunks, DatumInformation{Eigen::MatrixXd::Zero(d, d), Eigen::MatrixXd::Zero(d, d)});
+  for_chunks(active.size(), kChunk, jobs, [&](std::size_t begin, std::size_t end) {
+    DatumInformation& part = parts[begin / kChunk];
+    for (std::size_t k = begin; k < end; ++k) {
+      const Rows r = p.linearize(active[k], layout);
+      Eigen::MatrixXd gj(static_cast<Eigen::Index>(r.unknowns.size()), d);
+      for (std::size_t c = 0; c < r.unknowns.size(); ++c) gj.row(static_cast<Eigen::Index>(c)) = g.row(r.unknowns[c]);
+      const Eigen::MatrixXd ag = r.a * gj;
+      part.measured.noalias() += ag.transpose() * ag;
+      part.reference.noalias() += r.a.squaredNorm() * (gj.transpose() * gj);
+    }
   });
-  out.push_back(b);
-  if (c != a && c != b) out.push_back(c);
+  DatumInformation info{Eigen::MatrixXd::Zero(d, d), Eigen::MatrixXd::Zero(d, d)};
+  for (const auto& part : parts) {
+    info.measured += part.measured;
+    info.reference += part.reference;
+  }
+  return info;
+}
+
+// A datum motion told at less than this share of what the network could
+// tell of it is undefined; below kWeakDatumRelative it is defined, weakly,
+// and named in a warning with the standard deviation it then has. See
+// datum_information for the scale: rounding leaves an undefined motion near
+// 10⁻³⁰; constraints of a kilometre among millimetre baselines are near
+// 10⁻¹³; the convergence of the ellipsoid's normals over a kilometre, the
+// only thing that turns a terrestrial network with no azimuth about the
+// vertical, gives about 10⁻⁹.
+constexpr double kUndefinedDatumRelative = 1e-15;
+constexpr double kWeakDatumRelative = 1e-8;
+
+// Below this share of its RMS motion at the stations, a combination's
+// motion of the fixed components is no motion (rounding: 10⁻¹⁶).
+constexpr double kFixedMotion = 1e-10;
+
+// The combinations of the motions (columns over them: over g's columns)
+// that neither the measurements nor the constraints define to more than
+// `below` of what the network tells (datum_information), with those
+// ratios: first the combinations that move no fixed component (a fixed
+// component defines any motion of it), then among those the generalized
+// eigenvectors of (measured + W, reference + W) with eigenvalue below it, W
+// the weighted constraints' information (1/σ² per component held with a
+// standard deviation). `probe` is the layout of every component (g's
+// rows). The columns move the stations by 1 m RMS and are orthogonal.
+struct DatumCombinations {
+  Eigen::MatrixXd v;  // d × k
+  // Per column: its information ratio, and what the measurements and the
+  // weighted constraints tell of it (vᵀ M v, vᵀ W v; 1/m² for its motion).
+  std::vector<double> ratio, measured, weighted;
+};
+DatumCombinations undefined_datum(const Problem& p, const Layout& probe, const Eigen::MatrixXd& g, const DatumInformation& info,
+                                  double below) {
+  const auto& net = p.net;
+  const Eigen::Index d = g.cols();
+  DatumCombinations out;
+  out.v.resize(d, 0);
+  if (d == 0) return out;
+  Eigen::MatrixXd fixed = Eigen::MatrixXd::Zero(d, d), weighted = Eigen::MatrixXd::Zero(d, d), total = Eigen::MatrixXd::Zero(d, d);
+  std::size_t stations = 0;
+  for (std::size_t s = 0; s < net.stations.size(); ++s) {
+    if (!p.station_used[s]) continue;
+    ++stations;
+    for (int c = 0; c < 3; ++c) {
+      const Index u = probe.station[s][static_cast<std::size_t>(c)];
+      if (u >= 0) total.noalias() += g.row(u).transpose() * g.row(u);
+    }
+    if (p.aside) continue;
+    const auto& con = net.stations[s].constraint;
+    for (int k = 0; k < 3; ++k) {
+      if (con.code[static_cast<std::size_t>(k)] != 'C') continue;
+      const Index u = probe.station[s][static_cast<std::size_t>(constrained_component(net.space, k))];
+      if (u < 0) continue;
+      const double sigma = con.sigma_m[static_cast<std::size_t>(k)];
+      const Eigen::MatrixXd gg = g.row(u).transpose() * g.row(u);
+      if (sigma > 0.0) {
+        weighted += gg / (sigma * sigma);
+      } else {
+        fixed += gg;
+      }
+    }
+  }
+  // The combinations that move no fixed component.
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> by_fixed(fixed, total);
+  if (by_fixed.info() != Eigen::Success) throw std::logic_error("adjust_network: a datum motion moves no station");
+  std::vector<Eigen::Index> free_of_fixed;
+  for (Eigen::Index k = 0; k < d; ++k) {
+    if (by_fixed.eigenvalues()(k) < kFixedMotion) free_of_fixed.push_back(k);
+  }
+  Eigen::MatrixXd u(d, static_cast<Eigen::Index>(free_of_fixed.size()));
+  for (std::size_t k = 0; k < free_of_fixed.size(); ++k) u.col(static_cast<Eigen::Index>(k)) = by_fixed.eigenvectors().col(free_of_fixed[k]);
+  if (u.cols() == 0) return out;
+  // Among them, those the measurements and the weights tell too little of.
+  const Eigen::MatrixXd told = u.transpose() * (info.measured + weighted) * u;
+  const Eigen::MatrixXd could = u.transpose() * (info.reference + weighted) * u;
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ges(told, could);
+  if (ges.info() != Eigen::Success) throw std::logic_error("adjust_network: the datum's reference information is not positive definite");
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index k = 0; k < ges.eigenvalues().size(); ++k) {
+    if (ges.eigenvalues()(k) < below) keep.push_back(k);
+  }
+  out.v.resize(d, static_cast<Eigen::Index>(keep.size()));
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    const Eigen::VectorXd y = u * ges.eigenvectors().col(keep[k]);
+    out.v.col(static_cast<Eigen::Index>(k)) = y;
+    out.ratio.push_back(std::max(0.0, ges.eigenvalues()(keep[k])));
+    out.measured.push_back(std::max(0.0, y.dot(info.measured * y)));
+    out.weighted.push_back(std::max(0.0, y.dot(weighted * y)));
+  }
   return out;
 }
+
+// The same span, as orthogonal motions of 1 m RMS at the stations: v (vᵀ T v / n)^(−1/2), T the motions' Gram matrix
+// over the probe's station unknowns.
+Eigen::MatrixXd unit_motions(const Problem& p, const Layout& probe, const Eigen::MatrixXd& g, const Eigen::MatrixXd& v) {
+  if (v.cols() == 0) return v;
+  Eigen::MatrixXd gv = Eigen::MatrixXd::Zero(g.rows(), v.cols());
+  std::size_t stations = 0;
+  for (std::size_t s = 0; s < p.net.stations.size(); ++s) {
+    if (!p.station_used[s]) continue;
+    ++stations;
+    for (int c = 0; c < 3; ++c) {
+      const Index u = probe.station[s][static_cast<std::size_t>(c)];
+      if (u >= 0) gv.row(u) = g.row(u) * v;
+    }
+  }
+  const Eigen::MatrixXd t = gv.transpose() * gv / static_cast<double>(std::max<std::size_t>(stations, 1));
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> te(t);
+  return v * te.operatorInverseSqrt();
+}
+
+// Where the defect is held while iterating (p.anchor and its components):
+// the fewest of the inner stations (one, then the farthest two, then three
+// far apart and off their line, else all of them) over which the defect's
+// directions are independent.
+void choose_anchors(Problem& p);
+
+// The ratio of the smallest to the largest singular value of the defect
+// restricted to `stations` (Eᵀ D, d × d): 0 when they leave a combination
+// of it undefined; `weakest` gets that combination (over the defect's columns).
+double spanning_ratio(const Problem& p, const std::vector<std::size_t>& stations,
+                      const std::vector<std::array<bool, 3>>& components, Eigen::VectorXd* weakest = nullptr);
+
+// Below this ratio (spanning_ratio) a set of stations does not hold the
+// defect: the inner constraints over them would leave a combination free.
+constexpr double kSpanningRatio = 1e-6;
 
 // The defect directions over the unknowns of `stations` only (zero elsewhere).
 Eigen::MatrixXd restricted(const Problem& p, const std::vector<std::size_t>& stations,
@@ -731,10 +871,109 @@ Eigen::MatrixXd restricted(const Problem& p, const std::vector<std::size_t>& sta
   return e;
 }
 
+double spanning_ratio(const Problem& p, const std::vector<std::size_t>& stations,
+                      const std::vector<std::array<bool, 3>>& components, Eigen::VectorXd* weakest) {
+  const Eigen::Index d = p.defect.cols();
+  if (d == 0) return 1.0;
+  const Eigen::MatrixXd ed = restricted(p, stations, components).transpose() * p.defect;
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(ed, Eigen::ComputeFullV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  if (weakest) *weakest = svd.matrixV().col(d - 1);
+  return sv(0) > 0.0 ? sv(d - 1) / sv(0) : 0.0;
+}
+
+// The inner-constraint stations (p.inner with p.inner_components) must
+// hold every combination of the defect (EᵀD of full rank, spanning_ratio):
+// else a refusal naming the combinations they leave free and why, before
+// any factorization. `option`: they came from --inner-constraints (usage),
+// else from the input's datum stations (input).
+void check_inner_stations(const Problem& p, bool option) {
+  const Eigen::Index d = p.defect.cols();
+  if (d == 0) return;
+  const Eigen::MatrixXd ed = restricted(p, p.inner, p.inner_components).transpose() * p.defect;
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(ed, Eigen::ComputeFullV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  std::vector<std::string> left;
+  for (Eigen::Index k = 0; k < d; ++k) {
+    if (sv(0) > 0.0 && sv(k) >= kSpanningRatio * sv(0)) continue;
+    left.push_back(name_combination(p.defect_motions * svd.matrixV().col(k), p.motion_names));
+  }
+  if (left.empty()) return;
+  const auto& net = p.net;
+  std::string ids;
+  for (std::size_t k = 0; k < p.inner.size() && k < 8; ++k) ids += (k ? ", " : "") + net.stations[p.inner[k]].id;
+  if (p.inner.size() > 8) ids += ", …";
+  // Why, from the stations' geometry.
+  std::string why;
+  if (p.inner.size() == 1) {
+    why = "one station holds the translations only";
+  } else {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (std::size_t st : p.inner) c += p.states[st].x;
+    c /= static_cast<double>(p.inner.size());
+    Eigen::MatrixXd spread(static_cast<Eigen::Index>(p.inner.size()), 3);
+    for (std::size_t k = 0; k < p.inner.size(); ++k) spread.row(static_cast<Eigen::Index>(k)) = (p.states[p.inner[k]].x - c).transpose();
+    const Eigen::Vector3d geometry = Eigen::JacobiSVD<Eigen::MatrixXd>(spread).singularValues();
+    constexpr double kOnOneLine = 1e-3;  // the second singular value of their spread against the first
+    if (p.inner.size() == 2 || geometry(1) < kOnOneLine * geometry(0)) {
+      why = "the stations " + ids + " lie on one line: the rotation about the line through them moves none of them";
+    } else {
+      why = "the components of " + ids + " that take part do not hold it";
+    }
+  }
+  std::string list;
+  for (const auto& x : left) list += (list.empty() ? "" : "; ") + x;
+  const std::string text = (option ? "--inner-constraints " + ids : p.net.source_name + ": the input's datum stations " + ids) +
+                           ": these stations do not hold the " + list + " (" + std::to_string(left.size()) + " of the " +
+                           std::to_string(d) + " combination" + (d == 1 ? "" : "s") + " the measurements leave undefined): " + why +
+                           "; choose stations that span the network (for rotations and scale, three or more not on one line)";
+  if (option) throw Error(ErrorKind::usage, "E_INNER_CONSTRAINTS", text);
+  throw Error(ErrorKind::input, "E_DATUM_DEFECT", text);
+}
+
+void choose_anchors(Problem& p) {
+  const auto& set = p.inner;
+  p.anchor.clear();
+  p.anchor_components.clear();
+  if (set.empty()) return;
+  const auto components_of_inner = [&](std::size_t st) {
+    const std::size_t k = static_cast<std::size_t>(std::find(set.begin(), set.end(), st) - set.begin());
+    return k < p.inner_components.size() ? p.inner_components[k] : std::array<bool, 3>{true, true, true};
+  };
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (std::size_t s : set) centroid += p.states[s].x;
+  centroid /= static_cast<double>(set.size());
+  auto farthest = [&](const std::function<double(std::size_t)>& score) {
+    std::size_t best = set.front();
+    double top = -1.0;
+    for (std::size_t s : set) {
+      if (score(s) > top) top = score(s), best = s;
+    }
+    return best;
+  };
+  const std::size_t a = farthest([&](std::size_t s) { return (p.states[s].x - centroid).squaredNorm(); });
+  const std::size_t b = farthest([&](std::size_t s) { return (p.states[s].x - p.states[a].x).squaredNorm(); });
+  const std::size_t c = farthest([&](std::size_t s) {
+    return (p.states[s].x - p.states[a].x).cross(p.states[b].x - p.states[a].x).squaredNorm();
+  });
+  std::vector<std::vector<std::size_t>> tries = {{a}, {a, b}, {a, b, c}, set};
+  for (auto& t : tries) {
+    std::sort(t.begin(), t.end());
+    t.erase(std::unique(t.begin(), t.end()), t.end());
+    std::vector<std::array<bool, 3>> comps;
+    for (std::size_t st : t) comps.push_back(components_of_inner(st));
+    if (spanning_ratio(p, t, comps) >= kSpanningRatio || t.size() == set.size()) {
+      p.anchor = t;
+      p.anchor_components = comps;
+      return;
+    }
+  }
+}
+
 // Adds w·C Cᵀ to the normal equations (C: the defect held at the anchors).
 void hold_defect(const Problem& p, Normal& n) {
   if (!p.free || p.defect.cols() == 0) return;
-  const Eigen::MatrixXd c = restricted(p, p.anchor);
+  const Eigen::MatrixXd c = restricted(p, p.anchor, p.anchor_components);
   double trace = 0.0;
   std::size_t diagonal = 0;
   for (const auto& e : n.entries) {
@@ -781,6 +1020,149 @@ void hold_defect(const Problem& p, Normal& n) {
               where + ": station " + p.net.stations[s].id + " (" + p.net.stations[s].source + "): its " +
                   component_name(p.net.space, c) + " coordinate is not determined by the " + std::to_string(count) +
                   " measurement" + (count == 1 ? "" : "s") + " that reach it; add measurements or constrain it");
+}
+
+// The measurements that reach station s (their sources, at most `most`),
+// and how many they are.
+std::string reaching(const Problem& p, const std::vector<std::size_t>& stations, std::size_t most, std::size_t& count) {
+  std::string list;
+  count = 0;
+  for (std::size_t mi : p.order) {
+    if (!p.active[mi]) continue;
+    const auto& st = p.net.measurements[mi].stations;
+    if (std::none_of(st.begin(), st.end(), [&](std::size_t x) { return std::find(stations.begin(), stations.end(), x) != stations.end(); })) continue;
+    if (count++ < most) list += (list.empty() ? "" : ", ") + p.net.measurements[mi].source + " (" + geodesy::to_string(p.net.measurements[mi].kind) + ")";
+  }
+  if (count > most) list += ", …";
+  return list;
+}
+
+// A direction in a station's local components, in words: "east", "north
+// and up", or a horizontal azimuth.
+std::string direction_words(const Problem& p, const Eigen::Vector3d& local) {
+  const Eigen::Vector3d a = local.cwiseAbs();
+  const double top = a.maxCoeff();
+  std::string out;
+  for (int c = 0; c < 3; ++c) {
+    if (a(c) >= 0.3 * top) out += std::string(out.empty() ? "" : " and ") + component_name(p.net.space, c);
+  }
+  return out;
+}
+
+// A station whose own block of the normal matrix (its unknowns, with the
+// others held) is singular: moving it alone along the null direction
+// changes no measurement, whatever the rest does. Named with the direction
+// and the measurements that reach it (E_NETWORK_SINGULAR).
+void check_station_blocks(const Problem& p, const Normal& n) {
+  const auto& net = p.net;
+  std::vector<Eigen::Matrix3d> blocks(net.stations.size(), Eigen::Matrix3d::Zero());
+  for (const auto& e : n.entries) {
+    const auto [s1, c1] = p.layout.owner[static_cast<std::size_t>(e.row)];
+    const auto [s2, c2] = p.layout.owner[static_cast<std::size_t>(e.col)];
+    if (c1 >= 3 || c2 >= 3 || s1 != s2) continue;
+    blocks[s1](c1, c2) += e.value;
+    if (c1 != c2) blocks[s1](c2, c1) += e.value;
+  }
+  // Below this share of the block's largest eigenvalue a direction is not
+  // determined (one distance to a station: rank one, the rest rounding).
+  constexpr double kSingularBlock = 1e-12;
+  for (std::size_t s = 0; s < net.stations.size(); ++s) {
+    if (!p.station_used[s]) continue;
+    std::vector<int> comps;
+    for (int c = 0; c < 3; ++c) {
+      if (p.layout.station[s][static_cast<std::size_t>(c)] >= 0) comps.push_back(c);
+    }
+    if (comps.empty()) continue;
+    const auto m = static_cast<Eigen::Index>(comps.size());
+    Eigen::MatrixXd b(m, m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+      for (Eigen::Index j = 0; j < m; ++j) b(i, j) = blocks[s](comps[static_cast<std::size_t>(i)], comps[static_cast<std::size_t>(j)]);
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(b);
+    const double top = eig.eigenvalues()(m - 1);
+    if (eig.eigenvalues()(0) >= kSingularBlock * top && top > 0.0) continue;
+    Eigen::Vector3d dir = Eigen::Vector3d::Zero();
+    for (Eigen::Index i = 0; i < m; ++i) dir(comps[static_cast<std::size_t>(i)]) = eig.eigenvectors()(i, 0);
+    std::size_t count = 0;
+    const std::string list = reaching(p, {s}, 5, count);
+    throw Error(ErrorKind::input, "E_NETWORK_SINGULAR",
+                net.source_name + ": station " + net.stations[s].id + " (" + net.stations[s].source + "): its position along its " +
+                    direction_words(p, dir) + " is not determined by the " + std::to_string(count) + " measurement" +
+                    (count == 1 ? "" : "s") + " that reach it" + (list.empty() ? "" : " (" + list + ")") +
+                    "; add measurements or constrain it");
+  }
+}
+
+// When the factorization fails past the datum and station checks, the
+// direction the normal matrix leaves free is found and named: the matrix
+// shifted by 10⁻¹⁰ of its diagonal is factored, and inverse iteration
+// (three solves from a fixed start) turns any start towards its null
+// direction; the stations (and orientations, Helmert parameters) that
+// carry it are named with their components.
+[[noreturn]] void explain_singularity(const Problem& p, const Normal& n, Index failed_column) {
+  const auto& net = p.net;
+  const Index u = p.layout.count;
+  Eigen::VectorXd diag = Eigen::VectorXd::Zero(u);
+  for (const auto& e : n.entries) {
+    if (e.row == e.col) diag(e.row) += e.value;
+  }
+  std::vector<SymmetricEntry> shifted = n.entries;
+  constexpr double kShift = 1e-10;
+  for (Index k = 0; k < u; ++k) shifted.push_back({k, k, kShift * std::max(diag(k), std::numeric_limits<double>::min())});
+  Index again = -1;
+  std::optional<NormalFactor> f;
+  try {
+    f = NormalFactor::factor(u, shifted, p.o.dense ? NormalFactor::Mode::dense : NormalFactor::Mode::sparse, &again, std::nullopt,
+                             p.o.memory_budget_bytes, resolve_jobs(p.o.jobs));
+  } catch (const Error&) {
+    f.reset();
+  }
+  if (!f) singular(p, failed_column);
+  Eigen::VectorXd z(u);
+  for (Index k = 0; k < u; ++k) z(k) = (1.0 + static_cast<double>((static_cast<std::uint64_t>(k) * 2654435761u) % 1000u) / 1000.0) /
+                                      std::sqrt(std::max(diag(k), std::numeric_limits<double>::min()));
+  for (int it = 0; it < 3; ++it) {
+    z = f->solve(Eigen::VectorXd(diag.cwiseProduct(z)));
+    z /= std::sqrt(z.dot(diag.cwiseProduct(z)));
+  }
+  if (!z.allFinite()) singular(p, failed_column);
+  // Its share on each station (in the diagonal's metric), largest first.
+  std::vector<double> share(net.stations.size(), 0.0);
+  std::vector<Eigen::Vector3d> local(net.stations.size(), Eigen::Vector3d::Zero());
+  std::string others;
+  for (Index k = 0; k < u; ++k) {
+    const auto [s, c] = p.layout.owner[static_cast<std::size_t>(k)];
+    const double w = z(k) * z(k) * diag(k);
+    if (c < 3) {
+      share[s] += w;
+      local[s](c) = z(k);
+    } else if (w > 0.05) {
+      others += (others.empty() ? "" : ", ") +
+                (c == 3 ? "the orientation of the direction set at " + net.stations[net.direction_sets[s].station].id
+                        : std::string("the Helmert parameter ") + kHelmertNames[s]);
+    }
+  }
+  std::vector<std::size_t> involved;
+  for (std::size_t s = 0; s < share.size(); ++s) {
+    if (share[s] > 0.05) involved.push_back(s);
+  }
+  std::sort(involved.begin(), involved.end(), [&](std::size_t a, std::size_t b) { return share[a] > share[b]; });
+  if (involved.empty() && others.empty()) singular(p, failed_column);
+  std::string what;
+  constexpr std::size_t kNamed = 6;
+  for (std::size_t k = 0; k < involved.size() && k < kNamed; ++k) {
+    what += (k ? ", " : "") + net.stations[involved[k]].id + " (" + direction_words(p, local[involved[k]]) + ")";
+  }
+  if (involved.size() > kNamed) what += " and " + std::to_string(involved.size() - kNamed) + " more";
+  if (!others.empty()) what += (what.empty() ? "" : "; with ") + others;
+  std::size_t count = 0;
+  const std::string list = reaching(p, std::vector<std::size_t>(involved.begin(), involved.begin() + static_cast<std::ptrdiff_t>(std::min(involved.size(), kNamed))), 5, count);
+  throw Error(ErrorKind::input, "E_NETWORK_SINGULAR",
+              net.source_name + ": the normal equations are singular: the measurements and constraints leave a motion of " +
+                  (involved.size() == 1 ? "station " : "stations ") + what +
+                  " free (moving them together along it changes no measurement; " + std::to_string(count) +
+                  " measurement" + (count == 1 ? " reaches" : "s reach") + " them" + (list.empty() ? "" : ": " + list) +
+                  "); add measurements that tie them to the rest of the network, or constrain them");
 }
 
 // Moves the stations and orientations by the unknowns' corrections; returns
@@ -832,7 +1214,7 @@ NormalFactor factor_or_explain(const Problem& p, const Normal& n, std::optional<
   Index failed = -1;
   auto f = NormalFactor::factor(p.layout.count, n.entries, p.o.dense ? NormalFactor::Mode::dense : NormalFactor::Mode::sparse,
                                 &failed, std::move(previous), p.o.memory_budget_bytes, resolve_jobs(p.o.jobs));
-  if (!f) singular(p, failed);
+  if (!f) explain_singularity(p, n, failed);
   return std::move(*f);
 }
 
@@ -882,6 +1264,8 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   }
   Problem p(network, o);
   const auto& net = network;
+  p.order = canonical_order(net);
+  p.set_order = canonical_set_order(net, p.order);
   AdjustmentResult result;
   const int jobs = resolve_jobs(o.jobs);
   const std::string where = net.source_name;
@@ -954,7 +1338,8 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   {
     std::vector<bool> seeded(net.direction_sets.size(), false);
     const ModelContext ctx{net, o, p.states, p.orientations};
-    for (const auto& m : net.measurements) {
+    for (std::size_t mi : p.order) {
+      const auto& m = net.measurements[mi];
       if (m.kind != MeasurementKind::direction || m.ignore || !m.set || seeded[*m.set]) continue;
       const Evaluation ev = evaluate(m, ctx);  // computed = bearing − 0
       p.orientations[*m.set] = ev.computed(0) - m.value(0);
@@ -1025,6 +1410,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   levels_of.power = o.power;
   const PointTestLevels levels = point_test_levels(levels_of);
   result.w_critical = levels.w_critical;
+  result.alpha_point = o.alpha_point;
   std::vector<std::string> outlier_why = gross_why;
 
   const std::vector<std::string> base_warnings = result.warnings;
@@ -1032,6 +1418,8 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   // Data snooping: what the last pass removed, and the unknowns it had.
   std::vector<std::size_t> removed_last_pass;
   Layout last_layout;
+  std::vector<std::string> datum_warnings;  // the datum's weakly defined combinations (each pass that probes it)
+  std::vector<std::size_t> rank_of(net.measurements.size(), 0);  // data snooping's order (snooping_rank)
   for (;;) {
     result.warnings = base_warnings;  // each pass states its own
     ++result.passes;
@@ -1126,46 +1514,22 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       Normal n = assemble(p, !same_matrix, jobs);
       result.seconds.assemble += since(t0);
       if (iteration == 1 && !same_unknowns) {
-        // The datum. First what the measurements leave undefined (every
-        // component an unknown, no constraint), then whether the
-        // constraints define it: a station the measurements do not fix on
-        // its own is no datum defect but a singularity, named below.
-        Problem probe = p;
-        probe.free = true;
-        probe.aside = true;  // every component an unknown
-        probe.layout = make_layout(probe);
-        const Normal n0 = assemble(probe, true, jobs);
-        const DatumVectors dv = datum_vectors(probe);
-        const Eigen::MatrixXd m0 = dv.g.transpose() * times(n0.entries, dv.g);
-        std::vector<std::string> unused;
-        const Eigen::MatrixXd v0 = weak_combinations(m0, dv.names, unused);
+        // The datum, judged against the network's own precision
+        // (datum_information): what the measurements and the constraints
+        // leave undefined of the translations, rotations and scale. A
+        // station the measurements do not fix on its own is no datum
+        // defect but a singularity, named below.
+        const Layout probe = make_layout(p, true);
+        const DatumVectors dv = datum_vectors(p, probe);
+        const DatumInformation info = datum_information(p, probe, dv.g, jobs);
+        const Eigen::MatrixXd undefined = unit_motions(p, probe, dv.g, undefined_datum(p, probe, dv.g, info, kUndefinedDatumRelative).v);
         std::vector<std::string> names;
-        if (p.free) {
-          p.defect = dv.g * v0;  // the free layout is the probe's
-          for (Eigen::Index k = 0; k < v0.cols(); ++k) names.push_back(name_combination(dv.basis * v0.col(k), dv.names));
-        } else if (v0.cols() > 0) {
-          // The constraints' weight on those combinations.
-          Eigen::VectorXd weight = Eigen::VectorXd::Zero(probe.layout.count);
-          for (std::size_t st = 0; st < net.stations.size(); ++st) {
-            if (!p.station_used[st]) continue;
-            const auto& con = net.stations[st].constraint;
-            for (int k = 0; k < 3; ++k) {
-              if (con.code[static_cast<std::size_t>(k)] != 'C') continue;
-              const Index u = probe.layout.station[st][static_cast<std::size_t>(constrained_component(net.space, k))];
-              if (u < 0) continue;
-              const double sigma = con.sigma_m[static_cast<std::size_t>(k)];
-              weight(u) = sigma > 0.0 ? 1.0 / (sigma * sigma) : kFixedWeight;
-            }
-          }
-          const Eigen::MatrixXd gv = dv.g * v0;
-          const Eigen::MatrixXd mv = v0.transpose() * m0 * v0 + gv.transpose() * weight.asDiagonal() * gv;
-          const Eigen::MatrixXd still = weak_combinations(mv, {}, unused);
-          for (Eigen::Index k = 0; k < still.cols(); ++k) names.push_back(name_combination(dv.basis * (v0 * still.col(k)), dv.names));
-          if (!names.empty() && !net.datum_stations.empty()) {
+        for (Eigen::Index k = 0; k < undefined.cols(); ++k) names.push_back(name_combination(dv.basis * undefined.col(k), dv.names));
+        if (!p.free && undefined.cols() > 0) {
+          if (!net.datum_stations.empty()) {
             // What the constraints leave undefined is held by the input's
             // own datum stations (GNU Gama's constrained points): the
             // minimum-norm solution over them, the fixed components kept.
-            names.clear();
             p.free = true;
             for (const auto& ds : net.datum_stations) {
               if (p.station_used[ds.station]) p.inner.push_back(ds.station), p.inner_components.push_back(ds.components);
@@ -1174,12 +1538,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
               throw Error(ErrorKind::input, "E_DATUM_DEFECT",
                           where + ": the datum is not defined and none of the input's datum stations has a measurement");
             }
-            const DatumVectors dvp = datum_vectors(p);
-            const Eigen::MatrixXd mp = dvp.g.transpose() * times(n.entries, dvp.g);
-            const Eigen::MatrixXd vp = weak_combinations(mp, dvp.names, unused);
-            p.defect = dvp.g * vp;
-            for (Eigen::Index k = 0; k < vp.cols(); ++k) names.push_back(name_combination(dvp.basis * vp.col(k), dvp.names));
-          } else if (!names.empty()) {
+          } else {
             std::string list;
             for (const auto& x : names) list += (list.empty() ? "" : "; ") + x;
             throw Error(ErrorKind::input, "E_DATUM_DEFECT",
@@ -1191,19 +1550,42 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
                                        : "; constrain stations (--constrain ID=CCC[,SIGMA_M]) or adjust it as a free network (--free)"));
           }
         }
+        p.defect_motions = dv.basis * undefined;
+        p.defect = datum_vectors(p, p.layout).named * p.defect_motions;  // over the unknowns (no fixed component moves)
         p.defect_names = names;
+        p.motion_names = dv.names;
         if (p.free && p.defect.cols() > 0) {
-          bool beyond_translation = false;
-          for (const auto& x : names) beyond_translation = beyond_translation || x.find("translation") == std::string::npos || x.find(" with ") != std::string::npos;
-          p.anchor = anchors(p, beyond_translation);
+          check_inner_stations(p, net.datum_stations.empty() || o.free);
+          choose_anchors(p);
         }
+        // Defined by the measurements, but weakly (not the constraints'
+        // business: a datum held by weighted constraints is the user's):
+        // named, with the standard deviation it then has at least.
+        datum_warnings.clear();
+        const DatumCombinations weak = undefined_datum(p, probe, dv.g, info, kWeakDatumRelative);
+        for (Eigen::Index k = 0; k < weak.v.cols(); ++k) {
+          const auto c = static_cast<std::size_t>(k);
+          if (weak.ratio[c] < kUndefinedDatumRelative || weak.weighted[c] > weak.measured[c]) continue;
+          const Eigen::VectorXd y = weak.v.col(k);
+          double motion2 = 0.0;
+          std::size_t stations = 0;
+          const Eigen::VectorXd gy = dv.g * y;
+          for (std::size_t uk = 0; uk < probe.owner.size(); ++uk) {
+            if (probe.owner[uk].second < 3) motion2 += gy(static_cast<Eigen::Index>(uk)) * gy(static_cast<Eigen::Index>(uk));
+          }
+          for (std::size_t st = 0; st < net.stations.size(); ++st) stations += p.station_used[st] ? 1u : 0u;
+          const double rms = std::sqrt(motion2 / static_cast<double>(std::max<std::size_t>(stations, 1)));
+          const double told = weak.measured[c] + weak.weighted[c];
+          datum_warnings.push_back("the datum's " + name_combination(dv.basis * y, dv.names) +
+                                   " is defined only weakly by the measurements: they tell it at " + fmt(weak.ratio[c], 2) +
+                                   " of what they tell of the network's other motions; its standard deviation is at least " +
+                                   fmt_m(told > 0.0 ? rms / std::sqrt(told) : std::numeric_limits<double>::infinity()) +
+                                   " at the stations (RMS): constrain stations or add measurements that fix it");
+        }
+        check_station_blocks(p, n);
       } else if (p.free && p.defect.cols() > 0) {
-        // The same combinations, at the moved positions.
-        const DatumVectors dv = datum_vectors(p);
-        std::vector<std::string> unused;
-        const Eigen::MatrixXd m = dv.g.transpose() * times(n.entries, dv.g);
-        const Eigen::MatrixXd weak = weak_combinations(m, dv.names, unused);
-        if (weak.cols() == p.defect.cols()) p.defect = dv.g * weak;
+        // The same combinations of the motions, at the moved positions.
+        p.defect = datum_vectors(p, p.layout).named * p.defect_motions;
       }
       hold_defect(p, n);
       t0 = Clock::now();
@@ -1212,7 +1594,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       t0 = Clock::now();
       const Eigen::VectorXd dx = last_factor->solve(n.b);
       result.seconds.solve += since(t0);
-      if (!dx.allFinite()) singular(p, -1);
+      if (!dx.allFinite()) explain_singularity(p, n, -1);
       const auto [moved, at] = apply_corrections(p, dx);
       largest = moved;
       largest_at = at;
@@ -1309,6 +1691,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       am.used = in;
       am.outlier = was_outlier;
       am.removed_because = outlier_why[mi];
+      am.snooping_rank = rank_of[mi];
       am.observed = m.value;
       am.sigma = m.covariance.diagonal().cwiseSqrt();
       const Eigen::Index k = m.value.size();
@@ -1361,6 +1744,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       am.statistic = t.statistic;
       am.test_dof = t.dof;
       am.p_value = t.p_value;
+      am.log_p = t.log_p;
       // σ of the residual: W⁻¹ Q_v W⁻ᵀ.
       const Eigen::MatrixXd w_inv = p.whitening[mi].inverse();
       am.residual_sigma = (w_inv * qv * w_inv.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
@@ -1371,10 +1755,16 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     for (std::size_t slot = 0; slot < listed.size(); ++slot) {
       if (deferred[slot]) measure(slot, false);
     }
-    // vᵀPv in the measurements' order.
+    // vᵀPv in the canonical order.
     double vtpv = 0.0;
-    for (const auto& am : measured) {
-      if (am.used) vtpv += (p.whitening[am.index] * am.residual).squaredNorm();
+    {
+      std::vector<std::size_t> slot_of(net.measurements.size(), listed.size());
+      for (std::size_t slot = 0; slot < listed.size(); ++slot) slot_of[listed[slot]] = slot;
+      for (std::size_t mi : p.order) {
+        if (slot_of[mi] == listed.size()) continue;
+        const auto& am = measured[slot_of[mi]];
+        if (am.used) vtpv += (p.whitening[am.index] * am.residual).squaredNorm();
+      }
     }
     result.measurements = std::move(measured);
     for (const auto& q : p.pseudo_observations()) vtpv += q.l * q.l;
@@ -1385,86 +1775,88 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
 
     result.seconds.measurements += since(t0);
 
-    // Data snooping: the measurement with the smallest p-value below
-    // alpha_point goes, within the share; then the network is adjusted again.
+    // Data snooping (snooping.hpp): the failing measurements in the order
+    // iterative snooping removes them, each the strongest evidence once the
+    // ones before it are out. Flagged and kept; with remove_outliers they
+    // go, and the network is adjusted and tested again (ranks continue).
     if (o.data_snooping && result.dof > 0) {
-      std::vector<std::pair<std::size_t, SnoopCandidate>> failing;  // measurement index, candidate
-      for (const auto& am : result.measurements) {
-        if (!am.fails_test(o.alpha_point)) continue;
-        if (am.test_dof < am.observed.size()) {
-          // Some of its components are redundant and some not: without it
-          // part of the network would be undetermined; it stays, named.
-          result.warnings.push_back(net.measurements[am.index].source + " (" + geodesy::to_string(net.measurements[am.index].kind) +
-                                    ") fails its measurement test (p = " + format_shortest(am.p_value) +
-                                    ") but cannot be removed: the rest of the network does not determine all of what it measures");
-          continue;
-        }
-        failing.push_back({am.index, {am.p_value, 1.0 - am.redundancy.mean()}});
+      std::vector<std::size_t> failing;  // positions in result.measurements
+      for (std::size_t k = 0; k < result.measurements.size(); ++k) {
+        if (result.measurements[k].fails_test(o.alpha_point)) failing.push_back(k);
       }
-      std::stable_sort(failing.begin(), failing.end(),
-                       [](const auto& a, const auto& b) { return a.second.p_value < b.second.p_value; });
       if (!failing.empty()) {
+        NetworkCofactors cofactors(f, p.layout.count);
+        std::vector<SnoopingCandidate> candidates(failing.size());
+        for (std::size_t c = 0; c < failing.size(); ++c) {
+          const AdjustedMeasurement& am = result.measurements[failing[c]];
+          const std::size_t mi = am.index;
+          Rows r = p.linearize(mi);
+          const std::size_t nu = r.unknowns.size();
+          Eigen::MatrixXd q(static_cast<Eigen::Index>(nu), static_cast<Eigen::Index>(nu));
+          if (!f.inverse_block(r.unknowns.data(), nu, q.data())) {
+            throw std::logic_error("adjust_network: a measurement's unknowns are off the factor's pattern");
+          }
+          const Eigen::Index k = r.a.rows();
+          candidates[c].v = p.whitening[mi] * am.residual;
+          candidates[c].q = Eigen::MatrixXd::Identity(k, k) - r.a * q * r.a.transpose();
+          candidates[c].key = measurement_key(net, net.measurements[mi]);
+          cofactors.add(std::move(r.unknowns), std::move(r.a));
+        }
         const std::size_t limit = std::max<std::size_t>(
             1, static_cast<std::size_t>(std::floor(o.max_outlier_share * static_cast<double>(countable))));
-        const auto& worst = net.measurements[failing.front().first];
-        std::vector<std::size_t> position(net.measurements.size(), 0);  // in result.measurements
-        for (std::size_t k = 0; k < result.measurements.size(); ++k) position[result.measurements[k].index] = k;
-        const auto describe = [&](std::size_t mi) {
-          const auto it = result.measurements.begin() + static_cast<std::ptrdiff_t>(position[mi]);
-          return "measurement test " + format_shortest(it->statistic) + " (χ²(" + std::to_string(it->test_dof) +
-                 "), p = " + format_shortest(it->p_value) + " < " + format_shortest(o.alpha_point) + "); max |w| " +
-                 format_fixed(it->w_max, 2);
+        SnoopingLimits limits;
+        limits.alpha = o.alpha_point;
+        limits.max_removals = limit > removed ? limit - removed : 0;
+        const SnoopingSequence seq = snooping_sequence(candidates, cofactors, limits);
+        const auto measurement_of = [&](std::size_t c) -> AdjustedMeasurement& { return result.measurements[failing[c]]; };
+        const auto describe = [&](const AdjustedMeasurement& am) {
+          return "measurement test " + fmt(am.statistic, 4) + " (χ²(" + std::to_string(am.test_dof) + "), p = " +
+                 fmt(am.p_value, 3) + " < " + format_shortest(o.alpha_point) + "); max |w| " + format_fixed(am.w_max, 2);
         };
-        if (removed + 1 > limit) {
-          result.refused_because = "data snooping stopped after removing " + std::to_string(removed) + " of " +
-                                   std::to_string(countable) + " measurements (the limit is " +
-                                   format_shortest(100.0 * o.max_outlier_share) + " %): " + worst.source + " (" +
-                                   geodesy::to_string(worst.kind) + ") still fails its " + describe(failing.front().first) +
-                                   "; " + std::to_string(failing.size()) +
-                                   " measurements fail now. So many failures mean the data or the model is wrong "
-                                   "(frames, units, heights, station names), not a few blunders";
-          result.warnings.push_back(result.refused_because);
-        } else {
-          std::vector<SnoopCandidate> candidates;
-          for (const auto& x : failing) candidates.push_back(x.second);
-          std::vector<std::size_t> take = snoop_selection(candidates, [&](std::size_t count) { return removed + count <= limit; });
-          // In a large, well-determined GNSS network a blunder's w-tests
-          // spill over only onto measurements near it: failing measurements
-          // far from every one taken (kSnoopSeparationHops), each redundant
-          // enough that its test is not tied to distant ones
-          // (kSnoopExtraMinRedundancy), go in the same pass, unless together
-          // they would split the network. In a weak loop one blunder makes
-          // every leg fail alike: those legs are low in redundancy and go
-          // one pass at a time, as before.
-          if (constant_jacobian(p)) {
-            std::vector<std::size_t> failing_index;
-            for (const auto& x : failing) failing_index.push_back(x.first);
-            std::vector<std::size_t> extras;
-            for (std::size_t k : separated_failures(p, failing_index, take)) {
-              if (removed + take.size() + extras.size() + 1 > limit) break;
-              if (1.0 - failing[k].second.leverage >= kSnoopExtraMinRedundancy) extras.push_back(k);
-            }
-            if (!extras.empty()) {
-              for (std::size_t k : take) p.active[failing[k].first] = false;
-              for (std::size_t k : extras) p.active[failing[k].first] = false;
-              // One part: a station left with no measurement counts as a part of its own.
-              std::size_t parts = 0;
-              components_of(p, parts);
-              for (std::size_t k : take) p.active[failing[k].first] = true;
-              for (std::size_t k : extras) p.active[failing[k].first] = true;
-              if (parts == 1) take.insert(take.end(), extras.begin(), extras.end());
-            }
-          }
-          for (std::size_t k : take) {
-            const std::size_t mi = failing[k].first;
-            outlier_why[mi] = "data snooping: " + describe(mi);
+        for (std::size_t k = 0; k < seq.removals.size(); ++k) {
+          AdjustedMeasurement& am = measurement_of(seq.removals[k].candidate);
+          am.snooping_rank = removed + k + 1;
+          rank_of[am.index] = am.snooping_rank;
+        }
+        for (std::size_t c = 0; c < candidates.size(); ++c) {
+          if (seq.passes_after[c] >= 0) measurement_of(c).passes_after_rank = removed + static_cast<std::size_t>(seq.passes_after[c]) + 1;
+        }
+        for (std::size_t c : seq.not_removable) {
+          const AdjustedMeasurement& am = measurement_of(c);
+          result.warnings.push_back(net.measurements[am.index].source + " (" + geodesy::to_string(net.measurements[am.index].kind) +
+                                    ") fails its " + describe(am) +
+                                    " but cannot be removed: the rest of the network does not determine all of what it measures");
+        }
+        // Past the limit: with --remove-outliers the measurements up to it
+        // go first (the next pass refuses, with them out); else named.
+        if (seq.limit_reached && (!o.remove_outliers || seq.removals.empty())) {
+          const AdjustedMeasurement& worst = measurement_of(seq.still_failing.front());
+          const std::string why =
+              "data snooping " + std::string(o.remove_outliers ? "stopped" : "would stop") + " after removing " +
+              std::to_string(removed + seq.removals.size()) + " of " + std::to_string(countable) + " measurements (the limit is " +
+              format_shortest(100.0 * o.max_outlier_share) + " %, --max-outlier-share): " + net.measurements[worst.index].source +
+              " (" + geodesy::to_string(net.measurements[worst.index].kind) + ") would still fail its " + describe(worst) + "; " +
+              std::to_string(seq.still_failing.size()) +
+              " measurements would fail then. So many failures mean the data or the model is wrong (frames, units, heights, "
+              "station names), not a few blunders";
+          if (o.remove_outliers) result.refused_because = why;
+          result.warnings.push_back(why);
+        } else if (o.remove_outliers && !seq.removals.empty()) {
+          for (const SnoopingRemoval& x : seq.removals) {
+            const AdjustedMeasurement& am = measurement_of(x.candidate);
+            const std::size_t mi = am.index;
+            outlier_why[mi] = "data snooping (rank " + std::to_string(am.snooping_rank) + "): " + describe(am) +
+                              (x.statistic != am.statistic
+                                   ? " (with the measurements removed before it: " + fmt(x.statistic, 4) + ", p = " +
+                                         fmt(x.p_value, 3) + ")"
+                                   : std::string());
             p.active[mi] = false;
             const auto kind = net.measurements[mi].kind;
             p.pattern_only[mi] = kind == MeasurementKind::gnss_baselines || kind == MeasurementKind::gnss_points;
-            ++removed;
+            removed_last_pass.push_back(mi);
           }
-          result.removed_per_pass.push_back(take.size());
-          for (std::size_t k : take) removed_last_pass.push_back(failing[k].first);
+          removed += seq.removals.size();
+          result.removed_per_pass.push_back(seq.removals.size());
           last_factor = std::move(f);  // its analysis serves the next pass (the same pattern)
           continue;  // adjust again without them
         }
@@ -1628,6 +2020,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       }
     }
     result.datum_by_minimum_norm = p.free && d > 0;
+    result.datum_defect = p.defect_names;
     if (p.free && d > 0 && !p.aside) {
       std::string list;
       for (const auto& x : p.defect_names) list += (list.empty() ? "" : "; ") + x;
@@ -1651,6 +2044,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
                                   ") is reached by no measurement in the adjustment: left out");
       }
     }
+    result.warnings.insert(result.warnings.end(), datum_warnings.begin(), datum_warnings.end());
     if (result.dof <= 0) {
       result.warnings.push_back("no redundancy (dof = " + std::to_string(result.dof) +
                                 "): σ0, the global test and the measurement tests are undefined");

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "fit_common.hpp"
+#include "snooping.hpp"
 #include "statistics.hpp"
 
 namespace geoanchor::solver {
@@ -15,29 +16,64 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
+const char* to_string(TestStatus s) {
+  switch (s) {
+    case TestStatus::used: return "used";
+    case TestStatus::flagged: return "flagged";
+    case TestStatus::removed: return "removed";
+    case TestStatus::uncontrolled: return "uncontrolled";
+    case TestStatus::ignored: return "ignored";
+  }
+  return "used";
+}
+
+namespace {
+
+// Σ (eᵀ v)² / λ over the eigenpairs (λ, e) of q with λ ≥ kMinRedundancy.
+template <class Matrix, class Vector>
+void controlled_quadratic_form(const Matrix& q, const Vector& vw, MeasurementTest& t) {
+  const Eigen::SelfAdjointEigenSolver<Matrix> eig(q);
+  for (Eigen::Index e = 0; e < q.rows(); ++e) {
+    if (!(eig.eigenvalues()(e) >= kMinRedundancy)) continue;
+    const double projection = eig.eigenvectors().col(e).dot(vw);
+    t.statistic += projection * projection / eig.eigenvalues()(e);
+    ++t.dof;
+  }
+}
+
+}  // namespace
+
+MeasurementTest measurement_test(const Eigen::VectorXd& vw, const Eigen::MatrixXd& q, double sigma_scale) {
+  MeasurementTest t;
+  const Eigen::Index k = vw.size();
+  if (k == 1) {
+    if (q(0, 0) >= kMinRedundancy) {
+      t.statistic = vw(0) * vw(0) / q(0, 0);
+      t.dof = 1;
+    }
+  } else if (k == 3) {
+    controlled_quadratic_form(Eigen::Matrix3d(q), Eigen::Vector3d(vw), t);
+  } else {
+    controlled_quadratic_form(q, vw, t);
+  }
+  t.statistic /= sigma_scale * sigma_scale;
+  if (t.dof > 0) {
+    t.p_value = chi_squared_upper_tail(t.dof, t.statistic);
+    t.log_p = chi_squared_log_upper_tail(t.dof, t.statistic);
+  }
+  return t;
+}
+
 ObservationTest test_observation(const Eigen::VectorXd& v, const Eigen::MatrixXd& w, const Eigen::MatrixXd& q,
                                  const Eigen::MatrixXd& axes, bool in_fit, double sigma_scale, double lambda0) {
   ObservationTest t;
   const Eigen::Index k = v.size();
   const Eigen::VectorXd vw = w * v;
-  // The observation test over the redundant directions of Q (all of them
-  // unless the observation alone determines some unknown).
-  const Eigen::LLT<Eigen::MatrixXd> llt(q);
-  if (llt.info() == Eigen::Success && llt.matrixLLT().diagonal().minCoeff() > 1e-5) {
-    t.statistic = vw.dot(llt.solve(vw));
-    t.dof = static_cast<int>(k);
-  } else {
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> qe(q);
-    for (Eigen::Index e = 0; e < k; ++e) {
-      if (qe.eigenvalues()(e) > 1e-9) {
-        const double proj = qe.eigenvectors().col(e).dot(vw);
-        t.statistic += proj * proj / qe.eigenvalues()(e);
-        ++t.dof;
-      }
-    }
-  }
-  t.statistic /= sigma_scale * sigma_scale;
-  t.p_value = t.dof > 0 ? chi_squared_upper_tail(t.dof, t.statistic) : 1.0;
+  const MeasurementTest m = measurement_test(vw, q, sigma_scale);
+  t.statistic = m.statistic;
+  t.dof = m.dof;
+  t.p_value = m.p_value;
+  t.log_p = m.log_p;
 
   // Redundancy numbers: the diagonal of R = Q_v P (Q_v the residuals'
   // cofactor, P = C⁻¹) along each axis; in whitened terms R = W⁻¹ Q W, whose
@@ -51,21 +87,21 @@ ObservationTest test_observation(const Eigen::VectorXd& v, const Eigen::MatrixXd
   for (Eigen::Index axis = 0; axis < n_axes; ++axis) {
     const Eigen::VectorXd b = w * axes.row(axis).transpose();  // blunder direction, whitened
     const double qb = b.dot(q * b);
-    if (!(qb > 1e-12 * b.squaredNorm())) {  // no redundancy along this axis: the blunder is invisible
+    if (in_fit) {
+      double along = 0.0;  // aᵀ R a
+      for (Eigen::Index i = 0; i < k; ++i) {
+        for (Eigen::Index j = 0; j < k; ++j) along += axes(axis, i) * r(i, j) * axes(axis, j);
+      }
+      t.redundancy(axis) = std::max(0.0, along);  // rounding of a zero redundancy can be negative
+    }
+    if (!(qb >= kMinRedundancy * b.squaredNorm())) {  // uncontrolled along this axis: no w-test
       t.w(axis) = kNaN;
       if (in_fit) t.mdb(axis) = std::numeric_limits<double>::infinity();
       continue;
     }
     t.w(axis) = b.dot(vw) / std::sqrt(qb) / sigma_scale;  // τ-test when σ0 is estimated
     if (!(std::fabs(t.w(axis)) <= t.w_max)) t.w_max = std::fabs(t.w(axis));
-    if (in_fit) {
-      double along = 0.0;  // aᵀ R a
-      for (Eigen::Index i = 0; i < k; ++i) {
-        for (Eigen::Index j = 0; j < k; ++j) along += axes(axis, i) * r(i, j) * axes(axis, j);
-      }
-      t.redundancy(axis) = along;
-      t.mdb(axis) = std::sqrt(lambda0) * sigma_scale / std::sqrt(qb);
-    }
+    if (in_fit) t.mdb(axis) = std::sqrt(lambda0) * sigma_scale / std::sqrt(qb);
   }
   return t;
 }
@@ -79,6 +115,7 @@ void test_point(const PointTestInput& in, double sigma_scale, double lambda0, Po
   pr.point_statistic = t.statistic;
   pr.point_dof = t.dof;
   pr.point_p_value = t.p_value;
+  pr.point_log_p = t.log_p;
   pr.w_enu = t.w;
   pr.w_max = t.w_max;
   pr.redundancy_enu = t.redundancy;
@@ -101,18 +138,6 @@ GlobalTest global_test(double omega, int dof, double alpha, bool applicable) {
   return g;
 }
 
-std::vector<std::size_t> snoop_selection(const std::vector<SnoopCandidate>& failing,
-                                         const std::function<bool(std::size_t)>& may_take) {
-  std::vector<std::size_t> take;
-  double leverage = 0.0;
-  for (std::size_t k = 0; k < failing.size(); ++k) {
-    if (!take.empty() && (leverage + failing[k].leverage > kSnoopLeverageBudget || !may_take(take.size() + 1))) break;
-    leverage += failing[k].leverage;
-    take.push_back(k);
-  }
-  return take;
-}
-
 PointTestLevels point_test_levels(const FitOptions& o) {
   PointTestLevels l;
   l.w_critical = normal_quantile(1.0 - o.alpha_point / 2.0);
@@ -131,43 +156,97 @@ double sigma_scale(const FitResult& r, const FitOptions& o) { return o.scale_by_
 Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov) {
   Eigen::MatrixXd c = cov;
   for (Eigen::Index a = 0; a < cov.rows(); ++a) {
-    for (Eigen::Index b = 0; b < cov.cols(); ++b) c(a, b) = cov(a, b) / std::sqrt(cov(a, a) * cov(b, b));
+    for (Eigen::Index b = 0; b < cov.cols(); ++b) c(a, b) = a == b ? 1.0 : correlation_coefficient(cov(a, b), cov(a, a), cov(b, b));
   }
   return c;
+}
+
+double correlation_coefficient(double covariance, double variance_a, double variance_b) {
+  const double d = std::sqrt(variance_a * variance_b);
+  if (!(d > 0.0) || !std::isfinite(covariance)) return 0.0;
+  // A covariance matrix's rounding can put |c| a few parts in 10⁶ past 1
+  // where two components are nearly dependent; a correlation is never more.
+  return std::clamp(covariance / d, -1.0, 1.0);
 }
 
 std::size_t max_snooped(std::size_t n, const FitOptions& o) {
   return std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(o.max_outlier_share * static_cast<double>(n))));
 }
 
-SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions& o, int u, int min_points) {
-  if (!o.data_snooping || r.dof <= 0) return SnoopStep::none;
-  // The failing points, worst (smallest p-value) first.
-  std::vector<std::size_t> failing;  // positions in `active`
-  for (std::size_t k = 0; k < active.size(); ++k) {
-    const auto& p = r.points[active[k]];
-    if (p.point_dof > 0 && p.point_p_value < o.alpha_point) failing.push_back(k);
+namespace {
+
+// Q(i, t) = δ_it I − A_i N⁻¹ A_tᵀ between the failing marks of a fit.
+class FitCofactors final : public CofactorSource {
+ public:
+  explicit FitCofactors(const FitLinearization& lin) : lin_(lin) {}
+  Eigen::MatrixXd column(const std::vector<std::size_t>& rows, std::size_t t) override {
+    const Eigen::MatrixXd nat = lin_.n_inv * lin_.a[t].transpose();  // u × 3
+    Eigen::MatrixXd out(static_cast<Eigen::Index>(3 * rows.size()), 3);
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      Eigen::Matrix3d block = -lin_.a[rows[k]] * nat;
+      if (rows[k] == t) block += Eigen::Matrix3d::Identity();
+      out.middleRows(static_cast<Eigen::Index>(3 * k), 3) = block;
+    }
+    return out;
   }
-  if (failing.empty()) return SnoopStep::none;
-  std::stable_sort(failing.begin(), failing.end(), [&](std::size_t a, std::size_t b) {
-    return r.points[active[a]].point_p_value < r.points[active[b]].point_p_value;
-  });
+
+ private:
+  const FitLinearization& lin_;
+};
+
+}  // namespace
+
+SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions& o, int u, int min_points,
+                const FitLinearization& lin) {
+  if (!o.data_snooping || r.dof <= 0 || lin.position.empty()) return SnoopStep::none;
   const auto why_of = [&](const PointResult& pr) {
     return "point test " + fmt(pr.point_statistic, 4) + " (χ²(" + std::to_string(pr.point_dof) + "), p = " +
            fmt(pr.point_p_value, 2) + " < " + fmt(o.alpha_point) + "); max |w| " + fmt(pr.w_max) + "; residual E/N/U " +
            fmt(pr.residual_enu_m.x()) + ", " + fmt(pr.residual_enu_m.y()) + ", " + fmt(pr.residual_enu_m.z()) + " m";
   };
-  const PointResult& worst = r.points[active[failing.front()]];
-  const int n = static_cast<int>(active.size());
-  if (n - 1 < min_points || 3 * (n - 1) - u <= 0) {
-    r.warnings.push_back("point " + worst.id + " fails the " + why_of(worst) + ", but too few points remain to remove it");
-    return SnoopStep::stopped;
+  // The candidates: the marks failing now (their design rows and residuals
+  // as the fit stands), keyed by id (ids are unique in a control set).
+  std::vector<SnoopingCandidate> candidates(lin.position.size());
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    candidates[c].v = lin.vw[c];
+    candidates[c].q = Eigen::Matrix3d::Identity() - lin.a[c] * lin.n_inv * lin.a[c].transpose();
+    candidates[c].key = r.points[active[lin.position[c]]].id;
   }
   const std::size_t marks = r.points.size();
   const std::size_t removed = static_cast<std::size_t>(std::count_if(r.points.begin(), r.points.end(),
                                                                      [](const PointResult& p) { return p.outlier; }));
   const std::size_t limit = max_snooped(marks, o);
-  if (removed + 1 > limit) {
+  const int n = static_cast<int>(active.size());
+  SnoopingLimits limits;
+  limits.alpha = o.alpha_point;
+  limits.max_removals = limit > removed ? limit - removed : 0;
+  limits.scale_by_sigma0 = o.scale_by_sigma0 && r.sigma0.has_value();
+  limits.dof = r.dof;
+  limits.omega = r.sigma0 ? *r.sigma0 * *r.sigma0 * r.dof : 0.0;
+  limits.may_remove = [&](std::size_t count, std::size_t) {
+    const int left = n - static_cast<int>(count);
+    return left >= min_points && 3 * left - u > 0;
+  };
+  FitCofactors cofactors(lin);
+  const SnoopingSequence seq = snooping_sequence(candidates, cofactors, limits);
+  const auto point_of = [&](std::size_t c) -> PointResult& { return r.points[active[lin.position[c]]]; };
+  // Ranks continue those of the marks removed in earlier passes.
+  for (std::size_t k = 0; k < seq.removals.size(); ++k) point_of(seq.removals[k].candidate).snooping_rank = removed + k + 1;
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    if (seq.passes_after[c] >= 0) point_of(c).passes_after_rank = removed + static_cast<std::size_t>(seq.passes_after[c]) + 1;
+  }
+  for (std::size_t c : seq.not_removable) {
+    r.warnings.push_back("point " + point_of(c).id + " fails the " + why_of(point_of(c)) +
+                         ", but too few points remain to remove it (the other marks do not determine all the fit takes from it)");
+  }
+  if (seq.stopped_by_caller && !seq.still_failing.empty()) {
+    const PointResult& worst = point_of(seq.still_failing.front());
+    r.warnings.push_back("point " + worst.id + " fails the " + why_of(worst) + ", but too few points remain to remove it");
+  }
+  // Past the limit: with --remove-outliers the marks up to it go first (the
+  // next pass refuses, with them out); else named.
+  if (seq.limit_reached && !seq.still_failing.empty() && (!o.remove_outliers || seq.removals.empty())) {
+    const PointResult& worst = point_of(seq.still_failing.front());
     const auto& g = r.global_test;
     std::string global;
     if (g.applicable) {
@@ -175,36 +254,32 @@ SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions
                " (" + fmt(g.statistic, 4) + " vs [" + fmt(g.critical_lower, 4) + ", " + fmt(g.critical_upper, 4) +
                "], σ0 = " + fmt(r.sigma0.value_or(0.0), 4) + ")";
     }
-    r.refused_because = "data snooping stopped after removing " + std::to_string(removed) + " of " + std::to_string(marks) +
-                        " marks (the limit is " + fmt(100.0 * o.max_outlier_share, 3) + " %, --max-outlier-share): " +
-                        worst.id + " still fails its " + why_of(worst) + global + "; " + std::to_string(failing.size()) +
-                        " marks fail now. So many failing marks mean the data or the model is wrong (frames, units, "
-                        "height types, quantized coordinates), not a few blunders";
-    r.warnings.push_back(r.refused_because);
-    return SnoopStep::stopped;
+    const std::string why = "data snooping " + std::string(o.remove_outliers ? "stopped after removing " : "would stop after removing ") +
+                            std::to_string(removed + seq.removals.size()) + " of " + std::to_string(marks) +
+                            " marks (the limit is " + fmt(100.0 * o.max_outlier_share, 3) + " %, --max-outlier-share): " +
+                            worst.id + " still fails its " + why_of(worst) + global + "; " +
+                            std::to_string(seq.still_failing.size()) +
+                            " marks would fail then. So many failing marks mean the data or the model is wrong (frames, "
+                            "units, height types, quantized coordinates), not a few blunders";
+    if (o.remove_outliers) {
+      r.refused_because = why;
+    }
+    r.warnings.push_back(why);
+    if (o.remove_outliers) return SnoopStep::stopped;
   }
-  // The worst point goes; with it, further failing points while their
-  // leverages (1 − mean redundancy) add up to at most kSnoopLeverageBudget:
-  // then removing them together moves the parameters, and the others'
-  // tests, as removing them one at a time would, to within a few per cent.
-  // In a small network one point's leverage exceeds the budget, and this is
-  // Baarda's one-at-a-time data snooping; in a network of 10⁵ marks the
-  // chance failures at alpha_point go in a few passes instead of one each.
-  std::vector<SnoopCandidate> candidates;
-  for (std::size_t k : failing) {
-    const PointResult& p = r.points[active[k]];
-    candidates.push_back({p.point_p_value, 1.0 - p.redundancy_enu.sum() / 3.0});
-  }
-  std::vector<std::size_t> take = snoop_selection(candidates, [&](std::size_t count) {
-    const int left = n - static_cast<int>(count);
-    return removed + count <= limit && left >= min_points && 3 * left - u > 0;
-  });
-  for (std::size_t& k : take) k = failing[k];
-  for (std::size_t k : take) {
-    PointResult& pr = r.points[active[k]];
+  if (!o.remove_outliers || seq.removals.empty()) return SnoopStep::none;
+  // --remove-outliers: the ranked marks go, in their order; the caller
+  // fits again and tests every mark anew.
+  std::vector<std::size_t> take;
+  for (const SnoopingRemoval& x : seq.removals) {
+    PointResult& pr = point_of(x.candidate);
     pr.outlier = true;
     pr.used = false;
-    pr.removed_because = "data snooping: " + why_of(pr);
+    pr.removed_because = "data snooping (rank " + std::to_string(pr.snooping_rank) + "): " + why_of(pr) +
+                         (x.statistic != pr.point_statistic
+                              ? " (with the marks removed before it: point test " + fmt(x.statistic, 4) + ", p = " + fmt(x.p_value, 2) + ")"
+                              : std::string());
+    take.push_back(lin.position[x.candidate]);
   }
   std::sort(take.begin(), take.end());
   for (auto it = take.rbegin(); it != take.rend(); ++it) active.erase(active.begin() + static_cast<std::ptrdiff_t>(*it));
@@ -220,6 +295,24 @@ GeometryDilution geometry_dilution(const Eigen::MatrixXd& scaled_cov, const std:
   g.dilution = std::sqrt(std::max(eig.eigenvalues()(top), 0.0) / reference);
   g.direction = eig.eigenvectors().col(top);
   return g;
+}
+
+std::vector<std::size_t> failing_marks(const FitResult& r) {
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < r.points.size(); ++i) {
+    const TestStatus s = r.points[i].status(r.alpha_point);
+    if (s == TestStatus::flagged || (s == TestStatus::removed && r.points[i].snooping_rank > 0)) out.push_back(i);
+  }
+  std::sort(out.begin(), out.end(), [&](std::size_t a, std::size_t b) {
+    const PointResult& pa = r.points[a];
+    const PointResult& pb = r.points[b];
+    if ((pa.snooping_rank > 0) != (pb.snooping_rank > 0)) return pa.snooping_rank > 0;
+    if (pa.snooping_rank != pb.snooping_rank) return pa.snooping_rank < pb.snooping_rank;
+    if (stronger_evidence(pa.point_log_p, pa.point_statistic, pb.point_log_p, pb.point_statistic)) return true;
+    if (stronger_evidence(pb.point_log_p, pb.point_statistic, pa.point_log_p, pa.point_statistic)) return false;
+    return pa.id < pb.id;
+  });
+  return out;
 }
 
 void add_statistics_warnings(FitResult& r, const FitOptions& o) {
@@ -251,6 +344,26 @@ void add_statistics_warnings(FitResult& r, const FitOptions& o) {
              " of them fail by chance alone with no blunder at all, and removing those lowers σ0 to about " +
              fmt(sigma0_after, 4) + " of its true value";
     r.warnings.push_back(chance);
+  }
+  // Flagged marks: failing and kept (the default).
+  std::size_t flagged = 0, ranked = 0, explained = 0;
+  const PointResult* first = nullptr;
+  for (const auto& p : r.points) {
+    if (p.status(o.alpha_point) != TestStatus::flagged) continue;
+    ++flagged;
+    ranked += p.snooping_rank > 0 ? 1u : 0u;
+    explained += p.passes_after_rank > 0 ? 1u : 0u;
+    if (p.snooping_rank > 0 && (!first || p.snooping_rank < first->snooping_rank)) first = &p;
+  }
+  if (flagged > 0) {
+    r.warnings.push_back(std::to_string(flagged) + " of " + std::to_string(r.points.size()) + " marks fail their point test at alpha_point = " +
+                         fmt(o.alpha_point) + " and are flagged, none removed" +
+                         (first ? "; data snooping would remove " + std::to_string(ranked) + " (" + first->id +
+                                      " first; --remove-outliers removes them in the order of their snooping rank)"
+                                : std::string()) +
+                         (explained > 0 ? "; " + std::to_string(explained) + " pass once those before them are removed" : std::string()) +
+                         "; about " + fmt(o.alpha_point * static_cast<double>(r.points.size()), 3) +
+                         " of the marks fail by chance alone with no blunder at all");
   }
   if (g.applicable && !g.passed) {
     r.warnings.push_back(std::string("global test ") +

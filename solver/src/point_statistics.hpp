@@ -26,25 +26,50 @@ struct PointTestInput {
   bool in_fit = true;
 };
 
+// Below this redundancy a direction of a measurement's residual is not
+// tested: the eigenvalues of the whitened residual cofactor Q (the
+// redundancy numbers of the measurement's independent directions, 0 … 1 in
+// the adjustment) are compared with it, and so is each axis's redundancy
+// bᵀQb/bᵀb. Along such a direction a blunder shows in the residual at less
+// than a thousandth of its size (its MDB is over 30 times the measurement's
+// own σ·√λ0), and what the residual holds there is rounding: Q = I − A N⁻¹ Aᵀ
+// is formed in double precision, so a redundancy of 1e-10 gives w-tests of
+// a few units from rounding alone. A measurement with no direction above it
+// is "uncontrolled": it is adjusted, never tested, never removed.
+inline constexpr double kMinRedundancy = 1e-3;
+
+// The test of one measurement (or mark) of k components over the
+// directions of its residual that are controlled (the eigenvectors of Q
+// with eigenvalue ≥ kMinRedundancy): statistic vᵀ Q⁺ v (over those
+// directions; v whitened, divided by σ0² for τ-tests), χ²(dof) under H0,
+// dof the number of those directions (0: uncontrolled, p = 1). log_p is
+// ln p computed without underflow: the evidence data snooping ranks by.
+struct MeasurementTest {
+  double statistic = 0.0;
+  int dof = 0;
+  double p_value = 1.0;
+  double log_p = 0.0;
+};
+MeasurementTest measurement_test(const Eigen::VectorXd& vw, const Eigen::MatrixXd& q, double sigma_scale);
+
 // The tests of one observation of k components (a mark's three
 // coordinates, a GNSS baseline, a distance): `v` its residual, `w` the
 // whitening (Wᵀ W = C⁻¹), `q` the cofactor of the whitened residual
 // (I − A N⁻¹ Aᵀ in the adjustment, I + A N⁻¹ Aᵀ for one tested against
 // it), `axes` the directions in the observation's space along which
 // blunders are tested (rows, unit length: the local E, N, U of a mark, the
-// identity for a measurement's own components).
-// How much leverage (Σ over removed points of 1 − mean redundancy) one
-// snooping pass may remove at once; see snoop().
-inline constexpr double kSnoopLeverageBudget = 0.01;
-
+// identity for a measurement's own components). The measurement test is
+// measurement_test(); an axis whose redundancy is below kMinRedundancy has
+// no w-test (NaN) and an infinite MDB.
 struct ObservationTest {
-  Eigen::VectorXd w;           // per axis (NaN: no redundancy along it)
-  Eigen::VectorXd redundancy;  // per axis: the diagonal of Q_v P there (0 outside the adjustment, or without redundancy)
+  Eigen::VectorXd w;           // per axis (NaN: uncontrolled along it)
+  Eigen::VectorXd redundancy;  // per axis: the diagonal of Q_v P there (0 outside the adjustment)
   Eigen::VectorXd mdb;         // per axis, in the observation's units (inf: undetectable; NaN outside)
   double w_max = 0.0;
   double statistic = 0.0;      // vᵀ Q⁺ v of the whitened residual: χ²(dof) under H0
   int dof = 0;
   double p_value = 1.0;
+  double log_p = 0.0;
 };
 ObservationTest test_observation(const Eigen::VectorXd& v, const Eigen::MatrixXd& w, const Eigen::MatrixXd& q,
                                  const Eigen::MatrixXd& axes, bool in_fit, double sigma_scale, double lambda0);
@@ -52,17 +77,6 @@ ObservationTest test_observation(const Eigen::VectorXd& v, const Eigen::MatrixXd
 // The two-sided χ² global test of Ω = Σ vᵀPv with `dof` degrees of
 // freedom at `alpha`; applicable with a-priori sigmas and redundancy.
 GlobalTest global_test(double omega, int dof, double alpha, bool applicable);
-
-// Which failing items (worst first: ascending p-value) one pass of data
-// snooping removes: the first, then more while their leverages (1 − mean
-// redundancy) add up to at most kSnoopLeverageBudget and `may_take(count)`
-// allows `count` of them. Returns indices into `failing`.
-struct SnoopCandidate {
-  double p_value = 1.0;
-  double leverage = 0.0;
-};
-std::vector<std::size_t> snoop_selection(const std::vector<SnoopCandidate>& failing,
-                                         const std::function<bool(std::size_t)>& may_take);
 
 // Fills residual_enu_m, w_enu, w_max, redundancy_enu, mdb_m and the point
 // test of `pr`. `sigma_scale` is σ̂0 when σ0 is estimated (τ-tests), else 1;
@@ -86,22 +100,46 @@ void fill_global_test(FitResult& r, double omega, int dof, double alpha, bool a_
 // σ̂0 when the options scale by it (and it is defined), else 1.
 double sigma_scale(const FitResult& r, const FitOptions& o);
 
-// The correlation matrix of a covariance matrix.
+// The correlation matrix of a covariance matrix, each entry by
+// correlation_coefficient.
 Eigen::MatrixXd correlation_of(const Eigen::MatrixXd& cov);
+// cov / √(var_a var_b) within [−1, 1] (rounding of a nearly dependent pair
+// can put it a few parts in 10⁶ outside); 0 when either variance is 0 (a
+// fixed component) or a value is not finite.
+double correlation_coefficient(double covariance, double variance_a, double variance_b);
 
-// One step of data snooping after the points in `active` were tested in
-// the fit: the point with the smallest point-test p-value below
-// alpha_point is removed from `active` (marked in `r`) and `removed` is
-// returned, so that the caller refits; in large networks further failing
-// points go in the same step while their leverage is small (see
-// kSnoopLeverageBudget). A failing point is never kept
-// silently: when too few points would remain (fewer than `min_points`, or no
-// redundancy), or when removing it would take data snooping past the
-// options' max_outlier_share of the marks, it stays in the fit, a warning
-// names it, and past the share `r.refused_because` says the data or the
-// model is wrong and which test failed.
+// What data snooping needs of a fit as it stands: for each mark that
+// fails its point test (its place in `active`), its whitened design rows
+// over the estimated parameters (3 × u) and whitened residual; and the
+// parameters' cofactor N⁻¹ (u × u, σ0 = 1). Only the failing marks are
+// kept (10⁶ marks: a few thousand rows, not 10⁶).
+struct FitLinearization {
+  Eigen::MatrixXd n_inv;
+  std::vector<std::size_t> position;   // in `active`
+  std::vector<Eigen::MatrixXd> a;      // 3 × u each
+  std::vector<Eigen::Vector3d> vw;
+  void add(std::size_t at, const Eigen::MatrixXd& rows, const Eigen::Vector3d& whitened) {
+    position.push_back(at);
+    a.push_back(rows);
+    vw.push_back(whitened);
+  }
+};
+
+// Data snooping after the marks in `active` were tested in the fit
+// (solver/src/snooping.hpp): the order in which iterative snooping removes
+// the failing marks, each removal the strongest evidence after the ones
+// before it, is each mark's snooping_rank (ranks continue those of earlier
+// passes). With o.remove_outliers the ranked marks are removed from
+// `active` (marked in `r`) and `removed` is returned, so that the caller
+// refits and tests again; otherwise nothing is removed (none). A failing
+// mark is never removed silently: when too few marks would remain (fewer
+// than `min_points`, or no redundancy) it stays, a warning names it
+// (stopped); past the options' max_outlier_share of the marks
+// `r.refused_because` says the data or the model is wrong and which test
+// failed.
 enum class SnoopStep { none, removed, stopped };
-SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions& o, int u, int min_points);
+SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions& o, int u, int min_points,
+                const FitLinearization& lin);
 
 // The largest number of marks data snooping may remove from `n` marks.
 std::size_t max_snooped(std::size_t n, const FitOptions& o);

@@ -200,7 +200,9 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
     const int dof = 3 * n - kParams;
     fill_global_test(result, omega, dof, o.alpha, control.has_a_priori_sigmas);
     const double scale = sigma_scale(result, o);
-    auto tests = [&](const SiteObs& ob, const Eigen::Vector3d& vi, bool in_fit, PointResult& pr) {
+    FitLinearization lin;  // the failing marks, for data snooping
+    lin.n_inv = cov7;
+    auto tests = [&](const SiteObs& ob, const Eigen::Vector3d& vi, bool in_fit, PointResult& pr, std::size_t position) {
       ceres::AutoDiffCostFunction<SiteCost, 3, kParams> f(new SiteCost{ob, e0, n0});
       double res[3] = {}, jac[3 * kParams] = {};
       double* jacs[1] = {jac};
@@ -209,18 +211,19 @@ FitResult fit_site_calibration(const geodesy::ControlSet& control, const FitOpti
       const Eigen::Map<Eigen::Matrix<double, 3, kParams, Eigen::RowMajor>> aw(jac);
       const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() + (in_fit ? -1.0 : 1.0) * aw * cov7 * aw.transpose();
       test_point(PointTestInput{vi, ob.w, q, Eigen::Matrix3d::Identity(), in_fit}, scale, levels.lambda0, pr);
+      if (in_fit && pr.point_dof > 0 && pr.point_p_value < o.alpha_point) lin.add(position, aw, ob.w * vi);
     };
     for (std::size_t m = 0; m < active.size(); ++m) {
       result.points[active[m]].used = true;
-      tests(obs[m], v[m], true, result.points[active[m]]);
+      tests(obs[m], v[m], true, result.points[active[m]], m);
     }
-    if (snoop(result, active, o, kParams, 3) == SnoopStep::removed) continue;
+    if (snoop(result, active, o, kParams, 3, lin) == SnoopStep::removed) continue;
     std::vector<bool> in_fit(control.points.size(), false);
     for (std::size_t i : active) in_fit[i] = true;
     for (std::size_t i = 0; i < control.points.size(); ++i) {
       if (in_fit[i]) continue;
       const SiteObs ob = observation(i, similarity);
-      tests(ob, ob.grid - result.site_calibration->grid_from_local(ob.local), false, result.points[i]);
+      tests(ob, ob.grid - result.site_calibration->grid_from_local(ob.local), false, result.points[i], 0);
     }
 
     // Reported parameters: (a, b) as rotation and scale; tilts in ppm (mm/km).

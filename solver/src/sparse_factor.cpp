@@ -289,6 +289,20 @@ std::string gigabytes(double bytes) {
   return text;
 }
 
+// The first column (in the factor's order) whose pivot L(k, k)² is below
+// kMinPivotRatio of N's own diagonal there, or −1.
+std::int64_t first_negligible_pivot(const SupernodalLayout& layout, const double* x, const std::vector<double>& diagonal) {
+  for (std::int64_t s = 0; s < layout.nsuper; ++s) {
+    const std::int64_t first = layout.super[s], width = layout.super[s + 1] - first;
+    const std::int64_t rows = layout.pi[s + 1] - layout.pi[s];
+    for (std::int64_t c = 0; c < width; ++c) {
+      const double d = x[layout.px[s] + c * rows + c];
+      if (!(d * d >= kMinPivotRatio * diagonal[static_cast<std::size_t>(first + c)])) return first + c;
+    }
+  }
+  return -1;
+}
+
 }  // namespace
 
 std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vector<SymmetricEntry>& entries, Mode mode,
@@ -314,6 +328,17 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
       if (e.row != e.col) impl->dense(e.col, e.row) += e.value;
     }
     impl->llt.compute(impl->dense);
+    std::int64_t negligible = -1;
+    if (impl->llt.info() == Eigen::Success) {
+      for (std::int64_t k = 0; k < n && negligible < 0; ++k) {
+        const double d = impl->llt.matrixLLT()(k, k);
+        if (!(d * d >= kMinPivotRatio * impl->dense(k, k))) negligible = k;
+      }
+    }
+    if (negligible >= 0) {
+      if (failed_column) *failed_column = negligible;
+      return std::nullopt;
+    }
     if (impl->llt.info() != Eigen::Success) {
       // The first column whose pivot is not positive.
       Eigen::MatrixXd a = impl->dense;
@@ -430,8 +455,16 @@ std::optional<NormalFactor> NormalFactor::factor(std::int64_t n, const std::vect
                                 static_cast<const std::int64_t*>(f->pi), static_cast<const std::int64_t*>(f->px),
                                 static_cast<const std::int64_t*>(f->s)};
   if (!impl->tree) impl->tree.emplace(layout);
-  const std::int64_t failed = factor_supernodal(layout, *impl->tree, lower_p.data(), lower_i.data(), lower_x.data(),
-                                                static_cast<double*>(f->x), std::max(1, jobs));
+  // N's diagonal in the factor's order (each column's entries start at its diagonal).
+  std::vector<double> diagonal(static_cast<std::size_t>(n), 0.0);
+  for (std::int64_t j = 0; j < n; ++j) {
+    for (std::int64_t q = lower_p[static_cast<std::size_t>(j)]; q < lower_p[static_cast<std::size_t>(j) + 1]; ++q) {
+      if (lower_i[static_cast<std::size_t>(q)] == j) diagonal[static_cast<std::size_t>(j)] += lower_x[static_cast<std::size_t>(q)];
+    }
+  }
+  std::int64_t failed = factor_supernodal(layout, *impl->tree, lower_p.data(), lower_i.data(), lower_x.data(),
+                                          static_cast<double*>(f->x), std::max(1, jobs));
+  if (failed < 0) failed = first_negligible_pivot(layout, static_cast<const double*>(f->x), diagonal);
   if (failed >= 0) {
     if (failed_column) *failed_column = perm[failed];
     return std::nullopt;

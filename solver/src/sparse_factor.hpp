@@ -27,6 +27,14 @@ struct SymmetricEntry {
   double value = 0.0;
 };
 
+// A pivot L(k, k)² below this share of the matrix's own diagonal N(k, k)
+// is a direction the matrix does not determine that rounding left positive:
+// the factorization is taken as failed there (a station whose position its
+// measurements leave free, factored early, has a pivot of a few units of
+// rounding, 1e-16 of its diagonal; a datum held by weighted constraints of
+// 100 m among baselines of millimetres, 1e-10 and more).
+inline constexpr double kMinPivotRatio = 1e-14;
+
 class NormalFactor {
  public:
   enum class Mode { sparse, dense };
@@ -35,7 +43,8 @@ class NormalFactor {
   // analysis, the numeric factorization of supernodal_cholesky.hpp on `jobs`
   // threads, the same bits on any number). When it is not positive
   // definite, nullopt, and `failed_column` the first unknown (in the
-  // caller's order) at which the factorization broke down.
+  // caller's order) at which the factorization broke down (a pivot not
+  // positive, not finite, or below kMinPivotRatio of its diagonal).
   // With `previous` (a sparse factor of a matrix of the same size), its
   // analysis (ordering and supernodal pattern) is reused when the entries
   // have the same pattern: only the numeric factorization is redone

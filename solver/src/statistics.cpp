@@ -3,6 +3,9 @@
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/normal.hpp>
 
+#include <cmath>
+#include <limits>
+
 namespace geoanchor::solver {
 namespace {
 
@@ -13,11 +16,52 @@ using DoublePolicy = boost::math::policies::policy<boost::math::policies::promot
 using ChiSquared = boost::math::chi_squared_distribution<double, DoublePolicy>;
 using Normal = boost::math::normal_distribution<double, DoublePolicy>;
 
+// ln Q(a, y), Q the regularized upper incomplete gamma function, for
+// y > a + 1: Q = e^{−y} y^a / Γ(a) · 1/(y + 1 − a − 1·(1 − a)/(y + 3 − a −
+// 2·(2 − a)/(y + 5 − a − …))), the continued fraction evaluated by the
+// modified Lentz method; every factor stays in range, only the prefactor is
+// taken in logarithms.
+double log_upper_gamma_continued_fraction(double a, double y) {
+  constexpr double kTiny = 1e-300;
+  constexpr double kEpsilon = 1e-16;
+  constexpr int kMaxTerms = 10000;
+  double b = y + 1.0 - a;
+  double c = 1.0 / kTiny;
+  double d = 1.0 / b;
+  double h = d;
+  for (int i = 1; i <= kMaxTerms; ++i) {
+    const double an = -static_cast<double>(i) * (static_cast<double>(i) - a);
+    b += 2.0;
+    d = an * d + b;
+    if (std::fabs(d) < kTiny) d = kTiny;
+    c = b + an / c;
+    if (std::fabs(c) < kTiny) c = kTiny;
+    d = 1.0 / d;
+    const double step = d * c;
+    h *= step;
+    if (std::fabs(step - 1.0) < kEpsilon) break;
+  }
+  return -y + a * std::log(y) - std::lgamma(a) + std::log(h);
+}
+
 }  // namespace
 
 double chi_squared_quantile(int dof, double p) { return boost::math::quantile(ChiSquared(dof), p); }
 
 double chi_squared_upper_tail(int dof, double x) { return boost::math::cdf(boost::math::complement(ChiSquared(dof), x)); }
+
+double chi_squared_log_upper_tail(int dof, double x) {
+  if (std::isnan(x)) return x;
+  if (x == std::numeric_limits<double>::infinity()) return -std::numeric_limits<double>::infinity();
+  if (!(x > 0.0)) return 0.0;
+  // Where the p-value is well inside double's range, its own logarithm.
+  constexpr double kSmallestTrusted = 1e-280;
+  const double a = 0.5 * dof, y = 0.5 * x;
+  if (y <= a + 1.0) return std::log(chi_squared_upper_tail(dof, x));
+  const double p = chi_squared_upper_tail(dof, x);
+  if (p > kSmallestTrusted) return std::log(p);
+  return log_upper_gamma_continued_fraction(a, y);
+}
 
 double normal_quantile(double p) { return boost::math::quantile(Normal(), p); }
 

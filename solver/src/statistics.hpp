@@ -7,6 +7,13 @@ namespace geoanchor::solver {
 double chi_squared_quantile(int dof, double p);
 // P(X > x) for X ~ χ²(dof).
 double chi_squared_upper_tail(int dof, double x);
+// ln P(X > x) for X ~ χ²(dof), without underflow: where P is below the
+// smallest normal double (a gross blunder's test: x of a few thousand and
+// more) it comes from the continued fraction of the upper incomplete gamma
+// function in logarithms. The evidence data snooping ranks by: a p-value of
+// 0 would tie every gross blunder with every other. −inf for x = +inf, NaN
+// for NaN.
+double chi_squared_log_upper_tail(int dof, double x);
 // x with P(Z <= x) = p for Z ~ N(0, 1).
 double normal_quantile(double p);
 

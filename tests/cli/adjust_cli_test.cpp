@@ -5,8 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+#include <GeographicLib/Geocentric.hpp>
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -182,8 +187,8 @@ TEST_F(AdjustCli, Issue14_PublishedSamplesWriteEveryOutput) {
   const std::string f = std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/";
   const RunResult r = run("adjust '" + f + "dynadjust/gnss-networkstn.xml' '" + f + "dynadjust/gnss-networkmsr.xml' -o '" +
                           path("st.csv").string() + "' --measurements '" + path("m.csv").string() + "' --sinex '" +
-                          path("s.snx").string() + "' --report '" + path("r.txt").string() + "' --json");
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+                          path("s.snx").string() + "' --report '" + path("r.txt").string() + "' --json --accept-failed-global-test");
+  ASSERT_EQ(r.exit_code, 0) << r.err;  // (as given, its global test fails high by a hair: 337.28 > 336.90)
   EXPECT_EQ(leftovers({}), (std::vector<std::string>{"m.csv", "r.txt", "s.snx", "st.csv", "st.csv.geoanchor.json"}));
   EXPECT_NE(r.out.find("\"variance_factor\""), std::string::npos);
   const RunResult g = run("adjust '" + f + "gama/tst-tetrahedron-1.gkf' -o '" + path("t.csv").string() + "' --no-snooping");
@@ -259,10 +264,10 @@ TEST_F(AdjustCli, Issue17_GenerateWritesANetworkThatAdjustReads) {
   EXPECT_NE(g.out.find("generated 300 stations"), std::string::npos) << g.out;
   EXPECT_NE(g.out.find("2 planted blunders"), std::string::npos) << g.out;
   const RunResult a = run("adjust '" + path("network.stn.xml").string() + "' '" + path("network.msr.xml").string() + "' -o '" +
-                          path("st.csv").string() + "' --report '" + path("r.txt").string() + "'");
+                          path("st.csv").string() + "' --report '" + path("r.txt").string() + "' --remove-outliers");
   EXPECT_EQ(a.exit_code, 0) << a.err;
   const RunResult j = run("adjust '" + path("network.json").string() + "' -o '" + path("st2.csv").string() + "' --report '" +
-                          path("r2.txt").string() + "'");
+                          path("r2.txt").string() + "' --remove-outliers");
   EXPECT_EQ(j.exit_code, 0) << j.err;
   // Again into the same folder: every file exists, none is replaced.
   const std::string before = testing::slurp(path("network.json"));
@@ -285,7 +290,7 @@ TEST_F(AdjustCli, Issue17_AFactorLargerThanTheMemoryIsRefusedBeforeItIsTaken) {
   }
   EXPECT_FALSE(std::filesystem::exists(path("st.csv")));
   EXPECT_FALSE(std::filesystem::exists(path("r.txt")));
-  EXPECT_EQ(run("adjust " + in + " -o '" + path("st.csv").string() + "' --report '" + path("r.txt").string() + "' --max-memory 1").exit_code, 0);
+  EXPECT_EQ(run("adjust " + in + " -o '" + path("st.csv").string() + "' --report '" + path("r.txt").string() + "' --max-memory 1 --remove-outliers").exit_code, 0);
 }
 
 // The inputs are read in one piece when they are files; a FIFO (a shell's
@@ -294,10 +299,10 @@ TEST_F(AdjustCli, Issue17_AnInputFromAFifoIsReadWhole) {
   ASSERT_EQ(run("adjust --generate 200 --out-dir '" + path("").string() + "'").exit_code, 0);
   const RunResult r = shell("mkfifo '" + path("fifo").string() + "' && { cat '" + path("network.json").string() + "' > '" +
                             path("fifo").string() + "' & } && " + exe() + " adjust '" + path("fifo").string() + "' -o '" +
-                            path("st.csv").string() + "' --report '" + path("r.txt").string() + "'");
+                            path("st.csv").string() + "' --report '" + path("r.txt").string() + "' --remove-outliers");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   const RunResult direct = run("adjust '" + path("network.json").string() + "' -o '" + path("st2.csv").string() + "' --report '" +
-                               path("r2.txt").string() + "'");
+                               path("r2.txt").string() + "' --remove-outliers");
   EXPECT_EQ(direct.exit_code, 0) << direct.err;
   EXPECT_EQ(testing::slurp(path("st.csv")), testing::slurp(path("st2.csv")));
   // A FIFO cannot be read twice: its hash is null (as standard input's), never that of nothing.
@@ -326,6 +331,136 @@ TEST_F(AdjustCli, Issue17_GenerateMisuseIsRefusedByName) {
     for (const auto& piece : pieces) EXPECT_NE(r.err.find(piece), std::string::npos) << piece << " in: " << r.err;
     EXPECT_EQ(leftovers({}), std::vector<std::string>{});
   }
+}
+
+}  // namespace
+}  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// Issue 39: the refusals it adds name what is wrong and leave no output.
+// The stations: four marks around Zürich; their ECEF positions and
+// distances by GeographicLib (a reference of its own here).
+struct Mark {
+  const char* id;
+  double lat, lon, h;
+};
+constexpr Mark kMarks[] = {{"A", 47.45, 8.55, 430.0}, {"B", 47.46, 8.56, 440.0}, {"C", 47.455, 8.57, 435.0}, {"D", 47.447, 8.565, 520.0}};
+
+Eigen::Vector3d ecef_of(const Mark& m) {
+  const GeographicLib::Geocentric grs80(6378137.0, 1.0 / 298.257222101);
+  Eigen::Vector3d x;
+  grs80.Forward(m.lat, m.lon, m.h, x.x(), x.y(), x.z());
+  return x;
+}
+
+std::string mark_json(const Mark& m, const std::string& constraint = "") {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, R"({"id": "%s", "lat_deg": %.9f, "lon_deg": %.9f, "h_m": %.4f%s})", m.id, m.lat, m.lon, m.h,
+                constraint.empty() ? "" : (", \"constraint\": \"" + constraint + "\"").c_str());
+  return buf;
+}
+
+TEST_F(AdjustCli, Issue39_BadInputIsRefusedByNameWithNoOutput) {
+  const auto run_in = [&](const std::string& json, const std::string& args) {
+    write("net.json", json);
+    return run("adjust '" + path("net.json").string() + "' -o '" + path("st.csv").string() + "' --measurements '" +
+               path("m.csv").string() + "' --report '" + path("r.txt").string() + "' " + args);
+  };
+  // A GNSS point cluster in ITRF2014, a dynamic frame, with no epoch: never
+  // taken at the network's epoch silently.
+  const Eigen::Vector3d b = ecef_of(kMarks[1]);
+  char cluster[400];
+  std::snprintf(cluster, sizeof cluster,
+                R"({"kind": "gnss_point_cluster", "frame": "ITRF2014", "cov_m2": [[1e-4,0,0],[0,1e-4,0],[0,0,1e-4]], "points": [{"id": "B", "x_m": %.4f, "y_m": %.4f, "z_m": %.4f}]})",
+                b.x(), b.y(), b.z());
+  const std::string stations = mark_json(kMarks[0], "CCC") + "," + mark_json(kMarks[1]);
+  const std::string dated = network(stations, baseline("A", "B") + "," + cluster);
+  const RunResult no_epoch = run_in(dated, "");
+  EXPECT_EQ(no_epoch.exit_code, 3) << no_epoch.err;
+  for (const char* piece : {"E_EPOCH_MISSING", "net.json: measurements[1]", "in ITRF2014, a dynamic frame, with no coordinate epoch",
+                            "--frame NAME@EPOCH"}) {
+    EXPECT_NE(no_epoch.err.find(piece), std::string::npos) << piece << " in: " << no_epoch.err;
+  }
+  EXPECT_EQ(leftovers({"net.json"}), std::vector<std::string>{});
+  // With --frame the epoch to assume is given: taken at it, and said so.
+  const RunResult assumed = run_in(dated, "--frame ITRF2014@2024.5 --accept-failed-global-test");
+  EXPECT_EQ(assumed.exit_code, 0) << assumed.err;
+  EXPECT_NE(assumed.err.find("warning: 1 GNSS measurement(s) in a dynamic frame name no coordinate epoch"), std::string::npos)
+      << assumed.err;
+  EXPECT_NE(testing::slurp(path("r.txt")).find("taken at --frame's epoch, as ITRF2014@2024.5"), std::string::npos);
+  for (const char* f : {"st.csv", "st.csv.geoanchor.json", "m.csv", "r.txt"}) std::filesystem::remove(path(f));
+
+  // Inner constraints over stations that do not hold the defect: a
+  // tetrahedron of slope distances (free: three translations, three
+  // rotations) held at two of its marks leaves the rotation about their line.
+  std::string distances;
+  for (std::size_t i = 0; i < 4; ++i) {
+    for (std::size_t j = i + 1; j < 4; ++j) {
+      char d[200];
+      std::snprintf(d, sizeof d, R"(%s{"kind": "slope_distance", "from": "%s", "to": "%s", "value_m": %.4f, "sigma_m": 0.002})",
+                    distances.empty() ? "" : ",", kMarks[i].id, kMarks[j].id, (ecef_of(kMarks[j]) - ecef_of(kMarks[i])).norm());
+      distances += d;
+    }
+  }
+  const std::string tetrahedron = network(mark_json(kMarks[0]) + "," + mark_json(kMarks[1]) + "," + mark_json(kMarks[2]) + "," +
+                                              mark_json(kMarks[3]),
+                                          distances);
+  const RunResult two = run_in(tetrahedron, "--free --inner-constraints A,C");
+  EXPECT_EQ(two.exit_code, 2) << two.err;
+  for (const char* piece : {"E_INNER_CONSTRAINTS", "--inner-constraints A, C", "rotation about the line through them",
+                            "1 of the 6 combinations"}) {
+    EXPECT_NE(two.err.find(piece), std::string::npos) << piece << " in: " << two.err;
+  }
+  EXPECT_EQ(leftovers({"net.json"}), std::vector<std::string>{});
+  const RunResult free = run_in(tetrahedron, "--free");
+  EXPECT_EQ(free.exit_code, 0) << free.err;
+  EXPECT_NE(testing::slurp(path("r.txt")).find("free network: "), std::string::npos);
+  for (const char* f : {"st.csv", "st.csv.geoanchor.json", "m.csv", "r.txt"}) std::filesystem::remove(path(f));
+
+  // The default and its opposite together.
+  const RunResult both = run_in(tetrahedron, "--free --remove-outliers --no-snooping");
+  EXPECT_EQ(both.exit_code, 2) << both.err;
+  EXPECT_NE(both.err.find("--remove-outliers and --no-snooping: give one"), std::string::npos) << both.err;
+  EXPECT_EQ(leftovers({"net.json"}), std::vector<std::string>{});
+}
+
+// The measurements CSV states what became of each measurement: the
+// flagged one with its snooping rank by default, removed with
+// --remove-outliers, the ignored one listed as such.
+TEST_F(AdjustCli, Issue39_TheMeasurementsCsvSaysWhatBecameOfEachMeasurement) {
+  ASSERT_EQ(run("adjust --generate 300 --out-dir '" + path("").string() + "' --seed 9 --blunders 1 --blunder 0.5").exit_code, 0);
+  std::string json = testing::slurp(path("network.json"));
+  // The first measurement ignored by its input.
+  const auto at = json.find("{\"kind\": \"gnss_baseline\"");
+  ASSERT_NE(at, std::string::npos);
+  json.insert(at + 1, "\"ignore\": true, ");
+  write("net.json", json);
+  const std::string blunder_line = testing::slurp(path("network.blunders.csv"));
+  const RunResult flagged = run("adjust '" + path("net.json").string() + "' -o '" + path("st.csv").string() + "' --measurements '" +
+                                path("m.csv").string() + "' --accept-failed-global-test --json");
+  ASSERT_EQ(flagged.exit_code, 0) << flagged.err;
+  const std::string csv = testing::slurp(path("m.csv"));
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,mdb,"
+            "status,snooping_rank");
+  EXPECT_NE(csv.find(",ignored,\n"), std::string::npos);
+  EXPECT_NE(csv.find(",flagged,1\n"), std::string::npos);
+  EXPECT_EQ(csv.find(",removed,"), std::string::npos);
+  const auto report = nlohmann::json::parse(flagged.out);
+  ASSERT_FALSE(report.at("flagged").empty());
+  EXPECT_EQ(report.at("flagged").front().at("snooping_rank"), 1);
+  EXPECT_TRUE(report.at("removed").empty());
+  const RunResult removed = run("adjust '" + path("net.json").string() + "' -o '" + path("st2.csv").string() + "' --measurements '" +
+                                path("m2.csv").string() + "' --remove-outliers --json");
+  ASSERT_EQ(removed.exit_code, 0) << removed.err;
+  const std::string csv2 = testing::slurp(path("m2.csv"));
+  EXPECT_NE(csv2.find(",removed,1\n"), std::string::npos);
+  const auto report2 = nlohmann::json::parse(removed.out);
+  ASSERT_FALSE(report2.at("removed").empty());
+  EXPECT_EQ(report2.at("removed").front().at("snooping_rank"), 1);
+  EXPECT_EQ(report2.at("removed").front().at("source"), report.at("flagged").front().at("source"));
 }
 
 }  // namespace

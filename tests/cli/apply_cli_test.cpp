@@ -48,7 +48,7 @@ class ApplyCli : public CliTest {
  protected:
   // The bundled control set fitted with a 7-parameter Helmert: T.json.
   fs::path fit() {
-    const RunResult r = run("fit " + kControl + " --model helmert7 --convention position_vector -o " + path("T.json").string());
+    const RunResult r = run("fit " + kControl + " --remove-outliers --model helmert7 --convention position_vector -o " + path("T.json").string());
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return path("T.json");
   }

@@ -101,7 +101,7 @@ void write_realistic_las(const fs::path& p, std::size_t n, unsigned seed) {
 class ApplyLaz : public CliTest {
  protected:
   fs::path fit() {
-    const RunResult r = run("fit " + kFixtures + "/airport_control.csv --model helmert7 --convention position_vector -o " +
+    const RunResult r = run("fit " + kFixtures + "/airport_control.csv --remove-outliers --model helmert7 --convention position_vector -o " +
                             path("T.json").string());
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return path("T.json");

@@ -64,9 +64,9 @@ TEST_F(Conventions, Point12_CrOnlyAndMixedLineEndsConvertAsTheLfFile) {
 // issue 12 point 12
 TEST_F(Conventions, Point12_CrOnlyControlSetFitsAsTheLfFile) {
   write("cr.csv", replace_all(slurp(kControl), "\n", "\r"));
-  const RunResult lf = run("fit " + kControl + kFit + " -o " + path("lf.json").string());
+  const RunResult lf = run("fit " + kControl + " --remove-outliers" + kFit + " -o " + path("lf.json").string());
   ASSERT_EQ(lf.exit_code, 0) << lf.err;
-  const RunResult cr = run("fit " + path("cr.csv").string() + kFit + " -o " + path("cr.json").string());
+  const RunResult cr = run("fit " + path("cr.csv").string() + " --remove-outliers" + kFit + " -o " + path("cr.json").string());
   ASSERT_EQ(cr.exit_code, 0) << cr.err;
   const json a = json::parse(slurp(path("lf.json"))), b = json::parse(slurp(path("cr.json")));
   for (const char* key : {"parameters", "sigmas", "statistics", "points"}) EXPECT_EQ(a.at(key), b.at(key)) << key;
@@ -170,7 +170,7 @@ TEST_F(Conventions, Point15_DashOutputWritesStandardOutput) {
     EXPECT_EQ(leftovers({"in.csv"}), std::vector<std::string>{}) << command << ": no file '-', no sidecar";
   }
   // fit: the transform file on standard output, the report on standard error.
-  const RunResult fit = shell("cd '" + path("").string() + "' && " + exe() + " fit " + kControl + kFit + " -o -");
+  const RunResult fit = shell("cd '" + path("").string() + "' && " + exe() + " fit " + kControl + " --remove-outliers" + kFit + " -o -");
   ASSERT_EQ(fit.exit_code, 0) << fit.err;
   EXPECT_EQ(json::parse(fit.out).at("model"), "helmert7");
   EXPECT_NE(fit.err.find("geoanchor fit: model helmert7"), std::string::npos) << fit.err;
@@ -184,7 +184,7 @@ TEST_F(Conventions, Point15_DashOutputWritesStandardOutput) {
 
 // issue 12 point 15
 TEST_F(Conventions, Point15_DashForAFolderIsRefusedNotCreated) {
-  const RunResult fit = run("fit " + kControl + kFit + " -o " + path("t.json").string());
+  const RunResult fit = run("fit " + kControl + " --remove-outliers" + kFit + " -o " + path("t.json").string());
   ASSERT_EQ(fit.exit_code, 0) << fit.err;
   // report and apply write folders: `-` there would be a folder named '-'.
   const RunResult report = shell("cd '" + path("").string() + "' && " + kNoDisplay + exe() + " report " + kControl +
@@ -200,9 +200,9 @@ TEST_F(Conventions, Point15_DashForAFolderIsRefusedNotCreated) {
 
 // issue 12 point 15
 TEST_F(Conventions, Point15_FitDiagnoseSnapshotReadTheControlSetFromStandardInput) {
-  const RunResult file = run("fit " + kControl + kFit + " -o " + path("file.json").string());
+  const RunResult file = run("fit " + kControl + " --remove-outliers" + kFit + " -o " + path("file.json").string());
   ASSERT_EQ(file.exit_code, 0) << file.err;
-  const RunResult fit = run("fit -" + kFit + " -o " + path("stdin.json").string(), kControl);
+  const RunResult fit = run("fit - --remove-outliers" + kFit + " -o " + path("stdin.json").string(), kControl);
   ASSERT_EQ(fit.exit_code, 0) << fit.err;
   EXPECT_EQ(json::parse(slurp(path("file.json"))).at("parameters"), json::parse(slurp(path("stdin.json"))).at("parameters"));
 
@@ -219,7 +219,7 @@ TEST_F(Conventions, Point15_FitDiagnoseSnapshotReadTheControlSetFromStandardInpu
 
 // issue 12 point 15
 TEST_F(Conventions, Point15_JsonOnEveryReportingCommand) {
-  const RunResult fit = run("fit " + kControl + kFit + " --json -o " + path("t.json").string());
+  const RunResult fit = run("fit " + kControl + " --remove-outliers" + kFit + " --json -o " + path("t.json").string());
   ASSERT_EQ(fit.exit_code, 0) << fit.err;
   const json report = json::parse(fit.out);
   EXPECT_EQ(report.at("schema"), "geoanchor.fit-report/1");

@@ -5,8 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
+#include <GeographicLib/Geocentric.hpp>
+#include <GeographicLib/LocalCartesian.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <numeric>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -71,10 +75,10 @@ std::vector<Eigen::Vector3d> ecef_rows(const std::string& text) {
 const std::string kControl = std::string(GEOANCHOR_FIXTURES_DIR) + "/airport_control.csv";
 
 TEST_F(FitCli, BundledExampleNamesThePlantedBlunderAndPassesTheGlobalTest) {
-  const RunResult r = run("fit " + kControl + " --model helmert7 --convention position_vector -o " + path("T.json").string());
+  const RunResult r = run("fit " + kControl + " --remove-outliers --model helmert7 --convention position_vector -o " + path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("P17 "), std::string::npos);
-  EXPECT_NE(r.out.find("OUTLIER (removed)"), std::string::npos);
+  EXPECT_NE(r.out.find("removed       1"), std::string::npos) << r.out;  // P17, snooping rank 1
   EXPECT_NE(r.out.find("PASSED"), std::string::npos);
   const std::string json = slurp(path("T.json"));
   for (const char* key : {"\"model\": \"helmert7\"", "\"convention\": \"position_vector\"", "\"rotation_model\": \"small_angle\"",
@@ -145,7 +149,7 @@ TEST_F(FitCli, ProjPipelineRunByCctReproducesOurTransformedCoordinates) {
   for (const auto& [model, conv] : cases) {
     const char* convention = conv.c_str();
     const fs::path t = path("T_" + model + "_" + conv + ".json");
-    ASSERT_EQ(run("fit " + kControl + " --model " + model + " --convention " + convention + " -o " + t.string()).exit_code, 0);
+    ASSERT_EQ(run("fit " + kControl + " --remove-outliers --model " + model + " --convention " + convention + " -o " + t.string()).exit_code, 0);
     if (model == "molodensky-badekas") {
       EXPECT_NE(json_string_value(slurp(t), "proj_pipeline").find("+proj=molobadekas"), std::string::npos);
       EXPECT_NE(slurp(t).find("\"px_m\""), std::string::npos);
@@ -230,7 +234,7 @@ TEST_F(FitCli, BundledFitRecoversTheHelmertTheFixtureWasMadeWithWithinFourSigma)
     SCOPED_TRACE(convention);
     const double rotation_sign = convention == "position_vector" ? 1.0 : -1.0;
     const fs::path t = path("T_" + convention + ".json");
-    const RunResult fit = run("fit " + kControl + " --model helmert7 --convention " + convention + " -o " + t.string());
+    const RunResult fit = run("fit " + kControl + " --remove-outliers --model helmert7 --convention " + convention + " -o " + t.string());
     ASSERT_EQ(fit.exit_code, 0) << fit.err;
     const auto doc = nlohmann::json::parse(slurp(t));
     ASSERT_FALSE(doc.at("statistics").at("sigmas_scaled_by_sigma0").get<bool>());  // a-priori σ, σ0 = 0.90 here
@@ -417,7 +421,7 @@ TEST_F(FitCli, CompareFitsEveryApplicableModelOnTheSamePoints) {
 }
 
 TEST_F(FitCli, TheWgs84EnsembleIsFlaggedAndTheWarningRecorded) {
-  const RunResult r = run("fit " + kControl + " --model helmert7 --convention position_vector --target-frame WGS84 -o " +
+  const RunResult r = run("fit " + kControl + " --remove-outliers --model helmert7 --convention position_vector --target-frame WGS84 -o " +
                                 path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("WGS 84 ensemble"), std::string::npos);
@@ -600,7 +604,7 @@ std::string control_json(const std::string& extra_first = "") {
 // issue 12 point 3
 TEST_F(FitCli, Point3_AControlSetJsonWithADuplicateKeyIsRefused) {
   write("c.json", control_json());
-  const RunResult good = run("fit " + path("c.json").string() + " --model helmert7 --convention position_vector");
+  const RunResult good = run("fit " + path("c.json").string() + " --remove-outliers --model helmert7 --convention position_vector");
   ASSERT_EQ(good.exit_code, 0) << good.err;
   // The second sigma, 100 times the first, would weight P01 silently.
   write("dup.json", control_json(", \"sigma_src_m\": 0.3"));
@@ -730,9 +734,9 @@ constexpr double kGeoidReadTol_sigmas = 0.1;
 TEST_F(FitCli, Point2_OrthometricTargetHeightsReadThroughEgm96FitAsTheEllipsoidalSetTheyWereMadeFrom) {
   write("ortho.csv", rename_column(slurp(kOrthometricControl), "h_dst_m", "H_dst_m"));
   const std::string args = " --model helmert7 --convention position_vector -o ";
-  const RunResult h = run("fit " + kControl + args + path("T_h.json").string());
+  const RunResult h = run("fit " + kControl + " --remove-outliers" + args + path("T_h.json").string());
   ASSERT_EQ(h.exit_code, 0) << h.err;
-  const RunResult o = run("fit " + path("ortho.csv").string() + " --geoid EGM96" + args + path("T_H.json").string());
+  const RunResult o = run("fit " + path("ortho.csv").string() + " --remove-outliers --geoid EGM96" + args + path("T_H.json").string());
   ASSERT_EQ(o.exit_code, 0) << o.err;
   EXPECT_NE(o.out.find("heights: H_dst_m orthometric, read as h = H + N on EGM96"), std::string::npos) << o.out;
   EXPECT_EQ(o.err.find("vertical offset"), std::string::npos) << o.err;  // no height-type warning once read right
@@ -766,7 +770,7 @@ TEST_F(FitCli, Point2_AVerticalOffsetOfTheGeoidUndulationIsWarnedNamingIt) {
   }
   EXPECT_TRUE(recorded);
   // The honest set is not warned.
-  const RunResult ok = run("fit " + kControl + " --model helmert7 --convention position_vector");
+  const RunResult ok = run("fit " + kControl + " --remove-outliers --model helmert7 --convention position_vector");
   EXPECT_EQ(ok.err.find("vertical offset"), std::string::npos) << ok.err;
 }
 
@@ -786,15 +790,15 @@ TEST_F(FitCli, Point5_ADynamicFrameWithoutItsEpochInTheControlSetOrAFlagIsRefuse
   EXPECT_NE(r.err.find("give ITRF2014@YYYY.Y"), std::string::npos) << r.err;
   EXPECT_EQ(leftovers({"c.csv"}), std::vector<std::string>{});
   // The flag that names the epoch replaces the file's frame.
-  const RunResult given = run("fit " + path("c.csv").string() + " --source-frame ITRF2014@2024.5 --model helmert7 "
+  const RunResult given = run("fit " + path("c.csv").string() + " --remove-outliers --source-frame ITRF2014@2024.5 --model helmert7 "
                               "--convention position_vector");
   EXPECT_EQ(given.exit_code, 0) << given.err;
-  const RunResult f = run("fit " + kControl + " --target-frame 'WGS84(G2139)'" + args);
+  const RunResult f = run("fit " + kControl + " --remove-outliers --target-frame 'WGS84(G2139)'" + args);
   EXPECT_EQ(f.exit_code, 2) << f.err;
   EXPECT_NE(f.err.find("--target-frame: frame WGS84(G2139) is dynamic"), std::string::npos) << f.err;
   EXPECT_NE(f.err.find("give WGS84(G2139)@YYYY.Y"), std::string::npos) << f.err;
   EXPECT_EQ(leftovers({"c.csv"}), std::vector<std::string>{});
-  const RunResult dated = run("fit " + kControl + " --target-frame 'WGS84(G2139)@2024.5'" + args);
+  const RunResult dated = run("fit " + kControl + " --remove-outliers --target-frame 'WGS84(G2139)@2024.5'" + args);
   EXPECT_EQ(dated.exit_code, 0) << dated.err;
 }
 
@@ -849,7 +853,7 @@ std::string bundled_marks_as_ecef(F transform) {
 TEST_F(FitCli, Issue12Point4_Float32QuantizedEcefIsWarnedAndSnoopingPastItsShareIsRefused) {
   // Each ECEF value stored in single precision: steps of 0.5 m at 4–5·10⁶ m.
   write("q.csv", bundled_marks_as_ecef([](double v) { return static_cast<double>(static_cast<float>(v)); }));
-  const RunResult r = run("fit " + path("q.csv").string() + " --model helmert7 --convention position_vector -o " +
+  const RunResult r = run("fit " + path("q.csv").string() + " --remove-outliers --model helmert7 --convention position_vector -o " +
                           path("T.json").string());
   EXPECT_EQ(r.exit_code, 4) << r.err;
   EXPECT_NE(r.err.find("is a float32 value"), std::string::npos) << r.err;
@@ -859,7 +863,7 @@ TEST_F(FitCli, Issue12Point4_Float32QuantizedEcefIsWarnedAndSnoopingPastItsShare
   EXPECT_EQ(files(), std::vector<std::string>{"q.csv"});
   // The same marks in float64 fit, with the planted blunder removed alone.
   write("f.csv", bundled_marks_as_ecef([](double v) { return v; }));
-  const RunResult ok = run("fit " + path("f.csv").string() + " --model helmert7 --convention position_vector -o " +
+  const RunResult ok = run("fit " + path("f.csv").string() + " --remove-outliers --model helmert7 --convention position_vector -o " +
                            path("T.json").string());
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
   EXPECT_EQ(ok.err.find("float32"), std::string::npos) << ok.err;
@@ -956,7 +960,7 @@ TEST_F(FitCli, Issue12Point13_ALargeSetsReportListsWhatMattersAndTheFileHoldsEve
     csv += row;
   }
   write("big.csv", csv);
-  const RunResult r = run("fit " + path("big.csv").string() + " --model helmert7 --convention position_vector -o " +
+  const RunResult r = run("fit " + path("big.csv").string() + " --remove-outliers --model helmert7 --convention position_vector -o " +
                           path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The report: the removed blunder first, at most 50 ok rows, and a line for the rest.
@@ -967,7 +971,7 @@ TEST_F(FitCli, Issue12Point13_ALargeSetsReportListsWhatMattersAndTheFileHoldsEve
   }
   EXPECT_LE(rows, 60u) << r.out;
   EXPECT_NE(r.out.find("  Q700 "), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("more marks, all ok"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("more marks, all used and passing"), std::string::npos) << r.out;
   // The file: every mark, each record on one line.
   const std::string text = slurp(path("T.json"));
   const auto doc = nlohmann::json::parse(text);
@@ -1027,7 +1031,7 @@ TEST_F(FitCli, Issue12Point1_ControlOnAForcedUtmZoneBeyondItsBandIsWarnedAndReco
                                                   f[8].c_str());
                                     return std::string(row);
                                   }));
-  const RunResult r = run("fit " + path("grid.csv").string() + " --dst-zone 31N --ellipsoid GRS80 --model helmert7 "
+  const RunResult r = run("fit " + path("grid.csv").string() + " --remove-outliers --dst-zone 31N --ellipsoid GRS80 --model helmert7 "
                           "--convention position_vector -o " + path("T.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string expected = "target grid coordinates on UTM zone 31N: 36 of 36 marks lie beyond the zone's band";
@@ -1036,6 +1040,96 @@ TEST_F(FitCli, Issue12Point1_ControlOnAForcedUtmZoneBeyondItsBandIsWarnedAndReco
   bool recorded = false;
   for (const auto& w : doc.at("statistics").at("warnings")) recorded = recorded || w.get<std::string>().rfind(expected, 0) == 0;
   EXPECT_TRUE(recorded) << doc.at("statistics").at("warnings").dump(2);
+}
+
+}  // namespace
+}  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// The bundled control set with its planted blunder taken back (P17's
+// target moved 0.12 m south again, as its header says it was moved north)
+// and `mark`'s target moved `east_m` east, both in the target's local
+// horizon (GeographicLib's LocalCartesian, on GRS80), rows in `order`.
+std::string bundled_with(const std::string& mark, double east_m, const std::vector<std::size_t>& order = {}) {
+  const GeographicLib::Geocentric grs80(6378137.0, 1.0 / 298.257222101);
+  std::istringstream in(slurp(kControl));
+  std::vector<std::string> head, rows;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#' || line.rfind("id,", 0) == 0) {
+      head.push_back(line);
+      continue;
+    }
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    const auto move = [&](double de, double dn) {
+      const GeographicLib::LocalCartesian at(std::stod(f[4]), std::stod(f[5]), std::stod(f[6]), grs80);
+      double lat = 0, lon = 0, h = 0;
+      at.Reverse(de, dn, 0.0, lat, lon, h);
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.10f", lat), f[4] = buf;
+      std::snprintf(buf, sizeof buf, "%.10f", lon), f[5] = buf;
+      std::snprintf(buf, sizeof buf, "%.4f", h), f[6] = buf;
+    };
+    if (f[0] == "P17") move(0.0, -0.12);
+    if (f[0] == mark) move(east_m, 0.0);
+    std::string joined;
+    for (std::size_t k = 0; k < f.size(); ++k) joined += (k ? "," : "") + f[k];
+    rows.push_back(joined);
+  }
+  std::string out;
+  for (const auto& l : head) out += l + "\n";
+  for (std::size_t k = 0; k < rows.size(); ++k) out += rows[order.empty() ? k : order[k]] + "\n";
+  return out;
+}
+
+// Issue 39: one mark 3 m wrong in a set without other blunders is flagged,
+// named first with snooping rank 1, and the only mark --remove-outliers
+// removes; whatever the order of the rows.
+TEST_F(FitCli, Issue39_AMarkThreeMetresWrongIsFlaggedFirstAndTheOnlyOneRemoved) {
+  const std::string fit = " --model helmert7 --convention position_vector";
+  write("clean.csv", bundled_with("", 0.0));
+  const RunResult clean = run("fit " + path("clean.csv").string() + fit + " --json");
+  ASSERT_EQ(clean.exit_code, 0) << clean.err;
+  EXPECT_TRUE(nlohmann::json::parse(clean.out).at("flagged").empty()) << "the set's own blunder taken back";
+  for (const std::string mark : {"P05", "P23"}) {
+    SCOPED_TRACE(mark);
+    std::vector<std::size_t> order(36);
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::mt19937 rng(mark == "P05" ? 5u : 23u);
+    for (const bool shuffled : {false, true}) {
+      SCOPED_TRACE(shuffled ? "rows shuffled" : "rows in order");
+      if (shuffled) std::shuffle(order.begin(), order.end(), rng);
+      write("c.csv", bundled_with(mark, 3.0, order));
+      // As given: flagged first with rank 1 (its error spreads to the
+      // others through the parameters; they pass once it is out), refused.
+      const RunResult as_given = run("fit " + path("c.csv").string() + fit + " --json -o " + path("T.json").string());
+      EXPECT_EQ(as_given.exit_code, 4) << as_given.err;
+      EXPECT_NE(as_given.err.find("point test: " + mark + " (|w| "), std::string::npos) << as_given.err;
+      EXPECT_FALSE(fs::exists(path("T.json")));
+      const auto report = nlohmann::json::parse(as_given.out);
+      const auto& flagged = report.at("flagged");
+      ASSERT_FALSE(flagged.empty());
+      EXPECT_EQ(flagged.front().at("id"), mark);
+      EXPECT_EQ(flagged.front().at("snooping_rank"), 1);
+      for (std::size_t k = 1; k < flagged.size(); ++k) {
+        EXPECT_TRUE(flagged[k].at("snooping_rank").is_null()) << flagged[k].at("id");
+        EXPECT_EQ(flagged[k].at("passes_after_rank"), 1) << flagged[k].at("id");
+      }
+      EXPECT_TRUE(report.at("removed").empty());
+      // --remove-outliers: it alone goes, and the fit passes.
+      const RunResult removing = run("fit " + path("c.csv").string() + fit + " --remove-outliers --json -o " + path("T.json").string());
+      ASSERT_EQ(removing.exit_code, 0) << removing.err;
+      const auto after = nlohmann::json::parse(removing.out);
+      ASSERT_EQ(after.at("removed").size(), 1u) << after.at("removed").dump();
+      EXPECT_EQ(after.at("removed").front().at("id"), mark);
+      EXPECT_TRUE(after.at("flagged").empty());
+      EXPECT_EQ(after.at("global_test"), "passed");
+      fs::remove(path("T.json"));
+    }
+  }
 }
 
 }  // namespace

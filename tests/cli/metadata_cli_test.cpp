@@ -56,7 +56,7 @@ class MetadataCli : public CliTest {
 };
 
 TEST_F(MetadataCli, Issue16_FitLeavesFloatAndWorseOutAndCountsEachSolutionType) {
-  const RunResult r = here("fit " + kFixtures + "/airport_control_gnss.csv --model molodensky-badekas --convention "
+  const RunResult r = here("fit " + kFixtures + "/airport_control_gnss.csv --remove-outliers --model molodensky-badekas --convention "
                           "position_vector -o T.json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The fixture: P01-P28 fixed (P17 the planted blunder, removed by data
@@ -97,7 +97,7 @@ TEST_F(MetadataCli, Issue16_FitLeavesFloatAndWorseOutAndCountsEachSolutionType) 
   }
   EXPECT_TRUE(saw);
   // Weighted, the float marks enter with σ × 10.
-  const RunResult w = here("fit " + kFixtures + "/airport_control_gnss.csv --model molodensky-badekas --convention "
+  const RunResult w = here("fit " + kFixtures + "/airport_control_gnss.csv --remove-outliers --model molodensky-badekas --convention "
                           "position_vector --solution-weighting -o W.json");
   ASSERT_EQ(w.exit_code, 0) << w.err;
   const json wc = read_json("W.json")["gnss_solutions"]["classes"];
@@ -106,7 +106,7 @@ TEST_F(MetadataCli, Issue16_FitLeavesFloatAndWorseOutAndCountsEachSolutionType) 
 }
 
 TEST_F(MetadataCli, Issue16_WithoutASolutionColumnTheFitIsTheSameAndHasNoCounts) {
-  ASSERT_EQ(here("fit " + kFixtures + "/airport_control.csv --model molodensky-badekas --convention position_vector -o A.json")
+  ASSERT_EQ(here("fit " + kFixtures + "/airport_control.csv --remove-outliers --model molodensky-badekas --convention position_vector -o A.json")
                 .exit_code, 0);
   const json a = read_json("A.json");
   EXPECT_FALSE(a.contains("gnss_solutions"));
@@ -118,7 +118,7 @@ TEST_F(MetadataCli, Issue16_WithoutASolutionColumnTheFitIsTheSameAndHasNoCounts)
 }
 
 TEST_F(MetadataCli, Issue16_FitTakesTheSurveyMetadataAndRefusesAContradiction) {
-  const RunResult r = here("fit " + kFixtures + "/airport_control.csv --model helmert7 --convention position_vector "
+  const RunResult r = here("fit " + kFixtures + "/airport_control.csv --remove-outliers --model helmert7 --convention position_vector "
                           "--survey-metadata " + kFixtures + "/lszh_survey.json -o T.json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json m = read_json("T.json")["metadata"];
@@ -129,7 +129,7 @@ TEST_F(MetadataCli, Issue16_FitTakesTheSurveyMetadataAndRefusesAContradiction) {
   // The survey file's frame (ITRF2014) is the source's: its origin is not the target's.
   EXPECT_EQ(m["enu_origin"], "unknown");
   // 98.7 % stated, 31 of 36 = 86.1 % computed from the marks: refused, nothing written.
-  const RunResult bad = here("fit " + kFixtures + "/airport_control_gnss.csv --model helmert7 --convention position_vector "
+  const RunResult bad = here("fit " + kFixtures + "/airport_control_gnss.csv --remove-outliers --model helmert7 --convention position_vector "
                             "--survey-metadata " + kFixtures + "/lszh_survey.json -o U.json");
   EXPECT_EQ(bad.exit_code, 3) << bad.err;
   EXPECT_NE(bad.err.find("error[E_METADATA_CONFLICT]"), std::string::npos) << bad.err;
@@ -137,7 +137,7 @@ TEST_F(MetadataCli, Issue16_FitTakesTheSurveyMetadataAndRefusesAContradiction) {
   EXPECT_FALSE(fs::exists(path("U.json")));
   // A survey file with an unknown key fails before the fit.
   write("typo.json", R"({"schema": "geoanchor.survey/1", "gnss_bsae": "ZIMM"})");
-  const RunResult typo = here("fit " + kFixtures + "/airport_control.csv --model helmert7 --convention position_vector "
+  const RunResult typo = here("fit " + kFixtures + "/airport_control.csv --remove-outliers --model helmert7 --convention position_vector "
                              "--survey-metadata typo.json -o V.json");
   EXPECT_EQ(typo.exit_code, 3);
   EXPECT_NE(typo.err.find("typo.json.gnss_bsae: unknown key"), std::string::npos) << typo.err;
@@ -145,7 +145,7 @@ TEST_F(MetadataCli, Issue16_FitTakesTheSurveyMetadataAndRefusesAContradiction) {
 }
 
 TEST_F(MetadataCli, Issue16_ApplyWritesTheContractAndReadsItBack) {
-  ASSERT_EQ(here("fit " + kFixtures + "/airport_control.csv --model helmert7 --convention position_vector -o T.json").exit_code, 0);
+  ASSERT_EQ(here("fit " + kFixtures + "/airport_control.csv --remove-outliers --model helmert7 --convention position_vector -o T.json").exit_code, 0);
   const RunResult r = here("apply " + kFixtures + "/airport_tile.las --transform T.json --out-dir out --survey-metadata " +
                           kFixtures + "/lszh_survey.json");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -129,7 +129,8 @@ TEST_F(WorkbenchCli, Issue14_NetworkAndFitOptionsBelongToTheirViewsAndABadNetwor
     int exit_code;
   } cases[] = {
       {kControl + " --frame GDA2020 -o a.png", "--frame: only with --view network", 2},
-      {kControl + " --no-snooping -o a.png", "--no-snooping: only with --view network", 2},
+      {kControl + " --free -o a.png", "--free: only with --view network", 2},
+      {kControl + " --remove-outliers --no-snooping -o a.png", "--remove-outliers and --no-snooping: give one", 2},
       {kControl + " " + kControl + " -o a.png", "CONTROL: expected one control set, got 2 files", 2},
       {kNetwork + " --view network --model helmert7 -o a.png", "--model: not with --view network", 2},
       {kNetwork + " --view network --transform t.json -o a.png", "--transform: not with --view network", 2},
@@ -169,7 +170,7 @@ TEST_F(WorkbenchCli, Issue14_ANetworkReportHoldsAdjustsReportAndThePictureAndRep
   EXPECT_NE(text.find("sha256"), std::string::npos);
   // A fit's report in the same folder: refused, then replacing the network's files with --overwrite.
   const auto t = path("t.json");
-  ASSERT_EQ(run("fit " + kControl + " --model helmert7 --convention position_vector -o " + t.string()).exit_code, 0);
+  ASSERT_EQ(run("fit " + kControl + " --remove-outliers --model helmert7 --convention position_vector -o " + t.string()).exit_code, 0);
   const auto fit = run("report " + kControl + " --transform " + t.string() + " -o " + dir.string());
   EXPECT_EQ(fit.exit_code, 5);
   EXPECT_NE(fit.err.find("exists (use --overwrite to replace the report)"), std::string::npos) << fit.err;
@@ -183,7 +184,7 @@ TEST_F(WorkbenchCli, Issue14_ANetworkReportHoldsAdjustsReportAndThePictureAndRep
 
 TEST_F(WorkbenchCli, ReportWritesTheFitReportAndEveryViewAndReopensTheTransformsChoices) {
   const auto t = path("t.json");
-  const auto fit = run("fit " + kControl + " --model helmert7 --convention coordinate_frame -o " + t.string());
+  const auto fit = run("fit " + kControl + " --remove-outliers --model helmert7 --convention coordinate_frame -o " + t.string());
   ASSERT_EQ(fit.exit_code, 0) << fit.err;
   const auto dir = path("report");
   const auto r = shell(kNoDisplay + exe() + " report " + kControl + " --transform " + t.string() + " -o " + dir.string());
@@ -352,7 +353,7 @@ TEST_F(WorkbenchCli, Point14_ReportPagesTheTableSoThatEveryMarkOfA120MarkSetIsIn
 // issue 12 point 14
 TEST_F(WorkbenchCli, Point14_AReportOnAMolodenskyBadekasFitNeverAdvisesItAndComparesItWithHelmert7) {
   const auto t = path("mb.json");
-  const auto fit = run("fit " + kControl + " --model molodensky-badekas --convention position_vector -o " + t.string());
+  const auto fit = run("fit " + kControl + " --remove-outliers --model molodensky-badekas --convention position_vector -o " + t.string());
   ASSERT_EQ(fit.exit_code, 0) << fit.err;
   const auto r = run("report " + kControl + " --transform " + t.string() + " -o " + path("rep").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -372,7 +373,7 @@ TEST_F(WorkbenchCli, Point14_AReportOnAMolodenskyBadekasFitNeverAdvisesItAndComp
 // issue 12 point 14
 TEST_F(WorkbenchCli, Point14_TheReportSaysEveryMarkIsLabelledOnThePlanAndDrawsItsEllipse) {
   const auto t = path("t.json");
-  ASSERT_EQ(run("fit " + kControl + " --model helmert7 --convention position_vector -o " + t.string()).exit_code, 0);
+  ASSERT_EQ(run("fit " + kControl + " --remove-outliers --model helmert7 --convention position_vector -o " + t.string()).exit_code, 0);
   const auto r = run("report " + kControl + " --transform " + t.string() + " -o " + path("rep").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string text = slurp(path("rep") / "report.txt");

@@ -117,7 +117,9 @@ TEST(NetworkView, APlantedBlunderIsDrawnAndLabelledAsAnOutlier) {
   const std::size_t planted = planted_distance(net);
   ASSERT_LT(planted, net.measurements.size());
   net.measurements[planted].value(0) += kBlunder_m;
-  NetworkModel model(net, solver::AdjustOptions{});
+  solver::AdjustOptions removing;
+  removing.remove_outliers = true;  // (by default it is flagged, and drawn as failing)
+  NetworkModel model(net, removing);
   ASSERT_TRUE(model.result()) << model.error();
   EXPECT_NEAR(model.result()->w_critical, kWCritical, kWCriticalTol);
   NetworkUi ui(model);
@@ -266,7 +268,9 @@ TEST(NetworkView, ADenseNetworkIsDrawnByCellsWithEveryOutlierOnItsOwnAndZoomingI
   o.seed = 7;
   const workflow::GeneratedNetwork generated = workflow::generate_network(o);
   ASSERT_FALSE(generated.blunders.empty());
-  NetworkModel model(generated.network, solver::AdjustOptions{});
+  solver::AdjustOptions removing;
+  removing.remove_outliers = true;
+  NetworkModel model(generated.network, removing);
   model.wait();
   ASSERT_TRUE(model.result()) << model.error();
   NetworkUi ui(model);

@@ -41,10 +41,12 @@ constexpr double kMappingTol_px = 0.01;
 // of a 3 px arrow carries its colour exactly; allow for rounding in the blend.
 constexpr int kColourTol = 3;  // per 8-bit channel
 
+// The bundled example's fit: its planted blunder (P17) removed by data snooping.
 solver::FitOptions helmert7_pv() {
   solver::FitOptions o;
   o.model = solver::FitModel::helmert7;
   o.convention = solver::Convention::position_vector;
+  o.remove_outliers = true;
   return o;
 }
 

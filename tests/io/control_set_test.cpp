@@ -535,10 +535,10 @@ TEST(ControlSet, Issue13_JsonReadsACrsAndCarriesItsCovariance) {
     j.col(k) = (utm.forward(at + step) - utm.forward(at - step)) / (2.0 * kTestStep_m);
   }
   const Eigen::Matrix3d expected = j * c * j.transpose();
-  EXPECT_LT((set.points[0].source_cov_m2 - expected).cwiseAbs().maxCoeff(), kCovarianceTol * expected.cwiseAbs().maxCoeff())
+  EXPECT_LT(testing::max_abs_component(set.points[0].source_cov_m2 - expected), kCovarianceTol * testing::max_abs_component(expected))
       << set.points[0].source_cov_m2 << "\nexpected\n" << expected;
   // An isotropic sigma stays isotropic.
-  EXPECT_LT((set.points[1].source_cov_m2 - Eigen::Matrix3d::Identity() * 4e-6).cwiseAbs().maxCoeff(), 1e-18);
+  EXPECT_LT(testing::max_abs_component(set.points[1].source_cov_m2 - Eigen::Matrix3d::Identity() * 4e-6), 1e-18);
 
   // The CSV reads the same covariance the same way.
   const std::string csv =
@@ -548,7 +548,7 @@ TEST(ControlSet, Issue13_JsonReadsACrsAndCarriesItsCovariance) {
       "A,464998.123,5258862.456,480.0,4271315.7,641096.4,4678048.5,4e-6,1e-6,5e-7,9e-6,-2e-7,2.5e-5\n";
   std::istringstream cin(csv);
   const auto from_csv = read_control_csv(cin, "c.csv", o);
-  EXPECT_LT((from_csv.points[0].source_cov_m2 - expected).cwiseAbs().maxCoeff(), kCovarianceTol * expected.cwiseAbs().maxCoeff());
+  EXPECT_LT(testing::max_abs_component(from_csv.points[0].source_cov_m2 - expected), kCovarianceTol * testing::max_abs_component(expected));
 
   // A key that is not the CRS's is refused with its path.
   std::string wrong = json;

@@ -298,6 +298,7 @@ TEST(HelmertFit, DataSnoopingRemovesExactlyThePlantedBlunders) {
   FitOptions o;
   o.model = FitModel::helmert7;
   o.convention = Convention::position_vector;
+  o.remove_outliers = true;
   std::mt19937_64 rng(99);
   std::normal_distribution<double> noise(0.0, 0.005 / std::sqrt(2.0));
   std::uniform_int_distribution<std::size_t> pick(0, 29);
@@ -794,6 +795,7 @@ TEST(HelmertFit, DataSnoopingPastItsLimitRefusesTheFit) {
   FitOptions o;
   o.model = FitModel::helmert7;
   o.convention = Convention::position_vector;
+  o.remove_outliers = true;
   const FitResult r = fit_helmert(set, o);
   const auto removed = std::count_if(r.points.begin(), r.points.end(), [](const PointResult& p) { return p.outlier; });
   EXPECT_EQ(removed, 3);  // 10 % of 36, rounded down

@@ -97,7 +97,7 @@ Built grid_matrix(int width, int height, unsigned seed, int hubs = 0) {
 // the same for a solve.
 double worst_difference(const NormalFactor& f, const Built& b) {
   const Eigen::MatrixXd inverse = b.dense.llt().solve(Eigen::MatrixXd::Identity(b.dense.rows(), b.dense.cols()));
-  const double scale = inverse.cwiseAbs().maxCoeff();
+  const double scale = testing::max_abs_component(inverse);
   double worst = 0.0;
   for (const auto& e : b.entries) {
     worst = testing::nan_max(worst, std::abs(f.inverse(e.row, e.col) - inverse(e.row, e.col)) / scale);
@@ -105,7 +105,7 @@ double worst_difference(const NormalFactor& f, const Built& b) {
   }
   const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(b.dense.rows(), -1.0, 2.0);
   const Eigen::VectorXd x = b.dense.llt().solve(rhs);
-  worst = testing::nan_max(worst, (f.solve(rhs) - x).cwiseAbs().maxCoeff() / x.cwiseAbs().maxCoeff());
+  worst = testing::nan_max(worst, testing::max_abs_component(f.solve(rhs) - x) / testing::max_abs_component(x));
   return worst;
 }
 
@@ -163,7 +163,7 @@ TEST(NormalFactor, Issue17_TheFactorizationOnThreadsGivesTheSameBits) {
     auto again = NormalFactor::factor(n, other.entries, NormalFactor::Mode::sparse, nullptr, std::move(*two), 0, 2);
     ASSERT_TRUE(again);
     const Eigen::VectorXd expected = other.dense.llt().solve(rhs);
-    EXPECT_LE((again->solve(rhs) - expected).cwiseAbs().maxCoeff() / expected.cwiseAbs().maxCoeff(), kRelative);
+    EXPECT_LE(testing::max_abs_component(again->solve(rhs) - expected) / testing::max_abs_component(expected), kRelative);
   }
 }
 
@@ -196,7 +196,7 @@ TEST(NormalFactor, Issue17_AnInverseBlockIsItsEntries) {
     for (std::size_t a = 0; a < u.size(); ++a) {
       for (std::size_t c = 0; c < u.size(); ++c) {
         EXPECT_EQ(q[a + c * u.size()], f->inverse(u[a], u[c])) << a << ", " << c;
-        EXPECT_NEAR(dq[a + c * u.size()], inverse(u[a], u[c]), kRelative * inverse.cwiseAbs().maxCoeff());
+        EXPECT_NEAR(dq[a + c * u.size()], inverse(u[a], u[c]), kRelative * testing::max_abs_component(inverse));
       }
     }
   }

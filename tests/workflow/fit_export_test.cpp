@@ -72,6 +72,7 @@ TEST(FitExport, Issue12Point13_TheStreamedFileIsTheHeldFileByteForByte) {
   solver::FitOptions o;
   o.model = solver::FitModel::helmert7;
   o.convention = solver::Convention::position_vector;
+  o.remove_outliers = true;
   const solver::FitResult r = solver::fit_helmert(set, o);
   ASSERT_TRUE(r.points[4500].outlier) << "the blunder was meant to be removed";
   const std::vector<std::string> left_out{"M17"};
@@ -119,7 +120,7 @@ TEST(FitExport, Issue12Point13_AFitForExportWritesTheFileOfItsFit) {
     solver::FitOptions o;
     o.model = solver::FitModel::helmert7;
     o.convention = solver::Convention::position_vector;
-    o.data_snooping = snooping;
+    o.remove_outliers = snooping;
     const FitForExport fitted = fit_for_export(set, o);
     ASSERT_EQ(fitted.fit.points[kBlunder].used, !snooping) << "the blunder was meant to be removed by snooping alone";
     ASSERT_TRUE(fitted.extent);

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
@@ -146,9 +147,12 @@ std::string csv_field(const std::string& v) {
   return out + "\"";
 }
 
+// Within [−1, 1] (rounding of a nearly dependent pair can put it a few
+// parts in 10⁶ outside); 0 where a component is fixed (σ = 0).
 double correlation(const Eigen::Matrix3d& c, int a, int b) {
   const double d = std::sqrt(c(a, a) * c(b, b));
-  return d > 0.0 ? c(a, b) / d : 0.0;
+  if (!(d > 0.0) || !std::isfinite(c(a, b))) return 0.0;
+  return std::clamp(c(a, b) / d, -1.0, 1.0);
 }
 
 
@@ -411,13 +415,26 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
     if (p.helmert) {
       for (std::size_t mi : p.helmert->measurements) in_group[mi] = true;
     }
-    std::size_t moved = 0;
-    std::string first;
+    std::size_t moved = 0, assumed = 0;
+    std::string first, assumed_first, assumed_frame;
     for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
       auto& m = net.measurements[mi];
       if (m.kind != MeasurementKind::gnss_baselines && m.kind != MeasurementKind::gnss_points) continue;
       if (in_group[mi]) continue;  // in its own datum: the estimated Helmert relates it
-      const Frame from = m.frame ? *m.frame : net.frame ? *net.frame : *target;
+      Frame from = m.frame ? *m.frame : net.frame ? *net.frame : *target;
+      if (geodesy::is_dynamic(from) && !from.epoch()) {
+        // A dynamic frame names no epoch: refused, unless --frame gives the
+        // epoch to assume (said in the notes and on standard error).
+        if (!request.frame || !target->epoch()) {
+          throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                      m.source + ": " + geodesy::to_string(m.kind) + " in " + from.to_string() +
+                          ", a dynamic frame, with no coordinate epoch: give it (\"" + from.name() +
+                          "@YYYY.Y\"), or --frame NAME@EPOCH to take such measurements at that epoch");
+        }
+        from = Frame::parse(from.name() + "@" + geodesy::format_decimal_year(*target->epoch()), m.source);
+        if (assumed++ == 0) assumed_first = m.source;
+        assumed_frame = from.to_string();
+      }
       if (from == *target) continue;
       const FrameChange c = frame_change(from, *target, m.source);
       const Eigen::Matrix3d linear = c.map.linear();
@@ -435,6 +452,10 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
       m.covariance = j * m.covariance * j.transpose();
       m.frame_step = c.description;
       if (moved++ == 0) first = m.source + ": " + c.description;
+    }
+    if (assumed > 0) {
+      p.notes.push_back("warning: " + std::to_string(assumed) + " GNSS measurement(s) in a dynamic frame name no coordinate epoch (" +
+                        assumed_first + " the first): taken at --frame's epoch, as " + assumed_frame);
     }
     if (moved > 0) p.notes.push_back(std::to_string(moved) + " GNSS measurement(s) brought to " + target->to_string() + "; the first " + first);
     net.frame = target;
@@ -558,9 +579,13 @@ std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentRe
 std::string measurements_csv(const geodesy::Network& net, const solver::AdjustmentResult& r, int jobs) {
   // Rows of consecutive measurements formatted on threads into strings of
   // their own and joined in order: the same text for any number of threads
-  // (10⁵ stations: 8·10⁵ rows, 200 MB).
+  // (10⁵ stations: 8·10⁵ rows, 200 MB). Every measurement of the network,
+  // in its order: those its input ignores with their observed values only.
   constexpr std::size_t kMeasurementsPerChunk = 4096;
-  const std::size_t chunks = (r.measurements.size() + kMeasurementsPerChunk - 1) / kMeasurementsPerChunk;
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> slot_of(net.measurements.size(), kNone);
+  for (std::size_t k = 0; k < r.measurements.size(); ++k) slot_of[r.measurements[k].index] = k;
+  const std::size_t chunks = (net.measurements.size() + kMeasurementsPerChunk - 1) / kMeasurementsPerChunk;
   std::vector<std::string> parts(chunks);
   const auto number = [](std::string& out, double v) {
     if (!std::isfinite(v)) return;  // empty field
@@ -568,17 +593,21 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
     const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, v);
     out.append(buf, ec == std::errc() ? ptr : buf);
   };
-  for_chunks(r.measurements.size(), kMeasurementsPerChunk, resolve_jobs(jobs), [&](std::size_t begin, std::size_t end) {
+  for_chunks(net.measurements.size(), kMeasurementsPerChunk, resolve_jobs(jobs), [&](std::size_t begin, std::size_t end) {
     std::string& out = parts[begin / kMeasurementsPerChunk];
     out.reserve((end - begin) * 3 * 240);
-    for (std::size_t i = begin; i < end; ++i) {
-      const auto& am = r.measurements[i];
-      const auto& m = net.measurements[am.index];
+    for (std::size_t mi = begin; mi < end; ++mi) {
+      const auto& m = net.measurements[mi];
+      const solver::AdjustedMeasurement* am = slot_of[mi] == kNone ? nullptr : &r.measurements[slot_of[mi]];
       const bool ang = angular(m.kind);
       const double value_scale = ang ? kRadToDeg : 1.0, small_scale = ang ? kRadToArcsec : 1.0;
-      const char* status = am.outlier ? "outlier" : am.used ? "used" : "not used";
+      const char* status = am ? solver::to_string(am->status(r.alpha_point)) : "ignored";
+      const std::string rank = am && am->snooping_rank > 0 ? std::to_string(am->snooping_rank) : std::string();
       const std::string source = csv_field(m.source), stations = csv_field(stations_of(net, m));
-      for (Eigen::Index k = 0; k < am.observed.size(); ++k) {
+      const auto at = [&](const Eigen::VectorXd* v, Eigen::Index k) {
+        return v && k < v->size() ? (*v)(k) : std::numeric_limits<double>::quiet_NaN();
+      };
+      for (Eigen::Index k = 0; k < m.value.size(); ++k) {
         static constexpr const char* kAxis[] = {"x", "y", "z"};
         out += source;
         out += ',';
@@ -586,36 +615,38 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
         out += ',';
         out += stations;
         out += ',';
-        if (am.observed.size() != 1) {
+        if (m.value.size() != 1) {
           if (m.kind == MeasurementKind::gnss_points) out += net.stations[m.stations[static_cast<std::size_t>(k / 3)]].id;
           else out += std::to_string(k / 3);
           out += '.';
           out += kAxis[k % 3];
         }
         out += ',';
-        number(out, am.observed(k) * value_scale);
+        number(out, m.value(k) * value_scale);
         out += ',';
-        number(out, am.adjusted(k) * value_scale);
+        number(out, at(am ? &am->adjusted : nullptr, k) * value_scale);
         out += ang ? ",deg," : ",m,";
-        number(out, am.residual(k) * small_scale);
+        number(out, at(am ? &am->residual : nullptr, k) * small_scale);
         out += ',';
-        number(out, am.sigma(k) * small_scale);
+        number(out, std::sqrt(m.covariance(k, k)) * small_scale);
         out += ',';
-        number(out, am.residual_sigma(k) * small_scale);
+        number(out, at(am ? &am->residual_sigma : nullptr, k) * small_scale);
         out += ang ? ",arcsec," : ",m,";
-        number(out, am.redundancy(k));
+        number(out, at(am ? &am->redundancy : nullptr, k));
         out += ',';
-        number(out, am.w(k));
+        number(out, at(am ? &am->w : nullptr, k));
         out += ',';
-        number(out, am.mdb(k) * small_scale);
+        number(out, at(am ? &am->mdb : nullptr, k) * small_scale);
         out += ',';
         out += status;
+        out += ',';
+        out += rank;
         out += '\n';
       }
     }
   });
   std::string out = "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,"
-                    "mdb,status\n";
+                    "mdb,status,snooping_rank\n";
   std::size_t size = out.size();
   for (const auto& part : parts) size += part.size();
   out.reserve(size);
@@ -717,6 +748,44 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
                   s.ellipse.azimuth_rad * kRadToDeg, s.constraint.c_str());
     out << line;
   }
+  // The flagged measurements first, in the order data snooping removes them.
+  const auto p_text = [](double p) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3g", p);
+    return std::string(b);
+  };
+  const auto mdb_text = [&](const solver::AdjustedMeasurement& am, const geodesy::NetworkMeasurement& m) {
+    double largest = 0.0;
+    for (Eigen::Index k = 0; k < am.mdb.size(); ++k) {
+      if (!(am.mdb(k) <= largest)) largest = am.mdb(k);
+    }
+    if (!std::isfinite(largest)) return std::string("-");
+    return angular(m.kind) ? format_fixed(largest * kRadToArcsec, 2) + "\"" : format_fixed(largest * 1e3, 1) + " mm";
+  };
+  const std::vector<std::size_t> failing = solver::failing_measurements(r);
+  std::size_t flagged = 0, removed = 0;
+  for (const auto& am : r.measurements) {
+    const auto st = am.status(r.alpha_point);
+    flagged += st == solver::TestStatus::flagged ? 1u : 0u;
+    removed += st == solver::TestStatus::removed ? 1u : 0u;
+  }
+  if (flagged > 0) {
+    out << "\nFlagged measurements: " << flagged << " fail their test at alpha " << format_shortest(o.alpha_point)
+        << " and are kept (--remove-outliers removes them in the order of their snooping rank, strongest evidence first)\n";
+    out << "  rank  measurement\n";
+    for (const std::size_t k : failing) {
+      const auto& am = r.measurements[k];
+      if (am.status(r.alpha_point) != solver::TestStatus::flagged) continue;
+      const auto& m = net.measurements[am.index];
+      char rank[16];
+      std::snprintf(rank, sizeof rank, "%4s", am.snooping_rank > 0 ? std::to_string(am.snooping_rank).c_str() : "-");
+      out << "  " << rank << "  " << m.source << "  " << geodesy::to_string(m.kind) << " " << stations_of(net, m) << ": max |w| "
+          << format_fixed(am.w_max, 2) << ", test " << format_fixed(am.statistic, 2) << " (chi-squared, " << am.test_dof
+          << " dof), p " << p_text(am.p_value) << ", MDB " << mdb_text(am, m)
+          << (am.passes_after_rank > 0 ? "; passes once rank " + std::to_string(am.passes_after_rank) + " is removed" : std::string())
+          << "\n";
+    }
+  }
   // The measurements with the largest |w|.
   std::vector<const solver::AdjustedMeasurement*> by_w;
   for (const auto& am : r.measurements) {
@@ -728,12 +797,11 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
     const auto& am = *by_w[k];
     const auto& m = net.measurements[am.index];
     out << "  " << m.source << "  " << geodesy::to_string(m.kind) << " " << stations_of(net, m) << ": max |w| "
-        << format_fixed(am.w_max, 2) << ", p " << format_shortest(am.p_value) << (am.outlier ? "  OUTLIER" : "") << "\n";
+        << format_fixed(am.w_max, 2) << ", p " << p_text(am.p_value) << ", " << solver::to_string(am.status(r.alpha_point))
+        << (am.snooping_rank > 0 ? " (snooping rank " + std::to_string(am.snooping_rank) + ")" : std::string()) << "\n";
   }
-  std::size_t outliers = 0;
-  for (const auto& am : r.measurements) outliers += am.outlier ? 1u : 0u;
-  if (outliers > 0) {
-    out << "\nMeasurements set aside (data snooping, or a gross misclosure before the adjustment): " << outliers << "\n";
+  if (removed > 0) {
+    out << "\nMeasurements removed (--remove-outliers, or a gross misclosure past the input's tolerance): " << removed << "\n";
     for (const auto& am : r.measurements) {
       if (am.outlier) out << "  " << net.measurements[am.index].source << ": " << am.removed_because << "\n";
     }
@@ -758,6 +826,7 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
   if (net.frame) j["frame"] = net.frame->to_string();
   j["ellipsoid"] = net.ellipsoid.name();
   j["datum"] = r.datum;
+  j["datum_defect"] = r.datum_defect;
   if (const auto rec = adjust_solution_record(prepared, r)) {
     ordered_json classes = ordered_json::object();
     for (const auto s : geodesy::kGnssSolutions) {
@@ -832,10 +901,27 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
     stations.push_back(st);
   }
   if (full) j["stations"] = std::move(stations);
-  ordered_json measurements = ordered_json::array(), outliers = ordered_json::array();
+  ordered_json measurements = ordered_json::array(), flagged = ordered_json::array(), removed = ordered_json::array();
+  for (const std::size_t k : solver::failing_measurements(r)) {
+    const auto& am = r.measurements[k];
+    const auto& m = net.measurements[am.index];
+    ordered_json x = {{"source", m.source},
+                      {"kind", kind_key(m.kind)},
+                      {"stations", stations_of(net, m)},
+                      {"snooping_rank", am.snooping_rank > 0 ? ordered_json(am.snooping_rank) : ordered_json(nullptr)},
+                      {"passes_after_rank", am.passes_after_rank > 0 ? ordered_json(am.passes_after_rank) : ordered_json(nullptr)},
+                      {"w_max", num(am.w_max)},
+                      {"test", {{"statistic", num(am.statistic)}, {"dof", am.test_dof}, {"p_value", num(am.p_value)}}}};
+    ordered_json mdb = ordered_json::array();
+    for (Eigen::Index c = 0; c < am.mdb.size(); ++c) mdb.push_back(num(am.mdb(c)));
+    x["mdb"] = mdb;
+    if (am.outlier) x["because"] = am.removed_because;
+    (am.outlier ? removed : flagged).push_back(std::move(x));
+  }
   for (const auto& am : r.measurements) {
     const auto& m = net.measurements[am.index];
-    if (am.outlier) outliers.push_back({{"source", m.source}, {"because", am.removed_because}});
+    if (am.outlier && am.snooping_rank == 0) removed.push_back({{"source", m.source}, {"kind", kind_key(m.kind)},
+                                                               {"stations", stations_of(net, m)}, {"because", am.removed_because}});
     if (!full) continue;
     ordered_json x = {{"source", m.source}, {"kind", kind_key(m.kind)}, {"stations", stations_of(net, m)},
                       {"unit", angular(m.kind) ? "rad" : "m"}};
@@ -853,12 +939,14 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
     x["w"] = vec(am.w);
     x["mdb"] = vec(am.mdb);
     x["test"] = {{"statistic", am.statistic}, {"dof", am.test_dof}, {"p_value", am.p_value}};
-    x["status"] = am.outlier ? "outlier" : am.used ? "used" : "not used";
+    x["status"] = solver::to_string(am.status(r.alpha_point));
+    x["snooping_rank"] = am.snooping_rank > 0 ? ordered_json(am.snooping_rank) : ordered_json(nullptr);
     if (!m.frame_step.empty()) x["frame_step"] = m.frame_step;
     measurements.push_back(std::move(x));
   }
   if (full) j["measurements"] = std::move(measurements);
-  j["outliers"] = outliers;
+  j["flagged"] = std::move(flagged);
+  j["removed"] = std::move(removed);
   j["warnings"] = r.warnings;
   if (!r.refused_because.empty()) j["refused_because"] = r.refused_because;
   return j;

@@ -177,12 +177,29 @@ std::optional<FitRefusal> fit_refusal(const solver::FitResult& r, const std::str
   }
   const auto& g = r.global_test;
   if (g.failed_high() && !accept_failed_global_test) {
+    // The flagged marks first, in the order data snooping would remove them.
+    const std::vector<std::size_t> failing = solver::failing_marks(r);
+    std::string flagged;
+    constexpr std::size_t kNamed = 10;
+    for (std::size_t k = 0; k < failing.size() && k < kNamed; ++k) {
+      const solver::PointResult& p = r.points[failing[k]];
+      flagged += (k ? ", " : "") + p.id + " (|w| " + format_fixed(p.w_max, 2) +
+                 (p.snooping_rank > 0 ? ", snooping rank " + std::to_string(p.snooping_rank) : std::string()) + ")";
+    }
+    if (failing.size() > kNamed) flagged += " and " + std::to_string(failing.size() - kNamed) + " more";
     return FitRefusal{
         "E_FIT_GLOBAL_TEST",
-        source_name + ": global test failed high (" + format_fixed(g.statistic, 2) + " > " + format_fixed(g.critical_upper, 2) +
+        source_name + ": " +
+            (failing.empty() ? std::string()
+                             : std::to_string(failing.size()) + " mark" + (failing.size() == 1 ? " fails its" : "s fail their") +
+                                   " point test: " + flagged + "; ") +
+            "global test failed high (" + format_fixed(g.statistic, 2) + " > " + format_fixed(g.critical_upper, 2) +
             ", σ0 = " + (r.sigma0 ? format_fixed(*r.sigma0, 3) : std::string("undefined")) +
-            "): the residuals do not fit the stated sigmas; no transform was written. hint: look for blunders "
-            "(residual table), wrong sigmas, or a wrong model; --accept-failed-global-test writes it anyway"};
+            "): the residuals do not fit the stated sigmas; no transform was written. hint: " +
+            (failing.empty() ? "look for blunders (residual table), wrong sigmas, or a wrong model"
+                             : "--remove-outliers removes the flagged marks in that order and fits again; else look for "
+                               "wrong sigmas or a wrong model") +
+            "; --accept-failed-global-test writes it anyway"};
   }
   return std::nullopt;
 }

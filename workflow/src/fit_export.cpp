@@ -92,7 +92,7 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
     return a.rank != b.rank ? a.rank < b.rank : a.w != b.w ? a.w > b.w : a.i < b.i;
   };
   const auto is_ok = [&](const solver::PointResult& p) {
-    return !p.outlier && p.used && p.point_dof > 0 && !(p.point_p_value < o.alpha_point) && !(p.robust_weight < 1.0);
+    return p.status(o.alpha_point) == solver::TestStatus::used && !(p.robust_weight < 1.0);
   };
   constexpr std::size_t kAllRowsUpTo = 1000, kOkRowsOfLargeSets = 50;
   const bool large = r.points.size() > kAllRowsUpTo;
@@ -102,7 +102,10 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     const auto& p = r.points[i];
     if (p.outlier) removed.push_back(i);
-    const Key k{p.outlier ? 0 : !p.used ? 1 : 2, std::isnan(p.w_max) ? -std::numeric_limits<double>::infinity() : p.w_max, i};
+    // Removed first, then flagged, then the rest (the ignored last); by |w| within each.
+    const solver::TestStatus st = p.status(o.alpha_point);
+    const int group = st == solver::TestStatus::removed ? 0 : st == solver::TestStatus::flagged ? 1 : st == solver::TestStatus::ignored ? 3 : 2;
+    const Key k{group, std::isnan(p.w_max) ? -std::numeric_limits<double>::infinity() : p.w_max, i};
     if (!large || !is_ok(p)) {
       shown.push_back(k);
       continue;
@@ -121,17 +124,19 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
   shown.insert(shown.end(), ok_keys.begin(), ok_keys.end());
   std::sort(shown.begin(), shown.end(), before);
   out << "\nResiduals (target − transformed source, local E/N/U, mm); w-tests critical |w| = " << format_fixed(r.w_critical, 2)
-      << "\n  id            dE       dN       dU      wE     wN     wU    MDB mm  status\n";
+      << "\n  id            dE       dN       dU      wE     wN     wU    MDB mm  status        snooping rank\n";
   for (const Key& k : shown) {
     const auto& p = r.points[k.i];
     char line[200];
     const std::string mdb = std::isfinite(p.mdb_m) ? format_fixed(1e3 * p.mdb_m, 1) : "-";
-    const std::string status = p.outlier                        ? "OUTLIER (removed)"
-                               : !p.used                        ? "not used"
-                               : p.point_dof == 0               ? "untestable (no redundancy)"
-                               : p.point_p_value < o.alpha_point ? "FAILS its point test"
-                               : p.robust_weight < 1.0          ? "weight " + format_fixed(p.robust_weight, 3)
-                                                                : "ok";
+    const solver::TestStatus st = p.status(o.alpha_point);
+    std::string status = solver::to_string(st);
+    if (st == solver::TestStatus::used && p.robust_weight < 1.0) status += " (weight " + format_fixed(p.robust_weight, 3) + ")";
+    if (p.snooping_rank > 0 || p.passes_after_rank > 0) {
+      status.resize(std::max<std::size_t>(status.size(), 12), ' ');
+      status += "  " + (p.snooping_rank > 0 ? std::to_string(p.snooping_rank)
+                                           : "- (passes once rank " + std::to_string(p.passes_after_rank) + " is out)");
+    }
     const auto w = [](double v) { return std::isfinite(v) ? format_fixed(v, 2) : std::string("-"); };
     std::snprintf(line, sizeof line, "  %-10s %8.1f %8.1f %8.1f  %6s %6s %6s  %8s  %s\n", p.id.c_str(),
                   1e3 * p.residual_enu_m.x(), 1e3 * p.residual_enu_m.y(), 1e3 * p.residual_enu_m.z(), w(p.w_enu.x()).c_str(),
@@ -139,18 +144,21 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
     out << line;
   }
   if (ok_hidden > 0) {
-    out << "  ... and " << ok_hidden << " more marks, all ok, with smaller |w| (every mark is in the transform file's "
-        << "points)\n";
+    out << "  ... and " << ok_hidden << " more marks, all used and passing, with smaller |w| (every mark is in the transform "
+        << "file's points)\n";
   }
   for (const std::size_t i : removed) out << "  " << r.points[i].id << ": " << r.points[i].removed_because << "\n";
-  out << "  (points not used are tested against the final fit: residuals at full size, prediction w-tests)\n";
+  out << "  (flagged: fails its point test at alpha_point " << format_shortest(o.alpha_point)
+      << ", kept; removed: by --remove-outliers; the snooping rank is the order in which iterative data snooping removes "
+         "them, strongest evidence first; marks not used are tested against the final fit: residuals at full size, "
+         "prediction w-tests)\n";
   if (!r.warnings.empty()) out << "\n" << r.warnings.size() << " warning(s): see standard error and the transform file\n";
 }
 
 namespace {
 
 // The per-point record of `p` in a transform file.
-void point_record(const solver::PointResult& p, const std::vector<std::string>& left_out, io::FitPointRecord& q) {
+void point_record(const solver::PointResult& p, double alpha_point, const std::vector<std::string>& left_out, io::FitPointRecord& q) {
   q.id = p.id;
   for (int k = 0; k < 3; ++k) {
     q.residual_enu_m[static_cast<std::size_t>(k)] = p.residual_enu_m(k);
@@ -168,6 +176,8 @@ void point_record(const solver::PointResult& p, const std::vector<std::string>& 
   q.point_test_p = p.point_p_value;
   q.outlier = p.outlier;
   q.used = p.used;
+  q.status = solver::to_string(p.status(alpha_point));
+  q.snooping_rank = p.snooping_rank;
   q.note = p.removed_because;
   if (std::find(left_out.begin(), left_out.end(), p.id) != left_out.end()) q.note = kLeftOutInWorkbench;
   q.robust_weight = p.robust_weight;
@@ -308,7 +318,7 @@ StreamedTransformFile streamed_file(const solver::FitResult& r, const geodesy::C
     for (const auto& p : set.points) solutions.push_back(p.solution);
   }
   streamed.points.record = [&r, left_out, solutions = std::move(solutions)](std::size_t i, io::FitPointRecord& q) {
-    point_record(r.points[i], left_out, q);
+    point_record(r.points[i], r.alpha_point, left_out, q);
     q.solution = i < solutions.size() ? solutions[i] : std::nullopt;
   };
   return streamed;
@@ -494,6 +504,8 @@ FitChoices fit_choices_from_transform(const io::TransformFile& t) {
     o.scale_by_sigma0 = t.fit->sigmas_scaled_by_sigma0;
     for (const auto& p : t.fit->points) {
       if (p.note == kLeftOutInWorkbench) c.left_out.push_back(p.id);
+      // A mark data snooping removed: the fit was made with --remove-outliers.
+      if (p.outlier) o.remove_outliers = true;
     }
   }
   return c;

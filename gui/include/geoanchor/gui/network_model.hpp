@@ -51,8 +51,8 @@ struct NetworkStationRow {
 enum class MeasurementClass {
   small,       // its test passes, |w| ≤ elevated_w: bluish green, thin
   elevated,    // its test passes, |w| > elevated_w: orange, medium
-  failing,     // its test fails and it was kept (data snooping off, at its limit, or not removable): vermillion, thick, labelled
-  outlier,     // removed by data snooping: vermillion, dashed, labelled
+  failing,     // its test fails and it was kept (flagged: the default; or at the limit, or not removable): vermillion, thick, labelled
+  outlier,     // removed by data snooping (--remove-outliers): vermillion, dashed, labelled
   untestable,  // no redundancy (w undefined): black, thin, dashed
   left_out,    // not in the shown adjustment (left out by the user or ignored by its input): grey, thin, dashed
 };

@@ -58,6 +58,11 @@ struct FitPointRecord {
   double point_test_p = 1.0;
   bool outlier = false;
   bool used = true;
+  // What became of it in the tests (solver::TestStatus: used, flagged,
+  // removed, uncontrolled, ignored; empty: not stated, files before
+  // 2026-12), and its place in data snooping's order (0: none; written when > 0).
+  std::string status;
+  std::size_t snooping_rank = 0;
   std::string note;  // why it was not used
   double robust_weight = 1.0;  // written when < 1 (robust loss)
   std::optional<geodesy::GnssSolution> solution;  // written when the control set states it ("solution": "float")

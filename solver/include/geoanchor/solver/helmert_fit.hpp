@@ -78,7 +78,13 @@ struct FitOptions {
   double alpha = 0.05;          // global test
   double alpha_point = 0.001;   // w-tests and data snooping
   double power = 0.80;          // for the minimal detectable bias
+  // Data snooping (solver/src/snooping.hpp): the marks that fail their
+  // point test are ranked in the order iterative snooping would remove them
+  // (PointResult::snooping_rank; off: no ranks, for the fits inside
+  // diagnose and --compare). They are flagged and kept unless
+  // remove_outliers (fit --remove-outliers) removes them in that order.
   bool data_snooping = true;
+  bool remove_outliers = false;
   // Data snooping removes at most this share of the marks (at least one);
   // when a mark still fails past it the fit is refused (refused_because):
   // so many failures mean the data or the model is wrong, not blunders.
@@ -126,28 +132,51 @@ struct GlobalTest {
   const char* verdict() const { return !applicable ? "not applicable" : passed ? "passed" : failed_high() ? "failed high" : "failed low"; }
 };
 
+// What became of a mark (fit) or a measurement (adjust) in the tests: the
+// status column of their tables. used: in the fit and passes its test;
+// flagged: fails it and is kept (the default); removed: by data snooping
+// (--remove-outliers) or by the input's tolerance; uncontrolled: no
+// direction of its residual has redundancy enough to be tested
+// (kMinRedundancy), so it is adjusted and never tested; ignored: left out
+// by the input (use = 0, Ignore, a GNSS solution type left out).
+enum class TestStatus { used, flagged, removed, uncontrolled, ignored };
+const char* to_string(TestStatus s);
+
 struct PointResult {
   std::string id;
   std::size_t line = 0;
   bool used = true;     // entered the final fit
   bool outlier = false; // removed by data snooping
   std::string removed_because;
+  // Its place in the order iterative data snooping removes the failing
+  // marks (1: first); 0 for a mark snooping would not remove.
+  std::size_t snooping_rank = 0;
+  // Flagged, but passes once the marks data snooping removes before it are
+  // out: the rank after whose removal it passes (0: not so).
+  std::size_t passes_after_rank = 0;
   Eigen::Vector3d residual_enu_m = Eigen::Vector3d::Zero();  // target − transformed source, local E, N, U
   Eigen::Vector3d w_enu = Eigen::Vector3d::Zero();           // w-test per local axis (NaN: untestable, no redundancy)
   Eigen::Vector3d redundancy_enu = Eigen::Vector3d::Zero();  // redundancy numbers per local axis
   double w_max = 0.0;
   double mdb_m = 0.0;  // largest minimal detectable bias over the three axes (inf: an axis without redundancy)
-  // The point test: r̄ᵀ Q⁺ r̄ of the whitened residual, χ²(point_dof) under
-  // H0; data snooping removes the point with the smallest p-value while it is
-  // below alpha_point.
+  // The point test: r̄ᵀ Q⁺ r̄ of the whitened residual over its controlled
+  // directions, χ²(point_dof) under H0; it fails below alpha_point.
   double point_statistic = 0.0;
   int point_dof = 0;
   double point_p_value = 1.0;
+  double point_log_p = 0.0;  // ln point_p_value, without underflow (the evidence snooping ranks by)
   double robust_weight = 1.0;  // with a robust loss: the final IRLS weight
   // The residual's covariance in local E, N, U (m²; for site-calibration:
   // grid E, grid N, up): C − A Σθ Aᵀ in the fit, C + A Σθ Aᵀ for a point
   // tested against it (its prediction), scaled like the parameter sigmas.
   Eigen::Matrix3d residual_cov_enu_m2 = Eigen::Matrix3d::Zero();
+  TestStatus status(double alpha_point) const {
+    return outlier ? TestStatus::removed
+           : !used ? TestStatus::ignored
+           : point_dof == 0 ? TestStatus::uncontrolled
+           : point_p_value < alpha_point ? TestStatus::flagged
+                                         : TestStatus::used;
+  }
 };
 
 struct FitResult {
@@ -180,6 +209,7 @@ struct FitResult {
   int dof = 0;
   GlobalTest global_test;
   double w_critical = 0.0;  // |w| above this fails its w-test at alpha_point
+  double alpha_point = 0.001;  // the options' (PointResult::status)
   std::vector<PointResult> points;  // in input order
   std::vector<std::string> warnings;
   // --vce: the estimated variance factors of the source and target
@@ -192,6 +222,11 @@ struct FitResult {
   // snooping reached its limit): why, naming the test that failed.
   std::string refused_because;
 };
+
+// The marks that fail their point test (flagged, or removed by data
+// snooping), in the order data snooping removes them (snooping_rank), then
+// the rest by evidence: what a refusal or report names first.
+std::vector<std::size_t> failing_marks(const FitResult& r);
 
 // Throws geoanchor::Error: `rejected` for ill-posed problems (too few
 // points, coincident points, collinear or nearly collinear points — any

@@ -28,8 +28,8 @@
 // point_statistics.hpp): vᵀPv, dof, σ0 and the two-sided χ² global test;
 // per measurement the residual, its standard deviation, redundancy numbers,
 // w-tests, MDB and the measurement test; data snooping by the same rule
-// (the smallest p-value below alpha_point goes, within
-// max_outlier_share).
+// (solver/src/snooping.hpp: ranked by evidence, flagged; removed only with
+// remove_outliers, within max_outlier_share).
 
 #include <Eigen/Core>
 
@@ -70,7 +70,15 @@ struct AdjustOptions {
   double alpha_point = 0.001;   // w-tests, measurement tests and data snooping
   double power = 0.80;          // for the minimal detectable bias
   double confidence = 0.95;     // the error ellipses' second size
+  // Data snooping (solver/src/snooping.hpp): the measurements that fail
+  // their test are ranked in the order iterative snooping would remove
+  // them (AdjustedMeasurement::snooping_rank; off: no ranks). They are
+  // flagged and kept unless remove_outliers (adjust --remove-outliers)
+  // removes them in that order, adjusting again until none fails.
   bool data_snooping = true;
+  bool remove_outliers = false;
+  // --remove-outliers removes at most this share of the measurements;
+  // past it the adjustment is refused (refused_because).
   double max_outlier_share = 0.10;
   double convergence_m = 1e-5;  // the iteration ends when no coordinate moves more (metres)
   int max_iterations = 25;
@@ -138,8 +146,14 @@ struct AdjustedStation {
 struct AdjustedMeasurement {
   std::size_t index = 0;  // into Network::measurements
   bool used = true;       // in the final adjustment
-  bool outlier = false;   // removed by data snooping
+  bool outlier = false;   // removed: by data snooping (--remove-outliers) or the input's tolerance for misclosures
   std::string removed_because;
+  // Its place in the order iterative data snooping removes the failing
+  // measurements (1: first); 0 for one snooping would not remove.
+  std::size_t snooping_rank = 0;
+  // Flagged, but passes once the measurements data snooping removes before
+  // it are out: the rank after whose removal it passes (0: not so).
+  std::size_t passes_after_rank = 0;
   Eigen::VectorXd observed, adjusted;
   Eigen::VectorXd residual;        // adjusted − observed
   Eigen::VectorXd sigma;           // a priori
@@ -148,12 +162,20 @@ struct AdjustedMeasurement {
   Eigen::VectorXd w;               // w-test per component (NaN: no redundancy)
   Eigen::VectorXd mdb;             // minimal detectable bias per component (inf: none)
   double w_max = 0.0;
-  double statistic = 0.0;  // the measurement test: χ²(dof) under H0
-  int test_dof = 0;
+  double statistic = 0.0;  // the measurement test: χ²(dof) under H0, over its controlled directions
+  int test_dof = 0;        // 0: uncontrolled (no direction with redundancy ≥ kMinRedundancy)
   double p_value = 1.0;
-  // In the adjustment, redundant, and its measurement test's p-value below
-  // alpha_point: what data snooping removes and the reports flag.
+  double log_p = 0.0;      // ln p_value without underflow: the evidence data snooping ranks by
+  // In the adjustment, controlled, and its measurement test's p-value below
+  // alpha_point: what the reports flag and data snooping removes.
   bool fails_test(double alpha_point) const { return used && test_dof > 0 && p_value < alpha_point; }
+  TestStatus status(double alpha_point) const {
+    return outlier ? TestStatus::removed
+           : !used ? TestStatus::ignored
+           : test_dof == 0 ? TestStatus::uncontrolled
+           : p_value < alpha_point ? TestStatus::flagged
+                                   : TestStatus::used;
+  }
 };
 
 struct RelativePrecision {
@@ -178,7 +200,9 @@ struct AdjustmentTimings {
 
 struct AdjustmentResult {
   std::vector<AdjustedStation> stations;          // in the network's order
-  std::vector<AdjustedMeasurement> measurements;  // in the network's order (ignored ones left out)
+  // In the network's order; those its input ignores are left out (the
+  // measurements CSV lists them, status "ignored").
+  std::vector<AdjustedMeasurement> measurements;
   std::vector<double> orientations_rad, orientation_sigmas_rad;  // per direction set
   std::vector<RelativePrecision> relative;  // between stations that share a measurement
   double vtpv = 0.0;                // vᵀ Σ⁻¹ v, Σ the a-priori covariance
@@ -187,9 +211,11 @@ struct AdjustmentResult {
   std::optional<double> sigma0;
   GlobalTest global_test;
   double w_critical = 0.0;
+  double alpha_point = 0.001;  // the options' (AdjustedMeasurement::status)
   int iterations = 0;  // Gauss–Newton iterations over every pass
-  // Adjustments in all: 1, plus one per data-snooping step (a step removes
-  // the worst failing measurement and any failing far from it).
+  // Adjustments in all: 1, plus one per data-snooping step (--remove-outliers:
+  // a step removes every measurement of snooping's order, snooping.hpp, and
+  // the next tests all again).
   int passes = 0;
   // Measurements data snooping removed after each pass but the last, and
   // the passes that took them out of the last factor (a downdate,
@@ -199,6 +225,10 @@ struct AdjustmentResult {
   bool converged = false;
   double largest_correction_m = 0.0;  // of the last iteration
   std::string datum;                  // how the datum is defined, in words
+  // The combinations of translations, rotations and scale that the
+  // measurements and constraints leave undefined, by name (a free network's
+  // defect, or what the input's datum stations hold); empty when none.
+  std::vector<std::string> datum_defect;
   bool datum_by_minimum_norm = false;  // part of it held by inner constraints (free network, Gama's constrained points)
   std::vector<std::string> warnings;
   std::string refused_because;        // set when data snooping reached its limit
@@ -213,13 +243,24 @@ struct AdjustmentResult {
   std::optional<EstimatedHelmert> helmert;
 };
 
+// The measurements that fail their test (flagged, or removed by data
+// snooping), as positions in r.measurements: in the order data snooping
+// removes them (snooping_rank), then the rest by evidence (ln p, then the
+// statistic): what a refusal or a report names first.
+std::vector<std::size_t> failing_measurements(const AdjustmentResult& r);
+
 // Throws geoanchor::Error (input) naming the station or measurement: an
-// undefined datum (E_DATUM_DEFECT, naming what is undefined), a disconnected
-// network (E_NETWORK_DISCONNECTED, naming the components), a station the
-// measurements do not determine (E_NETWORK_SINGULAR), a covariance that is
+// undefined datum (E_DATUM_DEFECT, naming what is undefined: judged
+// against the network's own precision, docs/commands/adjust.md "The
+// datum"), a disconnected network (E_NETWORK_DISCONNECTED, naming the
+// components), stations the measurements do not determine
+// (E_NETWORK_SINGULAR, naming them and the direction left free), a
+// covariance that is
 // not positive definite (E_COVARIANCE, with its smallest eigenvalue), a
-// height without a geoid (E_GEOID_MISSING); (rejected) no convergence
-// (E_NOT_CONVERGED, with the largest correction and its station).
+// height without a geoid (E_GEOID_MISSING); (usage) inner-constraint
+// stations that do not hold the defect (E_INNER_CONSTRAINTS, naming the
+// combinations left free); (rejected) no convergence (E_NOT_CONVERGED,
+// with the largest correction and its station).
 AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOptions& options);
 
 }  // namespace geoanchor::solver

@@ -103,8 +103,9 @@ void write_fit_report(std::ostream& out, const solver::FitResult& fit, const geo
 
 // The choices a transform file records: model, convention, rotation model,
 // reference epoch, pivot, nominal origin (enu-origin, site-calibration),
-// site grid, alpha, alpha_point, scaling by σ0, and the points left out in
-// the workbench. A file without a fit record (published parameters) gives
+// site grid, alpha, alpha_point, scaling by σ0, data snooping's removals
+// (a mark removed by it: the fit was made with --remove-outliers), and the
+// points left out in the workbench. A file without a fit record (published parameters) gives
 // its model and convention with the default statistics settings.
 struct FitChoices {
   solver::FitOptions options;

@@ -1,0 +1,112 @@
+#pragma once
+// Iterative data snooping (Baarda), in one implementation for fit and
+// adjust: the order in which the failing measurements (or marks) would be
+// removed one at a time, each time the one with the strongest evidence
+// against it, every other test recomputed without the ones before it.
+//
+// Nothing is refitted here. Removing measurements R from a least-squares
+// adjustment changes the whitened residuals and their cofactor exactly as
+//   v' = v − Q(·,R) Q(R,R)⁻¹ v_R,   Q' = Q − Q(·,R) Q(R,R)⁻¹ Q(R,·)
+// (Q = I − A N⁻¹ Aᵀ, the whitened residuals' cofactor): the projector onto
+// the residual space loses the directions of R (Sherman–Morrison–Woodbury
+// in the space of the residuals). So the sequence needs only each
+// candidate's residual and cofactor and, for each removal t, the column of
+// blocks Q(i, t) between it and the candidates still in play, which the
+// caller's CofactorSource gives (fit: from the parameters' cofactor; adjust:
+// one solve with the network's factor per removal, or one multi-column
+// solve for all candidates). Q(R,R) is kept as its Cholesky factor, grown
+// one removal at a time, so that a removal costs the column and a product
+// over the removals so far.
+//
+// Evidence: a test's natural logarithm of its p-value (χ² of the dimension
+// the test has), which does not underflow for gross blunders; then the
+// larger statistic; then the candidates' keys (their content, never their
+// place in the input), so that the order of the input changes nothing.
+// Under one blunder b, every other measurement's bias is at most b's
+// (|w_i| ≤ |w_b| in bias by Cauchy–Schwarz on the projector Q; for a
+// measurement of k components its χ² statistic is at most b's): a gross
+// blunder is removed before any measurement it contaminates, and once it
+// is out their tests are computed without it.
+//
+// Private to solver.
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace geoanchor::solver {
+
+// A measurement that fails its test as the adjustment stands.
+struct SnoopingCandidate {
+  Eigen::VectorXd v;  // whitened residual (k components)
+  Eigen::MatrixXd q;  // whitened residual cofactor (k × k): Q(i, i)
+  std::string key;    // breaks exact ties in evidence: what it is (kind, stations, values), not where it is
+};
+
+// The whitened residuals' cofactor between candidates, of the adjustment
+// as it stands (before any removal of the sequence).
+class CofactorSource {
+ public:
+  virtual ~CofactorSource() = default;
+  // The blocks Q(i, column) for every candidate i of `rows`, stacked in
+  // that order (Σ k_i rows × k_column columns). `rows` may include `column`
+  // itself (its block is Q(column, column)).
+  virtual Eigen::MatrixXd column(const std::vector<std::size_t>& rows, std::size_t column) = 0;
+  // A hint: the columns of these candidates will be asked for with (a
+  // subset of) them as rows; a source whose columns cost a solve each does
+  // them together.
+  virtual void prefetch(const std::vector<std::size_t>& candidates) { (void)candidates; }
+};
+
+struct SnoopingLimits {
+  double alpha = 0.001;  // a candidate fails while its test's p-value is below it
+  // The most removals (max_outlier_share); past it limit_reached.
+  std::size_t max_removals = 0;
+  // τ-tests (σ0 estimated: fit --scale-by-sigma0): the residuals scaled by
+  // √(Ω/dof) as Ω and dof fall with each removal; else σ0 = 1.
+  bool scale_by_sigma0 = false;
+  double omega = 0.0;
+  int dof = 0;
+  // Whether the (count)th removal, of `candidate`, may be made (a fit keeps
+  // its fewest points); false stops the sequence (stopped_by_caller).
+  std::function<bool(std::size_t count, std::size_t candidate)> may_remove;
+};
+
+struct SnoopingRemoval {
+  std::size_t candidate = 0;  // index into the candidates
+  // Its test when it was removed (after the removals before it).
+  double statistic = 0.0;
+  int dof = 0;
+  double p_value = 1.0;
+  double log_p = 0.0;
+};
+
+struct SnoopingSequence {
+  std::vector<SnoopingRemoval> removals;  // in the order they would be made
+  // Failing, but not removable: some direction of its residual has no
+  // redundancy once the earlier ones are out (the rest would not determine
+  // all it measures). In the order met.
+  std::vector<std::size_t> not_removable;
+  // Candidates that still fail when the sequence stopped at max_removals
+  // (limit_reached) or by may_remove (stopped_by_caller); the first is the
+  // strongest.
+  std::vector<std::size_t> still_failing;
+  bool limit_reached = false;
+  bool stopped_by_caller = false;
+  // Per candidate: the removal (index into `removals`) after which it no
+  // longer fails, its failure explained by the ones removed before; −1 for
+  // the removed and those that fail to the end.
+  std::vector<std::ptrdiff_t> passes_after;
+};
+
+SnoopingSequence snooping_sequence(const std::vector<SnoopingCandidate>& candidates, CofactorSource& source,
+                                   const SnoopingLimits& limits);
+
+// Whether evidence (ln p, statistic) `a` is stronger than `b` (the smaller
+// ln p; equal: the larger statistic). Neither when both are equal.
+bool stronger_evidence(double log_p_a, double statistic_a, double log_p_b, double statistic_b);
+
+}  // namespace geoanchor::solver
