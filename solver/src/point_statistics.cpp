@@ -173,29 +173,6 @@ std::size_t max_snooped(std::size_t n, const FitOptions& o) {
   return std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(o.max_outlier_share * static_cast<double>(n))));
 }
 
-namespace {
-
-// Q(i, t) = δ_it I − A_i N⁻¹ A_tᵀ between the failing marks of a fit.
-class FitCofactors final : public CofactorSource {
- public:
-  explicit FitCofactors(const FitLinearization& lin) : lin_(lin) {}
-  Eigen::MatrixXd column(const std::vector<std::size_t>& rows, std::size_t t) override {
-    const Eigen::MatrixXd nat = lin_.n_inv * lin_.a[t].transpose();  // u × 3
-    Eigen::MatrixXd out(static_cast<Eigen::Index>(3 * rows.size()), 3);
-    for (std::size_t k = 0; k < rows.size(); ++k) {
-      Eigen::Matrix3d block = -lin_.a[rows[k]] * nat;
-      if (rows[k] == t) block += Eigen::Matrix3d::Identity();
-      out.middleRows(static_cast<Eigen::Index>(3 * k), 3) = block;
-    }
-    return out;
-  }
-
- private:
-  const FitLinearization& lin_;
-};
-
-}  // namespace
-
 SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions& o, int u, int min_points,
                 const FitLinearization& lin) {
   if (!o.data_snooping || r.dof <= 0 || lin.position.empty()) return SnoopStep::none;
@@ -227,8 +204,7 @@ SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions
     const int left = n - static_cast<int>(count);
     return left >= min_points && 3 * left - u > 0;
   };
-  FitCofactors cofactors(lin);
-  const SnoopingSequence seq = snooping_sequence(candidates, cofactors, limits);
+  const SnoopingSequence seq = snooping_sequence(candidates, lin.a, lin.n_inv, limits);
   const auto point_of = [&](std::size_t c) -> PointResult& { return r.points[active[lin.position[c]]]; };
   // Ranks continue those of the marks removed in earlier passes.
   for (std::size_t k = 0; k < seq.removals.size(); ++k) point_of(seq.removals[k].candidate).snooping_rank = removed + k + 1;

@@ -185,7 +185,9 @@ std::vector<std::size_t> refitted_order(const Problem& p, double alpha) {
 }
 
 // The sequence without refitting is iterative snooping: the same
-// measurements in the same order as refitting after every removal, here
+// measurements in the same order as refitting after every removal (both
+// ways of computing it: over the cofactors between candidates, as a network
+// does, and over the parameters, as a fit does), here
 // with three planted blunders of different sizes among 1-D and 3-D
 // measurements, over many draws.
 TEST(Snooping, Issue39_TheSequenceIsIterativeSnoopingRefittedAfterEachRemoval) {
@@ -216,6 +218,17 @@ TEST(Snooping, Issue39_TheSequenceIsIterativeSnoopingRefittedAfterEachRemoval) {
     const SnoopingSequence seq = snooping_sequence(candidates, source, limits);
     std::vector<std::size_t> ours;
     for (const auto& r : seq.removals) ours.push_back(candidate_of[r.candidate]);
+    // The same order over the parameters (a fit's way): design rows and N⁻¹.
+    std::vector<Eigen::MatrixXd> design;
+    for (std::size_t k : candidate_of) {
+      Eigen::MatrixXd a(static_cast<Eigen::Index>(p.rows[k].size()), p.a.cols());
+      for (std::size_t r = 0; r < p.rows[k].size(); ++r) a.row(static_cast<Eigen::Index>(r)) = p.a.row(p.rows[k][r]);
+      design.push_back(a);
+    }
+    const SnoopingSequence by_parameters = snooping_sequence(candidates, design, (p.a.transpose() * p.a).inverse(), limits);
+    std::vector<std::size_t> theirs;
+    for (const auto& r : by_parameters.removals) theirs.push_back(candidate_of[r.candidate]);
+    EXPECT_EQ(theirs, ours) << "trial " << trial;
     // The long way may remove one the sequence never had (a measurement
     // that fails only once others are out, not failing at the start): the
     // sequence is its prefix of the measurements failing at the start.
