@@ -285,66 +285,114 @@ struct Problem {
   }
 };
 
-// Whether measurement a comes before b by what it is: kind, stations (by
-// name), values, then instrument and target heights and covariance; equal
-// content compares equal (such twins are interchangeable).
-bool canonical_less(const geodesy::Network& net, std::size_t a, std::size_t b) {
-  const auto& ma = net.measurements[a];
-  const auto& mb = net.measurements[b];
-  if (ma.kind != mb.kind) return ma.kind < mb.kind;
-  if (ma.stations.size() != mb.stations.size()) return ma.stations.size() < mb.stations.size();
+// Measurement a before b by what it is, apart from its direction set:
+// kind, stations (by name), values, instrument and target heights,
+// covariance, then frame, group, solution, variance scales and whether it
+// is ignored; < 0, 0 (equal content: such twins are interchangeable), > 0.
+int compare_content(const geodesy::Network& net, const geodesy::NetworkMeasurement& ma, const geodesy::NetworkMeasurement& mb) {
+  const auto three_way = [](auto x, auto y) { return x < y ? -1 : y < x ? 1 : 0; };
+  if (ma.kind != mb.kind) return three_way(ma.kind, mb.kind);
+  if (ma.stations.size() != mb.stations.size()) return three_way(ma.stations.size(), mb.stations.size());
   for (std::size_t k = 0; k < ma.stations.size(); ++k) {
     const int c = net.stations[ma.stations[k]].id.compare(net.stations[mb.stations[k]].id);
-    if (c != 0) return c < 0;
+    if (c != 0) return c < 0 ? -1 : 1;
   }
-  if (ma.value.size() != mb.value.size()) return ma.value.size() < mb.value.size();
+  if (ma.value.size() != mb.value.size()) return three_way(ma.value.size(), mb.value.size());
   for (Eigen::Index k = 0; k < ma.value.size(); ++k) {
-    if (ma.value(k) != mb.value(k)) return ma.value(k) < mb.value(k);
+    if (ma.value(k) != mb.value(k)) return three_way(ma.value(k), mb.value(k));
   }
-  if (ma.instrument_height_m != mb.instrument_height_m) return ma.instrument_height_m < mb.instrument_height_m;
-  if (ma.target_height_m != mb.target_height_m) return ma.target_height_m < mb.target_height_m;
-  for (Eigen::Index k = 0; k < ma.covariance.size() && k < mb.covariance.size(); ++k) {
-    if (ma.covariance(k) != mb.covariance(k)) return ma.covariance(k) < mb.covariance(k);
+  if (ma.instrument_height_m != mb.instrument_height_m) return three_way(ma.instrument_height_m, mb.instrument_height_m);
+  if (ma.target_height_m != mb.target_height_m) return three_way(ma.target_height_m, mb.target_height_m);
+  if (ma.covariance.size() != mb.covariance.size()) return three_way(ma.covariance.size(), mb.covariance.size());
+  for (Eigen::Index k = 0; k < ma.covariance.size(); ++k) {
+    if (ma.covariance(k) != mb.covariance(k)) return three_way(ma.covariance(k), mb.covariance(k));
   }
-  return false;
+  if (ma.frame != mb.frame) {
+    if (ma.frame.has_value() != mb.frame.has_value()) return ma.frame.has_value() ? 1 : -1;
+    const int c = ma.frame->to_string().compare(mb.frame->to_string());
+    if (c != 0) return c < 0 ? -1 : 1;
+  }
+  if (const int c = ma.group.compare(mb.group); c != 0) return c < 0 ? -1 : 1;
+  if (ma.solution != mb.solution) return three_way(ma.solution, mb.solution);
+  for (int k = 0; k < 3; ++k) {
+    if (ma.local_variance_scale(k) != mb.local_variance_scale(k)) return three_way(ma.local_variance_scale(k), mb.local_variance_scale(k));
+  }
+  return three_way(ma.ignore, mb.ignore);
 }
 
-std::vector<std::size_t> canonical_order(const geodesy::Network& net) {
-  std::vector<std::size_t> order(net.measurements.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return canonical_less(net, a, b); });
-  return order;
-}
-
-// Direction sets by their station's name, then by their first direction in
-// the canonical order.
-std::vector<std::size_t> canonical_set_order(const geodesy::Network& net, const std::vector<std::size_t>& order) {
-  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
-  std::vector<std::size_t> first(net.direction_sets.size(), kNone);
-  for (std::size_t rank = 0; rank < order.size(); ++rank) {
-    const auto& m = net.measurements[order[rank]];
-    if (m.set && *m.set < first.size() && first[*m.set] == kNone) first[*m.set] = rank;
+// Direction sets by what they are: their station's name, then their
+// directions in the order of their content, compared one by one (then the
+// fewer first). Equal sets are interchangeable.
+std::vector<std::size_t> canonical_set_order(const geodesy::Network& net) {
+  std::vector<std::vector<std::size_t>> members(net.direction_sets.size());
+  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+    const auto& m = net.measurements[mi];
+    if (m.set && *m.set < members.size()) members[*m.set].push_back(mi);
+  }
+  for (auto& list : members) {
+    std::stable_sort(list.begin(), list.end(), [&](std::size_t a, std::size_t b) {
+      return compare_content(net, net.measurements[a], net.measurements[b]) < 0;
+    });
   }
   std::vector<std::size_t> sets(net.direction_sets.size());
   std::iota(sets.begin(), sets.end(), std::size_t{0});
   std::stable_sort(sets.begin(), sets.end(), [&](std::size_t a, std::size_t b) {
     const int c = net.stations[net.direction_sets[a].station].id.compare(net.stations[net.direction_sets[b].station].id);
-    return c != 0 ? c < 0 : first[a] < first[b];
+    if (c != 0) return c < 0;
+    const auto& la = members[a];
+    const auto& lb = members[b];
+    for (std::size_t k = 0; k < la.size() && k < lb.size(); ++k) {
+      const int d = compare_content(net, net.measurements[la[k]], net.measurements[lb[k]]);
+      if (d != 0) return d < 0;
+    }
+    return la.size() < lb.size();
   });
   return sets;
 }
 
+// Each set's place in canonical_set_order (its canonical rank).
+std::vector<std::size_t> set_ranks(const std::vector<std::size_t>& set_order) {
+  std::vector<std::size_t> rank(set_order.size());
+  for (std::size_t k = 0; k < set_order.size(); ++k) rank[set_order[k]] = k;
+  return rank;
+}
+
+// The measurements by what they are (compare_content), a direction's set
+// by its canonical rank after that.
+std::vector<std::size_t> canonical_order(const geodesy::Network& net, const std::vector<std::size_t>& set_order) {
+  const std::vector<std::size_t> rank = set_ranks(set_order);
+  const auto set_rank = [&](const geodesy::NetworkMeasurement& m) {
+    return m.set && *m.set < rank.size() ? rank[*m.set] + 1 : std::size_t{0};
+  };
+  std::vector<std::size_t> order(net.measurements.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const auto& ma = net.measurements[a];
+    const auto& mb = net.measurements[b];
+    const int c = compare_content(net, ma, mb);
+    return c != 0 ? c < 0 : set_rank(ma) < set_rank(mb);
+  });
+  return order;
+}
+
 // The text data snooping breaks exact ties with: what the measurement is
-// (kind, stations, values as exact hexadecimal), not where it is.
-std::string measurement_key(const geodesy::Network& net, const geodesy::NetworkMeasurement& m) {
+// (kind, stations, values, heights and covariance as exact hexadecimal,
+// frame, group, a direction's set by its canonical rank `set_rank`, 0 for
+// none), not where it is.
+std::string measurement_key(const geodesy::Network& net, const geodesy::NetworkMeasurement& m, std::size_t set_rank) {
   std::string key = geodesy::to_string(m.kind);
   for (std::size_t s : m.stations) key += "\x1f" + net.stations[s].id;
   char buf[40];
-  for (Eigen::Index k = 0; k < m.value.size(); ++k) {
-    const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, m.value(k), std::chars_format::hex);
+  const auto add = [&](double x) {
+    const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::hex);
     key += '\x1f';
     key.append(buf, ec == std::errc() ? end : buf);
-  }
+  };
+  for (Eigen::Index k = 0; k < m.value.size(); ++k) add(m.value(k));
+  add(m.instrument_height_m);
+  add(m.target_height_m);
+  for (Eigen::Index k = 0; k < m.covariance.size(); ++k) add(m.covariance(k));
+  key += "\x1f" + (m.frame ? m.frame->to_string() : std::string()) + "\x1f" + m.group + "\x1f" + std::to_string(set_rank);
   return key;
 }
 
@@ -1264,8 +1312,8 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   }
   Problem p(network, o);
   const auto& net = network;
-  p.order = canonical_order(net);
-  p.set_order = canonical_set_order(net, p.order);
+  p.set_order = canonical_set_order(net);
+  p.order = canonical_order(net, p.set_order);
   AdjustmentResult result;
   const int jobs = resolve_jobs(o.jobs);
   const std::string where = net.source_name;
@@ -1781,9 +1829,17 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     // go, and the network is adjusted and tested again (ranks continue).
     if (o.data_snooping && result.dof > 0) {
       std::vector<std::size_t> failing;  // positions in result.measurements
+      std::vector<std::string> keys(result.measurements.size());
+      const std::vector<std::size_t> set_rank = set_ranks(p.set_order);
       for (std::size_t k = 0; k < result.measurements.size(); ++k) {
-        if (result.measurements[k].fails_test(o.alpha_point)) failing.push_back(k);
+        if (!result.measurements[k].fails_test(o.alpha_point)) continue;
+        failing.push_back(k);
+        const auto& m = net.measurements[result.measurements[k].index];
+        keys[k] = measurement_key(net, m, m.set && *m.set < set_rank.size() ? set_rank[*m.set] + 1 : 0);
       }
+      // In the order of their content, so that the cofactors' solves are
+      // batched the same for any order of the input.
+      std::sort(failing.begin(), failing.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
       if (!failing.empty()) {
         NetworkCofactors cofactors(f, p.layout.count);
         std::vector<SnoopingCandidate> candidates(failing.size());
@@ -1799,7 +1855,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           const Eigen::Index k = r.a.rows();
           candidates[c].v = p.whitening[mi] * am.residual;
           candidates[c].q = Eigen::MatrixXd::Identity(k, k) - r.a * q * r.a.transpose();
-          candidates[c].key = measurement_key(net, net.measurements[mi]);
+          candidates[c].key = std::move(keys[failing[c]]);
           cofactors.add(std::move(r.unknowns), std::move(r.a));
         }
         const std::size_t limit = std::max<std::size_t>(
@@ -1809,6 +1865,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         limits.max_removals = limit > removed ? limit - removed : 0;
         const SnoopingSequence seq = snooping_sequence(candidates, cofactors, limits);
         const auto measurement_of = [&](std::size_t c) -> AdjustedMeasurement& { return result.measurements[failing[c]]; };
+        const auto name_of = [&](const AdjustedMeasurement& am) {
+          return net.measurements[am.index].source + " (" + geodesy::to_string(net.measurements[am.index].kind) + ")";
+        };
         const auto describe = [&](const AdjustedMeasurement& am) {
           return "measurement test " + fmt(am.statistic, 4) + " (χ²(" + std::to_string(am.test_dof) + "), p = " +
                  fmt(am.p_value, 3) + " < " + format_shortest(o.alpha_point) + "); max |w| " + format_fixed(am.w_max, 2);
@@ -1819,30 +1878,46 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           rank_of[am.index] = am.snooping_rank;
         }
         for (std::size_t c = 0; c < candidates.size(); ++c) {
-          if (seq.passes_after[c] >= 0) measurement_of(c).passes_after_rank = removed + static_cast<std::size_t>(seq.passes_after[c]) + 1;
+          measurement_of(c).passes_after_rank =
+              seq.passes_after[c] >= 0 ? removed + static_cast<std::size_t>(seq.passes_after[c]) + 1 : 0;
         }
         for (std::size_t c : seq.not_removable) {
           const AdjustedMeasurement& am = measurement_of(c);
-          result.warnings.push_back(net.measurements[am.index].source + " (" + geodesy::to_string(net.measurements[am.index].kind) +
-                                    ") fails its " + describe(am) +
+          result.warnings.push_back(name_of(am) + " fails its " + describe(am) +
                                     " but cannot be removed: the rest of the network does not determine all of what it measures");
         }
+        for (const auto& group : seq.inseparable) {
+          std::string names;
+          for (std::size_t c : group) names += (names.empty() ? "" : ", ") + name_of(measurement_of(c));
+          result.warnings.push_back(
+              names + " fail their measurement tests and cannot be told apart: with " + name_of(measurement_of(group.front())) +
+              " removed the others could no longer be tested along the direction they share (their residuals are correlated by "
+              "±1 there); one of them is wrong, none is removed");
+        }
         // Past the limit: with --remove-outliers the measurements up to it
-        // go first (the next pass refuses, with them out); else named.
-        if (seq.limit_reached && (!o.remove_outliers || seq.removals.empty())) {
-          const AdjustedMeasurement& worst = measurement_of(seq.still_failing.front());
+        // go first (the next pass refuses, with them out), unless the
+        // sequence found the failures hopeless (then it refuses now); else
+        // named.
+        if (seq.limit_reached && (!o.remove_outliers || seq.removals.empty() || seq.hopeless)) {
+          const SnoopingTest& worst_test = seq.still_failing.front();
+          const AdjustedMeasurement& worst = measurement_of(worst_test.candidate);
+          const std::size_t sequenced = removed + seq.removals.size();
           const std::string why =
               "data snooping " + std::string(o.remove_outliers ? "stopped" : "would stop") + " after removing " +
-              std::to_string(removed + seq.removals.size()) + " of " + std::to_string(countable) + " measurements (the limit is " +
-              format_shortest(100.0 * o.max_outlier_share) + " %, --max-outlier-share): " + net.measurements[worst.index].source +
-              " (" + geodesy::to_string(net.measurements[worst.index].kind) + ") would still fail its " + describe(worst) + "; " +
-              std::to_string(seq.still_failing.size()) +
+              std::to_string(o.remove_outliers ? removed : sequenced) + " of " + std::to_string(countable) + " measurements" +
+              (seq.hopeless ? " (" + std::to_string(seq.still_failing.size()) + " fail, more than the " +
+                                  std::to_string(limit - std::min(limit, sequenced)) + " removals left under the limit, and the last " +
+                                  std::to_string(kHopelessWindow) + " removals explained almost none of the others)"
+                            : " (the limit is " + format_shortest(100.0 * o.max_outlier_share) + " %, --max-outlier-share)") +
+              ": " + name_of(worst) + " would still fail its measurement test with those out (" + fmt(worst_test.statistic, 4) +
+              ", χ²(" + std::to_string(worst_test.dof) + "), p = " + fmt(worst_test.p_value, 3) + "; as adjusted: " + describe(worst) +
+              "); " + std::to_string(seq.still_failing.size()) +
               " measurements would fail then. So many failures mean the data or the model is wrong (frames, units, heights, "
               "station names), not a few blunders";
           if (o.remove_outliers) result.refused_because = why;
           result.warnings.push_back(why);
         } else if (o.remove_outliers && !seq.removals.empty()) {
-          for (const SnoopingRemoval& x : seq.removals) {
+          for (const SnoopingTest& x : seq.removals) {
             const AdjustedMeasurement& am = measurement_of(x.candidate);
             const std::size_t mi = am.index;
             outlier_why[mi] = "data snooping (rank " + std::to_string(am.snooping_rank) + "): " + describe(am) +

@@ -90,6 +90,7 @@ Eigen::MatrixXd NetworkCofactors::column(const std::vector<std::size_t>& rows, s
 }
 
 void NetworkCofactors::prefetch(const std::vector<std::size_t>& candidates) {
+  std::fill(offset_.begin(), offset_.end(), Eigen::Index{-1});
   Eigen::Index total = 0;
   for (std::size_t i : candidates) {
     offset_[i] = total;

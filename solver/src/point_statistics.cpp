@@ -58,8 +58,11 @@ MeasurementTest measurement_test(const Eigen::VectorXd& vw, const Eigen::MatrixX
   }
   t.statistic /= sigma_scale * sigma_scale;
   if (t.dof > 0) {
-    t.p_value = chi_squared_upper_tail(t.dof, t.statistic);
-    t.log_p = chi_squared_log_upper_tail(t.dof, t.statistic);
+    // (A residual that is not finite gives a statistic that is not: p = 0
+    // for +inf, NaN for NaN — never passed to Boost, which throws on them.)
+    const ChiSquaredTail tail = chi_squared_tail(t.dof, t.statistic);
+    t.p_value = tail.p;
+    t.log_p = tail.log_p;
   }
   return t;
 }
@@ -189,9 +192,13 @@ SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions
     candidates[c].q = Eigen::Matrix3d::Identity() - lin.a[c] * lin.n_inv * lin.a[c].transpose();
     candidates[c].key = r.points[active[lin.position[c]]].id;
   }
-  const std::size_t marks = r.points.size();
-  const std::size_t removed = static_cast<std::size_t>(std::count_if(r.points.begin(), r.points.end(),
-                                                                     [](const PointResult& p) { return p.outlier; }));
+  // The limit counts the marks that entered the fit (not those the input
+  // left out).
+  std::size_t marks = 0, removed = 0;
+  for (const PointResult& p : r.points) {
+    marks += p.used || p.outlier ? 1u : 0u;
+    removed += p.outlier ? 1u : 0u;
+  }
   const std::size_t limit = max_snooped(marks, o);
   const int n = static_cast<int>(active.size());
   SnoopingLimits limits;
@@ -209,20 +216,37 @@ SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions
   // Ranks continue those of the marks removed in earlier passes.
   for (std::size_t k = 0; k < seq.removals.size(); ++k) point_of(seq.removals[k].candidate).snooping_rank = removed + k + 1;
   for (std::size_t c = 0; c < candidates.size(); ++c) {
-    if (seq.passes_after[c] >= 0) point_of(c).passes_after_rank = removed + static_cast<std::size_t>(seq.passes_after[c]) + 1;
+    point_of(c).passes_after_rank =
+        seq.passes_after[c] >= 0 ? removed + static_cast<std::size_t>(seq.passes_after[c]) + 1 : 0;
   }
+  // What this pass says; kept only when it is the last (a pass that
+  // removes is followed by another, which says it again with them out).
+  std::vector<std::string> said;
   for (std::size_t c : seq.not_removable) {
-    r.warnings.push_back("point " + point_of(c).id + " fails the " + why_of(point_of(c)) +
-                         ", but too few points remain to remove it (the other marks do not determine all the fit takes from it)");
+    said.push_back("point " + point_of(c).id + " fails the " + why_of(point_of(c)) +
+                   ", but too few points remain to remove it (the other marks do not determine all the fit takes from it)");
   }
+  for (const auto& group : seq.inseparable) {
+    std::string ids;
+    for (std::size_t c : group) ids += (ids.empty() ? "" : ", ") + point_of(c).id;
+    said.push_back("points " + ids + " fail their point tests and cannot be told apart: with " + point_of(group.front()).id +
+                   " removed the others could no longer be tested along the direction they share (their residuals are "
+                   "correlated by ±1 there); one of them is wrong, none is removed");
+  }
+  const auto test_text = [&](const SnoopingTest& t) {
+    return "point test " + fmt(t.statistic, 4) + " (χ²(" + std::to_string(t.dof) + "), p = " + fmt(t.p_value, 2) + ")";
+  };
   if (seq.stopped_by_caller && !seq.still_failing.empty()) {
-    const PointResult& worst = point_of(seq.still_failing.front());
-    r.warnings.push_back("point " + worst.id + " fails the " + why_of(worst) + ", but too few points remain to remove it");
+    const PointResult& worst = point_of(seq.still_failing.front().candidate);
+    said.push_back("point " + worst.id + " fails the " + why_of(worst) + ", but too few points remain to remove it");
   }
   // Past the limit: with --remove-outliers the marks up to it go first (the
-  // next pass refuses, with them out); else named.
-  if (seq.limit_reached && !seq.still_failing.empty() && (!o.remove_outliers || seq.removals.empty())) {
-    const PointResult& worst = point_of(seq.still_failing.front());
+  // next pass refuses, with them out), unless the sequence found the
+  // failures hopeless (then it refuses now); else named.
+  const bool refuse_now = seq.limit_reached && (!o.remove_outliers || seq.removals.empty() || seq.hopeless);
+  if (refuse_now && !seq.still_failing.empty()) {
+    const SnoopingTest& worst_test = seq.still_failing.front();
+    const PointResult& worst = point_of(worst_test.candidate);
     const auto& g = r.global_test;
     std::string global;
     if (g.applicable) {
@@ -230,24 +254,33 @@ SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions
                " (" + fmt(g.statistic, 4) + " vs [" + fmt(g.critical_lower, 4) + ", " + fmt(g.critical_upper, 4) +
                "], σ0 = " + fmt(r.sigma0.value_or(0.0), 4) + ")";
     }
-    const std::string why = "data snooping " + std::string(o.remove_outliers ? "stopped after removing " : "would stop after removing ") +
-                            std::to_string(removed + seq.removals.size()) + " of " + std::to_string(marks) +
-                            " marks (the limit is " + fmt(100.0 * o.max_outlier_share, 3) + " %, --max-outlier-share): " +
-                            worst.id + " still fails its " + why_of(worst) + global + "; " +
-                            std::to_string(seq.still_failing.size()) +
-                            " marks would fail then. So many failing marks mean the data or the model is wrong (frames, "
-                            "units, height types, quantized coordinates), not a few blunders";
+    const std::size_t sequenced = removed + seq.removals.size();
+    const std::string why =
+        "data snooping " + std::string(o.remove_outliers ? "stopped after removing " : "would stop after removing ") +
+        std::to_string(o.remove_outliers ? removed : sequenced) + " of " + std::to_string(marks) + " marks" +
+        (seq.hopeless ? " (" + std::to_string(seq.still_failing.size()) + " fail, more than the " +
+                            std::to_string(limit - std::min(limit, sequenced)) + " removals left under the limit, and the last " +
+                            std::to_string(kHopelessWindow) + " removals explained almost none of the others)"
+                      : std::string(" (the limit is ") + fmt(100.0 * o.max_outlier_share, 3) + " %, --max-outlier-share)") +
+        ": " + worst.id + " still fails its " + test_text(worst_test) + " with those out (as the fit stands: " + why_of(worst) + ")" +
+        global + "; " + std::to_string(seq.still_failing.size()) +
+        " marks fail then. So many failing marks mean the data or the model is wrong (frames, units, height types, quantized "
+        "coordinates), not a few blunders";
+    if (o.remove_outliers) r.refused_because = why;
+    said.push_back(why);
     if (o.remove_outliers) {
-      r.refused_because = why;
+      for (auto& w : said) r.warnings.push_back(std::move(w));
+      return SnoopStep::stopped;
     }
-    r.warnings.push_back(why);
-    if (o.remove_outliers) return SnoopStep::stopped;
   }
-  if (!o.remove_outliers || seq.removals.empty()) return SnoopStep::none;
+  if (!o.remove_outliers || seq.removals.empty()) {
+    for (auto& w : said) r.warnings.push_back(std::move(w));
+    return SnoopStep::none;
+  }
   // --remove-outliers: the ranked marks go, in their order; the caller
   // fits again and tests every mark anew.
   std::vector<std::size_t> take;
-  for (const SnoopingRemoval& x : seq.removals) {
+  for (const SnoopingTest& x : seq.removals) {
     PointResult& pr = point_of(x.candidate);
     pr.outlier = true;
     pr.used = false;

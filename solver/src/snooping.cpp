@@ -26,17 +26,23 @@ namespace {
 constexpr Eigen::Index kPrefetchRows = 3000;
 
 // What the removals so far make of each candidate's residual and cofactor,
-// and the removal of one more: over the cofactor between candidates (W
+// and the removal of one more, prepared (to see what it would do to the
+// others) before it is made: over the cofactor between candidates (W
 // below) or over a few parameters (a fit).
 class Downdater {
  public:
   virtual ~Downdater() = default;
   // Candidate i's whitened residual and cofactor once the removals so far are out.
   virtual void current(std::size_t i, Eigen::VectorXd& v, Eigen::MatrixXd& q) = 0;
-  // Takes t out, given its current residual and the Cholesky factor of its
-  // current cofactor, for the candidates in `rows` (which include t).
-  virtual void remove(std::size_t t, const Eigen::VectorXd& vt, const Eigen::LLT<Eigen::MatrixXd>& d,
-                      const std::vector<std::size_t>& rows) = 0;
+  // Prepares t's removal, given its current residual and the Cholesky
+  // factor of its current cofactor, for the candidates in `rows` (which
+  // include t).
+  virtual void prepare(std::size_t t, const Eigen::VectorXd& vt, const Eigen::LLT<Eigen::MatrixXd>& d,
+                       const std::vector<std::size_t>& rows) = 0;
+  // Candidate i's (one of the prepared rows, not t) were the prepared removal made.
+  virtual void after(std::size_t i, Eigen::VectorXd& v, Eigen::MatrixXd& q) = 0;
+  // Makes the prepared removal.
+  virtual void commit() = 0;
   // The candidates in play are few enough (rows) to have their cofactors together.
   virtual void few(const std::vector<std::size_t>& rows) { (void)rows; }
 };
@@ -48,7 +54,7 @@ class Downdater {
 class CofactorDowndater final : public Downdater {
  public:
   CofactorDowndater(const std::vector<SnoopingCandidate>& candidates, CofactorSource& source)
-      : candidates_(candidates), source_(source), w_(candidates.size()) {
+      : candidates_(candidates), source_(source), w_(candidates.size()), added_(candidates.size()) {
     for (std::size_t i = 0; i < candidates.size(); ++i) w_[i].resize(candidates[i].v.size(), 0);
   }
   void current(std::size_t i, Eigen::VectorXd& v, Eigen::MatrixXd& q) override {
@@ -59,28 +65,40 @@ class CofactorDowndater final : public Downdater {
       q.noalias() -= w_[i] * w_[i].transpose();
     }
   }
-  void remove(std::size_t t, const Eigen::VectorXd& vt, const Eigen::LLT<Eigen::MatrixXd>& d,
-              const std::vector<std::size_t>& rows) override {
+  void prepare(std::size_t t, const Eigen::VectorXd& vt, const Eigen::LLT<Eigen::MatrixXd>& d,
+               const std::vector<std::size_t>& rows) override {
     const Eigen::MatrixXd column = source_.column(rows, t);
     // The new column of every w: (Q(i, t) − w_i w_tᵀ) L_d⁻ᵀ, L_d L_dᵀ = Q'_tt.
-    const Eigen::Index kt = vt.size();
-    const Eigen::MatrixXd wt = w_[t];
+    t_ = t;
+    rows_ = rows;
     Eigen::Index at = 0;
     for (std::size_t i : rows) {
       const Eigen::Index ki = candidates_[i].v.size();
       if (i != t) {
         Eigen::MatrixXd c = column.middleRows(at, ki);
-        if (wt.cols() > 0) c.noalias() -= w_[i] * wt.transpose();
-        const Eigen::MatrixXd added = d.matrixL().solve(c.transpose()).transpose();  // c L_d⁻ᵀ
-        Eigen::MatrixXd grown(ki, w_[i].cols() + kt);
-        grown << w_[i], added;
-        w_[i].swap(grown);
+        if (w_[t].cols() > 0) c.noalias() -= w_[i] * w_[t].transpose();
+        added_[i] = d.matrixL().solve(c.transpose()).transpose();  // c L_d⁻ᵀ
       }
       at += ki;
     }
-    z_.conservativeResize(z_.size() + kt);
-    z_.tail(kt) = d.matrixL().solve(vt);
-    w_[t].resize(0, 0);
+    zt_ = d.matrixL().solve(vt);
+  }
+  void after(std::size_t i, Eigen::VectorXd& v, Eigen::MatrixXd& q) override {
+    current(i, v, q);
+    v.noalias() -= added_[i] * zt_;
+    q.noalias() -= added_[i] * added_[i].transpose();
+  }
+  void commit() override {
+    for (std::size_t i : rows_) {
+      if (i == t_) continue;
+      Eigen::MatrixXd grown(w_[i].rows(), w_[i].cols() + added_[i].cols());
+      grown << w_[i], added_[i];
+      w_[i].swap(grown);
+      added_[i].resize(0, 0);
+    }
+    z_.conservativeResize(z_.size() + zt_.size());
+    z_.tail(zt_.size()) = zt_;
+    w_[t_].resize(0, 0);
   }
   void few(const std::vector<std::size_t>& rows) override { source_.prefetch(rows); }
 
@@ -89,6 +107,11 @@ class CofactorDowndater final : public Downdater {
   CofactorSource& source_;
   std::vector<Eigen::MatrixXd> w_;
   Eigen::VectorXd z_ = Eigen::VectorXd(0);
+  // The prepared removal.
+  std::size_t t_ = 0;
+  std::vector<std::size_t> rows_;
+  std::vector<Eigen::MatrixXd> added_;
+  Eigen::VectorXd zt_;
 };
 
 // A problem of few parameters: with A_i a candidate's whitened design rows
@@ -108,25 +131,45 @@ class ParameterDowndater final : public Downdater {
       q = candidates_[i].q;
       return;
     }
-    v = candidates_[i].v + a_[i] * dx_;
-    q = Eigen::MatrixXd::Identity(a_[i].rows(), a_[i].rows()) - a_[i] * n_inv_ * a_[i].transpose();
+    state(i, dx_, n_inv_, v, q);
   }
-  void remove(std::size_t t, const Eigen::VectorXd& vt, const Eigen::LLT<Eigen::MatrixXd>& d,
-              const std::vector<std::size_t>& rows) override {
+  void prepare(std::size_t t, const Eigen::VectorXd& vt, const Eigen::LLT<Eigen::MatrixXd>& d,
+               const std::vector<std::size_t>& rows) override {
     (void)rows;
     const Eigen::MatrixXd g = n_inv_ * a_[t].transpose();
-    dx_.noalias() += g * d.solve(vt);
-    n_inv_.noalias() += g * d.solve(Eigen::MatrixXd(g.transpose()));
+    next_dx_ = dx_ + g * d.solve(vt);
+    next_n_inv_ = n_inv_ + g * d.solve(Eigen::MatrixXd(g.transpose()));
+  }
+  void after(std::size_t i, Eigen::VectorXd& v, Eigen::MatrixXd& q) override { state(i, next_dx_, next_n_inv_, v, q); }
+  void commit() override {
+    dx_.swap(next_dx_);
+    n_inv_.swap(next_n_inv_);
     moved_ = true;
   }
 
  private:
+  void state(std::size_t i, const Eigen::VectorXd& dx, const Eigen::MatrixXd& n_inv, Eigen::VectorXd& v, Eigen::MatrixXd& q) const {
+    v = candidates_[i].v + a_[i] * dx;
+    q = Eigen::MatrixXd::Identity(a_[i].rows(), a_[i].rows()) - a_[i] * n_inv * a_[i].transpose();
+  }
   const std::vector<SnoopingCandidate>& candidates_;
   const std::vector<Eigen::MatrixXd>& a_;
   Eigen::MatrixXd n_inv_;
   Eigen::VectorXd dx_;
+  Eigen::MatrixXd next_n_inv_;
+  Eigen::VectorXd next_dx_;
   bool moved_ = false;
 };
+
+SnoopingTest as_snooping_test(std::size_t candidate, const MeasurementTest& t) {
+  SnoopingTest s;
+  s.candidate = candidate;
+  s.statistic = t.statistic;
+  s.dof = t.dof;
+  s.p_value = t.p_value;
+  s.log_p = t.log_p;
+  return s;
+}
 
 SnoopingSequence run_sequence(const std::vector<SnoopingCandidate>& candidates, Downdater& downdater,
                               const SnoopingLimits& limits) {
@@ -137,7 +180,13 @@ SnoopingSequence run_sequence(const std::vector<SnoopingCandidate>& candidates, 
   int dof = limits.dof;
   std::vector<std::size_t> in_play(n);
   std::iota(in_play.begin(), in_play.end(), std::size_t{0});
+  const auto drop = [&](std::size_t i) {
+    const auto it = std::find(in_play.begin(), in_play.end(), i);
+    if (it != in_play.end()) in_play.erase(it);
+  };
   bool few = false;
+  std::vector<int> initial_dof(n, -1);
+  std::vector<std::size_t> failing_at;  // the failing count after each number of removals
 
   struct Current {
     Eigen::VectorXd v;
@@ -151,15 +200,23 @@ SnoopingSequence run_sequence(const std::vector<SnoopingCandidate>& candidates, 
     // out, what made them fail being gone; once they are few every one is
     // kept and followed, since one that passes may fail again once others
     // are out (a blunder masked by another).
-    const double sigma = limits.scale_by_sigma0 ? (dof > 0 ? std::sqrt(omega / dof) : 1.0) : 1.0;
+    double sigma = 1.0;
+    if (limits.scale_by_sigma0) {
+      if (!(dof > 0 && omega > 0.0)) break;  // no σ̂0 left to test by
+      sigma = std::sqrt(omega / dof);
+    }
     std::vector<std::size_t> failing;
     for (std::size_t i : in_play) {
       Current& c = current[i];
       downdater.current(i, c.v, c.q);
       c.test = measurement_test(c.v, c.q, sigma);
+      if (initial_dof[i] < 0) initial_dof[i] = c.test.dof;
       if (c.test.dof > 0 && c.test.p_value < limits.alpha) {
         failing.push_back(i);
-      } else if (!out.removals.empty() && out.passes_after[i] < 0) {
+        out.passes_after[i] = -1;  // (failing again, if it passed before)
+      } else if (!out.removals.empty() && out.passes_after[i] < 0 && c.test.dof == initial_dof[i]) {
+        // Explained by the removals so far; not when it passes only because
+        // fewer of its directions can be tested.
         out.passes_after[i] = static_cast<std::ptrdiff_t>(out.removals.size()) - 1;
       }
     }
@@ -173,52 +230,79 @@ SnoopingSequence run_sequence(const std::vector<SnoopingCandidate>& candidates, 
       if (stronger_evidence(tb.log_p, tb.statistic, ta.log_p, ta.statistic)) return false;
       return candidates[a].key < candidates[b].key;
     };
-    const std::size_t t = *std::min_element(failing.begin(), failing.end(), stronger);
-    const Eigen::Index kt = candidates[t].v.size();
-    // Removable only when every direction of its residual is redundant: else
-    // the rest would not determine all it measures. It stays, named.
-    if (current[t].test.dof < kt) {
-      out.not_removable.push_back(t);
-      in_play.erase(std::find(in_play.begin(), in_play.end(), t));
-      continue;
-    }
-    for (std::size_t i : failing) out.passes_after[i] = -1;  // (failing again, if it passed before)
+    std::sort(failing.begin(), failing.end(), stronger);
+    const std::size_t made = out.removals.size();
     const auto stop = [&](bool& flag) {
       flag = true;
-      std::sort(failing.begin(), failing.end(), stronger);
-      out.still_failing = failing;
+      for (std::size_t i : failing) out.still_failing.push_back(as_snooping_test(i, current[i].test));
     };
-    if (out.removals.size() + 1 > limits.max_removals) {
+    failing_at.push_back(failing.size());
+    if (made >= kHopelessWindow && failing.size() > limits.max_removals - std::min(made, limits.max_removals) &&
+        failing_at[made - kHopelessWindow] <= failing.size() + 2 * kHopelessWindow) {
+      out.hopeless = true;
       stop(out.limit_reached);
       break;
     }
-    if (limits.may_remove && !limits.may_remove(out.removals.size() + 1, t)) {
-      stop(out.stopped_by_caller);
+    // The strongest that can be removed; those that cannot are named.
+    std::vector<bool> excluded(n, false);
+    bool removed = false, stopped = false;
+    for (std::size_t t : failing) {
+      if (excluded[t]) continue;
+      const Eigen::Index kt = candidates[t].v.size();
+      // Removable only when every direction of its residual is redundant:
+      // else the rest would not determine all it measures. It stays, named.
+      const Eigen::LLT<Eigen::MatrixXd> d(current[t].q);
+      if (current[t].test.dof < kt || d.info() != Eigen::Success) {
+        out.not_removable.push_back(t);
+        excluded[t] = true;
+        drop(t);
+        continue;
+      }
+      if (made + 1 > limits.max_removals) {
+        stop(out.limit_reached);
+        stopped = true;
+        break;
+      }
+      if (limits.may_remove && !limits.may_remove(made + 1, t)) {
+        stop(out.stopped_by_caller);
+        stopped = true;
+        break;
+      }
+      Eigen::Index rows = 0;
+      for (std::size_t i : in_play) rows += candidates[i].v.size();
+      if (!few && rows <= kPrefetchRows) {
+        downdater.few(in_play);
+        few = true;
+      }
+      downdater.prepare(t, current[t].v, d, in_play);
+      // A failing candidate that would lose a tested direction with t out
+      // cannot be told from t (their residuals correlated by ±1 along it):
+      // neither is removed.
+      std::vector<std::size_t> group{t};
+      for (std::size_t j : failing) {
+        if (j == t || excluded[j]) continue;
+        Eigen::VectorXd v;
+        Eigen::MatrixXd q;
+        downdater.after(j, v, q);
+        if (measurement_test(v, q, sigma).dof < current[j].test.dof) group.push_back(j);
+      }
+      if (group.size() > 1) {
+        for (std::size_t i : group) {
+          excluded[i] = true;
+          drop(i);
+        }
+        out.inseparable.push_back(std::move(group));
+        continue;
+      }
+      downdater.commit();
+      omega = std::max(0.0, omega - d.matrixL().solve(current[t].v).squaredNorm());
+      dof -= static_cast<int>(kt);
+      out.removals.push_back(as_snooping_test(t, current[t].test));
+      drop(t);
+      removed = true;
       break;
     }
-    const Eigen::LLT<Eigen::MatrixXd> d(current[t].q);
-    if (d.info() != Eigen::Success) {  // (its eigenvalues passed kMinRedundancy: not expected)
-      out.not_removable.push_back(t);
-      in_play.erase(std::find(in_play.begin(), in_play.end(), t));
-      continue;
-    }
-    Eigen::Index rows = 0;
-    for (std::size_t i : in_play) rows += candidates[i].v.size();
-    if (!few && rows <= kPrefetchRows) {
-      downdater.few(in_play);
-      few = true;
-    }
-    downdater.remove(t, current[t].v, d, in_play);
-    omega -= d.matrixL().solve(current[t].v).squaredNorm();
-    dof -= static_cast<int>(kt);
-    SnoopingRemoval removal;
-    removal.candidate = t;
-    removal.statistic = current[t].test.statistic;
-    removal.dof = current[t].test.dof;
-    removal.p_value = current[t].test.p_value;
-    removal.log_p = current[t].test.log_p;
-    out.removals.push_back(removal);
-    in_play.erase(std::find(in_play.begin(), in_play.end(), t));
+    if (stopped || !removed) break;
   }
   return out;
 }

@@ -66,7 +66,8 @@ struct SnoopingLimits {
   // The most removals (max_outlier_share); past it limit_reached.
   std::size_t max_removals = 0;
   // τ-tests (σ0 estimated: fit --scale-by-sigma0): the residuals scaled by
-  // √(Ω/dof) as Ω and dof fall with each removal; else σ0 = 1.
+  // √(Ω/dof) as Ω and dof fall with each removal (once either reaches 0
+  // there is no σ̂0 left to test by: the sequence ends); else σ0 = 1.
   bool scale_by_sigma0 = false;
   double omega = 0.0;
   int dof = 0;
@@ -75,9 +76,10 @@ struct SnoopingLimits {
   std::function<bool(std::size_t count, std::size_t candidate)> may_remove;
 };
 
-struct SnoopingRemoval {
+// A candidate's test at one step of the sequence (after the removals
+// before it).
+struct SnoopingTest {
   std::size_t candidate = 0;  // index into the candidates
-  // Its test when it was removed (after the removals before it).
   double statistic = 0.0;
   int dof = 0;
   double p_value = 1.0;
@@ -85,22 +87,40 @@ struct SnoopingRemoval {
 };
 
 struct SnoopingSequence {
-  std::vector<SnoopingRemoval> removals;  // in the order they would be made
+  // In the order they would be made, each with its test when it was made.
+  std::vector<SnoopingTest> removals;
   // Failing, but not removable: some direction of its residual has no
   // redundancy once the earlier ones are out (the rest would not determine
   // all it measures). In the order met.
   std::vector<std::size_t> not_removable;
-  // Candidates that still fail when the sequence stopped at max_removals
-  // (limit_reached) or by may_remove (stopped_by_caller); the first is the
-  // strongest.
-  std::vector<std::size_t> still_failing;
+  // Failing candidates that cannot be told apart: removing the first would
+  // take the redundancy of the others (their residuals correlated by
+  // ±1 along it), so that they would pass because they could no longer be
+  // tested. One of them is wrong; none is removed. In the order met.
+  std::vector<std::vector<std::size_t>> inseparable;
+  // The candidates that still fail, with their tests, when the sequence
+  // stopped at max_removals (limit_reached) or by may_remove
+  // (stopped_by_caller); strongest first.
+  std::vector<SnoopingTest> still_failing;
   bool limit_reached = false;
+  // limit_reached before max_removals: more candidates fail than removals
+  // remain, and the last kHopelessWindow removals explained almost none of
+  // the others (each took only itself out of the failing): the signature of
+  // a wrong model or frame, not of blunders, which the remaining removals
+  // could not finish. Stopped there rather than ranking thousands.
+  bool hopeless = false;
   bool stopped_by_caller = false;
   // Per candidate: the removal (index into `removals`) after which it no
-  // longer fails, its failure explained by the ones removed before; −1 for
-  // the removed and those that fail to the end.
+  // longer fails, its failure explained by the ones removed before, tested
+  // over as many directions as at the start; −1 for the removed and those
+  // that fail to the end.
   std::vector<std::ptrdiff_t> passes_after;
 };
+
+// The window of the hopeless stop (SnoopingSequence::hopeless): over this
+// many consecutive removals the failing count fell by at most twice as
+// many.
+inline constexpr std::size_t kHopelessWindow = 10;
 
 SnoopingSequence snooping_sequence(const std::vector<SnoopingCandidate>& candidates, CofactorSource& source,
                                    const SnoopingLimits& limits);

@@ -14,6 +14,13 @@ double chi_squared_upper_tail(int dof, double x);
 // 0 would tie every gross blunder with every other. −inf for x = +inf, NaN
 // for NaN.
 double chi_squared_log_upper_tail(int dof, double x);
+// P(X > x) and its logarithm (as chi_squared_log_upper_tail) at once; for
+// x = +inf 0 and −inf, for NaN NaN and NaN.
+struct ChiSquaredTail {
+  double p = 1.0;
+  double log_p = 0.0;
+};
+ChiSquaredTail chi_squared_tail(int dof, double x);
 // x with P(Z <= x) = p for Z ~ N(0, 1).
 double normal_quantile(double p);
 

@@ -361,15 +361,15 @@ TEST(NetworkAdjustment, MonteCarloCoverageOfAnEstimatedHelmert) {
   EXPECT_NEAR(factor_sum / kTrials, 1.0, 0.05);
 }
 
-// A direction set whose every direction is set aside (ignored in the input,
-// left out in the workbench) has no orientation unknown: the adjustment is
-// the one without those directions, with one unknown fewer.
-// Issue 17 point 5 (review): data snooping takes failing measurements far
-// apart in one pass only where their tests are not tied together. In a
-// single loop of 20 baselines one blunder makes every leg fail alike (a
-// redundancy of 3/20 each); taking the legs 4 hops apart together split the
-// network (E_NETWORK_DISCONNECTED). One leg goes, and the loop stays whole.
-TEST(NetworkAdjustment, AWeakLoopLosesOneLegPerSnoopingPassNotTheLoop) {
+// Issue 17 point 5 (review), issue 39: in a single loop of 20 baselines
+// one blunder makes every leg fail alike: each leg's residual is its share
+// of the loop's one misclosure, so the legs' residuals are correlated by ±1
+// and the data cannot say which leg is wrong. Removing any leg would leave
+// the others with no redundancy (they would "pass" untested). So none is
+// removed, even with --remove-outliers: every failing leg stays flagged, and
+// a warning says they cannot be told apart. (Taking legs 4 hops apart
+// together once split the network: E_NETWORK_DISCONNECTED.)
+TEST(NetworkAdjustment, ASingleLoopsBlunderCannotBeLocatedSoNoLegIsRemoved) {
   std::mt19937 rng(20);
   Site s;
   for (int i = 0; i < 20; ++i) {
@@ -388,12 +388,24 @@ TEST(NetworkAdjustment, AWeakLoopLosesOneLegPerSnoopingPassNotTheLoop) {
   AdjustOptions o;
   o.remove_outliers = true;
   const AdjustmentResult r = adjust_network(net, o);
-  std::size_t removed = 0;
-  for (const auto& m : r.measurements) removed += m.outlier ? 1u : 0u;
-  EXPECT_EQ(removed, 1u);
-  EXPECT_TRUE(r.converged);
+  ASSERT_TRUE(r.converged);
+  std::size_t removed = 0, flagged = 0;
+  for (const auto& m : r.measurements) {
+    removed += m.outlier ? 1u : 0u;
+    flagged += m.status(r.alpha_point) == TestStatus::flagged ? 1u : 0u;
+    EXPECT_EQ(m.snooping_rank, 0u) << m.index;
+  }
+  EXPECT_EQ(removed, 0u);
+  EXPECT_GE(flagged, 2u);  // the planted leg and at least one it cannot be told from
+  EXPECT_TRUE(r.measurements[7].fails_test(r.alpha_point));
+  bool warned = false;
+  for (const auto& w : r.warnings) warned = warned || w.find("cannot be told apart") != std::string::npos;
+  EXPECT_TRUE(warned);
 }
 
+// A direction set whose every direction is set aside (ignored in the input,
+// left out in the workbench) has no orientation unknown: the adjustment is
+// the one without those directions, with one unknown fewer.
 TEST(NetworkAdjustment, ADirectionSetWithNoDirectionLeftHasNoOrientationUnknown) {
   std::mt19937 rng(5);
   const Site s = make_site(12, rng);

@@ -314,5 +314,164 @@ TEST(Snooping, Issue39_ATestCountsOnlyTheDirectionsWithRedundancy) {
   EXPECT_EQ(none.p_value, 1.0);
 }
 
+// Two measurements that are each other's only check (one unknown measured
+// twice, nothing else on it) fail alike when one is a blunder: their
+// residuals are correlated by −1, and removing either would leave the other
+// untested. Neither is removed, on both paths; they are named together.
+TEST(Snooping, Issue39_MeasurementsThatCannotBeToldApartAreNotRemoved) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> z;
+  Problem p;
+  constexpr int kOthers = 12;
+  p.a = Eigen::MatrixXd::Zero(2 + kOthers, 2);
+  p.l.resize(2 + kOthers);
+  p.a(0, 0) = 1.0;
+  p.a(1, 0) = 1.0;
+  for (int r = 2; r < 2 + kOthers; ++r) p.a(r, 1) = 1.0 + 0.1 * r;
+  for (Eigen::Index r = 0; r < p.l.size(); ++r) p.l(r) = z(rng);
+  for (Eigen::Index r = 0; r < p.l.size(); ++r) p.rows.push_back({r});
+  p.l(0) += 20.0;
+  const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
+  std::vector<SnoopingCandidate> candidates;
+  std::vector<std::size_t> candidate_of;
+  std::vector<Eigen::MatrixXd> design;
+  for (std::size_t k = 0; k < p.rows.size(); ++k) {
+    const Eigen::VectorXd v = part(s.v, p.rows[k]);
+    const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
+    const MeasurementTest t = measurement_test(v, q, 1.0);
+    if (!(t.dof > 0 && t.p_value < 0.001)) continue;
+    candidates.push_back({v, q, "m" + std::to_string(k)});
+    candidate_of.push_back(k);
+    design.push_back(p.a.row(static_cast<Eigen::Index>(k)));
+  }
+  ASSERT_EQ(candidate_of, (std::vector<std::size_t>{0, 1}));
+  SnoopingLimits limits;
+  limits.max_removals = 5;
+  DenseCofactors source(p, s, candidate_of);
+  for (const SnoopingSequence& seq :
+       {snooping_sequence(candidates, source, limits), snooping_sequence(candidates, design, (p.a.transpose() * p.a).inverse(), limits)}) {
+    EXPECT_TRUE(seq.removals.empty());
+    ASSERT_EQ(seq.inseparable.size(), 1u);
+    std::vector<std::size_t> group = seq.inseparable.front();
+    std::sort(group.begin(), group.end());
+    EXPECT_EQ(group, (std::vector<std::size_t>{0, 1}));
+    EXPECT_EQ(seq.passes_after, (std::vector<std::ptrdiff_t>{-1, -1}));
+  }
+}
+
+// Past the limit the sequence says how the ones still failing test with
+// the removals made: the statistic of a refit without them.
+TEST(Snooping, Issue39_TheLimitReportsTheTestsAsTheRemovalsLeaveThem) {
+  constexpr double kStatisticRelative = 1e-9;
+  std::mt19937 rng(11);
+  Problem p = make_problem(rng, 60, 6);
+  p.l(p.rows[3][0]) += 50.0;
+  p.l(p.rows[4][0]) += 12.0;
+  p.l(p.rows[17].back()) -= 10.0;
+  const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
+  std::vector<SnoopingCandidate> candidates;
+  std::vector<std::size_t> candidate_of;
+  for (std::size_t k = 0; k < p.rows.size(); ++k) {
+    const Eigen::VectorXd v = part(s.v, p.rows[k]);
+    const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
+    const MeasurementTest t = measurement_test(v, q, 1.0);
+    if (!(t.dof > 0 && t.p_value < 0.001)) continue;
+    candidates.push_back({v, q, "m" + std::to_string(k)});
+    candidate_of.push_back(k);
+  }
+  DenseCofactors source(p, s, candidate_of);
+  SnoopingLimits limits;
+  limits.max_removals = 1;
+  const SnoopingSequence seq = snooping_sequence(candidates, source, limits);
+  ASSERT_EQ(seq.removals.size(), 1u);
+  ASSERT_TRUE(seq.limit_reached);
+  EXPECT_FALSE(seq.hopeless);
+  ASSERT_FALSE(seq.still_failing.empty());
+  std::vector<bool> out(p.rows.size(), false);
+  out[candidate_of[seq.removals.front().candidate]] = true;
+  const Solved after = solve_without(p, out);
+  for (const SnoopingTest& t : seq.still_failing) {
+    const auto& rows = p.rows[candidate_of[t.candidate]];
+    const MeasurementTest reference = measurement_test(part(after.v, rows), part(after.q, rows, rows), 1.0);
+    EXPECT_NEAR(t.statistic, reference.statistic, kStatisticRelative * reference.statistic) << candidates[t.candidate].key;
+    EXPECT_LT(t.p_value, 0.001);
+  }
+}
+
+// A model error, not blunders: a sign-dependent offset the linear model
+// cannot absorb makes a third of the measurements fail, and each removal
+// takes only itself out of the failing. Once the failing outnumber the
+// removals left and ten removals explained none of the others, the
+// sequence stops (hopeless) instead of ranking them all.
+TEST(Snooping, Issue39_FailuresNoRemovalExplainsStopTheSequenceEarly) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> z;
+  Problem p;
+  constexpr int kMeasurements = 400;
+  p.a.resize(kMeasurements, 3);
+  p.l.resize(kMeasurements);
+  for (int r = 0; r < kMeasurements; ++r) {
+    for (int c = 0; c < 3; ++c) p.a(r, c) = z(rng);
+    p.l(r) = z(rng) + (p.a(r, 0) > 0.3 ? 8.0 : 0.0);
+    p.rows.push_back({r});
+  }
+  const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
+  std::vector<SnoopingCandidate> candidates;
+  std::vector<Eigen::MatrixXd> design;
+  for (std::size_t k = 0; k < p.rows.size(); ++k) {
+    const Eigen::VectorXd v = part(s.v, p.rows[k]);
+    const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
+    const MeasurementTest t = measurement_test(v, q, 1.0);
+    if (!(t.dof > 0 && t.p_value < 0.001)) continue;
+    candidates.push_back({v, q, "m" + std::to_string(k)});
+    design.push_back(p.a.row(static_cast<Eigen::Index>(k)));
+  }
+  ASSERT_GT(candidates.size(), 60u);
+  SnoopingLimits limits;
+  limits.max_removals = kMeasurements / 20;  // 5 %
+  const SnoopingSequence seq = snooping_sequence(candidates, design, (p.a.transpose() * p.a).inverse(), limits);
+  EXPECT_TRUE(seq.hopeless);
+  EXPECT_TRUE(seq.limit_reached);
+  EXPECT_EQ(seq.removals.size(), kHopelessWindow);
+  EXPECT_GT(seq.still_failing.size(), limits.max_removals - kHopelessWindow);
+}
+
+// τ-tests with nothing left to scale by (Ω = 0) test nothing; a residual
+// that is not finite gives a test that says so, and never reaches Boost
+// (which throws on it).
+TEST(Snooping, Issue39_DegenerateTestsNeitherThrowNorInventNumbers) {
+  const Eigen::MatrixXd q = Eigen::MatrixXd::Identity(1, 1) * 0.5;
+  const MeasurementTest inf = measurement_test(Eigen::VectorXd::Constant(1, std::numeric_limits<double>::infinity()), q, 1.0);
+  EXPECT_EQ(inf.p_value, 0.0);
+  EXPECT_EQ(inf.log_p, -std::numeric_limits<double>::infinity());
+  const MeasurementTest nan = measurement_test(Eigen::VectorXd::Constant(1, std::numeric_limits<double>::quiet_NaN()), q, 1.0);
+  EXPECT_TRUE(std::isnan(nan.p_value));
+  EXPECT_TRUE(std::isnan(nan.log_p));
+  std::vector<SnoopingCandidate> candidates{{Eigen::VectorXd::Constant(1, 40.0), q, "a"}};
+  std::vector<Eigen::MatrixXd> design{Eigen::MatrixXd::Constant(1, 1, std::sqrt(0.5))};
+  SnoopingLimits limits;
+  limits.max_removals = 5;
+  limits.scale_by_sigma0 = true;
+  limits.omega = 0.0;
+  limits.dof = 3;
+  const SnoopingSequence seq = snooping_sequence(candidates, design, Eigen::MatrixXd::Identity(1, 1), limits);
+  EXPECT_TRUE(seq.removals.empty());
+  EXPECT_FALSE(seq.limit_reached);
+}
+
+// ln Γ at half-whole arguments (no std::lgamma: it writes a global) is
+// checked through the tail's continued fraction against Boost's long
+// double at dof where the fraction is used (p below 1e-280).
+TEST(Snooping, Issue39_TheContinuedFractionsGammaIsExactAtEveryDof) {
+  testing::WorstCase worst;
+  for (int dof = 1; dof <= 41; ++dof) {
+    const double x = 1400.0 + 10.0 * dof;
+    const long double reference =
+        std::log(boost::math::cdf(boost::math::complement(boost::math::chi_squared_distribution<long double>(dof), static_cast<long double>(x))));
+    worst.add(std::abs(chi_squared_log_upper_tail(dof, x) - static_cast<double>(reference)) / std::abs(static_cast<double>(reference)));
+  }
+  EXPECT_WORST_WITHIN(worst, kLogTailRelative);
+}
+
 }  // namespace
 }  // namespace geoanchor::solver
