@@ -18,6 +18,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "datum_rank.hpp"
 #include "network_approximate.hpp"
 #include "network_model.hpp"
 #include "network_snooping.hpp"
@@ -735,17 +736,13 @@ std::string name_combination(const Eigen::VectorXd& e, const std::vector<std::st
   return what;
 }
 
-// How much the measurements tell of each datum motion (the columns of g,
-// unit RMS over the stations, over the unknowns of `layout`: the probe of
-// every component), against how much they could: with A_j a measurement's
-// whitened rows over its unknowns and G_j the motions there,
-//   measured  = Σ_j (A_j G_j)ᵀ (A_j G_j),
-//   reference = Σ_j ‖A_j‖²_F G_jᵀ G_j.
-// A motion the measurements cannot see makes each A_j G_j vanish to
-// rounding (10⁻¹⁶ of ‖A_j‖ ‖G_j‖): its ratio measured/reference is about
-// 10⁻³², where a motion held only by constraints of 100 m among millimetre
-// baselines is 10⁻¹¹ (the constraints join in undefined_datum). Summed in
-// the canonical order, in chunks on `jobs` threads added in turn.
+// What the measurements tell of the datum motions (the columns of g, unit
+// RMS over the stations, over the unknowns of `layout`: the probe of every
+// component) and what they could (datum_rank.hpp): the R factors of the
+// rows A_j G_j and ‖A_j‖_F G_j, A_j a measurement's whitened rows over its
+// unknowns and G_j the motions there. In the canonical order, in chunks on
+// `jobs` threads folded in turn: the same bits for any order of the input
+// and any number of threads.
 struct DatumInformation {
   Eigen::MatrixXd measured, reference;
 };
@@ -758,71 +755,79 @@ DatumInformation datum_information(const Problem& p, const Layout& layout, const
   }
   constexpr std::size_t kChunk = 4096;
   const std::size_t chunks = (active.size() + kChunk - 1) / kChunk;
-  std::vector<DatumInformation> parts(chunks, DatumInformation{Eigen::MatrixXd::Zero(d, d), Eigen::MatrixXd::Zero(d, d)});
+  std::vector<RowsR> measured(chunks, RowsR(d)), reference(chunks, RowsR(d));
   for_chunks(active.size(), kChunk, jobs, [&](std::size_t begin, std::size_t end) {
-    DatumInformation& part = parts[begin / kChunk];
+    const std::size_t chunk = begin / kChunk;
     for (std::size_t k = begin; k < end; ++k) {
       const Rows r = p.linearize(active[k], layout);
       Eigen::MatrixXd gj(static_cast<Eigen::Index>(r.unknowns.size()), d);
       for (std::size_t c = 0; c < r.unknowns.size(); ++c) gj.row(static_cast<Eigen::Index>(c)) = g.row(r.unknowns[c]);
-      const Eigen::MatrixXd ag = r.a * gj;
-      part.measured.noalias() += ag.transpose() * ag;
-      part.reference.noalias() += r.a.squaredNorm() * (gj.transpose() * gj);
+      measured[chunk].add(r.a * gj);
+      reference[chunk].add(r.a.norm() * gj);
     }
   });
-  DatumInformation info{Eigen::MatrixXd::Zero(d, d), Eigen::MatrixXd::Zero(d, d)};
-  for (const auto& part : parts) {
-    info.measured += part.measured;
-    info.reference += part.reference;
+  RowsR all_measured(d), all_reference(d);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    all_measured.add(measured[c]);
+    all_reference.add(reference[c]);
   }
-  return info;
+  return {all_measured.r(), all_reference.r()};
 }
 
-// A datum motion told at less than this share of what the network could
-// tell of it is undefined; below kWeakDatumRelative it is defined, weakly,
-// and named in a warning with the standard deviation it then has. See
-// datum_information for the scale: rounding leaves an undefined motion near
-// 10⁻³⁰; constraints of a kilometre among millimetre baselines are near
-// 10⁻¹³; the convergence of the ellipsoid's normals over a kilometre, the
-// only thing that turns a terrestrial network with no azimuth about the
-// vertical, gives about 10⁻⁹.
-constexpr double kUndefinedDatumRelative = 1e-15;
-constexpr double kWeakDatumRelative = 1e-8;
+// The ratio (datum_rank.hpp: a typical station's variance over the
+// combination's) below which a combination of the datum motions is
+// undefined: the factorization's pivots are then within a hundred roundings
+// of nothing (sparse_factor's relative pivot check is the same 10⁻¹⁴).
+// Rounding leaves a motion nothing measures near n·10⁻³²; a datum held by
+// constraints of 100 m among millimetre baselines is near 10⁻¹⁰, by 1 km
+// holds 10⁻¹², by a GNSS point of 3 m on one station 10⁻⁷: each the same
+// for ten stations or a million. Below kWeakDatumRelative (a combination
+// whose standard deviation is over a thousand times a typical station's)
+// it is defined, weakly, and named in a warning with the standard
+// deviation it then has: a terrestrial network with no azimuth, turned
+// about the vertical only by the convergence of the ellipsoid's normals,
+// is near 10⁻⁸.
+constexpr double kUndefinedDatumRelative = 1e-14;
+constexpr double kWeakDatumRelative = 1e-6;
 
-// Below this share of its RMS motion at the stations, a combination's
-// motion of the fixed components is no motion (rounding: 10⁻¹⁶).
-constexpr double kFixedMotion = 1e-10;
+// How closely double precision resolves the standard deviation of a datum
+// combination of this ratio in a network of n stations: the
+// factorization's rounding along it grows as √n times a station's, about
+// ε √n / (4 ratio) (measured: one station of 900, joined by baselines of
+// millimetres, held at 1 km and 3 km, ratio 6·10⁻¹³ and 6·10⁻¹⁴: σ 0.2 % and
+// 1.9 % off, this says 0.3 % and 3 %; held at 6 km the iteration no longer
+// converges). Past kDatumResolution a warning says so; past
+// kUnresolvedDatum the combination is undefined, as good as nothing.
+double datum_resolution(double ratio, std::size_t stations) {
+  return std::numeric_limits<double>::epsilon() * std::sqrt(static_cast<double>(std::max<std::size_t>(stations, 1))) / (4.0 * ratio);
+}
+constexpr double kDatumResolution = 1e-3;
+// Above this ratio a combination is told of by the measurements, weakly,
+// rather than left to their rounding (n·10⁻³² in the R factors; the
+// positions' own rounding in ECEF, 10⁻⁹ m against a network's radius,
+// under 10⁻²⁰ for stations 10 m apart).
+constexpr double kToldOf = 1e-18;
+constexpr double kUnresolvedDatum = 0.05;
 
-// The combinations of the motions (columns over them: over g's columns)
-// that neither the measurements nor the constraints define to more than
-// `below` of what the network tells (datum_information), with those
-// ratios: first the combinations that move no fixed component (a fixed
-// component defines any motion of it), then among those the generalized
-// eigenvectors of (measured + W, reference + W) with eigenvalue below it, W
-// the weighted constraints' information (1/σ² per component held with a
-// standard deviation). `probe` is the layout of every component (g's
-// rows). The columns move the stations by 1 m RMS and are orthogonal.
-struct DatumCombinations {
-  Eigen::MatrixXd v;  // d × k
-  // Per column: its information ratio, and what the measurements and the
-  // weighted constraints tell of it (vᵀ M v, vᵀ W v; 1/m² for its motion).
-  std::vector<double> ratio, measured, weighted;
-};
-DatumCombinations undefined_datum(const Problem& p, const Layout& probe, const Eigen::MatrixXd& g, const DatumInformation& info,
-                                  double below) {
+// The combinations of the motions (columns over g's columns) that neither
+// the measurements nor the constraints define to `below` of what a typical
+// station is told (datum_rank.hpp), weakest first: a fixed component
+// defines any motion that moves it; weighted constraints tell 1/σ² per
+// component held. `probe` is the layout of every component (g's rows).
+DatumRank undefined_datum(const Problem& p, const Layout& probe, const Eigen::MatrixXd& g, const DatumInformation& info,
+                          double below) {
   const auto& net = p.net;
   const Eigen::Index d = g.cols();
-  DatumCombinations out;
-  out.v.resize(d, 0);
-  if (d == 0) return out;
-  Eigen::MatrixXd fixed = Eigen::MatrixXd::Zero(d, d), weighted = Eigen::MatrixXd::Zero(d, d), total = Eigen::MatrixXd::Zero(d, d);
+  std::vector<Eigen::RowVectorXd> fixed_rows;
+  RowsR weighted(d);
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(d, d);
   std::size_t stations = 0;
   for (std::size_t s = 0; s < net.stations.size(); ++s) {
     if (!p.station_used[s]) continue;
     ++stations;
     for (int c = 0; c < 3; ++c) {
       const Index u = probe.station[s][static_cast<std::size_t>(c)];
-      if (u >= 0) total.noalias() += g.row(u).transpose() * g.row(u);
+      if (u >= 0) gram.noalias() += g.row(u).transpose() * g.row(u);
     }
     if (p.aside) continue;
     const auto& con = net.stations[s].constraint;
@@ -831,42 +836,16 @@ DatumCombinations undefined_datum(const Problem& p, const Layout& probe, const E
       const Index u = probe.station[s][static_cast<std::size_t>(constrained_component(net.space, k))];
       if (u < 0) continue;
       const double sigma = con.sigma_m[static_cast<std::size_t>(k)];
-      const Eigen::MatrixXd gg = g.row(u).transpose() * g.row(u);
       if (sigma > 0.0) {
-        weighted += gg / (sigma * sigma);
+        weighted.add(Eigen::MatrixXd(g.row(u) / sigma));
       } else {
-        fixed += gg;
+        fixed_rows.push_back(g.row(u));
       }
     }
   }
-  // The combinations that move no fixed component.
-  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> by_fixed(fixed, total);
-  if (by_fixed.info() != Eigen::Success) throw std::logic_error("adjust_network: a datum motion moves no station");
-  std::vector<Eigen::Index> free_of_fixed;
-  for (Eigen::Index k = 0; k < d; ++k) {
-    if (by_fixed.eigenvalues()(k) < kFixedMotion) free_of_fixed.push_back(k);
-  }
-  Eigen::MatrixXd u(d, static_cast<Eigen::Index>(free_of_fixed.size()));
-  for (std::size_t k = 0; k < free_of_fixed.size(); ++k) u.col(static_cast<Eigen::Index>(k)) = by_fixed.eigenvectors().col(free_of_fixed[k]);
-  if (u.cols() == 0) return out;
-  // Among them, those the measurements and the weights tell too little of.
-  const Eigen::MatrixXd told = u.transpose() * (info.measured + weighted) * u;
-  const Eigen::MatrixXd could = u.transpose() * (info.reference + weighted) * u;
-  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ges(told, could);
-  if (ges.info() != Eigen::Success) throw std::logic_error("adjust_network: the datum's reference information is not positive definite");
-  std::vector<Eigen::Index> keep;
-  for (Eigen::Index k = 0; k < ges.eigenvalues().size(); ++k) {
-    if (ges.eigenvalues()(k) < below) keep.push_back(k);
-  }
-  out.v.resize(d, static_cast<Eigen::Index>(keep.size()));
-  for (std::size_t k = 0; k < keep.size(); ++k) {
-    const Eigen::VectorXd y = u * ges.eigenvectors().col(keep[k]);
-    out.v.col(static_cast<Eigen::Index>(k)) = y;
-    out.ratio.push_back(std::max(0.0, ges.eigenvalues()(keep[k])));
-    out.measured.push_back(std::max(0.0, y.dot(info.measured * y)));
-    out.weighted.push_back(std::max(0.0, y.dot(weighted * y)));
-  }
-  return out;
+  Eigen::MatrixXd fixed(static_cast<Eigen::Index>(fixed_rows.size()), d);
+  for (std::size_t k = 0; k < fixed_rows.size(); ++k) fixed.row(static_cast<Eigen::Index>(k)) = fixed_rows[k];
+  return weak_combinations(fixed, gram, stations, info.measured, weighted.r(), info.reference, below);
 }
 
 // The same span, as orthogonal motions of 1 m RMS at the stations: v (vᵀ T v / n)^(−1/2), T the motions' Gram matrix
@@ -888,22 +867,6 @@ Eigen::MatrixXd unit_motions(const Problem& p, const Layout& probe, const Eigen:
   return v * te.operatorInverseSqrt();
 }
 
-// Where the defect is held while iterating (p.anchor and its components):
-// the fewest of the inner stations (one, then the farthest two, then three
-// far apart and off their line, else all of them) over which the defect's
-// directions are independent.
-void choose_anchors(Problem& p);
-
-// The ratio of the smallest to the largest singular value of the defect
-// restricted to `stations` (Eᵀ D, d × d): 0 when they leave a combination
-// of it undefined; `weakest` gets that combination (over the defect's columns).
-double spanning_ratio(const Problem& p, const std::vector<std::size_t>& stations,
-                      const std::vector<std::array<bool, 3>>& components, Eigen::VectorXd* weakest = nullptr);
-
-// Below this ratio (spanning_ratio) a set of stations does not hold the
-// defect: the inner constraints over them would leave a combination free.
-constexpr double kSpanningRatio = 1e-6;
-
 // The defect directions over the unknowns of `stations` only (zero elsewhere).
 Eigen::MatrixXd restricted(const Problem& p, const std::vector<std::size_t>& stations,
                            const std::vector<std::array<bool, 3>>& components = {}) {
@@ -919,16 +882,36 @@ Eigen::MatrixXd restricted(const Problem& p, const std::vector<std::size_t>& sta
   return e;
 }
 
-double spanning_ratio(const Problem& p, const std::vector<std::size_t>& stations,
-                      const std::vector<std::array<bool, 3>>& components, Eigen::VectorXd* weakest) {
+// A station's share of EᵀD (E: the defect D restricted to the stations
+// holding it): D_sᵀ D_s over its components that take part (d × d), so
+// that EᵀD over any set of stations is the sum of theirs.
+Eigen::MatrixXd station_block(const Problem& p, std::size_t s, const std::array<bool, 3>& components) {
   const Eigen::Index d = p.defect.cols();
-  if (d == 0) return 1.0;
-  const Eigen::MatrixXd ed = restricted(p, stations, components).transpose() * p.defect;
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(ed, Eigen::ComputeFullV);
-  const Eigen::VectorXd& sv = svd.singularValues();
-  if (weakest) *weakest = svd.matrixV().col(d - 1);
-  return sv(0) > 0.0 ? sv(d - 1) / sv(0) : 0.0;
+  Eigen::MatrixXd block = Eigen::MatrixXd::Zero(d, d);
+  for (int c = 0; c < 3; ++c) {
+    if (!components[static_cast<std::size_t>(c)]) continue;
+    const Index u = p.layout.station[s][static_cast<std::size_t>(c)];
+    if (u >= 0) block.noalias() += p.defect.row(u).transpose() * p.defect.row(u);
+  }
+  return block;
 }
+
+// The ratio of the smallest to the largest eigenvalue of EᵀD (symmetric,
+// positive semi-definite): 0 when the stations leave a combination of the
+// defect undefined; `weakest` gets that combination (over the defect's
+// columns).
+double spanning_ratio(const Eigen::MatrixXd& ed, Eigen::VectorXd* weakest = nullptr) {
+  const Eigen::Index d = ed.rows();
+  if (d == 0) return 1.0;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(ed);
+  if (weakest) *weakest = eig.eigenvectors().col(0);
+  const double top = eig.eigenvalues()(d - 1);
+  return top > 0.0 ? std::max(0.0, eig.eigenvalues()(0)) / top : 0.0;
+}
+
+// Below this ratio (spanning_ratio) a set of stations does not hold the
+// defect: the inner constraints over them would leave a combination free.
+constexpr double kSpanningRatio = 1e-6;
 
 // The inner-constraint stations (p.inner with p.inner_components) must
 // hold every combination of the defect (EᵀD of full rank, spanning_ratio):
@@ -938,22 +921,28 @@ double spanning_ratio(const Problem& p, const std::vector<std::size_t>& stations
 void check_inner_stations(const Problem& p, bool option) {
   const Eigen::Index d = p.defect.cols();
   if (d == 0) return;
-  const Eigen::MatrixXd ed = restricted(p, p.inner, p.inner_components).transpose() * p.defect;
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(ed, Eigen::ComputeFullV);
-  const Eigen::VectorXd& sv = svd.singularValues();
+  Eigen::MatrixXd ed = Eigen::MatrixXd::Zero(d, d), every_component = Eigen::MatrixXd::Zero(d, d);
+  for (std::size_t k = 0; k < p.inner.size(); ++k) {
+    ed += station_block(p, p.inner[k], k < p.inner_components.size() ? p.inner_components[k] : std::array<bool, 3>{true, true, true});
+    every_component += station_block(p, p.inner[k], {true, true, true});
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(ed);
+  const double top = eig.eigenvalues()(d - 1);
   std::vector<std::string> left;
   for (Eigen::Index k = 0; k < d; ++k) {
-    if (sv(0) > 0.0 && sv(k) >= kSpanningRatio * sv(0)) continue;
-    left.push_back(name_combination(p.defect_motions * svd.matrixV().col(k), p.motion_names));
+    if (top > 0.0 && eig.eigenvalues()(k) >= kSpanningRatio * top) continue;
+    left.push_back(name_combination(p.defect_motions * eig.eigenvectors().col(k), p.motion_names));
   }
   if (left.empty()) return;
   const auto& net = p.net;
   std::string ids;
   for (std::size_t k = 0; k < p.inner.size() && k < 8; ++k) ids += (k ? ", " : "") + net.stations[p.inner[k]].id;
   if (p.inner.size() > 8) ids += ", …";
-  // Why, from the stations' geometry.
+  // Why: the components left out, or the stations' places.
   std::string why;
-  if (p.inner.size() == 1) {
+  if (spanning_ratio(every_component) >= kSpanningRatio) {
+    why = "the components of " + ids + " that take part do not hold it (with all three components of each they would)";
+  } else if (p.inner.size() == 1) {
     why = "one station holds the translations only";
   } else {
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -966,7 +955,7 @@ void check_inner_stations(const Problem& p, bool option) {
     if (p.inner.size() == 2 || geometry(1) < kOnOneLine * geometry(0)) {
       why = "the stations " + ids + " lie on one line: the rotation about the line through them moves none of them";
     } else {
-      why = "the components of " + ids + " that take part do not hold it";
+      why = "the places of " + ids + " leave it free";
     }
   }
   std::string list;
@@ -979,42 +968,67 @@ void check_inner_stations(const Problem& p, bool option) {
   throw Error(ErrorKind::input, "E_DATUM_DEFECT", text);
 }
 
+// Where the defect is held while iterating (p.anchor and its components):
+// few of the inner stations over which the defect's directions are
+// independent: the one farthest from their centroid, then the farthest
+// from it, then the one farthest off their line, then, while a
+// combination is left free, the station that holds it best. A handful, so
+// that holding them adds a small dense block to the normal matrix.
 void choose_anchors(Problem& p) {
   const auto& set = p.inner;
   p.anchor.clear();
   p.anchor_components.clear();
   if (set.empty()) return;
-  const auto components_of_inner = [&](std::size_t st) {
-    const std::size_t k = static_cast<std::size_t>(std::find(set.begin(), set.end(), st) - set.begin());
+  const auto components_at = [&](std::size_t k) {
     return k < p.inner_components.size() ? p.inner_components[k] : std::array<bool, 3>{true, true, true};
   };
+  std::vector<Eigen::MatrixXd> blocks(set.size());
+  for (std::size_t k = 0; k < set.size(); ++k) blocks[k] = station_block(p, set[k], components_at(k));
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (std::size_t s : set) centroid += p.states[s].x;
   centroid /= static_cast<double>(set.size());
-  auto farthest = [&](const std::function<double(std::size_t)>& score) {
-    std::size_t best = set.front();
+  const auto farthest = [&](const std::function<double(std::size_t)>& score) {  // an index into set
+    std::size_t best = 0;
     double top = -1.0;
-    for (std::size_t s : set) {
-      if (score(s) > top) top = score(s), best = s;
+    for (std::size_t k = 0; k < set.size(); ++k) {
+      if (score(k) > top) top = score(k), best = k;
     }
     return best;
   };
-  const std::size_t a = farthest([&](std::size_t s) { return (p.states[s].x - centroid).squaredNorm(); });
-  const std::size_t b = farthest([&](std::size_t s) { return (p.states[s].x - p.states[a].x).squaredNorm(); });
-  const std::size_t c = farthest([&](std::size_t s) {
-    return (p.states[s].x - p.states[a].x).cross(p.states[b].x - p.states[a].x).squaredNorm();
-  });
-  std::vector<std::vector<std::size_t>> tries = {{a}, {a, b}, {a, b, c}, set};
-  for (auto& t : tries) {
-    std::sort(t.begin(), t.end());
-    t.erase(std::unique(t.begin(), t.end()), t.end());
-    std::vector<std::array<bool, 3>> comps;
-    for (std::size_t st : t) comps.push_back(components_of_inner(st));
-    if (spanning_ratio(p, t, comps) >= kSpanningRatio || t.size() == set.size()) {
-      p.anchor = t;
-      p.anchor_components = comps;
-      return;
+  const auto x = [&](std::size_t k) { return p.states[set[k]].x; };
+  const std::size_t a = farthest([&](std::size_t k) { return (x(k) - centroid).squaredNorm(); });
+  const std::size_t b = farthest([&](std::size_t k) { return (x(k) - x(a)).squaredNorm(); });
+  const std::size_t c = farthest([&](std::size_t k) { return (x(k) - x(a)).cross(x(b) - x(a)).squaredNorm(); });
+  std::vector<bool> chosen(set.size(), false);
+  const Eigen::Index d = p.defect.cols();
+  Eigen::MatrixXd ed = Eigen::MatrixXd::Zero(d, d);
+  const auto take = [&](std::size_t k) {
+    if (chosen[k]) return;
+    chosen[k] = true;
+    ed += blocks[k];
+  };
+  Eigen::VectorXd weakest;
+  for (std::size_t k : {a, b, c}) {
+    take(k);
+    if (spanning_ratio(ed) >= kSpanningRatio) break;
+  }
+  std::size_t count = static_cast<std::size_t>(std::count(chosen.begin(), chosen.end(), true));
+  while (spanning_ratio(ed, &weakest) < kSpanningRatio && count < set.size()) {
+    // The station that holds the weakest combination best.
+    std::size_t best = set.size();
+    double most = -1.0;
+    for (std::size_t k = 0; k < set.size(); ++k) {
+      if (chosen[k]) continue;
+      const double held = weakest.dot(blocks[k] * weakest);
+      if (held > most) most = held, best = k;
     }
+    take(best);
+    ++count;
+  }
+  for (std::size_t k = 0; k < set.size(); ++k) {
+    if (!chosen[k]) continue;
+    p.anchor.push_back(set[k]);
+    p.anchor_components.push_back(components_at(k));
   }
 }
 
@@ -1570,9 +1584,23 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         const Layout probe = make_layout(p, true);
         const DatumVectors dv = datum_vectors(p, probe);
         const DatumInformation info = datum_information(p, probe, dv.g, jobs);
-        const Eigen::MatrixXd undefined = unit_motions(p, probe, dv.g, undefined_datum(p, probe, dv.g, info, kUndefinedDatumRelative).v);
+        const DatumRank weak = undefined_datum(p, probe, dv.g, info, kWeakDatumRelative);
+        std::size_t stations = 0;
+        for (std::size_t st = 0; st < net.stations.size(); ++st) stations += p.station_used[st] ? 1u : 0u;
+        const auto resolution = [&](double ratio) { return datum_resolution(ratio, stations); };
+        std::size_t below = 0;
+        while (below < weak.ratio.size() &&
+               (weak.ratio[below] < kUndefinedDatumRelative || resolution(weak.ratio[below]) > kUnresolvedDatum)) {
+          ++below;
+        }
+        const Eigen::MatrixXd undefined =
+            unit_motions(p, probe, dv.g, weak.combinations.leftCols(static_cast<Eigen::Index>(below)));
         std::vector<std::string> names;
         for (Eigen::Index k = 0; k < undefined.cols(); ++k) names.push_back(name_combination(dv.basis * undefined.col(k), dv.names));
+        // (Those told of, but too weakly for double precision, say so: by
+        // weighted constraints, or by measurements above their rounding.)
+        std::size_t unresolved = 0;
+        for (std::size_t k = 0; k < below; ++k) unresolved += weak.weighted[k] > 0.0 || weak.ratio[k] >= kToldOf ? 1u : 0u;
         if (!p.free && undefined.cols() > 0) {
           if (!net.datum_stations.empty()) {
             // What the constraints leave undefined is held by the input's
@@ -1589,9 +1617,18 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           } else {
             std::string list;
             for (const auto& x : names) list += (list.empty() ? "" : "; ") + x;
+            const std::string weakly = "with a standard deviation over " + fmt(1.0 / std::sqrt(weak.ratio[below - 1]), 2) +
+                                       " times a typical station's, which double precision does not resolve in a network of " +
+                                       std::to_string(stations) + " stations";
+            const std::string what =
+                unresolved == names.size()
+                    ? "the datum is not defined to what double precision resolves: the measurements and constraints tell the " + list +
+                          " only " + weakly
+                    : "the datum is not defined: neither the measurements nor the constraints fix the " + list +
+                          (names.size() == 1 ? "" : " (" + std::to_string(names.size()) + " combinations)") +
+                          (unresolved > 0 ? "; " + std::to_string(unresolved) + " of them they tell only " + weakly : std::string());
             throw Error(ErrorKind::input, "E_DATUM_DEFECT",
-                        where + ": the datum is not defined: neither the measurements nor the constraints fix the " + list +
-                            (names.size() == 1 ? "" : " (" + std::to_string(names.size()) + " combinations)") +
+                        where + ": " + what +
                             (o.helmert ? "; the Helmert of group " + o.helmert->name +
                                              " takes up the datum its measurements would give: constrain stations "
                                              "(--constrain ID=CCC[,SIGMA_M]) or add measurements in the network's frame"
@@ -1606,29 +1643,43 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           check_inner_stations(p, net.datum_stations.empty() || o.free);
           choose_anchors(p);
         }
-        // Defined by the measurements, but weakly (not the constraints'
-        // business: a datum held by weighted constraints is the user's):
-        // named, with the standard deviation it then has at least.
+        // Defined by the measurements, but weakly: named, with the
+        // standard deviation it then has at least. A datum held by weighted
+        // constraints is the user's business, unless it is held so weakly
+        // that double precision cannot resolve its standard deviation: the
+        // factorization's rounding along it grows as √n times a station's
+        // (measured: a 3 km hold at one of 900 stations of millimetre
+        // baselines, ratio 2·10⁻¹³, gives its σ 2 % off).
         datum_warnings.clear();
-        const DatumCombinations weak = undefined_datum(p, probe, dv.g, info, kWeakDatumRelative);
-        for (Eigen::Index k = 0; k < weak.v.cols(); ++k) {
+        for (Eigen::Index k = static_cast<Eigen::Index>(below); k < weak.combinations.cols(); ++k) {
           const auto c = static_cast<std::size_t>(k);
-          if (weak.ratio[c] < kUndefinedDatumRelative || weak.weighted[c] > weak.measured[c]) continue;
-          const Eigen::VectorXd y = weak.v.col(k);
+          const double resolved = resolution(weak.ratio[c]);
+          const bool by_measurements = weak.measured[c] >= weak.weighted[c];
+          if (!by_measurements && resolved <= kDatumResolution) continue;
+          const Eigen::VectorXd y = weak.combinations.col(k);
           double motion2 = 0.0;
-          std::size_t stations = 0;
           const Eigen::VectorXd gy = dv.g * y;
           for (std::size_t uk = 0; uk < probe.owner.size(); ++uk) {
             if (probe.owner[uk].second < 3) motion2 += gy(static_cast<Eigen::Index>(uk)) * gy(static_cast<Eigen::Index>(uk));
           }
-          for (std::size_t st = 0; st < net.stations.size(); ++st) stations += p.station_used[st] ? 1u : 0u;
           const double rms = std::sqrt(motion2 / static_cast<double>(std::max<std::size_t>(stations, 1)));
           const double told = weak.measured[c] + weak.weighted[c];
-          datum_warnings.push_back("the datum's " + name_combination(dv.basis * y, dv.names) +
-                                   " is defined only weakly by the measurements: they tell it at " + fmt(weak.ratio[c], 2) +
-                                   " of what they tell of the network's other motions; its standard deviation is at least " +
-                                   fmt_m(told > 0.0 ? rms / std::sqrt(told) : std::numeric_limits<double>::infinity()) +
-                                   " at the stations (RMS): constrain stations or add measurements that fix it");
+          const std::string sigma = fmt_m(told > 0.0 ? rms / std::sqrt(told) : std::numeric_limits<double>::infinity());
+          const std::string precision =
+              resolved > kDatumResolution ? "; double precision resolves that standard deviation only to about " +
+                                                fmt(100.0 * resolved, 2) + " %"
+                                          : std::string();
+          if (by_measurements) {
+            datum_warnings.push_back("the datum's " + name_combination(dv.basis * y, dv.names) +
+                                     " is defined only weakly by the measurements: its standard deviation is " +
+                                     fmt(1.0 / std::sqrt(weak.ratio[c]), 2) + " times a typical station's, at least " + sigma +
+                                     " at the stations (RMS)" + precision + ": constrain stations or add measurements that fix it");
+          } else {
+            datum_warnings.push_back("the datum's " + name_combination(dv.basis * y, dv.names) +
+                                     " is held by the weighted constraints alone, with a standard deviation " +
+                                     fmt(1.0 / std::sqrt(weak.ratio[c]), 2) + " times a typical station's (" + sigma +
+                                     " at the stations, RMS)" + precision + ": hold it with smaller standard deviations");
+          }
         }
         check_station_blocks(p, n);
       } else if (p.free && p.defect.cols() > 0) {

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/QR>
+#include <Eigen/SVD>
 
 #include <algorithm>
 #include <cmath>
@@ -18,6 +19,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
+#include "datum_rank.hpp"
 #include "network_builder.hpp"
 #include "test_support.hpp"
 
@@ -345,6 +347,132 @@ TEST(NetworkDatum, Issue39_SingularStationsAreTheOnesThatMove) {
   EXPECT_EQ(turned.rfind("E_NETWORK_SINGULAR", 0), 0u) << turned;
   EXPECT_NE(turned.find("station S16"), std::string::npos) << turned;
   EXPECT_NE(turned.find("2 measurements that reach it"), std::string::npos) << turned;
+}
+
+// A datum held at one station is not diluted by the number of stations:
+// 900 stations joined by baselines of millimetres, held only by one
+// station's constraint of 300 m (its information 10⁻¹¹ of a station's own,
+// and 10⁻¹⁴ of the network's in all), or by one code GNSS point of 3 m on
+// one station. Each is accepted, and the whole network moves with the
+// hold: every station's σ is the hold's. Held at 3 km, double precision
+// resolves that σ only to a few per cent (the factorization's rounding
+// along the translation grows as √n times a station's): accepted, and a
+// warning says so; at 6 km it would be rounding, and it is refused.
+TEST(NetworkDatum, Issue39_ADatumHeldAtOneStationIsNotDilutedByTheNetworksSize) {
+  constexpr double kSigmaRelative = 0.01;  // a station's σ against the hold's (the baselines add millimetres)
+  std::mt19937 rng(44);
+  const int side = 30;
+  const Site s = make_site(side * side, rng);
+  Network base = network_of(s);
+  for (std::size_t i = 0; i < s.ecef.size(); ++i) {
+    if ((i + 1) % side != 0) add_baseline(base, s, i, i + 1, &rng);
+    if (i + side < s.ecef.size()) add_baseline(base, s, i, i + side, &rng);
+  }
+  const std::size_t held = 17;
+  const auto warned = [](const AdjustmentResult& r, const std::string& what) {
+    return std::any_of(r.warnings.begin(), r.warnings.end(), [&](const std::string& w) { return w.find(what) != std::string::npos; });
+  };
+  for (const double hold_m : {300.0, 3000.0}) {
+    SCOPED_TRACE(hold_m);
+    Network net = base;
+    net.stations[held].constraint = {{'C', 'C', 'C'}, {hold_m, hold_m, hold_m}};
+    const AdjustmentResult r = adjust_network(net, quiet());
+    EXPECT_TRUE(r.datum_defect.empty());
+    if (hold_m < 1000.0) {
+      for (const std::size_t i : {held, std::size_t{450}, s.ecef.size() - 1}) {
+        EXPECT_NEAR(std::sqrt(r.stations[i].covariance_local_m2(0, 0)), hold_m, kSigmaRelative * hold_m) << i;
+      }
+      EXPECT_FALSE(warned(r, "double precision resolves")) << ::testing::PrintToString(r.warnings);
+    } else {
+      EXPECT_TRUE(warned(r, "held by the weighted constraints alone")) << ::testing::PrintToString(r.warnings);
+      EXPECT_TRUE(warned(r, "double precision resolves"));
+    }
+  }
+  // At 6 km the rounding would be the answer: refused, saying so.
+  {
+    Network net = base;
+    net.stations[held].constraint = {{'C', 'C', 'C'}, {6e3, 6e3, 6e3}};
+    const std::string refused = error_of(net, quiet());
+    EXPECT_EQ(refused.rfind("E_DATUM_DEFECT", 0), 0u) << refused;
+    EXPECT_NE(refused.find("not defined to what double precision resolves"), std::string::npos) << refused;
+    EXPECT_NE(refused.find("900 stations"), std::string::npos) << refused;
+  }
+  Network net = base;
+  constexpr double kPoint_m = 3.0;
+  NetworkMeasurement point;
+  point.kind = MeasurementKind::gnss_points;
+  point.stations = {held};
+  point.value = s.ecef[held];
+  point.covariance = Eigen::Matrix3d::Identity() * kPoint_m * kPoint_m;
+  point.source = "code point";
+  net.measurements.push_back(point);
+  const AdjustmentResult r = adjust_network(net, quiet());
+  EXPECT_TRUE(r.datum_defect.empty());
+  EXPECT_NEAR(std::sqrt(r.stations[450].covariance_local_m2(2, 2)), kPoint_m, kSigmaRelative * kPoint_m);
+}
+
+// Two fixed stations 5 cm apart hold every rotation but the one about the
+// line through them: their lever is short against the network's
+// kilometres, but a fixed component defines any motion that moves it. A
+// network of slope distances then lacks exactly that one rotation (named
+// alone); add a third fixed station off their line and it is accepted.
+TEST(NetworkDatum, Issue39_FixedStationsCentimetresApartHoldAllButTheirLine) {
+  std::mt19937 rng(8);
+  Site s = make_site(100, rng);
+  // Z: 5 cm east of S44, near the middle.
+  const std::size_t twin = 44;
+  double x = 0, y = 0, z = 0;
+  const GeographicLib::LocalCartesian at(s.geodetic[twin][0], s.geodetic[twin][1], s.geodetic[twin][2], grs80());
+  double lat = 0, lon = 0, h = 0;
+  at.Reverse(0.05, 0.0, 0.0, lat, lon, h);
+  grs80().Forward(lat, lon, h, x, y, z);
+  s.ecef.emplace_back(x, y, z);
+  s.geodetic.push_back({lat, lon, h});
+  Network net = network_of(s);
+  const std::size_t zed = s.ecef.size() - 1;
+  for (std::size_t i = 0; i < s.ecef.size(); ++i) {
+    for (std::size_t j = i + 1; j < s.ecef.size(); ++j) {
+      if ((i == twin && j == zed) || (s.ecef[j] - s.ecef[i]).norm() > 900.0) continue;
+      net.measurements.push_back(scalar(MeasurementKind::slope_distance, {i, j}, (s.ecef[j] - s.ecef[i]).norm(), 0.002, "d"));
+    }
+  }
+  net.stations[twin].constraint.code = {'C', 'C', 'C'};
+  net.stations[zed].constraint.code = {'C', 'C', 'C'};
+  const std::string refused = error_of(net, quiet());
+  EXPECT_EQ(refused.rfind("E_DATUM_DEFECT", 0), 0u) << refused;
+  EXPECT_NE(refused.find("rotation"), std::string::npos) << refused;
+  EXPECT_EQ(refused.find("combinations)"), std::string::npos) << "one combination only: " << refused;
+  net.stations[0].constraint.code = {'C', 'C', 'C'};
+  const AdjustmentResult r = adjust_network(net, quiet());
+  EXPECT_TRUE(r.datum_defect.empty());
+  testing::WorstCase truth;
+  for (std::size_t i = 0; i < s.ecef.size(); ++i) truth.add((r.stations[i].position - s.ecef[i]).norm(), i);
+  EXPECT_WORST_WITHIN(truth, kTruth_m);
+}
+
+// The R factor of stacked rows keeps what a sum of squares loses: 20 000
+// rows whose third column is the sum of the first two (rounded) have a
+// smallest singular value at rounding's level, 10⁻¹⁶ of the largest, which
+// the eigenvalues of AᵀA cannot show below about 10⁻⁸ (their square root).
+// RᵀR is AᵀA.
+TEST(NetworkDatum, Issue39_TheRowsRFactorResolvesWhatASumOfSquaresCannot) {
+  constexpr double kGramRelative = 1e-13;
+  constexpr double kNullRelative = 1e-14;
+  std::mt19937 rng(2);
+  std::normal_distribution<double> z;
+  Eigen::MatrixXd a(20000, 3);
+  for (Eigen::Index r = 0; r < a.rows(); ++r) {
+    a(r, 0) = z(rng);
+    a(r, 1) = z(rng);
+    a(r, 2) = a(r, 0) + a(r, 1);
+  }
+  RowsR rows(3);
+  for (Eigen::Index at = 0; at < a.rows(); at += 777) rows.add(a.middleRows(at, std::min<Eigen::Index>(777, a.rows() - at)));
+  const Eigen::MatrixXd r = rows.r();
+  const Eigen::MatrixXd gram = a.transpose() * a;
+  EXPECT_LT(testing::max_abs_component(Eigen::MatrixXd(r.transpose() * r - gram)) / testing::max_abs_component(gram), kGramRelative);
+  const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::Matrix3d>(Eigen::Matrix3d(r)).singularValues();
+  EXPECT_LT(sv.z() / sv.x(), kNullRelative);
 }
 
 }  // namespace
