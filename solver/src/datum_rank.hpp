@@ -10,10 +10,12 @@
 //   told(y)  = Σ_j ‖A_j G_j y‖² + Σ_c w_c (g_c y)²   (w_c = 1/σ² of a held component)
 //   could(y) = Σ_j ‖A_j‖²_F ‖G_j y‖²
 //   ratio(y) = told(y) / (could(y) / n)              (n: the stations)
-// The ratio is the square of a typical station's standard deviation over
-// the standard deviation the combination has: it does not depend on the
-// unit of the coordinates, nor on the number of stations for a datum held
-// at one of them (a single GNSS point, one weighted hold).
+// could(y)/n bounds from above what a typical station is told along the
+// motion (‖A_j G_j y‖ ≤ ‖A_j‖_F ‖G_j y‖), so the ratio is at most the
+// square of a typical station's standard deviation over the combination's.
+// It does not depend on the unit of the coordinates, nor on the number of
+// stations for a datum held at one of them (a single GNSS point, one
+// weighted hold).
 //
 // The sums are never formed: each is kept as the R factor of its rows
 // stacked (a tall-skinny QR, RowsR), so that a combination nothing tells of
@@ -51,9 +53,12 @@ class RowsR {
 };
 
 // A combination's motion of the fixed components below this share of a
-// typical station's motion (squared: 10⁻¹⁰ of the motion) is no motion of
-// them: rounding leaves about 10⁻³².
-inline constexpr double kFixedMotionSquared = 1e-20;
+// typical station's motion (squared: 10⁻⁷ of the motion) is no motion of
+// them (rounding leaves about 10⁻³²): held by so short a lever (fixed
+// stations 0.1 mm apart in a network of a kilometre) the factorization
+// would meet it at its rounding, as with a ratio below 10⁻¹⁴; it is judged
+// by the measurements and weighted constraints instead.
+inline constexpr double kFixedMotionSquared = 1e-14;
 
 struct DatumRank {
   // Columns over the motions: the combinations below the threshold asked

@@ -378,8 +378,8 @@ std::vector<std::size_t> canonical_order(const geodesy::Network& net, const std:
 
 // The text data snooping breaks exact ties with: what the measurement is
 // (kind, stations, values, heights and covariance as exact hexadecimal,
-// frame, group, a direction's set by its canonical rank `set_rank`, 0 for
-// none), not where it is.
+// frame, group, a direction's set by its canonical rank `set_rank` (0 for
+// none), solution type, variance scales, ignored), not where it is.
 std::string measurement_key(const geodesy::Network& net, const geodesy::NetworkMeasurement& m, std::size_t set_rank) {
   std::string key = geodesy::to_string(m.kind);
   for (std::size_t s : m.stations) key += "\x1f" + net.stations[s].id;
@@ -394,6 +394,9 @@ std::string measurement_key(const geodesy::Network& net, const geodesy::NetworkM
   add(m.target_height_m);
   for (Eigen::Index k = 0; k < m.covariance.size(); ++k) add(m.covariance(k));
   key += "\x1f" + (m.frame ? m.frame->to_string() : std::string()) + "\x1f" + m.group + "\x1f" + std::to_string(set_rank);
+  key += "\x1f" + (m.solution ? std::to_string(static_cast<int>(*m.solution)) : std::string());
+  for (int k = 0; k < 3; ++k) add(m.local_variance_scale(k));
+  key += m.ignore ? "\x1fignored" : "";
   return key;
 }
 
@@ -774,15 +777,15 @@ DatumInformation datum_information(const Problem& p, const Layout& layout, const
   return {all_measured.r(), all_reference.r()};
 }
 
-// The ratio (datum_rank.hpp: a typical station's variance over the
-// combination's) below which a combination of the datum motions is
+// The ratio (datum_rank.hpp: what a combination is told over what a
+// typical station could be told at most) below which a combination of the datum motions is
 // undefined: the factorization's pivots are then within a hundred roundings
 // of nothing (sparse_factor's relative pivot check is the same 10⁻¹⁴).
 // Rounding leaves a motion nothing measures near n·10⁻³²; a datum held by
 // constraints of 100 m among millimetre baselines is near 10⁻¹⁰, by 1 km
-// holds 10⁻¹², by a GNSS point of 3 m on one station 10⁻⁷: each the same
-// for ten stations or a million. Below kWeakDatumRelative (a combination
-// whose standard deviation is over a thousand times a typical station's)
+// holds 10⁻¹², by a GNSS point of 3 m on one station 10⁻⁷: for a datum held
+// at one station, the same for ten stations or a million. Below kWeakDatumRelative (a combination
+// told at less than a millionth of what a typical station is told)
 // it is defined, weakly, and named in a warning with the standard
 // deviation it then has: a terrestrial network with no azimuth, turned
 // about the vertical only by the convergence of the ellipsoid's normals,
@@ -950,9 +953,14 @@ void check_inner_stations(const Problem& p, bool option) {
     c /= static_cast<double>(p.inner.size());
     Eigen::MatrixXd spread(static_cast<Eigen::Index>(p.inner.size()), 3);
     for (std::size_t k = 0; k < p.inner.size(); ++k) spread.row(static_cast<Eigen::Index>(k)) = (p.states[p.inner[k]].x - c).transpose();
-    const Eigen::Vector3d geometry = Eigen::JacobiSVD<Eigen::MatrixXd>(spread).singularValues();
     constexpr double kOnOneLine = 1e-3;  // the second singular value of their spread against the first
-    if (p.inner.size() == 2 || geometry(1) < kOnOneLine * geometry(0)) {
+    bool on_one_line = p.inner.size() == 2;
+    if (!on_one_line) {
+      // (≥ 3 stations: the spread's scatter matrix has 3 eigenvalues, the squares of its singular values.)
+      const Eigen::Vector3d scatter = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(Eigen::Matrix3d(spread.transpose() * spread)).eigenvalues();
+      on_one_line = scatter(1) < kOnOneLine * kOnOneLine * scatter(2);
+    }
+    if (on_one_line) {
       why = "the stations " + ids + " lie on one line: the rotation about the line through them moves none of them";
     } else {
       why = "the places of " + ids + " leave it free";
@@ -1597,10 +1605,10 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
             unit_motions(p, probe, dv.g, weak.combinations.leftCols(static_cast<Eigen::Index>(below)));
         std::vector<std::string> names;
         for (Eigen::Index k = 0; k < undefined.cols(); ++k) names.push_back(name_combination(dv.basis * undefined.col(k), dv.names));
-        // (Those told of, but too weakly for double precision, say so: by
-        // weighted constraints, or by measurements above their rounding.)
+        // (Those told of, by measurements or weighted constraints, above
+        // rounding but too weakly for double precision, say so.)
         std::size_t unresolved = 0;
-        for (std::size_t k = 0; k < below; ++k) unresolved += weak.weighted[k] > 0.0 || weak.ratio[k] >= kToldOf ? 1u : 0u;
+        for (std::size_t k = 0; k < below; ++k) unresolved += weak.ratio[k] >= kToldOf ? 1u : 0u;
         if (!p.free && undefined.cols() > 0) {
           if (!net.datum_stations.empty()) {
             // What the constraints leave undefined is held by the input's
@@ -1617,9 +1625,9 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           } else {
             std::string list;
             for (const auto& x : names) list += (list.empty() ? "" : "; ") + x;
-            const std::string weakly = "with a standard deviation over " + fmt(1.0 / std::sqrt(weak.ratio[below - 1]), 2) +
-                                       " times a typical station's, which double precision does not resolve in a network of " +
-                                       std::to_string(stations) + " stations";
+            const std::string weakly = "at " + fmt(weak.ratio[below - 1], 2) +
+                                       " of what a typical station is told or less, which double precision does not resolve "
+                                       "in a network of " + std::to_string(stations) + " stations";
             const std::string what =
                 unresolved == names.size()
                     ? "the datum is not defined to what double precision resolves: the measurements and constraints tell the " + list +
@@ -1649,7 +1657,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         // that double precision cannot resolve its standard deviation: the
         // factorization's rounding along it grows as √n times a station's
         // (measured: a 3 km hold at one of 900 stations of millimetre
-        // baselines, ratio 2·10⁻¹³, gives its σ 2 % off).
+        // baselines, ratio 6·10⁻¹⁴, gives its σ 1.9 % off).
         datum_warnings.clear();
         for (Eigen::Index k = static_cast<Eigen::Index>(below); k < weak.combinations.cols(); ++k) {
           const auto c = static_cast<std::size_t>(k);
@@ -1671,13 +1679,13 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
                                           : std::string();
           if (by_measurements) {
             datum_warnings.push_back("the datum's " + name_combination(dv.basis * y, dv.names) +
-                                     " is defined only weakly by the measurements: its standard deviation is " +
-                                     fmt(1.0 / std::sqrt(weak.ratio[c]), 2) + " times a typical station's, at least " + sigma +
+                                     " is defined only weakly by the measurements: they tell it at " + fmt(weak.ratio[c], 2) +
+                                     " of what a typical station is told; its standard deviation is at least " + sigma +
                                      " at the stations (RMS)" + precision + ": constrain stations or add measurements that fix it");
           } else {
             datum_warnings.push_back("the datum's " + name_combination(dv.basis * y, dv.names) +
-                                     " is held by the weighted constraints alone, with a standard deviation " +
-                                     fmt(1.0 / std::sqrt(weak.ratio[c]), 2) + " times a typical station's (" + sigma +
+                                     " is held by the weighted constraints alone, at " + fmt(weak.ratio[c], 2) +
+                                     " of what a typical station is told (its standard deviation " + sigma +
                                      " at the stations, RMS)" + precision + ": hold it with smaller standard deviations");
           }
         }
@@ -1890,7 +1898,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       }
       // In the order of their content, so that the cofactors' solves are
       // batched the same for any order of the input.
-      std::sort(failing.begin(), failing.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
+      std::stable_sort(failing.begin(), failing.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
       if (!failing.empty()) {
         NetworkCofactors cofactors(f, p.layout.count);
         std::vector<SnoopingCandidate> candidates(failing.size());
@@ -1932,10 +1940,13 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           measurement_of(c).passes_after_rank =
               seq.passes_after[c] >= 0 ? removed + static_cast<std::size_t>(seq.passes_after[c]) + 1 : 0;
         }
+        const std::string stops = "; data snooping stops there (the weaker failing measurements may fail because of it, so "
+                                  "none is removed in its place)";
         for (std::size_t c : seq.not_removable) {
           const AdjustedMeasurement& am = measurement_of(c);
           result.warnings.push_back(name_of(am) + " fails its " + describe(am) +
-                                    " but cannot be removed: the rest of the network does not determine all of what it measures");
+                                    " but cannot be removed: the rest of the network does not determine all of what it measures" +
+                                    stops);
         }
         for (const auto& group : seq.inseparable) {
           std::string names;
@@ -1943,7 +1954,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
           result.warnings.push_back(
               names + " fail their measurement tests and cannot be told apart: with " + name_of(measurement_of(group.front())) +
               " removed the others could no longer be tested along the direction they share (their residuals are correlated by "
-              "±1 there); one of them is wrong, none is removed");
+              "±1 there); one of them is wrong, none is removed" + stops);
         }
         // Past the limit: with --remove-outliers the measurements up to it
         // go first (the next pass refuses, with them out), unless the

@@ -222,16 +222,19 @@ SnoopStep snoop(FitResult& r, std::vector<std::size_t>& active, const FitOptions
   // What this pass says; kept only when it is the last (a pass that
   // removes is followed by another, which says it again with them out).
   std::vector<std::string> said;
+  const std::string stops = "; data snooping stops there (the weaker failing marks may fail because of it, so none is "
+                            "removed in its place)";
   for (std::size_t c : seq.not_removable) {
     said.push_back("point " + point_of(c).id + " fails the " + why_of(point_of(c)) +
-                   ", but too few points remain to remove it (the other marks do not determine all the fit takes from it)");
+                   ", but too few points remain to remove it (the other marks do not determine all the fit takes from it)" +
+                   stops);
   }
   for (const auto& group : seq.inseparable) {
     std::string ids;
     for (std::size_t c : group) ids += (ids.empty() ? "" : ", ") + point_of(c).id;
     said.push_back("points " + ids + " fail their point tests and cannot be told apart: with " + point_of(group.front()).id +
                    " removed the others could no longer be tested along the direction they share (their residuals are "
-                   "correlated by ±1 there); one of them is wrong, none is removed");
+                   "correlated by ±1 there); one of them is wrong, none is removed" + stops);
   }
   const auto test_text = [&](const SnoopingTest& t) {
     return "point test " + fmt(t.statistic, 4) + " (χ²(" + std::to_string(t.dof) + "), p = " + fmt(t.p_value, 2) + ")";

@@ -3,6 +3,7 @@
 #include "snooping.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
@@ -13,8 +14,8 @@
 namespace geoanchor::solver {
 
 bool stronger_evidence(double log_p_a, double statistic_a, double log_p_b, double statistic_b) {
-  if (log_p_a != log_p_b) return log_p_a < log_p_b;
-  return statistic_a > statistic_b;
+  if (statistic_a != statistic_b) return statistic_a > statistic_b;
+  return log_p_a < log_p_b;
 }
 
 namespace {
@@ -139,6 +140,7 @@ class ParameterDowndater final : public Downdater {
     const Eigen::MatrixXd g = n_inv_ * a_[t].transpose();
     next_dx_ = dx_ + g * d.solve(vt);
     next_n_inv_ = n_inv_ + g * d.solve(Eigen::MatrixXd(g.transpose()));
+    next_n_inv_ = (0.5 * (next_n_inv_ + next_n_inv_.transpose())).eval();  // (the solvers read one triangle)
   }
   void after(std::size_t i, Eigen::VectorXd& v, Eigen::MatrixXd& q) override { state(i, next_dx_, next_n_inv_, v, q); }
   void commit() override {
@@ -160,6 +162,31 @@ class ParameterDowndater final : public Downdater {
   Eigen::VectorXd next_dx_;
   bool moved_ = false;
 };
+
+// Whether a candidate whose whitened residual cofactor is `before` keeps
+// almost none of the redundancy of one of its tested directions (those with
+// eigenvalue ≥ kMinRedundancy) once it is `after`: the smallest generalized
+// eigenvalue of (after, before) over them is below kInseparable, i.e. its
+// residual there is correlated with the removed one's by ±1 within 10⁻⁶.
+// Merely falling below kMinRedundancy (becoming untested along a direction
+// it shared in part) is not enough.
+bool loses_a_direction(const Eigen::MatrixXd& before, const Eigen::MatrixXd& after) {
+  constexpr double kInseparable = 1e-6;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(before);
+  std::vector<Eigen::Index> tested;
+  for (Eigen::Index k = 0; k < before.rows(); ++k) {
+    if (eig.eigenvalues()(k) >= kMinRedundancy) tested.push_back(k);
+  }
+  if (tested.empty()) return false;
+  // In the tested directions, scaled so that `before` is the identity there.
+  Eigen::MatrixXd e(before.rows(), static_cast<Eigen::Index>(tested.size()));
+  for (std::size_t k = 0; k < tested.size(); ++k) {
+    e.col(static_cast<Eigen::Index>(k)) = eig.eigenvectors().col(tested[k]) / std::sqrt(eig.eigenvalues()(tested[k]));
+  }
+  const Eigen::MatrixXd kept = e.transpose() * after * e;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> left(0.5 * (kept + kept.transpose()));
+  return left.eigenvalues()(0) < kInseparable;
+}
 
 SnoopingTest as_snooping_test(std::size_t candidate, const MeasurementTest& t) {
   SnoopingTest s;
@@ -214,7 +241,8 @@ SnoopingSequence run_sequence(const std::vector<SnoopingCandidate>& candidates, 
       if (c.test.dof > 0 && c.test.p_value < limits.alpha) {
         failing.push_back(i);
         out.passes_after[i] = -1;  // (failing again, if it passed before)
-      } else if (!out.removals.empty() && out.passes_after[i] < 0 && c.test.dof == initial_dof[i]) {
+      } else if (!out.removals.empty() && out.passes_after[i] < 0 && c.test.dof == initial_dof[i] &&
+                 std::isfinite(c.test.statistic)) {
         // Explained by the removals so far; not when it passes only because
         // fewer of its directions can be tested.
         out.passes_after[i] = static_cast<std::ptrdiff_t>(out.removals.size()) - 1;
@@ -222,7 +250,7 @@ SnoopingSequence run_sequence(const std::vector<SnoopingCandidate>& candidates, 
     }
     if (!few) in_play = failing;
     if (failing.empty()) break;
-    // Strongest first: ln p, statistic, then the key (what it is, not where).
+    // Strongest first: the statistic, ln p, then the key (what it is, not where).
     const auto stronger = [&](std::size_t a, std::size_t b) {
       const MeasurementTest& ta = current[a].test;
       const MeasurementTest& tb = current[b].test;
@@ -230,7 +258,7 @@ SnoopingSequence run_sequence(const std::vector<SnoopingCandidate>& candidates, 
       if (stronger_evidence(tb.log_p, tb.statistic, ta.log_p, ta.statistic)) return false;
       return candidates[a].key < candidates[b].key;
     };
-    std::sort(failing.begin(), failing.end(), stronger);
+    std::stable_sort(failing.begin(), failing.end(), stronger);
     const std::size_t made = out.removals.size();
     const auto stop = [&](bool& flag) {
       flag = true;
@@ -243,66 +271,56 @@ SnoopingSequence run_sequence(const std::vector<SnoopingCandidate>& candidates, 
       stop(out.limit_reached);
       break;
     }
-    // The strongest that can be removed; those that cannot are named.
-    std::vector<bool> excluded(n, false);
-    bool removed = false, stopped = false;
-    for (std::size_t t : failing) {
-      if (excluded[t]) continue;
-      const Eigen::Index kt = candidates[t].v.size();
-      // Removable only when every direction of its residual is redundant:
-      // else the rest would not determine all it measures. It stays, named.
-      const Eigen::LLT<Eigen::MatrixXd> d(current[t].q);
-      if (current[t].test.dof < kt || d.info() != Eigen::Success) {
-        out.not_removable.push_back(t);
-        excluded[t] = true;
-        drop(t);
-        continue;
-      }
-      if (made + 1 > limits.max_removals) {
-        stop(out.limit_reached);
-        stopped = true;
-        break;
-      }
-      if (limits.may_remove && !limits.may_remove(made + 1, t)) {
-        stop(out.stopped_by_caller);
-        stopped = true;
-        break;
-      }
-      Eigen::Index rows = 0;
-      for (std::size_t i : in_play) rows += candidates[i].v.size();
-      if (!few && rows <= kPrefetchRows) {
-        downdater.few(in_play);
-        few = true;
-      }
-      downdater.prepare(t, current[t].v, d, in_play);
-      // A failing candidate that would lose a tested direction with t out
-      // cannot be told from t (their residuals correlated by ±1 along it):
-      // neither is removed.
-      std::vector<std::size_t> group{t};
-      for (std::size_t j : failing) {
-        if (j == t || excluded[j]) continue;
-        Eigen::VectorXd v;
-        Eigen::MatrixXd q;
-        downdater.after(j, v, q);
-        if (measurement_test(v, q, sigma).dof < current[j].test.dof) group.push_back(j);
-      }
-      if (group.size() > 1) {
-        for (std::size_t i : group) {
-          excluded[i] = true;
-          drop(i);
-        }
-        out.inseparable.push_back(std::move(group));
-        continue;
-      }
-      downdater.commit();
-      omega = std::max(0.0, omega - d.matrixL().solve(current[t].v).squaredNorm());
-      dof -= static_cast<int>(kt);
-      out.removals.push_back(as_snooping_test(t, current[t].test));
-      drop(t);
-      removed = true;
+    // The strongest goes, if it can. If it cannot, the sequence ends
+    // there: it may be what makes the weaker ones fail, and removing them
+    // in its place would take good measurements out.
+    const std::size_t t = failing.front();
+    const Eigen::Index kt = candidates[t].v.size();
+    // Removable only when every direction of its residual is redundant:
+    // else the rest would not determine all it measures. It stays, named.
+    const Eigen::LLT<Eigen::MatrixXd> d(current[t].q);
+    if (current[t].test.dof < kt || d.info() != Eigen::Success) {
+      out.not_removable.push_back(t);
+      out.stopped_at = static_cast<std::ptrdiff_t>(t);
       break;
     }
-    if (stopped || !removed) break;
+    if (made + 1 > limits.max_removals) {
+      stop(out.limit_reached);
+      break;
+    }
+    if (limits.may_remove && !limits.may_remove(made + 1, t)) {
+      stop(out.stopped_by_caller);
+      break;
+    }
+    Eigen::Index rows = 0;
+    for (std::size_t i : in_play) rows += candidates[i].v.size();
+    if (!few && rows <= kPrefetchRows) {
+      downdater.few(in_play);
+      few = true;
+    }
+    downdater.prepare(t, current[t].v, d, in_play);
+    // A failing candidate that would lose (nearly) all the redundancy of
+    // one of its tested directions with t out cannot be told from t: their
+    // residuals are correlated by ±1 along it. Neither is removed, and the
+    // sequence ends.
+    std::vector<std::size_t> group{t};
+    for (std::size_t j : failing) {
+      if (j == t) continue;
+      Eigen::VectorXd v;
+      Eigen::MatrixXd q;
+      downdater.after(j, v, q);
+      if (loses_a_direction(current[j].q, q)) group.push_back(j);
+    }
+    if (group.size() > 1) {
+      out.inseparable.push_back(std::move(group));
+      out.stopped_at = static_cast<std::ptrdiff_t>(t);
+      break;
+    }
+    downdater.commit();
+    omega = std::max(0.0, omega - d.matrixL().solve(current[t].v).squaredNorm());
+    dof -= static_cast<int>(kt);
+    out.removals.push_back(as_snooping_test(t, current[t].test));
+    drop(t);
   }
   return out;
 }

@@ -18,15 +18,18 @@
 // one removal at a time, so that a removal costs the column and a product
 // over the removals so far.
 //
-// Evidence: a test's natural logarithm of its p-value (χ² of the dimension
-// the test has), which does not underflow for gross blunders; then the
-// larger statistic; then the candidates' keys (their content, never their
-// place in the input), so that the order of the input changes nothing.
-// Under one blunder b, every other measurement's bias is at most b's
-// (|w_i| ≤ |w_b| in bias by Cauchy–Schwarz on the projector Q; for a
-// measurement of k components its χ² statistic is at most b's): a gross
-// blunder is removed before any measurement it contaminates, and once it
-// is out their tests are computed without it.
+// Evidence: a test's statistic S = vᵀQ⁺v (the χ² quantity; w² for one
+// dimension), then the natural logarithm of its p-value (computed without
+// underflow), then the candidates' keys (their content, never their place
+// in the input), so that the order of the input changes nothing. Under one
+// blunder b, every other measurement's S from b's bias is at most b's,
+// whatever the two dimensions (Q is a projector, so Q_bb ⪰ Q_bi Q_ii⁻¹ Q_ib):
+// a gross blunder is removed before any measurement it contaminates, and
+// once it is out their tests are computed without it. (ln p would not do
+// across dimensions: a 1-D measurement at 0.95 of a 3-D blunder's S has the
+// smaller p.) When the strongest candidate cannot be removed (some
+// direction of it has no redundancy, or it cannot be told from another) the
+// sequence ends there: the weaker ones may fail because of it.
 //
 // Private to solver.
 
@@ -91,13 +94,19 @@ struct SnoopingSequence {
   std::vector<SnoopingTest> removals;
   // Failing, but not removable: some direction of its residual has no
   // redundancy once the earlier ones are out (the rest would not determine
-  // all it measures). In the order met.
+  // all it measures). At most one: the sequence ends there.
   std::vector<std::size_t> not_removable;
   // Failing candidates that cannot be told apart: removing the first would
   // take the redundancy of the others (their residuals correlated by
   // ±1 along it), so that they would pass because they could no longer be
-  // tested. One of them is wrong; none is removed. In the order met.
+  // tested. One of them is wrong; none is removed, and the sequence ends
+  // there. At most one group.
   std::vector<std::vector<std::size_t>> inseparable;
+  // The candidate (the strongest failing then) at which the sequence ended
+  // because it could not be removed (not_removable or inseparable): the
+  // weaker ones may fail because of it, so none of them is removed in its
+  // place; −1 when it did not end so.
+  std::ptrdiff_t stopped_at = -1;
   // The candidates that still fail, with their tests, when the sequence
   // stopped at max_removals (limit_reached) or by may_remove
   // (stopped_by_caller); strongest first.
@@ -135,8 +144,8 @@ SnoopingSequence snooping_sequence(const std::vector<SnoopingCandidate>& candida
 SnoopingSequence snooping_sequence(const std::vector<SnoopingCandidate>& candidates, const std::vector<Eigen::MatrixXd>& design,
                                    const Eigen::MatrixXd& n_inv, const SnoopingLimits& limits);
 
-// Whether evidence (ln p, statistic) `a` is stronger than `b` (the smaller
-// ln p; equal: the larger statistic). Neither when both are equal.
+// Whether evidence (ln p, statistic) `a` is stronger than `b` (the larger
+// statistic; equal: the smaller ln p). Neither when both are equal.
 bool stronger_evidence(double log_p_a, double statistic_a, double log_p_b, double statistic_b);
 
 }  // namespace geoanchor::solver

@@ -450,6 +450,39 @@ TEST(NetworkDatum, Issue39_FixedStationsCentimetresApartHoldAllButTheirLine) {
   EXPECT_WORST_WITHIN(truth, kTruth_m);
 }
 
+// A plane network of distances held only by one station at 1 cm: the
+// translations are held, the rotation about it is not, and the
+// refusal says that neither the measurements nor the constraints fix it
+// (not that they tell it too weakly: the weighted constraint's share of it
+// is rounding).
+TEST(NetworkDatum, Issue39_AWeightedHoldDoesNotMakeAnUndefinedRotationToldOf) {
+  Network plane;
+  plane.space = geodesy::NetworkSpace::local;
+  plane.local_dimensions = 2;
+  plane.source_name = "distances";
+  const std::vector<Eigen::Vector2d> xy = {{0, 0}, {500, 40}, {950, -30}, {60, 480}, {520, 530}, {990, 470}};
+  for (std::size_t i = 0; i < xy.size(); ++i) {
+    NetworkStation st;
+    st.id = "D" + std::to_string(i);
+    st.position = Eigen::Vector3d(xy[i].x(), xy[i].y(), 0.0);
+    plane.stations.push_back(st);
+  }
+  for (std::size_t i = 0; i < xy.size(); ++i) {
+    for (std::size_t j = i + 1; j < xy.size(); ++j) {
+      plane.measurements.push_back(scalar(MeasurementKind::horizontal_distance, {i, j}, (xy[j] - xy[i]).norm(), 0.002, "d"));
+    }
+  }
+  plane.stations[2].constraint = {{'C', 'C', 'F'}, {0.01, 0.01, 0.0}};
+  const std::string refused = error_of(plane, quiet());
+  EXPECT_EQ(refused.rfind("E_DATUM_DEFECT", 0), 0u) << refused;
+  // One combination: the rotation about the held station (about the
+  // centroid, with the translations that keep D2 in place).
+  EXPECT_NE(refused.find("neither the measurements nor the constraints fix the "), std::string::npos) << refused;
+  EXPECT_NE(refused.find("rotation about the vertical"), std::string::npos) << refused;
+  EXPECT_EQ(refused.find("combinations)"), std::string::npos) << refused;
+  EXPECT_EQ(refused.find("double precision"), std::string::npos) << refused;
+}
+
 // The R factor of stacked rows keeps what a sum of squares loses: 20 000
 // rows whose third column is the sum of the first two (rounded) have a
 // smallest singular value at rounding's level, 10⁻¹⁶ of the largest, which

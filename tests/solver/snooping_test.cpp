@@ -59,15 +59,22 @@ TEST(Snooping, Issue39_TheLogOfAChiSquaredTailDoesNotUnderflow) {
   EXPECT_TRUE(std::isnan(chi_squared_log_upper_tail(3, std::numeric_limits<double>::quiet_NaN())));
 }
 
-// A gross 3-D blunder and a 1-D measurement it contaminates: the 3-D
-// statistic bounds the bias of every w-test correlated with it, and ln p
-// (not p, which is 0 for both) ranks the blunder first.
+// A gross 3-D blunder and a 1-D measurement it contaminates: the blunder's
+// statistic S = vᵀQ⁺v bounds every other measurement's S from its bias
+// (Q is a projector: Q_bb ⪰ Q_bi Q_ii⁻¹ Q_ib), whatever their dimensions,
+// so ranking by S puts the blunder first. ln p would not: at S_b = 100 (χ²(3),
+// ln p = −47.9) a 1-D measurement at S = 95 has ln p = −50.0. Where p
+// underflows (S = 4·10¹⁰) S still ranks.
 TEST(Snooping, Issue39_EvidenceRanksAGrossBlunderBeforeWhatItContaminates) {
-  const double gross = chi_squared_log_upper_tail(3, 4.0e10);
-  const double contaminated = chi_squared_log_upper_tail(1, 0.99 * 4.0e10);
-  EXPECT_TRUE(stronger_evidence(gross, 4.0e10, contaminated, 0.99 * 4.0e10));
-  // Equal ln p: the larger statistic.
-  EXPECT_TRUE(stronger_evidence(-5.0, 12.0, -5.0, 11.0));
+  const double blunder = chi_squared_log_upper_tail(3, 100.0);
+  const double contaminated = chi_squared_log_upper_tail(1, 95.0);
+  ASSERT_LT(contaminated, blunder);  // (what ln p alone would rank first)
+  EXPECT_TRUE(stronger_evidence(blunder, 100.0, contaminated, 95.0));
+  EXPECT_FALSE(stronger_evidence(contaminated, 95.0, blunder, 100.0));
+  EXPECT_TRUE(stronger_evidence(chi_squared_log_upper_tail(3, 4.0e10), 4.0e10, chi_squared_log_upper_tail(1, 0.99 * 4.0e10),
+                                0.99 * 4.0e10));
+  // Equal statistics: the smaller ln p (the larger dimension's is the larger p).
+  EXPECT_TRUE(stronger_evidence(-6.0, 12.0, -5.0, 12.0));
   EXPECT_FALSE(stronger_evidence(-5.0, 11.0, -5.0, 11.0));
 }
 
@@ -317,7 +324,8 @@ TEST(Snooping, Issue39_ATestCountsOnlyTheDirectionsWithRedundancy) {
 // Two measurements that are each other's only check (one unknown measured
 // twice, nothing else on it) fail alike when one is a blunder: their
 // residuals are correlated by −1, and removing either would leave the other
-// untested. Neither is removed, on both paths; they are named together.
+// untested. Neither is removed, on both paths; they are named together, and
+// the sequence ends there: a weaker blunder elsewhere stays flagged.
 TEST(Snooping, Issue39_MeasurementsThatCannotBeToldApartAreNotRemoved) {
   std::mt19937 rng(3);
   std::normal_distribution<double> z;
@@ -331,6 +339,7 @@ TEST(Snooping, Issue39_MeasurementsThatCannotBeToldApartAreNotRemoved) {
   for (Eigen::Index r = 0; r < p.l.size(); ++r) p.l(r) = z(rng);
   for (Eigen::Index r = 0; r < p.l.size(); ++r) p.rows.push_back({r});
   p.l(0) += 20.0;
+  p.l(5) += 7.0;  // a weaker blunder elsewhere: not removed in the pair's place
   const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
   std::vector<SnoopingCandidate> candidates;
   std::vector<std::size_t> candidate_of;
@@ -344,7 +353,7 @@ TEST(Snooping, Issue39_MeasurementsThatCannotBeToldApartAreNotRemoved) {
     candidate_of.push_back(k);
     design.push_back(p.a.row(static_cast<Eigen::Index>(k)));
   }
-  ASSERT_EQ(candidate_of, (std::vector<std::size_t>{0, 1}));
+  ASSERT_EQ(candidate_of, (std::vector<std::size_t>{0, 1, 5}));
   SnoopingLimits limits;
   limits.max_removals = 5;
   DenseCofactors source(p, s, candidate_of);
@@ -355,7 +364,51 @@ TEST(Snooping, Issue39_MeasurementsThatCannotBeToldApartAreNotRemoved) {
     std::vector<std::size_t> group = seq.inseparable.front();
     std::sort(group.begin(), group.end());
     EXPECT_EQ(group, (std::vector<std::size_t>{0, 1}));
-    EXPECT_EQ(seq.passes_after, (std::vector<std::ptrdiff_t>{-1, -1}));
+    EXPECT_GE(seq.stopped_at, 0);
+    EXPECT_EQ(seq.passes_after, (std::vector<std::ptrdiff_t>{-1, -1, -1}));
+  }
+}
+
+// A measurement that shares part of a blunder's redundancy is not
+// inseparable from it: one precise observation of an unknown (redundancy
+// 1.1·10⁻³, just above the tested level) and four of unit weight, one of
+// them 30σ wrong. Removing the blunder leaves the precise one below the
+// tested level (correlation −0.5, not ±1): it becomes untested, and the
+// blunder is removed, first and alone.
+TEST(Snooping, Issue39_APartialShareOfRedundancyIsNotInseparable) {
+  std::mt19937 rng(1);
+  std::normal_distribution<double> z;
+  Problem p;
+  p.a.resize(5, 1);
+  p.a << std::sqrt(3500.0), 1.0, 1.0, 1.0, 1.0;
+  p.l.resize(5);
+  for (Eigen::Index r = 0; r < 5; ++r) {
+    p.l(r) = 0.3 * z(rng);
+    p.rows.push_back({r});
+  }
+  p.l(1) += 30.0;
+  const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
+  std::vector<SnoopingCandidate> candidates;
+  std::vector<std::size_t> candidate_of;
+  std::vector<Eigen::MatrixXd> design;
+  for (std::size_t k = 0; k < p.rows.size(); ++k) {
+    const Eigen::VectorXd v = part(s.v, p.rows[k]);
+    const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
+    const MeasurementTest t = measurement_test(v, q, 1.0);
+    if (!(t.dof > 0 && t.p_value < 0.001)) continue;
+    candidates.push_back({v, q, "m" + std::to_string(k)});
+    candidate_of.push_back(k);
+    design.push_back(p.a.row(static_cast<Eigen::Index>(k)));
+  }
+  ASSERT_NE(std::find(candidate_of.begin(), candidate_of.end(), 0u), candidate_of.end());  // the precise one fails too
+  SnoopingLimits limits;
+  limits.max_removals = 2;
+  DenseCofactors source(p, s, candidate_of);
+  for (const SnoopingSequence& seq :
+       {snooping_sequence(candidates, source, limits), snooping_sequence(candidates, design, (p.a.transpose() * p.a).inverse(), limits)}) {
+    EXPECT_TRUE(seq.inseparable.empty());
+    ASSERT_EQ(seq.removals.size(), 1u);
+    EXPECT_EQ(candidate_of[seq.removals.front().candidate], 1u);
   }
 }
 
@@ -447,16 +500,25 @@ TEST(Snooping, Issue39_DegenerateTestsNeitherThrowNorInventNumbers) {
   const MeasurementTest nan = measurement_test(Eigen::VectorXd::Constant(1, std::numeric_limits<double>::quiet_NaN()), q, 1.0);
   EXPECT_TRUE(std::isnan(nan.p_value));
   EXPECT_TRUE(std::isnan(nan.log_p));
-  std::vector<SnoopingCandidate> candidates{{Eigen::VectorXd::Constant(1, 40.0), q, "a"}};
-  std::vector<Eigen::MatrixXd> design{Eigen::MatrixXd::Constant(1, 1, std::sqrt(0.5))};
+  // Two failing candidates whose residuals make up all of Ω: once the
+  // first is out Ω is 0 (to rounding, never below), and the second is not
+  // tested by a σ̂0 of 0 (0/0) — the sequence ends with one removal.
+  std::vector<SnoopingCandidate> candidates{{Eigen::VectorXd::Constant(1, 40.0), q, "a"},
+                                            {Eigen::VectorXd::Constant(1, 0.0), q, "b"}};
+  std::vector<Eigen::MatrixXd> design{Eigen::MatrixXd::Constant(1, 1, std::sqrt(0.5)), Eigen::MatrixXd::Constant(1, 1, 0.0)};
   SnoopingLimits limits;
   limits.max_removals = 5;
   limits.scale_by_sigma0 = true;
-  limits.omega = 0.0;
+  limits.omega = 40.0 * 40.0 / 0.5;  // = a's share, ‖L⁻¹ v‖²
   limits.dof = 3;
+  limits.alpha = 0.5;  // (at σ̂0 = √(Ω/dof) a's τ-test fails at this level)
   const SnoopingSequence seq = snooping_sequence(candidates, design, Eigen::MatrixXd::Identity(1, 1), limits);
-  EXPECT_TRUE(seq.removals.empty());
+  ASSERT_EQ(seq.removals.size(), 1u);
+  EXPECT_EQ(seq.removals.front().candidate, 0u);
+  EXPECT_TRUE(std::isfinite(seq.removals.front().statistic));
   EXPECT_FALSE(seq.limit_reached);
+  limits.omega = 0.0;  // nothing to scale by from the start: nothing tested
+  EXPECT_TRUE(snooping_sequence(candidates, design, Eigen::MatrixXd::Identity(1, 1), limits).removals.empty());
 }
 
 // ln Γ at half-whole arguments (no std::lgamma: it writes a global) is
