@@ -455,13 +455,13 @@ ControlSet read_control_pair(const std::filesystem::path& source, const std::fil
     std::string name = *f.stated_ellipsoid;
     std::transform(name.begin(), name.end(), name.begin(), [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
     geodesy::ControlInputForm& form = f.source ? set.source_input : set.target_input;
-    if (name == "GRS80") {
-      form.ellipsoid = geodesy::Ellipsoid::grs80();
-    } else if (name == "WGS84") {
-      form.ellipsoid = geodesy::Ellipsoid::wgs84();
-    } else {
-      throw Error(ErrorKind::input, "E_ELLIPSOID", f.ellipsoid_where + ": '" + *f.stated_ellipsoid + "': expected GRS80 or WGS84");
+    // (GRS80 and WGS84 in any case, as before; the other EPSG names as written.)
+    const auto named = geodesy::named_ellipsoid(name == "GRS80" || name == "WGS84" ? name : *f.stated_ellipsoid);
+    if (!named) {
+      throw Error(ErrorKind::input, "E_ELLIPSOID",
+                  f.ellipsoid_where + ": '" + *f.stated_ellipsoid + "': expected one of " + geodesy::named_ellipsoid_list());
     }
+    form.ellipsoid = *named;
     if (form.projection) form.projection->ellipsoid = form.ellipsoid;
   }
   for (const RoleFile& f : files) {

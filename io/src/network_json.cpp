@@ -211,9 +211,27 @@ void read_network_json(std::string_view text_in, std::string_view source_in, geo
     if (const auto e = geodesy::implied_ellipsoid(f)) net.ellipsoid = *e, net.ellipsoid_stated = true;
   }
   if (doc.contains("ellipsoid")) {
-    const std::string e = text(doc, "ellipsoid", source);
-    const geodesy::Ellipsoid given = e == "GRS80" ? geodesy::Ellipsoid::grs80() : e == "WGS84" ? geodesy::Ellipsoid::wgs84()
-                                                                                              : (fail(source + ".ellipsoid", "'" + e + "': expected GRS80 or WGS84"), geodesy::Ellipsoid::grs80());
+    // By its EPSG name, or {"a_m", "rf", "name"}.
+    const json& ej = doc.at("ellipsoid");
+    std::optional<geodesy::Ellipsoid> named;
+    std::string e;
+    if (ej.is_object()) {
+      const std::string where = source + ".ellipsoid";
+      only_keys(ej, where, {"a_m", "rf", "name"});
+      if (!ej.contains("a_m") || !ej.contains("rf")) fail(where, "an ellipsoid given by its parameters needs a_m and rf");
+      try {
+        named = geodesy::Ellipsoid::custom(number(ej, "a_m", where), number(ej, "rf", where),
+                                           ej.contains("name") ? text(ej, "name", where) : "custom");
+      } catch (const Error& x) {
+        fail(where, x.what());
+      }
+      e = named->name();
+    } else {
+      e = text(doc, "ellipsoid", source);
+      named = geodesy::named_ellipsoid(e);
+      if (!named) fail(source + ".ellipsoid", "'" + e + "': expected one of " + geodesy::named_ellipsoid_list() + ", or {\"a_m\", \"rf\"}");
+    }
+    const geodesy::Ellipsoid given = *named;
     if (net.frame) {
       if (const auto implied = geodesy::implied_ellipsoid(*net.frame); implied && !(*implied == given)) {
         fail(source + ".ellipsoid", e + " contradicts the frame " + net.frame->to_string() + ", which is on " + implied->name());

@@ -68,9 +68,9 @@ double number(const json& j, std::string_view source, const std::string& key, do
 geodesy::Ellipsoid ellipsoid(const json& j, std::string_view source) {
   if (j.is_string()) {
     const auto name = j.get<std::string>();
-    if (name == "WGS84") return geodesy::Ellipsoid::wgs84();
-    if (name == "GRS80") return geodesy::Ellipsoid::grs80();
-    fail(source, "coordinates.ellipsoid", "value \"" + name + "\" unknown; expected WGS84, GRS80 or {\"a_m\", \"rf\"}");
+    if (const auto named = geodesy::named_ellipsoid(name)) return *named;
+    fail(source, "coordinates.ellipsoid",
+         "value \"" + name + "\" unknown; expected one of " + geodesy::named_ellipsoid_list() + ", or {\"a_m\", \"rf\"}");
   }
   only_keys(j, source, "coordinates.ellipsoid", {"a_m", "rf", "name"});
   const json* a = member(j, "a_m", source, "coordinates.ellipsoid");

@@ -426,6 +426,54 @@ TEST_F(AdjustCli, Issue39_BadInputIsRefusedByNameWithNoOutput) {
   EXPECT_EQ(leftovers({"net.json"}), std::vector<std::string>{});
 }
 
+// A frame outside geoanchor's catalog names no ellipsoid: never GRS80 by
+// default (the terrestrial models, the local axes and the heights are on
+// it). Stated by its EPSG name, it is taken; a stated ellipsoid that its
+// frame contradicts is refused at its key.
+TEST_F(AdjustCli, Issue39_AFrameOutsideTheCatalogNeedsItsEllipsoid) {
+  const auto run_in = [&](const std::string& json) {
+    write("net.json", json);
+    return run("adjust '" + path("net.json").string() + "' -o '" + path("st.csv").string() + "' --accept-failed-global-test");
+  };
+  std::string stations;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Eigen::Vector3d x = ecef_of(kMarks[i]);
+    char st[240];
+    std::snprintf(st, sizeof st, R"(%s{"id": "%s", "x_m": %.4f, "y_m": %.4f, "z_m": %.4f%s})", i ? "," : "", kMarks[i].id, x.x(), x.y(),
+                  x.z(), i == 0 ? R"(, "constraint": "CCC")" : "");
+    stations += st;
+  }
+  const std::string measurements = baseline("A", "B", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", "NZGD1949") + "," +
+                                   baseline("B", "C", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", "NZGD1949") + "," +
+                                   baseline("A", "C", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", "NZGD1949");
+  const auto with = [&](const std::string& ellipsoid) {
+    return R"({"schema": "geoanchor.network/1", "frame": "NZGD1949", )" + ellipsoid + R"("stations": [)" + stations +
+           R"(], "measurements": [)" + measurements + "]}";
+  };
+  const RunResult unknown = run_in(with(""));
+  EXPECT_EQ(unknown.exit_code, 3) << unknown.err;
+  for (const char* piece : {"E_ELLIPSOID", "net.json", "the frame NZGD1949 is not in geoanchor's catalog", "International 1924"}) {
+    EXPECT_NE(unknown.err.find(piece), std::string::npos) << piece << " in: " << unknown.err;
+  }
+  EXPECT_EQ(leftovers({"net.json"}), std::vector<std::string>{});
+  const RunResult stated = run_in(with(R"("ellipsoid": "International 1924", )"));
+  EXPECT_EQ(stated.exit_code, 0) << stated.err;
+  for (const char* f : {"st.csv", "st.csv.geoanchor.json"}) std::filesystem::remove(path(f));
+  const RunResult custom = run_in(with(R"("ellipsoid": {"a_m": 6378388, "rf": 297, "name": "Hayford"}, )"));
+  EXPECT_EQ(custom.exit_code, 0) << custom.err;
+  for (const char* f : {"st.csv", "st.csv.geoanchor.json"}) std::filesystem::remove(path(f));
+  const RunResult misspelt = run_in(with(R"("ellipsoid": "Hayford 1909", )"));
+  EXPECT_EQ(misspelt.exit_code, 3) << misspelt.err;
+  EXPECT_NE(misspelt.err.find("net.json.ellipsoid: 'Hayford 1909': expected one of GRS80, WGS84, International 1924"), std::string::npos)
+      << misspelt.err;
+  // GDA2020 is on GRS 1980: International 1924 contradicts it.
+  const RunResult contradicted = run_in(R"({"schema": "geoanchor.network/1", "frame": "GDA2020", "ellipsoid": "International 1924", "stations": [)" +
+                                        stations + R"(], "measurements": []})");
+  EXPECT_EQ(contradicted.exit_code, 3) << contradicted.err;
+  EXPECT_NE(contradicted.err.find("International 1924 contradicts the frame GDA2020"), std::string::npos) << contradicted.err;
+  EXPECT_EQ(leftovers({"net.json"}), std::vector<std::string>{});
+}
+
 // The measurements CSV states what became of each measurement: the
 // flagged one with its snooping rank by default, removed with
 // --remove-outliers, the ignored one listed as such.

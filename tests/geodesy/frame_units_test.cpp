@@ -241,6 +241,48 @@ TEST(Frame, Issue13_ImpliedEllipsoidIsProjDbsForEveryCatalogFrame) {
   EXPECT_FALSE(implied_ellipsoid(Frame::parse("Tokyo", "test")).has_value());
 }
 
+// Issue 39 (the SNAP traverse on International 1924): every ellipsoid
+// geoanchor knows by name has the EPSG dataset's a and 1/f (proj.db), and a
+// name it does not know is nullopt.
+TEST(Ellipsoid, Issue39_NamedEllipsoidsAreProjDbs) {
+  constexpr double kRfRelative = 1e-13;  // (Clarke 1866 is defined by b: its 1/f computed on both sides)
+  PJ_CONTEXT* ctx = proj_context_create();
+  proj_log_level(ctx, PJ_LOG_NONE);
+  const PJ_TYPE types[] = {PJ_TYPE_ELLIPSOID};
+  int checked = 0;
+  for (const char* name : {"GRS 1980", "WGS 84", "International 1924", "Bessel 1841", "Clarke 1866", "Clarke 1880 (RGS)",
+                           "Airy 1830", "Krassowsky 1940", "GRS 1967", "Australian National Spheroid"}) {
+    const auto ours = named_ellipsoid(name);
+    ASSERT_TRUE(ours.has_value()) << name;
+    PJ_OBJ_LIST* found = proj_create_from_name(ctx, "EPSG", name, types, 1, 0, 0, nullptr);
+    ASSERT_TRUE(found && proj_list_get_count(found) >= 1) << name;
+    PJ* ell = nullptr;
+    for (int k = 0; k < proj_list_get_count(found) && !ell; ++k) {
+      PJ* candidate = proj_list_get(ctx, found, k);
+      if (std::string(proj_get_name(candidate)) == name) {
+        ell = candidate;
+      } else {
+        proj_destroy(candidate);
+      }
+    }
+    ASSERT_NE(ell, nullptr) << name;
+    double a = 0, b = 0, rf = 0;
+    int computed = 0;
+    ASSERT_TRUE(proj_ellipsoid_get_parameters(ctx, ell, &a, &b, &computed, &rf)) << name;
+    EXPECT_EQ(ours->a_m(), a) << name;
+    EXPECT_NEAR(ours->rf(), rf, kRfRelative * rf) << name;
+    proj_destroy(ell);
+    proj_list_destroy(found);
+    ++checked;
+  }
+  proj_context_destroy(ctx);
+  EXPECT_EQ(checked, 10);
+  EXPECT_EQ(named_ellipsoid("GRS80"), Ellipsoid::grs80());
+  EXPECT_EQ(named_ellipsoid("WGS84"), Ellipsoid::wgs84());
+  EXPECT_FALSE(named_ellipsoid("Hayford").has_value());
+  EXPECT_FALSE(named_ellipsoid("international 1924").has_value());
+}
+
 // issue 12 point 5: the refusal names where the frame was read, the frame,
 // and the form that would be accepted.
 TEST(Frame, Point5_DynamicFrameWithoutEpochIsRefusedNamingWhereAndTheForm) {

@@ -403,7 +403,21 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
                                       ErrorKind::usage);
     // The stations are ECEF already; heights and terrestrial models use the
     // adjustment frame's own ellipsoid.
-    if (const auto e = geodesy::implied_ellipsoid(*target)) net.ellipsoid = *e;
+    if (const auto e = geodesy::implied_ellipsoid(*target)) {
+      if (net.ellipsoid_stated && !(net.ellipsoid == *e)) {
+        throw Error(ErrorKind::input, "E_ELLIPSOID",
+                    net.source_name + ": the network states the ellipsoid " + net.ellipsoid.name() + ", but its frame " +
+                        target->to_string() + " is on " + e->name());
+      }
+      net.ellipsoid = *e;
+    } else if (!net.ellipsoid_stated) {
+      // Never a default ellipsoid for a frame geoanchor does not know: the
+      // terrestrial models, the local axes and the stations' heights are on it.
+      throw Error(ErrorKind::input, "E_ELLIPSOID",
+                  net.source_name + ": the frame " + target->to_string() +
+                      " is not in geoanchor's catalog, so its ellipsoid is unknown: give the network's \"ellipsoid\" (" +
+                      geodesy::named_ellipsoid_list() + ", or {\"a_m\", \"rf\"})");
+    }
     // The stations' a-priori positions and each GNSS measurement into the target.
     if (net.frame && !(*net.frame == *target)) {
       const FrameChange c = frame_change(*net.frame, *target, net.source_name + ": the stations");

@@ -1,7 +1,9 @@
 #pragma once
 // A reference ellipsoid: semi-major axis a (metres) and flattening f.
 
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace geoanchor::geodesy {
 
@@ -32,5 +34,15 @@ class Ellipsoid {
   double rf_;
   std::string name_;
 };
+
+// An ellipsoid by its EPSG name, with a and 1/f as the EPSG dataset defines
+// them (tests/geodesy/frame_units_test.cpp compares each with proj.db):
+// "GRS 1980" (also "GRS80"), "WGS 84" ("WGS84"), "International 1924",
+// "Bessel 1841", "Clarke 1866", "Clarke 1880 (RGS)", "Airy 1830",
+// "Krassowsky 1940", "GRS 1967", "Australian National Spheroid". nullopt
+// for any other name (compared exactly).
+std::optional<Ellipsoid> named_ellipsoid(std::string_view name);
+// Those names, for messages: "GRS80, WGS84, International 1924, …".
+std::string named_ellipsoid_list();
 
 }  // namespace geoanchor::geodesy
