@@ -61,6 +61,21 @@ void expect_sparse_equals_dense(const Network& net, const AdjustOptions& o) {
   EXPECT_WORST_WITHIN(covariance, kSparseVsDenseRelative);
 }
 
+// A plane (2-D local) network of stations D0, D1, … at `xy`, no measurement.
+Network plane_of(const std::vector<Eigen::Vector2d>& xy, const std::string& name) {
+  Network plane;
+  plane.space = geodesy::NetworkSpace::local;
+  plane.local_dimensions = 2;
+  plane.source_name = name;
+  for (std::size_t i = 0; i < xy.size(); ++i) {
+    NetworkStation st;
+    st.id = "D" + std::to_string(i);
+    st.position = Eigen::Vector3d(xy[i].x(), xy[i].y(), 0.0);
+    plane.stations.push_back(st);
+  }
+  return plane;
+}
+
 // A straight 3-D traverse: 12 stations 250 m apart on one straight line in
 // space (azimuth 60°, rising 1°), slope distances, azimuths and zenith
 // angles from each station to the next, computed by GeographicLib; the
@@ -257,17 +272,8 @@ TEST(NetworkDatum, Issue39_AFreeDistanceNetworkHasSixUndefinedCombinationsAndThe
 // The defect of a plane network of directions alone: two translations,
 // the rotation and the scale; of a levelling network: the height.
 TEST(NetworkDatum, Issue39_TheDefectOfAFreeDirectionOrLevellingNetworkIsNamedExactly) {
-  Network plane;
-  plane.space = geodesy::NetworkSpace::local;
-  plane.local_dimensions = 2;
-  plane.source_name = "directions";
   const std::vector<Eigen::Vector2d> xy = {{0, 0}, {500, 40}, {950, -30}, {60, 480}, {520, 530}, {990, 470}, {30, 1010}, {480, 960}};
-  for (std::size_t i = 0; i < xy.size(); ++i) {
-    NetworkStation st;
-    st.id = "D" + std::to_string(i);
-    st.position = Eigen::Vector3d(xy[i].x(), xy[i].y(), 0.0);
-    plane.stations.push_back(st);
-  }
+  Network plane = plane_of(xy, "directions");
   for (std::size_t i = 0; i < xy.size(); ++i) {
     const std::size_t set = plane.direction_sets.size();
     plane.direction_sets.push_back({i, "set"});
@@ -456,17 +462,8 @@ TEST(NetworkDatum, Issue39_FixedStationsCentimetresApartHoldAllButTheirLine) {
 // (not that they tell it too weakly: the weighted constraint's share of it
 // is rounding).
 TEST(NetworkDatum, Issue39_AWeightedHoldDoesNotMakeAnUndefinedRotationToldOf) {
-  Network plane;
-  plane.space = geodesy::NetworkSpace::local;
-  plane.local_dimensions = 2;
-  plane.source_name = "distances";
   const std::vector<Eigen::Vector2d> xy = {{0, 0}, {500, 40}, {950, -30}, {60, 480}, {520, 530}, {990, 470}};
-  for (std::size_t i = 0; i < xy.size(); ++i) {
-    NetworkStation st;
-    st.id = "D" + std::to_string(i);
-    st.position = Eigen::Vector3d(xy[i].x(), xy[i].y(), 0.0);
-    plane.stations.push_back(st);
-  }
+  Network plane = plane_of(xy, "distances");
   for (std::size_t i = 0; i < xy.size(); ++i) {
     for (std::size_t j = i + 1; j < xy.size(); ++j) {
       plane.measurements.push_back(scalar(MeasurementKind::horizontal_distance, {i, j}, (xy[j] - xy[i]).norm(), 0.002, "d"));

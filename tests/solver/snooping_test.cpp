@@ -170,6 +170,30 @@ class DenseCofactors final : public CofactorSource {
   const std::vector<std::size_t>& of_;
 };
 
+// The measurements of `p` that fail their test at `alpha` as `s` leaves
+// them: the candidates (keyed m<index>), their measurement indices and
+// their whitened design rows.
+struct Failing {
+  std::vector<SnoopingCandidate> candidates;
+  std::vector<std::size_t> of;
+  std::vector<Eigen::MatrixXd> design;
+};
+Failing failing_of(const Problem& p, const Solved& s, double alpha) {
+  Failing f;
+  for (std::size_t k = 0; k < p.rows.size(); ++k) {
+    const Eigen::VectorXd v = part(s.v, p.rows[k]);
+    const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
+    const MeasurementTest t = measurement_test(v, q, 1.0);
+    if (!(t.dof > 0 && t.p_value < alpha)) continue;
+    f.candidates.push_back({v, q, "m" + std::to_string(k)});
+    f.of.push_back(k);
+    Eigen::MatrixXd a(static_cast<Eigen::Index>(p.rows[k].size()), p.a.cols());
+    for (std::size_t r = 0; r < p.rows[k].size(); ++r) a.row(static_cast<Eigen::Index>(r)) = p.a.row(p.rows[k][r]);
+    f.design.push_back(a);
+  }
+  return f;
+}
+
 // Iterative data snooping done the long way: refit without the removed
 // measurements, test every one, remove the strongest failing, again.
 std::vector<std::size_t> refitted_order(const Problem& p, double alpha) {
@@ -208,16 +232,10 @@ TEST(Snooping, Issue39_TheSequenceIsIterativeSnoopingRefittedAfterEachRemoval) {
     p.l(p.rows[4][0]) += 8.0;
     p.l(p.rows[17].back()) -= 6.0;
     const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
-    std::vector<SnoopingCandidate> candidates;
-    std::vector<std::size_t> candidate_of;
-    for (std::size_t k = 0; k < p.rows.size(); ++k) {
-      const Eigen::VectorXd v = part(s.v, p.rows[k]);
-      const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
-      const MeasurementTest t = measurement_test(v, q, 1.0);
-      if (!(t.dof > 0 && t.p_value < kAlpha)) continue;
-      candidates.push_back({v, q, "m" + std::to_string(k)});
-      candidate_of.push_back(k);
-    }
+    const Failing failing = failing_of(p, s, kAlpha);
+    const std::vector<SnoopingCandidate>& candidates = failing.candidates;
+    const std::vector<std::size_t>& candidate_of = failing.of;
+    const std::vector<Eigen::MatrixXd>& design = failing.design;
     DenseCofactors source(p, s, candidate_of);
     SnoopingLimits limits;
     limits.alpha = kAlpha;
@@ -226,12 +244,6 @@ TEST(Snooping, Issue39_TheSequenceIsIterativeSnoopingRefittedAfterEachRemoval) {
     std::vector<std::size_t> ours;
     for (const auto& r : seq.removals) ours.push_back(candidate_of[r.candidate]);
     // The same order over the parameters (a fit's way): design rows and N⁻¹.
-    std::vector<Eigen::MatrixXd> design;
-    for (std::size_t k : candidate_of) {
-      Eigen::MatrixXd a(static_cast<Eigen::Index>(p.rows[k].size()), p.a.cols());
-      for (std::size_t r = 0; r < p.rows[k].size(); ++r) a.row(static_cast<Eigen::Index>(r)) = p.a.row(p.rows[k][r]);
-      design.push_back(a);
-    }
     const SnoopingSequence by_parameters = snooping_sequence(candidates, design, (p.a.transpose() * p.a).inverse(), limits);
     std::vector<std::size_t> theirs;
     for (const auto& r : by_parameters.removals) theirs.push_back(candidate_of[r.candidate]);
@@ -341,18 +353,10 @@ TEST(Snooping, Issue39_MeasurementsThatCannotBeToldApartAreNotRemoved) {
   p.l(0) += 20.0;
   p.l(5) += 7.0;  // a weaker blunder elsewhere: not removed in the pair's place
   const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
-  std::vector<SnoopingCandidate> candidates;
-  std::vector<std::size_t> candidate_of;
-  std::vector<Eigen::MatrixXd> design;
-  for (std::size_t k = 0; k < p.rows.size(); ++k) {
-    const Eigen::VectorXd v = part(s.v, p.rows[k]);
-    const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
-    const MeasurementTest t = measurement_test(v, q, 1.0);
-    if (!(t.dof > 0 && t.p_value < 0.001)) continue;
-    candidates.push_back({v, q, "m" + std::to_string(k)});
-    candidate_of.push_back(k);
-    design.push_back(p.a.row(static_cast<Eigen::Index>(k)));
-  }
+  const Failing failing = failing_of(p, s, 0.001);
+  const std::vector<SnoopingCandidate>& candidates = failing.candidates;
+  const std::vector<std::size_t>& candidate_of = failing.of;
+  const std::vector<Eigen::MatrixXd>& design = failing.design;
   ASSERT_EQ(candidate_of, (std::vector<std::size_t>{0, 1, 5}));
   SnoopingLimits limits;
   limits.max_removals = 5;
@@ -388,18 +392,10 @@ TEST(Snooping, Issue39_APartialShareOfRedundancyIsNotInseparable) {
   }
   p.l(1) += 30.0;
   const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
-  std::vector<SnoopingCandidate> candidates;
-  std::vector<std::size_t> candidate_of;
-  std::vector<Eigen::MatrixXd> design;
-  for (std::size_t k = 0; k < p.rows.size(); ++k) {
-    const Eigen::VectorXd v = part(s.v, p.rows[k]);
-    const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
-    const MeasurementTest t = measurement_test(v, q, 1.0);
-    if (!(t.dof > 0 && t.p_value < 0.001)) continue;
-    candidates.push_back({v, q, "m" + std::to_string(k)});
-    candidate_of.push_back(k);
-    design.push_back(p.a.row(static_cast<Eigen::Index>(k)));
-  }
+  const Failing failing = failing_of(p, s, 0.001);
+  const std::vector<SnoopingCandidate>& candidates = failing.candidates;
+  const std::vector<std::size_t>& candidate_of = failing.of;
+  const std::vector<Eigen::MatrixXd>& design = failing.design;
   ASSERT_NE(std::find(candidate_of.begin(), candidate_of.end(), 0u), candidate_of.end());  // the precise one fails too
   SnoopingLimits limits;
   limits.max_removals = 2;
@@ -422,16 +418,9 @@ TEST(Snooping, Issue39_TheLimitReportsTheTestsAsTheRemovalsLeaveThem) {
   p.l(p.rows[4][0]) += 12.0;
   p.l(p.rows[17].back()) -= 10.0;
   const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
-  std::vector<SnoopingCandidate> candidates;
-  std::vector<std::size_t> candidate_of;
-  for (std::size_t k = 0; k < p.rows.size(); ++k) {
-    const Eigen::VectorXd v = part(s.v, p.rows[k]);
-    const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
-    const MeasurementTest t = measurement_test(v, q, 1.0);
-    if (!(t.dof > 0 && t.p_value < 0.001)) continue;
-    candidates.push_back({v, q, "m" + std::to_string(k)});
-    candidate_of.push_back(k);
-  }
+  const Failing failing = failing_of(p, s, 0.001);
+  const std::vector<SnoopingCandidate>& candidates = failing.candidates;
+  const std::vector<std::size_t>& candidate_of = failing.of;
   DenseCofactors source(p, s, candidate_of);
   SnoopingLimits limits;
   limits.max_removals = 1;
@@ -469,16 +458,9 @@ TEST(Snooping, Issue39_FailuresNoRemovalExplainsStopTheSequenceEarly) {
     p.rows.push_back({r});
   }
   const Solved s = solve_without(p, std::vector<bool>(p.rows.size(), false));
-  std::vector<SnoopingCandidate> candidates;
-  std::vector<Eigen::MatrixXd> design;
-  for (std::size_t k = 0; k < p.rows.size(); ++k) {
-    const Eigen::VectorXd v = part(s.v, p.rows[k]);
-    const Eigen::MatrixXd q = part(s.q, p.rows[k], p.rows[k]);
-    const MeasurementTest t = measurement_test(v, q, 1.0);
-    if (!(t.dof > 0 && t.p_value < 0.001)) continue;
-    candidates.push_back({v, q, "m" + std::to_string(k)});
-    design.push_back(p.a.row(static_cast<Eigen::Index>(k)));
-  }
+  const Failing failing = failing_of(p, s, 0.001);
+  const std::vector<SnoopingCandidate>& candidates = failing.candidates;
+  const std::vector<Eigen::MatrixXd>& design = failing.design;
   ASSERT_GT(candidates.size(), 60u);
   SnoopingLimits limits;
   limits.max_removals = kMeasurements / 20;  // 5 %
