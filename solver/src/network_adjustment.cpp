@@ -1086,10 +1086,15 @@ void hold_defect(const Problem& p, Normal& n) {
     const auto& st = p.net.measurements[mi].stations;
     if (std::find(st.begin(), st.end(), s) != st.end()) ++count;
   }
+  // (Reached only when the motion the matrix leaves free could not be
+  // isolated: the station is where the elimination broke down, which is
+  // not always what leaves it free. Said so.)
   throw Error(ErrorKind::input, "E_NETWORK_SINGULAR",
-              where + ": station " + p.net.stations[s].id + " (" + p.net.stations[s].source + "): its " +
-                  component_name(p.net.space, c) + " coordinate is not determined by the " + std::to_string(count) +
-                  " measurement" + (count == 1 ? "" : "s") + " that reach it; add measurements or constrain it");
+              where + ": the normal equations are singular: the elimination broke down at station " + p.net.stations[s].id + " (" +
+                  p.net.stations[s].source + "), its " + component_name(p.net.space, c) + " coordinate (" +
+                  std::to_string(count) + " measurement" + (count == 1 ? " reaches" : "s reach") +
+                  " it), and the motion left free could not be isolated: check the measurements near it for a value that "
+                  "is not finite or a distance of zero, then add measurements or constrain stations");
 }
 
 // The measurements that reach station s (their sources, at most `most`),
