@@ -97,7 +97,9 @@ void NetworkCofactors::prefetch(const std::vector<std::size_t>& candidates) {
     total += a_[i].rows();
   }
   cached_.resize(total, total);
-  const Eigen::Index by_memory = static_cast<Eigen::Index>(kSolveBytes / (8.0 * static_cast<double>(std::max<std::int64_t>(unknowns_, 1))));
+  // (Two u × columns blocks at a time: the right-hand sides and the solutions.)
+  const Eigen::Index by_memory =
+      static_cast<Eigen::Index>(kSolveBytes / (2.0 * 8.0 * static_cast<double>(std::max<std::int64_t>(unknowns_, 1))));
   const Eigen::Index per_solve = std::clamp<Eigen::Index>(by_memory, 1, kMaxColumnsPerSolve);
   std::size_t first = 0;
   while (first < candidates.size()) {
