@@ -395,17 +395,19 @@ int main(int argc, char** argv) {
     kernels.push_back({n, k});
   }
   std::printf("\nthe adjustment's parts (seconds over every pass; solver::AdjustmentTimings; passes: all, and those downdated)\n"
-              "%-8s %10s %7s %9s %9s %9s %9s %9s %9s %9s %12s\n",
-              "stations", "nnz(L)", "passes", "assemble", "factor", "solve", "sel.inv", "downdate", "per-meas", "stations", "vs dense");
+              "%-8s %10s %7s %9s %9s %9s %9s %9s %9s %9s %9s %9s %12s\n",
+              "stations", "nnz(L)", "passes", "assemble", "factor", "solve", "sel.inv", "downdate", "per-meas", "datum", "snooping",
+              "stations", "vs dense");
   // (then, per size, the adjustment on one thread and the speed-up of two)
   for (const auto& [n, k] : kernels) {
     char dense[32] = "-";
     if (k.dense_difference >= 0.0 || std::isnan(k.dense_difference)) std::snprintf(dense, sizeof dense, "%.1e", k.dense_difference);
     char passes[16];
     std::snprintf(passes, sizeof passes, "%d/%d", k.passes, k.downdated);
-    std::printf("%-8zu %10.3g %7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %12s\n", n, static_cast<double>(k.factor_nonzeros), passes,
-                k.parts.assemble, k.parts.factor, k.parts.solve, k.parts.select_inverse, k.parts.downdate, k.parts.measurements,
-                k.parts.stations, dense);
+    std::printf("%-8zu %10.3g %7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %12s\n", n,
+                static_cast<double>(k.factor_nonzeros), passes, k.parts.assemble, k.parts.factor, k.parts.solve,
+                k.parts.select_inverse, k.parts.downdate, k.parts.measurements, k.parts.datum, k.parts.snooping, k.parts.stations,
+                dense);
   }
   std::printf("\n%-8s %12s %12s %9s\n", "stations", "1 thread s", "2 threads s", "speed-up");
   for (const auto& [n, k] : kernels) {

@@ -1594,6 +1594,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         // leave undefined of the translations, rotations and scale. A
         // station the measurements do not fix on its own is no datum
         // defect but a singularity, named below.
+        const auto datum_t0 = Clock::now();
         const Layout probe = make_layout(p, true);
         const DatumVectors dv = datum_vectors(p, probe);
         const DatumInformation info = datum_information(p, probe, dv.g, jobs);
@@ -1694,6 +1695,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
                                      " at the stations, RMS)" + precision + ": hold it with smaller standard deviations");
           }
         }
+        result.seconds.datum += since(datum_t0);
         check_station_blocks(p, n);
       } else if (p.free && p.defect.cols() > 0) {
         // The same combinations of the motions, at the moved positions.
@@ -1892,6 +1894,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
     // ones before it are out. Flagged and kept; with remove_outliers they
     // go, and the network is adjusted and tested again (ranks continue).
     if (o.data_snooping && result.dof > 0) {
+      const auto snooping_t0 = Clock::now();
       std::vector<std::size_t> failing;  // positions in result.measurements
       std::vector<std::string> keys(result.measurements.size());
       const std::vector<std::size_t> set_rank = set_ranks(p.set_order);
@@ -1905,7 +1908,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
       // batched the same for any order of the input.
       std::stable_sort(failing.begin(), failing.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
       if (!failing.empty()) {
-        NetworkCofactors cofactors(f, p.layout.count);
+        NetworkCofactors cofactors(f, p.layout.count, jobs);
         std::vector<SnoopingCandidate> candidates(failing.size());
         for (std::size_t c = 0; c < failing.size(); ++c) {
           const AdjustedMeasurement& am = result.measurements[failing[c]];
@@ -1928,6 +1931,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
         limits.alpha = o.alpha_point;
         limits.max_removals = limit > removed ? limit - removed : 0;
         const SnoopingSequence seq = snooping_sequence(candidates, cofactors, limits);
+        result.seconds.snooping += since(snooping_t0);
         const auto measurement_of = [&](std::size_t c) -> AdjustedMeasurement& { return result.measurements[failing[c]]; };
         const auto name_of = [&](const AdjustedMeasurement& am) {
           return net.measurements[am.index].source + " (" + geodesy::to_string(net.measurements[am.index].kind) + ")";

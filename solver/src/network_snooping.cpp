@@ -27,15 +27,6 @@ std::vector<std::size_t> failing_measurements(const AdjustmentResult& r) {
   return out;
 }
 
-namespace {
-
-// Right-hand sides per multi-column solve: a few dozen keep CHOLMOD's
-// supernodal solve in matrix-matrix products, within 256 MB of vectors.
-constexpr Eigen::Index kMaxColumnsPerSolve = 64;
-constexpr double kSolveBytes = 256.0 * 1024 * 1024;
-
-}  // namespace
-
 void NetworkCofactors::add(std::vector<std::int64_t> unknowns, Eigen::MatrixXd a) {
   candidate_unknowns_.push_back(std::move(unknowns));
   a_.push_back(std::move(a));
@@ -91,34 +82,16 @@ Eigen::MatrixXd NetworkCofactors::column(const std::vector<std::size_t>& rows, s
 
 void NetworkCofactors::prefetch(const std::vector<std::size_t>& candidates) {
   std::fill(offset_.begin(), offset_.end(), Eigen::Index{-1});
+  std::vector<std::vector<std::int64_t>> unknowns;
+  std::vector<Eigen::MatrixXd> rows;
   Eigen::Index total = 0;
   for (std::size_t i : candidates) {
     offset_[i] = total;
     total += a_[i].rows();
+    unknowns.push_back(candidate_unknowns_[i]);
+    rows.push_back(a_[i]);
   }
-  cached_.resize(total, total);
-  // (Two u × columns blocks at a time: the right-hand sides and the solutions.)
-  const Eigen::Index by_memory =
-      static_cast<Eigen::Index>(kSolveBytes / (2.0 * 8.0 * static_cast<double>(std::max<std::int64_t>(unknowns_, 1))));
-  const Eigen::Index per_solve = std::clamp<Eigen::Index>(by_memory, 1, kMaxColumnsPerSolve);
-  std::size_t first = 0;
-  while (first < candidates.size()) {
-    // Whole candidates, up to per_solve right-hand sides (at least one candidate).
-    std::vector<std::size_t> ts;
-    Eigen::Index cols = 0;
-    for (std::size_t k = first; k < candidates.size(); ++k) {
-      if (!ts.empty() && cols + a_[candidates[k]].rows() > per_solve) break;
-      ts.push_back(candidates[k]);
-      cols += a_[candidates[k]].rows();
-    }
-    const Eigen::MatrixXd z = solved(ts);
-    Eigen::Index zc = 0;
-    for (std::size_t t : ts) {
-      for (std::size_t i : candidates) cached_.block(offset_[i], offset_[t], a_[i].rows(), a_[t].rows()) = block(i, t, z, zc);
-      zc += a_[t].rows();
-    }
-    first += ts.size();
-  }
+  cached_ = Eigen::MatrixXd::Identity(total, total) - factor_.inverse_between(unknowns, rows, jobs_);
 }
 
 }  // namespace geoanchor::solver

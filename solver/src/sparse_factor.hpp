@@ -108,6 +108,16 @@ class NormalFactor {
   // a pair is off the pattern.
   bool inverse_block(const std::int64_t* u, std::size_t count, double* q) const;
 
+  // The blocks A_i N⁻¹ A_jᵀ between row blocks (block c: its rows `rows[c]`
+  // over the unknowns `unknowns[c]`, k_c × their count), stacked (Σk × Σk,
+  // symmetric); the downdates' low-rank terms included. L⁻¹ P A_cᵀ is zero
+  // off the elimination tree's paths from c's unknowns to the root, so a
+  // block costs a forward solve along them (a tenth of a solve and less in
+  // a network of 10⁵ stations) and a pair the inner product over the
+  // supernodes their paths share (sparse_paths.cpp). On `jobs` threads, the
+  // same bits for any number. Dense mode: from the whole inverse.
+  Eigen::MatrixXd inverse_between(const std::vector<std::vector<std::int64_t>>& unknowns, const std::vector<Eigen::MatrixXd>& rows,
+                                  int jobs = 1) const;
   // Where `unknown` comes in the factor's elimination order (the tests' view
   // of the ordering; dense: the unknown itself).
   std::int64_t elimination_step(std::int64_t unknown) const;

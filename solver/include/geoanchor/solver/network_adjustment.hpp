@@ -195,6 +195,8 @@ struct AdjustmentTimings {
   double select_inverse = 0.0;  // N⁻¹ on the factor's pattern
   double downdate = 0.0;        // data snooping: measurements taken out of the factor and N⁻¹
   double measurements = 0.0;    // per measurement: residuals, redundancy, tests
+  double datum = 0.0;           // the datum's undefined and weak combinations (first pass)
+  double snooping = 0.0;        // data snooping's order: the failing measurements' cofactors and the sequence
   double stations = 0.0;        // covariances, ellipses, relative precision
 };
 
