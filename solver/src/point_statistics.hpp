@@ -61,18 +61,24 @@ MeasurementTest measurement_test(const Eigen::VectorXd& vw, const Eigen::MatrixX
 // identity for a measurement's own components). The measurement test is
 // measurement_test(); an axis whose redundancy is below kMinRedundancy has
 // no w-test (NaN) and an infinite MDB.
-struct ObservationTest {
-  Eigen::VectorXd w;           // per axis (NaN: uncontrolled along it)
-  Eigen::VectorXd redundancy;  // per axis: the diagonal of Q_v P there (0 outside the adjustment)
-  Eigen::VectorXd mdb;         // per axis, in the observation's units (inf: undetectable; NaN outside)
+// K: the observation's components (Eigen::Dynamic for any; 3 for a mark,
+// on the stack: a million marks' tests allocate nothing).
+template <int K>
+struct ObservationTestOf {
+  Eigen::Matrix<double, K, 1> w;           // per axis (NaN: uncontrolled along it)
+  Eigen::Matrix<double, K, 1> redundancy;  // per axis: the diagonal of Q_v P there (0 outside the adjustment)
+  Eigen::Matrix<double, K, 1> mdb;         // per axis, in the observation's units (inf: undetectable; NaN outside)
   double w_max = 0.0;
   double statistic = 0.0;      // vᵀ Q⁺ v of the whitened residual: χ²(dof) under H0
   int dof = 0;
   double p_value = 1.0;
   double log_p = 0.0;
 };
+using ObservationTest = ObservationTestOf<Eigen::Dynamic>;
 ObservationTest test_observation(const Eigen::VectorXd& v, const Eigen::MatrixXd& w, const Eigen::MatrixXd& q,
                                  const Eigen::MatrixXd& axes, bool in_fit, double sigma_scale, double lambda0);
+ObservationTestOf<3> test_observation(const Eigen::Vector3d& v, const Eigen::Matrix3d& w, const Eigen::Matrix3d& q,
+                                      const Eigen::Matrix3d& axes, bool in_fit, double sigma_scale, double lambda0);
 
 // The two-sided χ² global test of Ω = Σ vᵀPv with `dof` degrees of
 // freedom at `alpha`; applicable with a-priori sigmas and redundancy.
