@@ -160,6 +160,9 @@ CLI::App* add_transform_command(CLI::App& app, TransformOptions& o) {
                   "for WGS 84); one that contradicts a frame is refused");
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")->check(integer_range(0, 15));
   cmd->add_option("--geoid", o.geoid, "Geoid of H_m (orthometric height) columns: EGM96, EGM96-NGA, a grid name PROJ finds or a PATH; H_m is written back on it");
+  cmd->add_flag("--assume-zero-velocity", o.assume_zero_velocity,
+               "Between a dynamic frame and a plate-fixed one (NAD83, ETRF, GDA2020, ...) at another epoch, without "
+               "velocity columns: assume the points do not move in the plate-fixed frame (stated in every output)");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");
   cmd->add_flag("--json", o.json, "Print the provenance sidecar (schema geoanchor.transform-provenance/1) on standard output; needs -o FILE");
   return cmd;
@@ -188,63 +191,6 @@ void run_transform(const TransformOptions& o) {
   const geodesy::Frame from = crs_mode ? catalog_frame_of(*from_crs, "--from") : geodesy::Frame::parse(o.from, "--from");
   const geodesy::Frame to = crs_mode ? catalog_frame_of(*to_crs, "--to") : geodesy::Frame::parse(o.to, "--to");
   const geodesy::FramePath path = geodesy::find_frame_path(from.name(), to.name(), "--from/--to");
-  // A static (plate-fixed) frame's coordinates do not move with its plate:
-  // between it and a dynamic frame at an epoch, the published time-dependent
-  // sets are evaluated at the dynamic side's epoch, as EPSG and PROJ do
-  // (issue 13 point 4), and the static side needs no epoch. An epoch given
-  // on the static side is recorded and not used.
-  const bool from_dynamic = geodesy::is_dynamic(from), to_dynamic = geodesy::is_dynamic(to);
-  std::vector<std::string> notes;
-  std::optional<DecimalYear> from_epoch = from.epoch(), to_epoch = to.epoch();
-  if (!from_dynamic && to_dynamic && to_epoch) {
-    if (from_epoch && from_epoch->year != to_epoch->year) {
-      notes.push_back("--from " + o.from + ": " + from.name() + " is a static (plate-fixed) frame: its coordinates do "
-                      "not move with the plate, so the path is evaluated at the target epoch " +
-                      geodesy::format_decimal_year(*to_epoch) + " (EPSG's convention); the epoch " +
-                      geodesy::format_decimal_year(*from_epoch) + " is recorded, not used");
-    }
-    from_epoch = to_epoch;
-  } else if (from_dynamic && !to_dynamic && from_epoch) {
-    if (to_epoch && to_epoch->year != from_epoch->year) {
-      notes.push_back("--to " + o.to + ": " + to.name() + " is a static (plate-fixed) frame: the path is evaluated at "
-                      "the input's epoch " + geodesy::format_decimal_year(*from_epoch) + "; the epoch " +
-                      geodesy::format_decimal_year(*to_epoch) + " is recorded, not used");
-    }
-    to_epoch = from_epoch;
-  }
-  if (to_epoch && !from_epoch) {
-    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
-                "--from " + o.from + ": --to names an epoch, so the input's epoch is needed too, e.g. " + from.name() + "@2010.0");
-  }
-  if (path.time_dependent() && !from_epoch) {
-    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
-                "--from " + o.from + ": the transformation " + from.name() + " → " + to.name() +
-                    " is time-dependent: give the coordinates' epoch, e.g. " + from.name() + "@2010.0" +
-                    (from_dynamic || to_dynamic ? "" : ", or the epoch of a dynamic frame on the other side"));
-  }
-  // A static path needs no epoch; its steps ignore the one used here.
-  const DecimalYear t_from = from_epoch.value_or(DecimalYear{2000.0});
-  const DecimalYear t_to = to_epoch.value_or(t_from);
-  const bool epochs_given = from_epoch.has_value();
-  // A static frame is named without an epoch: its coordinates have none.
-  const auto frame_text = [&](const geodesy::Frame& f, DecimalYear t) {
-    return epochs_given && geodesy::is_dynamic(f) ? f.name() + "@" + geodesy::format_decimal_year(t) : f.name();
-  };
-  if (o.plate && t_from.year == t_to.year) {
-    notes.push_back("--plate " + *o.plate + " not used: the coordinates stay at epoch " + geodesy::format_decimal_year(t_from) +
-                    (from_dynamic != to_dynamic ? " (a static frame's coordinates do not move with its plate)" : ""));
-  }
-  std::optional<geodesy::PlateMotionModel> plate;
-  if (o.plate) {  // checked even when not used: an unknown plate is a typo
-    if (o.plate_model != "ITRF2020" && o.plate_model != "ITRF2014") {
-      throw Error(ErrorKind::usage, "E_OPTION", "--plate-model " + o.plate_model + ": expected ITRF2020 or ITRF2014");
-    }
-    plate = geodesy::find_plate_motion_model(o.plate_model, *o.plate);
-    if (!plate) {
-      throw Error(ErrorKind::usage, "E_OPTION", "--plate " + *o.plate + ": expected a plate: " + plate_list(o.plate_model));
-    }
-    if (t_from.year == t_to.year) plate.reset();
-  }
   // Each frame's geodetic coordinates are on its own ellipsoid; --ellipsoid
   // may only say the same (or name one for a frame geoanchor does not know).
   const auto from_ellipsoid = geodesy::implied_ellipsoid(from), to_ellipsoid = geodesy::implied_ellipsoid(to);
@@ -336,13 +282,106 @@ void run_transform(const TransformOptions& o) {
                       ", " + kVelocityColumns[1][1] + ", " + kVelocityColumns[1][2] + " (local), in m/yr; rename it");
     }
   }
+  // Epochs. A dynamic frame's coordinates change with time; a static
+  // (plate-fixed) frame's move too, by the intraplate velocities (a few
+  // mm/yr, up to 3 cm/yr in the western US), so an epoch asked for on a
+  // static side is honoured like any other: the points move by their
+  // velocities (or the plate model) in the source frame and the
+  // time-dependent path is evaluated at the target epoch, as HTDP does
+  // (issue 40 point 1). Where a side names no epoch, the other side's is
+  // used (issue 13 point 4): a static frame needs no epoch of its own.
+  const bool from_dynamic = geodesy::is_dynamic(from), to_dynamic = geodesy::is_dynamic(to);
+  std::vector<std::string> notes;
+  std::optional<DecimalYear> from_epoch = from.epoch(), to_epoch = to.epoch();
+  if (!from_dynamic && to_dynamic && to_epoch && !from_epoch) from_epoch = to_epoch;
+  if (from_dynamic && !to_dynamic && from_epoch && !to_epoch) to_epoch = from_epoch;
+  if (to_epoch && !from_epoch) {
+    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
+                "--from " + o.from + ": --to names an epoch, so the input's epoch is needed too, e.g. " + from.name() + "@2010.0");
+  }
+  if (path.time_dependent() && !from_epoch) {
+    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
+                "--from " + o.from + ": the transformation " + from.name() + " → " + to.name() +
+                    " is time-dependent: give the coordinates' epoch, e.g. " + from.name() + "@2010.0" +
+                    (from_dynamic || to_dynamic ? "" : ", or the epoch of a dynamic frame on the other side"));
+  }
+  const bool epoch_change = from_epoch && to_epoch && from_epoch->year != to_epoch->year;
+  // --assume-zero-velocity: the points stand still in the plate-fixed
+  // frame, so the path is evaluated at the dynamic side's epoch and the
+  // static side's coordinates hold at any epoch. Refused where that says
+  // nothing (two dynamic frames) or cannot hold (two static frames joined
+  // through the ITRF, whose plates differ).
+  std::optional<std::string> zero_velocity_note;
+  if (o.assume_zero_velocity) {
+    if (has_velocity || o.plate) {
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  std::string("--assume-zero-velocity with ") + (has_velocity ? "the input's velocity columns" : "--plate") +
+                      ": give one way to carry the points between epochs");
+    }
+    if (from_dynamic && to_dynamic) {
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  "--assume-zero-velocity: " + from.name() + " and " + to.name() + " are both dynamic frames, in which "
+                  "points move with their plates; give velocity columns or --plate");
+    }
+    if (!from_dynamic && !to_dynamic && epoch_change && path.time_dependent()) {
+      throw Error(ErrorKind::usage, "E_OPTION",
+                  "--assume-zero-velocity: " + from.name() + " and " + to.name() + " are both plate-fixed and joined by a "
+                  "time-dependent path, so points cannot stand still in both; give velocity columns");
+    }
+    if (epoch_change) {
+      const DecimalYear used = from_dynamic ? *from_epoch : *to_epoch;
+      const geodesy::Frame& fixed = from_dynamic ? to : from;
+      const DecimalYear fixed_epoch = from_dynamic ? *to_epoch : *from_epoch;
+      zero_velocity_note = "--assume-zero-velocity: the points are assumed not to move in the plate-fixed frame " +
+                           fixed.name() + " between " + geodesy::format_decimal_year(fixed_epoch) + " and " +
+                           geodesy::format_decimal_year(used) + " (no intraplate velocity); the path is evaluated at " +
+                           geodesy::format_decimal_year(used) + ". Where the points do move in " + fixed.name() +
+                           " (mm to cm a year), the result is off by that motion";
+      if (from_dynamic) {
+        to_epoch = from_epoch;
+      } else {
+        from_epoch = to_epoch;
+      }
+    } else {
+      notes.push_back("--assume-zero-velocity not used: the coordinates stay at epoch " +
+                      (from_epoch ? geodesy::format_decimal_year(*from_epoch) : std::string("(none)")));
+    }
+  }
+  // The epochs the path and the motion use; the ones the user stated are
+  // what the output records (a static frame's under the assumption).
+  const DecimalYear t_from = from_epoch.value_or(DecimalYear{2000.0});  // a static path ignores it
+  const DecimalYear t_to = to_epoch.value_or(t_from);
+  const bool epochs_given = from_epoch.has_value();
+  const DecimalYear stated_from = from.epoch().value_or(t_from), stated_to = to.epoch().value_or(t_to);
+  // A static frame is named without an epoch when none was given.
+  const auto frame_text = [&](const geodesy::Frame& f, DecimalYear t) {
+    return epochs_given && (geodesy::is_dynamic(f) || f.epoch()) ? f.name() + "@" + geodesy::format_decimal_year(t) : f.name();
+  };
+  if (o.plate && t_from.year == t_to.year) {
+    notes.push_back("--plate " + *o.plate + " not used: the coordinates stay at epoch " + geodesy::format_decimal_year(t_from));
+  }
+  std::optional<geodesy::PlateMotionModel> plate;
+  if (o.plate) {  // checked even when not used: an unknown plate is a typo
+    if (o.plate_model != "ITRF2020" && o.plate_model != "ITRF2014") {
+      throw Error(ErrorKind::usage, "E_OPTION", "--plate-model " + o.plate_model + ": expected ITRF2020 or ITRF2014");
+    }
+    plate = geodesy::find_plate_motion_model(o.plate_model, *o.plate);
+    if (!plate) {
+      throw Error(ErrorKind::usage, "E_OPTION", "--plate " + *o.plate + ": expected a plate: " + plate_list(o.plate_model));
+    }
+    if (t_from.year == t_to.year) plate.reset();
+  }
   if (t_to.year != t_from.year && !has_velocity && !plate) {
     throw Error(ErrorKind::usage, "E_EPOCH_PROPAGATION",
                 "--to " + o.to + ": moving coordinates from " + geodesy::format_decimal_year(t_from) + " to " +
                     geodesy::format_decimal_year(t_to) +
                     " needs velocities (columns vx_m_per_year, vy_m_per_year, vz_m_per_year, or ve_m_per_year, "
                     "vn_m_per_year, vu_m_per_year) or a plate motion model: "
-                    "--plate PLATE, the plate the points are on (" + plate_list(o.plate_model) + ")");
+                    "--plate PLATE, the plate the points are on (" + plate_list(o.plate_model) + ")" +
+                    (from_dynamic != to_dynamic
+                         ? std::string("; points move in the plate-fixed frame ") + (from_dynamic ? to : from).name() +
+                               " too (intraplate velocities, mm to cm a year): --assume-zero-velocity assumes they do not"
+                         : std::string()));
   }
   if (has_velocity && plate) {
     throw Error(ErrorKind::usage, "E_OPTION", "--plate: the input has velocity columns; give one or the other");
@@ -388,8 +427,8 @@ void run_transform(const TransformOptions& o) {
   // The path, each step's source and the stated accuracy: on standard
   // error (standard output may be the CSV), and in the sidecar.
   std::ostream& report = std::cerr;
-  report << "geoanchor transform: " << frame_text(from, t_from) << " -> " << frame_text(to, t_to);
-  if (epochs_given && from_dynamic != to_dynamic) {
+  report << "geoanchor transform: " << frame_text(from, stated_from) << " -> " << frame_text(to, stated_to);
+  if (epochs_given && from_dynamic != to_dynamic && t_from.year == t_to.year) {
     report << " (the published sets evaluated at " << geodesy::format_decimal_year(from_dynamic ? t_from : t_to) << ")";
   }
   report << "\n";
@@ -436,6 +475,7 @@ void run_transform(const TransformOptions& o) {
   for (const auto& c : reader.leading_comments()) {
     if (!crs_mode || !io::is_crs_comment(c)) out << c << '\n';
   }
+  if (zero_velocity_note) out << "# geoanchor: " << *zero_velocity_note << '\n';
   io::write_csv_line(out, out_header);
   io::CsvRecord record;
   std::size_t rows = 0;
@@ -477,6 +517,7 @@ void run_transform(const TransformOptions& o) {
     io::write_csv_line(out, fields);
     ++rows;
   }
+  if (zero_velocity_note) notes.insert(notes.begin(), *zero_velocity_note);
   std::vector<std::string> housekeeping = notes;  // and stale temporaries of killed runs removed beside the output
   if (crs_mode) {
     for (auto& w : crs_rows->warnings()) housekeeping.push_back(std::move(w));
@@ -504,10 +545,10 @@ void run_transform(const TransformOptions& o) {
   side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
                    {"sha256", from_stdin ? json(nullptr) : json(io::sha256_file_hex(o.input))},
                    {"frame", from.name()},
-                   {"epoch", epochs_given ? json(t_from.year) : json(nullptr)},
+                   {"epoch", epochs_given ? json(stated_from.year) : json(nullptr)},
                    {"kind", std::string(io::to_string(columns.kind))},
                    {"ellipsoid", in_ellipsoid.name()}};
-  side["output"] = {{"path", o.output}, {"frame", to.name()}, {"epoch", epochs_given ? json(t_to.year) : json(nullptr)}, {"rows", rows},
+  side["output"] = {{"path", o.output}, {"frame", to.name()}, {"epoch", epochs_given ? json(stated_to.year) : json(nullptr)}, {"rows", rows},
                     {"height_type", columns.orthometric ? "orthometric" : "ellipsoidal"}, {"ellipsoid", out_ellipsoid.name()}};
   if (!crs_mode && columns.orthometric) {
     side["output"]["geoid_model"] = geoid->model_name();
@@ -531,8 +572,16 @@ void run_transform(const TransformOptions& o) {
     side["crs_operations"] = crs_rows->operations_json();
   }
   side["path"] = {{"steps", steps}, {"accuracy_m", path.accuracy_m()}, {"stated_accuracy_m", stated_m}};
-  if (from.epoch() && from.epoch()->year != t_from.year) side["input"]["stated_epoch"] = from.epoch()->year;
-  if (to.epoch() && to.epoch()->year != t_to.year) side["output"]["stated_epoch"] = to.epoch()->year;
+  if (zero_velocity_note) {
+    const bool fixed_is_target = from_dynamic;
+    side["epoch_propagation"] = {{"by", "assumed_zero_velocity"},
+                                 {"plate_fixed_frame", (fixed_is_target ? to : from).name()},
+                                 {"from", stated_from.year},
+                                 {"to", stated_to.year},
+                                 {"path_evaluated_at", t_from.year},
+                                 {"accuracy_m", nullptr},
+                                 {"statement", *zero_velocity_note}};
+  }
   if (t_to.year != t_from.year) {
     side["epoch_propagation"] =
         has_velocity ? json{{"by", local_velocity ? "velocities (local east, north, up)" : "velocities (ECEF)"},

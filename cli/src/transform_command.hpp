@@ -22,6 +22,7 @@ struct TransformOptions {
   std::optional<std::string> ellipsoid;  // default: each frame's own (issue 13 point 5)
   std::optional<int> precision;
   std::optional<std::string> geoid;  // for H_m columns (read and written on the same model)
+  bool assume_zero_velocity = false;  // a plate-fixed frame's epoch change without velocities (issue 40 point 1)
   bool overwrite = false;
   bool json = false;  // print the provenance sidecar on standard output
   std::vector<std::string> argv;

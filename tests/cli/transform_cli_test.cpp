@@ -35,7 +35,8 @@ const Eigen::Vector3d kVelocity(-0.0135, 0.0180, 0.0100);
 std::vector<Eigen::Vector3d> read_xyz(const std::string& csv, std::vector<Eigen::Vector3d>* velocities = nullptr) {
   std::istringstream in(csv);
   std::string line;
-  std::getline(in, line);
+  while (std::getline(in, line) && line.rfind('#', 0) == 0) {
+  }  // comments above the header
   std::vector<Eigen::Vector3d> out;
   while (std::getline(in, line)) {
     std::vector<double> v;
@@ -336,6 +337,124 @@ TEST_F(TransformCli, Issue13_VelocitiesInACrsAndInLocalAxes) {
   EXPECT_EQ(u.exit_code, 3);
   EXPECT_NE(u.err.find("'ve_mm_per_year' reads as a velocity"), std::string::npos) << u.err;
   EXPECT_FALSE(std::filesystem::exists(path("d.csv")));
+}
+
+}  // namespace
+}  // namespace geoanchor
+
+namespace geoanchor {
+namespace {
+
+// Issue 40 point 1: a plate-fixed frame's coordinates move too (intraplate
+// velocities), so an epoch asked for on its side is honoured: the point
+// moves by its velocity in the source frame and the time-dependent set is
+// evaluated at the target epoch, as NGS's HTDP does. Reference: PROJ with
+// EPSG:8970 (ITRF2014 to NAD83(2011), NGS) at the propagated epoch.
+constexpr double kPropagatedAgreement_m = 0.5e-3;         // the issue's bound against cct
+constexpr double kOutputVelocityAgreement_m_per_year = 1e-6;  // the path's rates times the years: 1e-9 m/yr
+
+const char* kEpsg8970 = "urn:ogc:def:coordinateOperation:EPSG::8970";
+
+// A mark near Los Angeles with a velocity of the Pacific plate's size in
+// ITRF2014, and one near Washington, D.C. (ECEF, m and m/yr, rounded).
+struct MovingMark {
+  Eigen::Vector3d x, v;
+};
+const MovingMark kUsMarks[] = {{{-2494360.0, -4656410.0, 3553450.0}, {-0.0320, 0.0210, 0.0090}},
+                               {{1115450.0, -4843290.0, 3983240.0}, {-0.0145, -0.0010, 0.0035}}};
+
+std::string moving_csv(const MovingMark* marks, std::size_t n) {
+  std::string s = "id,x_m,y_m,z_m,vx_m_per_year,vy_m_per_year,vz_m_per_year\n";
+  for (std::size_t i = 0; i < n; ++i) {
+    s += "M" + std::to_string(i);
+    for (const auto& c : {marks[i].x, marks[i].v}) {
+      for (int k = 0; k < 3; ++k) s += "," + format_shortest(c(k));
+    }
+    s += "\n";
+  }
+  return s;
+}
+
+TEST_F(TransformCli, Issue40_PlateFixedEpochsAreHonouredWithVelocities) {
+  const ProjPipeline epsg(kEpsg8970);
+  const auto in = write("in.csv", moving_csv(kUsMarks, 2));
+  const auto r = run("transform " + in.string() + " --from ITRF2014@2020.0 --to 'NAD83(2011)@2010.0' -o " +
+                     path("out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("not used"), std::string::npos) << r.err;
+  std::vector<Eigen::Vector3d> v_got;
+  const auto got = read_xyz(slurp(path("out.csv")), &v_got);
+  ASSERT_EQ(got.size(), 2u);
+  ASSERT_EQ(v_got.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto& m = kUsMarks[i];
+    const Eigen::Vector3d expected = epsg.forward(m.x - 10.0 * m.v, 2010.0);  // to 2010.0 in ITRF2014, then EPSG:8970
+    EXPECT_LT((got[i] - expected).norm(), kPropagatedAgreement_m) << i;
+    // The output velocity: the motion through the time-dependent set.
+    const Eigen::Vector3d v_expected = (epsg.forward(m.x - 9.0 * m.v, 2011.0) - epsg.forward(m.x - 11.0 * m.v, 2009.0)) / 2.0;
+    EXPECT_LT((v_got[i] - v_expected).norm(), kOutputVelocityAgreement_m_per_year) << i;
+    // Not the old answer, the set evaluated at 2020.0 with the epoch ignored:
+    // 10 years of intraplate motion, 2 cm in the east, 0.3 m in the west.
+    EXPECT_GT((got[i] - epsg.forward(m.x, 2020.0)).norm(), 0.01) << i;
+  }
+  const auto side = nlohmann::json::parse(slurp(path("out.csv.geoanchor.json")));
+  EXPECT_EQ(side["output"]["epoch"], 2010.0);
+  EXPECT_EQ(side["input"]["epoch"], 2020.0);
+
+  // The reverse: NAD83(2011)@2010.0 with NAD83 velocities to ITRF2014@2020.0.
+  const MovingMark nad83[] = {{got[0], v_got[0]}, {got[1], v_got[1]}};
+  const auto back_in = write("nad83.csv", moving_csv(nad83, 2));
+  const auto b = run("transform " + back_in.string() + " --from 'NAD83(2011)@2010.0' --to ITRF2014@2020.0 -o " +
+                     path("back.csv").string());
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  std::vector<Eigen::Vector3d> v_back;
+  const auto back = read_xyz(slurp(path("back.csv")), &v_back);
+  ASSERT_EQ(back.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const Eigen::Vector3d expected = epsg.inverse(nad83[i].x + 10.0 * nad83[i].v, 2020.0);  // to 2020.0 in NAD83(2011)
+    EXPECT_LT((back[i] - expected).norm(), kPropagatedAgreement_m) << i;
+    EXPECT_LT((back[i] - kUsMarks[i].x).norm(), kPropagatedAgreement_m) << i;  // the round trip
+    EXPECT_LT((v_back[i] - kUsMarks[i].v).norm(), kOutputVelocityAgreement_m_per_year) << i;
+  }
+}
+
+TEST_F(TransformCli, Issue40_PlateFixedEpochChangeWithoutVelocitiesIsRefusedOrAssumedAloud) {
+  const ProjPipeline epsg(kEpsg8970);
+  const auto& m = kUsMarks[0];
+  const auto in = write("in.csv", "id,x_m,y_m,z_m\nM0," + format_shortest(m.x.x()) + "," + format_shortest(m.x.y()) + "," +
+                                      format_shortest(m.x.z()) + "\n");
+  for (const std::string& pair : {std::string("--from ITRF2014@2020.0 --to 'NAD83(2011)@2010.0'"),
+                                  std::string("--from 'NAD83(2011)@2010.0' --to ITRF2014@2020.0")}) {
+    const auto r = run("transform " + in.string() + " " + pair + " -o " + path("out.csv").string());
+    EXPECT_EQ(r.exit_code, 2) << pair << ": " << r.err;
+    EXPECT_NE(r.err.find("E_EPOCH_PROPAGATION"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--assume-zero-velocity"), std::string::npos) << r.err;
+    EXPECT_EQ(leftovers({"in.csv"}), std::vector<std::string>{}) << pair;
+  }
+  // Said in every output: the terminal, the CSV and the sidecar.
+  const auto r = run("transform " + in.string() + " --from ITRF2014@2020.0 --to 'NAD83(2011)@2010.0' --assume-zero-velocity -o " +
+                     path("out.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: --assume-zero-velocity"), std::string::npos) << r.err;
+  const std::string csv = slurp(path("out.csv"));
+  EXPECT_EQ(csv.rfind("# geoanchor: --assume-zero-velocity", 0), 0u) << csv;
+  const auto got = read_xyz(csv);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_LT((got[0] - epsg.forward(m.x, 2020.0)).norm(), kPropagatedAgreement_m);
+  const auto side = nlohmann::json::parse(slurp(path("out.csv.geoanchor.json")));
+  EXPECT_EQ(side["epoch_propagation"]["by"], "assumed_zero_velocity");
+  EXPECT_EQ(side["epoch_propagation"]["plate_fixed_frame"], "NAD83(2011)");
+  EXPECT_EQ(side["output"]["epoch"], 2010.0);
+  // Where it says nothing, it is refused: two dynamic frames.
+  const auto dyn = run("transform " + in.string() + " --from ITRF2014@2020.0 --to ITRF2020@2010.0 --assume-zero-velocity -o " +
+                       path("dyn.csv").string());
+  EXPECT_EQ(dyn.exit_code, 2) << dyn.err;
+  EXPECT_NE(dyn.err.find("both dynamic frames"), std::string::npos) << dyn.err;
+  EXPECT_FALSE(std::filesystem::exists(path("dyn.csv")));
+  // The earlier rule stays: a static frame named without an epoch takes the other side's.
+  const auto same = run("transform " + in.string() + " --from ITRF2014@2020.0 --to 'NAD83(2011)' -o " + path("same.csv").string());
+  ASSERT_EQ(same.exit_code, 0) << same.err;
+  EXPECT_LT((read_xyz(slurp(path("same.csv")))[0] - epsg.forward(m.x, 2020.0)).norm(), kPropagatedAgreement_m);
 }
 
 }  // namespace
