@@ -173,10 +173,13 @@ std::vector<CatalogTransformation> build_catalog() {
        {"NAD83(2011)", 993.43, -1903.31, -526.55, 1.71504, -25.91467, -9.42645, -11.59935, 0.79, -0.60, -1.34, -0.10201,
         -0.06667, 0.75744, 0.05133, 0.0, "EPSG:7807"},
        "NGS, Pearson & Snay (2013), GPS Solutions 17, ITRF2008 to NAD83(2011) (coordinate frame, rotations negated)"},
-      // NGS, ITRF2014 to NAD83(2011) as HTDP applies it (coordinate frame; rotations negated).
+      // NGS, ITRF2014 to NAD83(2011) as HTDP applies it (coordinate frame; rotations negated), to
+      // HTDP's digits (htdp.f 3.6.0: ITRF94 -> NAD83(2011) less ITRF94 -> ITRF2014), as EPSG:8970
+      // now gives them; PROJ 9.1.1's database rounds them (tz -0.5416 m, dtz -1.4 mm/yr: 0.45 mm
+      // in ten years).
       {"ITRF2014", 2010.0,
-       {"NAD83(2011)", 1005.3, -1909.2, -541.6, 0.37, -26.7814, 0.4203, -10.9321, 0.8, -0.6, -1.4, -0.07, -0.0667, 0.7574,
-        0.0513, 0.0, "EPSG:8970"},
+       {"NAD83(2011)", 1005.30, -1909.21, -541.57, 0.36891, -26.78138, 0.42027, -10.93206, 0.79, -0.60, -1.44, -0.07201,
+        -0.06667, 0.75744, 0.05133, 0.0, "EPSG:8970"},
        "NGS (HTDP), ITRF2014 to NAD83(2011) (coordinate frame, rotations negated)"},
       // NGS, HTDP user guide (v3.5 and later), table 5: ITRF2020 to NAD83(2011)
       // (coordinate frame; rotations negated); EPSG:10334, newer than PROJ

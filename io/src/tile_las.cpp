@@ -66,27 +66,28 @@ std::array<double, 2> input_resolution_m(const LasHeader& h, const ArrayFrame& f
   return {std::min(h.scale[0], h.scale[1]), h.scale[2]};
 }
 
-// The output's scale: the resolution in its units, a power of ten at or
-// below it where the unit is not the metre.
+// The output's scale: the resolution in its units, the power of ten at or
+// below it (0.01 US survey foot in, 0.001 m out; a resolution of 0.0025 m,
+// 0.001 m), as apply.md states (issue 40 point 2).
 std::array<double, 3> output_scale(const std::array<double, 2>& res, const ArrayFrame& to, const std::optional<TileCrsAxes>& crs) {
   if (crs && !crs->geocentric) {
-    const double z = crs->vertical_m == 1.0 ? res[1] : pow10_floor(res[1] / crs->vertical_m);
+    const double z = pow10_floor(res[1] / crs->vertical_m);
     if (crs->angular) {
       const double unit = pow10_floor(res[0] / kMetresPerDegree / crs->horizontal_unit);
       return {unit, unit, z};
     }
-    const double xy = crs->horizontal_unit == 1.0 ? res[0] : pow10_floor(res[0] / crs->horizontal_unit);
+    const double xy = pow10_floor(res[0] / crs->horizontal_unit);
     return {xy, xy, z};
   }
   if (!crs && to.kind == CoordinateKind::geodetic) {
     const double deg = pow10_floor(res[0] / kMetresPerDegree);
-    return {deg, deg, res[1]};
+    return {deg, deg, pow10_floor(res[1])};
   }
   if (crs || to.kind == CoordinateKind::ecef) {
-    const double r = std::min(res[0], res[1]);
+    const double r = pow10_floor(std::min(res[0], res[1]));
     return {r, r, r};
   }
-  return {res[0], res[0], res[1]};
+  return {pow10_floor(res[0]), pow10_floor(res[0]), pow10_floor(res[1])};
 }
 
 // An offset near the middle of [lo, hi], on a grid of 1000 steps.

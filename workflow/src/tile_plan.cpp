@@ -703,6 +703,26 @@ void TilePlanner::plan_crs_stages(TilePlan& p) const {
   }
   if (!in_2d && two_d(dst)) dst = dst.promoted_to_3d(dst_flag);
   if (in_2d) {
+    // Z passes unchanged, so it must mean the same number on both sides: a
+    // 2-D CRS states no unit for it (by custom a LAS tile's Z is in the
+    // horizontal unit of a projected CRS and in metres beside degrees, but
+    // nothing in the file says so), and a change of that unit would leave
+    // feet in a tile in metres (issue 40 point 2).
+    const auto z_unit = [](const io::Crs& c) -> std::pair<std::string, double> {
+      const auto& d = c.description();
+      const auto& axes = d.visualization_axes.empty() ? d.axes : d.visualization_axes;
+      if (!axes.empty() && axes[0].unit_type == "linear") return {axes[0].unit_name, axes[0].unit_to_si};
+      return {"metre", 1.0};
+    };
+    const auto [ui, si_in] = z_unit(*in.crs);
+    const auto [uo, si_out] = z_unit(dst);
+    if (si_in != si_out) {
+      throw Error(ErrorKind::input, "E_HEIGHT_UNIT",
+                  tile + ": the tile's CRS " + in.crs->display_name() + " (" + p.in_frame_source + ") is 2-D in " + ui +
+                      " and " + dst_flag + " is 2-D in " + uo + ": the tile's Z values would pass unchanged from " +
+                      ui + " into a file in " + uo + ", and no CRS states their unit; give --crs with the tile's CRS in 3-D or "
+                      "compound (EPSG:h+v, its heights and their unit), so the heights are converted");
+    }
     p.warnings.push_back(tile + ": the tile's CRS " + in.crs->display_name() +
                          " is 2-D: its Z values are no coordinate of it and were copied unchanged into the 2-D output");
   }
