@@ -1143,6 +1143,67 @@ TEST_F(CrsLas, Issue13_TwoDimensionalLasWktNeedsItsHeightsStated) {
   EXPECT_FALSE(fs::exists(path("other/fl.las")));
 }
 
+// Issue 40 point 2: heights change unit with the CRS (US survey feet and
+// international feet to metres and back), each output scale is a power of
+// ten in the output's unit (apply.md), and a 2-D tile whose Z would pass
+// unchanged from feet into metres is refused naming both units.
+TEST_F(CrsLas, Issue40_HeightsChangeUnitWithTheCrsAndScalesArePowersOfTen) {
+  struct Case {
+    std::string name, source_code;
+    std::array<double, 4> box;
+    std::string target_code;
+    std::array<double, 3> scale;
+    double expected_scale;  // in the output's unit
+  };
+  const Case cases[] = {
+      // NAVD88 heights in US survey feet (EPSG:6360) and in international feet (EPSG:8228).
+      {"ftus_to_m", "EPSG:2236+6360", {-81.6, 27.0, -80.4, 28.2}, "EPSG:26917+5703", {0.01, 0.01, 0.01}, 0.001},
+      {"m_to_ftus", "EPSG:26917+5703", {-81.6, 27.0, -80.4, 28.2}, "EPSG:2236+6360", {0.001, 0.001, 0.001}, 0.001},
+      {"ft_to_m", "EPSG:2222+8228", {-110.4, 32.0, -109.6, 36.0}, "EPSG:26912+5703", {0.01, 0.01, 0.01}, 0.001},
+      {"m_to_ft", "EPSG:26912+5703", {-110.4, 32.0, -109.6, 36.0}, "EPSG:2222+8228", {0.01, 0.01, 0.01}, 0.01},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const bool compound = c.source_code.find('+') != std::string::npos;
+    const std::string source = wkt_of(proj_, c.source_code, !compound);
+    const std::string target = wkt_of(proj_, c.target_code, c.target_code.find('+') == std::string::npos);
+    const auto points = points_in_box(source, c.box, 11);
+    const Tile in = las("in/" + c.name + ".las", source, points, c.scale);
+    write(c.name + ".wkt", target);
+    const RunResult r = run("apply '" + path("in/" + c.name + ".las").string() + "' --to-crs '@" + path(c.name + ".wkt").string() +
+                            "' --out-dir '" + path("out").string() + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json got = verify(path("out") / (c.name + ".las"));
+    ASSERT_FALSE(got.is_null());
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(got["header"]["scale"][k].get<double>(), c.expected_scale) << k;
+    // Every axis, the heights included, as PROJ moves them (feet to metres and back).
+    Pj op = proj_.op(source, target);
+    ASSERT_TRUE(op);
+    testing::WorstCase worst;
+    for (std::size_t i = 0; i < in.xyz.size(); ++i) {
+      const auto& a = in.xyz[i];
+      const PJ_COORD e = proj_trans(op.get(), PJ_FWD, proj_coord(a[0], a[1], a[2], 0));
+      const double expected[3] = {e.xyz.x, e.xyz.y, e.xyz.z};
+      for (std::size_t k = 0; k < 3; ++k) {
+        const double tol = 0.5 * c.expected_scale + kVsProjTol_m;
+        worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
+      }
+    }
+    EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+  }
+  // 2-D in US survey feet to 2-D in metres: Z has no stated unit, so it is refused, nothing written.
+  const std::string two_d = wkt_of(proj_, "EPSG:2236", false);
+  las("in/flat.las", two_d, points_in_box(two_d, {-81.6, 27.0, -80.4, 28.2}, 3), {0.01, 0.01, 0.01});
+  const RunResult refused =
+      run("apply '" + path("in/flat.las").string() + "' --to-crs EPSG:26917 --out-dir '" + path("flat").string() + "'");
+  EXPECT_EQ(refused.exit_code, 3) << refused.err;
+  EXPECT_NE(refused.err.find("E_HEIGHT_UNIT"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("US survey foot"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("metre"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(path("flat/flat.las")));
+  EXPECT_FALSE(fs::exists(path("flat/flat.las.geoanchor.json")));
+}
+
 // --crs completes what a tile's WKT states, compared by PROJ and never by
 // name: the heights of a 2-D CRS as a compound CRS whose horizontal part is
 // equivalent (the tile's WKT under another name), a dynamic CRS's coordinate
