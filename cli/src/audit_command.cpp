@@ -72,6 +72,10 @@ CLI::App* add_locate_command(CLI::App& app, LocateCommandOptions& o) {
   cmd->add_option("--plate", o.request.plate, "The plate the points are on, for an epoch change (EURA, NOAM, ...)");
   cmd->add_option("--plate-model", o.request.plate_model, "ITRF2020 (default) | ITRF2014");
   cmd->add_option("--exclude", o.request.exclude, "Leave out files of the map's folder matching GLOB (repeatable)");
+  cmd->add_option("--max-extrapolation", o.request.max_extrapolation_m,
+                  "Refuse points farther than this (m) outside the control network of the map's transform (without "
+                  "one: from the map's ENU origin; default 10000)")
+      ->check(finite_range(0.0, 1e7));
   cmd->add_option("-o,--output", o.output, "Output CSV (default: standard output)");
   cmd->add_flag("--json", o.json, "Write JSON (schema geoanchor.locate/1) instead of CSV");
   cmd->add_flag("--overwrite", o.overwrite, "Replace an existing output file");

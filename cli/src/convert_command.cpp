@@ -8,6 +8,8 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/coordinate_codec.hpp"
@@ -19,6 +21,7 @@
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/hash.hpp"
 #include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/workflow/audit.hpp"
 #include "geoanchor/workflow/transform_checks.hpp"
 #include "command_input.hpp"
 #include "option_parsing.hpp"
@@ -47,6 +50,51 @@ json origin_json(const geodesy::LocalOrigin& o) {
               {"h_m", o.point.h.m},
               {"height_type", "ellipsoidal"},
               {"ellipsoid", o.ellipsoid.name()}};
+}
+
+// Two local origins agree when their geocentric positions are within this.
+constexpr double kOriginAgreement_m = 1e-3;
+
+std::string origin_text(const geodesy::LocalOrigin& o) {
+  return format_fixed(o.point.lat.deg(), 9) + "," + format_fixed(o.point.lon.deg(), 9) + "," + format_fixed(o.point.h.m, 4) +
+         " (" + o.ellipsoid.name() + ")";
+}
+
+double origin_distance_m(const geodesy::LocalOrigin& a, const geodesy::LocalOrigin& b) {
+  return (geodesy::ecef_from_geodetic(a.ellipsoid, a.point).m - geodesy::ecef_from_geodetic(b.ellipsoid, b.point).m).norm();
+}
+
+// A transform fitted in a local frame (enu-origin, site-calibration) reads
+// ENU at its own origin on its source side: that side's origin must be the
+// transform's, and is taken from it when no flag gives one (issue 40
+// point 3). A wrong one moved points by tens of kilometres.
+void reconcile_transform_origin(const ConvertOptions& o, const io::TransformFile& t, bool local_in, bool local_out,
+                                io::InputCoordinateFrame& in_frame, io::OutputCoordinateFrame& out_frame,
+                                std::vector<std::string>& notes) {
+  std::optional<geodesy::LocalOrigin> fitted;
+  std::string what;
+  if (t.enu_origin) fitted = t.enu_origin->nominal, what = "the map's nominal ENU origin of its enu-origin correction";
+  if (t.site_calibration) fitted = t.site_calibration->local_origin(), what = "the local origin of its site calibration";
+  const bool source_is_input = !o.inverse;
+  if (!fitted || !(source_is_input ? local_in : local_out)) return;
+  std::optional<geodesy::LocalOrigin>& origin = source_is_input ? in_frame.origin : out_frame.origin;
+  const std::string flag = source_is_input && o.from_origin ? "--from-origin" : "--origin";
+  const std::string side = source_is_input ? "input" : "output";
+  if (!origin) {
+    origin = *fitted;
+    notes.push_back("the " + side + "'s ENU/NED origin is the transform's, " + origin_text(*fitted) + " (" + what + ")");
+    return;
+  }
+  const double d = origin_distance_m(*origin, *fitted);
+  if (!(d <= kOriginAgreement_m)) {
+    throw Error(ErrorKind::usage, "E_ORIGIN_MISMATCH",
+                flag + " " + origin_text(*origin) + ": " + *o.transform + " was fitted at " + origin_text(*fitted) + " (" +
+                    what + "), " + format_shortest(d) + " m from it (they must agree within 1 mm): the " + side +
+                    "'s local coordinates are relative to the transform's origin; leave " + flag +
+                    " out to take it from the transform" +
+                    (source_is_input && !o.from_origin ? " (then --origin sets the output's alone: give --from-origin for the input)"
+                                                        : ""));
+  }
 }
 
 json tm_json(const geodesy::TransverseMercatorParams& p) {
@@ -229,6 +277,10 @@ CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   cmd->add_option("--transform", o.transform, "Transform file (JSON) applied in ECEF between input and output");
   cmd->add_flag("--inverse", o.inverse, "Apply the transform's exact inverse (target -> source)");
   cmd->add_option("--epoch", o.epoch, "Observation epoch (decimal year) for a 14-parameter transform");
+  cmd->add_option("--max-extrapolation", o.max_extrapolation_m,
+                  "Refuse a point farther than this (m) from the ENU/NED origin, or outside the transform's control "
+                  "network (default 10000)")
+      ->check(finite_range(0.0, 1e7));
   cmd->add_option("--precision", o.precision, "Decimals for metres (degrees get 5 more); default: full precision")
       ->check(integer_range(0, 15));
   cmd->add_option("--geoid", o.geoid, "Geoid of orthometric heights (H_m columns): EGM96, EGM96-NGA, a grid PROJ finds by name (egm96_15.gtx) or a PATH (GTX, GeoTIFF)");
@@ -315,10 +367,30 @@ void run_convert(const ConvertOptions& o) {
                         "read it with --to-crs DST (with --to ecef for its geocentric coordinates)");
   const auto& header = reader.header();
   const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
+  const bool local_in = columns.kind == io::CoordinateKind::enu || columns.kind == io::CoordinateKind::ned;
+  const bool local_out = out_kind == io::OutputKind::enu || out_kind == io::OutputKind::ned;
+  std::vector<std::string> warnings;
+  if (transform) reconcile_transform_origin(o, *transform, local_in, local_out, in_frame, out_frame, warnings);
   const io::CoordinateDecoder decoder(columns, header, in_frame, source_name);
   const io::CoordinateEncoder encoder(out_frame, io::NumberFormat{o.precision});
-
-  std::vector<std::string> warnings;
+  // How far the points reach: from each local origin (a swapped latitude
+  // and longitude lands thousands of kilometres away), and outside the
+  // transform's control network; refused past --max-extrapolation.
+  std::optional<geodesy::LocalTangentPlane> in_plane, out_plane;
+  if (local_in && in_frame.origin) in_plane.emplace(*in_frame.origin);
+  if (local_out && out_frame.origin) out_plane.emplace(*out_frame.origin);
+  const io::ControlExtent* extent = transform && transform->fit && transform->fit->extent ? &*transform->fit->extent : nullptr;
+  double farthest_local_m[2] = {0.0, 0.0}, farthest_outside_m = 0.0;  // input's plane, output's
+  std::size_t rows_outside = 0;
+  const auto check_reach = [&](double d, const std::string& where, const std::string& from_what) {
+    if (!(d <= o.max_extrapolation_m)) {
+      throw Error(ErrorKind::rejected, "E_EXTRAPOLATION",
+                  where + ": the point lies " + format_fixed(d / 1000.0, 3) + " km " + from_what + " (limit --max-extrapolation " +
+                      format_shortest(o.max_extrapolation_m) + " m)" +
+                      (from_what.find("origin") != std::string::npos ? "; latitude and longitude swapped, or the wrong origin?" : "") +
+                      "; nothing was written");
+    }
+  };
   if (decoder.heights_missing()) {
     warnings.push_back(source_name + ": no h_m column: every height is taken as 0 m above the ellipsoid (" +
                        std::string(io::to_string(columns.kind)) + " input)");
@@ -367,6 +439,20 @@ void run_convert(const ConvertOptions& o) {
     }
     const geodesy::EcefPosition source = decoder.decode(record);
     const geodesy::EcefPosition target(step.apply(source.m, row_epoch, where));
+    for (int side = 0; side < 2; ++side) {
+      const geodesy::LocalTangentPlane* plane = side == 0 ? (in_plane ? &*in_plane : nullptr) : (out_plane ? &*out_plane : nullptr);
+      if (plane == nullptr) continue;
+      const Eigen::Vector3d e = plane->enu_from_ecef(side == 0 ? source : target).enu_m;
+      const double d = std::hypot(e.x(), e.y());
+      check_reach(d, where, "from the ENU/NED origin " + origin_text(plane->origin()));
+      if (d > farthest_local_m[side]) farthest_local_m[side] = d;
+    }
+    if (extent) {
+      const double d = extent->distance_m(o.inverse ? target : source);  // the transform's source frame
+      check_reach(d, where, "outside the control network of " + *o.transform);
+      if (d > 0.0) ++rows_outside;
+      if (d > farthest_outside_m) farthest_outside_m = d;
+    }
     if (step.needs_row_epoch()) {
       const DecimalYear used = row_epoch ? *row_epoch : *flag_epoch;  // step.apply threw if neither
       if (!epochs_used) epochs_used = workflow::EpochSpan{used, used};
@@ -389,6 +475,22 @@ void run_convert(const ConvertOptions& o) {
     if (!epochs_used && flag_epoch && transform->time_dependent()) epochs_used = workflow::EpochSpan{*flag_epoch, *flag_epoch};
     for (auto& w : workflow::implausible_transform_warnings(*transform, *o.transform, epochs_used)) {
       warnings.push_back(std::move(w));
+    }
+  }
+  if (rows_outside > 0) {
+    warnings.push_back(std::to_string(rows_outside) + " of the " + std::to_string(rows) + " points lie outside the control network of " +
+                       *o.transform + ", up to " + format_fixed(farthest_outside_m, 1) + " m: the transform is extrapolated there");
+  }
+  for (int side = 0; side < 2; ++side) {
+    const geodesy::LocalTangentPlane* plane = side == 0 ? (in_plane ? &*in_plane : nullptr) : (out_plane ? &*out_plane : nullptr);
+    if (plane == nullptr) continue;
+    const auto& origin = plane->origin();
+    const double departure = workflow::tangent_plane_departure_m(farthest_local_m[side], origin.point.lat.deg(), origin.ellipsoid);
+    if (departure > workflow::AuditLimits{}.tangent_plane_m) {
+      warnings.push_back(std::string(side == 0 ? "the input's" : "the output's") + " points reach " +
+                         format_fixed(farthest_local_m[side] / 1000.0, 3) + " km from the ENU/NED origin " + origin_text(origin) +
+                         ", where the tangent plane departs from the ellipsoid by " + format_fixed(departure, 2) +
+                         " m: up is not height there");
     }
   }
   // Points a forced UTM zone does not contain (--zone, --from-zone, utm_zone column).

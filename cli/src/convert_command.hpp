@@ -27,6 +27,7 @@ struct ConvertOptions {
   std::optional<std::string> transform;
   bool inverse = false;
   std::optional<std::string> epoch;
+  double max_extrapolation_m = 10000.0;  // from a local origin, or outside a transform's control network
   std::optional<int> precision;
   std::optional<std::string> geoid;  // EGM96: reads H_m input, and writes H_m with --output-heights orthometric
   std::string output_heights = "ellipsoidal";

@@ -379,5 +379,27 @@ TEST_F(Audit, Issue16_LocateGivesTheGeodeticPositionAndTheTransformsSigmas) {
   EXPECT_NE(bad.err.find("'h_m'"), std::string::npos) << bad.err;
 }
 
+// Issue 40 point 3: locate extrapolates the map's transform no farther
+// than apply does: a point 20 km outside the control network (about 420 m
+// across) is refused by name with nothing written, accepted with a note
+// under a larger --max-extrapolation.
+TEST_F(Audit, Issue40_LocateRefusesPointsFarOutsideTheControlNetwork) {
+  clean_map();
+  write("points.csv", "id,e_m,n_m,u_m\nstand_12,120.0,80.0,2.5\nfar_away,20000.0,0.0,2.5\n");
+  const fs::path out = path("located.csv");
+  const RunResult r = run("locate " + path("map").string() + " " + path("points.csv").string() + " -o " + out.string());
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_NE(r.err.find("E_EXTRAPOLATION"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("far_away"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("points.csv:3"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  const RunResult wide = run("locate " + path("map").string() + " " + path("points.csv").string() +
+                             " --max-extrapolation 30000 -o " + out.string());
+  ASSERT_EQ(wide.exit_code, 0) << wide.err;
+  const std::string csv = slurp(out);
+  EXPECT_NE(csv.find("# note: points lie outside the control network"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("far_away 19"), std::string::npos) << csv;  // about 19.6 km outside the hull
+}
+
 }  // namespace
 }  // namespace geoanchor

@@ -107,17 +107,24 @@ LocateResult locate_points(const LocateRequest& request) {
       plate = geodesy::find_plate_motion_model(request.plate_model, *request.plate);
       if (!plate) throw Error(ErrorKind::usage, "E_OPTION", "--plate " + *request.plate + ": no such plate in " + request.plate_model + "-PMM");
     }
-    // A static frame's coordinates do not move with its plate: its epoch is
-    // the other side's.
+    // A static frame named without an epoch takes the other side's; one
+    // named with its own epoch keeps it (points move in plate-fixed frames
+    // too: issue 40 point 1), and a change of epoch needs --plate.
     const bool from_dynamic = geodesy::is_dynamic(r.map.frame), to_dynamic = geodesy::is_dynamic(*r.to);
     const auto year_of = [](const geodesy::Frame& f) { return f.epoch() ? std::optional<double>(f.epoch()->year) : std::nullopt; };
     std::optional<double> t_from = year_of(r.map.frame), t_to = year_of(*r.to);
-    if (!from_dynamic && t_to) t_from = t_to;
-    if (!to_dynamic && t_from) t_to = t_from;
+    if (!from_dynamic && !t_from && t_to) t_from = t_to;
+    if (!to_dynamic && !t_to && t_from) t_to = t_from;
     if (!t_from || !t_to) {
       throw Error(ErrorKind::usage, "E_EPOCH_MISSING", "--to " + *request.to + ": the frames name no epoch to evaluate the path at; give FRAME@YYYY.Y");
     }
     if (*t_from == *t_to) plate.reset();
+    if (*t_from != *t_to && !plate) {
+      throw Error(ErrorKind::usage, "E_EPOCH_PROPAGATION",
+                  "--to " + *request.to + ": the map's points are at " + format_shortest(*t_from) + " and --to asks for " +
+                      format_shortest(*t_to) + ": give --plate, the plate the points are on (points move in plate-fixed "
+                      "frames too, by intraplate velocities)");
+    }
     geodesy::FramePath path = geodesy::find_frame_path(r.map.frame.name(), r.to->name(), "--to");
     r.path_description = path.describe();
     r.path_accuracy_m = path.accuracy_m();
@@ -130,6 +137,8 @@ LocateResult locate_points(const LocateRequest& request) {
     to_transform.emplace(std::move(path), geodesy::DecimalYear{*t_from}, geodesy::DecimalYear{*t_to}, plate ? &*plate : nullptr, "--to");
   }
 
+  double farthest_outside_m = 0.0;
+  std::string farthest_id;
   for (const auto& row : rows) {
     LocatedPoint p;
     p.id = row.id;
@@ -138,12 +147,31 @@ LocateResult locate_points(const LocateRequest& request) {
     p.ecef = plane.ecef_from_enu(geodesy::EnuPosition{row.enu, r.map.origin});
     p.geodetic = geodesy::geodetic_from_ecef(ell, p.ecef);
     const std::string where = request.points + ":" + std::to_string(row.line);
+    // How far the point reaches: outside the control network of the map's
+    // transform, or from the map's origin when it records none.
+    const auto refuse_past_limit = [&](double d, const std::string& from_what) {
+      if (!(d <= request.max_extrapolation_m)) {
+        throw Error(ErrorKind::rejected, "E_EXTRAPOLATION",
+                    where + ": " + p.id + " lies " + n(d / 1000.0, 3) + " km " + from_what + " (limit --max-extrapolation " +
+                        format_shortest(request.max_extrapolation_m) + " m); nothing was written");
+      }
+    };
+    const io::ControlExtent* extent =
+        r.map.transform && r.map.transform->fit && r.map.transform->fit->extent ? &*r.map.transform->fit->extent : nullptr;
+    if (!extent) refuse_past_limit(std::hypot(row.enu.x(), row.enu.y()), "from the map's ENU origin");
     if (r.map.transform) {
       // The map's point came from its source position by the transform;
       // the transform's uncertainty there is the point's.
       const std::optional<geodesy::DecimalYear> epoch =
           r.map.transform_epoch ? std::optional(geodesy::DecimalYear{*r.map.transform_epoch}) : std::nullopt;
       const geodesy::EcefPosition source = r.map.transform->apply(p.ecef, epoch, !r.map.transform_inverse, where);
+      if (extent) {
+        // The extent is the transform's source frame's, where the map's
+        // point was before it moved (with --inverse the map is there).
+        const double d = extent->distance_m(r.map.transform_inverse ? p.ecef : source);
+        refuse_past_limit(d, "outside the control network of " + r.map.transform_path);
+        if (d > farthest_outside_m) farthest_outside_m = d, farthest_id = p.id;
+      }
       if (const auto cov = propagated_covariance_m2(*r.map.transform, source, epoch, r.map.transform_inverse)) {
         if (!cov->allFinite()) throw Error(ErrorKind::input, "E_TRANSFORM", r.map.transform_path + ": its sigmas' correlation is incomplete");
         const Eigen::Matrix3d rot = enu_rotation_at(p.geodetic);
@@ -158,6 +186,10 @@ LocateResult locate_points(const LocateRequest& request) {
       if (!out.x.m.allFinite()) throw Error(ErrorKind::input, "E_VALUE", where + ": " + p.id + ": not finite in " + r.to->to_string());
     }
     r.points.push_back(std::move(p));
+  }
+  if (farthest_outside_m > 0.0) {
+    r.notes.push_back("points lie outside the control network of " + r.map.transform_path + " (" + farthest_id + " " +
+                      n(farthest_outside_m, 1) + " m): the transform and its uncertainty are extrapolated there");
   }
   if (!r.map.transform) r.notes.push_back("the map was moved by no transform file: no propagated uncertainty");
   else if (r.points.empty() || !r.points.front().covariance_enu_m2) r.notes.push_back("the map's transform file carries no sigmas");

@@ -25,6 +25,10 @@ struct LocateRequest {
   std::optional<std::string> to;     // FRAME[@EPOCH]
   std::optional<std::string> plate;  // the plate the points are on, for an epoch change
   std::string plate_model = "ITRF2020";
+  // A point farther than this outside the control network of the map's
+  // transform (without one: from the map's ENU origin) is refused, as
+  // apply refuses a tile (issue 40 point 3).
+  double max_extrapolation_m = 10000.0;
 };
 
 struct LocatedPoint {

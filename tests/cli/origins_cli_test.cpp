@@ -1,0 +1,117 @@
+// Issue 40 point 3: convert compares the ENU origin it is given with the
+// one a local transform was fitted at (or takes the transform's), and
+// refuses points that land farther from a local origin, or outside the
+// transform's control network, than --max-extrapolation.
+
+#include <GeographicLib/LocalCartesian.hpp>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <sstream>
+
+#include "cli_support.hpp"
+#include "test_support.hpp"
+
+namespace geoanchor {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CliTest;
+using testing::slurp;
+
+constexpr double kVsGeographicLib_deg = 1e-10;  // about 0.01 mm of arc
+constexpr double kVsGeographicLib_m = 1e-6;
+
+// An enu-origin correction that moves nothing, so that the result is
+// GeographicLib's ENU -> geodetic at the nominal origin; and one that moves.
+const char* kIdentityEnuOrigin = R"({"model": "enu-origin",
+  "nominal_origin": {"lat_deg": 47.4647, "lon_deg": 8.5492, "h_m": 480.05, "height_type": "ellipsoidal", "ellipsoid": "WGS84"},
+  "parameters": {"shift_e_m": 0, "shift_n_m": 0, "shift_u_m": 0, "yaw_arcsec": 0, "ds_ppm": 0}})";
+const char* kSiteCalibration = R"({"model": "site-calibration",
+  "nominal_origin": {"lat_deg": 46.6, "lon_deg": 7.4, "h_m": 600, "height_type": "ellipsoidal", "ellipsoid": "GRS80"},
+  "grid": {"lat0_deg": 46.5, "lon0_deg": 7.5, "k0": 1, "false_easting_m": 0, "false_northing_m": 0, "ellipsoid": "GRS80"},
+  "parameters": {"shift_e_m": 500, "shift_n_m": -300, "rotation_arcsec": 126000, "scale_ppm": 45, "vertical_shift_m": 48.2,
+                 "slope_n_ppm": 0, "slope_e_ppm": 0, "centroid_e_m": 0, "centroid_n_m": 0}})";
+
+class Origins : public CliTest {};
+
+std::vector<double> first_row(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string line;
+  while (std::getline(in, line) && (line.empty() || line[0] == '#')) {
+  }
+  std::getline(in, line);
+  std::vector<double> v;
+  std::stringstream row(line);
+  std::string cell;
+  std::getline(row, cell, ',');  // id
+  while (std::getline(row, cell, ',')) v.push_back(std::stod(cell));
+  return v;
+}
+
+TEST_F(Origins, Issue40_ALocalTransformsOriginIsTakenOrCompared) {
+  const auto t = write("t.json", kIdentityEnuOrigin);
+  const auto in = write("map.csv", "id,e_m,n_m,u_m\nA,100,200,5\n");
+  // Without --origin: the transform's.
+  const auto r = run("convert " + in.string() + " --to geodetic --transform " + t.string() + " -o " + path("taken.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("origin is the transform's"), std::string::npos) << r.err;
+  double lat = 0, lon = 0, h = 0;
+  GeographicLib::LocalCartesian(47.4647, 8.5492, 480.05, GeographicLib::Geocentric::WGS84()).Reverse(100, 200, 5, lat, lon, h);
+  const auto got = first_row(slurp(path("taken.csv")));
+  ASSERT_EQ(got.size(), 3u);
+  EXPECT_NEAR(got[0], lat, kVsGeographicLib_deg);
+  EXPECT_NEAR(got[1], lon, kVsGeographicLib_deg);
+  EXPECT_NEAR(got[2], h, kVsGeographicLib_m);
+  // The same origin within 1 mm (0.5 mm up): accepted.
+  const auto same = run("convert " + in.string() + " --to geodetic --origin 47.4647,8.5492,480.0505 --transform " + t.string() +
+                        " -o " + path("same.csv").string());
+  EXPECT_EQ(same.exit_code, 0) << same.err;
+  // Another origin: refused naming both and the distance, nothing written.
+  const auto other = run("convert " + in.string() + " --to geodetic --origin 47.0,8.0,480 --transform " + t.string() + " -o " +
+                         path("other.csv").string());
+  EXPECT_EQ(other.exit_code, 2) << other.err;
+  EXPECT_NE(other.err.find("E_ORIGIN_MISMATCH"), std::string::npos) << other.err;
+  EXPECT_NE(other.err.find("47.000000000,8.000000000"), std::string::npos) << other.err;
+  EXPECT_NE(other.err.find("47.464700000,8.549200000"), std::string::npos) << other.err;
+  EXPECT_NE(other.err.find(" m from it"), std::string::npos) << other.err;
+  EXPECT_FALSE(fs::exists(path("other.csv")));
+  // With --inverse the transform's source side is the output.
+  const auto inverse = run("convert " + path("taken.csv").string() + " --to enu --origin 47.0,8.0,480 --inverse --transform " +
+                           t.string() + " -o " + path("inverse.csv").string());
+  EXPECT_EQ(inverse.exit_code, 2) << inverse.err;
+  EXPECT_NE(inverse.err.find("E_ORIGIN_MISMATCH"), std::string::npos) << inverse.err;
+  EXPECT_FALSE(fs::exists(path("inverse.csv")));
+  // A site calibration's local origin, likewise.
+  const auto cal = write("cal.json", kSiteCalibration);
+  const auto cal_other = run("convert " + in.string() + " --to geodetic --origin 46.61,7.4,600 --ellipsoid GRS80 --transform " +
+                             cal.string() + " -o " + path("cal.csv").string());
+  EXPECT_EQ(cal_other.exit_code, 2) << cal_other.err;
+  EXPECT_NE(cal_other.err.find("site calibration"), std::string::npos) << cal_other.err;
+  EXPECT_FALSE(fs::exists(path("cal.csv")));
+}
+
+TEST_F(Origins, Issue40_PointsFarFromTheOriginAreRefused) {
+  // The second row has latitude and longitude swapped: about 4 900 km away.
+  const auto in = write("pts.csv", "id,lat_deg,lon_deg,h_m\nA,47.4650,8.5500,480\nB,8.5500,47.4650,480\n");
+  const auto r = run("convert " + in.string() + " --to enu --origin 47.464722,8.549167,480 -o " + path("out.csv").string());
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_NE(r.err.find("E_EXTRAPOLATION"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("pts.csv:3"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("swapped"), std::string::npos) << r.err;
+  EXPECT_EQ(leftovers({"pts.csv"}), std::vector<std::string>{});
+  // Farther than the tangent plane serves (5.6 km: 2.5 m below it) but inside the limit: a warning.
+  const auto far = write("far.csv", "id,lat_deg,lon_deg,h_m\nA,47.5150,8.5500,480\n");
+  const auto w = run("convert " + far.string() + " --to enu --origin 47.464722,8.549167,480 -o " + path("far_out.csv").string());
+  ASSERT_EQ(w.exit_code, 0) << w.err;
+  EXPECT_NE(w.err.find("tangent plane departs from the ellipsoid"), std::string::npos) << w.err;
+  // The limit is the user's.
+  const auto tight = run("convert " + far.string() + " --to enu --origin 47.464722,8.549167,480 --max-extrapolation 1000 -o " +
+                         path("tight.csv").string());
+  EXPECT_EQ(tight.exit_code, 4) << tight.err;
+  EXPECT_FALSE(fs::exists(path("tight.csv")));
+}
+
+}  // namespace
+}  // namespace geoanchor
