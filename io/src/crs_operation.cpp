@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <set>
 
 #include <proj_experimental.h>
 
@@ -250,6 +251,7 @@ struct CrsOperation::Impl {
   AreaTally source_area, target_area;  // points outside either CRS's area of use: warned
   std::size_t fallbacks = 0;
   std::string first_fallback;
+  std::set<std::string> fallback_reasons;  // why the better operations were not used: missing grids named
   // Points whose PROJ choice was set aside for one whose area holds them.
   std::size_t set_aside = 0;
   std::string first_set_aside;
@@ -658,7 +660,9 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
     const AreaTally source_area = m.source_area, target_area = m.target_area;
     const std::size_t fallbacks = m.fallbacks, set_aside = m.set_aside;
     const std::string first_fallback = m.first_fallback, first_set_aside = m.first_set_aside;
+    const std::set<std::string> fallback_reasons = m.fallback_reasons;
     transform(a, b, c, n, point_name, Count::yes);
+    m.fallback_reasons = fallback_reasons;
     for (std::size_t k = 0; k < m.all.size(); ++k) m.all[k].info.points = points[k];
     m.source_area = source_area;
     m.target_area = target_area;
@@ -783,8 +787,18 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
   auto finite = [&](std::size_t i) {
     return std::isfinite(a[i]) && std::isfinite(b[i]) && (!c || std::isfinite(c[i]));
   };
-  auto note_fallback = [&](std::size_t i) {
+  auto note_fallback = [&](std::size_t i, const Candidate& better, bool missing_grid) {
     if (m.fallbacks++ == 0) m.first_fallback = point_name(i);
+    if (!missing_grid) {
+      m.fallback_reasons.insert("'" + better.info.name + "' cannot move them (outside its grid)");
+      return;
+    }
+    std::vector<std::string> grids;
+    for (const auto& g : better.info.grids) {
+      if (!g.available) grids.push_back(g.name);
+    }
+    m.fallback_reasons.insert("'" + better.info.name + "' (" + accuracy_text(better.info.accuracy_m) + ") needs " + joined(grids) +
+                              ", not on this machine");
   };
 
   if (single) {
@@ -853,7 +867,7 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
                         joined(detail::proj_search_paths()) +
                         " (network access off); --allow-fallback uses the next operation instead");
       }
-      if (choice.missing_better) note_fallback(i);  // --allow-fallback: a worse operation than PROJ would use with its grid
+      if (choice.missing_better) note_fallback(i, m.all[*choice.missing_better], true);  // --allow-fallback: a worse operation
       if (!choice.use) choice.use = lon.empty() ? std::nullopt : m.fallback(plon, plat, {});
       if (!choice.use && lon.empty()) fail_point(i, m.all.front(), "no operation's area of use is known to hold it; the best-ranked is");
       if (!choice.use) fail_area(i, m.all[choice.set_aside.value_or(0)]);
@@ -878,7 +892,7 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
       while (!finite(i)) {
         if (!m.options.allow_fallback) fail_point(i, m.all[k], "PROJ cannot move it with");
         if (lon.empty()) fail_point(i, m.all[k], "PROJ cannot move it with");
-        note_fallback(i);
+        note_fallback(i, m.all[k], false);
         const auto next = m.fallback(lon[i], lat[i], tried);
         if (!next) fail_point(i, m.all[k], "PROJ cannot move it with");
         k = *next;
@@ -924,6 +938,17 @@ void CrsOperation::estimate(double* a, double* b, double* c, std::size_t n) cons
 
 std::optional<double> CrsOperation::epoch() const { return impl_->t; }
 
+namespace {
+// An area's name for a one-line warning (EPSG's run to hundreds of characters).
+std::string abridged(const std::string& name) {
+  constexpr std::size_t kMaxArea = 120;
+  if (name.size() <= kMaxArea) return name;
+  std::size_t cut = kMaxArea;
+  while (cut > 0 && (static_cast<unsigned char>(name[cut]) & 0xC0u) == 0x80u) --cut;  // not inside a UTF-8 character
+  return name.substr(0, cut) + "…";
+}
+}  // namespace
+
 std::vector<std::string> CrsOperation::warnings() const {
   std::vector<std::string> out = impl_->notes;
   if (auto w = impl_->source_area.warning()) out.push_back(*w);
@@ -934,8 +959,24 @@ std::vector<std::string> CrsOperation::warnings() const {
                   "operation whose area holds them; the first is " + impl_->first_set_aside);
   }
   if (impl_->fallbacks > 0) {
-    out.push_back(std::to_string(impl_->fallbacks) + " points were moved by a worse operation than PROJ's first "
-                  "choice for them (--allow-fallback); the first is " + impl_->first_fallback);
+    std::string why;
+    for (const auto& r : impl_->fallback_reasons) why += (why.empty() ? "" : "; ") + r;
+    out.push_back(std::to_string(impl_->fallbacks) + (impl_->fallbacks == 1 ? " point was" : " points were") +
+                  " moved by a worse operation than PROJ's first choice for them (--allow-fallback): " + why + "; the first is " + impl_->first_fallback);
+  }
+  // Each operation that moved points with a stated accuracy worse than
+  // 0.1 m, or none, is named with its area (issue 40 point 4): a zero
+  // shift rated ±1 m must not pass as a datum change.
+  constexpr double kCoarseOperation_m = 0.1;
+  for (const auto& c : impl_->all) {
+    if (c.info.points == 0 || (c.info.accuracy_m && *c.info.accuracy_m <= kCoarseOperation_m)) continue;
+    out.push_back(std::to_string(c.info.points) + (c.info.points == 1 ? " point was" : " points were") +
+                  " moved by PROJ's operation '" + c.info.name + "'" +
+                  (c.info.identifier.empty() ? std::string() : " (" + c.info.identifier + ")") + ", " +
+                  (c.info.accuracy_m ? "stated accuracy ±" + format_shortest(*c.info.accuracy_m) + " m"
+                                     : std::string("no stated accuracy")) +
+                  (c.info.area ? ", area of use: " + abridged(c.info.area->name) : std::string()) +
+                  ": coarser than 0.1 m; the sidecar records the operation of each group of points");
   }
   return out;
 }
