@@ -182,6 +182,19 @@ void LasReader::check_chunk_points(std::uint64_t points, std::uint64_t offset, c
                   " points are not supported (a chunk is decoded whole, in memory)");
 }
 
+namespace {
+// A chunk that holds more than the header's count gives it (issue 40
+// point 8): refused, since the rest would be dropped.
+Error point_count_mismatch(const std::filesystem::path& path, std::uint64_t offset, std::size_t chunk, std::size_t chunks,
+                           std::uint64_t expected, std::uint64_t header_count, const std::string& what) {
+  return Error(ErrorKind::input, "E_LAZ_POINT_COUNT",
+               path.string() + ": byte " + std::to_string(offset) + ": chunk " + std::to_string(chunk) + " of " +
+                   std::to_string(chunks) + " should hold " + plural(expected, "point") + " by the header's count (" +
+                   plural(header_count, "point") + ") but " + what +
+                   ": the header counts fewer points than the chunks hold, and the rest would be dropped");
+}
+}  // namespace
+
 void LasReader::scan_laz_chunks(std::uint64_t data_end) {
   const LasHeader& h = header_;
   check_chunk_points(std::min<std::uint64_t>(laz_->chunk_size, h.point_count), std::uint64_t{h.offset_to_points} + 8,
@@ -208,6 +221,9 @@ void LasReader::scan_laz_chunks(std::uint64_t data_end) {
     } catch (const laz::StreamCorrupt& e) {
       throw Error(ErrorKind::input, "E_LAZ_CHUNK",
                   path_.string() + ": byte " + std::to_string(offset) + ": " + which + " is corrupt: " + e.what);
+    } catch (const laz::ChunkCountMismatch& m) {
+      throw point_count_mismatch(path_, offset, static_cast<std::size_t>(i), static_cast<std::size_t>(count), n, h.point_count,
+                                 "states " + plural(m.stored, "point"));
     }
     chunks_.push_back({offset, used, first, n});
     offset += used;
@@ -274,8 +290,12 @@ void LasReader::decode_chunk(std::size_t i, std::vector<std::uint8_t>& records) 
     }
   }
   if (!borrowed.decoder) borrowed.decoder = std::make_unique<laz::ChunkDecoder>(layout_of(*laz_, header_.record_length));
+  std::size_t used = 0;
   try {
-    borrowed.decoder->decode(coded.data(), coded.size(), c.points, records.data());
+    used = borrowed.decoder->decode(coded.data(), coded.size(), c.points, records.data());
+  } catch (const laz::ChunkCountMismatch& m) {
+    throw point_count_mismatch(path_, c.offset, i, chunks_.size(), c.points, header_.point_count,
+                               "holds " + plural(m.stored, "point"));
   } catch (const laz::StreamOverrun&) {
     throw Error(ErrorKind::input, "E_LAZ_CHUNK",
                 path_.string() + ": byte " + std::to_string(c.offset) + ": " + which +
@@ -283,6 +303,12 @@ void LasReader::decode_chunk(std::size_t i, std::vector<std::uint8_t>& records) 
   } catch (const laz::StreamCorrupt& e) {
     throw Error(ErrorKind::input, "E_LAZ_CHUNK",
                 path_.string() + ": byte " + std::to_string(c.offset) + ": " + which + " is corrupt: " + e.what);
+  }
+  // A chunk decodes to its last byte (LASzip's and geoanchor's both):
+  // bytes left over are points the header does not count.
+  if (used != c.bytes) {
+    throw point_count_mismatch(path_, c.offset, i, chunks_.size(), c.points, header_.point_count,
+                               "has " + std::to_string(c.bytes - used) + " bytes left after them");
   }
 }
 

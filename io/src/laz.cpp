@@ -273,6 +273,9 @@ std::size_t LazChunkDecoder::decode(const std::uint8_t* chunk, std::size_t size,
                     " points do: truncated or corrupt");
   } catch (const laz::StreamCorrupt& e) {
     throw Error(ErrorKind::input, "E_LAZ_CHUNK", std::string("the chunk is corrupt: ") + e.what);
+  } catch (const laz::ChunkCountMismatch& m) {
+    throw Error(ErrorKind::input, "E_LAZ_CHUNK",
+                "the chunk states " + std::to_string(m.stored) + " points, not the " + std::to_string(n) + " asked for");
   }
 }
 

@@ -1213,7 +1213,11 @@ class LayeredCoder {
     const std::size_t layers = layer_count();
     if (size < len + 4 * (1 + layers)) throw StreamOverrun{};
     std::memcpy(out, data, len);
-    const std::uint8_t* at = data + len + 4;  // the chunk's own point count is not needed
+    // The chunk's own point count must be the one the header and the chunk
+    // table give it: fewer would drop the rest silently (issue 40 point 8).
+    const auto stored = load<std::uint32_t>(data + len);
+    if (stored != n) throw ChunkCountMismatch{stored};
+    const std::uint8_t* at = data + len + 4;
     std::vector<std::size_t> sizes(layers);
     std::size_t total = len + 4 * (1 + layers);
     for (std::size_t k = 0; k < layers; ++k, at += 4) {

@@ -70,7 +70,8 @@ class ChunkDecoder {
   // Decodes `n` (>= 1) records from the chunk [data, data + size) into
   // `out` (n × record_length bytes). Returns the bytes of the chunk used.
   // Throws StreamOverrun when the chunk ends first, StreamCorrupt when a
-  // decoded value is impossible; never reads outside [data, data + size).
+  // decoded value is impossible, ChunkCountMismatch when a layered chunk
+  // states another point count than n; never reads outside [data, data + size).
   std::size_t decode(const std::uint8_t* data, std::size_t size, std::size_t n, std::uint8_t* out);
 
  private:

@@ -43,6 +43,12 @@ struct StreamCorrupt {
   const char* what;
 };
 
+// Thrown by a chunk decoder when the chunk holds another number of points
+// than it was asked to decode (a layered chunk states its own count).
+struct ChunkCountMismatch {
+  std::uint32_t stored;
+};
+
 // The interval is renormalised (a byte shifted out) whenever its length
 // falls below 2^24; it starts as the whole 32-bit range.
 inline constexpr std::uint32_t kMinLength = 1u << 24;

@@ -814,5 +814,35 @@ TEST_F(LazTest, CorruptChunksNeverReadOutOfBounds) {
   }
 }
 
+// Issue 40 point 8: a header that counts fewer points than the chunks hold
+// (1 100 of 1 200 here, chunks of 500) is refused naming both counts, for a
+// pointwise-compressed format (3: bytes left in the last chunk) and a
+// layered one (7: the chunk's own count); nothing is read.
+TEST_F(LazTest, Issue40_AHeaderCountingFewerPointsThanTheChunksIsRefused) {
+  for (const std::uint8_t format : std::vector<std::uint8_t>{3, 7}) {
+    SCOPED_TRACE(static_cast<int>(format));
+    const Bytes records = make_records(format, 0, 1200, Content::realistic, 5);
+    const fs::path p = path("short.laz");
+    write_tile(p, format, 0, records, true, 500);
+    Bytes file = slurp(p);
+    // LAS 1.4: the 64-bit count at byte 247, the legacy 32-bit one at 107 (0 for formats 6-10).
+    put<std::uint64_t>(file, 247, 1100);
+    if (format < 6) put<std::uint32_t>(file, 107, 1100);
+    {
+      std::ofstream f(p, std::ios::binary | std::ios::trunc);
+      f.write(reinterpret_cast<const char*>(file.data()), static_cast<std::streamsize>(file.size()));
+    }
+    try {
+      LasReader r(p);
+      records_of(r);
+      ADD_FAILURE() << "read 1100 of the 1200 points without a word";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), "E_LAZ_POINT_COUNT") << e.what();
+      EXPECT_NE(std::string(e.what()).find("1100 points"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("chunk 2 of 3"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace geoanchor::io
