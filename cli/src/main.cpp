@@ -23,6 +23,7 @@
 #include "option_parsing.hpp"
 #include "snapshot_command.hpp"
 #include "transform_command.hpp"
+#include "usage_hints.hpp"
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/huge_pages.hpp"
@@ -109,7 +110,13 @@ int main(int argc, char** argv) {
       names += (names.empty() ? "" : ", ") + sub->get_name();
     }
     if (!known) {
-      std::cerr << "geoanchor: error[E_USAGE]: help " << argv[1] << ": no such command; expected one of " << names
+      std::vector<std::string> all;
+      for (const CLI::App* sub : std::as_const(app).get_subcommands(std::function<bool(const CLI::App*)>())) {
+        all.push_back(sub->get_name());
+      }
+      const std::string near = geoanchor::cli::nearest_name(argv[1], all);
+      std::cerr << "geoanchor: error[E_USAGE]: help " << argv[1] << ": no such command"
+                << (near.empty() ? "" : "; did you mean '" + near + "'?") << "; expected one of " << names
                 << "\n(run 'geoanchor --help')\n";
       return geoanchor::exit_code(ErrorKind::usage);
     }
@@ -124,7 +131,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "geoanchor: error[E_USAGE]: " << e.what() << "\n(run 'geoanchor --help')\n";
+    const std::vector<std::string> words_after(argv + 1, argv + argc);
+    std::cerr << "geoanchor: error[E_USAGE]: " << geoanchor::cli::usage_hint(app, words_after, e.what()) << "\n(run '"
+              << geoanchor::cli::help_command(app) << "')\n";
     return geoanchor::exit_code(ErrorKind::usage);
   }
 

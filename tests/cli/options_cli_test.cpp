@@ -41,6 +41,9 @@ const NumericOption kOptions[] = {
     {"apply_max_extrapolation", "apply tile.csv --out-dir out", "--max-extrapolation",
      "expected a finite number in [0, 1e+07]"},
     {"apply_jobs", "apply tile.csv --out-dir out", "--jobs", "expected an integer in [1, 32]"},
+    {"convert_max_extrapolation", "convert in.csv --to enu --origin 47,8,400", "--max-extrapolation",
+     "expected a finite number in [0, 1e+07]"},
+    {"locate_max_extrapolation", "locate map points.csv", "--max-extrapolation", "expected a finite number in [0, 1e+07]"},
     {"fit_alpha", "fit control.csv --model helmert7 --convention position_vector", "--alpha",
      "expected a finite number in [1e-06, 0.5]"},
     {"fit_alpha_point", "fit control.csv --model helmert7 --convention position_vector", "--alpha-point",
@@ -99,6 +102,36 @@ TEST_F(OptionsCli, Issue12Point6_AFiniteValueOutsideTheRangeOrNotAnIntegerIsRefu
   EXPECT_EQ(zero.exit_code, 2) << zero.err;
   EXPECT_NE(zero.err.find("--sigma: value 0 is out of range; expected a finite number > 0"), std::string::npos)
       << zero.err;
+  EXPECT_TRUE(leftovers({}).empty()) << "left behind: " << ::testing::PrintToString(leftovers({}));
+}
+
+// Issue 40 point 13: a mistyped command or option is named with the
+// nearest that exists; nothing is run and nothing written.
+TEST_F(OptionsCli, Issue40_UsageErrorsSuggestTheNearestCommandOrOption) {
+  struct Typo {
+    const char* command_line;
+    const char* says;
+  };
+  const Typo typos[] = {
+      {"conver in.csv --to ecef", "'conver' is not a command; did you mean 'convert'?"},
+      {"tranform in.csv --from ITRF2014@2010.0 --to ITRF2020", "did you mean 'transform'?"},
+      {"convert in.csv --to enu --orgin 47.46,8.55,480", "--orgin is not an option of convert: did you mean --origin?"},
+      {"convert in.csv --to enu --orgin=47.46,8.55,480", "did you mean --origin?"},
+      {"fit control.csv --model helmert7 --remove-outlier", "did you mean --remove-outliers?"},
+      {"apply tile.csv --out-dir out --max-extrapolaton 5", "did you mean --max-extrapolation?"},
+      {"help conver", "did you mean 'convert'?"},
+  };
+  for (const auto& t : typos) {
+    const RunResult r = run(t.command_line);
+    EXPECT_EQ(r.exit_code, 2) << t.command_line << ": " << r.err;
+    EXPECT_NE(r.err.find(t.says), std::string::npos) << t.command_line << ": " << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+  // Far from every name: no guess, the commands listed.
+  const RunResult far = run("frobnicate in.csv");
+  EXPECT_EQ(far.exit_code, 2);
+  EXPECT_EQ(far.err.find("did you mean"), std::string::npos) << far.err;
+  EXPECT_NE(far.err.find("(commands: convert, fit"), std::string::npos) << far.err;
   EXPECT_TRUE(leftovers({}).empty()) << "left behind: " << ::testing::PrintToString(leftovers({}));
 }
 
