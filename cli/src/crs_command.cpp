@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/io/crs.hpp"
 
 namespace geoanchor::cli {
@@ -25,6 +26,7 @@ void run_crs(const CrsCommandOptions& o) {
   const std::string json_text = io::crs_json_text(crs);
   if (o.json) {
     std::cout << json_text << '\n';
+    io::finish_standard_output("the CRS's description");
     return;
   }
   // The text form says the same as the JSON, one fact per line.
@@ -113,6 +115,7 @@ void run_crs(const CrsCommandOptions& o) {
     std::cout << text(j["columns"]);
   }
   std::cout << '\n' << "WKT2:2019:\n" << text(j["wkt2"]) << '\n';
+  io::finish_standard_output("the CRS's description");
 }
 
 }  // namespace geoanchor::cli

@@ -29,6 +29,20 @@
 #include "geoanchor/io/huge_pages.hpp"
 #include "version.hpp"
 
+namespace {
+// Help and the version go to standard output like every result: one that
+// cannot be written is an error (exit 5), as for the other commands.
+int printed(int cli11_exit, std::string_view what) {
+  try {
+    geoanchor::io::finish_standard_output(what);
+  } catch (const geoanchor::Error& e) {
+    std::cerr << "geoanchor: error[" << e.code() << "]: " << e.what() << '\n';
+    return geoanchor::exit_code(e.kind());
+  }
+  return cli11_exit;
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   using geoanchor::Error;
   using geoanchor::ErrorKind;
@@ -125,11 +139,11 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
+    return printed(app.exit(e), "the help");
   } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
+    return printed(app.exit(e), "the help");
   } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
+    return printed(app.exit(e), "the version");
   } catch (const CLI::ParseError& e) {
     const std::vector<std::string> words_after(argv + 1, argv + argc);
     std::cerr << "geoanchor: error[E_USAGE]: " << geoanchor::cli::usage_hint(app, words_after, e.what()) << "\n(run '"

@@ -135,5 +135,17 @@ TEST_F(OptionsCli, Issue40_UsageErrorsSuggestTheNearestCommandOrOption) {
   EXPECT_TRUE(leftovers({}).empty()) << "left behind: " << ::testing::PrintToString(leftovers({}));
 }
 
+// Issue 40 point 10: help, the version and crs print to standard output
+// like every result; a full device is an error (exit 5), as for the others.
+TEST_F(OptionsCli, Issue40_HelpVersionAndCrsFailWhenStandardOutputCannotBeWritten) {
+  for (const std::string args : {"--version", "version", "--help", "help", "help fit", "convert --help", "crs EPSG:4326",
+                                 "crs EPSG:4326 --json"}) {
+    const RunResult r = shell("{ " + exe() + " " + args + " > /dev/full; }");
+    EXPECT_EQ(r.exit_code, 5) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("E_WRITE"), std::string::npos) << args << ": " << r.err;
+  }
+  EXPECT_EQ(run("--version").exit_code, 0);
+}
+
 }  // namespace
 }  // namespace geoanchor
