@@ -14,6 +14,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/physical_range.hpp"
 #include "geoanchor/io/crs_operation.hpp"
 #include "crs_impl.hpp"
 
@@ -259,6 +260,22 @@ void refuse_orthometric_without_geoid(const std::string& where) {
                       "needs takes the geoid model: give --geoid EGM96 (h = H + N), or give ellipsoidal heights as h");
 }
 
+void check_physical_positions(const geodesy::ControlSet& set, const std::function<std::string(const geodesy::ControlPoint&)>& where) {
+  // Each role's own ellipsoid is within a few hundred metres of GRS80's, far
+  // inside the range's kilometres.
+  const geodesy::Ellipsoid e = geodesy::Ellipsoid::grs80();
+  for (const auto& p : set.points) {
+    for (const bool source : {true, false}) {
+      const geodesy::EcefPosition& x = source ? p.source : p.target;
+      if (geodesy::is_physical_ecef(x.m, e)) continue;
+      throw Error(ErrorKind::input, "E_ECEF_RANGE",
+                  where(p) + ": " + p.id + ": its " + (source ? "source" : "target") + " position lies " +
+                      format_shortest(x.m.norm()) + " m from the Earth's centre: not a position on the Earth (ellipsoidal "
+                      "heights are " + geodesy::physical_height_range_text() + "): a unit, a swapped column or a placeholder?");
+    }
+  }
+}
+
 void check_frame_epochs(const geodesy::ControlSet& set, const ControlReadOptions& o, const std::string& source_where,
                         const std::string& target_where) {
   const bool every_point_dated =
@@ -323,6 +340,7 @@ double RoleConverter::convert(const RoleValues& v, bool others_have_sigmas, cons
     }
     default: fail(RoleField::first, "control sets take ECEF, geodetic, ENU or projected coordinates");
   }
+
   Eigen::Matrix3d local = Eigen::Matrix3d::Identity();  // unit weight when the set gives no sigmas at all
   if (v.sigma_m) {
     if (!(*v.sigma_m > 0.0)) fail(RoleField::sigma, "must be > 0 (a standard deviation in metres)");

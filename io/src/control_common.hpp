@@ -92,6 +92,10 @@ geodesy::ControlInputForm input_form(CoordinateKind kind, const std::optional<ge
 // point has none either (geodesy::require_epoch_if_dynamic), naming where
 // each frame was declared (empty: not declared in the file).
 // A frame the caller overrides (ControlReadOptions) is not checked.
+// Every mark's source and target lie on the Earth (issue 40 point 10):
+// Error (input, E_ECEF_RANGE) naming `where(point)` and the role otherwise.
+void check_physical_positions(const geodesy::ControlSet& set, const std::function<std::string(const geodesy::ControlPoint&)>& where);
+
 void check_frame_epochs(const geodesy::ControlSet& set, const ControlReadOptions& o, const std::string& source_where,
                         const std::string& target_where);
 

@@ -640,6 +640,7 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
   detail::refuse_duplicate_ids(
       set, [&](const ControlPoint& q) { return source_name + ":" + std::to_string(q.line); },
       [](const ControlPoint& q) { return "line " + std::to_string(q.line); });
+  detail::check_physical_positions(set, [&](const ControlPoint& q) { return source_name + ":" + std::to_string(q.line); });
   detail::check_frame_epochs(set, o, source_frame_where, target_frame_where);
   return set;
 }

@@ -323,6 +323,8 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     if (mixed_src) p.source_as_read = p.source.m;
     if (mixed_dst) p.target_as_read = p.target.m;
   }
+  detail::check_physical_positions(
+      set, [&](const geodesy::ControlPoint& q) { return source_name + ": points[" + std::to_string(q.line) + "]"; });
   detail::check_frame_epochs(set, o, source_frame_where, target_frame_where);
   return set;
 }

@@ -571,6 +571,10 @@ ControlSet read_control_pair(const std::filesystem::path& source, const std::fil
         set, f.source, *f.crs, f.source ? "--src-crs" : "--dst-crs", [](std::size_t) { return false; },
         [&](const ControlPoint& q) { return f.name + ":" + std::to_string(rows_of.at(q.id).line); });
   }
+  detail::check_physical_positions(set, [&](const ControlPoint& q) {
+    return files[0].name + ":" + std::to_string(rows[0].at(q.id).line) + " / " + files[1].name + ":" +
+           std::to_string(rows[1].at(q.id).line);
+  });
   detail::check_frame_epochs(set, o, files[0].frame_where, files[1].frame_where);
   return set;
 }

@@ -4,6 +4,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/physical_range.hpp"
 
 namespace geoanchor::io {
 
@@ -141,14 +142,23 @@ EcefPosition CoordinateDecoder::decode(const CsvRecord& r) const {
       const double h = columns_.third ? number(r, *columns_.third) : 0.0;
       GeodeticPosition g{Angle::degrees(a), Angle::degrees(b), EllipsoidalHeight{h}};
       if (columns_.orthometric) g = with_ellipsoidal_height(g, *frame_.geoid, source_ + ":" + std::to_string(r.line));
+      geodesy::require_physical_height(g.h.m, where(columns_.third.value_or(columns_.second)));
       return geocentric_.ecef_from_geodetic(g);
     }
-    case CoordinateKind::ecef: return EcefPosition(a, b, number(r, *columns_.third));
+    case CoordinateKind::ecef: {
+      const EcefPosition x(a, b, number(r, *columns_.third));
+      geodesy::require_physical_ecef(x.m, frame_.ellipsoid, source_ + ":" + std::to_string(r.line));
+      return x;
+    }
     case CoordinateKind::enu:
-      return plane_->ecef_from_enu(geodesy::EnuPosition{Eigen::Vector3d(a, b, number(r, *columns_.third)), *frame_.origin});
-    case CoordinateKind::ned:
-      return plane_->ecef_from_enu(geodesy::enu_from_ned(
-          geodesy::NedPosition{Eigen::Vector3d(a, b, number(r, *columns_.third)), *frame_.origin}));
+    case CoordinateKind::ned: {
+      const Eigen::Vector3d v(a, b, number(r, *columns_.third));
+      const EcefPosition x = columns_.kind == CoordinateKind::enu
+                                 ? plane_->ecef_from_enu(geodesy::EnuPosition{v, *frame_.origin})
+                                 : plane_->ecef_from_enu(geodesy::enu_from_ned(geodesy::NedPosition{v, *frame_.origin}));
+      geodesy::require_physical_ecef(x.m, frame_.ellipsoid, source_ + ":" + std::to_string(r.line));
+      return x;
+    }
     case CoordinateKind::projected: {
       const double h = columns_.third ? number(r, *columns_.third) : 0.0;
       std::optional<geodesy::UtmZone> row_zone;
@@ -168,6 +178,7 @@ EcefPosition CoordinateDecoder::decode(const CsvRecord& r) const {
         }
       }
       if (columns_.orthometric) g = with_ellipsoidal_height(g, *frame_.geoid, source_ + ":" + std::to_string(r.line));
+      geodesy::require_physical_height(g.h.m, where(columns_.third.value_or(columns_.second)));
       return geocentric_.ecef_from_geodetic(g);
     }
   }

@@ -14,6 +14,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/physical_range.hpp"
 #include "geoanchor/geodesy/utf8.hpp"
 #include "network_builder.hpp"
 #include "network_readers.hpp"
@@ -56,6 +57,14 @@ std::size_t NetworkBuilder::define(const std::string& id, const Eigen::Vector3d&
                       " and " + constraint.text() + "); give one definition");
     }
     return i;
+  }
+  // An ellipsoidal network's stations are geocentric: a height of 1e308 or
+  // a unit slip is no position on the Earth (issue 40 point 10).
+  if (net_.space == geodesy::NetworkSpace::ellipsoidal && !geodesy::is_physical_ecef(position, net_.ellipsoid)) {
+    throw Error(ErrorKind::input, "E_ECEF_RANGE",
+                where + ": station " + id + " lies " + format_shortest(position.norm()) +
+                    " m from the Earth's centre: not a position on the Earth (ellipsoidal heights are " +
+                    geodesy::physical_height_range_text() + ")");
   }
   s.position = position;
   s.position_known = true;

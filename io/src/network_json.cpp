@@ -16,6 +16,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/physical_range.hpp"
 #include "geoanchor/io/json_input.hpp"
 #include "json_fields.hpp"
 #include "network_builder.hpp"
@@ -153,6 +154,10 @@ Eigen::Vector3d position(const json& s, const geodesy::Network& net, const std::
   const double lat = number(s, "lat_deg", where), lon = number(s, "lon_deg", where), h = number(s, "h_m", where);
   if (!(std::fabs(lat) <= 90.0)) fail(where + ".lat_deg", "latitude " + format_shortest(lat) + " not in [-90, 90]");
   if (!(std::fabs(lon) <= 180.0)) fail(where + ".lon_deg", "longitude " + format_shortest(lon) + " not in [-180, 180]");
+  if (!geodesy::is_physical_height(h)) {
+    fail(where + ".h_m", "ellipsoidal height " + format_shortest(h) + " m is not a height on the Earth: expected " +
+                             geodesy::physical_height_range_text());
+  }
   return geodesy::ecef_from_geodetic(net.ellipsoid, {geodesy::Angle::degrees(lat), geodesy::Angle::degrees(lon),
                                                      geodesy::EllipsoidalHeight{h}})
       .m;

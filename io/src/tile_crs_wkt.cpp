@@ -10,6 +10,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/physical_range.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
 #include "frame_datum_names.hpp"
 #include "proj_handles.hpp"
@@ -277,6 +278,10 @@ TileMetadata typed_tile_metadata(std::string_view wkt, std::string_view source) 
         o.point.lat = geodesy::Angle::degrees(param(ctx.get(), op.get(), 8834, source));
         o.point.lon = geodesy::Angle::degrees(param(ctx.get(), op.get(), 8835, source));
         o.point.h = geodesy::EllipsoidalHeight{param(ctx.get(), op.get(), 8836, source)};
+        if (!geodesy::is_physical_height(o.point.h.m)) {
+          fail(source, "'" + m.horizontal_crs + "': its origin's ellipsoidal height " + format_shortest(o.point.h.m) +
+                           " m is not a height on the Earth: expected " + geodesy::physical_height_range_text());
+        }
         m.coordinates.origin = o;
         m.origin_source = "LAS WKT";
       } else if (c == "9807") {

@@ -9,6 +9,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/physical_range.hpp"
 #include "geoanchor/geodesy/utf8.hpp"
 #include "geoanchor/io/json_input.hpp"
 #include "geoanchor/io/tile_metadata.hpp"
@@ -215,7 +216,8 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
     o.ellipsoid = m.coordinates.ellipsoid;
     o.point.lat = geodesy::Angle::degrees(number(*lat, source, "enu_origin.lat_deg", -90, 90, "[-90, 90]"));
     o.point.lon = geodesy::Angle::degrees(number(*lon, source, "enu_origin.lon_deg", -180, 180, "[-180, 180]"));
-    o.point.h = geodesy::EllipsoidalHeight{number(*h, source, "enu_origin.h_m", -1.0e4, 1.0e5, "[-10000, 100000] m")};
+    o.point.h = geodesy::EllipsoidalHeight{number(*h, source, "enu_origin.h_m", geodesy::kMinEllipsoidalHeight_m,
+                                                  geodesy::kMaxEllipsoidalHeight_m, geodesy::physical_height_range_text())};
     m.coordinates.origin = o;
     if (const json* src = member(*origin, "source", source, "enu_origin")) m.origin_source = text(*src, source, "enu_origin.source");
   } else if (k == "ecef" || k == "crs") {

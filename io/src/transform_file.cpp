@@ -28,6 +28,7 @@
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/physical_range.hpp"
 #include "geoanchor/io/json_input.hpp"
 
 namespace geoanchor::io {
@@ -384,7 +385,12 @@ geodesy::LocalOrigin origin_of(const json& doc, std::string_view model, std::str
   const double lon = number_field(*no, "lon_deg", "nominal_origin.", source);
   if (std::fabs(lat) > 90.0) fail(source, "nominal_origin.lat_deg", "latitude " + format_shortest(lat) + " not in [-90, 90]");
   if (std::fabs(lon) > 180.0) fail(source, "nominal_origin.lon_deg", "longitude " + format_shortest(lon) + " not in [-180, 180]");
-  return {{Angle::degrees(lat), Angle::degrees(lon), geodesy::EllipsoidalHeight{number_field(*no, "h_m", "nominal_origin.", source)}}, e};
+  const double h = number_field(*no, "h_m", "nominal_origin.", source);
+  if (!geodesy::is_physical_height(h)) {
+    fail(source, "nominal_origin.h_m", "ellipsoidal height " + format_shortest(h) + " m is not a height on the Earth: expected " +
+                                           geodesy::physical_height_range_text());
+  }
+  return {{Angle::degrees(lat), Angle::degrees(lon), geodesy::EllipsoidalHeight{h}}, e};
 }
 
 void frames_of(const json& doc, TransformFile& t, std::string_view source) {
@@ -1089,8 +1095,10 @@ ControlExtent parse_extent(const json& e, std::string_view source) {
   const double lon = number_field(c, "lon_deg", where + ".centroid.", source);
   if (!(std::fabs(lat) <= 90.0)) fail(source, where + ".centroid.lat_deg", "latitude " + format_shortest(lat) + " not in [-90, 90]");
   if (!(std::fabs(lon) <= 180.0)) fail(source, where + ".centroid.lon_deg", "longitude " + format_shortest(lon) + " not in [-180, 180]");
-  x.centroid.point = geodesy::GeodeticPosition{Angle::degrees(lat), Angle::degrees(lon),
-                                               geodesy::EllipsoidalHeight{number_field(c, "h_m", where + ".centroid.", source)}};
+  // (The centroid of marks spread over a continent lies below the ground:
+  // no physical range for it, only finiteness.)
+  const double h = number_field(c, "h_m", where + ".centroid.", source);
+  x.centroid.point = geodesy::GeodeticPosition{Angle::degrees(lat), Angle::degrees(lon), geodesy::EllipsoidalHeight{h}};
   x.centroid.ellipsoid = geodesy::Ellipsoid::wgs84();
   const json& hull = e.at("hull_en_m");
   if (!hull.is_array()) fail(source, where + ".hull_en_m", "value is not an array of [e, n] in metres");

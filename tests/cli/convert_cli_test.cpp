@@ -486,7 +486,7 @@ TEST_F(ConvertCli, Issue12Point1_AForcedZoneOutsideItsBandWarnsOnStderrAndInTheS
 TEST_F(ConvertCli, Issue12Point1_ANonFiniteOutputIsRefusedNeverWritten) {
   // A transform of 1.7e308 m gives an infinite height: it was written as "inf".
   write("T.json", R"({"model": "translation3", "parameters": {"tx_m": 1.7e308, "ty_m": 1.7e308, "tz_m": 0}})");
-  write("in.csv", "id,x_m,y_m,z_m\nA,4000000,600000,4700000\n");
+  write("in.csv", "id,x_m,y_m,z_m\nA,4270000,640000,4680000\n");  // near Zurich, on the ground
   const RunResult r = run("convert " + path("in.csv").string() + " --transform " + path("T.json").string() +
                           " --to geodetic -o " + path("out.csv").string());
   EXPECT_EQ(r.exit_code, 3) << r.err;

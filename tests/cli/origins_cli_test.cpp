@@ -113,5 +113,51 @@ TEST_F(Origins, Issue40_PointsFarFromTheOriginAreRefused) {
   EXPECT_FALSE(fs::exists(path("tight.csv")));
 }
 
+// Issue 40 point 10: a height or a geocentric position off the Earth (a
+// placeholder 1e308, a unit slip) is refused wherever a coordinate enters:
+// an origin flag, a CSV row, a control set, a network, a transform file.
+TEST_F(Origins, Issue40_HeightsAndRadiiOffTheEarthAreRefused) {
+  const auto pts = write("pts.csv", "id,lat_deg,lon_deg,h_m\nA,47.4650,8.5500,480\n");
+  const auto origin = run("convert " + pts.string() + " --to enu --origin 47.4,8.5,1e308 -o " + path("o.csv").string());
+  EXPECT_EQ(origin.exit_code, 2) << origin.err;
+  EXPECT_NE(origin.err.find("E_HEIGHT_RANGE"), std::string::npos) << origin.err;
+  EXPECT_NE(origin.err.find("[-12000, 100000] m"), std::string::npos) << origin.err;
+  EXPECT_FALSE(fs::exists(path("o.csv")));
+  struct Row {
+    const char* name;
+    const char* csv;
+    const char* code;
+  };
+  for (const Row& r : {Row{"h", "id,lat_deg,lon_deg,h_m\nA,47.4650,8.5500,1e308\n", "E_HEIGHT_RANGE"},
+                       Row{"feet_as_km", "id,lat_deg,lon_deg,h_m\nA,47.4650,8.5500,-480000\n", "E_HEIGHT_RANGE"},
+                       Row{"ecef", "id,x_m,y_m,z_m\nA,1,2,3\n", "E_ECEF_RANGE"},
+                       Row{"enu", "id,e_m,n_m,u_m\nA,0,0,1e9\n", "E_ECEF_RANGE"}}) {
+    const auto in = write(std::string(r.name) + ".csv", r.csv);
+    const auto run_result = run("convert " + in.string() + " --to ecef --origin 47.4,8.5,400 -o " + path("out.csv").string());
+    EXPECT_EQ(run_result.exit_code, 3) << r.name << ": " << run_result.err;
+    EXPECT_NE(run_result.err.find(r.code), std::string::npos) << r.name << ": " << run_result.err;
+    EXPECT_NE(run_result.err.find(std::string(r.name) + ".csv:2"), std::string::npos) << run_result.err;
+    EXPECT_FALSE(fs::exists(path("out.csv")));
+  }
+  // A control set and a transform file's origin.
+  const auto control = write("control.csv",
+                             "# source_frame = ITRF2014@2024.5\n# target_frame = ITRF2014@2024.5\n"
+                             "id,lat_src_deg,lon_src_deg,h_src_m,lat_dst_deg,lon_dst_deg,h_dst_m,sigma_src_m,sigma_dst_m\n"
+                             "A,47.40,8.50,400,47.40,8.50,400.01,0.01,0.01\nB,47.41,8.50,400,47.41,8.50,400.01,0.01,0.01\n"
+                             "C,47.40,8.51,1e308,47.40,8.51,400.01,0.01,0.01\nD,47.41,8.51,400,47.41,8.51,400.01,0.01,0.01\n");
+  const auto fit = run("fit " + control.string() + " --model translation3 -o " + path("t.json").string());
+  EXPECT_EQ(fit.exit_code, 3) << fit.err;
+  EXPECT_NE(fit.err.find("control.csv:6"), std::string::npos) << fit.err;
+  EXPECT_FALSE(fs::exists(path("t.json")));
+  std::string t = kIdentityEnuOrigin;
+  t.replace(t.find("480.05"), 6, "1e308");
+  const auto bad_t = write("bad_t.json", t);
+  const auto map = write("map.csv", "id,e_m,n_m,u_m\nA,100,200,5\n");
+  const auto applied = run("convert " + map.string() + " --to geodetic --transform " + bad_t.string() + " -o " + path("m.csv").string());
+  EXPECT_EQ(applied.exit_code, 3) << applied.err;
+  EXPECT_NE(applied.err.find("nominal_origin.h_m"), std::string::npos) << applied.err;
+  EXPECT_FALSE(fs::exists(path("m.csv")));
+}
+
 }  // namespace
 }  // namespace geoanchor

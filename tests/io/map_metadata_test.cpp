@@ -264,7 +264,8 @@ TEST_F(SolutionColumn, Issue16_EachMarkCarriesItsSolutionAndABadCellIsRefusedByL
   typo.replace(typo.find(",solution"), 9, ",soluton");
   EXPECT_HAS(error_of([&] { (void)read_control_set(write("typo.csv", typo), {}); }),
              "header column 10 'soluton': not read: a mark's GNSS solution type is read from the column 'solution'");
-  const auto none = read_control_set(write("none.csv", std::string(kHeader) + "\nA,1,2,3,1,2,3,1,1\n"), {});
+  const auto none = read_control_set(
+      write("none.csv", std::string(kHeader) + "\nA,4270000,640000,4680000,4270000.1,640000.1,4680000.1,1,1\n"), {});
   EXPECT_FALSE(none.has_solutions);
   EXPECT_FALSE(none.points[0].solution);
 }

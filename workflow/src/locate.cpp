@@ -13,6 +13,7 @@
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/physical_range.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"
 
@@ -147,6 +148,7 @@ LocateResult locate_points(const LocateRequest& request) {
     p.ecef = plane.ecef_from_enu(geodesy::EnuPosition{row.enu, r.map.origin});
     p.geodetic = geodesy::geodetic_from_ecef(ell, p.ecef);
     const std::string where = request.points + ":" + std::to_string(row.line);
+    geodesy::require_physical_height(p.geodetic.h.m, where + ": " + p.id);
     // How far the point reaches: outside the control network of the map's
     // transform, or from the map's origin when it records none.
     const auto refuse_past_limit = [&](double d, const std::string& from_what) {

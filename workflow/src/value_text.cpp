@@ -9,6 +9,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/geodesy/physical_range.hpp"
 #include "geoanchor/io/proj_geoid.hpp"
 
 namespace geoanchor::workflow {
@@ -76,6 +77,7 @@ geodesy::Ellipsoid parse_ellipsoid(std::string_view text, std::string_view flag)
 geodesy::LocalOrigin parse_origin(std::string_view text, std::string_view flag, const geodesy::Ellipsoid& e) {
   const auto v = split_numbers(text, flag, 3, "LAT,LON,H (degrees, degrees, ellipsoidal height in metres)");
   check_lat_lon(v[0], v[1], flag, text);
+  geodesy::require_physical_height(v[2], std::string(flag) + " " + std::string(text), ErrorKind::usage);
   return geodesy::LocalOrigin{
       geodesy::GeodeticPosition{geodesy::Angle::degrees(v[0]), geodesy::Angle::degrees(v[1]),
                                 geodesy::EllipsoidalHeight{v[2]}},

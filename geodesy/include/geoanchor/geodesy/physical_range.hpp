@@ -1,0 +1,42 @@
+#pragma once
+// Where a point geoanchor handles can physically be (issue 40 point 10):
+// between the deepest ocean floor and the edge of space. A height or a
+// geocentric position outside that range is a unit error, a swapped column
+// or a placeholder (1e308), never a coordinate; docs/conventions.md states
+// the range.
+
+#include <Eigen/Core>
+
+#include <string>
+#include <string_view>
+
+#include "geoanchor/geodesy/ellipsoid.hpp"
+#include "geoanchor/geodesy/error.hpp"
+
+namespace geoanchor::geodesy {
+
+// Challenger Deep's floor lies some 10.9 km below the ellipsoid.
+inline constexpr double kMinEllipsoidalHeight_m = -12000.0;
+// The Kármán line: nothing geoanchor maps or anchors lies above it.
+inline constexpr double kMaxEllipsoidalHeight_m = 100000.0;
+
+// Whether a height, or a geocentric position's distance from the centre of
+// `e` (b + min to a + max, a necessary condition), lies in the range; false
+// for NaN.
+bool is_physical_height(double h_m);
+bool is_physical_ecef(const Eigen::Vector3d& x_m, const Ellipsoid& e);
+// "[-12000, 100000] m, from below the deepest ocean floor to the edge of space".
+const std::string& physical_height_range_text();
+
+// Throws Error (`kind`, E_HEIGHT_RANGE) naming `where` for a height that is
+// not finite or not within [kMinEllipsoidalHeight_m, kMaxEllipsoidalHeight_m].
+void require_physical_height(double h_m, std::string_view where, ErrorKind kind = ErrorKind::input);
+
+// Throws Error (`kind`, E_ECEF_RANGE) naming `where` for a geocentric
+// position whose distance from the centre is not within the heights above
+// of `e` (b + min to a + max): a necessary condition, checked before any
+// conversion.
+void require_physical_ecef(const Eigen::Vector3d& x_m, const Ellipsoid& e, std::string_view where,
+                           ErrorKind kind = ErrorKind::input);
+
+}  // namespace geoanchor::geodesy
