@@ -136,6 +136,56 @@ std::optional<std::string> likely_lat_lon_swap(const geodesy::ControlSet& set) {
   return std::nullopt;
 }
 
+std::optional<std::string> far_apart_mark(const geodesy::ControlSet& set) {
+  if (set.points.size() < 2) return std::nullopt;
+  std::vector<double> apart;
+  for (const auto& p : set.points) apart.push_back((p.target.m - p.source.m).norm());
+  const double typical = median(apart);
+  if (!(typical <= kFarApart_m)) return std::nullopt;  // the whole set disagrees: likely_lat_lon_swap's case
+  std::size_t count = 0;
+  const geodesy::ControlPoint* first = nullptr;
+  double first_apart = 0.0;
+  for (std::size_t i = 0; i < set.points.size(); ++i) {
+    if (apart[i] <= kFarApart_m) continue;  // NaN cannot occur: positions are checked on the Earth
+    if (count++ == 0) first = &set.points[i], first_apart = apart[i];
+  }
+  if (!first) return std::nullopt;
+  // The role that is out of place: the one farther from the other marks'
+  // positions in its own frame (their component-wise median).
+  const auto distance_from_others = [&](bool source) {
+    Eigen::Vector3d m;
+    for (int c = 0; c < 3; ++c) {
+      std::vector<double> v;
+      for (const auto& p : set.points) v.push_back((source ? p.source.m : p.target.m)(c));
+      m(c) = median(v);
+    }
+    return ((source ? first->source.m : first->target.m) - m).norm();
+  };
+  const bool source_out = distance_from_others(true) > distance_from_others(false);
+  // Whether that role reads close to the other with its latitude and longitude swapped.
+  std::string why = "in the " + std::string(source_out ? "source" : "target") +
+                    " columns, which lie far from the other marks: latitude and longitude swapped, or a wrong unit?";
+  for (const bool source : {source_out}) {
+    const geodesy::ControlInputForm& form = source ? set.source_input : set.target_input;
+    if (form.form != geodesy::CoordinateForm::geodetic) continue;
+    const Eigen::Vector3d& as_read = source ? first->source_as_read : first->target_as_read;
+    if (!(std::fabs(as_read.y()) <= 90.0)) continue;
+    const geodesy::EcefPosition swapped = geodesy::GeocentricConverter(form.ellipsoid)
+                                              .ecef_from_geodetic({geodesy::Angle::degrees(as_read.y()), geodesy::Angle::degrees(as_read.x()),
+                                                                   geodesy::EllipsoidalHeight{as_read.z()}});
+    const double close = ((source ? first->target.m : first->source.m) - swapped.m).norm();
+    if (close < kSwappedClose_m) {
+      why = "read with its " + std::string(source ? "source" : "target") + " latitude and longitude the other way round, they lie " +
+            format_fixed(close, 3) + " m apart: those two cells look swapped in this row.";
+      break;
+    }
+  }
+  return set.source_name + (first->line ? ":" + std::to_string(first->line) : std::string()) + ": mark " + first->id +
+         ": its source and target lie " + format_fixed(first_apart / 1e3, 1) + " km apart, the marks' median " +
+         format_fixed(typical, 3) + " m" + (count > 1 ? " (" + std::to_string(count) + " marks are that far apart)" : "") +
+         "; " + why + " Nothing was fitted";
+}
+
 std::optional<std::string> orthometric_height_warning(const solver::FitResult& r, const geodesy::ControlSet& set,
                                                       const geodesy::GeoidGrid& geoid) {
   if (r.model == solver::FitModel::enu_origin || r.model == solver::FitModel::site_calibration) return std::nullopt;

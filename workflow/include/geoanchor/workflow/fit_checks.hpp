@@ -28,6 +28,14 @@ std::vector<std::string> control_set_warnings(const geodesy::ControlSet& set);
 // kilometre of each other. The message names the frame and the columns.
 std::optional<std::string> likely_lat_lon_swap(const geodesy::ControlSet& set);
 
+// One mark (or a few) whose source and target lie hundreds of kilometres
+// apart while the others agree (issue 40 point 10): a row with latitude and
+// longitude swapped, or a wrong unit, which would end the solve in "no
+// convergence". The message names the first such mark, its line, how far
+// apart its roles are against the marks' median, and which role reads
+// close when its latitude and longitude are swapped.
+std::optional<std::string> far_apart_mark(const geodesy::ControlSet& set);
+
 // When the fitted transform's vertical offset looks like the geoid
 // undulation: at the centroid of the marks the fit used, the displacement
 // target − source along the local up (from the fitted parameters) is larger
