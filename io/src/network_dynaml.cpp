@@ -246,6 +246,12 @@ class Reader final : public XmlHandler {
       return;
     }
     if (path_.size() == 2) {
+      // DynaML.xsd gives <DnaStation> and <DnaMeasurement> no attributes:
+      // one would go unread (issue 40 point 10).
+      if (*attributes && (tag == Tag::DnaStation || tag == Tag::DnaMeasurement)) {
+        fail(line(), "<" + name + "> attribute " + std::string(attributes[0]) + "=\"" + attributes[1] +
+                         "\" is not read by geoanchor (DynaML.xsd gives <" + name + "> no attributes)");
+      }
       if (tag == Tag::DnaStation) {
         station_.clear();
         station_.line = line();

@@ -258,12 +258,33 @@ NetworkFormat detect_network_format(std::string_view text, std::string_view sour
   if (t.substr(0, 5) == "%=SNX") return NetworkFormat::sinex;
   if (!t.empty() && t[0] == '{') return NetworkFormat::json;
   if (!t.empty() && t[0] == '<') {
-    // The root element, past the XML declaration, comments and doctype.
+    // The root element, past the XML declaration, processing instructions,
+    // comments and the doctype, each skipped whole: markup inside a comment
+    // (<!-- <obs ...> -->) is no element (issue 40 point 10).
     std::size_t p = 0;
     while ((p = t.find('<', p)) != std::string_view::npos) {
       const std::string_view rest = t.substr(p + 1);
+      std::size_t skip_to = std::string_view::npos;
+      if (rest.substr(0, 3) == "!--") {
+        const std::size_t e = t.find("-->", p + 4);
+        skip_to = e == std::string_view::npos ? t.size() : e + 3;
+      } else if (rest.substr(0, 1) == "?") {
+        const std::size_t e = t.find("?>", p + 2);
+        skip_to = e == std::string_view::npos ? t.size() : e + 2;
+      } else if (rest.substr(0, 1) == "!") {
+        // <!DOCTYPE ... [internal subset] >
+        const std::size_t bracket = t.find('[', p), close = t.find('>', p);
+        if (bracket != std::string_view::npos && bracket < close) {
+          const std::size_t e = t.find("]", bracket);
+          skip_to = e == std::string_view::npos ? t.size() : t.find('>', e);
+        } else {
+          skip_to = close;
+        }
+        if (skip_to != std::string_view::npos && skip_to < t.size()) ++skip_to;
+      }
       if (rest.substr(0, 1) == "?" || rest.substr(0, 1) == "!") {
-        p += 1;
+        if (skip_to == std::string_view::npos || skip_to >= t.size()) break;
+        p = skip_to;
         continue;
       }
       if (rest.substr(0, 12) == "DnaXmlFormat") return NetworkFormat::dynaml;
