@@ -688,6 +688,31 @@ TransformFile parse_transform_core(std::string_view text, std::string_view sourc
 // Keys that describe the transform again (for PROJ, EPSG, the other
 // convention) or say where it came from: type-checked, and where they state
 // the convention or the parameters a second time, held to the first.
+// Where two PROJ strings differ: the first step or parameter that does, or
+// nullopt when they say the same (numbers equal to 1e-12 relative, as
+// written and read back by format_shortest).
+std::optional<std::string> pipeline_difference(const std::string& stated, const std::string& expected) {
+  const auto tokens = [](const std::string& text) {
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    for (std::string w; in >> w;) out.push_back(w);
+    return out;
+  };
+  const auto a = tokens(stated), b = tokens(expected);
+  for (std::size_t i = 0; i < std::max(a.size(), b.size()); ++i) {
+    const std::string x = i < a.size() ? a[i] : "(nothing)", y = i < b.size() ? b[i] : "(nothing)";
+    if (x == y) continue;
+    const auto eq_x = x.find('='), eq_y = y.find('=');
+    if (eq_x != std::string::npos && eq_y != std::string::npos && x.substr(0, eq_x) == y.substr(0, eq_y)) {
+      const auto u = parse_finite_double(x.substr(eq_x + 1)), v = parse_finite_double(y.substr(eq_y + 1));
+      constexpr double kSameNumber = 1e-12;
+      if (u && v && std::fabs(*u - *v) <= kSameNumber * std::max({1.0, std::fabs(*u), std::fabs(*v)})) continue;
+    }
+    return "it has " + x + " where they give " + y;
+  }
+  return std::nullopt;
+}
+
 void check_written_keys(const json& doc, const TransformFile& t, std::string_view source) {
   const std::string model(to_string(t.model));
   if (const json* v = member(doc, "format_version")) {
@@ -704,11 +729,29 @@ void check_written_keys(const json& doc, const TransformFile& t, std::string_vie
   if (const json* v = member(doc, "epsg_method")) {
     const std::string stated = string_at(*v, "epsg_method", source);
     const std::string expected = epsg_method(t);
-    if (expected.empty()) fail(source, "epsg_method", "no EPSG method describes model " + model + "; remove it");
+    if (expected.empty()) {
+      fail(source, "epsg_method",
+           "value \"" + stated + "\": no EPSG method describes model " + model +
+               (t.rotation_model == geodesy::RotationModel::exact
+                    ? " with rotation_model exact (EPSG's Helmert methods are the small-angle formulas): the file states "
+                      "its rotation model twice, differently; correct one"
+                    : "; remove it"));
+    }
     if (stated != expected) {
       fail(source, "epsg_method",
            "value \"" + stated + "\" contradicts model " + model + " in convention " + std::string(t.convention_name()) +
                " (" + expected + "): the file states its method twice, differently; correct one");
+    }
+  }
+  // The file's own PROJ pipeline, as written, must be the one its model,
+  // convention, rotation model and parameters give (an edited
+  // rotation_model was applied without a word: issue 40 point 10).
+  if (const json* v = member(doc, "proj_pipeline")) {
+    const std::string stated = string_at(*v, "proj_pipeline", source);
+    if (const auto diff = pipeline_difference(stated, proj_pipeline(t))) {
+      fail(source, "proj_pipeline",
+           "contradicts the file's model, convention, rotation_model and parameters (" + *diff +
+               "): the file states its transform twice, differently; correct one (or remove proj_pipeline)");
     }
   }
   const json* alts = member(doc, "alternatives");
@@ -732,6 +775,9 @@ void check_written_keys(const json& doc, const TransformFile& t, std::string_vie
     }
     if (const json* e = member(a, "epsg_method")) {
       const std::string stated = string_at(*e, where + ".epsg_method", source);
+      if (epsg_method(other).empty()) {
+        fail(source, where + ".epsg_method", "value \"" + stated + "\": no EPSG method describes the exact rotation model");
+      }
       if (stated != epsg_method(other)) {
         fail(source, where + ".epsg_method", "value \"" + stated + "\" is not " + epsg_method(other) + ", the method of " +
                                                  other_convention);
@@ -1242,7 +1288,9 @@ json json_number_or_null(double v) { return std::isfinite(v) ? number(v) : json(
 }  // namespace
 
 std::string epsg_method(const TransformFile& t) {
-  if (t.enu_origin || t.site_calibration) return "";
+  // EPSG's Helmert methods are the small-angle formulas: finite rotations
+  // have none (fit.md "Exports").
+  if (t.enu_origin || t.site_calibration || t.rotation_model == geodesy::RotationModel::exact) return "";
   const bool pv = t.convention_name() == PositionVector::name;
   if (t.model == TransformModel::translation3) return "EPSG:1031";
   if (t.model == TransformModel::molodensky_badekas) return pv ? "EPSG:1061" : "EPSG:1034";
@@ -1583,7 +1631,7 @@ void write_json_with(std::ostream& out, const TransformFile& t, const PointRecor
   if (!t.enu_origin && !t.site_calibration) {
     doc["convention"] = std::string(t.convention_name());
     doc["rotation_model"] = std::string(geodesy::to_string(t.rotation_model));
-    doc["epsg_method"] = epsg_method(t);
+    if (const std::string m = epsg_method(t); !m.empty()) doc["epsg_method"] = m;
   }
   if (t.source_frame) doc["source_frame"] = t.source_frame->to_string();
   if (t.target_frame) doc["target_frame"] = t.target_frame->to_string();
@@ -1692,9 +1740,9 @@ void write_json_with(std::ostream& out, const TransformFile& t, const PointRecor
     // copy of 10⁶ marks' records was 200 MB and a fifth of a second).
     const TransformFile other = swapped_convention(t);
     doc["alternatives"] = json::array({json{{"convention", std::string(other.convention_name())},
-                                            {"epsg_method", epsg_method(other)},
                                             {"parameters", with_pivot(std::visit([](const auto& h) { return parameters_json(h); }, other.helmert))},
                                             {"proj_pipeline", proj_pipeline(other)}}});
+    if (const std::string m = epsg_method(other); !m.empty()) doc["alternatives"][0]["epsg_method"] = m;
     if (const auto wkt = to_wkt2(other)) doc["alternatives"][0]["wkt2"] = *wkt;
     if (const auto pj = to_projjson(other)) doc["alternatives"][0]["projjson"] = json::parse(*pj);
   }

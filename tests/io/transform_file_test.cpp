@@ -477,3 +477,43 @@ TEST(TransformFile, Point10_OriginHeightTypeAndGridEllipsoidAreRead) {
 
 }  // namespace
 }  // namespace geoanchor::io
+
+namespace geoanchor::io {
+namespace {
+
+// Issue 40 point 10: the file's rotation model, PROJ pipeline and EPSG
+// method say the same; an edited rotation_model that contradicts the
+// others is refused naming them, and the exact model, which no EPSG method
+// describes, is written without one and reads back.
+TEST(TransformFile, Issue40_AnEditedRotationModelThatContradictsThePipelineIsRefused) {
+  const std::string written = to_json_text(parse_transform_json(kHelmert7, "T.json"));
+  ASSERT_NE(written.find("\"epsg_method\": \"EPSG:1033\""), std::string::npos) << written;
+  ASSERT_NE(written.find("\"proj_pipeline\""), std::string::npos) << written;
+  const std::string edited = replace(written, "\"rotation_model\": \"small_angle\"", "\"rotation_model\": \"exact\"");
+  ASSERT_NE(edited, written);
+  const std::string e1 = error_of(edited);
+  EXPECT_NE(e1.find("T.json: epsg_method: value \"EPSG:1033\": no EPSG method describes model helmert7 with rotation_model exact"),
+            std::string::npos)
+      << e1;
+  // Without the method, the pipeline says it: PROJ's +exact is missing.
+  std::string no_method = edited;
+  const auto at = no_method.find("\"epsg_method\": \"EPSG:1033\",");
+  ASSERT_NE(at, std::string::npos) << edited;
+  no_method.erase(at, std::string("\"epsg_method\": \"EPSG:1033\",").size());
+  const std::string e2 = error_of(no_method);
+  EXPECT_NE(e2.find("T.json: proj_pipeline: contradicts the file's model, convention, rotation_model and parameters"),
+            std::string::npos)
+      << e2;
+  EXPECT_NE(e2.find("+exact"), std::string::npos) << e2;
+  // An edited parameter likewise.
+  const std::string e3 = error_of(replace(written, "\"tz_m\": 4.5", "\"tz_m\": 4.6"));
+  EXPECT_NE(e3.find("proj_pipeline: contradicts"), std::string::npos) << e3;
+  // The exact model as written: no EPSG method, and it reads back.
+  const std::string exact = to_json_text(parse_transform_json(
+      replace(kHelmert7, "\"rotation_model\": \"small_angle\"", "\"rotation_model\": \"exact\""), "T.json"));
+  EXPECT_EQ(exact.find("epsg_method"), std::string::npos) << exact;
+  EXPECT_EQ(error_of(exact), "");
+}
+
+}  // namespace
+}  // namespace geoanchor::io
