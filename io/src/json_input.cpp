@@ -13,6 +13,11 @@ ReadState::ReadState(std::string_view text, std::string_view source)
     : text_(text), source_(source), cursor_(text.data()) {}
 
 void ReadState::start(bool object) {
+  if (open_.size() >= kMaxJsonDepth) {
+    throw Error(ErrorKind::input, "E_NESTING",
+                source_ + ": " + line_and_column() + ": objects and arrays nested more than " + std::to_string(kMaxJsonDepth) +
+                    " deep; geoanchor reads JSON nested at most that deep");
+  }
   Level l;
   l.object = object;
   open_.push_back(std::move(l));

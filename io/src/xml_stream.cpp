@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <memory>
 #include <new>
+#include <string>
 
 #include "geoanchor/geodesy/error.hpp"
 
@@ -16,6 +17,8 @@ void XmlStream::parse(std::initializer_list<std::string_view> pieces, const std:
   std::unique_ptr<XML_ParserStruct, decltype(&XML_ParserFree)> parser(XML_ParserCreate("UTF-8"), &XML_ParserFree);
   if (!parser) throw std::bad_alloc();
   parser_ = parser.get();
+  source_ = source;
+  depth_ = 0;
   XML_SetUserData(parser_, this);
   XML_SetElementHandler(parser_, &XmlStream::on_start, &XmlStream::on_end);
   XML_SetCharacterDataHandler(parser_, &XmlStream::on_text);
@@ -57,6 +60,12 @@ void XmlStream::on_start(void* self, const XML_Char* name, const XML_Char** attr
   auto* x = static_cast<XmlStream*>(self);
   if (x->error_) return;
   try {
+    if (++x->depth_ > kMaxXmlDepth) {
+      throw Error(ErrorKind::input, "E_NESTING",
+                  x->source_ + ":" + std::to_string(x->line()) + ": <" + std::string(name) + "> is nested " +
+                      std::to_string(x->depth_) + " elements deep; geoanchor reads XML nested at most " +
+                      std::to_string(kMaxXmlDepth) + " deep");
+    }
     x->handler_.start_element(name, attributes);
   } catch (...) {
     x->error_ = std::current_exception();
@@ -68,6 +77,7 @@ void XmlStream::on_end(void* self, const XML_Char* name) {
   auto* x = static_cast<XmlStream*>(self);
   if (x->error_) return;
   try {
+    --x->depth_;
     x->handler_.end_element(name);
   } catch (...) {
     x->error_ = std::current_exception();

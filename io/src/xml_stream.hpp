@@ -31,7 +31,8 @@ class XmlStream {
   XmlStream& operator=(const XmlStream&) = delete;
 
   // Throws geoanchor::Error (input, `code`) "SOURCE:LINE: not well-formed
-  // XML: …", or whatever the handler threw.
+  // XML: …", (input, E_NESTING) for elements nested deeper than
+  // kMaxXmlDepth, or whatever the handler threw.
   void parse(std::string_view text, const std::string& source, const char* code);
   // The same for a text given in pieces, read in turn as one document (a
   // part of a file between its own beginning and end; see read_dynaml).
@@ -57,7 +58,14 @@ class XmlStream {
   XmlHandler& handler_;
   XML_Parser parser_ = nullptr;
   std::exception_ptr error_;
+  std::string source_;     // for the nesting error
+  std::size_t depth_ = 0;  // elements open
 };
+
+// Elements nested deeper than this are refused (E_NESTING), as JSON's are
+// (json_input.hpp): no format geoanchor reads nests more than a dozen deep,
+// and the handlers keep a path of the open elements.
+inline constexpr std::size_t kMaxXmlDepth = 256;
 
 // The value of attribute `name` in expat's name, value, …, nullptr list, or
 // nullptr when the element has none.

@@ -25,6 +25,11 @@
 
 namespace geoanchor::io {
 
+// Objects and arrays nested deeper than this are refused (E_NESTING): no
+// format geoanchor reads nests more than a dozen deep, and a value 10⁵ deep
+// would exhaust the stack of whatever walks it.
+inline constexpr std::size_t kMaxJsonDepth = 256;
+
 namespace json_detail {
 
 // Where a strict parse is: the open objects and arrays, the keys already
@@ -98,7 +103,8 @@ class TextIterator {
 
 // `text` parsed as JSON; `source` names it in errors (a file name). Throws
 // geoanchor::Error (input): E_JSON for malformed JSON or a number beyond
-// double's range, E_JSON_DUPLICATE_KEY for a key given twice in one object.
+// double's range, E_JSON_DUPLICATE_KEY for a key given twice in one object,
+// E_NESTING for objects and arrays nested deeper than kMaxJsonDepth.
 template <class Json>
 Json parse_json_strict(std::string_view text, std::string_view source) {
   json_detail::ReadState state(text, source);
