@@ -8,6 +8,7 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
@@ -290,6 +291,58 @@ CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   return cmd;
 }
 
+// The frames a frame-mode conversion is on: the input's, as its comments
+// state it ('# frame = NAME@EPOCH', as adjust writes its stations), and the
+// output's: the same, or a transform's other side.
+struct FrameStatement {
+  std::optional<geodesy::Frame> input, output;
+};
+
+FrameStatement frames_of(const io::CsvReader& reader, const std::string& source_name,
+                         const std::optional<io::TransformFile>& transform, const ConvertOptions& o) {
+  FrameStatement f;
+  for (const auto& c : reader.leading_comments()) {
+    const auto v = io::comment_value(c, "frame");
+    if (!v) continue;
+    const std::string where = source_name + ": comment '" + c + "'";
+    if (f.input) throw Error(ErrorKind::input, "E_COMMENT", where + ": a second '# frame =' comment; give one");
+    f.input = geodesy::Frame::parse(*v, where);
+  }
+  if (!transform) {
+    f.output = f.input;
+    return f;
+  }
+  const auto& from = o.inverse ? transform->target_frame : transform->source_frame;
+  const auto& to = o.inverse ? transform->source_frame : transform->target_frame;
+  if (f.input && from &&
+      (f.input->name() != from->name() ||
+       (f.input->epoch() && from->epoch() && f.input->epoch()->year != from->epoch()->year))) {
+    throw Error(ErrorKind::input, "E_FRAME_MISMATCH",
+                source_name + ": its coordinates are in " + f.input->to_string() + " (its '# frame =' comment) but " +
+                    *o.transform + (o.inverse ? "'s target_frame (--inverse) is " : "'s source_frame is ") + from->to_string());
+  }
+  f.output = to;
+  return f;
+}
+
+// The ellipsoid of one side: the stated frame's own (a flag may only say the
+// same), else the flag's, else `fallback` (the input's) or WGS84.
+geodesy::Ellipsoid ellipsoid_for(const std::optional<geodesy::Frame>& frame, const std::optional<std::string>& flag_value,
+                                 const char* flag, const geodesy::Ellipsoid* fallback = nullptr) {
+  const std::optional<geodesy::Ellipsoid> implied = frame ? geodesy::implied_ellipsoid(*frame) : std::nullopt;
+  if (flag_value) {
+    const geodesy::Ellipsoid given = parse_ellipsoid(*flag_value, flag);
+    if (implied && !(given == *implied)) {
+      throw Error(ErrorKind::usage, "E_ELLIPSOID",
+                  std::string(flag) + " " + *flag_value + " contradicts frame " + frame->to_string() +
+                      ", whose coordinates are on " + implied->name() + "; drop the flag (the frame's own is used)");
+    }
+    return given;
+  }
+  if (implied) return *implied;
+  return fallback ? *fallback : geodesy::Ellipsoid::wgs84();
+}
+
 void run_convert(const ConvertOptions& o) {
   if (o.json && is_standard_output(o.output)) {
     throw Error(ErrorKind::usage, "E_OPTION",
@@ -305,10 +358,29 @@ void run_convert(const ConvertOptions& o) {
   if (o.inverse && !o.transform) {
     throw Error(ErrorKind::usage, "E_OPTION", "--inverse: needs --transform T.json");
   }
-  // Ellipsoids, origins and projections: --from-X for the input, else --X for both.
-  const geodesy::Ellipsoid out_ellipsoid = parse_ellipsoid(o.ellipsoid.value_or("WGS84"), "--ellipsoid");
-  const geodesy::Ellipsoid in_ellipsoid =
-      o.from_ellipsoid ? parse_ellipsoid(*o.from_ellipsoid, "--from-ellipsoid") : out_ellipsoid;
+  // The input, its comments and the transform first: a frame the input
+  // states names its ellipsoid (issue 40 point 9).
+  CommandInput input(o.input);
+  const bool from_stdin = input.from_stdin();
+  const std::string& source_name = input.name();
+  io::CsvReader reader(input.stream(), source_name);
+  io::refuse_stated_crs(reader.leading_comments(), source_name,
+                        "read it with --to-crs DST (with --to ecef for its geocentric coordinates)");
+  std::optional<io::TransformFile> transform;
+  std::string transform_sha256;
+  if (o.transform) {
+    transform = io::read_transform_file(*o.transform);
+    transform_sha256 = io::sha256_file_hex(*o.transform);
+  }
+  const FrameStatement frames = frames_of(reader, source_name, transform, o);
+
+  // Ellipsoids, origins and projections: --from-X for the input, else --X
+  // for both; a frame's own ellipsoid where one is stated, and a flag that
+  // contradicts it refused.
+  const geodesy::Ellipsoid in_ellipsoid = ellipsoid_for(
+      frames.input, o.from_ellipsoid ? o.from_ellipsoid : o.ellipsoid, o.from_ellipsoid ? "--from-ellipsoid" : "--ellipsoid");
+  const geodesy::Ellipsoid out_ellipsoid =
+      ellipsoid_for(frames.output, o.ellipsoid, "--ellipsoid", !o.from_ellipsoid && !o.ellipsoid && !frames.output ? &in_ellipsoid : nullptr);
 
   io::InputCoordinateFrame in_frame;
   in_frame.ellipsoid = in_ellipsoid;
@@ -349,22 +421,10 @@ void run_convert(const ConvertOptions& o) {
   if (out_kind == io::OutputKind::utm && o.tm) throw Error(ErrorKind::usage, "E_OPTION", "--to utm with --tm: use --to tm");
   if (out_kind == io::OutputKind::tm && o.zone) throw Error(ErrorKind::usage, "E_OPTION", "--to tm with --zone: use --to utm");
 
-  std::optional<io::TransformFile> transform;
-  std::string transform_sha256;
-  if (o.transform) {
-    transform = io::read_transform_file(*o.transform);
-    transform_sha256 = io::sha256_file_hex(*o.transform);
-  }
   std::optional<DecimalYear> flag_epoch;
   if (o.epoch) flag_epoch = geodesy::parse_decimal_year(*o.epoch, "--epoch");
   const EcefStep step(transform, o.inverse, flag_epoch);
 
-  CommandInput input(o.input);
-  const bool from_stdin = input.from_stdin();
-  const std::string& source_name = input.name();
-  io::CsvReader reader(input.stream(), source_name);
-  io::refuse_stated_crs(reader.leading_comments(), source_name,
-                        "read it with --to-crs DST (with --to ecef for its geocentric coordinates)");
   const auto& header = reader.header();
   const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
   const bool local_in = columns.kind == io::CoordinateKind::enu || columns.kind == io::CoordinateKind::ned;
@@ -420,7 +480,18 @@ void run_convert(const ConvertOptions& o) {
   if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
   io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
   std::ostream& out = output.stream();
-  for (const auto& c : reader.leading_comments()) out << c << '\n';
+  // The comments go across, the frame's restated as the output's.
+  for (const auto& c : reader.leading_comments()) {
+    if (io::comment_value(c, "frame")) {
+      if (frames.output) out << "# frame = " << frames.output->to_string() << '\n';
+      continue;
+    }
+    out << c << '\n';
+  }
+  if (frames.input && !frames.output) {
+    warnings.push_back(source_name + ": its '# frame = " + frames.input->to_string() + "' comment is not copied: " + *o.transform +
+                       " names no target frame, so the output's frame is not known");
+  }
   io::write_csv_line(out, out_header);
 
   io::CsvRecord record;

@@ -185,6 +185,12 @@ Frame Frame::parse(std::string_view text, std::string_view where) {
   return f;
 }
 
+std::optional<std::string> ensemble_warning(const Frame& f) {
+  if (f.datum() != "WGS84" || !f.realization().empty()) return std::nullopt;
+  return "frame " + f.to_string() +
+         " is the WGS 84 ensemble: its realizations differ by up to about 2 m; name one, e.g. WGS84(G2139)";
+}
+
 bool is_dynamic(const Frame& f) {
   const std::string& d = f.datum();
   // The terrestrial reference frames of the ITRS and their IGS and national

@@ -400,6 +400,21 @@ void frames_of(const json& doc, TransformFile& t, std::string_view source) {
       (std::string_view(key) == "source_frame" ? t.source_frame : t.target_frame) = std::move(f);
     }
   }
+  // A transform of fixed parameters between a dynamic frame and another
+  // holds at one epoch: a dynamic frame without it would be applied at
+  // whatever epoch a tile has (ETRF2000@2020.0 out of a file fitted at
+  // 2024.5). fit never writes one (issue 40 point 9); a 14-parameter
+  // transform carries its own epochs.
+  if (t.model == TransformModel::helmert14) return;
+  for (const char* key : {"source_frame", "target_frame"}) {
+    const auto& f = std::string_view(key) == "source_frame" ? t.source_frame : t.target_frame;
+    if (f && geodesy::is_dynamic(*f) && !f->epoch()) {
+      fail(source, key,
+           "frame " + f->name() + " is dynamic (its coordinates change by centimetres a year) and names no epoch; a " +
+               std::string(to_string(t.model)) + " transform of fixed parameters holds at one epoch: write " + f->name() +
+               "@YYYY.Y, the epoch of the coordinates it was fitted to (fit writes it)");
+    }
+  }
 }
 
 // Keys that only some models read: refused by name where they would be ignored.

@@ -1079,7 +1079,7 @@ TEST_F(ApplyOutputs, Issue12Point11_ApplyJsonOntoAFullStandardOutputExitsNonZero
 // is refused, whether the sidecar or --from-frame names the frame, before
 // anything is written; the baseline moved it with a static transform.
 TEST_F(ApplyCli, Point5_ATileInADynamicFrameWithoutItsEpochIsRefusedNamingTheSidecarOrTheFlag) {
-  write("T.json", R"({"model": "translation3", "source_frame": "ITRF2014", "target_frame": "ETRF2000",
+  write("T.json", R"({"model": "translation3", "source_frame": "ITRF2014@2024.5", "target_frame": "ETRF2000",
   "parameters": {"tx_m": 0.05, "ty_m": 0.05, "tz_m": -0.07}})");
   const fs::path in = tile("in/tile.las", [](std::string& s) { replace(s, "\"ITRF2014@2024.5\"", "\"ITRF2014\""); });
   const fs::path out = out_dir();
@@ -1183,7 +1183,7 @@ TEST_F(ApplyCli, Issue12Point7_ImplausibleTransformParametersWarnOnceAndAreInEve
   for (const auto& c : cases) {
     SCOPED_TRACE(c.name);
     const std::string t = std::string(c.name) + ".json";
-    write(t, R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014",
+    write(t, R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014@2024.5",
       "target_frame": "ETRF2000", "parameters": {)" + c.parameters + "}}");
     const fs::path out = out_dir(std::string("out_") + c.name);
     const RunResult r = run("apply " + path("in/a.csv").string() + " " + path("in/b.csv").string() + " --transform " +

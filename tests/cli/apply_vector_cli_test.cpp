@@ -75,7 +75,7 @@ std::string helmert_steps(const std::string& parameters) {
 class ApplyVectorCli : public CliTest {
  protected:
   fs::path transform(const std::string& name, const std::string& parameters) {
-    return write(name, R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014",
+    return write(name, R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014@2024.5",
       "target_frame": "ETRF2000", "parameters": {)" + parameters + "}}");
   }
   // Only the run summaries in `dir`: nothing partial of a refused map.
@@ -543,7 +543,7 @@ TEST_F(ApplyVectorCli, OpenDriveIsReanchoredAndItsReportedDeviationMatchesAnInde
     double largest_m;  // what the deviation must stay below
   };
   auto helmert = [](const std::string& parameters) {
-    return R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014",
+    return R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014@2024.5",
       "target_frame": "ETRF2000", "parameters": {)" + parameters + "}}";
   };
   const std::vector<Case> cases = {

@@ -1339,7 +1339,7 @@ TEST_F(CrsLas, Issue13_BadCrsInputToApplyIsRefusedByNameWithNoOutput) {
   write("in/fr.csv", "id,easting_m,northing_m\nA,600000,2400000\n");
   write("in/ch.csv", "# crs = EPSG:21781\nid,easting_m,northing_m,H_m\nA,600000,200000,500\n");
   write("in/lv95.csv", "# crs = EPSG:2056\nid,easting_m,northing_m\nA,2600000,1200000\n");
-  write("T.json", R"J({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014",
+  write("T.json", R"J({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014@2024.5",
     "target_frame": "GDA2020", "parameters": {"tx_m": 0.1, "ty_m": 0, "tz_m": 0, "rx_arcsec": 0, "ry_arcsec": 0,
     "rz_arcsec": 0, "ds_ppm": 0}})J");
   struct Bad {

@@ -47,7 +47,7 @@ std::string deep_xodr(std::size_t n) {
   return s.substr(0, at) + repeated("<userData>", n) + repeated("</userData>", n) + s.substr(at);
 }
 
-constexpr const char* kTransform = R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014",
+constexpr const char* kTransform = R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014@2024.5",
   "target_frame": "ETRF2000", "parameters": {"tx_m": 0.05, "ty_m": 0.04, "tz_m": -0.09, "rx_arcsec": 0.001,
   "ry_arcsec": 0.012, "rz_arcsec": -0.02, "ds_ppm": 0.002}})";
 

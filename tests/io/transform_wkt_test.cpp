@@ -22,7 +22,7 @@ Eigen::Vector3d proj_apply(const std::string& definition, const Eigen::Vector3d&
 
 const char* kFiles[] = {
     R"J({"model": "translation3", "parameters": {"tx_m": 1.5, "ty_m": -2.25, "tz_m": 0.75}})J",
-    R"J({"model": "helmert7", "convention": "position_vector", "source_frame": "WGS72", "target_frame": "WGS84(G1762)",
+    R"J({"model": "helmert7", "convention": "position_vector", "source_frame": "WGS72", "target_frame": "WGS84(G1762)@2005.0",
         "parameters": {"tx_m": 0, "ty_m": 0, "tz_m": 4.5, "rx_arcsec": 0.3, "ry_arcsec": -0.2, "rz_arcsec": 0.554, "ds_ppm": 0.219}})J",
     R"J({"model": "helmert7", "convention": "coordinate_frame",
         "parameters": {"tx_m": 0.06155, "ty_m": -0.01087, "tz_m": -0.04019, "rx_arcsec": -0.0394924,

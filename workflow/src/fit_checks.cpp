@@ -29,10 +29,8 @@ double median(std::vector<double> v) {
 std::vector<std::string> control_set_warnings(const geodesy::ControlSet& set) {
   std::vector<std::string> out;
   for (const auto* f : {&set.source_frame, &set.target_frame}) {
-    if (*f && (*f)->datum() == "WGS84" && (*f)->realization().empty()) {
-      out.push_back("frame " + (*f)->to_string() +
-                    " is the WGS 84 ensemble: its realizations differ by up to about 2 m; name one, e.g. WGS84(G2139)");
-    }
+    if (!*f) continue;
+    if (auto w = geodesy::ensemble_warning(**f)) out.push_back(std::move(*w));
   }
   for (const bool source : {true, false}) {
     const geodesy::ControlInputForm& form = source ? set.source_input : set.target_input;

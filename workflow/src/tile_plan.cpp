@@ -363,6 +363,15 @@ void TilePlanner::check_flags_against(TileMetadata& m, TilePlan& p, const std::s
 TilePlan TilePlanner::plan(const fs::path& input) const {
   TilePlan p = plan_coordinates(input);
   if (io::is_vector_map(p.format)) check_vector_output(p);
+  // A tile on the WGS 84 ensemble is known to 2 m at best, as fit warns (issue 40 point 9).
+  std::optional<std::string> warned;
+  for (const auto* f : {&p.in.frame, &p.out.frame}) {
+    if (!*f || (warned && *warned == (*f)->to_string())) continue;
+    if (auto w = geodesy::ensemble_warning(**f)) {
+      p.warnings.push_back(input.string() + ": " + *w);
+      warned = (*f)->to_string();
+    }
+  }
   return p;
 }
 

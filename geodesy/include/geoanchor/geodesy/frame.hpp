@@ -67,6 +67,11 @@ bool is_dynamic(const Frame& f);
 // proj.db for every frame of the catalog.
 std::optional<Ellipsoid> implied_ellipsoid(const Frame& f);
 
+// For the WGS 84 ensemble (WGS84 without a realization), the warning fit
+// and apply give: its realizations differ by up to about 2 m, so a
+// position in it is known to 2 m at best. nullopt for any other frame.
+std::optional<std::string> ensemble_warning(const Frame& f);
+
 // Throws geoanchor::Error (`kind`, E_EPOCH_MISSING) when `f` is dynamic and
 // names no coordinate epoch: "WHERE: frame ITRF2014 is dynamic …; give
 // ITRF2014@YYYY.Y …". `where` names the flag, file:line or key the frame
