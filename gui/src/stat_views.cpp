@@ -135,6 +135,7 @@ void WorkbenchUi::draw_table() {
   t.total = rows_.size();
   t.first = 0;
   t.shown_ids.clear();
+  t.shown_use.clear();
   const std::size_t start = std::min(table_start_, rows_.size());
   // Numbers take the width they need; the status takes the rest.
   constexpr ImGuiTableFlags kFlags = ImGuiTableFlags_Sortable | ImGuiTableFlags_ScrollY | ImGuiTableFlags_RowBg |
@@ -205,6 +206,9 @@ void WorkbenchUi::draw_table() {
     for (int i = clipper.DisplayStart; i < clipper.DisplayEnd; ++i) {
       const std::size_t position = start + static_cast<std::size_t>(i);
       const PointRow& r = rows_[order_[position]];
+      // A mark data snooping removed is not used: its box is clear, as the
+      // status column says (it was ticked: issue 40 point 11).
+      const bool ticked = !r.left_out && !r.outlier;
       ImGui::TableNextRow(ImGuiTableRowFlags_None, row_h);
       t.rows_top = table->BgClipRect.Min.y;
       t.rows_bottom = table->BgClipRect.Max.y;
@@ -213,11 +217,12 @@ void WorkbenchUi::draw_table() {
         if (first_shown) t.first = position;
         first_shown = false;
         t.shown_ids.push_back(r.id);
+        t.shown_use.push_back(ticked);
       }
       ImGui::TableNextColumn();
       ImGui::PushID(i);
-      bool use = !r.left_out;
-      const bool fixed_out = !r.left_out && !r.used && !r.outlier;  // use = 0 in the file
+      bool use = ticked;
+      const bool fixed_out = (!r.left_out && !r.used) || r.outlier;  // use = 0 in the file, or removed by the fit
       if (fixed_out) ImGui::BeginDisabled();
       if (ImGui::Checkbox("##use", &use)) toggle = {r.id, !use};
       if (fixed_out) ImGui::EndDisabled();

@@ -401,5 +401,35 @@ TEST_F(Audit, Issue40_LocateRefusesPointsFarOutsideTheControlNetwork) {
   EXPECT_NE(csv.find("far_away 19"), std::string::npos) << csv;  // about 19.6 km outside the hull
 }
 
+// Issue 40 point 11: one sign for residuals, measured minus map. A
+// checkpoint surveyed 3 cm east of where the map puts it reads +3 cm east in
+// audit, and the same mark in a fit reads a positive east residual too.
+TEST_F(Audit, Issue40_CheckpointResidualsHaveFitsSign) {
+  clean_map();
+  const fs::path shifted = control("shifted.csv", 0.03);  // M0's target 3 cm east
+  const RunResult r = audit(path("map").string() + " " + transform_.string() + " --checkpoints " + shifted.string() + " --json");
+  const std::string evidence = check(r, "checkpoints").at("evidence").dump();
+  const auto at = evidence.find("M0: ");
+  ASSERT_NE(at, std::string::npos) << evidence;
+  const std::string m0 = evidence.substr(at, evidence.find('"', at) - at);
+  const auto east = m0.find("(east ");
+  ASSERT_NE(east, std::string::npos) << m0;
+  EXPECT_NE(m0[east + 6], '-') << m0;  // +2.x to +3.x cm, not −
+  const double audit_east_cm = std::stod(m0.substr(east + 6));
+  EXPECT_GT(audit_east_cm, 2.0) << m0;
+  // fit of the shifted set: M0's east residual (target − transformed source) is positive too.
+  const RunResult f = run("fit " + shifted.string() + " --model translation3 --survey-metadata " + survey().string() +
+                          " --accept-failed-global-test -o " + path("shifted.json").string());
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  const json t = json::parse(slurp(path("shifted.json")));
+  bool seen = false;
+  for (const auto& p : t.at("points")) {
+    if (p.at("id") != "M0") continue;
+    seen = true;
+    EXPECT_GT(p.at("residual_enu_m")[0].get<double>(), 0.0) << p;
+  }
+  EXPECT_TRUE(seen);
+}
+
 }  // namespace
 }  // namespace geoanchor

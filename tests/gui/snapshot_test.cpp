@@ -543,6 +543,28 @@ std::size_t whole_table_rows(const RgbImage& image, int x) {
 }
 
 // issue 12 point 14
+// Issue 40 point 11: the mark data snooping removed (P17) is not ticked
+// "use" in the table a report prints; every other mark is.
+TEST_F(Snapshot, Issue40_ARemovedMarkIsNotTickedUse) {
+  ui_.set_table_start(0);
+  std::size_t removed = 0, seen = 0;
+  for (std::size_t start = 0; start < set_.points.size() && seen < set_.points.size();) {
+    ui_.set_table_start(start);
+    (void)renderer_.render(ui_, View::table);
+    const TableGeometry& t = ui_.table();
+    ASSERT_EQ(t.shown_use.size(), t.shown_ids.size());
+    ASSERT_FALSE(t.shown_ids.empty());
+    for (std::size_t i = 0; i < t.shown_ids.size(); ++i) {
+      const bool outlier = model_.fit()->points[index_of(t.shown_ids[i])].outlier;
+      EXPECT_EQ(t.shown_use[i], !outlier) << t.shown_ids[i];
+      removed += outlier ? 1 : 0;
+    }
+    seen += t.shown_ids.size();
+    start += t.shown_ids.size();
+  }
+  EXPECT_EQ(removed, 1u);  // P17, the planted blunder
+}
+
 TEST(SnapshotPoint14, TheTableSaysWhichMarksAreWhollyInViewAndAReportPageStartsWhereTheLastEnded) {
   WorkbenchModel model(generated_set(120), helmert7_pv());
   ASSERT_TRUE(model.fit().has_value()) << model.error();

@@ -776,7 +776,10 @@ AuditCheck check_checkpoints(const std::vector<AuditArtifact>& arts, const Audit
       continue;
     }
     ++checked;
-    const Eigen::Vector3d d = enu_difference(p.target.m, moved);  // map − surveyed, ENU at the mark
+    // Surveyed − map (measured minus map), ENU at the mark: the sign of
+    // fit's residuals (target − transformed source), one convention
+    // everywhere (issue 40 point 11; docs/conventions.md).
+    const Eigen::Vector3d d = -enu_difference(p.target.m, moved);
     const double h = std::hypot(d.x(), d.y()), v = std::abs(d.z());
     worst_h = std::max(worst_h, h);
     worst_v = std::max(worst_v, v);

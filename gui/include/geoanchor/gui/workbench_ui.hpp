@@ -106,6 +106,7 @@ struct TableGeometry {
   std::size_t total = 0;
   std::size_t first = 0;
   std::vector<std::string> shown_ids;
+  std::vector<bool> shown_use;  // each shown row's "use" box: ticked (a mark the fit uses)
   std::string sorted_by;  // e.g. "id ▲"
   float left = 0, right = 0, rows_top = 0, rows_bottom = 0;  // the rows' area (pixels)
   float row_height_px = 0;
