@@ -243,6 +243,11 @@ struct CrsOperation::Impl {
   std::vector<Candidate> all;
   bool source_swapped = false;  // the source's own axis order is not the visualisation order
   std::optional<double> t;
+  // A time-dependent operation between CRSs that state no epoch: whether its
+  // result depends on the epoch is checked on the points (issue 40 point 5).
+  std::string epoch_probe;      // the operation's name; empty: no check due
+  bool probing = false;         // inside the check
+  double epoch_free_worst_m = 0.0;  // the largest difference the check saw
   std::vector<std::string> notes;
   Pj to_lonlat;  // source → geographic longitude/latitude, degrees (for choices and areas)
   bool source_is_lonlat = false, target_is_lonlat = false;
@@ -453,12 +458,10 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
   for (std::size_t i = 0; i < m.available_count; ++i) {
     const auto& c = m.all[i];
     any_time_dependent = any_time_dependent || c.info.time_dependent;
-    if (c.info.time_dependent && !m.t) {
-      throw Error(ErrorKind::input, "E_EPOCH_MISSING",
-                  m.where + ": " + pair + ": PROJ's operation '" + c.info.name +
-                      "' is time-dependent and neither CRS states a coordinate epoch; give the epoch it is evaluated "
-                      "at as CRS@YYYY.Y (on the dynamic CRS; between two static CRSs, on either)");
-    }
+    // Between two static CRSs a time-dependent route may give the same
+    // result at any epoch (MGA94 -> MGA2020 through ITRF2014: the plate
+    // motions cancel); that is checked on the points themselves.
+    if (c.info.time_dependent && !m.t && m.epoch_probe.empty()) m.epoch_probe = c.info.name;
   }
   for (const auto* c : {&source, &target}) {
     if (!c->description().dynamic && c->epoch() && !any_time_dependent) {
@@ -653,6 +656,44 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
                              const std::function<std::string(std::size_t)>& point_name, Count counted) {
   Impl& m = *impl_;
   if (n == 0) return;
+  if (!m.epoch_probe.empty() && !m.probing) {
+    // The operation at two epochs 40 years apart: the same result (to 1 µm)
+    // means it does not depend on the epoch, and none is needed.
+    constexpr double kProbeEpochs[2] = {1990.0, 2030.0};
+    constexpr double kEpochFree_m = 1e-6;
+    const bool angular = m.target_is_lonlat;
+    std::vector<double> a2(a, a + n), b2(b, b + n), c2;
+    if (c) c2.assign(c, c + n);
+    m.probing = true;
+    struct Reset {
+      Impl& m;
+      ~Reset() {
+        m.probing = false;
+        m.t.reset();
+      }
+    } reset{m};
+    m.t = kProbeEpochs[0];
+    transform(a, b, c, n, point_name, counted);
+    m.t = kProbeEpochs[1];
+    transform(a2.data(), b2.data(), c ? c2.data() : nullptr, n, point_name, Count::no);
+    constexpr double kMetresPerDegree = 111319.49;  // for differences of degrees, to 1 %
+    for (std::size_t i = 0; i < n; ++i) {
+      const double da = (a[i] - a2[i]) * (angular ? kMetresPerDegree : 1.0);
+      const double db = (b[i] - b2[i]) * (angular ? kMetresPerDegree : 1.0);
+      const double dc = c ? c[i] - c2[i] : 0.0;
+      const double d = std::sqrt(da * da + db * db + dc * dc);
+      if (!(d <= kEpochFree_m)) {
+        throw Error(ErrorKind::input, "E_EPOCH_MISSING",
+                    m.where + ": " + point_name(i) + ": " + m.src_name + " → " + m.dst_name + ": PROJ's operation '" +
+                        m.epoch_probe + "' is time-dependent and moves this point by " + format_shortest(d) +
+                        " m between epochs 1990.0 and 2030.0, so its result depends on the coordinates' epoch, which "
+                        "neither CRS states; give it as CRS@YYYY.Y (on the dynamic CRS; between two static CRSs, on "
+                        "either)");
+      }
+      m.epoch_free_worst_m = std::max(m.epoch_free_worst_m, d);
+    }
+    return;
+  }
   if (counted == Count::no) {
     // The same, with the tallies (points per candidate, areas, fallbacks) as they were.
     std::vector<std::size_t> points;
@@ -951,6 +992,11 @@ std::string abridged(const std::string& name) {
 
 std::vector<std::string> CrsOperation::warnings() const {
   std::vector<std::string> out = impl_->notes;
+  if (!impl_->epoch_probe.empty() && !impl_->probing) {
+    out.push_back("PROJ's operation '" + impl_->epoch_probe +
+                  "' is time-dependent, but its result does not depend on the epoch here: at 1990.0 and 2030.0 the "
+                  "points agree to " + format_shortest(impl_->epoch_free_worst_m) + " m, so no epoch was needed");
+  }
   if (auto w = impl_->source_area.warning()) out.push_back(*w);
   if (auto w = impl_->target_area.warning()) out.push_back(*w);
   if (impl_->set_aside > 0) {
