@@ -316,12 +316,12 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
     // date (a value of the wrong type there would make it compare wrongly).
     const std::pair<const char*, const char*> resume_keys[] = {
         {"input_sha256", "a string"}, {"transform_sha256", "a string or null"}, {"request", "an object"},
-        {"output_size_bytes", "a byte count"}, {"points", "a point count"}};
+        {"output_size_bytes", "a byte count"}, {"points", "a point count"}, {"output_sha256", "a string"}};
     for (const auto& [key, expected] : resume_keys) {
       const auto it = p->find(key);
       if (it == p->end()) continue;
       const std::string_view name(key);
-      const bool ok = name == "input_sha256"        ? it->is_string()
+      const bool ok = name == "input_sha256" || name == "output_sha256" ? it->is_string()
                       : name == "transform_sha256" ? it->is_string() || it->is_null()
                       : name == "request"          ? it->is_object()
                                                    : it->is_number_unsigned();

@@ -162,7 +162,7 @@ TEST_F(Audit, Issue16_TheCleanMapPassesEveryCheck) {
   clean_map();
   const RunResult text = audit(path("map").string() + " " + transform_.string() + " --checkpoints " + path("control.csv").string());
   EXPECT_EQ(text.exit_code, 0) << text.out << text.err;
-  EXPECT_NE(text.out.find("audit: PASSED (9 of 9 checks pass)"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("audit: PASSED (10 of 10 checks pass)"), std::string::npos) << text.out;
   const RunResult r =
       audit(path("map").string() + " " + transform_.string() + " --checkpoints " + path("control.csv").string() + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
@@ -429,6 +429,63 @@ TEST_F(Audit, Issue40_CheckpointResidualsHaveFitsSign) {
     EXPECT_GT(p.at("residual_enu_m")[0].get<double>(), 0.0) << p;
   }
   EXPECT_TRUE(seen);
+}
+
+// Issue 40 point 6: audit checks the data, not only the metadata. A tile
+// changed by one byte after apply fails, naming it; the untouched map
+// passes.
+TEST_F(Audit, Issue40_ATileChangedAfterApplyFailsNamingIt) {
+  clean_map();
+  const RunResult clean = audit(path("map").string() + " " + transform_.string() + " --json");
+  ASSERT_EQ(clean.exit_code, 0) << clean.out << clean.err;
+  EXPECT_EQ(check(clean, "data").at("status"), "pass") << check(clean, "data");
+  // One byte of one tile, after apply: a digit of its last coordinate.
+  std::string text = slurp(path("map/east.csv"));
+  const auto at = text.find_last_of("0123456789");
+  text[at] = text[at] == '9' ? '8' : static_cast<char>(text[at] + 1);
+  write("map/east.csv", text);
+  const RunResult r = audit(path("map").string() + " " + transform_.string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.out << r.err;
+  EXPECT_EQ(failing(r), std::vector<std::string>{"data"}) << r.out;
+  const std::string evidence = check(r, "data").at("evidence").dump();
+  EXPECT_NE(evidence.find(path("map/east.csv").string() + ": FAIL the file's SHA-256"), std::string::npos) << evidence;
+  EXPECT_EQ(evidence.find(path("map/west.csv").string() + ": FAIL"), std::string::npos) << evidence;
+}
+
+// A map moved to another frame by a Helmert (a GeoJSON in longitude and
+// latitude) has no ENU origin to state: it is auditable, and passes.
+TEST_F(Audit, Issue40_AMapMovedBetweenFramesByAHelmertIsAuditable) {
+  // The fitted Helmert (fit writes its metadata), without the survey's ENU origin.
+  const RunResult fitted = run("fit " + control("control.csv").string() + " --model translation3 --survey-metadata " +
+                               survey("enu_origin").string() + " -o " + path("helmert.json").string());
+  ASSERT_EQ(fitted.exit_code, 0) << fitted.err;
+  const fs::path t = path("helmert.json");
+  const fs::path apron = fs::path(GEOANCHOR_SOURCE_DIR) / "tests" / "data" / "vector" / "apron.geojson";
+  const RunResult moved = run("apply " + apron.string() + " --from-frame ITRF2014@2024.5 --transform " + t.string() +
+                              " --survey-metadata " + survey().string() + " --out-dir " + path("moved").string());
+  ASSERT_EQ(moved.exit_code, 0) << moved.err;
+  const RunResult r = audit(path("moved").string() + " " + t.string() + " --json");
+  EXPECT_EQ(failing(r), std::vector<std::string>{}) << r.out << r.err;
+  EXPECT_EQ(check(r, "metadata").at("status"), "pass") << check(r, "metadata");
+  EXPECT_EQ(r.out.find("unknown: enu_origin"), std::string::npos) << r.out;
+}
+
+// A folder of transforms alone is no map; locate refuses a tile whose
+// sidecar is missing or broken, as audit fails it.
+TEST_F(Audit, Issue40_NoTilesIsRefusedAndLocateNamesATileWithoutItsSidecar) {
+  clean_map();
+  fs::create_directories(path("only"));
+  fs::copy_file(transform_, path("only/t.json"));
+  const RunResult empty = audit(path("only").string());
+  EXPECT_EQ(empty.exit_code, 3) << empty.out << empty.err;
+  EXPECT_NE(empty.err.find("E_MAP_EMPTY"), std::string::npos) << empty.err;
+  fs::remove(path("map/east.csv.geoanchor.json"));
+  write("points.csv", "id,e_m,n_m,u_m\nstand_12,120.0,80.0,2.5\n");
+  const RunResult located = run("locate " + path("map").string() + " " + path("points.csv").string() + " -o " + path("l.csv").string());
+  EXPECT_EQ(located.exit_code, 3) << located.err;
+  EXPECT_NE(located.err.find("E_MAP_REFERENCE"), std::string::npos) << located.err;
+  EXPECT_NE(located.err.find(path("map/east.csv").string()), std::string::npos) << located.err;
+  EXPECT_FALSE(fs::exists(path("l.csv")));
 }
 
 }  // namespace

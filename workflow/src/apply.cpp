@@ -536,6 +536,9 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   // Flush the tile to learn its size, then the sidecar, then publish both.
   out->stream().flush();
   const auto output_size = static_cast<std::uint64_t>(out->stream().tellp());
+  // The bytes written, as audit verifies them (issue 40 point 6): a tile
+  // changed afterwards no longer matches its sidecar.
+  const std::string output_sha = io::sha256_file_hex(out->temporary_path());
   nlohmann::ordered_json prov;
   prov["tool"] = o_.tool;
   prov["command"] = o_.command;
@@ -607,6 +610,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   if (!res.format_record_json.empty()) prov[std::string(io::to_string(p.format))] = nlohmann::ordered_json::parse(res.format_record_json);
   if (p.keep_coordinates) prov["coordinates_kept"] = true;  // the tile's own CRS: every point record copied
   prov["output_size_bytes"] = output_size;
+  prov["output_sha256"] = output_sha;
   json all_warnings = warnings;
   for (const auto& w : transform_warnings) all_warnings.push_back(w);
   prov["warnings"] = all_warnings;

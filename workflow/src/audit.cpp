@@ -214,6 +214,18 @@ AuditCheck make_check(std::string name, std::string rule, std::string limit) {
 
 // ----------------------------------------------------------------- metadata
 
+// Whether an artifact's coordinates are relative to an ENU origin: a tile
+// or vector map in ENU/NED, a transform fitted in a local frame.
+bool needs_enu_origin(const AuditArtifact& a) {
+  if (a.kind == AuditArtifactKind::transform) {
+    return a.transform && (a.transform->enu_origin || a.transform->site_calibration);
+  }
+  if (!a.meta) return true;  // unreadable: the metadata check names it anyway
+  if (a.meta->crs) return false;
+  const auto k = a.meta->coordinates.kind;
+  return k == io::CoordinateKind::enu || k == io::CoordinateKind::ned;
+}
+
 AuditCheck check_metadata(const std::vector<AuditArtifact>& arts) {
   AuditCheck c = make_check("metadata",
                             "the map metadata contract (docs/tile-metadata.md, geoanchor.map-metadata/1): a reviewer "
@@ -239,8 +251,14 @@ AuditCheck check_metadata(const std::vector<AuditArtifact>& arts) {
         }
       }
       if (dynamic && !m->coordinate_epoch && !m->coordinate_epoch_range) missing.push_back("coordinate_epoch");
-      if (!m->enu_origin) missing.push_back("enu_origin");
-      if (!m->enu_origin_source) missing.push_back("enu_origin_source");
+      // An ENU origin is part of the coordinates of a local map (ENU, NED)
+      // and of a transform that anchors one; a map in geodetic, ECEF or a
+      // CRS's coordinates (moved between frames by a Helmert) has none to
+      // state (issue 40 point 6).
+      if (needs_enu_origin(a)) {
+        if (!m->enu_origin) missing.push_back("enu_origin");
+        if (!m->enu_origin_source) missing.push_back("enu_origin_source");
+      }
       if (!m->horizontal_crs) missing.push_back("horizontal_crs");
       if (!m->vertical_datum) missing.push_back("vertical_datum");
       if (!m->geoid_model) missing.push_back("geoid_model");
@@ -536,7 +554,23 @@ AuditCheck check_seams(const std::vector<AuditArtifact>& arts, const AuditLimits
                             "3-D separation ≤ " + cm(l.seam_m) + " (--max-seam-m); tiles closer than " +
                                 fixed(l.adjacency_gap_m, 1) + " m share a boundary");
   std::vector<Footprint> tiles;
-  const std::optional<geodesy::LocalOrigin> origin = map_origin(arts);
+  std::optional<geodesy::LocalOrigin> origin = map_origin(arts);
+  if (!origin) {
+    // A map in geodetic, ECEF or projected coordinates states no ENU
+    // origin: its footprints are compared in a tangent plane of their own,
+    // at the first corner of the first tile with bounds (any plane serves a
+    // comparison; issue 40 point 6).
+    for (const auto& a : arts) {
+      if (a.kind == AuditArtifactKind::transform || !a.meta || a.meta->crs) continue;
+      const auto b = bounds_of(a);
+      if (!b) continue;
+      if (const auto x = to_ecef(a.meta->coordinates, corners(b->first, b->second).front())) {
+        origin = geodesy::LocalOrigin{geodesy::geodetic_from_ecef(geodesy::Ellipsoid::grs80(), geodesy::EcefPosition(*x)),
+                                      geodesy::Ellipsoid::grs80()};
+        break;
+      }
+    }
+  }
   std::size_t not_checked = 0;
   for (const auto& a : arts) {
     // Tiles and vector maps: a layer moved otherwise than the tiles under it tears from them.
@@ -910,6 +944,11 @@ AuditCheck check_tangent_plane(const std::vector<AuditArtifact>& arts, const Aud
                             "a tangent plane departs from the ellipsoid by d²/2R at distance d from its origin: a map "
                             "read as flat (up taken as height) is that much off at its edge",
                             "d²/2R ≤ " + cm(l.tangent_plane_m) + " (--max-tangent-departure-m)");
+  if (std::none_of(arts.begin(), arts.end(), [](const AuditArtifact& a) { return a.kind != AuditArtifactKind::transform && needs_enu_origin(a); })) {
+    c.status = AuditStatus::not_run;
+    c.summary = "no tile or vector map of the map is in ENU/NED coordinates: no tangent plane to check";
+    return c;
+  }
   const std::optional<geodesy::LocalOrigin> origin = map_origin(arts);
   if (!origin) {
     c.status = AuditStatus::fail;
@@ -1044,6 +1083,53 @@ std::string web_mercator_mention(std::string_view text) {
   return "";
 }
 
+// ---------------------------------------------------------------- data
+
+// Each tile and vector map is the file apply wrote: the SHA-256 its
+// sidecar's provenance records (issue 40 point 6). A tile changed by a byte
+// after apply no longer matches, whatever its sidecar says.
+AuditCheck check_data(const std::vector<AuditArtifact>& arts) {
+  AuditCheck c = make_check("data",
+                            "the files are the ones their sidecars describe: a tile or map edited after it was written "
+                            "carries metadata that no longer holds",
+                            "SHA-256 of each file = its sidecar's provenance.output_sha256");
+  std::size_t checked = 0, bad = 0;
+  for (const auto& a : arts) {
+    if (a.kind == AuditArtifactKind::transform) continue;
+    ++checked;
+    std::string recorded;
+    if (a.meta && !a.meta->provenance_json.empty()) {
+      const json prov = json::parse(a.meta->provenance_json);
+      if (prov.contains("output_sha256") && prov.at("output_sha256").is_string()) recorded = prov.at("output_sha256");
+    }
+    if (recorded.empty()) {
+      ++bad;
+      c.evidence.push_back(name_of(a) + ": FAIL its sidecar records no output_sha256 (not written by geoanchor apply, or by "
+                                        "one before it recorded it): its data cannot be verified; apply it again");
+      continue;
+    }
+    std::string actual;
+    try {
+      actual = io::sha256_file_hex(a.path);
+    } catch (const Error& e) {
+      ++bad;
+      c.evidence.push_back(name_of(a) + ": FAIL " + e.what());
+      continue;
+    }
+    if (actual != recorded) {
+      ++bad;
+      c.evidence.push_back(name_of(a) + ": FAIL the file's SHA-256 is " + actual + ", its sidecar records " + recorded +
+                           ": the file was changed after it was written");
+    } else {
+      c.evidence.push_back(name_of(a) + ": SHA-256 " + actual.substr(0, 16) + "… as recorded");
+    }
+  }
+  c.status = bad == 0 ? AuditStatus::pass : AuditStatus::fail;
+  c.summary = bad == 0 ? "all " + std::to_string(checked) + " tiles and maps are the files their sidecars record"
+                       : std::to_string(bad) + " of " + std::to_string(checked) + " tiles and maps do not match their sidecars";
+  return c;
+}
+
 AuditResult audit_map(const AuditRequest& request) {
   const AuditLimits& l = request.limits;
   for (const auto& [v, flag] : {std::pair{l.checkpoint_horizontal_m, "--max-checkpoint-horizontal-m"},
@@ -1062,7 +1148,17 @@ AuditResult audit_map(const AuditRequest& request) {
   r.artifacts = std::move(listing.artifacts);
   r.ignored = std::move(listing.ignored);
   for (auto& a : r.artifacts) read_artifact(a);
+  // A map is its tiles and vector maps: a folder of transforms alone is none
+  // (it passed with 0 tiles).
+  if (std::none_of(r.artifacts.begin(), r.artifacts.end(), [](const AuditArtifact& a) { return a.kind != AuditArtifactKind::transform; })) {
+    std::string given;
+    for (const auto& m : request.inputs) given += (given.empty() ? "" : ", ") + m;
+    throw Error(ErrorKind::input, "E_MAP_EMPTY",
+                given + ": no tile or vector map to audit (" + std::to_string(r.artifacts.size()) +
+                    " transform files): a map's audit needs its tiles and maps with their sidecars");
+  }
   Transforms transforms(r.artifacts);
+  r.checks.push_back(check_data(r.artifacts));
   r.checks.push_back(check_metadata(r.artifacts));
   r.checks.push_back(check_one_frame(r.artifacts));
   r.checks.push_back(check_seams(r.artifacts, l, transforms));
@@ -1148,6 +1244,18 @@ MapReference map_reference(const std::vector<std::string>& inputs, const std::ve
   Listing listing = list_artifacts(request);
   std::vector<AuditArtifact>& arts = listing.artifacts;
   for (auto& a : arts) read_artifact(a);
+  // A tile whose sidecar is missing or broken is no part of the map's
+  // reference that can be checked: refused by name, as audit fails it
+  // (it was skipped without a word: issue 40 point 6).
+  for (const auto& a : arts) {
+    if (!a.unreadable.empty()) throw Error(ErrorKind::input, "E_MAP_REFERENCE", name_of(a) + ": " + a.unreadable);
+    if (a.kind != AuditArtifactKind::transform && !a.meta) {
+      throw Error(ErrorKind::input, "E_MAP_REFERENCE", name_of(a) + ": no sidecar (" + a.sidecar.string() + ") to read");
+    }
+  }
+  if (std::none_of(arts.begin(), arts.end(), [](const AuditArtifact& a) { return a.kind != AuditArtifactKind::transform; })) {
+    throw Error(ErrorKind::input, "E_MAP_EMPTY", join(inputs) + ": no tile or vector map to locate points in");
+  }
   const AuditCheck same = check_one_frame(arts);
   if (same.status == AuditStatus::fail) {
     std::string why;
