@@ -8,6 +8,7 @@
 #include "geoanchor/io/crs_csv.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/io/las.hpp"
+#include "geoanchor/io/las_geotiff.hpp"
 #include "geoanchor/io/vector_map.hpp"
 #include "geoanchor/workflow/value_text.hpp"
 
@@ -166,7 +167,7 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
   const fs::path side_path = io::sidecar_path(p.input);
   std::error_code ec;
   if (fs::exists(side_path, ec)) side = io::read_tile_metadata(side_path);
-  bool geotiff_only = false;
+  std::optional<std::string> geotiff_keys;
   if (io::is_las_family(p.format)) {
     io::LasReader reader(p.input);
     p.las_points = reader.header().point_count;
@@ -177,8 +178,14 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
       // else as geoanchor's own coordinates where it can be.
       const bool as_crs = side ? side->crs.has_value() : (o_.crs || o_.to_crs);
       wkt = as_crs ? io::tile_metadata_from_wkt_as_crs(*w, tile) : io::tile_metadata_from_wkt(*w, tile);
-    } else {
-      for (const auto& v : reader.vlrs()) geotiff_only |= io::is_geotiff_crs_vlr(v);
+    } else if (const auto keys = io::las_geotiff_crs(reader.vlrs(), tile)) {
+      // LAS 1.2-1.3 (and 1.4 formats 0-5) state their CRS as GeoTIFF keys:
+      // read as a CRS that PROJ moves, checked against the flags as a WKT
+      // is; a realization and epoch they cannot state are asked for as for
+      // a WKT without them (issue 40 point 12).
+      wkt = io::tile_metadata_from_crs(io::Crs::parse(keys->crs, tile + " GeoTIFF keys (" + keys->description + ")"), tile);
+      wkt->storage = "int32_scaled";
+      geotiff_keys = keys->crs + " (" + keys->description + ")";
     }
   }
   std::optional<TileMetadata> stated;  // a CSV's '# crs = …' comments
@@ -233,7 +240,7 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
     return *wkt;
   }
   if (wkt) {
-    p.in_frame_source = "LAS WKT";
+    p.in_frame_source = geotiff_keys ? "LAS GeoTIFF keys " + *geotiff_keys : std::string("LAS WKT");
     check_flags_against(*wkt, p, tile);
     return *wkt;
   }
@@ -254,10 +261,7 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
   if (!from_frame_) {
     throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
                 tile + ": the tile's frame is unknown: no sidecar " + side_path.filename().string() +
-                    (io::is_las_family(p.format) ? ", no WKT in the LAS file" : "") +
-                    (geotiff_only ? " (its GeoTIFF CRS keys are not read: they cannot state a realization and "
-                                    "epoch)"
-                                  : "") +
+                    (io::is_las_family(p.format) ? ", no WKT or GeoTIFF keys in the LAS file" : "") +
                     " and no --from-frame NAME@EPOCH");
   }
   m.frame = from_frame_;

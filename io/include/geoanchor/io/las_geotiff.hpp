@@ -1,0 +1,31 @@
+#pragma once
+// The CRS a LAS file states as GeoTIFF keys (LAS 1.0–1.3, and 1.4 point
+// formats 0–5): the GeoKeyDirectory record (LASF_Projection 34735), with
+// its double (34736) and ASCII (34737) parameters (GeoTIFF 1.0, section
+// 2.7; LAS 1.4 R15, section 2.5). See docs/commands/apply.md.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geoanchor/io/las.hpp"
+
+namespace geoanchor::io {
+
+struct LasGeoKeys {
+  std::string crs;          // for PROJ: "EPSG:2154", or "EPSG:2154+5720" with a vertical CRS
+  std::string description;  // the keys read, for messages: "ProjectedCSTypeGeoKey 2154, ..."
+};
+
+// The CRS the keys state, or nullopt when the file has no GeoKeyDirectory.
+// Read: the model type (1024), the raster type (1025, meaningless for
+// points), the geographic (2048) or projected (3072) CRS code with its
+// units (2054, 3076), the vertical CRS code (4096) with its units (4099),
+// the citations (1026, 2049, 3073, 4097: text) and the vertical datum code
+// (4098). Throws Error (input, E_GEOTIFF_KEYS) naming `where` for a
+// directory that is malformed, a key it does not read (user-defined CRS
+// parameters, geocentric models), a user-defined code (32767), or units
+// that contradict the EPSG CRS the code names.
+std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const std::string& where);
+
+}  // namespace geoanchor::io

@@ -1,0 +1,117 @@
+// Issue 40 point 12: a LAS tile's GeoTIFF CRS keys (GeoKeyDirectory,
+// LASF_Projection 34735) are read: a flag that contradicts them is refused
+// as a WKT contradiction is, the CRS they name moves the tile as PROJ's own
+// operation does, and keys geoanchor cannot read (a user-defined CRS, units
+// that contradict the code) are refused by name. Keys as GeoTIFF 1.0
+// section 2.7 lays them out: a header (1, 1, 0, count) and four shorts a key.
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <proj.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "cli_support.hpp"
+#include "las_builder.hpp"
+#include "test_support.hpp"
+
+namespace geoanchor {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::CliTest;
+
+constexpr double kVsProj_deg = 1e-9;  // 0.1 mm of arc
+constexpr double kStep_m = 0.001;     // the tile's quantization
+
+std::vector<std::uint8_t> geo_keys(const std::vector<std::array<std::uint16_t, 2>>& keys) {
+  std::vector<std::uint16_t> v = {1, 1, 0, static_cast<std::uint16_t>(keys.size())};
+  for (const auto& [id, value] : keys) v.insert(v.end(), {id, 0, 1, value});
+  std::vector<std::uint8_t> bytes(2 * v.size());
+  std::memcpy(bytes.data(), v.data(), bytes.size());
+  return bytes;
+}
+
+// Points near Paris in Lambert-93 (EPSG:2154), metres.
+const std::array<double, 3> kPoints[] = {{652000.0, 6862000.0, 35.0}, {652500.25, 6862400.5, 36.5}, {651800.75, 6861700.125, 34.0}};
+
+class LasGeoTiff : public CliTest {
+ protected:
+  fs::path las(const std::string& name, const std::vector<std::array<std::uint16_t, 2>>& keys) {
+    testing::LasBuild b;
+    b.minor = 2;
+    b.point_format = 1;
+    b.offset = {652000.0, 6862000.0, 0.0};
+    for (const auto& p : kPoints) {
+      b.xyz.push_back({static_cast<std::int32_t>(std::lround((p[0] - b.offset[0]) / kStep_m)),
+                       static_cast<std::int32_t>(std::lround((p[1] - b.offset[1]) / kStep_m)),
+                       static_cast<std::int32_t>(std::lround((p[2] - b.offset[2]) / kStep_m))});
+    }
+    b.vlrs.push_back({"LASF_Projection", 34735, "GeoKeyDirectoryTag", geo_keys(keys)});
+    fs::create_directories(path("in"));
+    testing::write_bytes(path("in/" + name), testing::build_las(b));
+    return path("in/" + name);
+  }
+};
+
+TEST_F(LasGeoTiff, Issue40_TheKeysStateTheTilesCrs) {
+  // Projected (1), Lambert-93, metres.
+  const fs::path in = las("paris.las", {{1024, 1}, {3072, 2154}, {3076, 9001}});
+  // A flag that contradicts the keys (Oregon's Lambert in international feet) is refused; nothing written.
+  const auto wrong = run("apply " + in.string() + " --crs EPSG:2992 --to-crs EPSG:4326 --out-dir " + path("wrong").string());
+  EXPECT_EQ(wrong.exit_code, 2) << wrong.err;
+  EXPECT_NE(wrong.err.find("LAS GeoTIFF keys EPSG:2154"), std::string::npos) << wrong.err;
+  EXPECT_FALSE(fs::exists(path("wrong/paris.las")));
+  // Without a flag the keys' CRS moves the tile, as PROJ's own operation does.
+  const auto r = run("apply " + in.string() + " --to-crs EPSG:4171 --out-dir " + path("out").string());  // RGF93 v1 geographic
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json got = json::parse(las_verify_text(path("out/paris.las")));
+  ASSERT_EQ(got["points"].size(), 3u);
+  PJ_CONTEXT* ctx = proj_context_create();
+  proj_context_set_enable_network(ctx, 0);
+  PJ* raw = proj_create_crs_to_crs(ctx, "EPSG:2154", "EPSG:4171", nullptr);
+  PJ* op = proj_normalize_for_visualization(ctx, raw);
+  testing::WorstCase worst;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const PJ_COORD e = proj_trans(op, PJ_FWD, proj_coord(kPoints[i][0], kPoints[i][1], 0, 0));
+    const double tol = 0.5 * got["header"]["scale"][0].get<double>() + kVsProj_deg;
+    worst.add(std::abs(got["points"][i][0].get<double>() - e.lp.lam) / tol, i);
+    worst.add(std::abs(got["points"][i][1].get<double>() - e.lp.phi) / tol, i);
+  }
+  EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+  proj_destroy(op);
+  proj_destroy(raw);
+  proj_context_destroy(ctx);
+  const json side = json::parse(testing::slurp(path("out/paris.las.geoanchor.json")));
+  EXPECT_NE(side["provenance"]["input_frame_from"].get<std::string>().find("LAS GeoTIFF keys EPSG:2154"), std::string::npos)
+      << side["provenance"];
+}
+
+TEST_F(LasGeoTiff, Issue40_KeysGeoanchorCannotReadAreRefusedByName) {
+  struct Case {
+    const char* name;
+    std::vector<std::array<std::uint16_t, 2>> keys;
+    const char* says;
+  };
+  const Case cases[] = {
+      {"user.las", {{1024, 1}, {3072, 32767}}, "key 3072 is user-defined (32767)"},
+      {"params.las", {{1024, 1}, {3072, 32767}, {3074, 32767}, {3075, 9}}, "key 3074 is not read by geoanchor"},
+      {"feet.las", {{1024, 1}, {3072, 2154}, {3076, 9002}}, "ProjLinearUnitsGeoKey 9002 (0.3048 m) contradicts EPSG:2154"},
+      {"geocentric.las", {{1024, 3}}, "GTModelTypeGeoKey 3"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const fs::path in = las(c.name, c.keys);
+    const auto r = run("apply " + in.string() + " --to-crs EPSG:4326 --out-dir " + path("out").string());
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    EXPECT_NE(r.err.find("E_GEOTIFF_KEYS"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path("out") / c.name));
+  }
+}
+
+}  // namespace
+}  // namespace geoanchor
