@@ -1014,6 +1014,22 @@ class CrsLas : public CrsCli {
     const std::string text = las_verify_text(las);
     return text.empty() ? json() : json::parse(text);
   }
+  // The written points (`got`, as las-verify reads them) against PROJ's `op`
+  // on the input's points, in units of each axis's tolerance: half the
+  // output's quantization step plus kVsProjTol_m.
+  static testing::WorstCase against_proj(const Pj& op, const Tile& in, const json& got) {
+    testing::WorstCase worst;
+    for (std::size_t i = 0; i < in.xyz.size(); ++i) {
+      const auto& a = in.xyz[i];
+      const PJ_COORD e = proj_trans(op.get(), PJ_FWD, proj_coord(a[0], a[1], a[2], 0));
+      const double expected[3] = {e.xyz.x, e.xyz.y, e.xyz.z};
+      for (std::size_t k = 0; k < 3; ++k) {
+        const double tol = 0.5 * got["header"]["scale"][k].get<double>() + kVsProjTol_m;
+        worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
+      }
+    }
+    return worst;
+  }
 };
 
 // issue 13, acceptance 2: LAS tiles in EPSG:2236 promoted to 3-D (US survey
@@ -1124,17 +1140,7 @@ TEST_F(CrsLas, Issue13_TwoDimensionalLasWktNeedsItsHeightsStated) {
   const json got = verify(out / "fl.las");
   ASSERT_FALSE(got.is_null());
   Pj op = proj_.op(three_d, wkt_of(proj_, "EPSG:26917", true));
-  testing::WorstCase worst;
-  for (std::size_t i = 0; i < in.xyz.size(); ++i) {
-    const auto& a = in.xyz[i];
-    const PJ_COORD e = proj_trans(op.get(), PJ_FWD, proj_coord(a[0], a[1], a[2], 0));
-    const double expected[3] = {e.xyz.x, e.xyz.y, e.xyz.z};
-    for (std::size_t k = 0; k < 3; ++k) {
-      const double tol = 0.5 * got["header"]["scale"][k].get<double>() + kVsProjTol_m;
-      worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
-    }
-  }
-  EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+  EXPECT_WORST_WITHIN(against_proj(op, in, got), 1.0) << "(ratio to the tolerance)";
 
   const RunResult other = run("apply '" + path("in/fl.las").string() + "' --crs EPSG:2238 --to-crs EPSG:26917 --out-dir '" +
                               path("other").string() + "'");
@@ -1179,17 +1185,7 @@ TEST_F(CrsLas, Issue40_HeightsChangeUnitWithTheCrsAndScalesArePowersOfTen) {
     // Every axis, the heights included, as PROJ moves them (feet to metres and back).
     Pj op = proj_.op(source, target);
     ASSERT_TRUE(op);
-    testing::WorstCase worst;
-    for (std::size_t i = 0; i < in.xyz.size(); ++i) {
-      const auto& a = in.xyz[i];
-      const PJ_COORD e = proj_trans(op.get(), PJ_FWD, proj_coord(a[0], a[1], a[2], 0));
-      const double expected[3] = {e.xyz.x, e.xyz.y, e.xyz.z};
-      for (std::size_t k = 0; k < 3; ++k) {
-        const double tol = 0.5 * c.expected_scale + kVsProjTol_m;
-        worst.add(std::abs(got["points"][i][k].get<double>() - expected[k]) / tol, i);
-      }
-    }
-    EXPECT_WORST_WITHIN(worst, 1.0) << "(ratio to the tolerance)";
+    EXPECT_WORST_WITHIN(against_proj(op, in, got), 1.0) << "(ratio to the tolerance)";
   }
   // 2-D in US survey feet to 2-D in metres: Z has no stated unit, so it is refused, nothing written.
   const std::string two_d = wkt_of(proj_, "EPSG:2236", false);
