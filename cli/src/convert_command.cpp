@@ -521,7 +521,7 @@ void run_convert(const ConvertOptions& o) {
     if (extent) {
       const double d = extent->distance_m(o.inverse ? target : source);  // the transform's source frame
       check_reach(d, where, "outside the control network of " + *o.transform);
-      if (d > 0.0) ++rows_outside;
+      if (d > io::ControlExtent::kOnHull_m) ++rows_outside;
       if (d > farthest_outside_m) farthest_outside_m = d;
     }
     if (step.needs_row_epoch()) {

@@ -89,11 +89,30 @@ ControlExtent ControlExtent::of(const std::vector<geodesy::EcefPosition>& marks)
   return e;
 }
 
+namespace {
+double hull_distance(const std::vector<std::array<double, 2>>& h, const Point2& p);
+}  // namespace
+
 double ControlExtent::distance_m(const geodesy::EcefPosition& x) const {
   const geodesy::LocalTangentPlane plane(centroid);
   const Eigen::Vector3d v = plane.enu_from_ecef(x).enu_m;
-  const Point2 p{v.x(), v.y()};
-  const auto& h = hull_en_m;
+  return hull_distance(hull_en_m, Point2{v.x(), v.y()});
+}
+
+double ControlExtent::max_distance_m(std::span<const double> x, std::span<const double> y, std::span<const double> z) const {
+  const geodesy::LocalTangentPlane plane(centroid);
+  const geodesy::AffineMap to_enu = plane.enu_from_ecef_map();
+  double worst = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const Eigen::Vector3d v = to_enu.apply(Eigen::Vector3d(x[i], y[i], z[i]));
+    const double d = hull_distance(hull_en_m, Point2{v.x(), v.y()});
+    if (!(d <= worst)) worst = d;  // NaN propagates
+  }
+  return worst;
+}
+
+namespace {
+double hull_distance(const std::vector<std::array<double, 2>>& h, const Point2& p) {
   if (h.empty()) return std::hypot(p[0], p[1]);
   if (h.size() == 1) return std::hypot(p[0] - h[0][0], p[1] - h[0][1]);
   if (h.size() >= 3) {
@@ -103,7 +122,8 @@ double ControlExtent::distance_m(const geodesy::EcefPosition& x) const {
   }
   double d = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < h.size(); ++i) d = std::min(d, segment_distance(p, h[i], h[(i + 1) % h.size()]));
-  return d;
+  return std::isfinite(p[0]) && std::isfinite(p[1]) ? d : std::numeric_limits<double>::quiet_NaN();
 }
+}  // namespace
 
 }  // namespace geoanchor::io

@@ -93,6 +93,7 @@ inline ChainReport move_points(const PointChain& chain, const TileApplyOptions& 
   const bool z_in = !o.file_in || o.file_in->has_height;
   const bool z_out = !o.file_out || o.file_out->has_height;
   if (o.crs_before) o.crs_before->transform(a.data(), b.data(), z_in ? c.data() : nullptr, a.size(), point_name);
+  if (o.inspect_input) o.inspect_input(a, b, c);
   ChainReport report;
   if (o.chain_used) report = epochs ? chain.apply_at_epochs(a, b, c, *epochs) : chain.apply(a, b, c);
   if (o.crs_after) o.crs_after->transform(a.data(), b.data(), z_out ? c.data() : nullptr, a.size(), point_name);

@@ -159,5 +159,43 @@ TEST_F(Origins, Issue40_HeightsAndRadiiOffTheEarthAreRefused) {
   EXPECT_FALSE(fs::exists(path("m.csv")));
 }
 
+// Issue 40 point 11: a tile of the very marks a transform was fitted to
+// lies inside its control network: apply measures every point, not the
+// bounding box (whose corners put it 1991.8 m outside).
+TEST_F(Origins, Issue40_ATileOfTheControlMarksIsInsideItsNetwork) {
+  const fs::path control = fs::path(GEOANCHOR_SOURCE_DIR) / "fixtures" / "airport_control.csv";
+  const auto fit = run("fit " + control.string() + " --model helmert7 --convention position_vector --remove-outliers -o " +
+                       path("t.json").string());
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  // The marks the fit used (P17, the planted blunder, removed), as a tile in the source frame.
+  std::istringstream in(slurp(control));
+  std::string line, tile = "lat_deg,lon_deg,h_m\n";
+  bool header = false;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (!header) {
+      header = true;
+      continue;
+    }
+    std::stringstream row(line);
+    std::string id, lat, lon, h;
+    std::getline(row, id, ',');
+    std::getline(row, lat, ',');
+    std::getline(row, lon, ',');
+    std::getline(row, h, ',');
+    if (id != "P17") tile += lat + "," + lon + "," + h + "\n";
+  }
+  write("in/marks.csv", tile);
+  write("in/marks.csv.geoanchor.json",
+        R"({"schema": "geoanchor.tile/1", "frame": "ITRF2014@2024.5", "coordinates": {"kind": "geodetic", "ellipsoid": "GRS80",
+        "storage": "float64"}, "vertical": {"datum": "ellipsoid GRS80", "height_type": "ellipsoidal"}})");
+  const auto r = run("apply " + path("in/marks.csv").string() + " --transform " + path("t.json").string() + " --out-dir " +
+                     path("out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("outside the control network"), std::string::npos) << r.err;
+  const auto side = nlohmann::json::parse(slurp(path("out/marks.csv.geoanchor.json")));
+  EXPECT_LT(side["provenance"]["extrapolation"]["distance_outside_control_m"].get<double>(), 1e-3) << side["provenance"];
+}
+
 }  // namespace
 }  // namespace geoanchor

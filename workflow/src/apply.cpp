@@ -422,6 +422,26 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
       }
     }
   };
+  // How far the tile's points reach outside the fitted transform's control
+  // network, measured on every point in the transform's source frame (its
+  // bounding box's corners reached 2 km outside a network its points all
+  // lie in: issue 40 point 11).
+  struct Reach {
+    std::mutex m;
+    double worst_m = 0.0;
+  } reach;
+  std::optional<io::PointChain> to_source_ecef;
+  const io::ControlExtent* extent = t_ && t_->fit && t_->fit->extent ? &*t_->fit->extent : nullptr;
+  if (extent) {
+    to_source_ecef.emplace(p.in.coordinates, std::nullopt, false, std::nullopt, ArrayFrame{});
+    ao.inspect_input = [&](std::span<const double> a, std::span<const double> b, std::span<const double> c) {
+      std::vector<double> x(a.begin(), a.end()), y(b.begin(), b.end()), z(c.begin(), c.end());
+      (void)to_source_ecef->apply(x, y, z);
+      const double d = extent->max_distance_m(x, y, z);
+      const std::lock_guard<std::mutex> lock(reach.m);
+      if (!(d <= reach.worst_m)) reach.worst_m = d;  // NaN propagates to the refusal below
+    };
+  }
   io::TileApplyResult res;
   switch (p.format) {
     case io::TileFormat::las:
@@ -483,12 +503,8 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
     // The extent is the source frame's; with --inverse the tile is in the
     // target frame, metres at most from it, which does not matter at the
     // scale of the extrapolation limit.
-    if (t_->fit && t_->fit->extent) {
-      double worst = 0.0;
-      for (std::size_t k : usable) {
-        const double d = t_->fit->extent->distance_m(geodesy::EcefPosition(a[k], b[k], c[k]));
-        if (!(d <= worst)) worst = d;  // NaN propagates to the refusal below
-      }
+    if (extent) {
+      const double worst = reach.worst_m;
       if (!std::isfinite(worst)) {
         throw Error(ErrorKind::input, "E_EXTRAPOLATION", tile + ": the distance outside the control network of " + *o_.transform +
                                                              " cannot be computed; nothing was written");
@@ -500,7 +516,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
                         " m outside the control network of " + *o_.transform + " (limit --max-extrapolation " +
                         format_shortest(o_.max_extrapolation_m) + " m); nothing was written");
       }
-      if (worst > 0.0) {
+      if (worst > io::ControlExtent::kOnHull_m) {
         warnings.push_back(tile + ": the tile reaches " + format_fixed(worst, 1) +
                            " m outside the control network: the transform is extrapolated there");
       }

@@ -189,7 +189,7 @@ LocateResult locate_points(const LocateRequest& request) {
     }
     r.points.push_back(std::move(p));
   }
-  if (farthest_outside_m > 0.0) {
+  if (farthest_outside_m > io::ControlExtent::kOnHull_m) {
     r.notes.push_back("points lie outside the control network of " + r.map.transform_path + " (" + farthest_id + " " +
                       n(farthest_outside_m, 1) + " m): the transform and its uncertainty are extrapolated there");
   }

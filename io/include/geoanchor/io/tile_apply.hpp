@@ -11,6 +11,7 @@
 #include <functional>
 #include <optional>
 #include <ostream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -70,6 +71,10 @@ struct TileApplyOptions {
   std::size_t chunk_points = 1 << 16;
   // Called after each chunk with the points done so far in this tile.
   std::function<void(std::uint64_t)> progress;
+  // Called with each batch of points as the chain reads them (after
+  // `crs_before`, in `from`'s coordinates), from any thread; apply measures
+  // how far they reach outside a transform's control network.
+  std::function<void(std::span<const double>, std::span<const double>, std::span<const double>)> inspect_input = nullptr;
   // LAS: evaluate a time-dependent transform at each point's own epoch,
   // from its GPS time (adjusted standard GPS time, global encoding bit 0).
   bool epochs_from_gps_time = false;

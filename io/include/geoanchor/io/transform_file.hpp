@@ -27,6 +27,7 @@
 #include <iosfwd>
 #include <vector>
 #include <optional>
+#include <span>
 #include <string>
 #include <variant>
 
@@ -90,6 +91,9 @@ struct GnssSolutionRecord {
 // hull of the used marks in ENU (metres) at their centroid. `apply` measures
 // how far a tile lies outside it.
 struct ControlExtent {
+  // A point this close to the hull is on it (the hull's vertices are the
+  // marks, whose own distance comes out at 1e-10 m of rounding).
+  static constexpr double kOnHull_m = 1e-3;
   geodesy::LocalOrigin centroid;            // on WGS84, ellipsoidal height
   std::vector<std::array<double, 2>> hull_en_m;  // counter-clockwise
 
@@ -97,6 +101,9 @@ struct ControlExtent {
   static ControlExtent of(const std::vector<geodesy::EcefPosition>& marks);
   // Horizontal distance in metres from `x` to the hull; 0 inside.
   double distance_m(const geodesy::EcefPosition& x) const;
+  // The largest of distance_m over the points (x[i], y[i], z[i]) (ECEF);
+  // NaN when a point is not finite; 0 for none.
+  double max_distance_m(std::span<const double> x, std::span<const double> y, std::span<const double> z) const;
 };
 
 // The fit record, read back whole from a fitted file (present when the file
