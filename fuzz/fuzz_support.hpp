@@ -1,14 +1,19 @@
 #pragma once
 // What the fuzz targets share: the input as a temporary file (the tile
-// readers take paths), and frames for the identity chain they run.
+// readers take paths), frames for the identity chain they run, and a
+// network input read as `geoanchor adjust` reads it.
 
 #include <unistd.h>
 
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
+#include <string_view>
 
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/io/network_input.hpp"
 #include "geoanchor/io/point_chain.hpp"
 
 namespace geoanchor::fuzz {
@@ -32,6 +37,22 @@ inline io::ArrayFrame frame(io::CoordinateKind kind) {
                                     geodesy::Ellipsoid::grs80()};
   }
   return f;
+}
+
+// The input read as adjust's only input (read_network: the reader, then the
+// stations placed and checked) when its content is of `format`; the other
+// formats are left to their own targets. nullopt when it is not of that
+// format or the reader refused it with geoanchor::Error.
+inline std::optional<geodesy::Network> read_network_input(const std::uint8_t* data, std::size_t size,
+                                                          io::NetworkFormat format,
+                                                          const io::NetworkReadOptions& options) {
+  const std::string_view text(reinterpret_cast<const char*>(data), size);
+  try {
+    if (io::detect_network_format(text, "fuzz") != format) return std::nullopt;
+    return io::read_network({as_file(data, size, ".xml").string()}, options);
+  } catch (const Error&) {
+    return std::nullopt;
+  }
 }
 
 }  // namespace geoanchor::fuzz

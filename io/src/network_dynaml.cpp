@@ -788,6 +788,17 @@ void warn_approximate_heights(std::string_view source, std::size_t count, geodes
                           "at h = H (metres off where N is metres; their adjusted heights do not depend on it)");
 }
 
+// The line breaks in `t` as expat counts them (XML's end-of-line rule): LF,
+// CR LF and a CR alone are one each. A part's line offset counted in LFs
+// alone put every line after a lone CR elsewhere than one reading does.
+std::ptrdiff_t xml_line_breaks(std::string_view t) {
+  std::ptrdiff_t n = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (t[i] == '\n' || (t[i] == '\r' && (i + 1 == t.size() || t[i + 1] != '\n'))) ++n;
+  }
+  return n;
+}
+
 // A large file read in parts on threads (expat is one thread; a 10⁵-station
 // measurement file is 180 MB of XML). The parts are cut where a top-level
 // element (<DnaStation>, <DnaMeasurement>) starts; each is read as a
@@ -836,11 +847,11 @@ bool read_dynaml_in_parts(std::string_view text, std::string_view source, geodes
   cut.push_back(text.size());
   const std::size_t parts = cut.size() - 1;
   if (parts < 2) return false;
-  const std::ptrdiff_t prologue_lines = std::count(prologue.begin(), prologue.end(), '\n');
-  std::vector<std::ptrdiff_t> line_before(parts, 0);  // newlines before each part
+  const std::ptrdiff_t prologue_lines = xml_line_breaks(prologue);
+  std::vector<std::ptrdiff_t> line_before(parts, 0);  // line breaks before each part
   for (std::size_t k = 1; k < parts; ++k) {
-    line_before[k] = line_before[k - 1] + std::count(text.begin() + static_cast<std::ptrdiff_t>(k == 1 ? 0 : cut[k - 1]),
-                                                     text.begin() + static_cast<std::ptrdiff_t>(cut[k]), '\n');
+    const std::size_t from = k == 1 ? 0 : cut[k - 1];
+    line_before[k] = line_before[k - 1] + xml_line_breaks(text.substr(from, cut[k] - from));
   }
   struct Part {
     geodesy::Network net;

@@ -50,6 +50,10 @@ struct Estimate {
   std::size_t line = 0;
 };
 
+// A parameter index (INDEX, PARA1, PARA2) is a 5-digit field: a larger
+// value (1e300 in the same columns) is no parameter and no std::size_t.
+constexpr double kMaxIndex = 99999.0;
+
 std::string trim(std::string_view s) {
   const auto b = s.find_first_not_of(" \t\r");
   if (b == std::string_view::npos) return "";
@@ -182,7 +186,9 @@ class Reader {
     separators(line, line_no, {1, 7, 14, 19, 22, 27, 40, 45, 47, 69}, "SOLUTION/ESTIMATE");
     const std::string index_text = columns(line, 2, 6);
     const double index = number(index_text, line_no, "INDEX");
-    if (index < 1 || index != std::floor(index)) fail(line_no, "INDEX " + index_text + " must be a positive integer");
+    if (!(index >= 1 && index <= kMaxIndex) || index != std::floor(index)) {
+      fail(line_no, "INDEX " + index_text + " must be a whole number from 1 to 99999");
+    }
     Estimate e;
     e.type = columns(line, 8, 13);
     e.code = columns(line, 15, 18);
@@ -219,7 +225,9 @@ class Reader {
       fail(line_no, "a matrix line holds PARA1 PARA2 and 1 to 3 values; found " + std::to_string(t.size()) + " fields");
     }
     const double r = number(t[0], line_no, "PARA1"), c = number(t[1], line_no, "PARA2");
-    if (r < 1 || c < 1 || r != std::floor(r) || c != std::floor(c)) fail(line_no, "PARA1 and PARA2 must be positive integers");
+    if (!(r >= 1 && r <= kMaxIndex && c >= 1 && c <= kMaxIndex) || r != std::floor(r) || c != std::floor(c)) {
+      fail(line_no, "PARA1 and PARA2 must be whole numbers from 1 to 99999 (parameter indices)");
+    }
     for (std::size_t k = 2; k < t.size(); ++k) {
       const std::size_t row = static_cast<std::size_t>(r), col = static_cast<std::size_t>(c) + (k - 2);
       if (matrix_triangle_ == "L" ? col > row : col < row) {

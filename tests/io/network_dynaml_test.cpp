@@ -141,6 +141,35 @@ TEST_F(DynamlParts, Issue17_AFileReadInPartsIsTheFileReadWhole) {
   expect_same(read_network(sample, whole()), read_network(sample, in_parts()));
 }
 
+// Issue 40 point 7 (found by fuzz/dynaml_fuzz.cpp): expat counts a CR
+// alone as a line break (XML's end-of-line rule), as it counts LF and CR LF;
+// the parts' line offsets counted LFs alone, so after lone CRs (legal
+// white space inside a tag) every later part named other lines than one
+// reading does.
+TEST_F(DynamlParts, Issue40_LoneCarriageReturnsMoveLaterLinesAsInOneReading) {
+  std::string msr = measurements_file(), stn = stations_file();
+  msr.replace(msr.find("<First>A</First>"), 16, "<First\r\r\r>A</First\r>");
+  stn.replace(stn.find("<Type>LLh</Type>"), 16, "<Type\r\r>LLh</Type>");
+  // CR LF line ends (one break each), and a lone CR as the last byte before
+  // each later <DnaStation> (where a part may start).
+  for (auto at = stn.find("</DnaStation>\n  <DnaStation>"); at != std::string::npos;
+       at = stn.find("</DnaStation>\n  <DnaStation>", at + 1)) {
+    stn.replace(at, 28, "</DnaStation>\r\n  \r<DnaStation>");
+  }
+  const std::string a = write("cr.msr.xml", msr), b = write("cr.stn.xml", stn);
+  for (const auto& inputs : {std::vector<std::string>{a, b}, std::vector<std::string>{b, a}}) {
+    SCOPED_TRACE(inputs.front());
+    const geodesy::Network whole_read = read_network(inputs, whole());
+    expect_same(whole_read, read_network(inputs, in_parts()));
+    // Station D's <DnaStation> is on line 3 + 3 × 11 of the stations file,
+    // and 5 lines further on for the lone CRs before it (two in station A's
+    // <Type>, one before each of B, C and D).
+    const auto d = whole_read.find("D");
+    ASSERT_TRUE(d.has_value());
+    EXPECT_EQ(whole_read.stations[*d].source, b + ":41");
+  }
+}
+
 TEST_F(DynamlParts, Issue17_AnErrorInALaterPartIsReportedAsByOneReading) {
   const std::string stn = write("net.stn.xml", stations_file());
   std::string text = measurements_file();
