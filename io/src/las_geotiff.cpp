@@ -3,6 +3,7 @@
 #include <proj.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 
@@ -14,6 +15,7 @@ namespace geoanchor::io {
 namespace {
 
 constexpr std::uint16_t kKeyDirectory = 34735;
+constexpr std::uint16_t kDoubleParams = 34736;
 constexpr std::uint16_t kUserDefined = 32767;
 
 // GeoTIFF 1.0 key ids geoanchor reads.
@@ -23,10 +25,22 @@ enum Key : std::uint16_t {
   kCitation = 1026,
   kGeographicType = 2048,
   kGeogCitation = 2049,
+  kGeogGeodeticDatum = 2050,
+  kGeogPrimeMeridian = 2051,
+  kGeogLinearUnits = 2052,
+  kGeogLinearUnitSize = 2053,
   kGeogAngularUnits = 2054,
+  kGeogAngularUnitSize = 2055,
+  kGeogEllipsoid = 2056,
+  kGeogSemiMajorAxis = 2057,
+  kGeogSemiMinorAxis = 2058,
+  kGeogInvFlattening = 2059,
+  kGeogAzimuthUnits = 2060,
+  kGeogPrimeMeridianLong = 2061,
   kProjectedCsType = 3072,
   kPcsCitation = 3073,
   kProjLinearUnits = 3076,
+  kProjLinearUnitSize = 3077,
   kVerticalCsType = 4096,
   kVerticalCitation = 4097,
   kVerticalDatum = 4098,
@@ -63,6 +77,57 @@ double first_axis_unit(const std::string& code, const std::string& where) {
   return factor;
 }
 
+
+// The EPSG code PROJ gives an object (a datum, an ellipsoid, a prime
+// meridian), or 0 when it has none.
+int epsg_code_of(PJ_CONTEXT* ctx, const PJ* object) {
+  if (!object) return 0;
+  const char* authority = proj_get_id_auth_name(object, 0);
+  const char* code = proj_get_id_code(object, 0);
+  if (!authority || !code || std::strcmp(authority, "EPSG") != 0) return 0;
+  (void)ctx;
+  return std::atoi(code);
+}
+
+// What the EPSG CRS `code` says its geodetic datum is, for the keys that
+// repeat it (GeoTIFF 1.0 section 2.5.3.2 allows them beside a CRS code;
+// they must then agree with it).
+struct GeodeticFacts {
+  int datum = 0, ellipsoid = 0, prime_meridian = 0;
+  double semi_major_m = 0, semi_minor_m = 0, inverse_flattening = 0, prime_meridian_deg = 0;
+};
+
+GeodeticFacts geodetic_facts(const std::string& code, const std::string& where) {
+  const detail::PjContext ctx = detail::quiet_context();
+  detail::Pj crs(proj_create(ctx.get(), code.c_str()));
+  if (!crs) fail(where, code + " is not a CRS PROJ knows");
+  detail::Pj geodetic(proj_crs_get_geodetic_crs(ctx.get(), crs.get()));
+  if (!geodetic) fail(where, code + " has no geodetic datum");
+  GeodeticFacts f;
+  detail::Pj datum(proj_crs_get_datum_forced(ctx.get(), geodetic.get()));
+  f.datum = epsg_code_of(ctx.get(), datum.get());
+  detail::Pj ellipsoid(proj_get_ellipsoid(ctx.get(), geodetic.get()));
+  detail::Pj pm(proj_get_prime_meridian(ctx.get(), geodetic.get()));
+  if (!ellipsoid || !pm) fail(where, "cannot read the ellipsoid and prime meridian of " + code);
+  f.ellipsoid = epsg_code_of(ctx.get(), ellipsoid.get());
+  f.prime_meridian = epsg_code_of(ctx.get(), pm.get());
+  int computed = 0;
+  proj_ellipsoid_get_parameters(ctx.get(), ellipsoid.get(), &f.semi_major_m, &f.semi_minor_m, &computed, &f.inverse_flattening);
+  double pm_longitude = 0, pm_unit_rad = 0;
+  proj_prime_meridian_get_parameters(ctx.get(), pm.get(), &pm_longitude, &pm_unit_rad, nullptr);
+  f.prime_meridian_deg = pm_longitude * pm_unit_rad * 180.0 / M_PI;
+  return f;
+}
+
+// Two values a key and PROJ give for one quantity agree to `tolerance`.
+void agree(const std::string& where, const std::string& key, double key_value, const std::string& crs, double crs_value,
+           double tolerance, const std::string& unit) {
+  if (!(std::abs(key_value - crs_value) <= tolerance)) {
+    fail(where, key + " " + format_shortest(key_value) + unit + " contradicts " + crs + ", whose value is " +
+                    format_shortest(crs_value) + unit);
+  }
+}
+
 }  // namespace
 
 std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const std::string& where) {
@@ -83,7 +148,12 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
   if (d.size() < 8 * (keys + 1)) {
     fail(where, "the GeoKeyDirectory lists " + std::to_string(keys) + " keys in " + std::to_string(d.size()) + " bytes");
   }
+  const LasVlr* doubles = nullptr;  // GeoDoubleParamsTag: the values of double-valued keys
+  for (const auto& v : vlrs) {
+    if (v.user_id == "LASF_Projection" && v.record_id == kDoubleParams) doubles = &v;
+  }
   std::map<std::uint16_t, std::uint16_t> short_values;
+  std::map<std::uint16_t, double> double_values;
   for (std::size_t k = 0; k < keys; ++k) {
     const std::uint16_t id = u16(4 * (k + 1)), location = u16(4 * (k + 1) + 1), value = u16(4 * (k + 1) + 3);
     switch (id) {
@@ -92,10 +162,37 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
       case kPcsCitation:
       case kVerticalCitation:
         continue;  // text, read by people
+      case kGeogLinearUnitSize:
+      case kGeogAngularUnitSize:
+      case kGeogSemiMajorAxis:
+      case kGeogSemiMinorAxis:
+      case kGeogInvFlattening:
+      case kGeogPrimeMeridianLong:
+      case kProjLinearUnitSize: {
+        const std::uint16_t count = u16(4 * (k + 1) + 2);
+        if (location != kDoubleParams || count != 1) {
+          fail(where, "key " + std::to_string(id) + " is not one value of the GeoDoubleParams record (34736)");
+        }
+        if (!doubles || doubles->data.size() < 8 * (std::size_t{value} + 1)) {
+          fail(where, "key " + std::to_string(id) + " points at double " + std::to_string(value) +
+                          ", past the GeoDoubleParams record (34736)");
+        }
+        double x = 0;
+        std::memcpy(&x, doubles->data.data() + 8 * std::size_t{value}, 8);
+        if (!std::isfinite(x)) fail(where, "key " + std::to_string(id) + " is not a finite number");
+        if (double_values.count(id)) fail(where, "key " + std::to_string(id) + " is given twice");
+        double_values[id] = x;
+        continue;
+      }
       case kModelType:
       case kRasterType:
       case kGeographicType:
+      case kGeogGeodeticDatum:
+      case kGeogPrimeMeridian:
+      case kGeogLinearUnits:
       case kGeogAngularUnits:
+      case kGeogEllipsoid:
+      case kGeogAzimuthUnits:
       case kProjectedCsType:
       case kProjLinearUnits:
       case kVerticalCsType:
@@ -115,7 +212,9 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
     const auto it = short_values.find(id);
     return it == short_values.end() ? std::nullopt : std::optional(it->second);
   };
-  for (const std::uint16_t id : {kModelType, kGeographicType, kProjectedCsType, kVerticalCsType, kVerticalDatum}) {
+  for (const std::uint16_t id : {kModelType, kGeographicType, kProjectedCsType, kVerticalCsType, kVerticalDatum,
+                                 kGeogGeodeticDatum, kGeogPrimeMeridian, kGeogEllipsoid, kGeogLinearUnits,
+                                 kGeogAngularUnits, kGeogAzimuthUnits, kProjLinearUnits, kVerticalUnits}) {
     if (value(id) == kUserDefined) {
       fail(where, "key " + std::to_string(id) +
                       " is user-defined (32767): its CRS is stated by parameters geoanchor does not read; give the "
@@ -143,15 +242,66 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
     if (!value(kGeographicType)) fail(where, "model type 2 (geographic) without GeographicTypeGeoKey (2048)");
     horizontal = "EPSG:" + std::to_string(*value(kGeographicType));
     out.description = "GeographicTypeGeoKey " + std::to_string(*value(kGeographicType));
-    if (const auto units = value(kGeogAngularUnits); units && *units != 9102) {
-      fail(where, "GeogAngularUnitsGeoKey " + std::to_string(*units) + ": geoanchor reads degrees (9102)");
-    }
   } else if (model) {
     fail(where, "GTModelTypeGeoKey " + std::to_string(*model) + ": geoanchor reads projected (1) and geographic (2) models");
   } else {
     fail(where, "no GTModelTypeGeoKey and no CRS code: the keys state no CRS");
   }
   out.crs = horizontal;
+  // Keys that repeat what the CRS code states (a datum, an ellipsoid, a
+  // prime meridian and their numbers, units' sizes) are read and must
+  // agree with it: a tile whose keys name EPSG:4326 but Clarke 1866 is
+  // refused, not moved as either.
+  const double rad_per_deg = M_PI / 180.0;
+  if (const auto a = value(kGeogAngularUnits); a && *a != 9102) {
+    fail(where, "GeogAngularUnitsGeoKey " + std::to_string(*a) + ": geoanchor reads degrees (9102)");
+  }
+  if (const auto a = value(kGeogAzimuthUnits); a && *a != 9102) {
+    fail(where, "GeogAzimuthUnitsGeoKey " + std::to_string(*a) + ": geoanchor reads degrees (9102)");
+  }
+  if (const auto size = double_values.find(kGeogAngularUnitSize); size != double_values.end()) {
+    agree(where, "GeogAngularUnitSizeGeoKey", size->second, "a degree", rad_per_deg, 1e-12, " rad");
+  }
+  double ellipsoid_unit_m = 1.0;
+  if (const auto units = value(kGeogLinearUnits)) {
+    const auto m = linear_unit_m(*units);
+    if (!m) fail(where, "GeogLinearUnitsGeoKey " + std::to_string(*units) + " is not a linear unit geoanchor reads (9001, 9002, 9003, 9036)");
+    ellipsoid_unit_m = *m;
+  }
+  if (const auto size = double_values.find(kGeogLinearUnitSize); size != double_values.end()) {
+    agree(where, "GeogLinearUnitSizeGeoKey", size->second, "GeogLinearUnitsGeoKey", ellipsoid_unit_m, 1e-12 * ellipsoid_unit_m, " m");
+    ellipsoid_unit_m = size->second;
+  }
+  if (const auto size = double_values.find(kProjLinearUnitSize); size != double_values.end()) {
+    if (value(kGeographicType) && !value(kProjectedCsType)) fail(where, "ProjLinearUnitSizeGeoKey (3077) in a geographic model");
+    const double crs_m = first_axis_unit(horizontal, where);
+    agree(where, "ProjLinearUnitSizeGeoKey", size->second, horizontal, crs_m, 1e-12 * crs_m, " m");
+  }
+  const bool repeats_datum = value(kGeogGeodeticDatum) || value(kGeogPrimeMeridian) || value(kGeogEllipsoid) ||
+                             double_values.count(kGeogSemiMajorAxis) || double_values.count(kGeogSemiMinorAxis) ||
+                             double_values.count(kGeogInvFlattening) || double_values.count(kGeogPrimeMeridianLong);
+  if (repeats_datum) {
+    const GeodeticFacts f = geodetic_facts(horizontal, where);
+    if (const auto v = value(kGeogGeodeticDatum)) agree(where, "GeogGeodeticDatumGeoKey", *v, horizontal + "'s datum EPSG code", f.datum, 0, "");
+    if (const auto v = value(kGeogEllipsoid)) agree(where, "GeogEllipsoidGeoKey", *v, horizontal + "'s ellipsoid EPSG code", f.ellipsoid, 0, "");
+    if (const auto v = value(kGeogPrimeMeridian)) {
+      agree(where, "GeogPrimeMeridianGeoKey", *v, horizontal + "'s prime meridian EPSG code", f.prime_meridian, 0, "");
+    }
+    constexpr double kAxisTolerance_m = 1e-4;
+    if (const auto v = double_values.find(kGeogSemiMajorAxis); v != double_values.end()) {
+      agree(where, "GeogSemiMajorAxisGeoKey", v->second * ellipsoid_unit_m, horizontal, f.semi_major_m, kAxisTolerance_m, " m");
+    }
+    if (const auto v = double_values.find(kGeogSemiMinorAxis); v != double_values.end()) {
+      agree(where, "GeogSemiMinorAxisGeoKey", v->second * ellipsoid_unit_m, horizontal, f.semi_minor_m, kAxisTolerance_m, " m");
+    }
+    if (const auto v = double_values.find(kGeogInvFlattening); v != double_values.end()) {
+      agree(where, "GeogInvFlatteningGeoKey", v->second, horizontal, f.inverse_flattening, 1e-6, "");
+    }
+    if (const auto v = double_values.find(kGeogPrimeMeridianLong); v != double_values.end()) {
+      agree(where, "GeogPrimeMeridianLongGeoKey", v->second, horizontal, f.prime_meridian_deg, 1e-9, " deg");
+    }
+    out.description += ", with its datum keys";
+  }
   if (const auto v = value(kVerticalCsType)) {
     const std::string vertical = "EPSG:" + std::to_string(*v);
     out.crs = horizontal + "+" + std::to_string(*v);
@@ -167,8 +317,22 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
       }
       out.description += ", VerticalUnitsGeoKey " + std::to_string(*units);
     }
-  } else if (value(kVerticalUnits) || value(kVerticalDatum)) {
-    fail(where, "vertical units or datum without VerticalCSTypeGeoKey (4096): the heights' CRS is not stated; give --crs");
+  } else if (value(kVerticalDatum)) {
+    fail(where, "VerticalDatumGeoKey (4098) without VerticalCSTypeGeoKey (4096): the heights' CRS is not stated; give --crs");
+  } else if (const auto units = value(kVerticalUnits)) {
+    // The unit of Z alone (as many writers state it): it must be the unit
+    // the 2-D CRS's heights are taken in, that of its axes (metres for a
+    // geographic CRS).
+    const auto m = linear_unit_m(*units);
+    if (!m) fail(where, "VerticalUnitsGeoKey " + std::to_string(*units) + " is not a linear unit geoanchor reads (9001, 9002, 9003)");
+    const bool projected = model == 1 || (!model && value(kProjectedCsType));
+    const double z_m = projected ? first_axis_unit(horizontal, where) : 1.0;
+    if (std::abs(*m - z_m) > 1e-12 * z_m) {
+      fail(where, "VerticalUnitsGeoKey " + std::to_string(*units) + " says Z is in units of " + format_shortest(*m) +
+                      " m without a vertical CRS, and " + horizontal + " takes heights in units of " + format_shortest(z_m) +
+                      " m: give the tile's CRS with --crs (a compound CRS with a vertical CRS in that unit)");
+    }
+    out.description += ", VerticalUnitsGeoKey " + std::to_string(*units);
   }
   return out;
 }

@@ -27,20 +27,29 @@ using testing::CliTest;
 constexpr double kVsProj_deg = 1e-9;  // 0.1 mm of arc
 constexpr double kStep_m = 0.001;     // the tile's quantization
 
-std::vector<std::uint8_t> geo_keys(const std::vector<std::array<std::uint16_t, 2>>& keys) {
-  std::vector<std::uint16_t> v = {1, 1, 0, static_cast<std::uint16_t>(keys.size())};
-  for (const auto& [id, value] : keys) v.insert(v.end(), {id, 0, 1, value});
-  std::vector<std::uint8_t> bytes(2 * v.size());
-  std::memcpy(bytes.data(), v.data(), bytes.size());
-  return bytes;
-}
-
 // Points near Paris in Lambert-93 (EPSG:2154), metres.
 const std::array<double, 3> kPoints[] = {{652000.0, 6862000.0, 35.0}, {652500.25, 6862400.5, 36.5}, {651800.75, 6861700.125, 34.0}};
 
+// Keys whose values are doubles (GeoDoubleParams, record 34736): key id and value.
+std::pair<std::vector<std::uint8_t>, std::vector<std::uint8_t>> geo_keys(
+    const std::vector<std::array<std::uint16_t, 2>>& keys, const std::vector<std::pair<std::uint16_t, double>>& doubles) {
+  std::vector<std::uint16_t> v = {1, 1, 0, static_cast<std::uint16_t>(keys.size() + doubles.size())};
+  for (const auto& [id, value] : keys) v.insert(v.end(), {id, 0, 1, value});
+  std::vector<double> d;
+  for (const auto& [id, value] : doubles) {
+    v.insert(v.end(), {id, 34736, 1, static_cast<std::uint16_t>(d.size())});
+    d.push_back(value);
+  }
+  std::vector<std::uint8_t> dir(2 * v.size()), params(8 * d.size());
+  std::memcpy(dir.data(), v.data(), dir.size());
+  std::memcpy(params.data(), d.data(), params.size());
+  return {dir, params};
+}
+
 class LasGeoTiff : public CliTest {
  protected:
-  fs::path las(const std::string& name, const std::vector<std::array<std::uint16_t, 2>>& keys) {
+  fs::path las(const std::string& name, const std::vector<std::array<std::uint16_t, 2>>& keys,
+               const std::vector<std::pair<std::uint16_t, double>>& doubles = {}) {
     testing::LasBuild b;
     b.minor = 2;
     b.point_format = 1;
@@ -50,7 +59,9 @@ class LasGeoTiff : public CliTest {
                        static_cast<std::int32_t>(std::lround((p[1] - b.offset[1]) / kStep_m)),
                        static_cast<std::int32_t>(std::lround((p[2] - b.offset[2]) / kStep_m))});
     }
-    b.vlrs.push_back({"LASF_Projection", 34735, "GeoKeyDirectoryTag", geo_keys(keys)});
+    const auto [dir, params] = geo_keys(keys, doubles);
+    b.vlrs.push_back({"LASF_Projection", 34735, "GeoKeyDirectoryTag", dir});
+    if (!doubles.empty()) b.vlrs.push_back({"LASF_Projection", 34736, "GeoDoubleParamsTag", params});
     fs::create_directories(path("in"));
     testing::write_bytes(path("in/" + name), testing::build_las(b));
     return path("in/" + name);
@@ -111,6 +122,54 @@ TEST_F(LasGeoTiff, Issue40_KeysGeoanchorCannotReadAreRefusedByName) {
     EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(path("out") / c.name));
   }
+}
+
+// Keys that repeat what the code states (as libgeotiff and LAStools write
+// them) are read and must agree with PROJ's definition of the code
+// (EPSG:2154 is on RGF93 v1, datum 6171, GRS 1980 7019, Greenwich 8901);
+// VerticalUnitsGeoKey alone states Z's unit, which must be the CRS's.
+TEST_F(LasGeoTiff, Issue40_KeysThatRepeatTheCodeAreCheckedAgainstIt) {
+  const std::vector<std::array<std::uint16_t, 2>> agreeing = {{1024, 1}, {3072, 2154}, {3076, 9001}, {2050, 6171},
+                                                              {2051, 8901}, {2056, 7019}, {2054, 9102}, {4099, 9001}};
+  const std::vector<std::pair<std::uint16_t, double>> agreeing_doubles = {
+      {3077, 1.0}, {2057, 6378137.0}, {2059, 298.257222101}, {2061, 0.0}};
+  const fs::path good = las("repeats.las", agreeing, agreeing_doubles);
+  const auto r = run("apply " + good.string() + " --to-crs EPSG:4171 --out-dir " + path("out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  struct Case {
+    const char* name;
+    std::vector<std::array<std::uint16_t, 2>> keys;
+    std::vector<std::pair<std::uint16_t, double>> doubles;
+    const char* says;
+  };
+  const Case cases[] = {
+      {"clarke.las", {{1024, 1}, {3072, 2154}, {2056, 7008}}, {}, "GeogEllipsoidGeoKey 7008 contradicts EPSG:2154's ellipsoid EPSG code, whose value is 7019"},
+      {"ntf.las", {{1024, 1}, {3072, 2154}, {2050, 6275}}, {}, "GeogGeodeticDatumGeoKey 6275 contradicts"},
+      {"axis.las", {{1024, 1}, {3072, 2154}}, {{2057, 6378206.4}}, "GeogSemiMajorAxisGeoKey 6378206.4 m contradicts EPSG:2154"},
+      {"unit.las", {{1024, 1}, {3072, 2154}}, {{3077, 0.3048}}, "ProjLinearUnitSizeGeoKey 0.3048 m contradicts EPSG:2154"},
+      {"zfeet.las", {{1024, 1}, {3072, 2154}, {4099, 9002}}, {}, "VerticalUnitsGeoKey 9002 says Z is in units of 0.3048 m"},
+      {"vdatum.las", {{1024, 1}, {3072, 2154}, {4098, 5215}}, {}, "VerticalDatumGeoKey (4098) without VerticalCSTypeGeoKey"},
+      {"nodouble.las", {{1024, 1}, {3072, 2154}, {2057, 34736}}, {}, "key 2057 is not one value of the GeoDoubleParams record"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const fs::path in = las(c.name, c.keys, c.doubles);
+    const auto bad = run("apply " + in.string() + " --to-crs EPSG:4171 --out-dir " + path("bad").string());
+    EXPECT_EQ(bad.exit_code, 3) << bad.err;
+    EXPECT_NE(bad.err.find("E_GEOTIFF_KEYS"), std::string::npos) << bad.err;
+    EXPECT_NE(bad.err.find(c.says), std::string::npos) << bad.err;
+    EXPECT_FALSE(fs::exists(path("bad") / c.name));
+  }
+}
+
+// Keys geoanchor cannot read do not stop a tile whose CRS --crs states:
+// they are set aside, and the terminal says so.
+TEST_F(LasGeoTiff, Issue40_UnreadableKeysGiveWayToTheCrsFlag) {
+  const fs::path in = las("user.las", {{1024, 1}, {3072, 32767}, {3074, 32767}});
+  const auto r = run("apply " + in.string() + " --crs EPSG:2154 --to-crs EPSG:4171 --out-dir " + path("out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("set aside: the tile's CRS is the --crs flag's"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(path("out/user.las")));
 }
 
 }  // namespace

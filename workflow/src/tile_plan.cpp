@@ -178,14 +178,26 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
       // else as geoanchor's own coordinates where it can be.
       const bool as_crs = side ? side->crs.has_value() : (o_.crs || o_.to_crs);
       wkt = as_crs ? io::tile_metadata_from_wkt_as_crs(*w, tile) : io::tile_metadata_from_wkt(*w, tile);
-    } else if (const auto keys = io::las_geotiff_crs(reader.vlrs(), tile)) {
+    } else {
       // LAS 1.2-1.3 (and 1.4 formats 0-5) state their CRS as GeoTIFF keys:
-      // read as a CRS that PROJ moves, checked against the flags as a WKT
-      // is; a realization and epoch they cannot state are asked for as for
-      // a WKT without them (issue 40 point 12).
-      wkt = io::tile_metadata_from_crs(io::Crs::parse(keys->crs, tile + " GeoTIFF keys (" + keys->description + ")"), tile);
-      wkt->storage = "int32_scaled";
-      geotiff_keys = keys->crs + " (" + keys->description + ")";
+      // read as the WKT of the CRS they name would be, and checked against
+      // the sidecar and the flags as a WKT is; a realization and epoch they
+      // cannot state are asked for as for a WKT without them (issue 40
+      // point 12). Keys geoanchor cannot read refuse the tile unless a
+      // sidecar or --crs states its CRS; then they are set aside, and the
+      // terminal says so.
+      try {
+        if (const auto keys = io::las_geotiff_crs(reader.vlrs(), tile)) {
+          const std::string keys_wkt = io::Crs::parse(keys->crs, tile + " GeoTIFF keys (" + keys->description + ")").wkt2();
+          const bool as_crs = side ? side->crs.has_value() : (o_.crs || o_.to_crs);
+          wkt = as_crs ? io::tile_metadata_from_wkt_as_crs(keys_wkt, tile) : io::tile_metadata_from_wkt(keys_wkt, tile);
+          geotiff_keys = keys->crs + " (" + keys->description + ")";
+        }
+      } catch (const Error& e) {
+        if (e.code() != "E_GEOTIFF_KEYS" || !(side || o_.crs)) throw;
+        p.warnings.push_back(std::string(e.what()) + "; set aside: the tile's CRS is the " +
+                             (side ? "sidecar's (" + side_path.string() + ")" : std::string("--crs flag's")));
+      }
     }
   }
   std::optional<TileMetadata> stated;  // a CSV's '# crs = …' comments
@@ -219,7 +231,9 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
     }
     const std::string diff = io::describe_mismatch(*side, side_path.string(), *wkt, tile + " WKT");
     if (!diff.empty()) {
-      throw Error(ErrorKind::input, "E_FRAME_CONFLICT", tile + ": the sidecar and the LAS WKT disagree: " + diff);
+      throw Error(ErrorKind::input, "E_FRAME_CONFLICT",
+                  tile + ": the sidecar and the LAS " + (geotiff_keys ? "GeoTIFF keys " + *geotiff_keys : std::string("WKT")) +
+                      " disagree: " + diff);
     }
   }
   if (side) {

@@ -20,12 +20,16 @@ struct LasGeoKeys {
 // The CRS the keys state, or nullopt when the file has no GeoKeyDirectory.
 // Read: the model type (1024), the raster type (1025, meaningless for
 // points), the geographic (2048) or projected (3072) CRS code with its
-// units (2054, 3076), the vertical CRS code (4096) with its units (4099),
-// the citations (1026, 2049, 3073, 4097: text) and the vertical datum code
-// (4098). Throws Error (input, E_GEOTIFF_KEYS) naming `where` for a
-// directory that is malformed, a key it does not read (user-defined CRS
-// parameters, geocentric models), a user-defined code (32767), or units
-// that contradict the EPSG CRS the code names.
+// units (2054, 3076, 3077), the vertical CRS code (4096) with its units
+// (4099; alone, the unit of Z, which must be that of the 2-D CRS), the
+// citations (1026, 2049, 3073, 4097: text), the vertical datum code (4098)
+// and the keys that repeat the geodetic datum of the CRS code (2050-2061:
+// datum, prime meridian, ellipsoid, their parameters and units), which must
+// agree with PROJ's definition of that code. Throws Error (input,
+// E_GEOTIFF_KEYS) naming `where` for a directory that is malformed, a key
+// it does not read (user-defined projection parameters, geocentric models),
+// a user-defined code (32767), or a key that contradicts the EPSG CRS the
+// code names.
 std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const std::string& where);
 
 }  // namespace geoanchor::io
