@@ -335,6 +335,7 @@ int run_fit(const FitCommandOptions& o) {
   }
   if (const auto swap = workflow::likely_lat_lon_swap(set)) throw Error(ErrorKind::input, "E_AXIS_SWAP", *swap);
   if (const auto far = workflow::far_apart_mark(set)) throw Error(ErrorKind::input, "E_MARK_FAR_APART", *far);
+  (void)workflow::fixed_fit_epoch(set, fo.model);  // refuses epochs spread over years before the solve
   std::vector<std::string> set_warnings = workflow::control_set_warnings(set);
   // What the join of --src and --dst left out: printed and recorded with the fit.
   set_warnings.insert(set_warnings.end(), in.notes.begin(), in.notes.end());

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 #include "geoanchor/geodesy/projection.hpp"
@@ -134,18 +136,60 @@ std::optional<std::string> likely_lat_lon_swap(const geodesy::ControlSet& set) {
   return std::nullopt;
 }
 
+std::optional<geodesy::DecimalYear> fixed_fit_epoch(const geodesy::ControlSet& set, solver::FitModel model) {
+  if (model == solver::FitModel::helmert14) return std::nullopt;  // carries its own epochs
+  const auto undated_dynamic = [](const std::optional<geodesy::Frame>& f) {
+    return f && geodesy::is_dynamic(*f) && !f->epoch();
+  };
+  if (!undated_dynamic(set.source_frame) && !undated_dynamic(set.target_frame)) return std::nullopt;
+  const geodesy::ControlPoint* earliest = nullptr;
+  const geodesy::ControlPoint* latest = nullptr;
+  double sum = 0.0;
+  for (const auto& p : set.points) {
+    if (!p.epoch) return std::nullopt;  // the reader refused this set; nothing to name
+    if (!earliest || p.epoch->year < earliest->epoch->year) earliest = &p;
+    if (!latest || p.epoch->year > latest->epoch->year) latest = &p;
+    sum += p.epoch->year;
+  }
+  if (!earliest) return std::nullopt;
+  const double spread = latest->epoch->year - earliest->epoch->year;
+  if (!(spread <= kCampaignSpread_yr)) {
+    const auto& f = undated_dynamic(set.source_frame) ? *set.source_frame : *set.target_frame;
+    throw Error(ErrorKind::input, "E_EPOCH_SPREAD",
+                set.source_name + ": the points' epochs span " + format_fixed(spread, 3) + " years (mark " + earliest->id +
+                    " at " + format_fixed(earliest->epoch->year, 3) + ", mark " + latest->id + " at " +
+                    format_fixed(latest->epoch->year, 3) + ") in the dynamic frame " + f.name() + ", more than " +
+                    format_shortest(kCampaignSpread_yr) + " year: a transform of fixed parameters holds at one epoch; " +
+                    "fit --model helmert14, or give the coordinates at one epoch (the frame as " + f.name() + "@YYYY.Y)");
+  }
+  return geodesy::DecimalYear{sum / static_cast<double>(set.points.size())};
+}
+
+std::optional<geodesy::Frame> written_frame(const std::optional<geodesy::Frame>& frame, const geodesy::ControlSet& set,
+                                            solver::FitModel model) {
+  if (!frame || !geodesy::is_dynamic(*frame) || frame->epoch()) return frame;
+  const auto epoch = fixed_fit_epoch(set, model);
+  if (!epoch) return frame;
+  return geodesy::Frame::parse(frame->name() + "@" + format_fixed(epoch->year, 3), "the points' mean epoch");
+}
+
 std::optional<std::string> far_apart_mark(const geodesy::ControlSet& set) {
-  if (set.points.size() < 2) return std::nullopt;
+  // Only the marks the fit uses: a mark set aside (use = 0) does not stop it.
+  std::vector<const geodesy::ControlPoint*> used;
+  for (const auto& p : set.points) {
+    if (p.use) used.push_back(&p);
+  }
+  if (used.size() < 2) return std::nullopt;
   std::vector<double> apart;
-  for (const auto& p : set.points) apart.push_back((p.target.m - p.source.m).norm());
+  for (const auto* p : used) apart.push_back((p->target.m - p->source.m).norm());
   const double typical = median(apart);
   if (!(typical <= kFarApart_m)) return std::nullopt;  // the whole set disagrees: likely_lat_lon_swap's case
   std::size_t count = 0;
   const geodesy::ControlPoint* first = nullptr;
   double first_apart = 0.0;
-  for (std::size_t i = 0; i < set.points.size(); ++i) {
+  for (std::size_t i = 0; i < used.size(); ++i) {
     if (apart[i] <= kFarApart_m) continue;  // NaN cannot occur: positions are checked on the Earth
-    if (count++ == 0) first = &set.points[i], first_apart = apart[i];
+    if (count++ == 0) first = used[i], first_apart = apart[i];
   }
   if (!first) return std::nullopt;
   // The role that is out of place: the one farther from the other marks'
@@ -154,7 +198,7 @@ std::optional<std::string> far_apart_mark(const geodesy::ControlSet& set) {
     Eigen::Vector3d m;
     for (int c = 0; c < 3; ++c) {
       std::vector<double> v;
-      for (const auto& p : set.points) v.push_back((source ? p.source.m : p.target.m)(c));
+      for (const auto* p : used) v.push_back((source ? p->source.m : p->target.m)(c));
       m(c) = median(v);
     }
     return ((source ? first->source.m : first->target.m) - m).norm();

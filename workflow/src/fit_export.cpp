@@ -1,4 +1,5 @@
 #include "geoanchor/workflow/fit_export.hpp"
+#include "geoanchor/workflow/fit_checks.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -258,8 +259,10 @@ StreamedTransformFile streamed_file(const solver::FitResult& r, const geodesy::C
                                            geodesy::ScaleDifference::ppm(value("ds_ppm"))};
   }
   t.rotation_model = r.rotation_model;
-  t.source_frame = set.source_frame;
-  t.target_frame = set.target_frame;
+  // A dynamic frame named without an epoch (every point has its own) is
+  // written at the points' mean epoch: a fixed transform holds at one.
+  t.source_frame = written_frame(set.source_frame, set, r.model);
+  t.target_frame = written_frame(set.target_frame, set, r.model);
   t.reference_epoch = r.reference_epoch;
   const bool pv = r.convention == solver::Convention::position_vector;
   if (r.model == FitModel::helmert14) {

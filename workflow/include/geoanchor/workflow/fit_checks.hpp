@@ -22,6 +22,22 @@ namespace geoanchor::workflow {
 //    0.25–0.5 m): its residuals are quantization, not blunders.
 std::vector<std::string> control_set_warnings(const geodesy::ControlSet& set);
 
+// The epoch a fit of fixed parameters (every model but helmert14) holds at,
+// when a frame of the set is dynamic and names none because every point
+// has its own epoch: the points' mean epoch, which the transform file then
+// names (its reader refuses a dynamic frame without one). nullopt when no
+// frame needs it. Throws Error (input, E_EPOCH_SPREAD) when the points'
+// epochs span more than kCampaignSpread_yr: a fixed transform fitted across
+// years of plate motion holds at no epoch (fit helmert14, or give the
+// coordinates at one epoch).
+inline constexpr double kCampaignSpread_yr = 0.1;  // ≈ 5 weeks: 7 mm at the fastest plate's 7 cm/yr
+std::optional<geodesy::DecimalYear> fixed_fit_epoch(const geodesy::ControlSet& set, solver::FitModel model);
+
+// The set's frames as the transform file names them: a dynamic frame
+// without an epoch takes fixed_fit_epoch's.
+std::optional<geodesy::Frame> written_frame(const std::optional<geodesy::Frame>& frame, const geodesy::ControlSet& set,
+                                            solver::FitModel model);
+
 // When the set's latitudes and longitudes look swapped in one frame: both
 // frames are geodetic, the marks lie hundreds of kilometres apart as read,
 // and reading one frame's columns the other way round brings them within a
