@@ -450,6 +450,20 @@ TEST_F(Audit, Issue40_ATileChangedAfterApplyFailsNamingIt) {
   const std::string evidence = check(r, "data").at("evidence").dump();
   EXPECT_NE(evidence.find(path("map/east.csv").string() + ": FAIL the file's SHA-256"), std::string::npos) << evidence;
   EXPECT_EQ(evidence.find(path("map/west.csv").string() + ": FAIL"), std::string::npos) << evidence;
+  // Resuming the same apply does not call the changed tile up to date (its
+  // bytes are not the ones its sidecar records): refused, naming it, and
+  // written again with --overwrite; the map then passes.
+  const RunResult resumed = run("apply " + west_.string() + " " + east_.string() + " --transform " + transform_.string() +
+                                " --survey-metadata " + survey().string() + " --out-dir " + path("map").string());
+  EXPECT_NE(resumed.exit_code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find(path("map/east.csv").string() + ": output already exists and is not the one this request wrote"),
+            std::string::npos)
+      << resumed.err;
+  EXPECT_EQ(slurp(path("map/east.csv")), text);
+  apply(west_.string() + " " + east_.string(), transform_, "map", "--overwrite");
+  EXPECT_NE(slurp(path("map/east.csv")), text);
+  const RunResult again = audit(path("map").string() + " " + transform_.string() + " --json");
+  EXPECT_EQ(again.exit_code, 0) << again.out << again.err;
 }
 
 // A map moved to another frame by a Helmert (a GeoJSON in longitude and

@@ -305,11 +305,13 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   const json request = request_json(o_, p.format, p.output_format);
 
   // Resumable: an output whose provenance names this input, transform and
-  // request is up to date. Only regular files (or links to them) are read: a
-  // FIFO or a device at either path is refused below, never opened.
+  // request, and whose bytes are those it records, is up to date. Only
+  // regular files (or links to them) are read: a FIFO or a device at either
+  // path is refused below, never opened.
   std::error_code ec;
   const bool tile_there = fs::is_regular_file(p.output, ec);
   const bool sidecar_there = fs::is_regular_file(p.sidecar, ec);
+  std::string changed_after_apply;
   if (!o_.overwrite && tile_there && sidecar_there) {
     try {
       const TileMetadata done = io::read_tile_metadata(p.sidecar);
@@ -321,15 +323,27 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
                           prov.value("request", json()) == request &&
                           prov.value("output_size_bytes", std::uint64_t{0}) == fs::file_size(p.output, ec);
         if (same) {
-          r.status = "skipped";
-          r.points = prov.value("points", std::uint64_t{0});
-          return;
+          // The bytes too, as audit checks them: a tile changed after apply
+          // (or written before outputs were hashed) is not up to date, and
+          // is replaced only with --overwrite.
+          const std::string recorded = prov.value("output_sha256", "");
+          const std::string now = io::sha256_file_hex(p.output);
+          if (recorded == now) {
+            r.status = "skipped";
+            r.points = prov.value("points", std::uint64_t{0});
+            return;
+          }
+          changed_after_apply = p.output.string() +
+                                ": output already exists and is not the one this request wrote: its SHA-256 is " + now +
+                                ", its sidecar records " + (recorded.empty() ? std::string("none") : recorded) +
+                                " (changed after apply); pass --overwrite to write it again";
         }
       }
     } catch (const Error&) {
       // An unreadable sidecar is not ours: fall through to the refusal.
     }
   }
+  if (!changed_after_apply.empty()) throw Error(ErrorKind::io, "E_OUTPUT_EXISTS", changed_after_apply);
   // A sidecar is published before its tile (and, with --overwrite, the old
   // tile removed first), so a tile never stands beside another run's
   // sidecar. A sidecar of ours without its tile is either being published
