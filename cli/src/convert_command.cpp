@@ -233,15 +233,35 @@ void run_convert_crs(const ConvertOptions& o) {
   if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
   io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
   std::ostream& out = output.stream();
-  // The output states its CRS above the header; the input's statement of its own is dropped.
+  // The output states its CRS above the header; the input's statement of
+  // its own is dropped, and so is a '# frame = …' comment (as adjust writes
+  // it), once checked against the input's CRS where that CRS is a frame of
+  // the catalog.
+  std::vector<std::string> frame_notes;
   for (const auto& c : io::crs_comments(written.crs)) out << c << '\n';
   for (const auto& c : reader.leading_comments()) {
-    if (!io::is_crs_comment(c)) out << c << '\n';
+    if (io::is_crs_comment(c)) continue;
+    if (const auto v = io::comment_value(c, "frame")) {
+      const geodesy::Frame frame_stated = geodesy::Frame::parse(*v, source_name + ": comment '" + c + "'");
+      const std::string& catalog = source_crs.description().catalog_frame;
+      if (catalog.empty()) {
+        frame_notes.push_back(source_name + ": its '# frame = " + frame_stated.to_string() + "' comment is not copied (the output states its CRS); " +
+                           source_crs.display_name() + " is not a frame of geoanchor's catalog, so the two were not compared");
+      } else if (frame_stated.name() != catalog || (frame_stated.epoch() && source_crs.epoch() && frame_stated.epoch()->year != source_crs.epoch()->year)) {
+        throw Error(ErrorKind::input, "E_FRAME_MISMATCH",
+                    source_name + ": its coordinates are in " + frame_stated.to_string() + " (its '# frame =' comment) but the input's CRS " +
+                        source_crs.display_name() + " is on " + catalog +
+                        (source_crs.epoch() ? "@" + geodesy::format_decimal_year(*source_crs.epoch()) : std::string()));
+      }
+      continue;
+    }
+    out << c << '\n';
   }
   io::write_csv_line(out, converter.output_header());
   const std::size_t rows = converter.run(reader, op, out);
+  std::vector<std::string> warnings = op.warnings();  // filled by the run
+  warnings.insert(warnings.end(), frame_notes.begin(), frame_notes.end());
 
-  std::vector<std::string> warnings = op.warnings();
   if (warn_and_commit_standard_output(warnings, output)) return;
   json side = sidecar_start(o, from_stdin);
   side["input"]["kind"] = "crs";
@@ -296,6 +316,9 @@ CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
 // output's: the same, or a transform's other side.
 struct FrameStatement {
   std::optional<geodesy::Frame> input, output;
+  // The frame the input's coordinates are in as far as anything says: its
+  // comment's, else the transform's source (which names its ellipsoid).
+  std::optional<geodesy::Frame> input_or_transform;
 };
 
 FrameStatement frames_of(const io::CsvReader& reader, const std::string& source_name,
@@ -308,11 +331,13 @@ FrameStatement frames_of(const io::CsvReader& reader, const std::string& source_
     if (f.input) throw Error(ErrorKind::input, "E_COMMENT", where + ": a second '# frame =' comment; give one");
     f.input = geodesy::Frame::parse(*v, where);
   }
+  f.input_or_transform = f.input;
   if (!transform) {
     f.output = f.input;
     return f;
   }
   const auto& from = o.inverse ? transform->target_frame : transform->source_frame;
+  if (!f.input) f.input_or_transform = from;
   const auto& to = o.inverse ? transform->source_frame : transform->target_frame;
   if (f.input && from &&
       (f.input->name() != from->name() ||
@@ -378,7 +403,7 @@ void run_convert(const ConvertOptions& o) {
   // for both; a frame's own ellipsoid where one is stated, and a flag that
   // contradicts it refused.
   const geodesy::Ellipsoid in_ellipsoid = ellipsoid_for(
-      frames.input, o.from_ellipsoid ? o.from_ellipsoid : o.ellipsoid, o.from_ellipsoid ? "--from-ellipsoid" : "--ellipsoid");
+      frames.input_or_transform, o.from_ellipsoid ? o.from_ellipsoid : o.ellipsoid, o.from_ellipsoid ? "--from-ellipsoid" : "--ellipsoid");
   const geodesy::Ellipsoid out_ellipsoid =
       ellipsoid_for(frames.output, o.ellipsoid, "--ellipsoid", !o.from_ellipsoid && !o.ellipsoid && !frames.output ? &in_ellipsoid : nullptr);
 
@@ -421,12 +446,22 @@ void run_convert(const ConvertOptions& o) {
   if (out_kind == io::OutputKind::utm && o.tm) throw Error(ErrorKind::usage, "E_OPTION", "--to utm with --tm: use --to tm");
   if (out_kind == io::OutputKind::tm && o.zone) throw Error(ErrorKind::usage, "E_OPTION", "--to tm with --zone: use --to utm");
 
-  std::optional<DecimalYear> flag_epoch;
-  if (o.epoch) flag_epoch = geodesy::parse_decimal_year(*o.epoch, "--epoch");
-  const EcefStep step(transform, o.inverse, flag_epoch);
-
   const auto& header = reader.header();
   const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
+  std::optional<DecimalYear> flag_epoch;
+  if (o.epoch) flag_epoch = geodesy::parse_decimal_year(*o.epoch, "--epoch");
+  // A time-dependent transform is evaluated at the coordinates' epoch: the
+  // one the input's '# frame = NAME@EPOCH' comment states, which --epoch
+  // and an epoch column may only repeat.
+  const bool time_dependent = transform && transform->time_dependent();
+  const std::optional<DecimalYear> frame_epoch = time_dependent && frames.input ? frames.input->epoch() : std::nullopt;
+  if (frame_epoch && flag_epoch && flag_epoch->year != frame_epoch->year) {
+    throw Error(ErrorKind::usage, "E_EPOCH_CONFLICT",
+                "--epoch " + *o.epoch + " contradicts " + source_name + "'s '# frame = " + frames.input->to_string() +
+                    "' comment: its coordinates are at " + geodesy::format_decimal_year(*frame_epoch) + "; drop --epoch");
+  }
+  if (frame_epoch && !flag_epoch) flag_epoch = frame_epoch;  // and rows with an empty epoch
+  const EcefStep step(transform, o.inverse, flag_epoch);
   const bool local_in = columns.kind == io::CoordinateKind::enu || columns.kind == io::CoordinateKind::ned;
   const bool local_out = out_kind == io::OutputKind::enu || out_kind == io::OutputKind::ned;
   std::vector<std::string> warnings;
@@ -480,10 +515,18 @@ void run_convert(const ConvertOptions& o) {
   if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
   io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
   std::ostream& out = output.stream();
-  // The comments go across, the frame's restated as the output's.
+  // The comments go across, the frame's restated as the output's: after a
+  // time-dependent transform, a dynamic frame at the one epoch it was
+  // evaluated at (an epoch column dates each row instead).
+  std::optional<geodesy::Frame> output_frame = frames.output;
+  if (output_frame && time_dependent && geodesy::is_dynamic(*output_frame)) {
+    const bool one_epoch = flag_epoch && (!columns.epoch || frame_epoch);  // an epoch column may only repeat the frame's
+    output_frame = geodesy::Frame::parse(
+        output_frame->name() + (one_epoch ? "@" + geodesy::format_decimal_year(*flag_epoch) : std::string()), *o.transform);
+  }
   for (const auto& c : reader.leading_comments()) {
     if (io::comment_value(c, "frame")) {
-      if (frames.output) out << "# frame = " << frames.output->to_string() << '\n';
+      if (output_frame) out << "# frame = " << output_frame->to_string() << '\n';
       continue;
     }
     out << c << '\n';
@@ -507,6 +550,11 @@ void run_convert(const ConvertOptions& o) {
     std::optional<DecimalYear> row_epoch;
     if (step.needs_row_epoch() && columns.epoch && !record.values[*columns.epoch].empty()) {
       row_epoch = geodesy::parse_decimal_year(record.values[*columns.epoch], where + ": epoch");
+      if (frame_epoch && row_epoch->year != frame_epoch->year) {
+        throw Error(ErrorKind::input, "E_EPOCH_CONFLICT",
+                    where + ": epoch " + record.values[*columns.epoch] + " contradicts the '# frame = " + frames.input->to_string() +
+                        "' comment, which dates every coordinate of the file");
+      }
     }
     const geodesy::EcefPosition source = decoder.decode(record);
     const geodesy::EcefPosition target(step.apply(source.m, row_epoch, where));

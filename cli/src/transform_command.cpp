@@ -473,7 +473,21 @@ void run_transform(const TransformOptions& o) {
     for (const auto& c : io::crs_comments(dated ? out_crs.at_epoch(t_to, "--to") : out_crs)) out << c << '\n';
   }
   for (const auto& c : reader.leading_comments()) {
-    if (!crs_mode || !io::is_crs_comment(c)) out << c << '\n';
+    if (crs_mode && io::is_crs_comment(c)) continue;
+    // A '# frame = …' comment (as adjust and convert write it) states the
+    // input's frame: it must be --from's, and the output's is written in
+    // its place (in CRS mode the '# crs' comments state it).
+    if (const auto v = io::comment_value(c, "frame")) {
+      const geodesy::Frame stated = geodesy::Frame::parse(*v, source_name + ": comment '" + c + "'");
+      if (stated.name() != from.name() || (stated.epoch() && (!epochs_given || stated.epoch()->year != stated_from.year))) {
+        throw Error(ErrorKind::input, "E_FRAME_MISMATCH",
+                    source_name + ": its coordinates are in " + stated.to_string() + " (its '# frame =' comment) but --from is " +
+                        frame_text(from, stated_from) + "; give --from " + stated.to_string());
+      }
+      if (!crs_mode) out << "# frame = " << frame_text(to, stated_to) << '\n';
+      continue;
+    }
+    out << c << '\n';
   }
   if (zero_velocity_note) out << "# geoanchor: " << *zero_velocity_note << '\n';
   io::write_csv_line(out, out_header);

@@ -71,15 +71,20 @@ TileApplyResult apply_csv_tile(const std::filesystem::path& in, std::ostream& ou
   const auto out_header = output_header(header, columns, out_names, source, first_coordinate);
   // The output states its CRS first (as convert does); the input's statement was read (the planner).
   for (const auto& c : o.crs_comments) out << c << '\n';
+  // The input's '# frame = …' (checked against the tile's frame by the
+  // planner) is not copied: the output's sidecar states the output's frame.
+  const auto copied = [](const std::string& c) { return !is_crs_comment(c) && !comment_value(c, "frame"); };
   if (o.file_in) {
     for (const auto& c : reader.leading_comments()) {
-      if (!is_crs_comment(c)) out << c << '\n';
+      if (copied(c)) out << c << '\n';
     }
   } else {
     refuse_stated_crs(reader.leading_comments(), source,
                       "give the tile's frame in its sidecar or flags, without the '# crs' statement, or move it with "
                       "apply --to-crs");
-    for (const auto& c : reader.leading_comments()) out << c << '\n';
+    for (const auto& c : reader.leading_comments()) {
+      if (copied(c)) out << c << '\n';
+    }
   }
   io::write_csv_line(out, out_header);
 

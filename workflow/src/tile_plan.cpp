@@ -552,6 +552,25 @@ TilePlan TilePlanner::plan_coordinates(const fs::path& input) const {
       p.in.storage = storage;
     }
   }
+  // A CSV's '# frame = …' comment (as adjust and convert write it) must say
+  // what the sidecar or the flags say; the output does not copy it (its
+  // sidecar states the output's frame).
+  for (const auto& c : p.csv_comments) {
+    const auto v = io::comment_value(c, "frame");
+    if (!v) continue;
+    const Frame stated = Frame::parse(*v, tile + ": comment '" + c + "'");
+    if (!p.in.frame) {
+      throw Error(ErrorKind::input, "E_FRAME_CONFLICT",
+                  tile + ": its '# frame = " + stated.to_string() + "' comment states a frame that nothing else gives (" +
+                      p.in_frame_source + "); give --from-frame " + stated.to_string() + " or a sidecar");
+    }
+    if (stated.name() != p.in.frame->name() ||
+        (stated.epoch() && p.in.frame->epoch() && stated.epoch()->year != p.in.frame->epoch()->year)) {
+      throw Error(ErrorKind::input, "E_FRAME_CONFLICT",
+                  tile + ": its '# frame = " + stated.to_string() + "' comment contradicts the tile's frame " +
+                      p.in.frame->to_string() + " (" + p.in_frame_source + ")");
+    }
+  }
   const TileMetadata& in = p.in;
   if (in.crs && !in.frame && (t_ || (!o_.to_crs && out_.kind))) {
     throw Error(ErrorKind::input, "E_FRAME_UNKNOWN",
