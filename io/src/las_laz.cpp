@@ -74,12 +74,14 @@ void LasReader::open_laz(std::uint64_t file_size, const LasVlr& vlr) {
   std::uint8_t b[8];
   if (!read_at(fd_, h.offset_to_points, b, 8)) throw las_internal::malformed(path_, h.offset_to_points, "cannot read");
   auto table_at = get<std::int64_t>(b);
+  std::uint64_t points_end = data_end;  // where the chunks end when there is no table
   if (table_at == -1) {
     // Written to a stream that could not seek back: the offset ends the file.
     if (file_size < chunks_start + 8 || !read_at(fd_, file_size - 8, b, 8)) {
       throw table_error(path_, h.offset_to_points, "the chunk table offset is -1 (at the end of the file), but the file is too short");
     }
     table_at = get<std::int64_t>(b);
+    points_end = std::min(data_end, file_size - 8);
   }
   if (table_at == static_cast<std::int64_t>(h.offset_to_points)) {
     // The writer stopped before the table: LASzip walks fixed-size chunks.
@@ -88,7 +90,7 @@ void LasReader::open_laz(std::uint64_t file_size, const LasVlr& vlr) {
                         "no chunk table (the writer stopped before writing it), and variable-size chunks cannot be "
                         "found without one");
     }
-    scan_laz_chunks(data_end);
+    scan_laz_chunks(points_end);
     return;
   }
   if (table_at < static_cast<std::int64_t>(chunks_start) ||
@@ -229,6 +231,41 @@ void LasReader::scan_laz_chunks(std::uint64_t data_end) {
     offset += used;
     first += n;
   }
+  // Each chunk decodes to its last byte, so the header's points end where
+  // the point data does, or where a chunk table the offset does not point
+  // at starts (version 0, this many chunks). Another chunk there holds
+  // points the header does not count (issue 40 point 8): refused, since
+  // they would be dropped; other bytes are not understood: refused too.
+  if (offset == data_end) return;
+  std::uint8_t table_head[8];
+  if (data_end - offset >= kTableHeaderBytes && read_at(fd_, offset, table_head, 8) && get<std::uint32_t>(table_head) == 0 &&
+      get<std::uint32_t>(table_head + 4) == count) {
+    return;
+  }
+  const auto n = static_cast<std::uint32_t>(laz_->chunk_size);
+  const std::uint64_t window = std::min(data_end - offset, 2 * std::uint64_t{n} * h.record_length + kScanSlackBytes);
+  coded.resize(static_cast<std::size_t>(window));
+  records.resize(std::size_t{n} * h.record_length);
+  bool another_chunk = false;
+  if (read_at(fd_, offset, coded.data(), coded.size())) {
+    try {
+      (void)decoder.decode(coded.data(), coded.size(), n, records.data());
+      another_chunk = true;
+    } catch (const laz::ChunkCountMismatch&) {
+      another_chunk = true;  // a chunk, of fewer points
+    } catch (const laz::StreamOverrun&) {
+    } catch (const laz::StreamCorrupt&) {
+    }
+  }
+  if (another_chunk) {
+    throw Error(ErrorKind::input, "E_LAZ_POINT_COUNT",
+                path_.string() + ": byte " + std::to_string(offset) + ": the " + plural(h.point_count, "point") +
+                    " the header counts end here, but another chunk follows (no chunk table): the header counts fewer "
+                    "points than the chunks hold, and the rest would be dropped");
+  }
+  throw Error(ErrorKind::input, "E_LAZ_CHUNK",
+              path_.string() + ": byte " + std::to_string(offset) + ": " + std::to_string(data_end - offset) +
+                  " bytes after the last chunk the header's count implies are neither a chunk nor a chunk table");
 }
 
 std::size_t LasReader::chunk_count() const {

@@ -844,5 +844,28 @@ TEST_F(LazTest, Issue40_AHeaderCountingFewerPointsThanTheChunksIsRefused) {
   }
 }
 
+// The same without a chunk table (a writer that stopped before it): the
+// chunks are walked by the header's count, and a chunk after the last one
+// it implies is refused, not dropped.
+TEST_F(LazTest, Issue40_AHeaderCountingFewerPointsIsRefusedWithoutAChunkTable) {
+  const Bytes records = make_records(3, 0, 9000, Content::realistic, 5);
+  write_tile(path("t.laz"), 3, 0, records, true, 2500);
+  Bytes b = slurp(path("t.laz"));
+  const auto at = get<std::uint32_t>(b, 96);
+  put<std::int64_t>(b, at, at);  // no chunk table
+  put<std::uint32_t>(b, 107, 5000);
+  put<std::uint64_t>(b, 247, 5000);
+  write_file(path("short.laz"), b);
+  try {
+    LasReader r(path("short.laz"));
+    records_of(r);
+    ADD_FAILURE() << "read 5000 of the 9000 points without a word";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "E_LAZ_POINT_COUNT") << e.what();
+    EXPECT_NE(std::string(e.what()).find("the 5000 points the header counts end here, but another chunk follows"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace geoanchor::io
