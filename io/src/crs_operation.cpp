@@ -246,6 +246,7 @@ struct CrsOperation::Impl {
   // A time-dependent operation between CRSs that state no epoch: whether its
   // result depends on the epoch is checked on the points (issue 40 point 5).
   std::string epoch_probe;      // the operation's name; empty: no check due
+  std::size_t epoch_probed = 0;  // points checked so
   bool probing = false;         // inside the check
   double epoch_free_worst_m = 0.0;  // the largest difference the check saw
   std::vector<std::string> notes;
@@ -692,6 +693,7 @@ void CrsOperation::transform(double* a, double* b, double* c, std::size_t n,
       }
       m.epoch_free_worst_m = std::max(m.epoch_free_worst_m, d);
     }
+    m.epoch_probed += n;
     return;
   }
   if (counted == Count::no) {
@@ -992,10 +994,11 @@ std::string abridged(const std::string& name) {
 
 std::vector<std::string> CrsOperation::warnings() const {
   std::vector<std::string> out = impl_->notes;
-  if (!impl_->epoch_probe.empty() && !impl_->probing) {
-    out.push_back("PROJ's operation '" + impl_->epoch_probe +
-                  "' is time-dependent, but its result does not depend on the epoch here: at 1990.0 and 2030.0 the "
-                  "points agree to " + format_shortest(impl_->epoch_free_worst_m) + " m, so no epoch was needed");
+  if (!impl_->epoch_probe.empty() && !impl_->probing && impl_->epoch_probed > 0) {
+    out.push_back("PROJ's operations between these CRSs depend on time ('" + impl_->epoch_probe +
+                  "'), but their result does not depend on the epoch here: at 1990.0 and 2030.0 the " +
+                  std::to_string(impl_->epoch_probed) + " points agree to " + format_shortest(impl_->epoch_free_worst_m) +
+                  " m, so no epoch was needed");
   }
   if (auto w = impl_->source_area.warning()) out.push_back(*w);
   if (auto w = impl_->target_area.warning()) out.push_back(*w);

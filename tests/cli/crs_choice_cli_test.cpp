@@ -158,6 +158,11 @@ TEST_F(CrsChoice, Issue40_ACoarseOperationIsNamedWithItsAccuracyAndArea) {
 // best available operation whose area holds it, and the warnings name the
 // missing grid and the coarse operation used.
 TEST_F(CrsChoice, Issue40_AMissingBetterGridIsNamedForEveryPoint) {
+  // Debian's proj-data leaves NADCON out (NOTES.md); where it is installed
+  // there is no missing grid to name.
+  if (const PJ_GRID_INFO g = proj_grid_info("us_noaa_conus.tif"); g.filename[0] != '\0') {
+    GTEST_SKIP() << "us_noaa_conus.tif is on this machine (" << g.filename << "): no missing grid to name";
+  }
   for (const Place& p : {kOrlando, kHouston, kLosAngeles, kGulf}) {
     SCOPED_TRACE(p.id);
     const auto refused = convert(p, "EPSG:4267", "EPSG:4269");
@@ -186,7 +191,12 @@ TEST_F(CrsChoice, Issue40_AnOperationWhoseResultDoesNotDependOnTheEpochNeedsNone
   const auto in = write("mga.csv", "id,easting_m,northing_m,h_m\nA,334368.634,6250948.345,50\n");
   const auto r = run("convert " + in.string() + " --crs EPSG:28356 --to-crs EPSG:7856 -o " + path("out.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("its result does not depend on the epoch here"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("result does not depend on the epoch here"), std::string::npos) << r.err;
+  // No points, nothing checked: no such claim.
+  const auto none = write("none.csv", "id,easting_m,northing_m,h_m\n");
+  const auto empty = run("convert " + none.string() + " --crs EPSG:28356 --to-crs EPSG:7856 -o " + path("none_out.csv").string());
+  EXPECT_EQ(empty.exit_code, 0) << empty.err;
+  EXPECT_EQ(empty.err.find("does not depend on the epoch"), std::string::npos) << empty.err;
   double e = 0, n = 0, h = 0;
   {
     std::istringstream rows(slurp(path("out.csv")));
