@@ -466,6 +466,28 @@ TEST_F(Audit, Issue40_ATileChangedAfterApplyFailsNamingIt) {
   EXPECT_EQ(again.exit_code, 0) << again.out << again.err;
 }
 
+// The seams come from the points each tile holds now: a tile moved 4 cm
+// after apply fails the seams check too (its extent is not the one its
+// sidecar records), naming it, as well as the data check.
+TEST_F(Audit, Issue40_SeamsAreReadFromThePointsATileHolds) {
+  clean_map();
+  std::istringstream rows(slurp(path("map/east.csv")));
+  std::string line, moved;
+  std::getline(rows, line);
+  moved = line + "\n";
+  while (std::getline(rows, line)) {
+    const auto comma = line.find(',');
+    moved += format_shortest(std::stod(line.substr(0, comma)) + 0.04) + line.substr(comma) + "\n";
+  }
+  write("map/east.csv", moved);
+  const RunResult r = audit(path("map").string() + " " + transform_.string() + " --json");
+  EXPECT_EQ(r.exit_code, kExitFailed) << r.out << r.err;
+  EXPECT_EQ(failing(r), (std::vector<std::string>{"data", "seams"})) << r.out;
+  const std::string evidence = check(r, "seams").at("evidence").dump();
+  EXPECT_NE(evidence.find(path("map/east.csv").string() + ": FAIL its points span"), std::string::npos) << evidence;
+  EXPECT_EQ(evidence.find(path("map/west.csv").string() + ": FAIL"), std::string::npos) << evidence;
+}
+
 // A map moved to another frame by a Helmert (a GeoJSON in longitude and
 // latitude) has no ENU origin to state: it is auditable, and passes.
 TEST_F(Audit, Issue40_AMapMovedBetweenFramesByAHelmertIsAuditable) {

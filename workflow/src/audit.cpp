@@ -26,6 +26,7 @@
 #include "geoanchor/io/tile_apply.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"
 #include "map_files.hpp"
+#include "tile_points.hpp"
 
 namespace geoanchor::workflow {
 
@@ -38,6 +39,10 @@ using detail::excluded_by;
 using detail::is_run_summary;
 using detail::kSidecarSuffix;
 constexpr std::size_t kListed = 20;  // artifacts named in one line of evidence at most
+// An extent read back from the file apply wrote, through the readers'
+// chain (to ECEF and back: 1e-9 m of rounding), agrees to this.
+constexpr double kExtentAgree_m = 1e-6;
+constexpr double kMetresPerDegree = 111319.49;  // of latitude, to 1 %: for the tolerance in degrees
 
 std::string fixed(double v, int decimals) { return format_fixed(v, decimals); }
 std::string cm(double m) { return fixed(m * 100.0, 1) + " cm"; }
@@ -467,7 +472,10 @@ std::optional<Eigen::Vector3d> from_ecef(const io::ArrayFrame& f, const Eigen::V
 }
 
 // The tile's bounds (output coordinates) from its provenance.
-std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> bounds_of(const AuditArtifact& a) {
+using Box = std::pair<Eigen::Vector3d, Eigen::Vector3d>;
+
+// The bounds a sidecar records (provenance.bounds), in the file's axes.
+std::optional<Box> recorded_bounds(const AuditArtifact& a) {
   const nlohmann::json p = provenance(a);
   if (!p.contains("bounds") || !p["bounds"].is_object()) return std::nullopt;
   const auto& b = p["bounds"];
@@ -482,8 +490,14 @@ std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> bounds_of(const Audit
     hi[k] = b["max"][static_cast<std::size_t>(k)].get<double>();
   }
   if (!lo.allFinite() || !hi.allFinite()) return std::nullopt;
-  // Bounds are in the file's axes; geodetic files put longitude first in
-  // LAS/LAZ (X), GeoJSON and OSM, and CSV in the order of its columns.
+  return Box{lo, hi};
+}
+
+// Bounds in the file's axes, in the order of the tile's coordinates (lat,
+// lon, h for geodetic ones): geodetic files put longitude first in LAS/LAZ
+// (X), GeoJSON and OSM, and CSV in the order of its columns.
+std::optional<Box> in_coordinate_order(const AuditArtifact& a, Box box) {
+  auto& [lo, hi] = box;
   if (a.meta && !a.meta->crs && a.meta->coordinates.kind == io::CoordinateKind::geodetic) {
     const auto format = io::tile_format_of(a.path);
     bool lon_first = false;
@@ -505,7 +519,33 @@ std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> bounds_of(const Audit
     }
     if (lon_first) std::swap(lo[0], lo[1]), std::swap(hi[0], hi[1]);
   }
-  return std::pair{lo, hi};
+  return box;
+}
+
+std::optional<Box> bounds_of(const AuditArtifact& a) {
+  const auto recorded = recorded_bounds(a);
+  return recorded ? in_coordinate_order(a, *recorded) : std::nullopt;
+}
+
+// Two extents of the same points (file axes) agree: the reader gives back
+// the numbers apply wrote, so they differ by rounding at most. Geodetic
+// files hold degrees on their two horizontal axes (X, Y; or the CSV's
+// first two coordinate columns) and metres on the third.
+bool same_extent(const AuditArtifact& a, const Box& x, const Box& y) {
+  const bool degrees = a.meta && a.meta->coordinates.kind == io::CoordinateKind::geodetic;
+  for (int k = 0; k < 3; ++k) {
+    const double tolerance = degrees && k < 2 ? kExtentAgree_m / kMetresPerDegree : kExtentAgree_m;
+    if (!(std::abs(x.first[k] - y.first[k]) <= tolerance) || !(std::abs(x.second[k] - y.second[k]) <= tolerance)) return false;
+  }
+  return true;
+}
+
+std::string box_text(const Box& b) {
+  std::string t;
+  for (int k = 0; k < 3; ++k) {
+    t += std::string(k ? ", " : "") + format_shortest(b.first[k]) + " to " + format_shortest(b.second[k]);
+  }
+  return t;
 }
 
 // The eight corners of a box.
@@ -571,7 +611,7 @@ AuditCheck check_seams(const std::vector<AuditArtifact>& arts, const AuditLimits
       }
     }
   }
-  std::size_t not_checked = 0;
+  std::size_t not_checked = 0, moved_tiles = 0;
   for (const auto& a : arts) {
     // Tiles and vector maps: a layer moved otherwise than the tiles under it tears from them.
     if (a.kind == AuditArtifactKind::transform) continue;
@@ -582,9 +622,30 @@ AuditCheck check_seams(const std::vector<AuditArtifact>& arts, const AuditLimits
       ++not_checked;
       continue;
     }
-    const auto b = bounds_of(a);
-    if (!b) {
+    // The footprint of the points the file holds now, which must be those
+    // the sidecar records (a tile changed after apply is named here too).
+    Box points;
+    try {
+      points = detail::point_extent(a.path, a.meta->coordinates);
+    } catch (const Error& e) {
+      c.evidence.push_back(name_of(a) + ": not checked: its points cannot be read: " + e.what());
+      ++not_checked;
+      continue;
+    }
+    const auto recorded = recorded_bounds(a);
+    if (!recorded) {
       c.evidence.push_back(name_of(a) + ": not checked: its sidecar records no bounds (provenance.bounds)");
+      ++not_checked;
+      continue;
+    }
+    if (!same_extent(a, points, *recorded)) {
+      c.evidence.push_back(name_of(a) + ": FAIL its points span " + box_text(points) + " (file axes) but its sidecar records " +
+                           box_text(*recorded) + ": the points changed after apply");
+      ++moved_tiles;
+    }
+    const auto b = in_coordinate_order(a, points);
+    if (!b) {
+      c.evidence.push_back(name_of(a) + ": not checked: its axes' order is not stated");
       ++not_checked;
       continue;
     }
@@ -690,9 +751,11 @@ AuditCheck check_seams(const std::vector<AuditArtifact>& arts, const AuditLimits
       }
     }
   }
-  c.status = failing == 0 && not_checked == 0 ? AuditStatus::pass : AuditStatus::fail;
-  c.summary = std::to_string(pairs) + " shared boundaries or overlaps among " + std::to_string(tiles.size()) + " tiles and vector maps; " +
+  c.status = failing == 0 && not_checked == 0 && moved_tiles == 0 ? AuditStatus::pass : AuditStatus::fail;
+  c.summary = std::to_string(pairs) + " shared boundaries or overlaps among " + std::to_string(tiles.size()) +
+              " tiles and vector maps (their extents read from their points); " +
               (failing ? std::to_string(failing) + " fail" : "largest separation " + mm(worst)) +
+              (moved_tiles ? "; " + std::to_string(moved_tiles) + " tiles' points differ from their sidecars' bounds" : "") +
               (not_checked ? "; " + std::to_string(not_checked) + " tiles not checked" : "");
   return c;
 }
