@@ -187,13 +187,16 @@ void LasReader::check_chunk_points(std::uint64_t points, std::uint64_t offset, c
 namespace {
 // A chunk that holds more than the header's count gives it (issue 40
 // point 8): refused, since the rest would be dropped.
+// `holds_more`: the chunk holds more than the count gives it (the rest
+// would be dropped); else fewer (the count promises points the file lacks).
 Error point_count_mismatch(const std::filesystem::path& path, std::uint64_t offset, std::size_t chunk, std::size_t chunks,
-                           std::uint64_t expected, std::uint64_t header_count, const std::string& what) {
+                           std::uint64_t expected, std::uint64_t header_count, const std::string& what, bool holds_more) {
   return Error(ErrorKind::input, "E_LAZ_POINT_COUNT",
                path.string() + ": byte " + std::to_string(offset) + ": chunk " + std::to_string(chunk) + " of " +
                    std::to_string(chunks) + " should hold " + plural(expected, "point") + " by the header's count (" +
                    plural(header_count, "point") + ") but " + what +
-                   ": the header counts fewer points than the chunks hold, and the rest would be dropped");
+                   (holds_more ? ": the header counts fewer points than the chunks hold, and the rest would be dropped"
+                               : ": the header counts more points than the chunks hold"));
 }
 }  // namespace
 
@@ -225,7 +228,7 @@ void LasReader::scan_laz_chunks(std::uint64_t data_end) {
                   path_.string() + ": byte " + std::to_string(offset) + ": " + which + " is corrupt: " + e.what);
     } catch (const laz::ChunkCountMismatch& m) {
       throw point_count_mismatch(path_, offset, static_cast<std::size_t>(i), static_cast<std::size_t>(count), n, h.point_count,
-                                 "states " + plural(m.stored, "point"));
+                                 "states " + plural(m.stored, "point"), m.stored > n);
     }
     chunks_.push_back({offset, used, first, n});
     offset += used;
@@ -332,7 +335,7 @@ void LasReader::decode_chunk(std::size_t i, std::vector<std::uint8_t>& records) 
     used = borrowed.decoder->decode(coded.data(), coded.size(), c.points, records.data());
   } catch (const laz::ChunkCountMismatch& m) {
     throw point_count_mismatch(path_, c.offset, i, chunks_.size(), c.points, header_.point_count,
-                               "holds " + plural(m.stored, "point"));
+                               "holds " + plural(m.stored, "point"), m.stored > c.points);
   } catch (const laz::StreamOverrun&) {
     throw Error(ErrorKind::input, "E_LAZ_CHUNK",
                 path_.string() + ": byte " + std::to_string(c.offset) + ": " + which +
@@ -345,7 +348,7 @@ void LasReader::decode_chunk(std::size_t i, std::vector<std::uint8_t>& records) 
   // bytes left over are points the header does not count.
   if (used != c.bytes) {
     throw point_count_mismatch(path_, c.offset, i, chunks_.size(), c.points, header_.point_count,
-                               "has " + std::to_string(c.bytes - used) + " bytes left after them");
+                               "has " + std::to_string(c.bytes - used) + " bytes left after them", true);
   }
 }
 
