@@ -74,6 +74,20 @@ std::string helmert_steps(const std::string& parameters) {
 
 class ApplyVectorCli : public CliTest {
  protected:
+  // audit reads a moved vector map's points back (issue 40 point 6): its
+  // extent is the one its sidecar records, nothing left unread.
+  void expect_seams_read_back(const fs::path& out, const fs::path& transform) const {
+    const RunResult a = run("audit " + out.string() + " " + transform.string() + " --json");
+    const json report = json::parse(a.out);
+    for (const auto& c : report.at("checks")) {
+      if (c.at("name") != "seams") continue;
+      const std::string evidence = c.at("evidence").dump();
+      EXPECT_EQ(evidence.find("cannot be read"), std::string::npos) << evidence;
+      EXPECT_EQ(evidence.find("FAIL its points span"), std::string::npos) << evidence;
+      EXPECT_NE(c.at("summary").get<std::string>().find("their extents read from their points"), std::string::npos) << c;
+    }
+  }
+
   fs::path transform(const std::string& name, const std::string& parameters) {
     return write(name, R"({"model": "helmert7", "convention": "position_vector", "source_frame": "ITRF2014@2024.5",
       "target_frame": "ETRF2000", "parameters": {)" + parameters + "}}");

@@ -626,7 +626,11 @@ AuditCheck check_seams(const std::vector<AuditArtifact>& arts, const AuditLimits
     // the sidecar records (a tile changed after apply is named here too).
     Box points;
     try {
-      points = detail::point_extent(a.path, a.meta->coordinates);
+      std::optional<std::string> local_xy;  // a Lanelet2 map's, as apply recorded it
+      const nlohmann::json prov = provenance(a);
+      const nlohmann::json::json_pointer projection("/osm/local_xy/projection");
+      if (prov.contains(projection) && prov.at(projection).is_string()) local_xy = prov.at(projection).get<std::string>();
+      points = detail::point_extent(a.path, a.meta->coordinates, local_xy);
     } catch (const Error& e) {
       c.evidence.push_back(name_of(a) + ": not checked: its points cannot be read: " + e.what());
       ++not_checked;

@@ -42,12 +42,14 @@ class DiscardBuffer : public std::streambuf {
 
 }  // namespace
 
-std::pair<Eigen::Vector3d, Eigen::Vector3d> point_extent(const std::filesystem::path& file, const io::ArrayFrame& coordinates) {
+std::pair<Eigen::Vector3d, Eigen::Vector3d> point_extent(const std::filesystem::path& file, const io::ArrayFrame& coordinates,
+                                                         const std::optional<std::string>& local_xy) {
   const auto format = io::tile_format_of(file);
   if (!format) throw Error(ErrorKind::input, "E_TILE_FORMAT", file.string() + ": not a tile or vector map geoanchor reads");
   const io::PointChain identity(coordinates, std::nullopt, false, std::nullopt, coordinates);
   io::TileApplyOptions o{coordinates, coordinates, std::nullopt, "", 1 << 16, {}};
   o.las_output = io::TileFormat::las;  // nothing to compress
+  o.local_xy = local_xy;
   DiscardBuffer discard;
   std::ostream out(&discard);
   const std::string name = file.string();

@@ -7,6 +7,8 @@
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <optional>
+#include <string>
 #include <utility>
 
 #include "geoanchor/io/point_chain.hpp"
@@ -17,7 +19,10 @@ namespace geoanchor::workflow::detail {
 // CSV or PLY tile, a GeoJSON, Lanelet2 OSM or OpenDRIVE map) in the file's
 // axes, as apply records them in provenance.bounds: every point read through
 // the reader apply uses, in `coordinates` (the sidecar's), and moved nowhere.
+// `local_xy`: a Lanelet2 map's local projection of its local_x/local_y
+// tags, as apply recorded it (provenance.osm.local_xy.projection).
 // Throws geoanchor::Error naming the file where it cannot be read.
-std::pair<Eigen::Vector3d, Eigen::Vector3d> point_extent(const std::filesystem::path& file, const io::ArrayFrame& coordinates);
+std::pair<Eigen::Vector3d, Eigen::Vector3d> point_extent(const std::filesystem::path& file, const io::ArrayFrame& coordinates,
+                                                         const std::optional<std::string>& local_xy);
 
 }  // namespace geoanchor::workflow::detail
