@@ -93,7 +93,7 @@ int epsg_code_of(PJ_CONTEXT* ctx, const PJ* object) {
 // repeat it (GeoTIFF 1.0 section 2.5.3.2 allows them beside a CRS code;
 // they must then agree with it).
 struct GeodeticFacts {
-  int datum = 0, ellipsoid = 0, prime_meridian = 0;
+  int geodetic_crs = 0, datum = 0, ellipsoid = 0, prime_meridian = 0;
   double semi_major_m = 0, semi_minor_m = 0, inverse_flattening = 0, prime_meridian_deg = 0;
 };
 
@@ -104,6 +104,7 @@ GeodeticFacts geodetic_facts(const std::string& code, const std::string& where) 
   detail::Pj geodetic(proj_crs_get_geodetic_crs(ctx.get(), crs.get()));
   if (!geodetic) fail(where, code + " has no geodetic datum");
   GeodeticFacts f;
+  f.geodetic_crs = epsg_code_of(ctx.get(), geodetic.get());
   detail::Pj datum(proj_crs_get_datum_forced(ctx.get(), geodetic.get()));
   f.datum = epsg_code_of(ctx.get(), datum.get());
   detail::Pj ellipsoid(proj_get_ellipsoid(ctx.get(), geodetic.get()));
@@ -130,7 +131,13 @@ void agree(const std::string& where, const std::string& key, double key_value, c
 
 }  // namespace
 
-std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const std::string& where) {
+std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const std::string& where, bool set_aside_unread) {
+  LasGeoKeys out;
+  // A key geoanchor does not read: refused, or (set_aside_unread) listed.
+  const auto unread = [&](const std::string& what) {
+    if (!set_aside_unread) throw Error(ErrorKind::input, "E_GEOTIFF_KEYS_UNREAD", where + ": GeoTIFF CRS keys: " + what);
+    out.set_aside.push_back(what);
+  };
   const LasVlr* dir = nullptr;
   for (const auto& v : vlrs) {
     if (v.user_id == "LASF_Projection" && v.record_id == kKeyDirectory) dir = &v;
@@ -203,9 +210,10 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
         short_values[id] = value;
         continue;
       default:
-        fail(where, "key " + std::to_string(id) +
-                        " is not read by geoanchor (a user-defined CRS's parameters, or a key of another kind): give "
-                        "the tile's CRS with --crs (EPSG code or WKT), or a WKT record");
+        unread("key " + std::to_string(id) +
+               " is not read by geoanchor (a user-defined CRS's parameters, or a key of another kind): give "
+               "the tile's CRS with --crs (EPSG code or WKT), or a WKT record");
+        continue;
     }
   }
   const auto value = [&](std::uint16_t id) -> std::optional<std::uint16_t> {
@@ -216,12 +224,13 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
                                  kGeogGeodeticDatum, kGeogPrimeMeridian, kGeogEllipsoid, kGeogLinearUnits,
                                  kGeogAngularUnits, kGeogAzimuthUnits, kProjLinearUnits, kVerticalUnits}) {
     if (value(id) == kUserDefined) {
-      fail(where, "key " + std::to_string(id) +
-                      " is user-defined (32767): its CRS is stated by parameters geoanchor does not read; give the "
-                      "tile's CRS with --crs");
+      unread("key " + std::to_string(id) +
+             " is user-defined (32767): its CRS is stated by parameters geoanchor does not read; give the "
+             "tile's CRS with --crs");
+      short_values.erase(id);  // set aside: as if absent
+      if (id == kProjectedCsType || id == kGeographicType || id == kModelType) return out;  // no CRS the keys state
     }
   }
-  LasGeoKeys out;
   const auto model = value(kModelType);
   std::string horizontal;
   if (model == 1 || (!model && value(kProjectedCsType))) {
@@ -280,8 +289,12 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
   const bool repeats_datum = value(kGeogGeodeticDatum) || value(kGeogPrimeMeridian) || value(kGeogEllipsoid) ||
                              double_values.count(kGeogSemiMajorAxis) || double_values.count(kGeogSemiMinorAxis) ||
                              double_values.count(kGeogInvFlattening) || double_values.count(kGeogPrimeMeridianLong);
-  if (repeats_datum) {
+  const bool projected_model = model == 1 || (!model && value(kProjectedCsType));
+  if (repeats_datum || (projected_model && value(kGeographicType))) {
     const GeodeticFacts f = geodetic_facts(horizontal, where);
+    if (const auto v = value(kGeographicType); v && projected_model) {
+      agree(where, "GeographicTypeGeoKey", *v, horizontal + "'s geographic CRS EPSG code", f.geodetic_crs, 0, "");
+    }
     if (const auto v = value(kGeogGeodeticDatum)) agree(where, "GeogGeodeticDatumGeoKey", *v, horizontal + "'s datum EPSG code", f.datum, 0, "");
     if (const auto v = value(kGeogEllipsoid)) agree(where, "GeogEllipsoidGeoKey", *v, horizontal + "'s ellipsoid EPSG code", f.ellipsoid, 0, "");
     if (const auto v = value(kGeogPrimeMeridian)) {

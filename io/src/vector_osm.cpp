@@ -303,7 +303,10 @@ TileApplyResult apply_osm_map(const std::filesystem::path& in, std::ostream& out
     for (std::size_t i = 0; i < n; ++i) mean_h += nodes[i].ele.present ? nodes[i].ele.v : 0.0;
     if (n > 0) mean_h /= static_cast<double>(n);
     double ba[2] = {bd[0].v, bd[2].v}, bb[2] = {bd[1].v, bd[3].v}, bc[2] = {mean_h, mean_h};
-    detail::move_points(chain, o, ba, bb, bc, nullptr, [&](std::size_t) { return source + ": <bounds>"; });
+    // Not points of the map: apply's reach outside the control is measured on the nodes.
+    TileApplyOptions corners = o;
+    corners.inspect_input = nullptr;
+    detail::move_points(chain, corners, ba, bb, bc, nullptr, [&](std::size_t) { return source + ": <bounds>"; });
     if (detail::first_non_finite(ba, bb, bc) < 2) {
       throw Error(ErrorKind::input, "E_TRANSFORM", source + ": <bounds> has no finite position in the output frame");
     }

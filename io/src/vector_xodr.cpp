@@ -531,7 +531,6 @@ TileApplyResult apply_xodr_map(const std::filesystem::path& in, std::ostream& ou
                 name_of(bad) + ": the sample has no finite position in the output frame" +
                     detail::refusal_reason(report, bad) + "; nothing was written");
   }
-  out_bounds.add(a, b, c);
 
   // The rigid placement closest to the moved samples (least squares, about
   // the centroids): heading θ, translation t, height offset.
@@ -557,9 +556,13 @@ TileApplyResult apply_xodr_map(const std::filesystem::path& in, std::ostream& ou
   double worst = 0.0, worst_h = 0.0, worst_v = 0.0;
   std::size_t worst_at = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const double ex = tx + ct * plane[i].x - st * plane[i].y - a[i];
-    const double ey = ty + st * plane[i].x + ct * plane[i].y - b[i];
-    const double ev = z[i] + new_z - c[i];
+    // The re-anchored sample (what the file holds, and its bounds are the
+    // output's: audit reads them back) against the exactly moved one.
+    const double rx = tx + ct * plane[i].x - st * plane[i].y, ry = ty + st * plane[i].x + ct * plane[i].y, rz = z[i] + new_z;
+    out_bounds.add(std::span<const double>(&rx, 1), std::span<const double>(&ry, 1), std::span<const double>(&rz, 1));
+    const double ex = rx - a[i];
+    const double ey = ry - b[i];
+    const double ev = rz - c[i];
     const double dh = std::hypot(ex, ey), d = std::hypot(dh, ev);
     worst_h = std::max(worst_h, dh);
     worst_v = std::max(worst_v, std::abs(ev));

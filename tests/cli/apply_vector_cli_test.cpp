@@ -78,14 +78,19 @@ class ApplyVectorCli : public CliTest {
   // extent is the one its sidecar records, nothing left unread.
   void expect_seams_read_back(const fs::path& out, const fs::path& transform) const {
     const RunResult a = run("audit " + out.string() + " " + transform.string() + " --json");
+    ASSERT_FALSE(a.out.empty()) << a.err;
     const json report = json::parse(a.out);
+    int seen = 0;
     for (const auto& c : report.at("checks")) {
       if (c.at("name") != "seams") continue;
       const std::string evidence = c.at("evidence").dump();
       EXPECT_EQ(evidence.find("cannot be read"), std::string::npos) << evidence;
       EXPECT_EQ(evidence.find("FAIL its points span"), std::string::npos) << evidence;
+      EXPECT_EQ(c.at("status"), "pass") << c;
       EXPECT_NE(c.at("summary").get<std::string>().find("their extents read from their points"), std::string::npos) << c;
+      ++seen;
     }
+    EXPECT_EQ(seen, 1) << a.out << a.err;
   }
 
   fs::path transform(const std::string& name, const std::string& parameters) {
@@ -237,6 +242,7 @@ TEST_F(ApplyVectorCli, GeoJsonPositionsWithoutHeightAreWarnedOfAndACrs84MemberIs
   EXPECT_WORST_WITHIN(worst, kVsProjTol_m);
   const json side = json::parse(slurp(path("out/flat.geojson.geoanchor.json")));
   EXPECT_NE(side["provenance"]["warnings"].dump().find("no height"), std::string::npos);
+  expect_seams_read_back(path("out"), t);  // its recorded heights are the moved h = 0, the file has none
 }
 
 TEST_F(ApplyVectorCli, GeoJsonLegacyCrsMemberIsReadThroughProj) {
@@ -361,6 +367,7 @@ TEST_F(ApplyVectorCli, Lanelet2NodesAndTheirLocalXyAreMovedAsProjDoesEveryOtherB
   const json side = json::parse(slurp(path("out/lanelet2_map.osm.geoanchor.json")));
   EXPECT_EQ(side["frame"], "ETRF2000@2024.5");
   EXPECT_EQ(side["provenance"]["osm"]["local_xy"]["projection"], "lanelet2-utm:47.46,8.55");
+  expect_seams_read_back(path("out"), t);
 }
 
 TEST_F(ApplyVectorCli, Lanelet2LocalXyThatDisagreeWithLatLonAreRefusedBeforeAnythingMoves) {
@@ -599,6 +606,7 @@ TEST_F(ApplyVectorCli, OpenDriveIsReanchoredAndItsReportedDeviationMatchesAnInde
     if (std::string(c.name) == "plane_scale_allowed") {
       EXPECT_GT(reported, 0.02);  // 10 ppm of ~5 km
     }
+    expect_seams_read_back(out, t);
   }
 }
 

@@ -129,7 +129,7 @@ TEST_F(LasGeoTiff, Issue40_KeysGeoanchorCannotReadAreRefusedByName) {
 // (EPSG:2154 is on RGF93 v1, datum 6171, GRS 1980 7019, Greenwich 8901);
 // VerticalUnitsGeoKey alone states Z's unit, which must be the CRS's.
 TEST_F(LasGeoTiff, Issue40_KeysThatRepeatTheCodeAreCheckedAgainstIt) {
-  const std::vector<std::array<std::uint16_t, 2>> agreeing = {{1024, 1}, {3072, 2154}, {3076, 9001}, {2050, 6171},
+  const std::vector<std::array<std::uint16_t, 2>> agreeing = {{1024, 1}, {3072, 2154}, {2048, 4171}, {3076, 9001}, {2050, 6171},
                                                               {2051, 8901}, {2056, 7019}, {2054, 9102}, {4099, 9001}};
   const std::vector<std::pair<std::uint16_t, double>> agreeing_doubles = {
       {3077, 1.0}, {2057, 6378137.0}, {2059, 298.257222101}, {2061, 0.0}};
@@ -150,6 +150,7 @@ TEST_F(LasGeoTiff, Issue40_KeysThatRepeatTheCodeAreCheckedAgainstIt) {
       {"zfeet.las", {{1024, 1}, {3072, 2154}, {4099, 9002}}, {}, "VerticalUnitsGeoKey 9002 says Z is in units of 0.3048 m"},
       {"vdatum.las", {{1024, 1}, {3072, 2154}, {4098, 5215}}, {}, "VerticalDatumGeoKey (4098) without VerticalCSTypeGeoKey"},
       {"nodouble.las", {{1024, 1}, {3072, 2154}, {2057, 34736}}, {}, "key 2057 is not one value of the GeoDoubleParams record"},
+      {"base.las", {{1024, 1}, {3072, 2154}, {2048, 4326}}, {}, "GeographicTypeGeoKey 4326 contradicts EPSG:2154's geographic CRS EPSG code, whose value is 4171"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.name);
@@ -170,6 +171,22 @@ TEST_F(LasGeoTiff, Issue40_UnreadableKeysGiveWayToTheCrsFlag) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("set aside: the tile's CRS is the --crs flag's"), std::string::npos) << r.err;
   EXPECT_TRUE(fs::exists(path("out/user.las")));
+  // What the keys do state is still checked: a code beside an unread key
+  // refuses a --crs that contradicts it, and agrees with one that does not.
+  const fs::path coded = las("coded.las", {{1024, 1}, {3072, 2154}, {3074, 16031}});
+  const auto oregon = run("apply " + coded.string() + " --crs EPSG:2992 --to-crs EPSG:4171 --out-dir " + path("oregon").string());
+  EXPECT_EQ(oregon.exit_code, 2) << oregon.err;
+  EXPECT_NE(oregon.err.find("LAS GeoTIFF keys EPSG:2154"), std::string::npos) << oregon.err;
+  EXPECT_FALSE(fs::exists(path("oregon/coded.las")));
+  const auto lambert = run("apply " + coded.string() + " --crs EPSG:2154 --to-crs EPSG:4171 --out-dir " + path("lambert").string());
+  EXPECT_EQ(lambert.exit_code, 0) << lambert.err;
+  EXPECT_NE(lambert.err.find("key 3074 is not read by geoanchor"), std::string::npos) << lambert.err;
+  EXPECT_NE(lambert.err.find("checked against the keys' EPSG:2154"), std::string::npos) << lambert.err;
+  // A key that contradicts the code is never set aside.
+  const fs::path feet = las("feet.las", {{1024, 1}, {3072, 2154}, {3076, 9002}, {3074, 16031}});
+  const auto contradicted = run("apply " + feet.string() + " --crs EPSG:2154 --to-crs EPSG:4171 --out-dir " + path("feet").string());
+  EXPECT_EQ(contradicted.exit_code, 3) << contradicted.err;
+  EXPECT_NE(contradicted.err.find("ProjLinearUnitsGeoKey 9002"), std::string::npos) << contradicted.err;
 }
 
 }  // namespace

@@ -326,17 +326,21 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
           // The bytes too, as audit checks them: a tile changed after apply
           // (or written before outputs were hashed) is not up to date, and
           // is replaced only with --overwrite.
-          const std::string recorded = prov.value("output_sha256", "");
+          const auto hash = prov.find("output_sha256");
+          const std::string recorded = hash != prov.end() && hash->is_string() ? hash->get<std::string>() : "";
           const std::string now = io::sha256_file_hex(p.output);
           if (recorded == now) {
             r.status = "skipped";
             r.points = prov.value("points", std::uint64_t{0});
             return;
           }
-          changed_after_apply = p.output.string() +
-                                ": output already exists and is not the one this request wrote: its SHA-256 is " + now +
-                                ", its sidecar records " + (recorded.empty() ? std::string("none") : recorded) +
-                                " (changed after apply); pass --overwrite to write it again";
+          changed_after_apply =
+              p.output.string() + ": output already exists and " +
+              (recorded.empty() ? "its sidecar records no SHA-256 of it (written by an older geoanchor), so it cannot be "
+                                  "known to be the one this request wrote"
+                                : "is not the one this request wrote: its SHA-256 is " + now + ", its sidecar records " +
+                                      recorded + " (changed after apply)") +
+              "; pass --overwrite to write it again";
         }
       }
     } catch (const Error&) {

@@ -145,11 +145,14 @@ std::optional<geodesy::DecimalYear> fixed_fit_epoch(const geodesy::ControlSet& s
   const geodesy::ControlPoint* earliest = nullptr;
   const geodesy::ControlPoint* latest = nullptr;
   double sum = 0.0;
+  std::size_t used = 0;
   for (const auto& p : set.points) {
     if (!p.epoch) return std::nullopt;  // the reader refused this set; nothing to name
+    if (!p.use) continue;  // the epoch is the fitted marks'; a mark set aside does not shift it
     if (!earliest || p.epoch->year < earliest->epoch->year) earliest = &p;
     if (!latest || p.epoch->year > latest->epoch->year) latest = &p;
     sum += p.epoch->year;
+    ++used;
   }
   if (!earliest) return std::nullopt;
   const double spread = latest->epoch->year - earliest->epoch->year;
@@ -162,7 +165,7 @@ std::optional<geodesy::DecimalYear> fixed_fit_epoch(const geodesy::ControlSet& s
                     format_shortest(kCampaignSpread_yr) + " year: a transform of fixed parameters holds at one epoch; " +
                     "fit --model helmert14, or give the coordinates at one epoch (the frame as " + f.name() + "@YYYY.Y)");
   }
-  return geodesy::DecimalYear{sum / static_cast<double>(set.points.size())};
+  return geodesy::DecimalYear{sum / static_cast<double>(used)};
 }
 
 std::optional<geodesy::Frame> written_frame(const std::optional<geodesy::Frame>& frame, const geodesy::ControlSet& set,

@@ -183,20 +183,27 @@ TileMetadata TilePlanner::input_metadata(TilePlan& p) const {
       // read as the WKT of the CRS they name would be, and checked against
       // the sidecar and the flags as a WKT is; a realization and epoch they
       // cannot state are asked for as for a WKT without them (issue 40
-      // point 12). Keys geoanchor cannot read refuse the tile unless a
-      // sidecar or --crs states its CRS; then they are set aside, and the
-      // terminal says so.
+      // point 12). Keys geoanchor does not read (user-defined parameters or
+      // codes) refuse the tile unless a sidecar or --crs states its CRS:
+      // then they are set aside, with a warning, and whatever the keys do
+      // state is still checked against it (a contradiction is refused).
+      std::optional<io::LasGeoKeys> keys;
       try {
-        if (const auto keys = io::las_geotiff_crs(reader.vlrs(), tile)) {
-          const std::string keys_wkt = io::Crs::parse(keys->crs, tile + " GeoTIFF keys (" + keys->description + ")").wkt2();
-          const bool as_crs = side ? side->crs.has_value() : (o_.crs || o_.to_crs);
-          wkt = as_crs ? io::tile_metadata_from_wkt_as_crs(keys_wkt, tile) : io::tile_metadata_from_wkt(keys_wkt, tile);
-          geotiff_keys = keys->crs + " (" + keys->description + ")";
-        }
+        keys = io::las_geotiff_crs(reader.vlrs(), tile);
       } catch (const Error& e) {
-        if (e.code() != "E_GEOTIFF_KEYS" || !(side || o_.crs)) throw;
-        p.warnings.push_back(std::string(e.what()) + "; set aside: the tile's CRS is the " +
-                             (side ? "sidecar's (" + side_path.string() + ")" : std::string("--crs flag's")));
+        if (e.code() != "E_GEOTIFF_KEYS_UNREAD" || !(side || o_.crs)) throw;
+        keys = io::las_geotiff_crs(reader.vlrs(), tile, true);
+        for (const auto& why : keys->set_aside) {
+          p.warnings.push_back(tile + ": GeoTIFF CRS keys: " + why + "; set aside: the tile's CRS is the " +
+                               (side ? "sidecar's (" + side_path.string() + ")" : std::string("--crs flag's")) +
+                               (keys->crs.empty() ? "" : ", checked against the keys' " + keys->crs));
+        }
+      }
+      if (keys && !keys->crs.empty()) {
+        const std::string keys_wkt = io::Crs::parse(keys->crs, tile + " GeoTIFF keys (" + keys->description + ")").wkt2();
+        const bool as_crs = side ? side->crs.has_value() : (o_.crs || o_.to_crs);
+        wkt = as_crs ? io::tile_metadata_from_wkt_as_crs(keys_wkt, tile) : io::tile_metadata_from_wkt(keys_wkt, tile);
+        geotiff_keys = keys->crs + " (" + keys->description + ")";
       }
     }
   }
@@ -560,9 +567,12 @@ TilePlan TilePlanner::plan_coordinates(const fs::path& input) const {
     if (!v) continue;
     const Frame stated = Frame::parse(*v, tile + ": comment '" + c + "'");
     if (!p.in.frame) {
-      throw Error(ErrorKind::input, "E_FRAME_CONFLICT",
-                  tile + ": its '# frame = " + stated.to_string() + "' comment states a frame that nothing else gives (" +
-                      p.in_frame_source + "); give --from-frame " + stated.to_string() + " or a sidecar");
+      // A CRS whose datum is no frame of the catalog (an ensemble such as
+      // ETRS89, a national datum): the two cannot be compared, as in
+      // convert --crs; said, and the comment dropped.
+      p.warnings.push_back(tile + ": its '# frame = " + stated.to_string() + "' comment is not copied and was not compared with "
+                           "the tile's coordinate system (" + p.in_frame_source + "), which names no frame of geoanchor's catalog");
+      continue;
     }
     if (stated.name() != p.in.frame->name() ||
         (stated.epoch() && p.in.frame->epoch() && stated.epoch()->year != p.in.frame->epoch()->year)) {

@@ -13,8 +13,9 @@
 namespace geoanchor::io {
 
 struct LasGeoKeys {
-  std::string crs;          // for PROJ: "EPSG:2154", or "EPSG:2154+5720" with a vertical CRS
+  std::string crs;          // for PROJ: "EPSG:2154", or "EPSG:2154+5720" with a vertical CRS; "" when set_aside leaves none
   std::string description;  // the keys read, for messages: "ProjectedCSTypeGeoKey 2154, ..."
+  std::vector<std::string> set_aside;  // keys not read (only with set_aside_unread), each with why
 };
 
 // The CRS the keys state, or nullopt when the file has no GeoKeyDirectory.
@@ -26,10 +27,14 @@ struct LasGeoKeys {
 // and the keys that repeat the geodetic datum of the CRS code (2050-2061:
 // datum, prime meridian, ellipsoid, their parameters and units), which must
 // agree with PROJ's definition of that code. Throws Error (input,
-// E_GEOTIFF_KEYS) naming `where` for a directory that is malformed, a key
-// it does not read (user-defined projection parameters, geocentric models),
-// a user-defined code (32767), or a key that contradicts the EPSG CRS the
-// code names.
-std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const std::string& where);
+// E_GEOTIFF_KEYS) naming `where` for a directory that is malformed, a
+// model it does not read (geocentric), or a key that contradicts the EPSG CRS
+// the code names; and E_GEOTIFF_KEYS_UNREAD for a key it does not read
+// (user-defined projection parameters) or a user-defined code (32767),
+// unless `set_aside_unread`: those are then listed in `set_aside` (a
+// user-defined CRS code leaving `crs` empty) and the rest is read as ever,
+// contradictions refused.
+std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const std::string& where,
+                                          bool set_aside_unread = false);
 
 }  // namespace geoanchor::io

@@ -24,9 +24,9 @@ std::vector<std::string> control_set_warnings(const geodesy::ControlSet& set);
 
 // The epoch a fit of fixed parameters (every model but helmert14) holds at,
 // when a frame of the set is dynamic and names none because every point
-// has its own epoch: the points' mean epoch, which the transform file then
+// has its own epoch: the used marks' mean epoch, which the transform file then
 // names (its reader refuses a dynamic frame without one). nullopt when no
-// frame needs it. Throws Error (input, E_EPOCH_SPREAD) when the points'
+// frame needs it. Throws Error (input, E_EPOCH_SPREAD) when the used marks'
 // epochs span more than kCampaignSpread_yr: a fixed transform fitted across
 // years of plate motion holds at no epoch (fit helmert14, or give the
 // coordinates at one epoch).
