@@ -27,7 +27,9 @@ cd "$(dirname "$0")/.."
 
 bash scripts/setup.sh
 cmake --preset release >/dev/null
-cmake --build --preset release
+# The command-line program alone: the example needs no test, benchmark or
+# window (scripts/test.sh builds everything).
+cmake --build --preset release --target geoanchor
 
 geoanchor=build/release/cli/geoanchor
 out=build/example
