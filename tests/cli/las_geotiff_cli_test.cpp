@@ -42,7 +42,7 @@ std::pair<std::vector<std::uint8_t>, std::vector<std::uint8_t>> geo_keys(
   }
   std::vector<std::uint8_t> dir(2 * v.size()), params(8 * d.size());
   std::memcpy(dir.data(), v.data(), dir.size());
-  std::memcpy(params.data(), d.data(), params.size());
+  if (!d.empty()) std::memcpy(params.data(), d.data(), params.size());  // memcpy takes no null pointer, even for 0 bytes
   return {dir, params};
 }
 
