@@ -96,6 +96,7 @@ inline ChainReport move_points(const PointChain& chain, const TileApplyOptions& 
   if (o.inspect_input) o.inspect_input(a, b, c);
   ChainReport report;
   if (o.chain_used) report = epochs ? chain.apply_at_epochs(a, b, c, *epochs) : chain.apply(a, b, c);
+  if (o.inspect_output) o.inspect_output(a, b, c);
   if (o.crs_after) o.crs_after->transform(a.data(), b.data(), z_out ? c.data() : nullptr, a.size(), point_name);
   return report;
 }

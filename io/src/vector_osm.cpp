@@ -306,6 +306,7 @@ TileApplyResult apply_osm_map(const std::filesystem::path& in, std::ostream& out
     // Not points of the map: apply's reach outside the control is measured on the nodes.
     TileApplyOptions corners = o;
     corners.inspect_input = nullptr;
+    corners.inspect_output = nullptr;
     detail::move_points(chain, corners, ba, bb, bc, nullptr, [&](std::size_t) { return source + ": <bounds>"; });
     if (detail::first_non_finite(ba, bb, bc) < 2) {
       throw Error(ErrorKind::input, "E_TRANSFORM", source + ": <bounds> has no finite position in the output frame");

@@ -548,7 +548,9 @@ TEST_F(ApplyCli, ATileFarOutsideTheControlNetworkIsRefusedAndANearOneWarned) {
   const double d = side["provenance"]["extrapolation"]["distance_outside_control_m"];
   EXPECT_GT(d, 50000.0);
   EXPECT_LT(d, 62000.0);
-  EXPECT_EQ(side["provenance"]["warnings"].size(), 1u);
+  // The extrapolation, and (issue 40 point 3) the tangent plane 60 km from the tile's ENU origin.
+  EXPECT_EQ(side["provenance"]["warnings"].size(), 2u);
+  EXPECT_NE(side["provenance"]["warnings"].dump().find("the tangent plane departs"), std::string::npos) << side["provenance"]["warnings"];
 }
 
 struct BadTile {

@@ -116,6 +116,29 @@ TEST_F(Origins, Issue40_PointsFarFromTheOriginAreRefused) {
 // Issue 40 point 10: a height or a geocentric position off the Earth (a
 // placeholder 1e308, a unit slip) is refused wherever a coordinate enters:
 // an origin flag, a CSV row, a control set, a network, a transform file.
+// apply measures its tiles from an ENU/NED origin as convert does: a
+// swapped --origin (the LSZH tile 4 943 km away) and a local tile 50 km
+// from its own origin are refused past --max-extrapolation, nothing
+// written; within a raised limit the tile is moved, with a tangent-plane
+// warning (d = 50 km: d²/2R = 196 m).
+TEST_F(Origins, Issue40_ApplyRefusesTilesFarFromAnEnuOrigin) {
+  const fs::path tile = fs::path(GEOANCHOR_SOURCE_DIR) / "fixtures" / "airport_tile.las";
+  const auto swapped = run("apply " + tile.string() + " --to enu --origin 8.549167,47.464722,480 --out-dir " + path("swapped").string());
+  EXPECT_EQ(swapped.exit_code, 4) << swapped.err;
+  EXPECT_NE(swapped.err.find("E_EXTRAPOLATION"), std::string::npos) << swapped.err;
+  EXPECT_NE(swapped.err.find("from the output's ENU/NED origin 8.549167000, 47.464722000"), std::string::npos) << swapped.err;
+  EXPECT_FALSE(fs::exists(path("swapped/airport_tile.las")));
+  const auto far = write("far_enu.csv", "id,e_m,n_m,u_m\nA,50000,0,0\nB,50010,0,0\n");
+  const std::string args = far.string() + " --from-frame ITRF2014@2024.5 --from-origin 47.46,8.55,480 --to geodetic --out-dir ";
+  const auto refused = run("apply " + args + path("far").string());
+  EXPECT_EQ(refused.exit_code, 4) << refused.err;
+  EXPECT_NE(refused.err.find("lie up to 50.010 km from the input's ENU/NED origin"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(path("far/far_enu.csv")));
+  const auto allowed = run("apply " + args + path("allowed").string() + " --max-extrapolation 60000");
+  EXPECT_EQ(allowed.exit_code, 0) << allowed.err;
+  EXPECT_NE(allowed.err.find("the tangent plane departs 196.005 m"), std::string::npos) << allowed.err;
+}
+
 TEST_F(Origins, Issue40_HeightsAndRadiiOffTheEarthAreRefused) {
   const auto pts = write("pts.csv", "id,lat_deg,lon_deg,h_m\nA,47.4650,8.5500,480\n");
   const auto origin = run("convert " + pts.string() + " --to enu --origin 47.4,8.5,1e308 -o " + path("o.csv").string());

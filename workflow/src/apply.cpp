@@ -1,4 +1,5 @@
 #include "geoanchor/workflow/apply.hpp"
+#include "geoanchor/workflow/audit.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -444,20 +445,46 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   // network, measured on every point in the transform's source frame (its
   // bounding box's corners reached 2 km outside a network its points all
   // lie in: issue 40 point 11).
+  // And how far they lie from an ENU/NED origin, input's and output's (a
+  // swapped --origin put a tile 4 000 km from it without a word): refused
+  // past --max-extrapolation, as convert and locate refuse such points.
   struct Reach {
     std::mutex m;
     double worst_m = 0.0;
+    double from_origin_m[2] = {0.0, 0.0};  // input's, output's
   } reach;
+  const auto local = [](const ArrayFrame& f) {
+    return (f.kind == io::CoordinateKind::enu || f.kind == io::CoordinateKind::ned) && f.origin.has_value();
+  };
+  // The largest horizontal distance of a batch from its origin (e, n or n, e).
+  const auto farthest = [](std::span<const double> a, std::span<const double> b) {
+    double d = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const double h = std::hypot(a[i], b[i]);
+      if (!(h <= d)) d = h;  // NaN propagates to the refusal below
+    }
+    return d;
+  };
+  const auto record = [&reach](double& worst, double d) {
+    const std::lock_guard<std::mutex> lock(reach.m);
+    if (!(d <= worst)) worst = d;
+  };
   std::optional<io::PointChain> to_source_ecef;
   const io::ControlExtent* extent = t_ && t_->fit && t_->fit->extent ? &*t_->fit->extent : nullptr;
-  if (extent) {
-    to_source_ecef.emplace(p.in.coordinates, std::nullopt, false, std::nullopt, ArrayFrame{});
-    ao.inspect_input = [&](std::span<const double> a, std::span<const double> b, std::span<const double> c) {
+  if (extent) to_source_ecef.emplace(p.in.coordinates, std::nullopt, false, std::nullopt, ArrayFrame{});
+  const bool local_in = local(p.in.coordinates) && !before, local_out = local(p.out.coordinates);
+  if (extent || local_in) {
+    ao.inspect_input = [&, local_in](std::span<const double> a, std::span<const double> b, std::span<const double> c) {
+      if (local_in) record(reach.from_origin_m[0], farthest(a, b));
+      if (!extent) return;
       std::vector<double> x(a.begin(), a.end()), y(b.begin(), b.end()), z(c.begin(), c.end());
       (void)to_source_ecef->apply(x, y, z);
-      const double d = extent->max_distance_m(x, y, z);
-      const std::lock_guard<std::mutex> lock(reach.m);
-      if (!(d <= reach.worst_m)) reach.worst_m = d;  // NaN propagates to the refusal below
+      record(reach.worst_m, extent->max_distance_m(x, y, z));
+    };
+  }
+  if (local_out) {
+    ao.inspect_output = [&](std::span<const double> a, std::span<const double> b, std::span<const double>) {
+      record(reach.from_origin_m[1], farthest(a, b));
     };
   }
   io::TileApplyResult res;
@@ -472,6 +499,27 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   }
   r.points = res.points;
   std::vector<std::string> warnings = housekeeping;
+  std::pair<double, std::string> tangent{0.0, ""};
+  for (int end = 0; end < 2; ++end) {
+    if (!(end == 0 ? local_in : local_out)) continue;
+    const geodesy::LocalOrigin& origin = *(end == 0 ? p.in.coordinates : p.out.coordinates).origin;
+    const double d = reach.from_origin_m[end];
+    const std::string which = end == 0 ? "input's" : "output's";
+    if (!(d <= o_.max_extrapolation_m)) {
+      throw Error(ErrorKind::rejected, "E_EXTRAPOLATION",
+                  tile + ": the tile's points lie up to " + format_fixed(d / 1000.0, 3) + " km from the " + which +
+                      " ENU/NED origin " + format_fixed(origin.point.lat.deg(), 9) + ", " + format_fixed(origin.point.lon.deg(), 9) +
+                      " (limit --max-extrapolation " + format_shortest(o_.max_extrapolation_m) +
+                      " m): latitude and longitude swapped, or the wrong origin?; nothing was written");
+    }
+    const double departure = tangent_plane_departure_m(d, origin.point.lat.deg(), origin.ellipsoid);
+    if (departure > AuditLimits{}.tangent_plane_m && departure > tangent.first) {
+      tangent = {departure, tile + ": the tile's points lie up to " + format_fixed(d / 1000.0, 3) + " km from the " + which +
+                                " ENU/NED origin, where the tangent plane departs " + format_fixed(departure, 3) +
+                                " m from the ellipsoid (d²/2R): a map this large is better kept in a projection"};
+    }
+  }
+  if (!tangent.second.empty()) warnings.push_back(tangent.second);  // once: the farther of the two planes
   warnings.insert(warnings.end(), p.warnings.begin(), p.warnings.end());
   warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
   // The transform's implausible parameters (issue 12 point 7): in the

@@ -75,6 +75,10 @@ struct TileApplyOptions {
   // `crs_before`, in `from`'s coordinates), from any thread; apply measures
   // how far they reach outside a transform's control network.
   std::function<void(std::span<const double>, std::span<const double>, std::span<const double>)> inspect_input = nullptr;
+  // The same with each batch as the chain leaves it (before `crs_after`, in
+  // `to`'s coordinates): apply measures how far they lie from an output
+  // ENU/NED origin.
+  std::function<void(std::span<const double>, std::span<const double>, std::span<const double>)> inspect_output = nullptr;
   // LAS: evaluate a time-dependent transform at each point's own epoch,
   // from its GPS time (adjusted standard GPS time, global encoding bit 0).
   bool epochs_from_gps_time = false;
