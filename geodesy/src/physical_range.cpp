@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::geodesy {
@@ -15,10 +16,17 @@ const std::string& physical_height_range_text() {
 
 bool is_physical_height(double h_m) { return h_m >= kMinEllipsoidalHeight_m && h_m <= kMaxEllipsoidalHeight_m; }
 
-bool is_physical_ecef(const Eigen::Vector3d& x_m, const Ellipsoid& e) {
+namespace {
+// The ellipsoidal height of a geocentric position on `e`, or NaN when its
+// distance from the centre already rules it out (the cheap test first).
+double height_on(const Eigen::Vector3d& x_m, const Ellipsoid& e) {
   const double r = x_m.norm();
-  return r >= e.b_m() + kMinEllipsoidalHeight_m && r <= e.a_m() + kMaxEllipsoidalHeight_m;
+  if (!(r >= e.b_m() + kMinEllipsoidalHeight_m && r <= e.a_m() + kMaxEllipsoidalHeight_m)) return std::nan("");
+  return GeocentricConverter(e).geodetic_from_ecef(EcefPosition(x_m)).h.m;
 }
+}  // namespace
+
+bool is_physical_ecef(const Eigen::Vector3d& x_m, const Ellipsoid& e) { return is_physical_height(height_on(x_m, e)); }
 
 void require_physical_height(double h_m, std::string_view where, ErrorKind kind) {
   if (is_physical_height(h_m)) return;
@@ -27,14 +35,23 @@ void require_physical_height(double h_m, std::string_view where, ErrorKind kind)
                   physical_height_range_text());
 }
 
+std::string physical_ecef_problem(const Eigen::Vector3d& x_m, const Ellipsoid& e) {
+  const double h = height_on(x_m, e);
+  if (is_physical_height(h)) return "";
+  const std::string at = "geocentric position (" + format_shortest(x_m.x()) + ", " + format_shortest(x_m.y()) + ", " +
+                         format_shortest(x_m.z()) + ") m ";
+  if (std::isnan(h)) {
+    return at + "lies " + format_shortest(x_m.norm()) + " m from the Earth's centre, not on the Earth (ellipsoidal heights " +
+           physical_height_range_text() + ")";
+  }
+  return at + "is at ellipsoidal height " + format_fixed(h, 3) + " m on " + e.name() + ", not on the Earth (expected " +
+         physical_height_range_text() + ")";
+}
+
 void require_physical_ecef(const Eigen::Vector3d& x_m, const Ellipsoid& e, std::string_view where, ErrorKind kind) {
-  if (is_physical_ecef(x_m, e)) return;
-  const double r = x_m.norm();
-  const double lo = e.b_m() + kMinEllipsoidalHeight_m, hi = e.a_m() + kMaxEllipsoidalHeight_m;
-  throw Error(kind, "E_ECEF_RANGE",
-              std::string(where) + ": geocentric position (" + format_shortest(x_m.x()) + ", " + format_shortest(x_m.y()) + ", " +
-                  format_shortest(x_m.z()) + ") m lies " + format_shortest(r) + " m from the Earth's centre: expected " +
-                  format_shortest(lo) + " to " + format_shortest(hi) + " m (ellipsoidal heights " + physical_height_range_text() + ")");
+  const std::string problem = physical_ecef_problem(x_m, e);
+  if (problem.empty()) return;
+  throw Error(kind, "E_ECEF_RANGE", std::string(where) + ": " + problem);
 }
 
 }  // namespace geoanchor::geodesy

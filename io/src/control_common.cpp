@@ -267,11 +267,11 @@ void check_physical_positions(const geodesy::ControlSet& set, const std::functio
   for (const auto& p : set.points) {
     for (const bool source : {true, false}) {
       const geodesy::EcefPosition& x = source ? p.source : p.target;
-      if (geodesy::is_physical_ecef(x.m, e)) continue;
+      const std::string problem = geodesy::physical_ecef_problem(x.m, e);
+      if (problem.empty()) continue;
       throw Error(ErrorKind::input, "E_ECEF_RANGE",
-                  where(p) + ": " + p.id + ": its " + (source ? "source" : "target") + " position lies " +
-                      format_shortest(x.m.norm()) + " m from the Earth's centre: not a position on the Earth (ellipsoidal "
-                      "heights are " + geodesy::physical_height_range_text() + "): a unit, a swapped column or a placeholder?");
+                  where(p) + ": " + p.id + ": its " + (source ? "source" : "target") + " " + problem +
+                      ": a unit, a swapped column or a placeholder?");
     }
   }
 }

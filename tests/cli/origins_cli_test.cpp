@@ -154,7 +154,12 @@ TEST_F(Origins, Issue40_HeightsAndRadiiOffTheEarthAreRefused) {
   for (const Row& r : {Row{"h", "id,lat_deg,lon_deg,h_m\nA,47.4650,8.5500,1e308\n", "E_HEIGHT_RANGE"},
                        Row{"feet_as_km", "id,lat_deg,lon_deg,h_m\nA,47.4650,8.5500,-480000\n", "E_HEIGHT_RANGE"},
                        Row{"ecef", "id,x_m,y_m,z_m\nA,1,2,3\n", "E_ECEF_RANGE"},
-                       Row{"enu", "id,e_m,n_m,u_m\nA,0,0,1e9\n", "E_ECEF_RANGE"}}) {
+                       Row{"enu", "id,e_m,n_m,u_m\nA,0,0,1e9\n", "E_ECEF_RANGE"},
+                       // Inside the radii of the ellipsoid, off the Earth all the same: heights -19.5 km,
+                       // -28.1 km (the equator, 6 350 km from the centre) and +113 km (a pole).
+                       Row{"enu_deep", "id,e_m,n_m,u_m\nA,350,-200,-20000\n", "E_ECEF_RANGE"},
+                       Row{"ecef_equator", "id,x_m,y_m,z_m\nA,6350000,0,0\n", "E_ECEF_RANGE"},
+                       Row{"ecef_pole", "id,x_m,y_m,z_m\nA,0,0,6470000\n", "E_ECEF_RANGE"}}) {
     const auto in = write(std::string(r.name) + ".csv", r.csv);
     const auto run_result = run("convert " + in.string() + " --to ecef --origin 47.4,8.5,400 -o " + path("out.csv").string());
     EXPECT_EQ(run_result.exit_code, 3) << r.name << ": " << run_result.err;
@@ -172,6 +177,16 @@ TEST_F(Origins, Issue40_HeightsAndRadiiOffTheEarthAreRefused) {
   EXPECT_EQ(fit.exit_code, 3) << fit.err;
   EXPECT_NE(fit.err.find("control.csv:6"), std::string::npos) << fit.err;
   EXPECT_FALSE(fs::exists(path("t.json")));
+  // A mark 20 km below the ellipsoid (within its radii at 47°): refused before the solve.
+  std::string deep = slurp(control);
+  deep.replace(deep.find("1e308"), 5, "400");
+  deep.replace(deep.rfind("400.01"), 6, "-20000");
+  const auto deep_control = write("deep.csv", deep);
+  const auto deep_fit = run("fit " + deep_control.string() + " --model translation3 -o " + path("d.json").string());
+  EXPECT_EQ(deep_fit.exit_code, 3) << deep_fit.err;
+  EXPECT_NE(deep_fit.err.find("deep.csv:7: D: its target geocentric position"), std::string::npos) << deep_fit.err;
+  EXPECT_NE(deep_fit.err.find("ellipsoidal height -20000.000 m"), std::string::npos) << deep_fit.err;
+  EXPECT_FALSE(fs::exists(path("d.json")));
   std::string t = kIdentityEnuOrigin;
   t.replace(t.find("480.05"), 6, "1e308");
   const auto bad_t = write("bad_t.json", t);

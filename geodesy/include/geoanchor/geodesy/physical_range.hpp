@@ -20,11 +20,13 @@ inline constexpr double kMinEllipsoidalHeight_m = -12000.0;
 // The Kármán line: nothing geoanchor maps or anchors lies above it.
 inline constexpr double kMaxEllipsoidalHeight_m = 100000.0;
 
-// Whether a height, or a geocentric position's distance from the centre of
-// `e` (b + min to a + max, a necessary condition), lies in the range; false
-// for NaN.
+// Whether a height, or a geocentric position's ellipsoidal height on `e`,
+// lies in the range; false for NaN.
 bool is_physical_height(double h_m);
 bool is_physical_ecef(const Eigen::Vector3d& x_m, const Ellipsoid& e);
+// "" when is_physical_ecef, else what is wrong: the position and its height
+// on `e` (or its distance from the centre), and the range.
+std::string physical_ecef_problem(const Eigen::Vector3d& x_m, const Ellipsoid& e);
 // "[-12000, 100000] m, from below the deepest ocean floor to the edge of space".
 const std::string& physical_height_range_text();
 
@@ -33,9 +35,7 @@ const std::string& physical_height_range_text();
 void require_physical_height(double h_m, std::string_view where, ErrorKind kind = ErrorKind::input);
 
 // Throws Error (`kind`, E_ECEF_RANGE) naming `where` for a geocentric
-// position whose distance from the centre is not within the heights above
-// of `e` (b + min to a + max): a necessary condition, checked before any
-// conversion.
+// position whose ellipsoidal height on `e` is not within the range.
 void require_physical_ecef(const Eigen::Vector3d& x_m, const Ellipsoid& e, std::string_view where,
                            ErrorKind kind = ErrorKind::input);
 
