@@ -136,6 +136,11 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (const std::string wrong = geoanchor::cli::single_dash_long_option(app, std::vector<std::string>(argv + 1, argv + argc));
+      !wrong.empty()) {
+    std::cerr << "geoanchor: error[E_USAGE]: " << wrong << "\n(run 'geoanchor --help')\n";
+    return geoanchor::exit_code(ErrorKind::usage);
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

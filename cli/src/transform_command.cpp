@@ -80,6 +80,8 @@ geodesy::Frame catalog_frame_of(const io::Crs& crs, const char* flag) {
   return geodesy::Frame::parse(d.catalog_frame + (crs.epoch() ? "@" + geodesy::format_decimal_year(*crs.epoch()) : ""), flag);
 }
 
+io::Crs undated_if_static(const io::Crs& crs) { return crs.description().dynamic ? crs : crs.without_epoch(); }
+
 // A row's coordinates in a CRS read through PROJ, to and from ECEF on the
 // CRS's datum: the columns the CRS names (docs/commands/convert.md), PROJ's
 // conversion to its geocentric CRS, and back on the output side.
@@ -90,8 +92,10 @@ class CrsRows {
       : in_(io::crs_input_columns(source, header, source_name, "--from")),
         out_(io::crs_output_columns(target, true, in_.crs.description().type == "geocentric" && target.from_frame_name(),
                                     "--to")),
-        to_ecef_(in_.crs, in_.crs.geocentric("--from"), "--from"),
-        from_ecef_(out_.crs.geocentric("--to"), out_.crs, "--to"),
+        // A static CRS's epoch is the frame path's (issue 40 point 1), not
+        // its conversion's: PROJ would refuse it there as unused.
+        to_ecef_(undated_if_static(in_.crs), undated_if_static(in_.crs).geocentric("--from"), "--from"),
+        from_ecef_(undated_if_static(out_.crs).geocentric("--to"), undated_if_static(out_.crs), "--to"),
         index_(io::column_indices(in_, header)),
         coordinates_(io::coordinate_columns_at(index_)),
         numbers_(numbers) {

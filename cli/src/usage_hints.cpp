@@ -64,7 +64,31 @@ std::string nearest_name(std::string_view word, const std::vector<std::string>& 
   // Leading dashes are not letters of the name.
   const std::size_t letters = w.size() - std::min(w.find_first_not_of('-'), w.size());
   const std::size_t allowed = std::max<std::size_t>(1, letters / 3);
-  return !best.empty() && best_distance > 0 && best_distance <= allowed ? best : std::string();
+  // The same letters in another case ("Convert") are a typo too.
+  return !best.empty() && (best_distance > 0 || best != word) && best_distance <= allowed ? best : std::string();
+}
+
+std::string single_dash_long_option(const CLI::App& app, const std::vector<std::string>& args) {
+  std::vector<std::string> names = long_options(app);
+  for (const CLI::App* sub : app.get_subcommands(std::function<bool(const CLI::App*)>())) {
+    const auto more = long_options(*sub);
+    names.insert(names.end(), more.begin(), more.end());
+  }
+  for (const auto& a : args) {
+    if (a == "--") break;  // what follows is not options
+    if (a.size() < 3 || a[0] != '-' || a[1] == '-' || !std::isalpha(static_cast<unsigned char>(a[1])) ||
+        !std::isalpha(static_cast<unsigned char>(a[2]))) {
+      continue;
+    }
+    const std::string word = "-" + a.substr(0, a.find('='));  // "-overwrite" read as "--overwrite"
+    const bool exact = std::find(names.begin(), names.end(), word) != names.end();
+    const std::string near = exact ? word : nearest_name(word, names);
+    if (near.empty()) continue;
+    // CLI11 would read "-overwrite" as "-o verwrite" (an output file named
+    // "verwrite"): a long option takes two dashes.
+    return a + ": a long option takes two dashes: did you mean " + near + "?";
+  }
+  return "";
 }
 
 std::string usage_hint(const CLI::App& app, const std::vector<std::string>& args, const std::string& what) {

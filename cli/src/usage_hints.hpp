@@ -23,6 +23,11 @@ std::string nearest_name(std::string_view word, const std::vector<std::string>& 
 // `what` unchanged. `args` are the words after the program's name.
 std::string usage_hint(const CLI::App& app, const std::vector<std::string>& args, const std::string& what);
 
+// A word with one dash that reads as a long option ("-overwrite", which
+// CLI11 takes as "-o verwrite"): the message naming it and the option meant,
+// or "" when there is none. Checked before the command line is parsed.
+std::string single_dash_long_option(const CLI::App& app, const std::vector<std::string>& args);
+
 // "geoanchor convert --help" when a command was chosen, else "geoanchor --help".
 std::string help_command(const CLI::App& app);
 

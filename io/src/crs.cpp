@@ -644,6 +644,12 @@ Crs Crs::at_epoch(geodesy::DecimalYear epoch, std::string_view where) const {
   return out;
 }
 
+Crs Crs::without_epoch() const {
+  Crs out = *this;
+  out.epoch_.reset();
+  return out;
+}
+
 bool Crs::same_as(const Crs& other) const {
   if (epoch_.has_value() != other.epoch_.has_value() || (epoch_ && epoch_->year != other.epoch_->year)) return false;
   return proj_is_equivalent_to_with_ctx(impl_->ctx.get(), impl_->crs.get(), other.impl_->crs.get(), PJ_COMP_EQUIVALENT) != 0;

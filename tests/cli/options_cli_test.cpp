@@ -120,6 +120,12 @@ TEST_F(OptionsCli, Issue40_UsageErrorsSuggestTheNearestCommandOrOption) {
       {"fit control.csv --model helmert7 --remove-outlier", "did you mean --remove-outliers?"},
       {"apply tile.csv --out-dir out --max-extrapolaton 5", "did you mean --max-extrapolation?"},
       {"help conver", "did you mean 'convert'?"},
+      {"Convert in.csv --to ecef", "did you mean 'convert'?"},
+      {"CONVERT in.csv --to ecef", "did you mean 'convert'?"},
+      // One dash: CLI11 read "-overwrite" as "-o verwrite" and wrote a file named "verwrite".
+      {"convert in.csv --to ecef -overwrite", "-overwrite: a long option takes two dashes: did you mean --overwrite?"},
+      {"fit control.csv --model helmert7 -remove-outliers", "did you mean --remove-outliers?"},
+      {"convert in.csv --to ecef -precision 3", "did you mean --precision?"},
   };
   for (const auto& t : typos) {
     const RunResult r = run(t.command_line);

@@ -507,8 +507,12 @@ TEST_F(TransformCli, Issue40_PlateFixedEpochsAgreeWithHtdp) {
     const char* from;
     const char* to;
   };
+  // By frame names, and by the geocentric CRSs (EPSG:7789 ITRF2014, EPSG:6317
+  // NAD83(2011)), whose static side's epoch was refused as unused.
   for (const auto& d : {Direction{kHtdpForward, "ITRF2014@2020.0", "'NAD83(2011)@2010.0'"},
-                        Direction{kHtdpReverse, "'NAD83(2011)@2010.0'", "ITRF2014@2020.0"}}) {
+                        Direction{kHtdpReverse, "'NAD83(2011)@2010.0'", "ITRF2014@2020.0"},
+                        Direction{kHtdpForward, "EPSG:7789@2020.0", "EPSG:6317@2010.0"},
+                        Direction{kHtdpReverse, "EPSG:6317@2010.0", "EPSG:7789@2020.0"}}) {
     SCOPED_TRACE(std::string(d.from) + " -> " + d.to);
     std::vector<MovingMark> marks;
     for (std::size_t i = 0; i < 3; ++i) marks.push_back({d.cases[i].x, d.cases[i].v});

@@ -124,6 +124,9 @@ class Crs {
   // The same CRS at coordinate epoch `epoch` (a dynamic CRS only; throws
   // geoanchor::Error for a static one, as parse does).
   Crs at_epoch(geodesy::DecimalYear epoch, std::string_view where) const;
+  // The same CRS with no coordinate epoch (for an operation that does not
+  // depend on it, such as the conversion to its own geocentric CRS).
+  Crs without_epoch() const;
 
   // Whether PROJ holds the two for the same CRS (proj_is_equivalent_to,
   // PJ_COMP_EQUIVALENT: names may differ) at the same coordinate epoch.
