@@ -13,7 +13,7 @@ packages=(
   # solver
   libceres-dev libsuitesparse-dev libboost-math-dev
   # file formats, CLI, hashes
-  nlohmann-json3-dev libcli11-dev libssl-dev libexpat1-dev
+  nlohmann-json3-dev libcli11-dev libssl-dev libexpat1-dev libgeotiff-dev
   # GUI shells (later issues) and fonts
   libimgui-dev libglfw3-dev libosmesa6-dev libstb-dev fonts-dejavu-core xvfb xauth
   # tests, benchmarks and fuzzing (clang brings libFuzzer)

@@ -1,7 +1,12 @@
 #include "geoanchor/io/las_geotiff.hpp"
 
+#include <geo_normalize.h>
+#include <geo_simpletags.h>
+#include <geotiff.h>
 #include <proj.h>
+#include <proj_experimental.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -16,6 +21,7 @@ namespace {
 
 constexpr std::uint16_t kKeyDirectory = 34735;
 constexpr std::uint16_t kDoubleParams = 34736;
+constexpr std::uint16_t kAsciiParams = 34737;
 constexpr std::uint16_t kUserDefined = 32767;
 
 // GeoTIFF 1.0 key ids geoanchor reads.
@@ -37,6 +43,7 @@ enum Key : std::uint16_t {
   kGeogInvFlattening = 2059,
   kGeogAzimuthUnits = 2060,
   kGeogPrimeMeridianLong = 2061,
+  kGeogToWgs84 = 2062,
   kProjectedCsType = 3072,
   kPcsCitation = 3073,
   kProjLinearUnits = 3076,
@@ -129,6 +136,51 @@ void agree(const std::string& where, const std::string& key, double key_value, c
   }
 }
 
+
+// A user-defined CRS (its projection and datum stated as parameter keys)
+// as libgeotiff reads it, GDAL's and PDAL's reader: the PROJ string of
+// GTIFGetProj4Defn, or nullopt when libgeotiff cannot make one. The
+// records are handed over as in a TIFF file's tags (libgeotiff's simple
+// tags).
+struct UserDefinedCrs {
+  std::string proj;                       // PROJ's string of it
+  std::vector<std::uint16_t> parameters;  // the keys its projection takes its parameters from
+};
+
+std::optional<UserDefinedCrs> libgeotiff_proj_string(const LasVlr& directory, const LasVlr* doubles, const LasVlr* ascii) {
+  std::vector<std::uint16_t> shorts(directory.data.size() / 2);
+  std::memcpy(shorts.data(), directory.data.data(), 2 * shorts.size());
+  std::vector<double> numbers(doubles ? doubles->data.size() / 8 : 0);
+  if (!numbers.empty()) std::memcpy(numbers.data(), doubles->data.data(), 8 * numbers.size());
+  std::string text = ascii ? std::string(ascii->data.begin(), ascii->data.end()) : std::string();
+  ST_TIFF* tags = ST_Create();
+  ST_SetKey(tags, kKeyDirectory, static_cast<int>(shorts.size()), STT_SHORT, shorts.data());
+  if (!numbers.empty()) ST_SetKey(tags, kDoubleParams, static_cast<int>(numbers.size()), STT_DOUBLE, numbers.data());
+  if (!text.empty()) ST_SetKey(tags, kAsciiParams, static_cast<int>(text.size()), STT_ASCII, text.data());
+  std::optional<UserDefinedCrs> out;
+  GTIF* gtif = GTIFNewSimpleTags(tags);
+  GTIFDefn* defn = GTIFAllocDefn();
+  if (gtif && defn && GTIFGetDefn(gtif, defn) && defn->DefnSet) {
+    char* proj4 = GTIFGetProj4Defn(defn);
+    if (proj4 && *proj4) {
+      out = UserDefinedCrs{std::string(proj4), {}};
+      for (int k = 0; k < defn->nParms && k < MAX_GTIF_PROJPARMS; ++k) {
+        if (defn->ProjParmId[k] > 0) out->parameters.push_back(static_cast<std::uint16_t>(defn->ProjParmId[k]));
+      }
+    }
+    if (proj4) GTIFFreeMemory(proj4);
+  }
+  if (defn) GTIFFreeDefn(defn);
+  if (gtif) GTIFFree(gtif);
+  ST_Destroy(tags);
+  if (out) {
+    // "+proj=lcc ... +units=m +no_defs": trimmed, as a CRS.
+    while (!out->proj.empty() && out->proj.back() == ' ') out->proj.pop_back();
+    out->proj += " +type=crs";
+  }
+  return out;
+}
+
 }  // namespace
 
 std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const std::string& where, bool set_aside_unread) {
@@ -156,9 +208,13 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
     fail(where, "the GeoKeyDirectory lists " + std::to_string(keys) + " keys in " + std::to_string(d.size()) + " bytes");
   }
   const LasVlr* doubles = nullptr;  // GeoDoubleParamsTag: the values of double-valued keys
+  const LasVlr* ascii = nullptr;    // GeoAsciiParamsTag: citations
   for (const auto& v : vlrs) {
     if (v.user_id == "LASF_Projection" && v.record_id == kDoubleParams) doubles = &v;
+    if (v.user_id == "LASF_Projection" && v.record_id == kAsciiParams) ascii = &v;
   }
+  std::vector<std::uint16_t> unread_keys;  // refused below unless a user-defined CRS reads them
+  std::optional<std::string> to_wgs84;     // GeogTOWGS84GeoKey, described
   std::map<std::uint16_t, std::uint16_t> short_values;
   std::map<std::uint16_t, double> double_values;
   for (std::size_t k = 0; k < keys; ++k) {
@@ -209,10 +265,26 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
         if (short_values.count(id)) fail(where, "key " + std::to_string(id) + " is given twice");
         short_values[id] = value;
         continue;
+      case kGeogToWgs84: {
+        // A datum-shift hint to WGS 84 (3 or 7 values): read, not used
+        // (PROJ's operations move the points).
+        const std::uint16_t count = u16(4 * (k + 1) + 2);
+        if (location != kDoubleParams || (count != 3 && count != 7) || !doubles ||
+            doubles->data.size() < 8 * (std::size_t{value} + count)) {
+          fail(where, "GeogTOWGS84GeoKey (2062) is not 3 or 7 values of the GeoDoubleParams record (34736)");
+        }
+        std::string values;
+        for (std::uint16_t j = 0; j < count; ++j) {
+          double x = 0;
+          std::memcpy(&x, doubles->data.data() + 8 * (std::size_t{value} + j), 8);
+          if (!std::isfinite(x)) fail(where, "GeogTOWGS84GeoKey (2062) holds a value that is not a finite number");
+          values += (j ? "," : "") + format_shortest(x);
+        }
+        to_wgs84 = values;
+        continue;
+      }
       default:
-        unread("key " + std::to_string(id) +
-               " is not read by geoanchor (a user-defined CRS's parameters, or a key of another kind): give "
-               "the tile's CRS with --crs (EPSG code or WKT), or a WKT record");
+        unread_keys.push_back(id);
         continue;
     }
   }
@@ -220,6 +292,73 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
     const auto it = short_values.find(id);
     return it == short_values.end() ? std::nullopt : std::optional(it->second);
   };
+  // A user-defined projected or geographic CRS (code 32767, its projection
+  // and datum as parameter keys): read through libgeotiff into PROJ's
+  // string of it, whose datum PROJ cannot name (the frame is asked for as
+  // for a WKT without it).
+  {
+    const auto m = value(kModelType);
+    const bool projected = m == 1 || (!m && value(kProjectedCsType));
+    const bool user_defined = projected ? value(kProjectedCsType) == kUserDefined
+                                        : (m == 2 || (!m && value(kGeographicType))) && value(kGeographicType) == kUserDefined;
+    if (user_defined) {
+      if (value(kVerticalCsType) || value(kVerticalDatum)) {
+        unread("a vertical CRS beside a user-defined horizontal one is not read; give the tile's CRS with --crs");
+        return out;
+      }
+      if (const auto user = libgeotiff_proj_string(*dir, doubles, ascii)) {
+        // libgeotiff takes a parameter the keys do not give as 0: each one
+        // its projection takes must be there.
+        // The keys libgeotiff reads one parameter from (GeoTIFF 1.0 section
+        // 6.3.3.3: a false easting may be given as FalseEasting,
+        // FalseOriginEasting or CenterEasting, and so on).
+        static const std::vector<std::vector<std::uint16_t>> kAliases = {
+            {3080, 3084, 3088}, {3081, 3085, 3089}, {3082, 3086, 3090}, {3083, 3087, 3091}, {3092, 3093}};
+        const auto given = [&](std::uint16_t id) {
+          return std::find(unread_keys.begin(), unread_keys.end(), id) != unread_keys.end() || short_values.count(id) ||
+                 double_values.count(id);
+        };
+        for (const std::uint16_t id : user->parameters) {
+          bool present = given(id);
+          for (const auto& group : kAliases) {
+            if (std::find(group.begin(), group.end(), id) == group.end()) continue;
+            for (const std::uint16_t other : group) present = present || given(other);
+          }
+          if (!present) {
+            unread("the user-defined projection takes its parameter from key " + std::to_string(id) +
+                   ", which the keys do not give; give the tile's CRS with --crs");
+            return out;
+          }
+        }
+        const std::string* proj = &user->proj;
+        out.crs = *proj;
+        out.description = std::string("user-defined ") + (projected ? "projected" : "geographic") +
+                          " CRS read from its parameter keys by libgeotiff: " + *proj;
+        // A projection on a geographic CRS the keys name by code: that CRS
+        // (its datum, which a PROJ string cannot carry) under the projection.
+        if (const auto base = value(kGeographicType); projected && base && *base != kUserDefined) {
+          const detail::PjContext ctx = detail::quiet_context();
+          detail::Pj crs(proj_create(ctx.get(), proj->c_str()));
+          detail::Pj geographic(proj_create(ctx.get(), ("EPSG:" + std::to_string(*base)).c_str()));
+          if (!crs || !geographic) fail(where, "GeographicTypeGeoKey " + std::to_string(*base) + " is not a CRS PROJ knows");
+          detail::Pj altered(proj_crs_alter_geodetic_crs(ctx.get(), crs.get(), geographic.get()));
+          const char* wkt = altered ? proj_as_wkt(ctx.get(), altered.get(), PJ_WKT2_2019, nullptr) : nullptr;
+          if (!wkt) fail(where, "the user-defined projection cannot be put on GeographicTypeGeoKey " + std::to_string(*base));
+          out.crs = wkt;
+          out.description += " on EPSG:" + std::to_string(*base);
+        }
+        return out;
+      }
+      unread(std::string("the user-defined ") + (projected ? "projected" : "geographic") +
+             " CRS (code 32767) could not be read from its parameter keys (libgeotiff); give the tile's CRS with --crs");
+      return out;
+    }
+  }
+  for (const std::uint16_t id : unread_keys) {
+    unread("key " + std::to_string(id) +
+           " is not read by geoanchor (a user-defined CRS's parameters, or a key of another kind): give "
+           "the tile's CRS with --crs (EPSG code or WKT), or a WKT record");
+  }
   for (const std::uint16_t id : {kModelType, kGeographicType, kProjectedCsType, kVerticalCsType, kVerticalDatum,
                                  kGeogGeodeticDatum, kGeogPrimeMeridian, kGeogEllipsoid, kGeogLinearUnits,
                                  kGeogAngularUnits, kGeogAzimuthUnits, kProjLinearUnits, kVerticalUnits}) {
@@ -347,6 +486,7 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
     }
     out.description += ", VerticalUnitsGeoKey " + std::to_string(*units);
   }
+  if (to_wgs84) out.description += ", GeogTOWGS84GeoKey " + *to_wgs84 + " (a datum-shift hint, not used: PROJ's operations are)";
   return out;
 }
 

@@ -68,18 +68,8 @@ class LasGeoTiff : public CliTest {
   }
 };
 
-TEST_F(LasGeoTiff, Issue40_TheKeysStateTheTilesCrs) {
-  // Projected (1), Lambert-93, metres.
-  const fs::path in = las("paris.las", {{1024, 1}, {3072, 2154}, {3076, 9001}});
-  // A flag that contradicts the keys (Oregon's Lambert in international feet) is refused; nothing written.
-  const auto wrong = run("apply " + in.string() + " --crs EPSG:2992 --to-crs EPSG:4326 --out-dir " + path("wrong").string());
-  EXPECT_EQ(wrong.exit_code, 2) << wrong.err;
-  EXPECT_NE(wrong.err.find("LAS GeoTIFF keys EPSG:2154"), std::string::npos) << wrong.err;
-  EXPECT_FALSE(fs::exists(path("wrong/paris.las")));
-  // Without a flag the keys' CRS moves the tile, as PROJ's own operation does.
-  const auto r = run("apply " + in.string() + " --to-crs EPSG:4171 --out-dir " + path("out").string());  // RGF93 v1 geographic
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const json got = json::parse(las_verify_text(path("out/paris.las")));
+// The tile's points against PROJ's EPSG:2154 -> EPSG:4171 (RGF93 v1 geographic), longitude first as LAS stores it.
+void expect_moved_as_lambert93(const json& got) {
   ASSERT_EQ(got["points"].size(), 3u);
   PJ_CONTEXT* ctx = proj_context_create();
   proj_context_set_enable_network(ctx, 0);
@@ -96,6 +86,20 @@ TEST_F(LasGeoTiff, Issue40_TheKeysStateTheTilesCrs) {
   proj_destroy(op);
   proj_destroy(raw);
   proj_context_destroy(ctx);
+}
+
+TEST_F(LasGeoTiff, Issue40_TheKeysStateTheTilesCrs) {
+  // Projected (1), Lambert-93, metres.
+  const fs::path in = las("paris.las", {{1024, 1}, {3072, 2154}, {3076, 9001}});
+  // A flag that contradicts the keys (Oregon's Lambert in international feet) is refused; nothing written.
+  const auto wrong = run("apply " + in.string() + " --crs EPSG:2992 --to-crs EPSG:4326 --out-dir " + path("wrong").string());
+  EXPECT_EQ(wrong.exit_code, 2) << wrong.err;
+  EXPECT_NE(wrong.err.find("LAS GeoTIFF keys EPSG:2154"), std::string::npos) << wrong.err;
+  EXPECT_FALSE(fs::exists(path("wrong/paris.las")));
+  // Without a flag the keys' CRS moves the tile, as PROJ's own operation does.
+  const auto r = run("apply " + in.string() + " --to-crs EPSG:4171 --out-dir " + path("out").string());  // RGF93 v1 geographic
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  expect_moved_as_lambert93(json::parse(las_verify_text(path("out/paris.las"))));
   const json side = json::parse(testing::slurp(path("out/paris.las.geoanchor.json")));
   EXPECT_NE(side["provenance"]["input_frame_from"].get<std::string>().find("LAS GeoTIFF keys EPSG:2154"), std::string::npos)
       << side["provenance"];
@@ -108,8 +112,10 @@ TEST_F(LasGeoTiff, Issue40_KeysGeoanchorCannotReadAreRefusedByName) {
     const char* says;
   };
   const Case cases[] = {
-      {"user.las", {{1024, 1}, {3072, 32767}}, "key 3072 is user-defined (32767)"},
-      {"params.las", {{1024, 1}, {3072, 32767}, {3074, 32767}, {3075, 9}}, "key 3074 is not read by geoanchor"},
+      {"user.las", {{1024, 1}, {3072, 32767}}, "the user-defined projected CRS (code 32767) could not be read from its parameter keys"},
+      // A projection (CT 9, south-oriented TM) without its parameters: libgeotiff would take them as 0.
+      {"params.las", {{1024, 1}, {3072, 32767}, {3074, 32767}, {3075, 9}}, "the user-defined projection takes its parameter from key"},
+      {"unread.las", {{1024, 1}, {3072, 2154}, {3074, 16031}}, "key 3074 is not read by geoanchor"},
       {"feet.las", {{1024, 1}, {3072, 2154}, {3076, 9002}}, "ProjLinearUnitsGeoKey 9002 (0.3048 m) contradicts EPSG:2154"},
       {"geocentric.las", {{1024, 3}}, "GTModelTypeGeoKey 3"},
   };
@@ -187,6 +193,28 @@ TEST_F(LasGeoTiff, Issue40_UnreadableKeysGiveWayToTheCrsFlag) {
   const auto contradicted = run("apply " + feet.string() + " --crs EPSG:2154 --to-crs EPSG:4171 --out-dir " + path("feet").string());
   EXPECT_EQ(contradicted.exit_code, 3) << contradicted.err;
   EXPECT_NE(contradicted.err.find("ProjLinearUnitsGeoKey 9002"), std::string::npos) << contradicted.err;
+}
+
+// A user-defined CRS (code 32767, its projection as parameter keys) is read
+// through libgeotiff, as GDAL and PDAL read it: Lambert-93's parameters
+// (EPSG:2154: LCC 2SP, parallels 49 and 44, false origin 3°E 46.5°N,
+// 700 000 / 6 600 000 m) on RGF93 v1 (GeographicTypeGeoKey 4171) move the
+// tile as EPSG:2154 does, and --crs EPSG:2154 says the same CRS.
+TEST_F(LasGeoTiff, Issue40_AUserDefinedCrsIsReadFromItsParameterKeys) {
+  const fs::path in = las("lambert.las", {{1024, 1}, {3072, 32767}, {3074, 32767}, {3075, 8}, {3076, 9001}, {2048, 4171}},
+                          {{3078, 49.0}, {3079, 44.0}, {3084, 3.0}, {3085, 46.5}, {3086, 700000.0}, {3087, 6600000.0}});
+  const auto r = run("apply " + in.string() + " --to-crs EPSG:4171 --out-dir " + path("out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  expect_moved_as_lambert93(json::parse(las_verify_text(path("out/lambert.las"))));
+  const json side = json::parse(testing::slurp(path("out/lambert.las.geoanchor.json")));
+  EXPECT_NE(side["provenance"]["input_frame_from"].get<std::string>().find("user-defined projected CRS read from its parameter keys"),
+            std::string::npos)
+      << side["provenance"];
+  const auto same = run("apply " + in.string() + " --crs EPSG:2154 --to-crs EPSG:4171 --out-dir " + path("same").string());
+  EXPECT_EQ(same.exit_code, 0) << same.err;
+  const auto oregon = run("apply " + in.string() + " --crs EPSG:2992 --to-crs EPSG:4171 --out-dir " + path("oregon").string());
+  EXPECT_EQ(oregon.exit_code, 2) << oregon.err;
+  EXPECT_FALSE(fs::exists(path("oregon/lambert.las")));
 }
 
 }  // namespace
