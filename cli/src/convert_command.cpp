@@ -493,6 +493,21 @@ void run_convert(const ConvertOptions& o) {
   if (geoid && !columns.orthometric && !orthometric_out) {
     warnings.push_back("--geoid " + *o.geoid + " unused: no H_m column and ellipsoidal output heights (--output-heights orthometric writes H_m)");
   }
+  // Flags that say something no side of this conversion reads: said, as
+  // for --epoch (a typo'd command that silently converted otherwise).
+  const bool projected_in = columns.kind == io::CoordinateKind::projected;
+  const bool projected_out = out_kind == io::OutputKind::utm || out_kind == io::OutputKind::tm;
+  const std::pair<bool, std::string> unused_flags[] = {
+      {o.from_origin && !local_in, "--from-origin: the input has no ENU/NED columns"},
+      {o.origin && !o.from_origin && !local_in && !local_out, "--origin: neither the input nor the output is ENU/NED"},
+      {o.origin && o.from_origin && !local_out, "--origin: the output is not ENU/NED (--from-origin gives the input's)"},
+      {o.from_zone && !projected_in, "--from-zone: the input has no projected columns"},
+      {o.from_tm && !projected_in, "--from-tm: the input has no projected columns"},
+      {o.zone && !o.from_zone && !projected_in && !projected_out, "--zone: neither the input nor the output is UTM"},
+      {o.tm && !o.from_tm && !projected_in && !projected_out, "--tm: neither the input nor the output is a Transverse Mercator"}};
+  for (const auto& [unused, why] : unused_flags) {
+    if (unused) warnings.push_back(why + ", so it is not used");
+  }
   if (flag_epoch && !(transform && transform->time_dependent())) {
     warnings.push_back("--epoch " + *o.epoch + " ignored: " +
                        (transform ? "the transform is not time-dependent" : std::string("no --transform given")));

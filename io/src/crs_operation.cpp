@@ -339,14 +339,17 @@ CrsOperation::CrsOperation(const Crs& source, const Crs& target, std::string_vie
   for (const auto* c : {&source, &target}) {
     if (c->description().dynamic && c->epoch()) m.t = c->epoch()->year;
   }
+  const bool a_dynamic_side = src_dynamic || dst_dynamic;
   for (const auto* c : {&source, &target}) {
     if (c->description().dynamic || !c->epoch()) continue;
     if (m.t && *m.t != c->epoch()->year) {
       throw Error(ErrorKind::input, "E_CRS_EPOCH",
                   m.where + ": " + pair + ": " + c->display_name() + " is on a static datum and names epoch " +
-                      geodesy::format_decimal_year(*c->epoch()) + ", the dynamic side " +
+                      geodesy::format_decimal_year(*c->epoch()) + ", the " +
+                      (a_dynamic_side ? "dynamic side " : "other static side ") +
                       geodesy::format_decimal_year(geodesy::DecimalYear{*m.t}) +
-                      "; the operation is evaluated at one epoch: drop the static CRS's");
+                      "; PROJ evaluates the operation at one epoch and does not move points in time (geoanchor "
+                      "transform moves them with velocities): give one epoch");
     }
     m.t = c->epoch()->year;
   }

@@ -139,6 +139,20 @@ TEST_F(Origins, Issue40_ApplyRefusesTilesFarFromAnEnuOrigin) {
   EXPECT_NE(allowed.err.find("the tangent plane departs 196.005 m"), std::string::npos) << allowed.err;
 }
 
+// A flag convert reads on no side is said, as an unused --epoch is (a
+// --from-origin on geodetic input was dropped without a word).
+TEST_F(Origins, Issue40_ConvertSaysWhichFlagsItDoesNotUse) {
+  const auto geo = write("geo.csv", "id,lat_deg,lon_deg,h_m\nA,47.4,8.5,400\n");
+  const auto from_origin = run("convert " + geo.string() + " --to ecef --from-origin 40,8,0 -o " + path("a.csv").string());
+  EXPECT_EQ(from_origin.exit_code, 0) << from_origin.err;
+  EXPECT_NE(from_origin.err.find("--from-origin: the input has no ENU/NED columns, so it is not used"), std::string::npos)
+      << from_origin.err;
+  const auto zone = run("convert " + geo.string() + " --to ecef --zone 32N -o " + path("b.csv").string());
+  EXPECT_NE(zone.err.find("--zone: neither the input nor the output is UTM, so it is not used"), std::string::npos) << zone.err;
+  const auto used = run("convert " + geo.string() + " --to enu --origin 47.4,8.5,400 -o " + path("c.csv").string());
+  EXPECT_EQ(used.err.find("not used"), std::string::npos) << used.err;
+}
+
 TEST_F(Origins, Issue40_HeightsAndRadiiOffTheEarthAreRefused) {
   const auto pts = write("pts.csv", "id,lat_deg,lon_deg,h_m\nA,47.4650,8.5500,480\n");
   const auto origin = run("convert " + pts.string() + " --to enu --origin 47.4,8.5,1e308 -o " + path("o.csv").string());
