@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <sstream>
 #include <string>
 
 #include "cli_support.hpp"
@@ -14,6 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::CliTest;
+using testing::slurp;
 
 class ControlRows : public CliTest {};
 
@@ -107,6 +109,36 @@ TEST_F(ControlRows, Issue40_FitNamesTheEpochOfADynamicFrame) {
   EXPECT_NE(bad.err.find("E_EPOCH_SPREAD"), std::string::npos) << bad.err;
   EXPECT_NE(bad.err.find("span 2.000 years"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(path("s.json")));
+}
+
+// A mark the input leaves out (use = 0) is a check of the transform: the
+// planted 0.12 m blunder P17 of the bundled set, left out, fails its
+// prediction test (|w| 21) and the report says so instead of "ignored".
+TEST_F(ControlRows, Issue40_AFailingCheckMarkIsReportedAsFailing) {
+  std::string text = slurp(fs::path(GEOANCHOR_FIXTURES_DIR) / "airport_control.csv"), out;
+  std::size_t line = 0;
+  for (std::size_t at = 0; at < text.size();) {
+    const std::size_t end = text.find('\n', at);
+    std::string row = text.substr(at, end - at);
+    at = end + 1;
+    if (row.empty() || row[0] == '#') {
+      out += row + "\n";
+      continue;
+    }
+    out += row + (line++ == 0 ? ",use" : row.rfind("P17,", 0) == 0 || row.rfind("P05,", 0) == 0 ? ",0" : ",1") + "\n";
+  }
+  const auto in = write("checks.csv", out);
+  const auto r = run("fit " + in.string() + " --model helmert7 --convention position_vector -o " + path("t.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::istringstream report(r.out);
+  std::string row, p17, p05;
+  while (std::getline(report, row)) {
+    if (row.rfind("  P17 ", 0) == 0) p17 = row;
+    if (row.rfind("  P05 ", 0) == 0) p05 = row;
+  }
+  EXPECT_NE(p17.find("ignored, FAILS"), std::string::npos) << r.out;
+  EXPECT_EQ(p05.find("FAILS"), std::string::npos) << p05;  // passes its test
+  EXPECT_NE(slurp(path("t.json")).find("not used, and fails its prediction test"), std::string::npos);
 }
 
 }  // namespace

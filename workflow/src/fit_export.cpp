@@ -14,6 +14,14 @@
 #include "geoanchor/geodesy/number_text.hpp"
 
 namespace geoanchor::workflow {
+
+namespace {
+// A mark left out by the input (use = 0) whose prediction test fails.
+bool fails_prediction(const solver::PointResult& p, double alpha_point) {
+  return !p.used && !p.outlier && p.point_dof > 0 && p.point_p_value < alpha_point;
+}
+}  // namespace
+
 using solver::FitModel;
 
 // The printed report: parameters, statistics with verdict, residuals with
@@ -133,6 +141,9 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
     const solver::TestStatus st = p.status(o.alpha_point);
     std::string status = solver::to_string(st);
     if (st == solver::TestStatus::used && p.robust_weight < 1.0) status += " (weight " + format_fixed(p.robust_weight, 3) + ")";
+    // A mark the input left out is a check of the transform: its failing
+    // prediction test is a finding, not something to hide behind "ignored".
+    if (st == solver::TestStatus::ignored && fails_prediction(p, o.alpha_point)) status = "ignored, FAILS";
     if (p.snooping_rank > 0 || p.passes_after_rank > 0) {
       status.resize(std::max<std::size_t>(status.size(), 12), ' ');
       status += "  " + (p.snooping_rank > 0 ? std::to_string(p.snooping_rank)
@@ -152,7 +163,7 @@ void write_fit_report(std::ostream& out, const solver::FitResult& r, const geode
   out << "  (flagged: fails its point test at alpha_point " << format_shortest(o.alpha_point)
       << ", kept; removed: by --remove-outliers; the snooping rank is the order in which iterative data snooping removes "
          "them, strongest evidence first; marks not used are tested against the final fit: residuals at full size, "
-         "prediction w-tests)\n";
+         "prediction w-tests; 'ignored, FAILS': such a mark fails its test, and the transform does not hold there)\n";
   if (!r.warnings.empty()) out << "\n" << r.warnings.size() << " warning(s): see standard error and the transform file\n";
 }
 
@@ -181,6 +192,10 @@ void point_record(const solver::PointResult& p, double alpha_point, const std::v
   q.snooping_rank = p.snooping_rank;
   q.note = p.removed_because;
   if (std::find(left_out.begin(), left_out.end(), p.id) != left_out.end()) q.note = kLeftOutInWorkbench;
+  if (p.status(alpha_point) == solver::TestStatus::ignored && fails_prediction(p, alpha_point)) {
+    q.note = (q.note.empty() ? "" : q.note + "; ") + "not used, and fails its prediction test at alpha_point " +
+             format_shortest(alpha_point) + ": the transform does not hold at this mark";
+  }
   q.robust_weight = p.robust_weight;
 }
 
