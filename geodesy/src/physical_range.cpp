@@ -1,6 +1,7 @@
 #include "geoanchor/geodesy/physical_range.hpp"
 
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include "geoanchor/geodesy/geocentric.hpp"
@@ -22,7 +23,11 @@ namespace {
 double height_on(const Eigen::Vector3d& x_m, const Ellipsoid& e) {
   const double r = x_m.norm();
   if (!(r >= e.b_m() + kMinEllipsoidalHeight_m && r <= e.a_m() + kMaxEllipsoidalHeight_m)) return std::nan("");
-  return GeocentricConverter(e).geodetic_from_ecef(EcefPosition(x_m)).h.m;
+  // One converter per thread for the ellipsoid last asked (rows of a file
+  // share theirs): not rebuilt for every point.
+  thread_local std::optional<GeocentricConverter> converter;
+  if (!converter || !(converter->ellipsoid() == e)) converter.emplace(e);
+  return converter->geodetic_from_ecef(EcefPosition(x_m)).h.m;
 }
 }  // namespace
 

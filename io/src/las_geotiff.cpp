@@ -46,6 +46,7 @@ enum Key : std::uint16_t {
   kGeogToWgs84 = 2062,
   kProjectedCsType = 3072,
   kPcsCitation = 3073,
+  kProjection = 3074,
   kProjLinearUnits = 3076,
   kProjLinearUnitSize = 3077,
   kVerticalCsType = 4096,
@@ -145,7 +146,34 @@ void agree(const std::string& where, const std::string& key, double key_value, c
 struct UserDefinedCrs {
   std::string proj;                       // PROJ's string of it
   std::vector<std::uint16_t> parameters;  // the keys its projection takes its parameters from
+  std::vector<double> values;             // their values, in degrees and metres
+  int method = 0;                         // the GeoTIFF coordinate transformation (CT_*); 0: geographic
 };
+
+// The coordinate transformations whose PROJ string libgeotiff 1.7 writes
+// with every parameter (each then checked at full precision): it prints
+// Oblique Stereographic as stere, drops Stereographic's scale and the
+// Hotine Oblique Mercator's rectified grid angle, so those and the rest are
+// refused rather than read wrong.
+constexpr int kExactMethods[] = {1, 7, 8, 9, 10, 11, 12, 15, 17};  // TM, Mercator, LCC 2SP/1SP, LAEA, Albers, AEQD, polar stereographic, equirectangular
+
+// Whether every value is in the PROJ string as printed (libgeotiff prints
+// scale factors with 6 decimals: 0.999947368 became 0.999947, 9 cm at
+// 260 km).
+bool values_in_proj_string(const std::string& proj, const std::vector<double>& values) {
+  std::vector<double> printed;
+  for (std::size_t at = proj.find('='); at != std::string::npos; at = proj.find('=', at + 1)) {
+    char* end = nullptr;
+    const double x = std::strtod(proj.c_str() + at + 1, &end);
+    if (end != proj.c_str() + at + 1) printed.push_back(x);
+  }
+  for (const double v : values) {
+    const bool found = std::any_of(printed.begin(), printed.end(),
+                                   [&](double x) { return std::abs(x - v) <= 1e-10 * std::max(1.0, std::abs(v)); });
+    if (!found) return false;
+  }
+  return true;
+}
 
 std::optional<UserDefinedCrs> libgeotiff_proj_string(const LasVlr& directory, const LasVlr* doubles, const LasVlr* ascii) {
   std::vector<std::uint16_t> shorts(directory.data.size() / 2);
@@ -163,9 +191,12 @@ std::optional<UserDefinedCrs> libgeotiff_proj_string(const LasVlr& directory, co
   if (gtif && defn && GTIFGetDefn(gtif, defn) && defn->DefnSet) {
     char* proj4 = GTIFGetProj4Defn(defn);
     if (proj4 && *proj4) {
-      out = UserDefinedCrs{std::string(proj4), {}};
+      out = UserDefinedCrs{std::string(proj4), {}, {}, defn->Model == 1 ? defn->CTProjection : 0};  // 1: ModelTypeProjected
       for (int k = 0; k < defn->nParms && k < MAX_GTIF_PROJPARMS; ++k) {
-        if (defn->ProjParmId[k] > 0) out->parameters.push_back(static_cast<std::uint16_t>(defn->ProjParmId[k]));
+        if (defn->ProjParmId[k] > 0) {
+          out->parameters.push_back(static_cast<std::uint16_t>(defn->ProjParmId[k]));
+          out->values.push_back(defn->ProjParm[k]);
+        }
       }
     }
     if (proj4) GTIFFreeMemory(proj4);
@@ -257,6 +288,7 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
       case kGeogEllipsoid:
       case kGeogAzimuthUnits:
       case kProjectedCsType:
+      case kProjection:
       case kProjLinearUnits:
       case kVerticalCsType:
       case kVerticalDatum:
@@ -294,85 +326,136 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
   };
   // A user-defined projected or geographic CRS (code 32767, its projection
   // and datum as parameter keys): read through libgeotiff into PROJ's
-  // string of it, whose datum PROJ cannot name (the frame is asked for as
-  // for a WKT without it).
-  {
-    const auto m = value(kModelType);
-    const bool projected = m == 1 || (!m && value(kProjectedCsType));
-    const bool user_defined = projected ? value(kProjectedCsType) == kUserDefined
-                                        : (m == 2 || (!m && value(kGeographicType))) && value(kGeographicType) == kUserDefined;
-    if (user_defined) {
-      if (value(kVerticalCsType) || value(kVerticalDatum)) {
-        unread("a vertical CRS beside a user-defined horizontal one is not read; give the tile's CRS with --crs");
-        return out;
-      }
-      if (const auto user = libgeotiff_proj_string(*dir, doubles, ascii)) {
-        // libgeotiff takes a parameter the keys do not give as 0: each one
-        // its projection takes must be there.
-        // The keys libgeotiff reads one parameter from (GeoTIFF 1.0 section
-        // 6.3.3.3: a false easting may be given as FalseEasting,
-        // FalseOriginEasting or CenterEasting, and so on).
-        static const std::vector<std::vector<std::uint16_t>> kAliases = {
-            {3080, 3084, 3088}, {3081, 3085, 3089}, {3082, 3086, 3090}, {3083, 3087, 3091}, {3092, 3093}};
-        const auto given = [&](std::uint16_t id) {
-          return std::find(unread_keys.begin(), unread_keys.end(), id) != unread_keys.end() || short_values.count(id) ||
-                 double_values.count(id);
-        };
-        for (const std::uint16_t id : user->parameters) {
-          bool present = given(id);
-          for (const auto& group : kAliases) {
-            if (std::find(group.begin(), group.end(), id) == group.end()) continue;
-            for (const std::uint16_t other : group) present = present || given(other);
-          }
-          if (!present) {
-            unread("the user-defined projection takes its parameter from key " + std::to_string(id) +
-                   ", which the keys do not give; give the tile's CRS with --crs");
-            return out;
-          }
-        }
-        const std::string* proj = &user->proj;
-        out.crs = *proj;
-        out.description = std::string("user-defined ") + (projected ? "projected" : "geographic") +
-                          " CRS read from its parameter keys by libgeotiff: " + *proj;
-        // A projection on a geographic CRS the keys name by code: that CRS
-        // (its datum, which a PROJ string cannot carry) under the projection.
-        if (const auto base = value(kGeographicType); projected && base && *base != kUserDefined) {
-          const detail::PjContext ctx = detail::quiet_context();
-          detail::Pj crs(proj_create(ctx.get(), proj->c_str()));
-          detail::Pj geographic(proj_create(ctx.get(), ("EPSG:" + std::to_string(*base)).c_str()));
-          if (!crs || !geographic) fail(where, "GeographicTypeGeoKey " + std::to_string(*base) + " is not a CRS PROJ knows");
-          detail::Pj altered(proj_crs_alter_geodetic_crs(ctx.get(), crs.get(), geographic.get()));
-          const char* wkt = altered ? proj_as_wkt(ctx.get(), altered.get(), PJ_WKT2_2019, nullptr) : nullptr;
-          if (!wkt) fail(where, "the user-defined projection cannot be put on GeographicTypeGeoKey " + std::to_string(*base));
-          out.crs = wkt;
-          out.description += " on EPSG:" + std::to_string(*base);
-        }
-        return out;
-      }
-      unread(std::string("the user-defined ") + (projected ? "projected" : "geographic") +
-             " CRS (code 32767) could not be read from its parameter keys (libgeotiff); give the tile's CRS with --crs");
+  // string of it, put on the geographic CRS the keys name by code; its
+  // units, datum keys and Z unit are then checked as for a code.
+  std::string horizontal;
+  const auto model = value(kModelType);
+  const bool projected_model = model == 1 || (!model && value(kProjectedCsType));
+  const bool user_defined = projected_model ? value(kProjectedCsType) == kUserDefined
+                                            : (model == 2 || (!model && value(kGeographicType))) &&
+                                                  value(kGeographicType) == kUserDefined;
+  if (user_defined) {
+    const std::string what = std::string("the user-defined ") + (projected_model ? "projected" : "geographic") + " CRS (code 32767)";
+    if (value(kVerticalCsType) || value(kVerticalDatum)) {
+      unread("a vertical CRS beside a user-defined horizontal one is not read; give the tile's CRS with --crs");
       return out;
     }
-  }
-  for (const std::uint16_t id : unread_keys) {
-    unread("key " + std::to_string(id) +
-           " is not read by geoanchor (a user-defined CRS's parameters, or a key of another kind): give "
-           "the tile's CRS with --crs (EPSG code or WKT), or a WKT record");
-  }
-  for (const std::uint16_t id : {kModelType, kGeographicType, kProjectedCsType, kVerticalCsType, kVerticalDatum,
-                                 kGeogGeodeticDatum, kGeogPrimeMeridian, kGeogEllipsoid, kGeogLinearUnits,
-                                 kGeogAngularUnits, kGeogAzimuthUnits, kProjLinearUnits, kVerticalUnits}) {
-    if (value(id) == kUserDefined) {
+    // A projection named by its EPSG code (ProjectionGeoKey, e.g. 16032 UTM
+    // zone 32N) on a geographic CRS named by its code, as GDAL writes a CRS
+    // EPSG has no code for: built by PROJ from the two codes.
+    const auto projection = value(kProjection), base_code = value(kGeographicType);
+    if (projected_model && projection && *projection != kUserDefined && base_code && *base_code != kUserDefined) {
+      const auto units = value(kProjLinearUnits).value_or(9001);
+      const auto unit_m = linear_unit_m(units);
+      if (!unit_m) fail(where, "ProjLinearUnitsGeoKey " + std::to_string(units) + " is not a linear unit geoanchor reads (9001, 9002, 9003, 9036)");
+      const char* unit_name = units == 9001 ? "metre" : units == 9002 ? "foot" : units == 9003 ? "US survey foot" : "kilometre";
+      const detail::PjContext ctx = detail::quiet_context();
+      detail::Pj conversion(proj_create_from_database(ctx.get(), "EPSG", std::to_string(*projection).c_str(),
+                                                      PJ_CATEGORY_COORDINATE_OPERATION, false, nullptr));
+      detail::Pj geographic(proj_create(ctx.get(), ("EPSG:" + std::to_string(*base_code)).c_str()));
+      if (!conversion || proj_get_type(conversion.get()) != PJ_TYPE_CONVERSION) {
+        fail(where, "ProjectionGeoKey " + std::to_string(*projection) + " is not a projection PROJ knows");
+      }
+      if (!geographic) fail(where, "GeographicTypeGeoKey " + std::to_string(*base_code) + " is not a CRS PROJ knows");
+      detail::Pj cs(proj_create_cartesian_2D_cs(ctx.get(), PJ_CART2D_EASTING_NORTHING, unit_name, *unit_m));
+      const std::string name = "EPSG:" + std::to_string(*projection) + " on EPSG:" + std::to_string(*base_code);
+      detail::Pj crs(cs ? proj_create_projected_crs(ctx.get(), name.c_str(), geographic.get(), conversion.get(), cs.get()) : nullptr);
+      const char* wkt = crs ? proj_as_wkt(ctx.get(), crs.get(), PJ_WKT2_2019, nullptr) : nullptr;
+      if (!wkt) fail(where, "PROJ cannot put projection EPSG:" + std::to_string(*projection) + " on EPSG:" + std::to_string(*base_code));
+      horizontal = wkt;
+      out.description = "user-defined projected CRS (code 32767): projection " + name + ", in units " + std::to_string(units);
+    }
+    const auto user = horizontal.empty() ? libgeotiff_proj_string(*dir, doubles, ascii) : std::nullopt;
+    if (!horizontal.empty()) {
+      // built from codes above
+    } else if (!user) {
+      unread(what + " could not be read from its parameter keys (libgeotiff); give the tile's CRS with --crs");
+      return out;
+    }
+    if (user && projected_model &&
+        std::find(std::begin(kExactMethods), std::end(kExactMethods), user->method) == std::end(kExactMethods)) {
+      unread(what + ": its coordinate transformation (ProjCoordTransGeoKey " + std::to_string(user->method) +
+             ") is not one geoanchor reads exactly from keys; give the tile's CRS with --crs");
+      return out;
+    }
+    // A projection named by its own code (ProjectionGeoKey, e.g. 16032 UTM
+    // zone 32N) takes its parameters from EPSG; one given by parameters
+    // must give each (libgeotiff takes a missing one as 0). GeoTIFF 1.0
+    // section 6.3.3.3: a false easting may be FalseEasting,
+    // FalseOriginEasting or CenterEasting, and so on.
+    if (user && projected_model && (!value(kProjection) || value(kProjection) == kUserDefined)) {
+      static const std::vector<std::vector<std::uint16_t>> kAliases = {
+          {3080, 3084, 3088}, {3081, 3085, 3089}, {3082, 3086, 3090}, {3083, 3087, 3091}, {3092, 3093}};
+      const auto given = [&](std::uint16_t id) {
+        return std::find(unread_keys.begin(), unread_keys.end(), id) != unread_keys.end() || short_values.count(id) ||
+               double_values.count(id);
+      };
+      for (const std::uint16_t id : user->parameters) {
+        bool present = given(id);
+        for (const auto& group : kAliases) {
+          if (std::find(group.begin(), group.end(), id) == group.end()) continue;
+          for (const std::uint16_t other : group) present = present || given(other);
+        }
+        if (!present) {
+          unread("the user-defined projection takes its parameter from key " + std::to_string(id) +
+                 ", which the keys do not give; give the tile's CRS with --crs");
+          return out;
+        }
+      }
+    }
+    if (user && !values_in_proj_string(user->proj, user->values)) {
+      unread(what + ": libgeotiff's PROJ string of it (" + user->proj +
+             ") does not carry every parameter at full precision; give the tile's CRS with --crs");
+      return out;
+    }
+    if (user) {
+      horizontal = user->proj;
+      out.description = what.substr(4) + " read from its keys by libgeotiff: " + user->proj;
+    }
+    // A projection on a geographic CRS the keys name by code: that CRS (its
+    // datum, which a PROJ string cannot carry) under the projection.
+    if (const auto base = value(kGeographicType); user && projected_model && base && *base != kUserDefined) {
+      const detail::PjContext ctx = detail::quiet_context();
+      detail::Pj crs(proj_create(ctx.get(), user->proj.c_str()));
+      detail::Pj geographic(proj_create(ctx.get(), ("EPSG:" + std::to_string(*base)).c_str()));
+      if (!crs || !geographic) fail(where, "GeographicTypeGeoKey " + std::to_string(*base) + " is not a CRS PROJ knows");
+      detail::Pj altered(proj_crs_alter_geodetic_crs(ctx.get(), crs.get(), geographic.get()));
+      const char* wkt = altered ? proj_as_wkt(ctx.get(), altered.get(), PJ_WKT2_2019, nullptr) : nullptr;
+      if (!wkt) fail(where, "the user-defined projection cannot be put on GeographicTypeGeoKey " + std::to_string(*base));
+      horizontal = wkt;
+      out.description += " on EPSG:" + std::to_string(*base);
+    }
+    if (const auto units = value(kProjLinearUnits); units && projected_model) {
+      const auto m = linear_unit_m(*units);
+      const double crs_m = first_axis_unit(horizontal, where);
+      if (!m || std::abs(*m - crs_m) > 1e-12 * crs_m) {
+        fail(where, "ProjLinearUnitsGeoKey " + std::to_string(*units) + " contradicts the user-defined CRS, whose axes are in units of " +
+                        format_shortest(crs_m) + " m");
+      }
+    }
+  } else {
+    // A projection code beside a CRS code says what the code says; not read.
+    if (value(kProjection)) unread_keys.push_back(kProjection);
+    for (const std::uint16_t id : unread_keys) {
       unread("key " + std::to_string(id) +
-             " is user-defined (32767): its CRS is stated by parameters geoanchor does not read; give the "
-             "tile's CRS with --crs");
-      short_values.erase(id);  // set aside: as if absent
-      if (id == kProjectedCsType || id == kGeographicType || id == kModelType) return out;  // no CRS the keys state
+             " is not read by geoanchor (a user-defined CRS's parameters, or a key of another kind): give "
+             "the tile's CRS with --crs (EPSG code or WKT), or a WKT record");
+    }
+    for (const std::uint16_t id : {kModelType, kGeographicType, kProjectedCsType, kVerticalCsType, kVerticalDatum,
+                                   kGeogGeodeticDatum, kGeogPrimeMeridian, kGeogEllipsoid, kGeogLinearUnits,
+                                   kGeogAngularUnits, kGeogAzimuthUnits, kProjLinearUnits, kVerticalUnits}) {
+      if (value(id) == kUserDefined) {
+        unread("key " + std::to_string(id) +
+               " is user-defined (32767): its CRS is stated by parameters geoanchor does not read; give the "
+               "tile's CRS with --crs");
+        short_values.erase(id);  // set aside: as if absent
+        if (id == kProjectedCsType || id == kGeographicType || id == kModelType) return out;  // no CRS the keys state
+      }
     }
   }
-  const auto model = value(kModelType);
-  std::string horizontal;
-  if (model == 1 || (!model && value(kProjectedCsType))) {
+  if (user_defined) {
+    // read above
+  } else if (model == 1 || (!model && value(kProjectedCsType))) {
     if (!value(kProjectedCsType)) fail(where, "model type 1 (projected) without ProjectedCSTypeGeoKey (3072)");
     horizontal = "EPSG:" + std::to_string(*value(kProjectedCsType));
     out.description = "ProjectedCSTypeGeoKey " + std::to_string(*value(kProjectedCsType));
@@ -428,7 +511,6 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
   const bool repeats_datum = value(kGeogGeodeticDatum) || value(kGeogPrimeMeridian) || value(kGeogEllipsoid) ||
                              double_values.count(kGeogSemiMajorAxis) || double_values.count(kGeogSemiMinorAxis) ||
                              double_values.count(kGeogInvFlattening) || double_values.count(kGeogPrimeMeridianLong);
-  const bool projected_model = model == 1 || (!model && value(kProjectedCsType));
   if (repeats_datum || (projected_model && value(kGeographicType))) {
     const GeodeticFacts f = geodetic_facts(horizontal, where);
     if (const auto v = value(kGeographicType); v && projected_model) {

@@ -60,11 +60,10 @@ std::size_t NetworkBuilder::define(const std::string& id, const Eigen::Vector3d&
   }
   // An ellipsoidal network's stations are geocentric: a height of 1e308 or
   // a unit slip is no position on the Earth (issue 40 point 10).
-  if (net_.space == geodesy::NetworkSpace::ellipsoidal && !geodesy::is_physical_ecef(position, net_.ellipsoid)) {
-    throw Error(ErrorKind::input, "E_ECEF_RANGE",
-                where + ": station " + id + " lies " + format_shortest(position.norm()) +
-                    " m from the Earth's centre: not a position on the Earth (ellipsoidal heights are " +
-                    geodesy::physical_height_range_text() + ")");
+  if (net_.space == geodesy::NetworkSpace::ellipsoidal) {
+    if (const std::string problem = geodesy::physical_ecef_problem(position, net_.ellipsoid); !problem.empty()) {
+      throw Error(ErrorKind::input, "E_ECEF_RANGE", where + ": station " + id + ": " + problem);
+    }
   }
   s.position = position;
   s.position_known = true;

@@ -68,12 +68,12 @@ class LasGeoTiff : public CliTest {
   }
 };
 
-// The tile's points against PROJ's EPSG:2154 -> EPSG:4171 (RGF93 v1 geographic), longitude first as LAS stores it.
-void expect_moved_as_lambert93(const json& got) {
+// The tile's points against PROJ's `from` -> `to` (a geographic CRS), longitude first as LAS stores it.
+void expect_moved_as(const json& got, const char* from, const char* to) {
   ASSERT_EQ(got["points"].size(), 3u);
   PJ_CONTEXT* ctx = proj_context_create();
   proj_context_set_enable_network(ctx, 0);
-  PJ* raw = proj_create_crs_to_crs(ctx, "EPSG:2154", "EPSG:4171", nullptr);
+  PJ* raw = proj_create_crs_to_crs(ctx, from, to, nullptr);
   PJ* op = proj_normalize_for_visualization(ctx, raw);
   testing::WorstCase worst;
   for (std::size_t i = 0; i < 3; ++i) {
@@ -87,6 +87,7 @@ void expect_moved_as_lambert93(const json& got) {
   proj_destroy(raw);
   proj_context_destroy(ctx);
 }
+void expect_moved_as_lambert93(const json& got) { expect_moved_as(got, "EPSG:2154", "EPSG:4171"); }
 
 TEST_F(LasGeoTiff, Issue40_TheKeysStateTheTilesCrs) {
   // Projected (1), Lambert-93, metres.
@@ -207,7 +208,7 @@ TEST_F(LasGeoTiff, Issue40_AUserDefinedCrsIsReadFromItsParameterKeys) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   expect_moved_as_lambert93(json::parse(las_verify_text(path("out/lambert.las"))));
   const json side = json::parse(testing::slurp(path("out/lambert.las.geoanchor.json")));
-  EXPECT_NE(side["provenance"]["input_frame_from"].get<std::string>().find("user-defined projected CRS read from its parameter keys"),
+  EXPECT_NE(side["provenance"]["input_frame_from"].get<std::string>().find("user-defined projected CRS (code 32767) read from its keys by libgeotiff"),
             std::string::npos)
       << side["provenance"];
   const auto same = run("apply " + in.string() + " --crs EPSG:2154 --to-crs EPSG:4171 --out-dir " + path("same").string());
@@ -215,6 +216,20 @@ TEST_F(LasGeoTiff, Issue40_AUserDefinedCrsIsReadFromItsParameterKeys) {
   const auto oregon = run("apply " + in.string() + " --crs EPSG:2992 --to-crs EPSG:4171 --out-dir " + path("oregon").string());
   EXPECT_EQ(oregon.exit_code, 2) << oregon.err;
   EXPECT_FALSE(fs::exists(path("oregon/lambert.las")));
+  // A projection named by its code (ProjectionGeoKey 16032, UTM zone 32N)
+  // on ETRS89 (4258), as GDAL writes it: its parameters come from EPSG.
+  const fs::path utm = las("utm.las", {{1024, 1}, {3072, 32767}, {3074, 16032}, {3076, 9001}, {2048, 4258}});
+  const auto u = run("apply " + utm.string() + " --to-crs EPSG:4258 --out-dir " + path("utm").string());
+  ASSERT_EQ(u.exit_code, 0) << u.err;
+  expect_moved_as(json::parse(las_verify_text(path("utm/utm.las"))), "EPSG:25832", "EPSG:4258");
+  // libgeotiff prints a TM scale factor with 6 decimals (Idaho East's
+  // 0.999947368 as 0.999947, 9 cm at 260 km): refused, not read wrong.
+  const fs::path tm = las("tm.las", {{1024, 1}, {3072, 32767}, {3074, 32767}, {3075, 1}, {3076, 9001}, {2048, 4269}},
+                          {{3080, -112.1666666667}, {3081, 41.6666666667}, {3082, 200000.0}, {3083, 0.0}, {3092, 0.999947368}});
+  const auto t = run("apply " + tm.string() + " --to-crs EPSG:4269 --out-dir " + path("tm").string());
+  EXPECT_EQ(t.exit_code, 3) << t.err;
+  EXPECT_NE(t.err.find("does not carry every parameter at full precision"), std::string::npos) << t.err;
+  EXPECT_FALSE(fs::exists(path("tm/tm.las")));
 }
 
 }  // namespace

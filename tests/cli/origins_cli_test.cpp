@@ -148,8 +148,10 @@ TEST_F(Origins, Issue40_ConvertSaysWhichFlagsItDoesNotUse) {
   EXPECT_NE(from_origin.err.find("--from-origin: the input has no ENU/NED columns, so it is not used"), std::string::npos)
       << from_origin.err;
   const auto zone = run("convert " + geo.string() + " --to ecef --zone 32N -o " + path("b.csv").string());
+  EXPECT_EQ(zone.exit_code, 0) << zone.err;
   EXPECT_NE(zone.err.find("--zone: neither the input nor the output is UTM, so it is not used"), std::string::npos) << zone.err;
   const auto used = run("convert " + geo.string() + " --to enu --origin 47.4,8.5,400 -o " + path("c.csv").string());
+  EXPECT_EQ(used.exit_code, 0) << used.err;
   EXPECT_EQ(used.err.find("not used"), std::string::npos) << used.err;
 }
 

@@ -458,12 +458,12 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   };
   // The largest horizontal distance of a batch from its origin (e, n or n, e).
   const auto farthest = [](std::span<const double> a, std::span<const double> b) {
-    double d = 0.0;
+    double d2 = 0.0;
     for (std::size_t i = 0; i < a.size(); ++i) {
-      const double h = std::hypot(a[i], b[i]);
-      if (!(h <= d)) d = h;  // NaN propagates to the refusal below
+      const double h2 = a[i] * a[i] + b[i] * b[i];
+      if (!(h2 <= d2)) d2 = h2;  // NaN propagates to the refusal below
     }
-    return d;
+    return std::sqrt(d2);
   };
   const auto record = [&reach](double& worst, double d) {
     const std::lock_guard<std::mutex> lock(reach.m);
