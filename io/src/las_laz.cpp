@@ -334,8 +334,12 @@ void LasReader::decode_chunk(std::size_t i, std::vector<std::uint8_t>& records) 
   try {
     used = borrowed.decoder->decode(coded.data(), coded.size(), c.points, records.data());
   } catch (const laz::ChunkCountMismatch& m) {
+    const bool more = m.stored > c.points;
     throw point_count_mismatch(path_, c.offset, i, chunks_.size(), c.points, header_.point_count,
-                               "holds " + plural(m.stored, "point"), m.stored > c.points);
+                               "holds " + plural(m.stored, "point") +
+                                   (more ? " (the chunks hold " + plural(header_.point_count - c.points + m.stored, "point") + ")"
+                                         : std::string()),
+                               more);
   } catch (const laz::StreamOverrun&) {
     throw Error(ErrorKind::input, "E_LAZ_CHUNK",
                 path_.string() + ": byte " + std::to_string(c.offset) + ": " + which +
@@ -347,8 +351,35 @@ void LasReader::decode_chunk(std::size_t i, std::vector<std::uint8_t>& records) 
   // A chunk decodes to its last byte (LASzip's and geoanchor's both):
   // bytes left over are points the header does not count.
   if (used != c.bytes) {
-    throw point_count_mismatch(path_, c.offset, i, chunks_.size(), c.points, header_.point_count,
-                               "has " + std::to_string(c.bytes - used) + " bytes left after them", true);
+    // How many points it does hold: the count whose decoding ends at its
+    // last byte (more overrun it), found by bisection; only on this error.
+    const auto decodes_to = [&](std::uint64_t n) -> std::optional<std::size_t> {
+      records.resize(static_cast<std::size_t>(n) * header_.record_length);
+      try {
+        return borrowed.decoder->decode(coded.data(), coded.size(), static_cast<std::uint32_t>(n), records.data());
+      } catch (const laz::StreamOverrun&) {
+      } catch (const laz::StreamCorrupt&) {
+      } catch (const laz::ChunkCountMismatch&) {
+      }
+      return std::nullopt;
+    };
+    // decodes_to(lo) ends early; find the least n that does not. A chunk of
+    // fixed-size chunks holds at most chunk_size points.
+    std::uint64_t lo = c.points;
+    std::uint64_t hi = laz_->variable_chunks() ? kLazMaxChunkPoints : std::min<std::uint64_t>(laz_->chunk_size, kLazMaxChunkPoints);
+    if (hi <= lo) hi = lo + 1;
+    while (hi - lo > 1) {
+      const std::uint64_t mid = lo + (hi - lo) / 2;
+      const auto u = decodes_to(mid);
+      (u && *u < c.bytes ? lo : hi) = mid;
+    }
+    const auto at_hi = decodes_to(hi);
+    std::string what = "has " + std::to_string(c.bytes - used) + " bytes left after them";
+    if (at_hi && *at_hi == c.bytes) {
+      what = "holds " + plural(hi, "point") + " (the chunks hold " +
+             plural(header_.point_count - c.points + hi, "point") + ")";
+    }
+    throw point_count_mismatch(path_, c.offset, i, chunks_.size(), c.points, header_.point_count, what, true);
   }
 }
 

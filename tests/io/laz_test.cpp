@@ -840,6 +840,8 @@ TEST_F(LazTest, Issue40_AHeaderCountingFewerPointsThanTheChunksIsRefused) {
       EXPECT_EQ(e.code(), "E_LAZ_POINT_COUNT") << e.what();
       EXPECT_NE(std::string(e.what()).find("1100 points"), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find("chunk 2 of 3"), std::string::npos) << e.what();
+      // Both counts: the last chunk's 200 points (100 by the header) and the chunks' 1200.
+      EXPECT_NE(std::string(e.what()).find("holds 200 points (the chunks hold 1200 points)"), std::string::npos) << e.what();
     }
   }
 }
