@@ -365,10 +365,9 @@ std::optional<LasGeoKeys> las_geotiff_crs(const std::vector<LasVlr>& vlrs, const
       horizontal = wkt;
       out.description = "user-defined projected CRS (code 32767): projection " + name + ", in units " + std::to_string(units);
     }
+    // Otherwise the parameters, through libgeotiff.
     const auto user = horizontal.empty() ? libgeotiff_proj_string(*dir, doubles, ascii) : std::nullopt;
-    if (!horizontal.empty()) {
-      // built from codes above
-    } else if (!user) {
+    if (horizontal.empty() && !user) {
       unread(what + " could not be read from its parameter keys (libgeotiff); give the tile's CRS with --crs");
       return out;
     }
