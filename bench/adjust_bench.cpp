@@ -65,7 +65,7 @@
 #include "geoanchor/geodesy/network.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/huge_pages.hpp"
+#include "huge_pages.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 #include "geoanchor/workflow/network_generator.hpp"
 

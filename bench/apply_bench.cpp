@@ -40,11 +40,11 @@
 #include <thread>
 #include <vector>
 
-#include "geoanchor/io/crs.hpp"
-#include "geoanchor/io/crs_operation.hpp"
-#include "geoanchor/io/las.hpp"
-#include "geoanchor/io/point_chain.hpp"
-#include "geoanchor/io/tile_apply.hpp"
+#include "geoanchor/crs/crs.hpp"
+#include "geoanchor/crs/crs_operation.hpp"
+#include "geoanchor/las/las.hpp"
+#include "geoanchor/io/tile/point_chain.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
 #include "accuracy.hpp"
 #include "bench_process.hpp"
 #include "laz_records.hpp"

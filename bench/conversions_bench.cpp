@@ -19,7 +19,7 @@
 #include "geoanchor/geodesy/helmert.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/geodesy/projection.hpp"
-#include "geoanchor/io/point_chain.hpp"
+#include "geoanchor/io/tile/point_chain.hpp"
 #include "median_reporter.hpp"
 
 namespace {

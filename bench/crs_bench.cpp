@@ -27,8 +27,8 @@
 #include <string>
 #include <vector>
 
-#include "geoanchor/io/crs.hpp"
-#include "geoanchor/io/crs_operation.hpp"
+#include "geoanchor/crs/crs.hpp"
+#include "geoanchor/crs/crs_operation.hpp"
 
 extern char** environ;
 

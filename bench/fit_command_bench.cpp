@@ -29,7 +29,7 @@
 #include "bench_process.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
-#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 
 namespace {

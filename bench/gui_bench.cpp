@@ -22,7 +22,7 @@
 
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/gui/offscreen.hpp"
-#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
 #include "geoanchor/workflow/network_generator.hpp"
 #include "median_reporter.hpp"
 

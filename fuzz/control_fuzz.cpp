@@ -5,8 +5,8 @@
 #include <sstream>
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace geoanchor;

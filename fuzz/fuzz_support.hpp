@@ -1,7 +1,7 @@
 #pragma once
-// What the fuzz targets share: the input as a temporary file (the tile
-// readers take paths), frames for the identity chain they run, and a
-// network input read as `geoanchor adjust` reads it.
+// What the fuzz targets of io share: the input as a temporary file
+// (fuzz_file.hpp), frames for the identity chain they run, and a network
+// input read as `geoanchor adjust` reads it.
 
 #include <unistd.h>
 
@@ -12,20 +12,12 @@
 #include <string>
 #include <string_view>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/network_input.hpp"
-#include "geoanchor/io/point_chain.hpp"
+#include "fuzz_file.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/network/network_input.hpp"
+#include "geoanchor/io/tile/point_chain.hpp"
 
 namespace geoanchor::fuzz {
-
-// The input written to a file of this process's own, replaced each call.
-inline std::filesystem::path as_file(const std::uint8_t* data, std::size_t size, const char* extension) {
-  const auto p = std::filesystem::temp_directory_path() /
-                 ("geoanchor_fuzz_" + std::to_string(::getpid()) + extension);
-  std::ofstream(p, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data),
-                                                             static_cast<std::streamsize>(size));
-  return p;
-}
 
 inline io::ArrayFrame frame(io::CoordinateKind kind) {
   io::ArrayFrame f;

@@ -1,31 +1,23 @@
-// libFuzzer target: LasReader (header, VLRs, EVLRs, points), the WKT it
-// carries, and a whole tile through an ENU -> ECEF chain. Bad input must end
-// in geoanchor::Error, never in a crash, a hang or a sanitizer report.
+// libFuzzer target: LasReader alone (header, VLRs, EVLRs, the WKT record,
+// every point record), linked with the LAS/LAZ codec only. Bad input must
+// end in geoanchor::Error, never in a crash, a hang or a sanitizer report.
+// las_tile_fuzz.cpp runs the same corpus through the tile path of io.
 
-#include <sstream>
+#include <vector>
 
-#include "fuzz_support.hpp"
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/las.hpp"
-#include "geoanchor/io/tile_apply.hpp"
-#include "geoanchor/io/tile_metadata.hpp"
+#include "fuzz_file.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/las/las.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace geoanchor;
   const auto path = fuzz::as_file(data, size, ".las");
   try {
     io::LasReader reader(path);
-    if (const auto wkt = reader.wkt()) {
-      try {
-        io::tile_metadata_from_wkt(*wkt, path.string());
-      } catch (const Error&) {
-      }
+    (void)reader.wkt();
+    std::vector<std::uint8_t> records;
+    while (reader.read_records(records, 4096) != 0) {
     }
-    const io::ArrayFrame enu = fuzz::frame(io::CoordinateKind::enu), ecef = fuzz::frame(io::CoordinateKind::ecef);
-    const io::PointChain chain(enu, std::nullopt, false, std::nullopt, ecef);
-    std::stringstream out;
-    io::TileApplyOptions o{enu, ecef, std::nullopt, "WKT", 64, {}};
-    io::apply_las_tile(path, out, "out.las", chain, o);
   } catch (const Error&) {
   }
   return 0;

@@ -7,10 +7,10 @@
 
 #include <vector>
 
-#include "fuzz_support.hpp"
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/las.hpp"
-#include "geoanchor/io/laz.hpp"
+#include "fuzz_file.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/las/las.hpp"
+#include "geoanchor/las/laz.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace geoanchor;

@@ -4,8 +4,8 @@
 #include <sstream>
 
 #include "fuzz_support.hpp"
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/tile_apply.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace geoanchor;

@@ -3,8 +3,8 @@
 
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/tile_metadata.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/tile/tile_metadata.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace geoanchor;

@@ -5,8 +5,8 @@
 
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace geoanchor;

@@ -5,8 +5,8 @@
 #include <sstream>
 
 #include "fuzz_support.hpp"
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/vector_map.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/vector/vector_map.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace geoanchor;

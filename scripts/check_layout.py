@@ -24,18 +24,19 @@ import sys
 MAX_FILE_LINES = 800
 MAX_FUNCTION_LINES = 150
 SOURCE_SUFFIXES = {".cpp", ".hpp", ".h", ".inc"}
-SIZE_FOLDERS = ["geodesy", "crs", "las", "io", "solver", "workflow", "gui", "cli", "bench", "fuzz"]
+SIZE_FOLDERS = ["base", "geodesy", "crs", "las", "io", "solver", "workflow", "gui", "cli", "bench", "fuzz"]
 
 # Library -> the libraries of ours it may include (directly or not).
 ALLOWED = {
-    "geodesy": set(),
-    "crs": {"geodesy"},
-    "las": set(),
-    "solver": {"geodesy"},
-    "io": {"geodesy", "crs", "las"},
-    "workflow": {"geodesy", "crs", "las", "io", "solver"},
-    "gui": {"geodesy", "crs", "las", "io", "solver", "workflow"},
-    "cli": {"geodesy", "crs", "las", "io", "solver", "workflow", "gui"},
+    "base": set(),
+    "geodesy": {"base"},
+    "crs": {"base", "geodesy"},
+    "las": {"base"},
+    "solver": {"base", "geodesy"},
+    "io": {"base", "geodesy", "crs", "las"},
+    "workflow": {"base", "geodesy", "crs", "las", "io", "solver"},
+    "gui": {"base", "geodesy", "crs", "las", "io", "solver", "workflow"},
+    "cli": {"base", "geodesy", "crs", "las", "io", "solver", "workflow", "gui"},
 }
 PROJ_HEADER = re.compile(r'^\s*#\s*include\s*[<"](proj\.h|proj/[^>"]*|proj_[a-z_]*\.h)[>"]')
 JSON_HEADER = re.compile(r'^\s*#\s*include\s*[<"](nlohmann/[^>"]*|json/[^>"]*|rapidjson/[^>"]*|simdjson\.h)[>"]')

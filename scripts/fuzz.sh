@@ -9,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-150}"
-all=(las laz ply csv sidecar vector transform control network dynaml gama sinex)
+all=(las laz las_tile ply csv sidecar vector transform control network dynaml gama sinex)
 targets=("${all[@]}")
 if [ $# -gt 1 ]; then
   targets=("${@:2}")
@@ -27,17 +27,19 @@ cmake --build --preset fuzz --target "${targets[@]/#/fuzz_}"
 
 status=0
 for target in "${targets[@]}"; do
+  corpus="fuzz/corpus/${target}"
+  [ "$target" = las_tile ] && corpus=fuzz/corpus/las  # the LAS corpus, through the tile path
   echo "== fuzz_${target}: ${seconds} s =="
   # New inputs go to a scratch folder first; -merge keeps only those that add coverage.
   scratch="build/fuzz/new-${target}"
   rm -rf "$scratch" && mkdir -p "$scratch"
-  before=$(find "fuzz/corpus/${target}" -type f | wc -l)
-  if ! build/fuzz/fuzz/fuzz_${target} "$scratch" "fuzz/corpus/${target}" -max_total_time="$seconds" \
+  before=$(find "${corpus}" -type f | wc -l)
+  if ! build/fuzz/fuzz/fuzz_${target} "$scratch" "${corpus}" -max_total_time="$seconds" \
        -max_len=4096 -timeout=10 -rss_limit_mb=2048 -artifact_prefix="build/fuzz/${target}-" -print_final_stats=1 \
        2>&1 | tail -n 12; then
     status=1
   fi
-  build/fuzz/fuzz/fuzz_${target} -merge=1 "fuzz/corpus/${target}" "$scratch" 2>/dev/null | tail -n 1 || true
-  echo "corpus ${target}: ${before} -> $(find "fuzz/corpus/${target}" -type f | wc -l) files"
+  build/fuzz/fuzz/fuzz_${target} -merge=1 "${corpus}" "$scratch" 2>/dev/null | tail -n 1 || true
+  echo "corpus ${target}: ${before} -> $(find "${corpus}" -type f | wc -l) files"
 done
 exit "$status"

@@ -18,6 +18,8 @@ packages=(
   libimgui-dev libglfw3-dev libosmesa6-dev libstb-dev fonts-dejavu-core xvfb xauth
   # tests, benchmarks and fuzzing (clang brings libFuzzer)
   libgtest-dev libgmock-dev libbenchmark-dev clang
+  # the layout checks (scripts/check_layout.py, run by CTest)
+  python3
 )
 
 missing=()

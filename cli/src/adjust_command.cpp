@@ -9,8 +9,8 @@
 #include <iostream>
 
 #include "command_input.hpp"
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/workflow/adjust.hpp"
 #include "geoanchor/workflow/network_generator.hpp"

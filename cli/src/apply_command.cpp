@@ -10,8 +10,8 @@
 #include <mutex>
 #include <thread>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "geoanchor/workflow/apply.hpp"
 #include "option_parsing.hpp"

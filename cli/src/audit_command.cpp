@@ -5,7 +5,7 @@
 #include <iostream>
 #include <memory>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 #include "option_parsing.hpp"
 

@@ -19,11 +19,11 @@
 #include <vector>
 
 #include "geoanchor/geodesy/control_point.hpp"
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/utf8.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/utf8.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/control_csv.hpp"
-#include "geoanchor/io/hash.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
+#include "geoanchor/base/hash.hpp"
 
 namespace geoanchor::cli {
 
@@ -129,7 +129,7 @@ inline ControlInput read_control_input(const std::string& path, const io::Contro
   c.name = input_name(path);
   if (!c.from_stdin) {
     c.set = io::read_control_set(path, options);
-    if (hash) c.sha256 = io::sha256_file_hex(path);
+    if (hash) c.sha256 = sha256_file_hex(path);
     return c;
   }
   // Standard input can be read once: kept in memory, hashed, then parsed.
@@ -137,7 +137,7 @@ inline ControlInput read_control_input(const std::string& path, const io::Contro
   char block[1 << 16];
   for (std::size_t n; (n = std::fread(block, 1, sizeof block, stdin)) > 0;) text.append(block, n);
   if (std::ferror(stdin)) throw Error(ErrorKind::io, "E_READ", "<stdin>: read error: " + std::string(std::strerror(errno)));
-  if (hash) c.sha256 = io::sha256_hex(text);
+  if (hash) c.sha256 = sha256_hex(text);
   const auto first = text.find_first_not_of(" \t\r\n");
   const bool json = first != std::string::npos && text[first] == '{';
   std::istringstream in(std::move(text));
@@ -157,8 +157,8 @@ inline ControlInput read_control_pair_input(const std::string& source, const std
   ControlInput c;
   c.set = io::read_control_pair(source, target, options, unmatched_allowed, &c.notes);
   c.name = c.set.source_name;
-  c.role_files = {{"source", source, hash ? io::sha256_file_hex(source) : std::string()},
-                  {"target", target, hash ? io::sha256_file_hex(target) : std::string()}};
+  c.role_files = {{"source", source, hash ? sha256_file_hex(source) : std::string()},
+                  {"target", target, hash ? sha256_file_hex(target) : std::string()}};
   return c;
 }
 

@@ -6,22 +6,22 @@
 #include <iostream>
 #include <memory>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/coordinate_codec.hpp"
-#include "geoanchor/io/crs.hpp"
-#include "geoanchor/io/crs_columns.hpp"
-#include "geoanchor/io/crs_csv.hpp"
-#include "geoanchor/io/proj_geoid.hpp"
-#include "geoanchor/io/crs_operation.hpp"
+#include "geoanchor/io/control/coordinate_codec.hpp"
+#include "geoanchor/crs/crs.hpp"
+#include "geoanchor/io/control/crs_columns.hpp"
+#include "geoanchor/io/control/crs_csv.hpp"
+#include "geoanchor/crs/proj_geoid.hpp"
+#include "geoanchor/crs/crs_operation.hpp"
 #include "geoanchor/io/csv.hpp"
-#include "geoanchor/io/hash.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/base/hash.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/workflow/audit.hpp"
 #include "geoanchor/workflow/transform_checks.hpp"
 #include "command_input.hpp"
@@ -153,7 +153,7 @@ json sidecar_start(const ConvertOptions& o, bool from_stdin) {
   side["geoanchor_version"] = GEOANCHOR_VERSION;
   side["command"] = o.argv;
   side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
-                   {"sha256", from_stdin ? json(nullptr) : json(io::sha256_file_hex(o.input))}};
+                   {"sha256", from_stdin ? json(nullptr) : json(sha256_file_hex(o.input))}};
   return side;
 }
 
@@ -395,7 +395,7 @@ void run_convert(const ConvertOptions& o) {
   std::string transform_sha256;
   if (o.transform) {
     transform = io::read_transform_file(*o.transform);
-    transform_sha256 = io::sha256_file_hex(*o.transform);
+    transform_sha256 = sha256_file_hex(*o.transform);
   }
   const FrameStatement frames = frames_of(reader, source_name, transform, o);
 

@@ -6,9 +6,10 @@
 #include <cmath>
 #include <iostream>
 
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/crs.hpp"
+#include "geoanchor/crs/crs.hpp"
+#include "geoanchor/io/control/crs_columns.hpp"
 
 namespace geoanchor::cli {
 

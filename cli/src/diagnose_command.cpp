@@ -9,11 +9,11 @@
 #include <iostream>
 #include <type_traits>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/control_csv.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/solver/diagnosis.hpp"
 #include "command_input.hpp"
 #include "option_parsing.hpp"

@@ -13,13 +13,13 @@
 #include <optional>
 #include <tuple>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/workflow/fit_checks.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/control_csv.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 #include "geoanchor/solver/model_comparison.hpp"
 #include "command_input.hpp"

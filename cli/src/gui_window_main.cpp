@@ -14,7 +14,7 @@
 #include <optional>
 #include <vector>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/gui/image.hpp"
 #include "geoanchor/gui/palette.hpp"
 #include "geoanchor/gui/network_ui.hpp"

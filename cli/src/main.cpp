@@ -24,9 +24,9 @@
 #include "snapshot_command.hpp"
 #include "transform_command.hpp"
 #include "usage_hints.hpp"
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/huge_pages.hpp"
+#include "huge_pages.hpp"
 #include "version.hpp"
 
 namespace {
@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
   using geoanchor::ErrorKind;
   // (adjust alone: the restart costs a start of the program, some 60 ms,
   // and adjust is the command that touches gigabytes of fresh memory.)
-  if (argc > 1 && std::string_view(argv[1]) == "adjust") geoanchor::io::restart_with_huge_pages(argv);
+  if (argc > 1 && std::string_view(argv[1]) == "adjust") geoanchor::cli::restart_with_huge_pages(argv);
   geoanchor::io::install_signal_cleanup();
   std::vector<std::string> words(argv, argv + argc);
   try {

@@ -2,7 +2,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "option_parsing.hpp"
 
 namespace geoanchor::cli {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 
 namespace geoanchor::cli {
 namespace {

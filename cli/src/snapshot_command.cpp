@@ -11,12 +11,12 @@
 #include <iostream>
 #include <sstream>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/gui/offscreen.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/hash.hpp"
+#include "geoanchor/base/hash.hpp"
 #include "command_input.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
@@ -281,7 +281,7 @@ void network_report(const ReportOptions& o, int w, int h, ReportContents& out) {
        << "  generator: geoanchor " GEOANCHOR_VERSION ": " << cmd << "\n";
   for (const auto& in : o.workbench.inputs) {
     text << "  input:     " << input_name(in)
-         << (in == "-" ? std::string() : " (sha256 " + io::sha256_file_hex(in) + ")") << "\n";
+         << (in == "-" ? std::string() : " (sha256 " + sha256_file_hex(in) + ")") << "\n";
   }
   for (const auto& warning : network_warnings(ns)) text << "  warning: " << warning << "\n";
   text << "\n";
@@ -314,7 +314,7 @@ void fit_report(const ReportOptions& o, int w, int h, ReportContents& out) {
   text << "geoanchor report\n"
        << "  generator: " << s.generator << "\n"
        << "  control:   " << s.control_name << " (sha256 " << s.control_sha256 << ")\n"
-       << "  transform: " << o.workbench.transform << " (sha256 " << io::sha256_file_hex(o.workbench.transform) << ")\n";
+       << "  transform: " << o.workbench.transform << " (sha256 " << sha256_file_hex(o.workbench.transform) << ")\n";
   for (const auto& n : s.notes) text << "  note: " << n << "\n";
   text << "\n";
   if (s.model->fit()) {

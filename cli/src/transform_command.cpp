@@ -9,21 +9,21 @@
 #include <string_view>
 #include <vector>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/coordinate_codec.hpp"
-#include "geoanchor/io/crs.hpp"
-#include "geoanchor/io/crs_columns.hpp"
-#include "geoanchor/io/crs_csv.hpp"
-#include "geoanchor/io/proj_geoid.hpp"
-#include "geoanchor/io/crs_operation.hpp"
+#include "geoanchor/io/control/coordinate_codec.hpp"
+#include "geoanchor/crs/crs.hpp"
+#include "geoanchor/io/control/crs_columns.hpp"
+#include "geoanchor/io/control/crs_csv.hpp"
+#include "geoanchor/crs/proj_geoid.hpp"
+#include "geoanchor/crs/crs_operation.hpp"
 #include "geoanchor/io/csv.hpp"
-#include "geoanchor/io/hash.hpp"
+#include "geoanchor/base/hash.hpp"
 #include "command_input.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
@@ -561,7 +561,7 @@ void run_transform(const TransformOptions& o) {
   side["geoanchor_version"] = GEOANCHOR_VERSION;
   side["command"] = o.argv;
   side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
-                   {"sha256", from_stdin ? json(nullptr) : json(io::sha256_file_hex(o.input))},
+                   {"sha256", from_stdin ? json(nullptr) : json(sha256_file_hex(o.input))},
                    {"frame", from.name()},
                    {"epoch", epochs_given ? json(stated_from.year) : json(nullptr)},
                    {"kind", std::string(io::to_string(columns.kind))},

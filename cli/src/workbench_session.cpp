@@ -5,10 +5,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
-#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
 #include "command_input.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"

@@ -12,7 +12,7 @@
 
 #include "geoanchor/gui/workbench_model.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "network_options.hpp"
 
 namespace CLI {

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
 
 namespace geoanchor::geodesy {
 

@@ -6,9 +6,9 @@
 #include <cctype>
 #include <vector>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 
 namespace geoanchor::geodesy {
 namespace {

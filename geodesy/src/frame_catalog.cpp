@@ -8,10 +8,10 @@
 #include <map>
 #include <set>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 
 namespace geoanchor::geodesy {
 namespace {

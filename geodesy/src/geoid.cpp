@@ -9,7 +9,7 @@
 #include <limits>
 #include <mutex>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 
 namespace geoanchor::geodesy {
 namespace {

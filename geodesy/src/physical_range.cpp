@@ -5,7 +5,7 @@
 #include <string>
 
 #include "geoanchor/geodesy/geocentric.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 
 namespace geoanchor::geodesy {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/gui/palette.hpp"
 
 namespace geoanchor::gui {

@@ -3,7 +3,7 @@
 
 #include <fstream>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/gui/image.hpp"
 #include "geoanchor/io/atomic_file.hpp"
 

@@ -8,13 +8,13 @@
 #include <cmath>
 #include <numbers>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/workflow/fit_checks.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 
 namespace geoanchor::gui {
 

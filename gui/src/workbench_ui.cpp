@@ -6,7 +6,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "ui_common.hpp"
 
 namespace geoanchor::gui {

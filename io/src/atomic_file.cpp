@@ -21,7 +21,7 @@
 #include <set>
 #include <stdexcept>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 
 namespace geoanchor::io {
 namespace {

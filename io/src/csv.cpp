@@ -2,9 +2,9 @@
 
 #include <cctype>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
-#include "geoanchor/geodesy/utf8.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
+#include "geoanchor/base/utf8.hpp"
 
 namespace geoanchor::io {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 
 namespace geoanchor::io::detail {
 

@@ -5,7 +5,7 @@
 
 #include <algorithm>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 
 namespace geoanchor::io::json_detail {
 

@@ -12,9 +12,9 @@
 #include <set>
 #include <sstream>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
-#include "geoanchor/geodesy/utf8.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
+#include "geoanchor/base/utf8.hpp"
 #include "geoanchor/io/json_input.hpp"
 
 namespace geoanchor::io {

@@ -7,7 +7,7 @@
 #include <new>
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 
 namespace geoanchor::io::detail {
 

@@ -11,12 +11,12 @@
 #include <limits>
 #include <numbers>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/quantization.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/geodesy/projection.hpp"
 
 namespace geoanchor::solver {

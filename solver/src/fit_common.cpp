@@ -4,7 +4,7 @@
 
 #include <cstdio>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 
 namespace geoanchor::solver {
 

@@ -12,10 +12,10 @@
 #include <numeric>
 #include <functional>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "enu_origin_fit.hpp"
 #include "fit_common.hpp"
 #include "point_statistics.hpp"

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 
 namespace geoanchor::solver {
 

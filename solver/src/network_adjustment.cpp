@@ -15,16 +15,16 @@
 #include <numeric>
 
 #include "fit_common.hpp"
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "datum_rank.hpp"
 #include "network_approximate.hpp"
 #include "network_model.hpp"
 #include "network_snooping.hpp"
 #include "point_statistics.hpp"
 #include "snooping.hpp"
-#include "geoanchor/geodesy/parallel.hpp"
+#include "geoanchor/base/parallel.hpp"
 #include "sparse_factor.hpp"
 #include "statistics.hpp"
 

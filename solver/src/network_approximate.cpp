@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 
 namespace geoanchor::solver {
 

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <numbers>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geodesic.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 
 namespace geoanchor::solver {
 

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "enu_origin_fit.hpp"
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "fit_common.hpp"
 #include "point_statistics.hpp"

@@ -21,8 +21,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/parallel.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/parallel.hpp"
 #include "dense_kernels.hpp"
 #include "sparse_factor_impl.hpp"
 #include "supernodal_cholesky.hpp"

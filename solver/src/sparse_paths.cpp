@@ -16,7 +16,7 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "geoanchor/geodesy/parallel.hpp"
+#include "geoanchor/base/parallel.hpp"
 #include "sparse_factor_impl.hpp"
 
 namespace geoanchor::solver {

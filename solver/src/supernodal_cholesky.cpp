@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "dense_kernels.hpp"
-#include "geoanchor/geodesy/parallel.hpp"
+#include "geoanchor/base/parallel.hpp"
 
 namespace geoanchor::solver {
 

@@ -22,7 +22,7 @@
 #include <thread>
 
 #include "cli_support.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "las_builder.hpp"
 #include "proj_reference.hpp"
 #include "test_support.hpp"

@@ -16,8 +16,8 @@
 #include <sstream>
 
 #include "cli_support.hpp"
-#include "geoanchor/io/las.hpp"
-#include "geoanchor/io/laz.hpp"
+#include "geoanchor/las/las.hpp"
+#include "geoanchor/las/laz.hpp"
 #include "las_builder.hpp"
 #include "laz_support.hpp"
 

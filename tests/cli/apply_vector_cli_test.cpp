@@ -20,7 +20,7 @@
 
 #include "accuracy.hpp"
 #include "cli_support.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "proj_reference.hpp"
 #include "test_support.hpp"
 

@@ -24,7 +24,7 @@
 #include "cli_support.hpp"
 #include "las_builder.hpp"
 #include "proj_reference.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor {

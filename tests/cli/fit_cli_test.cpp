@@ -19,7 +19,7 @@
 #include <random>
 #include <sstream>
 
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "proj_reference.hpp"
 #include "cli_support.hpp"
 #include "test_support.hpp"

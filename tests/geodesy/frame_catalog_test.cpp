@@ -12,7 +12,7 @@
 #include <random>
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "proj_reference.hpp"
 #include "test_support.hpp"

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/ellipsoid.hpp"
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/units.hpp"

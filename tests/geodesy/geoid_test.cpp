@@ -8,7 +8,7 @@
 #include <fstream>
 #include <random>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geoid.hpp"
 #include "proj_reference.hpp"
 #include "temp_folder.hpp"

@@ -7,7 +7,7 @@
 
 #include <random>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/projection.hpp"
 #include "proj_reference.hpp"
 #include "test_support.hpp"

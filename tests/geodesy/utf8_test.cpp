@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "geoanchor/geodesy/utf8.hpp"
+#include "geoanchor/base/utf8.hpp"
 
 namespace geoanchor {
 namespace {

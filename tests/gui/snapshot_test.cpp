@@ -27,7 +27,7 @@
 #include "geoanchor/gui/offscreen.hpp"
 #include "geoanchor/gui/palette.hpp"
 #include "geoanchor/gui/workbench_ui.hpp"
-#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
 
 namespace geoanchor::gui {
 namespace {

@@ -11,10 +11,10 @@
 #include <fstream>
 #include <numbers>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/gui/workbench_model.hpp"
-#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
 #include "temp_folder.hpp"
 
 namespace geoanchor::gui {

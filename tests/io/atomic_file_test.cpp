@@ -31,7 +31,7 @@
 #include <string>
 #include <vector>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "temp_folder.hpp"
 
 namespace geoanchor {

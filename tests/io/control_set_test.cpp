@@ -10,10 +10,10 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
-#include "geoanchor/io/control_csv.hpp"
-#include "geoanchor/io/crs.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
+#include "geoanchor/crs/crs.hpp"
 #include "accuracy.hpp"
 #include "proj_reference.hpp"
 

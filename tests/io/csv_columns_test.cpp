@@ -4,8 +4,8 @@
 
 #include <sstream>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/control/coordinate_columns.hpp"
 #include "geoanchor/io/csv.hpp"
 
 namespace geoanchor::io {

@@ -9,9 +9,9 @@
 #include <optional>
 #include <random>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/las.hpp"
-#include "geoanchor/io/tile_apply.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/las/las.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
 #include "las_builder.hpp"
 #include "proj_reference.hpp"
 #include "temp_folder.hpp"

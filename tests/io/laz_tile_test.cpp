@@ -15,12 +15,12 @@
 #include <optional>
 #include <sstream>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/crs.hpp"
-#include "geoanchor/io/crs_operation.hpp"
-#include "geoanchor/io/las.hpp"
-#include "geoanchor/io/laz.hpp"
-#include "geoanchor/io/tile_apply.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/crs/crs.hpp"
+#include "geoanchor/crs/crs_operation.hpp"
+#include "geoanchor/las/las.hpp"
+#include "geoanchor/las/laz.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
 #include "las_builder.hpp"
 #include "laz_support.hpp"
 #include "temp_folder.hpp"

@@ -11,15 +11,15 @@
 #include <fstream>
 #include <sstream>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/gnss_solution.hpp"
-#include "geoanchor/io/control_csv.hpp"
-#include "geoanchor/io/las.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
+#include "geoanchor/las/las.hpp"
 #include "geoanchor/io/map_metadata.hpp"
-#include "geoanchor/io/point_chain.hpp"
-#include "geoanchor/io/tile_apply.hpp"
-#include "geoanchor/io/tile_metadata.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/tile/point_chain.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
+#include "geoanchor/io/tile/tile_metadata.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "las_builder.hpp"
 #include "temp_folder.hpp"
 

@@ -10,8 +10,8 @@
 #include <sstream>
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/network_input.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/network/network_input.hpp"
 #include "temp_folder.hpp"
 
 namespace geoanchor::io {

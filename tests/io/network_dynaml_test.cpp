@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/network_input.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/network/network_input.hpp"
 #include "temp_folder.hpp"
 
 namespace geoanchor::io {

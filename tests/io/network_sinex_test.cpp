@@ -9,8 +9,8 @@
 
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/network_input.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/network/network_input.hpp"
 
 namespace geoanchor::io {
 namespace {

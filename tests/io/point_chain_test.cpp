@@ -5,8 +5,8 @@
 
 #include <random>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/point_chain.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/tile/point_chain.hpp"
 #include "proj_reference.hpp"
 #include "test_support.hpp"
 

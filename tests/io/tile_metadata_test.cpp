@@ -13,11 +13,11 @@
 #include <random>
 #include <sstream>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/float32.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
-#include "geoanchor/io/tile_apply.hpp"
-#include "geoanchor/io/tile_metadata.hpp"
+#include "geoanchor/base/number_text.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
+#include "geoanchor/io/tile/tile_metadata.hpp"
 #include "proj_reference.hpp"
 #include "temp_folder.hpp"
 #include "test_support.hpp"

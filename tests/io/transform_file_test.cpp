@@ -9,8 +9,8 @@
 #include <map>
 #include <random>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 
 namespace geoanchor::io {
 namespace {

@@ -5,7 +5,7 @@
 
 #include <memory>
 
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "proj_reference.hpp"
 #include "test_support.hpp"
 

@@ -17,7 +17,7 @@
 #include <random>
 #include <string>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 #include "datum_rank.hpp"
 #include "network_builder.hpp"

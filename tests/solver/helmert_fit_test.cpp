@@ -9,7 +9,7 @@
 #include <map>
 #include <random>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 #include "generated_control.hpp"

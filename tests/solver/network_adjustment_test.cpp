@@ -22,7 +22,7 @@
 
 #include "network_builder.hpp"
 #include "test_support.hpp"
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 
 namespace geoanchor::solver {

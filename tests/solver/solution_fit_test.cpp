@@ -7,8 +7,8 @@
 
 #include <cmath>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 
 namespace geoanchor::solver {

@@ -15,7 +15,7 @@
 #include "accuracy.hpp"
 #include "generated_control.hpp"
 #include "geoanchor/geodesy/helmert.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
 

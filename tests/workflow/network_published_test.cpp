@@ -21,7 +21,7 @@
 
 #include "temp_folder.hpp"
 #include "test_support.hpp"
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 #include "geoanchor/workflow/adjust.hpp"
 

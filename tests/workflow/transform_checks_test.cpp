@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/workflow/transform_checks.hpp"
 
 namespace geoanchor::workflow {

@@ -11,7 +11,7 @@
 
 #include "generated_control.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"

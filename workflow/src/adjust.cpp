@@ -2,7 +2,7 @@
 
 #include "geoanchor/workflow/adjust.hpp"
 
-#include "geoanchor/geodesy/parallel.hpp"
+#include "geoanchor/base/parallel.hpp"
 
 #include <Eigen/SVD>
 #include <nlohmann/json.hpp>
@@ -17,14 +17,14 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
-#include "geoanchor/io/hash.hpp"
-#include "geoanchor/io/network_input.hpp"
-#include "geoanchor/io/sinex.hpp"
+#include "geoanchor/base/number_text.hpp"
+#include "geoanchor/base/hash.hpp"
+#include "geoanchor/io/network/network_input.hpp"
+#include "geoanchor/io/network/sinex.hpp"
 #include "geoanchor/workflow/fit_export.hpp"
 
 namespace geoanchor::workflow {
@@ -980,7 +980,7 @@ std::string stations_sidecar_text(const PreparedNetwork& prepared, const solver:
     std::error_code ec;
     const bool hashable = in != "-" && std::filesystem::is_regular_file(in, ec);
     listed.push_back({{"path", in == "-" ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(in)},
-                      {"sha256", hashable ? nlohmann::ordered_json(io::sha256_file_hex(in)) : nlohmann::ordered_json(nullptr)}});
+                      {"sha256", hashable ? nlohmann::ordered_json(sha256_file_hex(in)) : nlohmann::ordered_json(nullptr)}});
   }
   side["inputs"] = listed;
   return side.dump(2);

@@ -15,21 +15,21 @@
 #include <set>
 #include <thread>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
-#include "geoanchor/geodesy/utf8.hpp"
+#include "geoanchor/base/number_text.hpp"
+#include "geoanchor/base/utf8.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/crs_csv.hpp"
-#include "geoanchor/io/crs_operation.hpp"
-#include "geoanchor/io/hash.hpp"
+#include "geoanchor/io/control/crs_csv.hpp"
+#include "geoanchor/crs/crs_operation.hpp"
+#include "geoanchor/base/hash.hpp"
 #include "geoanchor/io/json_input.hpp"
-#include "geoanchor/io/point_chain.hpp"
-#include "geoanchor/io/tile_apply.hpp"
-#include "geoanchor/io/tile_metadata.hpp"
-#include "geoanchor/io/transform_file.hpp"
-#include "geoanchor/io/vector_map.hpp"
+#include "geoanchor/io/tile/point_chain.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
+#include "geoanchor/io/tile/tile_metadata.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
+#include "geoanchor/io/vector/vector_map.hpp"
 #include "geoanchor/workflow/map_contract.hpp"
 #include "geoanchor/workflow/transform_checks.hpp"
 #include "geoanchor/workflow/tile_plan.hpp"
@@ -231,7 +231,7 @@ json request_json(const ApplyRequest& o, io::TileFormat input_format, io::TileFo
   if (input_format == io::TileFormat::xodr) j["max_deviation_m"] = o.max_deviation_m;
   // Added with issue 16: the survey metadata written into the sidecar, by
   // content (another file makes another sidecar), only when given.
-  if (o.survey_metadata) j["survey_metadata_sha256"] = io::sha256_file_hex(*o.survey_metadata);
+  if (o.survey_metadata) j["survey_metadata_sha256"] = sha256_file_hex(*o.survey_metadata);
   return j;
 }
 
@@ -262,7 +262,7 @@ class TileRunner {
   const std::string& transform_sha_;
   ApplyProgress& progress_;
   unsigned threads_per_tile_ = 1;
-  mutable io::FileHashCache grid_hashes_;  // a grid is hashed once per run, not once per tile
+  mutable FileHashCache grid_hashes_;  // a grid is hashed once per run, not once per tile
 };
 
 TileOutcome TileRunner::run(const fs::path& input) const {
@@ -302,7 +302,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
     survey = io::read_survey_metadata(*o_.survey_metadata);
     check_survey_against_input(*survey, p.in, p.in_frame_source, tile);
   }
-  const std::string input_sha = io::sha256_file_hex(p.input);
+  const std::string input_sha = sha256_file_hex(p.input);
   const json request = request_json(o_, p.format, p.output_format);
 
   // Resumable: an output whose provenance names this input, transform and
@@ -329,7 +329,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
           // is replaced only with --overwrite.
           const auto hash = prov.find("output_sha256");
           const std::string recorded = hash != prov.end() && hash->is_string() ? hash->get<std::string>() : "";
-          const std::string now = io::sha256_file_hex(p.output);
+          const std::string now = sha256_file_hex(p.output);
           if (recorded == now) {
             r.status = "skipped";
             r.points = prov.value("points", std::uint64_t{0});
@@ -620,7 +620,7 @@ void TileRunner::process(const TilePlan& p, TileOutcome& r) const {
   const auto output_size = static_cast<std::uint64_t>(out->stream().tellp());
   // The bytes written, as audit verifies them (issue 40 point 6): a tile
   // changed afterwards no longer matches its sidecar.
-  const std::string output_sha = io::sha256_file_hex(out->temporary_path());
+  const std::string output_sha = sha256_file_hex(out->temporary_path());
   nlohmann::ordered_json prov;
   prov["tool"] = o_.tool;
   prov["command"] = o_.command;
@@ -745,7 +745,7 @@ ApplyRun::ApplyRun(ApplyRequest request) : impl_(std::make_unique<Impl>()) {
   const ApplyRequest& o = m.request;
   if (o.transform) {
     m.transform = io::read_transform_file(*o.transform);
-    m.transform_sha = io::sha256_file_hex(*o.transform);
+    m.transform_sha = sha256_file_hex(*o.transform);
   }
   // The planner parses every value flag: a bad one fails before any output.
   const TilePlanner check(o, m.transform);

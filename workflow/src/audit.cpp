@@ -12,18 +12,18 @@
 #include <set>
 #include <sstream>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/io/atomic_file.hpp"
-#include "geoanchor/io/control_csv.hpp"
-#include "geoanchor/io/coordinate_columns.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
+#include "geoanchor/io/control/coordinate_columns.hpp"
 #include "geoanchor/io/csv.hpp"
-#include "geoanchor/io/hash.hpp"
-#include "geoanchor/io/point_chain.hpp"
-#include "geoanchor/io/tile_apply.hpp"
+#include "geoanchor/base/hash.hpp"
+#include "geoanchor/io/tile/point_chain.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"
 #include "map_files.hpp"
 #include "tile_points.hpp"
@@ -175,7 +175,7 @@ void read_artifact(AuditArtifact& a) {
   try {
     if (a.kind == AuditArtifactKind::transform) {
       a.transform = io::read_transform_file(a.path);
-      a.transform_sha256 = io::sha256_file_hex(a.path);
+      a.transform_sha256 = sha256_file_hex(a.path);
       return;
     }
     if (!fs::exists(a.path, ec)) {
@@ -426,7 +426,7 @@ class Transforms {
       std::error_code ec;
       if (m.path.empty() || !fs::is_regular_file(t, ec)) continue;
       try {
-        if (io::sha256_file_hex(t) != m.sha256) {
+        if (sha256_file_hex(t) != m.sha256) {
           why = "the transform file " + t.string() + " it records has changed since (SHA-256 differs)";
           continue;
         }
@@ -1183,7 +1183,7 @@ AuditCheck check_data(const std::vector<AuditArtifact>& arts) {
     }
     std::string actual;
     try {
-      actual = io::sha256_file_hex(a.path);
+      actual = sha256_file_hex(a.path);
     } catch (const Error& e) {
       ++bad;
       c.evidence.push_back(name_of(a) + ": FAIL " + e.what());

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <limits>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/geodesy/projection.hpp"
 #include "geoanchor/geodesy/quantization.hpp"
 

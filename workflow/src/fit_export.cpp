@@ -11,7 +11,7 @@
 #include <system_error>
 #include <utility>
 
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 
 namespace geoanchor::workflow {
 

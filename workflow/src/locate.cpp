@@ -8,11 +8,11 @@
 #include <set>
 #include <sstream>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/geodesy/physical_range.hpp"
 #include "geoanchor/io/csv.hpp"
 #include "geoanchor/workflow/uncertainty.hpp"

@@ -12,11 +12,11 @@
 #include <random>
 #include <utility>
 
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
-#include "geoanchor/io/network_output.hpp"
+#include "geoanchor/base/number_text.hpp"
+#include "geoanchor/io/network/network_output.hpp"
 
 namespace geoanchor::workflow {
 

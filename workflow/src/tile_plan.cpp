@@ -3,13 +3,13 @@
 #include <cmath>
 #include <fstream>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
-#include "geoanchor/io/crs_csv.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
+#include "geoanchor/io/control/crs_csv.hpp"
 #include "geoanchor/io/csv.hpp"
-#include "geoanchor/io/las.hpp"
-#include "geoanchor/io/las_geotiff.hpp"
-#include "geoanchor/io/vector_map.hpp"
+#include "geoanchor/las/las.hpp"
+#include "geoanchor/io/tile/las_geotiff.hpp"
+#include "geoanchor/io/vector/vector_map.hpp"
 #include "geoanchor/workflow/value_text.hpp"
 
 namespace geoanchor::workflow {

@@ -5,9 +5,9 @@
 #include <ostream>
 #include <streambuf>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/io/tile_apply.hpp"
-#include "geoanchor/io/vector_map.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
+#include "geoanchor/io/vector/vector_map.hpp"
 
 namespace geoanchor::workflow::detail {
 namespace {

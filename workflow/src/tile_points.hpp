@@ -11,7 +11,7 @@
 #include <string>
 #include <utility>
 
-#include "geoanchor/io/point_chain.hpp"
+#include "geoanchor/io/tile/point_chain.hpp"
 
 namespace geoanchor::workflow::detail {
 

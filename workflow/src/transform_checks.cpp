@@ -3,7 +3,7 @@
 #include <variant>
 
 #include "geoanchor/geodesy/helmert.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/number_text.hpp"
 
 namespace geoanchor::workflow {
 

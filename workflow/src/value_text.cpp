@@ -7,10 +7,10 @@
 #include <tuple>
 #include <vector>
 
-#include "geoanchor/geodesy/error.hpp"
-#include "geoanchor/geodesy/number_text.hpp"
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
 #include "geoanchor/geodesy/physical_range.hpp"
-#include "geoanchor/io/proj_geoid.hpp"
+#include "geoanchor/crs/proj_geoid.hpp"
 
 namespace geoanchor::workflow {
 namespace {

@@ -15,7 +15,7 @@
 #include <string_view>
 
 #include "geoanchor/geodesy/ellipsoid.hpp"
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/units.hpp"
 
 namespace geoanchor::geodesy {

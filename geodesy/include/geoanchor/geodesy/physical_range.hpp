@@ -11,7 +11,7 @@
 #include <string_view>
 
 #include "geoanchor/geodesy/ellipsoid.hpp"
-#include "geoanchor/geodesy/error.hpp"
+#include "geoanchor/base/error.hpp"
 
 namespace geoanchor::geodesy {
 

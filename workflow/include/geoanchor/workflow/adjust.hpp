@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/network.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 
 namespace geoanchor::workflow {

@@ -31,8 +31,8 @@
 #include <string>
 #include <vector>
 
-#include "geoanchor/io/tile_metadata.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/tile/tile_metadata.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 
 namespace geoanchor::workflow {
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/control_point.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 
 namespace geoanchor::workflow {

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "geoanchor/io/map_metadata.hpp"
-#include "geoanchor/io/tile_apply.hpp"
-#include "geoanchor/io/tile_metadata.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
+#include "geoanchor/io/tile/tile_metadata.hpp"
 
 namespace geoanchor::workflow {
 

@@ -24,9 +24,9 @@
 
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/units.hpp"
-#include "geoanchor/io/tile_apply.hpp"
-#include "geoanchor/io/tile_metadata.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/tile/tile_apply.hpp"
+#include "geoanchor/io/tile/tile_metadata.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/workflow/apply.hpp"
 
 namespace geoanchor::workflow {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "geoanchor/geodesy/units.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 
 namespace geoanchor::workflow {
 

@@ -14,7 +14,7 @@
 
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/geodesy/units.hpp"
-#include "geoanchor/io/transform_file.hpp"
+#include "geoanchor/io/transform/transform_file.hpp"
 
 namespace geoanchor::workflow {
 

@@ -13,7 +13,7 @@
 #include "geoanchor/geodesy/geoid.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/geodesy/projection.hpp"
-#include "geoanchor/io/control_csv.hpp"
+#include "geoanchor/io/control/control_csv.hpp"
 #include "geoanchor/solver/helmert_fit.hpp"
 
 namespace geoanchor::workflow {
