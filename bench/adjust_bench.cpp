@@ -265,7 +265,7 @@ int main(int argc, char** argv) {
   // The bare factor-and-solve and the adjustment in the same memory setting
   // as the command (which starts itself with huge pages for malloc: the
   // floor is not to be measured with 4 kB page faults the command avoids).
-  io::restart_with_huge_pages(argv);
+  cli::restart_with_huge_pages(argv);
   std::vector<std::size_t> sizes{1000, 10000, 100000};
   int repetitions = 3;
   std::size_t command_max = 100000, kernel_max = 1000000, dense_max = 2000, threads_max = 100000;

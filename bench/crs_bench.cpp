@@ -37,7 +37,7 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr std::size_t kPoints = 1000000;
-constexpr std::size_t kBatch = 4096;  // convert's batch (io/src/crs_csv.cpp)
+constexpr std::size_t kBatch = 4096;  // convert's batch (io/src/control/crs_csv.cpp)
 constexpr int kKernelRepeats = 11;
 constexpr int kCommandRepeats = 3;
 

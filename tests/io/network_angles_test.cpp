@@ -6,7 +6,7 @@
 // carried minute, with a warning in the network's warnings; seconds above
 // 60 and minutes of 60 stay refused. Ranges: directions, horizontal angles
 // and azimuths [0, 360°]; zenith angles [0, 180°]; vertical angles
-// [−90°, 90°] (io/src/network_builder.hpp, check_angle_range).
+// [−90°, 90°] (io/src/network/network_builder.hpp, check_angle_range).
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

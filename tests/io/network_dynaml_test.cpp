@@ -1,4 +1,4 @@
-// DynaML read in parts on threads (io/src/network_dynaml.cpp,
+// DynaML read in parts on threads (io/src/network/network_dynaml.cpp,
 // NetworkReadOptions::dynaml_part_bytes) against the same file read in one
 // piece: the same stations in the same order, the same measurements,
 // direction sets, sources (file:line) and warnings; and where a part cannot
