@@ -259,32 +259,33 @@ std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t
   return {k, run};
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  // The bare factor-and-solve and the adjustment in the same memory setting
-  // as the command (which starts itself with huge pages for malloc: the
-  // floor is not to be measured with 4 kB page faults the command avoids).
-  cli::restart_with_huge_pages(argv);
+// The command line (the usage line at the top of this file).
+struct BenchOptions {
   std::vector<std::size_t> sizes{1000, 10000, 100000};
   int repetitions = 3;
   std::size_t command_max = 100000, kernel_max = 1000000, dense_max = 2000, threads_max = 100000;
+};
+
+// False (after printing the usage) for an unknown flag.
+bool parse_options(int argc, char** argv, BenchOptions& b) {
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--sizes") sizes = parse_sizes(argv[i + 1]);
-    else if (flag == "--threads-max") threads_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
-    else if (flag == "--dense-max") dense_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
-    else if (flag == "--kernel-max") kernel_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
-    else if (flag == "--repetitions") repetitions = std::max(1, std::atoi(argv[i + 1]));
-    else if (flag == "--command-max") command_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
+    if (flag == "--sizes") b.sizes = parse_sizes(argv[i + 1]);
+    else if (flag == "--threads-max") b.threads_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
+    else if (flag == "--dense-max") b.dense_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
+    else if (flag == "--kernel-max") b.kernel_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
+    else if (flag == "--repetitions") b.repetitions = std::max(1, std::atoi(argv[i + 1]));
+    else if (flag == "--command-max") b.command_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
     else {
       std::fprintf(stderr, "usage: %s [--sizes N,N...] [--repetitions R] [--command-max N] [--kernel-max N] [--dense-max N] [--threads-max N]\n", argv[0]);
-      return 2;
+      return false;
     }
   }
-  char folder_template[] = "/tmp/geoanchor_adjust_bench_XXXXXX";
-  if (!mkdtemp(folder_template)) return 1;
-  const fs::path folder = folder_template;
+  return true;
+}
+
+// The lines above the first table, and its header.
+void print_table_header(int repetitions) {
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   std::printf("malloc: GLIBC_TUNABLES=%s (every process below)\n", tunables ? tunables : "(not set)");
   std::printf("generated GNSS networks (adjust --generate N --seed N); median of %d; s = wall seconds, MB = peak RSS;\n"
@@ -294,106 +295,137 @@ int main(int argc, char** argv) {
   std::printf("%-8s %-8s | %7s %6s %6s | %7s %6s %5s | %7s %6s %5s | %7s %6s %5s | %6s %6s %9s %6s %6s\n", "stations", "baselns",
               "bare s", "MB", "ND s", "adj s", "MB", "ratio", "cmd-flag", "MB", "ratio", "cmd s", "MB", "ratio", "sigma0", "passes",
               "blunders", "cover", "eNe/n");
-  std::vector<std::pair<std::size_t, KernelRun>> kernels;
-  for (const std::size_t n : sizes) {
-    const GeneratedNetwork g = make_network(n);
-    std::vector<double> adjust_s, bare_s;
-    double peak = 0.0, bare_peak = 0.0;
-    KernelRun k;
-    for (int rep = 0; rep < (n <= kernel_max ? repetitions : 0); ++rep) {
-      const auto [kr, r] = adjust_in_child(g, dense_max, 2);
-      if (r.status != 0 || r.seconds < 0.0) {
-        std::fprintf(stderr, "the adjustment of %zu stations failed (status %d)\n", n, r.status);
-        return 1;
-      }
-      k = kr;
-      adjust_s.push_back(r.seconds);
-      peak = std::max(peak, r.peak_mb);
-    }
-    // The same on one thread: the speed-up of --jobs 2 (the results are
-    // the same bits, tests/workflow/network_generator_test.cpp).
-    double one_thread = 0.0;
-    if (n <= kernel_max && n <= threads_max) {
-      const auto [k1, r1] = adjust_in_child(g, 0, 1);
-      if (r1.status != 0 || r1.seconds < 0.0) return 1;
-      one_thread = r1.seconds;
-    }
-    // The bare factor-and-solve in a child too: CHOLMOD's OpenMP threads in
-    // this process would deadlock a child forked later (libgomp after fork).
-    std::vector<double> bare_nd_s;
-    for (int rep = 0; rep < repetitions; ++rep) {
-      for (const bool metis : {false, true}) {
-        int fds[2];
-        if (pipe(fds) != 0) return 1;
-        const pid_t pid = fork();
-        if (pid == 0) {
-          close(fds[0]);
-          const double sec = bare_cholmod_seconds(g, metis);
-          if (write(fds[1], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) _exit(1);
-          _exit(0);
-        }
-        close(fds[1]);
-        double sec = -1.0;
-        if (read(fds[0], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) sec = -1.0;
+}
+
+// The bare factor-and-solve's seconds, with CHOLMOD's default ordering
+// and with METIS's, and the default's peak memory.
+struct BareRuns {
+  std::vector<double> seconds, nd_seconds;
+  double peak_mb = 0.0;
+};
+
+// The bare factor-and-solve in a child too: CHOLMOD's OpenMP threads in
+// this process would deadlock a child forked later (libgomp after fork).
+// False when a run failed.
+bool time_bare(const GeneratedNetwork& g, int repetitions, BareRuns& bare) {
+  for (int rep = 0; rep < repetitions; ++rep) {
+    for (const bool metis : {false, true}) {
+      int fds[2];
+      if (pipe(fds) != 0) return false;
+      const pid_t pid = fork();
+      if (pid == 0) {
         close(fds[0]);
-        struct rusage usage {};
-        int status = 0;
-        wait4(pid, &status, 0, &usage);
-        if (sec < 0.0) return 1;
-        if (metis) {
-          bare_nd_s.push_back(sec);
-        } else {
-          bare_s.push_back(sec);
-          bare_peak = std::max(bare_peak, static_cast<double>(usage.ru_maxrss) / 1024.0);
-        }
+        const double sec = bare_cholmod_seconds(g, metis);
+        if (write(fds[1], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) _exit(1);
+        _exit(0);
+      }
+      close(fds[1]);
+      double sec = -1.0;
+      if (read(fds[0], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) sec = -1.0;
+      close(fds[0]);
+      struct rusage usage {};
+      int status = 0;
+      wait4(pid, &status, 0, &usage);
+      if (sec < 0.0) return false;
+      if (metis) {
+        bare.nd_seconds.push_back(sec);
+      } else {
+        bare.seconds.push_back(sec);
+        bare.peak_mb = std::max(bare.peak_mb, static_cast<double>(usage.ru_maxrss) / 1024.0);
       }
     }
-    const double bare = median(bare_s), bare_nd = median(bare_nd_s);
-    // The whole command, on the DynaML files as written.
-    std::string command[2][3];
-    for (auto& c : command) c[0] = c[1] = c[2] = "-";
-    if (n <= command_max) {
-      for (const auto& e : fs::directory_iterator(folder)) fs::remove(e.path());
-      workflow::write_generated_network(g, folder, "network", io::Overwrite::allow);
-      for (int snooping = 0; snooping < 2; ++snooping) {
-        std::vector<double> cmd_s;
-        double cmd_peak = 0.0;
-        for (int rep = 0; rep < repetitions; ++rep) {
-          std::vector<std::string> args{GEOANCHOR_EXE, "adjust", (folder / "network.stn.xml").string(), (folder / "network.msr.xml").string(),
-                                        "-o", (folder / "st.csv").string(), "--measurements", (folder / "m.csv").string(), "--report",
-                                        (folder / "report.txt").string(), "--overwrite"};
-          // As given the planted blunders fail the global test: written anyway.
-          if (!snooping) args.insert(args.end(), {"--accept-failed-global-test"});
-          if (snooping) args.push_back("--remove-outliers");
-          const Run r = bench::run_command(args, folder);
-          if (r.status != 0) {
-            std::fprintf(stderr, "geoanchor adjust exited %d; see %s\n", r.status, (folder / "stderr.txt").c_str());
-            return 1;
-          }
-          cmd_s.push_back(r.seconds);
-          cmd_peak = std::max(cmd_peak, r.peak_mb);
-        }
-        char buf[64];
-        std::snprintf(buf, sizeof buf, "%.2f", median(cmd_s));
-        command[snooping][0] = buf;
-        std::snprintf(buf, sizeof buf, "%.0f", cmd_peak);
-        command[snooping][1] = buf;
-        std::snprintf(buf, sizeof buf, "%.2f", median(cmd_s) / bare);
-        command[snooping][2] = buf;
-      }
-    }
-    const double a = adjust_s.empty() ? 0.0 : median(adjust_s);
-    char blunders[32];
-    std::snprintf(blunders, sizeof blunders, "%zu/%zu+%zu", k.found, g.blunders.size(), k.others_removed);
-    std::printf("%-8zu %-8zu | %7.2f %6.0f %6.2f | %7.2f %6.0f %5.2f | %7s %6s %5s | %7s %6s %5s | %6.4f %6d %9s %6.4f %6.4f\n", n,
-                g.network.measurements.size(), bare, bare_peak, bare_nd, a, peak, a / bare, command[0][0].c_str(), command[0][1].c_str(),
-                command[0][2].c_str(), command[1][0].c_str(), command[1][1].c_str(), command[1][2].c_str(), k.sigma0, k.passes,
-                blunders, k.coverage, k.chi2_ratio);
-    std::fflush(stdout);
-    k.one_thread_seconds = one_thread;
-    k.two_thread_seconds = a;
-    kernels.push_back({n, k});
   }
+  return true;
+}
+
+// The whole command, on the DynaML files as written: seconds, peak MB and
+// ratio to the bare factor-and-solve, as given ([0]) and with
+// --remove-outliers ([1]); "-" above --command-max. False when a run failed.
+bool time_command(const GeneratedNetwork& g, std::size_t n, const BenchOptions& b, const fs::path& folder, double bare,
+                  std::string (&command)[2][3]) {
+  for (auto& c : command) c[0] = c[1] = c[2] = "-";
+  if (n <= b.command_max) {
+    for (const auto& e : fs::directory_iterator(folder)) fs::remove(e.path());
+    workflow::write_generated_network(g, folder, "network", io::Overwrite::allow);
+    for (int snooping = 0; snooping < 2; ++snooping) {
+      std::vector<double> cmd_s;
+      double cmd_peak = 0.0;
+      for (int rep = 0; rep < b.repetitions; ++rep) {
+        std::vector<std::string> args{GEOANCHOR_EXE, "adjust", (folder / "network.stn.xml").string(), (folder / "network.msr.xml").string(),
+                                      "-o", (folder / "st.csv").string(), "--measurements", (folder / "m.csv").string(), "--report",
+                                      (folder / "report.txt").string(), "--overwrite"};
+        // As given the planted blunders fail the global test: written anyway.
+        if (!snooping) args.insert(args.end(), {"--accept-failed-global-test"});
+        if (snooping) args.push_back("--remove-outliers");
+        const Run r = bench::run_command(args, folder);
+        if (r.status != 0) {
+          std::fprintf(stderr, "geoanchor adjust exited %d; see %s\n", r.status, (folder / "stderr.txt").c_str());
+          return false;
+        }
+        cmd_s.push_back(r.seconds);
+        cmd_peak = std::max(cmd_peak, r.peak_mb);
+      }
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.2f", median(cmd_s));
+      command[snooping][0] = buf;
+      std::snprintf(buf, sizeof buf, "%.0f", cmd_peak);
+      command[snooping][1] = buf;
+      std::snprintf(buf, sizeof buf, "%.2f", median(cmd_s) / bare);
+      command[snooping][2] = buf;
+    }
+  }
+  return true;
+}
+
+// One size: the adjustment (on two threads, and on one), the bare
+// factor-and-solve and the command, printed as a row of the first table;
+// the adjustment's numbers added to `kernels`. False when a run failed.
+bool measure_size(std::size_t n, const BenchOptions& b, const fs::path& folder,
+                  std::vector<std::pair<std::size_t, KernelRun>>& kernels) {
+  const GeneratedNetwork g = make_network(n);
+  std::vector<double> adjust_s;
+  double peak = 0.0;
+  KernelRun k;
+  for (int rep = 0; rep < (n <= b.kernel_max ? b.repetitions : 0); ++rep) {
+    const auto [kr, r] = adjust_in_child(g, b.dense_max, 2);
+    if (r.status != 0 || r.seconds < 0.0) {
+      std::fprintf(stderr, "the adjustment of %zu stations failed (status %d)\n", n, r.status);
+      return false;
+    }
+    k = kr;
+    adjust_s.push_back(r.seconds);
+    peak = std::max(peak, r.peak_mb);
+  }
+  // The same on one thread: the speed-up of --jobs 2 (the results are
+  // the same bits, tests/workflow/network_generator_test.cpp).
+  double one_thread = 0.0;
+  if (n <= b.kernel_max && n <= b.threads_max) {
+    const auto [k1, r1] = adjust_in_child(g, 0, 1);
+    if (r1.status != 0 || r1.seconds < 0.0) return false;
+    one_thread = r1.seconds;
+  }
+  BareRuns bare_runs;
+  if (!time_bare(g, b.repetitions, bare_runs)) return false;
+  const double bare = median(bare_runs.seconds), bare_nd = median(bare_runs.nd_seconds);
+  std::string command[2][3];
+  if (!time_command(g, n, b, folder, bare, command)) return false;
+  const double a = adjust_s.empty() ? 0.0 : median(adjust_s);
+  char blunders[32];
+  std::snprintf(blunders, sizeof blunders, "%zu/%zu+%zu", k.found, g.blunders.size(), k.others_removed);
+  std::printf("%-8zu %-8zu | %7.2f %6.0f %6.2f | %7.2f %6.0f %5.2f | %7s %6s %5s | %7s %6s %5s | %6.4f %6d %9s %6.4f %6.4f\n", n,
+              g.network.measurements.size(), bare, bare_runs.peak_mb, bare_nd, a, peak, a / bare, command[0][0].c_str(),
+              command[0][1].c_str(), command[0][2].c_str(), command[1][0].c_str(), command[1][1].c_str(), command[1][2].c_str(),
+              k.sigma0, k.passes, blunders, k.coverage, k.chi2_ratio);
+  std::fflush(stdout);
+  k.one_thread_seconds = one_thread;
+  k.two_thread_seconds = a;
+  kernels.push_back({n, k});
+  return true;
+}
+
+// The second and third tables: the adjustment's parts per size, and the
+// speed-up of two threads; then the legend.
+void print_parts(const std::vector<std::pair<std::size_t, KernelRun>>& kernels) {
   std::printf("\nthe adjustment's parts (seconds over every pass; solver::AdjustmentTimings; passes: all, and those downdated)\n"
               "%-8s %10s %7s %9s %9s %9s %9s %9s %9s %9s %9s %9s %12s\n",
               "stations", "nnz(L)", "passes", "assemble", "factor", "solve", "sel.inv", "downdate", "per-meas", "datum", "snooping",
@@ -417,6 +449,26 @@ int main(int argc, char** argv) {
   }
   std::printf("\nblunders: planted found / planted + other measurements removed (alpha 0.001 removes about 0.1 %% of good ones)\n"
               "cover: station components within 1.96 sigma of the truth; eNe/n: e'Ne / n over the free stations' components\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // The bare factor-and-solve and the adjustment in the same memory setting
+  // as the command (which starts itself with huge pages for malloc: the
+  // floor is not to be measured with 4 kB page faults the command avoids).
+  cli::restart_with_huge_pages(argv);
+  BenchOptions b;
+  if (!parse_options(argc, argv, b)) return 2;
+  char folder_template[] = "/tmp/geoanchor_adjust_bench_XXXXXX";
+  if (!mkdtemp(folder_template)) return 1;
+  const fs::path folder = folder_template;
+  print_table_header(b.repetitions);
+  std::vector<std::pair<std::size_t, KernelRun>> kernels;
+  for (const std::size_t n : b.sizes) {
+    if (!measure_size(n, b, folder, kernels)) return 1;
+  }
+  print_parts(kernels);
   fs::remove_all(folder);
   return 0;
 }

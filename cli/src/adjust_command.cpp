@@ -83,10 +83,8 @@ int run_generate(const AdjustCommandOptions& o) {
   return 0;
 }
 
-}  // namespace
-
-int run_adjust(const AdjustCommandOptions& o) {
-  if (o.generate) return run_generate(o);
+// The options' combinations for an adjustment (not --generate).
+void check_options(const AdjustCommandOptions& o) {
   if (o.out_dir || o.seed || o.held || o.blunders || o.blunder_m || o.center || o.side_km) {
     throw Error(ErrorKind::usage, "E_OPTION", "--out-dir, --seed, --held, --blunders, --blunder, --center and --side-km go with --generate");
   }
@@ -98,7 +96,10 @@ int run_adjust(const AdjustCommandOptions& o) {
   if (!o.network.estimate_helmert && (o.convention || o.helmert_output)) {
     throw Error(ErrorKind::usage, "E_OPTION", std::string(o.convention ? "--convention" : "--helmert-output") + ": only with --estimate-helmert");
   }
-  // The estimated Helmert's transform file.
+}
+
+// The estimated Helmert's transform file.
+std::optional<std::string> helmert_output_path(const AdjustCommandOptions& o) {
   std::optional<std::string> helmert_path;
   if (o.network.estimate_helmert) {
     if (o.helmert_output) {
@@ -110,69 +111,77 @@ int run_adjust(const AdjustCommandOptions& o) {
       helmert_path = (out.parent_path() / (out.extension() == ".csv" ? out.stem() : out.filename())).string() + ".helmert.json";
     }
   }
-  workflow::AdjustRequest request = network_request(o.inputs, o.network, o.convention);
-  auto& so = request.options;
-  so.joint_covariance = o.sinex.has_value();
-  so.jobs = o.jobs;
-  if (o.max_memory_gb) so.memory_budget_bytes = static_cast<std::uint64_t>(std::max(1.0, *o.max_memory_gb * 1e9));
+  return helmert_path;
+}
 
-  // Every output its own file (the stations' sidecar included).
-  {
-    std::vector<std::pair<std::string, std::string>> outputs;
-    if (o.output != "-") outputs.push_back({"-o", o.output}), outputs.push_back({"-o's sidecar", o.output + ".geoanchor.json"});
-    if (o.measurements) outputs.push_back({"--measurements", *o.measurements});
-    if (o.report) outputs.push_back({"--report", *o.report});
-    if (o.sinex) outputs.push_back({"--sinex", *o.sinex});
-    if (helmert_path) outputs.push_back({"--estimate-helmert's transform file", *helmert_path});
-    for (std::size_t a = 0; a < outputs.size(); ++a) {
-      for (std::size_t b = a + 1; b < outputs.size(); ++b) {
-        std::error_code ec;
-        const bool same = outputs[a].second == outputs[b].second ||
-                          std::filesystem::weakly_canonical(outputs[a].second, ec) == std::filesystem::weakly_canonical(outputs[b].second, ec);
-        if (same) {
-          throw Error(ErrorKind::usage, "E_OPTION", outputs[a].first + " and " + outputs[b].first + " name the same file " +
-                                                        outputs[b].second + "; give each output its own");
-        }
+// Every output its own file (the stations' sidecar included).
+void refuse_shared_paths(const AdjustCommandOptions& o, const std::optional<std::string>& helmert_path) {
+  std::vector<std::pair<std::string, std::string>> outputs;
+  if (o.output != "-") outputs.push_back({"-o", o.output}), outputs.push_back({"-o's sidecar", o.output + ".geoanchor.json"});
+  if (o.measurements) outputs.push_back({"--measurements", *o.measurements});
+  if (o.report) outputs.push_back({"--report", *o.report});
+  if (o.sinex) outputs.push_back({"--sinex", *o.sinex});
+  if (helmert_path) outputs.push_back({"--estimate-helmert's transform file", *helmert_path});
+  for (std::size_t a = 0; a < outputs.size(); ++a) {
+    for (std::size_t b = a + 1; b < outputs.size(); ++b) {
+      std::error_code ec;
+      const bool same = outputs[a].second == outputs[b].second ||
+                        std::filesystem::weakly_canonical(outputs[a].second, ec) == std::filesystem::weakly_canonical(outputs[b].second, ec);
+      if (same) {
+        throw Error(ErrorKind::usage, "E_OPTION", outputs[a].first + " and " + outputs[b].first + " name the same file " +
+                                                      outputs[b].second + "; give each output its own");
       }
-      for (const auto& in : o.inputs) {
-        std::error_code ec;
-        if (in != "-" && std::filesystem::weakly_canonical(in, ec) == std::filesystem::weakly_canonical(outputs[a].second, ec)) {
-          throw Error(ErrorKind::usage, "E_OPTION", outputs[a].first + " " + outputs[a].second + " is an input");
-        }
+    }
+    for (const auto& in : o.inputs) {
+      std::error_code ec;
+      if (in != "-" && std::filesystem::weakly_canonical(in, ec) == std::filesystem::weakly_canonical(outputs[a].second, ec)) {
+        throw Error(ErrorKind::usage, "E_OPTION", outputs[a].first + " " + outputs[a].second + " is an input");
       }
     }
   }
-  // Outputs are claimed before the adjustment: a path that cannot be written fails first.
-  const io::Overwrite overwrite = o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse;
-  io::DataOutput stations(o.output, overwrite);
+}
+
+// The outputs, claimed before the adjustment: a path that cannot be
+// written fails first.
+struct AdjustOutputs {
+  AdjustOutputs(const AdjustCommandOptions& o, const std::optional<std::string>& helmert_path)
+      : overwrite(o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse), stations(o.output, overwrite) {
+    if (o.measurements) measurements = std::make_unique<io::AtomicOutputFile>(*o.measurements, overwrite);
+    if (o.report) report = std::make_unique<io::AtomicOutputFile>(*o.report, overwrite);
+    if (o.sinex) sinex = std::make_unique<io::AtomicOutputFile>(*o.sinex, overwrite);
+    if (helmert_path) helmert = std::make_unique<io::AtomicOutputFile>(*helmert_path, overwrite);
+  }
+  const io::Overwrite overwrite;
+  io::DataOutput stations;
   std::unique_ptr<io::AtomicOutputFile> measurements, report;
-  if (o.measurements) measurements = std::make_unique<io::AtomicOutputFile>(*o.measurements, overwrite);
-  if (o.report) report = std::make_unique<io::AtomicOutputFile>(*o.report, overwrite);
   std::unique_ptr<io::AtomicOutputFile> sinex, helmert;
-  if (o.sinex) sinex = std::make_unique<io::AtomicOutputFile>(*o.sinex, overwrite);
-  if (helmert_path) helmert = std::make_unique<io::AtomicOutputFile>(*helmert_path, overwrite);
+};
 
-  const workflow::PreparedNetwork prepared = workflow::prepare_network(request);
-  so.helmert = prepared.helmert;
-  const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
-
-  const std::string text = workflow::report_text(prepared, r, so);
+// The report, shown whether or not the results are written, with the
+// warnings of the reading and of the adjustment.
+void show_report(const AdjustCommandOptions& o, const AdjustOutputs& outputs, const workflow::PreparedNetwork& prepared,
+                 const solver::AdjustmentResult& r, const solver::AdjustOptions& so, const std::string& text) {
   // (The whole report only for --json: the sidecar holds its summary.)
   const nlohmann::ordered_json report_document =
       o.json ? workflow::report_document(prepared, r, so, workflow::ReportDetail::full) : nlohmann::ordered_json();
   // The report is shown whether or not the results are written.
-  std::ostream& shown = stations.is_standard_output() || o.json ? std::cerr : std::cout;
-  if (!report) shown << text;
+  std::ostream& shown = outputs.stations.is_standard_output() || o.json ? std::cerr : std::cout;
+  if (!outputs.report) shown << text;
   if (o.json) std::cout << report_document.dump(2) << "\n";
   for (const auto& n : prepared.notes) {
     if (n.rfind("warning: ", 0) == 0) std::cerr << "geoanchor: " << n << '\n';
   }
   for (const auto& w : r.warnings) std::cerr << "geoanchor: warning: " << w << '\n';
+}
 
+// Whether the results are refused (data snooping's limit, or a global test
+// that fails high without --accept-failed-global-test); then the error is
+// printed and nothing is written.
+bool refuse_results(const AdjustCommandOptions& o, const workflow::PreparedNetwork& prepared, const solver::AdjustmentResult& r) {
   const auto& g = r.global_test;
   if (!r.refused_because.empty()) {
     std::cerr << "geoanchor: error[E_ADJUST_SNOOPING_LIMIT]: " << r.refused_because << "; nothing written\n";
-    return exit_code(ErrorKind::rejected);
+    return true;
   }
   if (g.failed_high() && !o.accept_failed_global_test) {
     // The flagged measurements first, in the order data snooping would remove them.
@@ -201,9 +210,36 @@ int run_adjust(const AdjustCommandOptions& o) {
               << (failing.empty() && !worst.empty() ? "; the largest |w| is " + worst + " (" + format_fixed(w, 2) + ")" : std::string())
               << "; nothing written (--remove-outliers removes the flagged measurements in that order and adjusts again; "
                  "--accept-failed-global-test writes the results as they are)\n";
-    return exit_code(ErrorKind::rejected);
+    return true;
   }
+  return false;
+}
 
+// The estimated Helmert's transform file, its implausible parameters
+// printed and recorded.
+std::string helmert_file_text(const AdjustCommandOptions& o, const workflow::PreparedNetwork& prepared,
+                              const solver::AdjustmentResult& r, const solver::AdjustOptions& so, const std::string& helmert_path) {
+  std::string cmd;
+  for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
+  io::TransformFile file = workflow::helmert_transform_file(prepared, r, so, "geoanchor " GEOANCHOR_VERSION ": " + cmd);
+  // Parameters past the plausibility limits (RELIABILITY 15): printed and recorded.
+  std::optional<workflow::EpochSpan> span;
+  if (prepared.helmert->rates) {
+    const auto [lo, hi] = std::minmax_element(prepared.helmert->epochs.begin(), prepared.helmert->epochs.end());
+    span = workflow::EpochSpan{geodesy::DecimalYear{*lo}, geodesy::DecimalYear{*hi}};
+  }
+  for (const auto& w : workflow::implausible_transform_warnings(file, helmert_path, span)) {
+    std::cerr << "geoanchor: warning: " << w << '\n';
+    file.fit->warnings.push_back(w);
+  }
+  return io::to_json_text(file);
+}
+
+// Every output's text, written and published as one group.
+void write_outputs(const AdjustCommandOptions& o, AdjustOutputs& outputs, const workflow::PreparedNetwork& prepared,
+                   const solver::AdjustmentResult& r, const solver::AdjustOptions& so,
+                   const std::optional<std::string>& helmert_path, const std::string& text) {
+  io::DataOutput& stations = outputs.stations;
   // The sidecar's text (the report's summary and the inputs' hashes: a
   // second's reading of 200 MB at 10⁵ stations) is made on a thread of its
   // own while the other outputs are formatted.
@@ -214,49 +250,57 @@ int run_adjust(const AdjustCommandOptions& o) {
     });
   }
   // Every output's text before any is written: a refusal leaves none.
-  const std::string sinex_text = sinex ? workflow::stations_sinex(prepared, r, std::string("geoanchor ") + GEOANCHOR_VERSION) : "";
+  const std::string sinex_text = outputs.sinex ? workflow::stations_sinex(prepared, r, std::string("geoanchor ") + GEOANCHOR_VERSION) : "";
   std::string helmert_text;
-  if (helmert) {
-    std::string cmd;
-    for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
-    io::TransformFile file = workflow::helmert_transform_file(prepared, r, so, "geoanchor " GEOANCHOR_VERSION ": " + cmd);
-    // Parameters past the plausibility limits (RELIABILITY 15): printed and recorded.
-    std::optional<workflow::EpochSpan> span;
-    if (prepared.helmert->rates) {
-      const auto [lo, hi] = std::minmax_element(prepared.helmert->epochs.begin(), prepared.helmert->epochs.end());
-      span = workflow::EpochSpan{geodesy::DecimalYear{*lo}, geodesy::DecimalYear{*hi}};
-    }
-    for (const auto& w : workflow::implausible_transform_warnings(file, *helmert_path, span)) {
-      std::cerr << "geoanchor: warning: " << w << '\n';
-      file.fit->warnings.push_back(w);
-    }
-    helmert_text = io::to_json_text(file);
-  }
+  if (outputs.helmert) helmert_text = helmert_file_text(o, prepared, r, so, *helmert_path);
   stations.stream() << workflow::stations_csv(prepared.network, r, so);
-  const std::string measurements_text = measurements ? workflow::measurements_csv(prepared.network, r, o.jobs) : std::string();
+  const std::string measurements_text = outputs.measurements ? workflow::measurements_csv(prepared.network, r, o.jobs) : std::string();
   if (sidecar_text.valid()) stations.sidecar() << sidecar_text.get() << "\n";
   // One group (RELIABILITY 41): every output written before any is
   // published, the stations' CSV last; a failure leaves none of them.
   std::vector<io::AtomicOutputFile*> group;
-  if (sinex) {
-    sinex->stream() << sinex_text;
-    group.push_back(sinex.get());
+  if (outputs.sinex) {
+    outputs.sinex->stream() << sinex_text;
+    group.push_back(outputs.sinex.get());
   }
-  if (helmert) {
-    helmert->stream() << helmert_text;
-    group.push_back(helmert.get());
+  if (outputs.helmert) {
+    outputs.helmert->stream() << helmert_text;
+    group.push_back(outputs.helmert.get());
   }
-  if (measurements) {
-    measurements->stream() << measurements_text;
-    group.push_back(measurements.get());
+  if (outputs.measurements) {
+    outputs.measurements->stream() << measurements_text;
+    group.push_back(outputs.measurements.get());
   }
-  if (report) {
-    report->stream() << text;
-    group.push_back(report.get());
+  if (outputs.report) {
+    outputs.report->stream() << text;
+    group.push_back(outputs.report.get());
   }
   // Standard output first: a report that could not be printed leaves no file.
   if (o.json) io::finish_standard_output("the report (--json)");
   stations.commit_with(group, "the adjusted stations");
+}
+
+}  // namespace
+
+int run_adjust(const AdjustCommandOptions& o) {
+  if (o.generate) return run_generate(o);
+  check_options(o);
+  const std::optional<std::string> helmert_path = helmert_output_path(o);
+  workflow::AdjustRequest request = network_request(o.inputs, o.network, o.convention);
+  auto& so = request.options;
+  so.joint_covariance = o.sinex.has_value();
+  so.jobs = o.jobs;
+  if (o.max_memory_gb) so.memory_budget_bytes = static_cast<std::uint64_t>(std::max(1.0, *o.max_memory_gb * 1e9));
+  refuse_shared_paths(o, helmert_path);
+  AdjustOutputs outputs(o, helmert_path);
+
+  const workflow::PreparedNetwork prepared = workflow::prepare_network(request);
+  so.helmert = prepared.helmert;
+  const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
+  const std::string text = workflow::report_text(prepared, r, so);
+  show_report(o, outputs, prepared, r, so, text);
+  if (refuse_results(o, prepared, r)) return exit_code(ErrorKind::rejected);
+  write_outputs(o, outputs, prepared, r, so, helmert_path, text);
   return 0;
 }
 

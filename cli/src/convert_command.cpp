@@ -25,6 +25,8 @@
 #include "geoanchor/workflow/audit.hpp"
 #include "geoanchor/workflow/transform_checks.hpp"
 #include "command_input.hpp"
+#include "convert_crs.hpp"
+#include "convert_output.hpp"
 #include "option_parsing.hpp"
 #include "version.hpp"
 
@@ -136,143 +138,6 @@ class EcefStep {
   std::optional<AffineMap> fixed_;
 };
 
-// Prints the run's warnings (and the stale temporaries removed) on standard
-// error; commits standard output, which gets no sidecar. True when it did.
-bool warn_and_commit_standard_output(std::vector<std::string>& warnings, io::DataOutput& output) {
-  for (const auto& t : io::take_removed_stale_temporaries()) warnings.push_back(io::stale_temporary_warning(t));
-  for (const auto& w : warnings) std::cerr << "geoanchor: warning: " << w << '\n';
-  if (!output.is_standard_output()) return false;
-  output.commit("the converted rows");
-  return true;
-}
-
-// The sidecar's first keys: schema, version, command line, the input's path and hash.
-json sidecar_start(const ConvertOptions& o, bool from_stdin) {
-  json side;
-  side["schema"] = "geoanchor.convert-provenance/1";
-  side["geoanchor_version"] = GEOANCHOR_VERSION;
-  side["command"] = o.argv;
-  side["input"] = {{"path", from_stdin ? json(nullptr) : json(o.input)},
-                   {"sha256", from_stdin ? json(nullptr) : json(sha256_file_hex(o.input))}};
-  return side;
-}
-
-json crs_record(const io::Crs& crs, const io::CrsColumns& columns) {
-  const json names = io::written_names(columns);
-  const auto& d = crs.description();
-  return json{{"crs", crs.text()},
-              {"name", d.name},
-              {"identifier", d.identifier.empty() ? json(nullptr) : json(d.identifier)},
-              {"coordinate_epoch", crs.epoch() ? json(crs.epoch()->year) : json(nullptr)},
-              {"columns", names},
-              {"height_type", !columns.has_height() ? json(nullptr) : json(columns.orthometric ? "orthometric" : "ellipsoidal")},
-              {"wkt2", columns.crs.wkt2()}};
-}
-
-// --crs SRC --to-crs DST: the coordinates through PROJ's operation for the
-// pair, the columns named by each CRS's axes.
-void run_convert_crs(const ConvertOptions& o) {
-  if (!o.to_crs) {
-    throw Error(ErrorKind::usage, "E_OPTION", "--crs: give --to-crs DST too (the output's CRS)");
-  }
-  // What the CRSs say, nothing else: flags that would say it again are refused.
-  const std::pair<bool, const char*> unused[] = {
-      {o.ellipsoid.has_value(), "--ellipsoid"}, {o.from_ellipsoid.has_value(), "--from-ellipsoid"},
-      {o.origin.has_value(), "--origin"},       {o.from_origin.has_value(), "--from-origin"},
-      {o.zone.has_value(), "--zone"},           {o.from_zone.has_value(), "--from-zone"},
-      {o.tm.has_value(), "--tm"},               {o.from_tm.has_value(), "--from-tm"},
-      {o.transform.has_value(), "--transform"}, {o.inverse, "--inverse"},
-      {o.epoch.has_value(), "--epoch"},         {o.geoid.has_value(), "--geoid"},
-      {o.output_heights != "ellipsoidal", "--output-heights"}};
-  for (const auto& [given, flag] : unused) {
-    if (given) {
-      throw Error(ErrorKind::usage, "E_OPTION",
-                  std::string(flag) + " with --crs/--to-crs: the CRSs say the ellipsoid, projection, epoch and "
-                  "heights (a coordinate epoch as CRS@YYYY.Y, orthometric heights as a compound CRS EPSG:h+v)");
-    }
-  }
-  if (o.to && *o.to != "ecef") {
-    throw Error(ErrorKind::usage, "E_OPTION",
-                "--to " + *o.to + " with --to-crs: the CRS says the output's kind; --to ecef alone is read with it "
-                "(the CRS's geocentric form)");
-  }
-  const io::Crs target_crs = io::Crs::parse(*o.to_crs, "--to-crs");
-
-  CommandInput input(o.input);
-  const bool from_stdin = input.from_stdin();
-  const std::string& source_name = input.name();
-  io::CsvReader reader(input.stream(), source_name);
-  // The input's CRS: --crs, or the one the file states above its header
-  // (as convert writes it); both must say the same.
-  const std::optional<io::Crs> stated = io::crs_from_comments(reader.leading_comments(), source_name);
-  if (!o.crs && !stated) {
-    throw Error(ErrorKind::usage, "E_OPTION",
-                "--crs: give the input's CRS (" + source_name + " states none in a '# crs = …' comment above its header)");
-  }
-  const io::Crs source_crs = o.crs ? io::Crs::parse(*o.crs, "--crs") : *stated;
-  const io::CrsColumns in_columns = io::crs_input_columns(source_crs, reader.header(), source_name, "--crs");
-  if (o.crs && stated) {
-    const io::CrsColumns stated_columns = io::crs_input_columns(*stated, reader.header(), source_name, "the '# crs' comment");
-    if (!stated_columns.crs.same_as(in_columns.crs)) {
-      throw Error(ErrorKind::input, "E_CRS_CONFLICT",
-                  "--crs " + source_crs.display_name() + " contradicts the CRS " + source_name + " states above its header (" +
-                      stated->display_name() + "); drop --crs, or fix the file's '# crs = …' comment");
-    }
-  }
-  const io::CrsColumns out_columns =
-      io::crs_output_columns(target_crs, in_columns.has_height(), o.to && *o.to == "ecef", "--to-crs");
-  io::CrsOperation op(in_columns.crs, out_columns.crs, "convert", io::CrsOperationOptions{o.allow_fallback});
-  // A dynamic output CRS given without an epoch is at the epoch the
-  // operation was evaluated at (PROJ does not move points in time): the
-  // output states it.
-  const bool epoch_from_input = out_columns.crs.description().dynamic && !out_columns.crs.epoch() && op.epoch();
-  io::CrsColumns written = out_columns;
-  if (epoch_from_input) written.crs = out_columns.crs.at_epoch(geodesy::DecimalYear{*op.epoch()}, "--to-crs");
-  io::CrsCsvConverter converter(reader, in_columns, out_columns, io::NumberFormat{o.precision});
-
-  if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
-  io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
-  std::ostream& out = output.stream();
-  // The output states its CRS above the header; the input's statement of
-  // its own is dropped, and so is a '# frame = …' comment (as adjust writes
-  // it), once checked against the input's CRS where that CRS is a frame of
-  // the catalog.
-  std::vector<std::string> frame_notes;
-  for (const auto& c : io::crs_comments(written.crs)) out << c << '\n';
-  for (const auto& c : reader.leading_comments()) {
-    if (io::is_crs_comment(c)) continue;
-    if (const auto v = io::comment_value(c, "frame")) {
-      const geodesy::Frame frame_stated = geodesy::Frame::parse(*v, source_name + ": comment '" + c + "'");
-      const std::string& catalog = source_crs.description().catalog_frame;
-      if (catalog.empty()) {
-        frame_notes.push_back(source_name + ": its '# frame = " + frame_stated.to_string() + "' comment is not copied (the output states its CRS); " +
-                           source_crs.display_name() + " is not a frame of geoanchor's catalog, so the two were not compared");
-      } else if (frame_stated.name() != catalog || (frame_stated.epoch() && source_crs.epoch() && frame_stated.epoch()->year != source_crs.epoch()->year)) {
-        throw Error(ErrorKind::input, "E_FRAME_MISMATCH",
-                    source_name + ": its coordinates are in " + frame_stated.to_string() + " (its '# frame =' comment) but the input's CRS " +
-                        source_crs.display_name() + " is on " + catalog +
-                        (source_crs.epoch() ? "@" + geodesy::format_decimal_year(*source_crs.epoch()) : std::string()));
-      }
-      continue;
-    }
-    out << c << '\n';
-  }
-  io::write_csv_line(out, converter.output_header());
-  const std::size_t rows = converter.run(reader, op, out);
-  std::vector<std::string> warnings = op.warnings();  // filled by the run
-  warnings.insert(warnings.end(), frame_notes.begin(), frame_notes.end());
-
-  if (warn_and_commit_standard_output(warnings, output)) return;
-  json side = sidecar_start(o, from_stdin);
-  side["input"]["kind"] = "crs";
-  side["input"].update(crs_record(source_crs, in_columns));
-  side["output"] = {{"path", o.output}, {"kind", "crs"}, {"rows", rows}};
-  side["output"].update(crs_record(epoch_from_input ? written.crs : target_crs, written));
-  side["operation"] = json::parse(io::operation_record_json(op));
-  side["warnings"] = warnings;
-  publish_with_provenance(output, side.dump(2) + "\n", "the converted rows", o.json, o.output);
-}
-
 }  // namespace
 
 CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
@@ -310,6 +175,8 @@ CLI::App* add_convert_command(CLI::App& app, ConvertOptions& o) {
   cmd->add_flag("--json", o.json, "Print the provenance sidecar (schema geoanchor.convert-provenance/1) on standard output; needs -o FILE");
   return cmd;
 }
+
+namespace {
 
 // The frames a frame-mode conversion is on: the input's, as its comments
 // state it ('# frame = NAME@EPOCH', as adjust writes its stations), and the
@@ -368,46 +235,38 @@ geodesy::Ellipsoid ellipsoid_for(const std::optional<geodesy::Frame>& frame, con
   return fallback ? *fallback : geodesy::Ellipsoid::wgs84();
 }
 
-void run_convert(const ConvertOptions& o) {
-  if (o.json && is_standard_output(o.output)) {
-    throw Error(ErrorKind::usage, "E_OPTION",
-                "--json: prints the sidecar on standard output, where the CSV goes without -o; give -o FILE");
-  }
-  if (o.crs || o.to_crs) {
-    run_convert_crs(o);
-    return;
-  }
-  if (!o.to) throw Error(ErrorKind::usage, "E_OPTION", "--to is required (or --crs SRC --to-crs DST)");
-  if (o.allow_fallback) throw Error(ErrorKind::usage, "E_OPTION", "--allow-fallback: only with --crs and --to-crs");
-  const io::OutputKind out_kind = parse_output_kind(*o.to);
-  if (o.inverse && !o.transform) {
-    throw Error(ErrorKind::usage, "E_OPTION", "--inverse: needs --transform T.json");
-  }
-  // The input, its comments and the transform first: a frame the input
-  // states names its ellipsoid (issue 40 point 9).
-  CommandInput input(o.input);
-  const bool from_stdin = input.from_stdin();
-  const std::string& source_name = input.name();
-  io::CsvReader reader(input.stream(), source_name);
-  io::refuse_stated_crs(reader.leading_comments(), source_name,
-                        "read it with --to-crs DST (with --to ecef for its geocentric coordinates)");
+// What a frame-mode conversion reads and writes, known before the first
+// row: the output's kind, the transform, the frames the input and output
+// are on, their coordinate frames, the input's columns and the epoch a
+// time-dependent transform is evaluated at.
+struct ConvertPlan {
+  io::OutputKind out_kind = io::OutputKind::ecef;
   std::optional<io::TransformFile> transform;
   std::string transform_sha256;
-  if (o.transform) {
-    transform = io::read_transform_file(*o.transform);
-    transform_sha256 = sha256_file_hex(*o.transform);
-  }
-  const FrameStatement frames = frames_of(reader, source_name, transform, o);
+  FrameStatement frames;
+  io::InputCoordinateFrame in_frame;    // its ellipsoid is the input's
+  io::OutputCoordinateFrame out_frame;  // its ellipsoid is the output's
+  const geodesy::GeoidGrid* geoid = nullptr;
+  bool orthometric_out = false;
+  io::CoordinateColumns columns;
+  std::optional<DecimalYear> flag_epoch;   // --epoch, else the '# frame' comment's
+  std::optional<DecimalYear> frame_epoch;  // the '# frame' comment's, for a time-dependent transform
+  bool time_dependent = false;
+  bool local_in = false, local_out = false;  // ENU/NED
+};
 
-  // Ellipsoids, origins and projections: --from-X for the input, else --X
-  // for both; a frame's own ellipsoid where one is stated, and a flag that
-  // contradicts it refused.
+// Ellipsoids, origins and projections: --from-X for the input, else --X
+// for both; a frame's own ellipsoid where one is stated, and a flag that
+// contradicts it refused. The geoid and the output's heights.
+void coordinate_frames(const ConvertOptions& o, ConvertPlan& plan) {
+  const FrameStatement& frames = plan.frames;
+  const io::OutputKind out_kind = plan.out_kind;
   const geodesy::Ellipsoid in_ellipsoid = ellipsoid_for(
       frames.input_or_transform, o.from_ellipsoid ? o.from_ellipsoid : o.ellipsoid, o.from_ellipsoid ? "--from-ellipsoid" : "--ellipsoid");
   const geodesy::Ellipsoid out_ellipsoid =
       ellipsoid_for(frames.output, o.ellipsoid, "--ellipsoid", !o.from_ellipsoid && !o.ellipsoid && !frames.output ? &in_ellipsoid : nullptr);
 
-  io::InputCoordinateFrame in_frame;
+  io::InputCoordinateFrame& in_frame = plan.in_frame;
   in_frame.ellipsoid = in_ellipsoid;
   if (o.from_origin) {
     in_frame.origin = parse_origin(*o.from_origin, "--from-origin", in_ellipsoid);
@@ -427,16 +286,18 @@ void run_convert(const ConvertOptions& o) {
   }
 
   const geodesy::GeoidGrid* geoid = o.geoid ? &parse_geoid(*o.geoid, "--geoid") : nullptr;
+  plan.geoid = geoid;
   in_frame.geoid = geoid;
   if (o.output_heights != "ellipsoidal" && o.output_heights != "orthometric") {
     throw Error(ErrorKind::usage, "E_OPTION", "--output-heights " + o.output_heights + ": expected ellipsoidal or orthometric");
   }
   const bool orthometric_out = o.output_heights == "orthometric";
+  plan.orthometric_out = orthometric_out;
   if (orthometric_out && !geoid) {
     throw Error(ErrorKind::usage, "E_OPTION", "--output-heights orthometric: needs the geoid model: give --geoid EGM96");
   }
 
-  io::OutputCoordinateFrame out_frame;
+  io::OutputCoordinateFrame& out_frame = plan.out_frame;
   out_frame.kind = out_kind;
   if (orthometric_out) out_frame.geoid = geoid;
   out_frame.ellipsoid = out_ellipsoid;
@@ -445,56 +306,118 @@ void run_convert(const ConvertOptions& o) {
   if (o.tm) out_frame.tm = parse_tm(*o.tm, "--tm");
   if (out_kind == io::OutputKind::utm && o.tm) throw Error(ErrorKind::usage, "E_OPTION", "--to utm with --tm: use --to tm");
   if (out_kind == io::OutputKind::tm && o.zone) throw Error(ErrorKind::usage, "E_OPTION", "--to tm with --zone: use --to utm");
+}
 
-  const auto& header = reader.header();
-  const io::CoordinateColumns columns = io::classify_coordinate_header(header, source_name);
-  std::optional<DecimalYear> flag_epoch;
+// A time-dependent transform is evaluated at the coordinates' epoch: the
+// one the input's '# frame = NAME@EPOCH' comment states, which --epoch
+// and an epoch column may only repeat.
+void transform_epoch(const ConvertOptions& o, const std::string& source_name, ConvertPlan& plan) {
+  const auto& transform = plan.transform;
+  const FrameStatement& frames = plan.frames;
+  std::optional<DecimalYear>& flag_epoch = plan.flag_epoch;
   if (o.epoch) flag_epoch = geodesy::parse_decimal_year(*o.epoch, "--epoch");
-  // A time-dependent transform is evaluated at the coordinates' epoch: the
-  // one the input's '# frame = NAME@EPOCH' comment states, which --epoch
-  // and an epoch column may only repeat.
   const bool time_dependent = transform && transform->time_dependent();
+  plan.time_dependent = time_dependent;
   const std::optional<DecimalYear> frame_epoch = time_dependent && frames.input ? frames.input->epoch() : std::nullopt;
+  plan.frame_epoch = frame_epoch;
   if (frame_epoch && flag_epoch && flag_epoch->year != frame_epoch->year) {
     throw Error(ErrorKind::usage, "E_EPOCH_CONFLICT",
                 "--epoch " + *o.epoch + " contradicts " + source_name + "'s '# frame = " + frames.input->to_string() +
                     "' comment: its coordinates are at " + geodesy::format_decimal_year(*frame_epoch) + "; drop --epoch");
   }
   if (frame_epoch && !flag_epoch) flag_epoch = frame_epoch;  // and rows with an empty epoch
-  const EcefStep step(transform, o.inverse, flag_epoch);
-  const bool local_in = columns.kind == io::CoordinateKind::enu || columns.kind == io::CoordinateKind::ned;
-  const bool local_out = out_kind == io::OutputKind::enu || out_kind == io::OutputKind::ned;
-  std::vector<std::string> warnings;
-  if (transform) reconcile_transform_origin(o, *transform, local_in, local_out, in_frame, out_frame, warnings);
-  const io::CoordinateDecoder decoder(columns, header, in_frame, source_name);
-  const io::CoordinateEncoder encoder(out_frame, io::NumberFormat{o.precision});
-  // How far the points reach: from each local origin (a swapped latitude
-  // and longitude lands thousands of kilometres away), and outside the
-  // transform's control network; refused past --max-extrapolation.
-  std::optional<geodesy::LocalTangentPlane> in_plane, out_plane;
-  if (local_in && in_frame.origin) in_plane.emplace(*in_frame.origin);
-  if (local_out && out_frame.origin) out_plane.emplace(*out_frame.origin);
-  const io::ControlExtent* extent = transform && transform->fit && transform->fit->extent ? &*transform->fit->extent : nullptr;
-  double farthest_local_m[2] = {0.0, 0.0}, farthest_outside_m = 0.0;  // input's plane, output's
-  std::size_t rows_outside = 0;
-  const auto check_reach = [&](double d, const std::string& where, const std::string& from_what) {
-    if (!(d <= o.max_extrapolation_m)) {
+}
+
+// How far the points reach: from each local origin (a swapped latitude
+// and longitude lands thousands of kilometres away), and outside the
+// transform's control network; refused past --max-extrapolation, and
+// warned of where the transform is extrapolated or the tangent plane
+// departs from the ellipsoid.
+class Reach {
+ public:
+  Reach(const ConvertOptions& o, const ConvertPlan& plan) : o_(o) {
+    const auto& transform = plan.transform;
+    if (plan.local_in && plan.in_frame.origin) in_plane_.emplace(*plan.in_frame.origin);
+    if (plan.local_out && plan.out_frame.origin) out_plane_.emplace(*plan.out_frame.origin);
+    extent_ = transform && transform->fit && transform->fit->extent ? &*transform->fit->extent : nullptr;
+  }
+
+  // One row's points: the input's (`source`) and the output's (`target`).
+  void check_row(const geodesy::EcefPosition& source, const geodesy::EcefPosition& target, const std::string& where) {
+    for (int side = 0; side < 2; ++side) {
+      const geodesy::LocalTangentPlane* plane = plane_of(side);
+      if (plane == nullptr) continue;
+      const Eigen::Vector3d e = plane->enu_from_ecef(side == 0 ? source : target).enu_m;
+      const double d = std::hypot(e.x(), e.y());
+      check_reach(d, where, "from the ENU/NED origin " + origin_text(plane->origin()));
+      if (d > farthest_local_m_[side]) farthest_local_m_[side] = d;
+    }
+    if (extent_) {
+      const double d = extent_->distance_m(o_.inverse ? target : source);  // the transform's source frame
+      check_reach(d, where, "outside the control network of " + *o_.transform);
+      if (d > io::ControlExtent::kOnHull_m) ++rows_outside_;
+      if (d > farthest_outside_m_) farthest_outside_m_ = d;
+    }
+  }
+
+  // The warnings after `rows` rows: points outside the control network,
+  // and local coordinates where up is not height.
+  void add_warnings(std::size_t rows, std::vector<std::string>& warnings) const {
+    if (rows_outside_ > 0) {
+      warnings.push_back(std::to_string(rows_outside_) + " of the " + std::to_string(rows) + " points lie outside the control network of " +
+                         *o_.transform + ", up to " + format_fixed(farthest_outside_m_, 1) + " m: the transform is extrapolated there");
+    }
+    for (int side = 0; side < 2; ++side) {
+      const geodesy::LocalTangentPlane* plane = plane_of(side);
+      if (plane == nullptr) continue;
+      const auto& origin = plane->origin();
+      const double departure = workflow::tangent_plane_departure_m(farthest_local_m_[side], origin.point.lat.deg(), origin.ellipsoid);
+      if (departure > workflow::AuditLimits{}.tangent_plane_m) {
+        warnings.push_back(std::string(side == 0 ? "the input's" : "the output's") + " points reach " +
+                           format_fixed(farthest_local_m_[side] / 1000.0, 3) + " km from the ENU/NED origin " + origin_text(origin) +
+                           ", where the tangent plane departs from the ellipsoid by " + format_fixed(departure, 2) +
+                           " m: up is not height there");
+      }
+    }
+  }
+
+ private:
+  // The input's plane (side 0) or the output's (1), where that side is local.
+  const geodesy::LocalTangentPlane* plane_of(int side) const {
+    return side == 0 ? (in_plane_ ? &*in_plane_ : nullptr) : (out_plane_ ? &*out_plane_ : nullptr);
+  }
+  void check_reach(double d, const std::string& where, const std::string& from_what) const {
+    if (!(d <= o_.max_extrapolation_m)) {
       throw Error(ErrorKind::rejected, "E_EXTRAPOLATION",
                   where + ": the point lies " + format_fixed(d / 1000.0, 3) + " km " + from_what + " (limit --max-extrapolation " +
-                      format_shortest(o.max_extrapolation_m) + " m)" +
+                      format_shortest(o_.max_extrapolation_m) + " m)" +
                       (from_what.find("origin") != std::string::npos ? "; latitude and longitude swapped, or the wrong origin?" : "") +
                       "; nothing was written");
     }
-  };
+  }
+  const ConvertOptions& o_;
+  std::optional<geodesy::LocalTangentPlane> in_plane_, out_plane_;
+  const io::ControlExtent* extent_ = nullptr;
+  double farthest_local_m_[2] = {0.0, 0.0}, farthest_outside_m_ = 0.0;  // input's plane, output's
+  std::size_t rows_outside_ = 0;
+};
+
+// Warnings about what the conversion does not read: heights, the geoid,
+// and flags that say something no side of this conversion reads: said, as
+// for --epoch (a typo'd command that silently converted otherwise).
+void add_unread_warnings(const ConvertOptions& o, const ConvertPlan& plan, const io::CoordinateDecoder& decoder,
+                         const std::string& source_name, std::vector<std::string>& warnings) {
+  const io::CoordinateColumns& columns = plan.columns;
+  const io::OutputKind out_kind = plan.out_kind;
+  const bool local_in = plan.local_in, local_out = plan.local_out;
+  const auto& transform = plan.transform;
   if (decoder.heights_missing()) {
     warnings.push_back(source_name + ": no h_m column: every height is taken as 0 m above the ellipsoid (" +
                        std::string(io::to_string(columns.kind)) + " input)");
   }
-  if (geoid && !columns.orthometric && !orthometric_out) {
+  if (plan.geoid && !columns.orthometric && !plan.orthometric_out) {
     warnings.push_back("--geoid " + *o.geoid + " unused: no H_m column and ellipsoidal output heights (--output-heights orthometric writes H_m)");
   }
-  // Flags that say something no side of this conversion reads: said, as
-  // for --epoch (a typo'd command that silently converted otherwise).
   const bool projected_in = columns.kind == io::CoordinateKind::projected;
   const bool projected_out = out_kind == io::OutputKind::utm || out_kind == io::OutputKind::tm;
   const std::pair<bool, std::string> unused_flags[] = {
@@ -508,34 +431,22 @@ void run_convert(const ConvertOptions& o) {
   for (const auto& [unused, why] : unused_flags) {
     if (unused) warnings.push_back(why + ", so it is not used");
   }
-  if (flag_epoch && !(transform && transform->time_dependent())) {
+  if (plan.flag_epoch && !(transform && transform->time_dependent())) {
     warnings.push_back("--epoch " + *o.epoch + " ignored: " +
                        (transform ? "the transform is not time-dependent" : std::string("no --transform given")));
   }
-  if (step.needs_row_epoch() && !columns.epoch && !flag_epoch) {
-    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
-                *o.transform + ": a 14-parameter transform needs the observation epoch: give --epoch YEAR or an "
-                               "epoch column; the reference epoch is never substituted");
-  }
+}
 
-  // Output header: the new coordinate columns where the first input
-  // coordinate column stood, every other column in its place.
-  std::size_t first_coordinate = 0;
-  const auto out_header = io::output_header(header, columns, encoder.column_names(), source_name, first_coordinate);
-
-  // Output: a temporary file renamed at the end, or standard output (no -o,
-  // or -o -), which gets the rows and no sidecar. Both the output and its
-  // provenance sidecar are opened before any row is read, so an existing
-  // file is refused up front.
-  if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
-  io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
-  std::ostream& out = output.stream();
-  // The comments go across, the frame's restated as the output's: after a
-  // time-dependent transform, a dynamic frame at the one epoch it was
-  // evaluated at (an epoch column dates each row instead).
+// The comments go across, the frame's restated as the output's: after a
+// time-dependent transform, a dynamic frame at the one epoch it was
+// evaluated at (an epoch column dates each row instead).
+void write_comments(std::ostream& out, const io::CsvReader& reader, const ConvertOptions& o, const ConvertPlan& plan,
+                    const std::string& source_name, std::vector<std::string>& warnings) {
+  const FrameStatement& frames = plan.frames;
+  const std::optional<DecimalYear>& flag_epoch = plan.flag_epoch;
   std::optional<geodesy::Frame> output_frame = frames.output;
-  if (output_frame && time_dependent && geodesy::is_dynamic(*output_frame)) {
-    const bool one_epoch = flag_epoch && (!columns.epoch || frame_epoch);  // an epoch column may only repeat the frame's
+  if (output_frame && plan.time_dependent && geodesy::is_dynamic(*output_frame)) {
+    const bool one_epoch = flag_epoch && (!plan.columns.epoch || plan.frame_epoch);  // an epoch column may only repeat the frame's
     output_frame = geodesy::Frame::parse(
         output_frame->name() + (one_epoch ? "@" + geodesy::format_decimal_year(*flag_epoch) : std::string()), *o.transform);
   }
@@ -550,11 +461,34 @@ void run_convert(const ConvertOptions& o) {
     warnings.push_back(source_name + ": its '# frame = " + frames.input->to_string() + "' comment is not copied: " + *o.transform +
                        " names no target frame, so the output's frame is not known");
   }
-  io::write_csv_line(out, out_header);
+}
 
-  io::CsvRecord record;
+// What each row goes through: the input's columns decoded, the transform
+// applied, the output's columns encoded where the first input coordinate
+// column stood.
+struct RowCodec {
+  const EcefStep& step;
+  const io::CoordinateDecoder& decoder;
+  const io::CoordinateEncoder& encoder;
+  std::size_t first_coordinate;
+};
+
+struct RowsWritten {
   std::size_t rows = 0;
   std::optional<workflow::EpochSpan> epochs_used;  // of a 14-parameter transform, over the rows
+};
+
+RowsWritten convert_rows(io::CsvReader& reader, std::ostream& out, const std::string& source_name, const ConvertPlan& plan,
+                         const RowCodec& codec, Reach& reach) {
+  const auto& header = reader.header();
+  const io::CoordinateColumns& columns = plan.columns;
+  const std::optional<DecimalYear>& flag_epoch = plan.flag_epoch;
+  const std::optional<DecimalYear>& frame_epoch = plan.frame_epoch;
+  const EcefStep& step = codec.step;
+  io::CsvRecord record;
+  RowsWritten written;
+  std::size_t& rows = written.rows;
+  std::optional<workflow::EpochSpan>& epochs_used = written.epochs_used;
   std::vector<std::string> fields;
   while (reader.next(record)) {
     if (record.is_comment) {
@@ -567,75 +501,43 @@ void run_convert(const ConvertOptions& o) {
       row_epoch = geodesy::parse_decimal_year(record.values[*columns.epoch], where + ": epoch");
       if (frame_epoch && row_epoch->year != frame_epoch->year) {
         throw Error(ErrorKind::input, "E_EPOCH_CONFLICT",
-                    where + ": epoch " + record.values[*columns.epoch] + " contradicts the '# frame = " + frames.input->to_string() +
+                    where + ": epoch " + record.values[*columns.epoch] + " contradicts the '# frame = " + plan.frames.input->to_string() +
                         "' comment, which dates every coordinate of the file");
       }
     }
-    const geodesy::EcefPosition source = decoder.decode(record);
+    const geodesy::EcefPosition source = codec.decoder.decode(record);
     const geodesy::EcefPosition target(step.apply(source.m, row_epoch, where));
-    for (int side = 0; side < 2; ++side) {
-      const geodesy::LocalTangentPlane* plane = side == 0 ? (in_plane ? &*in_plane : nullptr) : (out_plane ? &*out_plane : nullptr);
-      if (plane == nullptr) continue;
-      const Eigen::Vector3d e = plane->enu_from_ecef(side == 0 ? source : target).enu_m;
-      const double d = std::hypot(e.x(), e.y());
-      check_reach(d, where, "from the ENU/NED origin " + origin_text(plane->origin()));
-      if (d > farthest_local_m[side]) farthest_local_m[side] = d;
-    }
-    if (extent) {
-      const double d = extent->distance_m(o.inverse ? target : source);  // the transform's source frame
-      check_reach(d, where, "outside the control network of " + *o.transform);
-      if (d > io::ControlExtent::kOnHull_m) ++rows_outside;
-      if (d > farthest_outside_m) farthest_outside_m = d;
-    }
+    reach.check_row(source, target, where);
     if (step.needs_row_epoch()) {
       const DecimalYear used = row_epoch ? *row_epoch : *flag_epoch;  // step.apply threw if neither
       if (!epochs_used) epochs_used = workflow::EpochSpan{used, used};
       if (used.year < epochs_used->first.year) epochs_used->first = used;
       if (used.year > epochs_used->last.year) epochs_used->last = used;
     }
-    const auto coords = encoder.encode(target, where);
+    const auto coords = codec.encoder.encode(target, where);
     fields.clear();
     for (std::size_t i = 0; i < header.size(); ++i) {
-      if (i == first_coordinate) fields.insert(fields.end(), coords.begin(), coords.end());
+      if (i == codec.first_coordinate) fields.insert(fields.end(), coords.begin(), coords.end());
       if (!columns.is_coordinate(i)) fields.push_back(record.raw[i]);
     }
     io::write_csv_line(out, fields);
     ++rows;
   }
+  return written;
+}
 
-  // Parameters beyond fit's plausibility limits (issue 12 point 7), once per
-  // run; a 14-parameter set at the first and last epoch the rows used.
-  if (transform) {
-    if (!epochs_used && flag_epoch && transform->time_dependent()) epochs_used = workflow::EpochSpan{*flag_epoch, *flag_epoch};
-    for (auto& w : workflow::implausible_transform_warnings(*transform, *o.transform, epochs_used)) {
-      warnings.push_back(std::move(w));
-    }
-  }
-  if (rows_outside > 0) {
-    warnings.push_back(std::to_string(rows_outside) + " of the " + std::to_string(rows) + " points lie outside the control network of " +
-                       *o.transform + ", up to " + format_fixed(farthest_outside_m, 1) + " m: the transform is extrapolated there");
-  }
-  for (int side = 0; side < 2; ++side) {
-    const geodesy::LocalTangentPlane* plane = side == 0 ? (in_plane ? &*in_plane : nullptr) : (out_plane ? &*out_plane : nullptr);
-    if (plane == nullptr) continue;
-    const auto& origin = plane->origin();
-    const double departure = workflow::tangent_plane_departure_m(farthest_local_m[side], origin.point.lat.deg(), origin.ellipsoid);
-    if (departure > workflow::AuditLimits{}.tangent_plane_m) {
-      warnings.push_back(std::string(side == 0 ? "the input's" : "the output's") + " points reach " +
-                         format_fixed(farthest_local_m[side] / 1000.0, 3) + " km from the ENU/NED origin " + origin_text(origin) +
-                         ", where the tangent plane departs from the ellipsoid by " + format_fixed(departure, 2) +
-                         " m: up is not height there");
-    }
-  }
-  // Points a forced UTM zone does not contain (--zone, --from-zone, utm_zone column).
-  for (auto& w : decoder.warnings()) warnings.push_back(std::move(w));
-  for (auto& w : encoder.warnings()) warnings.push_back(std::move(w));
-  if (warn_and_commit_standard_output(warnings, output)) return;
-
-  // Provenance sidecar beside the output.
+// The provenance sidecar of a frame-mode conversion.
+json frame_sidecar(const ConvertOptions& o, bool from_stdin, const ConvertPlan& plan, const std::vector<std::string>& header,
+                   std::size_t rows, const std::vector<std::string>& warnings) {
+  const io::CoordinateColumns& columns = plan.columns;
+  const io::InputCoordinateFrame& in_frame = plan.in_frame;
+  const io::OutputCoordinateFrame& out_frame = plan.out_frame;
+  const io::OutputKind out_kind = plan.out_kind;
+  const geodesy::GeoidGrid* geoid = plan.geoid;
+  const auto& transform = plan.transform;
   json side = sidecar_start(o, from_stdin);
   side["input"]["kind"] = std::string(io::to_string(columns.kind));
-  side["input"]["ellipsoid"] = in_ellipsoid.name();
+  side["input"]["ellipsoid"] = in_frame.ellipsoid.name();
   if (columns.kind == io::CoordinateKind::geodetic || columns.kind == io::CoordinateKind::projected) {
     side["input"]["height_type"] = columns.orthometric ? "orthometric" : "ellipsoidal";
     if (columns.orthometric) {
@@ -651,9 +553,9 @@ void run_convert(const ConvertOptions& o) {
     if (in_frame.projection->utm) side["input"]["utm_zone"] = in_frame.projection->utm->to_string();
   }
   side["output"] = {{"path", o.output}, {"kind", std::string(io::to_string(out_kind))},
-                    {"ellipsoid", out_ellipsoid.name()}, {"rows", rows},
-                    {"height_type", orthometric_out ? "orthometric" : "ellipsoidal"}};
-  if (orthometric_out) {
+                    {"ellipsoid", out_frame.ellipsoid.name()}, {"rows", rows},
+                    {"height_type", plan.orthometric_out ? "orthometric" : "ellipsoidal"}};
+  if (plan.orthometric_out) {
     side["output"]["geoid_model"] = geoid->model_name();
     side["output"]["geoid"] = json::parse(io::geoid_record_json(*geoid));
   }
@@ -664,18 +566,110 @@ void run_convert(const ConvertOptions& o) {
   if (out_frame.tm) side["output"]["projection"] = tm_json(*out_frame.tm);
   if (transform) {
     json t = {{"path", *o.transform},
-              {"sha256", transform_sha256},
+              {"sha256", plan.transform_sha256},
               {"model", std::string(io::to_string(transform->model))},
               {"convention", std::string(transform->convention_name())},
               {"rotation_model", std::string(geodesy::to_string(transform->rotation_model))},
               {"direction", o.inverse ? "inverse (exact)" : "forward"}};
     if (transform->source_frame) t["source_frame"] = transform->source_frame->to_string();
     if (transform->target_frame) t["target_frame"] = transform->target_frame->to_string();
-    if (flag_epoch) t["observation_epoch"] = flag_epoch->year;
+    if (plan.flag_epoch) t["observation_epoch"] = plan.flag_epoch->year;
     if (columns.epoch) t["observation_epoch_column"] = header[*columns.epoch];
     side["transform"] = t;
   }
   side["warnings"] = warnings;
+  return side;
+}
+
+}  // namespace
+
+void run_convert(const ConvertOptions& o) {
+  if (o.json && is_standard_output(o.output)) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--json: prints the sidecar on standard output, where the CSV goes without -o; give -o FILE");
+  }
+  if (o.crs || o.to_crs) {
+    run_convert_crs(o);
+    return;
+  }
+  if (!o.to) throw Error(ErrorKind::usage, "E_OPTION", "--to is required (or --crs SRC --to-crs DST)");
+  if (o.allow_fallback) throw Error(ErrorKind::usage, "E_OPTION", "--allow-fallback: only with --crs and --to-crs");
+  ConvertPlan plan;
+  plan.out_kind = parse_output_kind(*o.to);
+  if (o.inverse && !o.transform) {
+    throw Error(ErrorKind::usage, "E_OPTION", "--inverse: needs --transform T.json");
+  }
+  // The input, its comments and the transform first: a frame the input
+  // states names its ellipsoid (issue 40 point 9).
+  CommandInput input(o.input);
+  const bool from_stdin = input.from_stdin();
+  const std::string& source_name = input.name();
+  io::CsvReader reader(input.stream(), source_name);
+  io::refuse_stated_crs(reader.leading_comments(), source_name,
+                        "read it with --to-crs DST (with --to ecef for its geocentric coordinates)");
+  if (o.transform) {
+    plan.transform = io::read_transform_file(*o.transform);
+    plan.transform_sha256 = sha256_file_hex(*o.transform);
+  }
+  plan.frames = frames_of(reader, source_name, plan.transform, o);
+  coordinate_frames(o, plan);
+
+  const auto& header = reader.header();
+  plan.columns = io::classify_coordinate_header(header, source_name);
+  transform_epoch(o, source_name, plan);
+  const EcefStep step(plan.transform, o.inverse, plan.flag_epoch);
+  plan.local_in = plan.columns.kind == io::CoordinateKind::enu || plan.columns.kind == io::CoordinateKind::ned;
+  plan.local_out = plan.out_kind == io::OutputKind::enu || plan.out_kind == io::OutputKind::ned;
+  std::vector<std::string> warnings;
+  if (plan.transform) {
+    reconcile_transform_origin(o, *plan.transform, plan.local_in, plan.local_out, plan.in_frame, plan.out_frame, warnings);
+  }
+  const io::CoordinateDecoder decoder(plan.columns, header, plan.in_frame, source_name);
+  const io::CoordinateEncoder encoder(plan.out_frame, io::NumberFormat{o.precision});
+  Reach reach(o, plan);
+  add_unread_warnings(o, plan, decoder, source_name, warnings);
+  if (step.needs_row_epoch() && !plan.columns.epoch && !plan.flag_epoch) {
+    throw Error(ErrorKind::usage, "E_EPOCH_MISSING",
+                *o.transform + ": a 14-parameter transform needs the observation epoch: give --epoch YEAR or an "
+                               "epoch column; the reference epoch is never substituted");
+  }
+
+  // Output header: the new coordinate columns where the first input
+  // coordinate column stood, every other column in its place.
+  std::size_t first_coordinate = 0;
+  const auto out_header = io::output_header(header, plan.columns, encoder.column_names(), source_name, first_coordinate);
+
+  // Output: a temporary file renamed at the end, or standard output (no -o,
+  // or -o -), which gets the rows and no sidecar. Both the output and its
+  // provenance sidecar are opened before any row is read, so an existing
+  // file is refused up front.
+  if (!from_stdin && !is_standard_output(o.output)) io::refuse_same_file(o.input, o.output);
+  io::DataOutput output(o.output, o.overwrite ? io::Overwrite::allow : io::Overwrite::refuse);
+  std::ostream& out = output.stream();
+  write_comments(out, reader, o, plan, source_name, warnings);
+  io::write_csv_line(out, out_header);
+  RowsWritten written = convert_rows(reader, out, source_name, plan, RowCodec{step, decoder, encoder, first_coordinate}, reach);
+
+  // Parameters beyond fit's plausibility limits (issue 12 point 7), once per
+  // run; a 14-parameter set at the first and last epoch the rows used.
+  if (plan.transform) {
+    const io::TransformFile& transform = *plan.transform;
+    std::optional<workflow::EpochSpan>& epochs_used = written.epochs_used;
+    if (!epochs_used && plan.flag_epoch && transform.time_dependent()) {
+      epochs_used = workflow::EpochSpan{*plan.flag_epoch, *plan.flag_epoch};
+    }
+    for (auto& w : workflow::implausible_transform_warnings(transform, *o.transform, epochs_used)) {
+      warnings.push_back(std::move(w));
+    }
+  }
+  reach.add_warnings(written.rows, warnings);
+  // Points a forced UTM zone does not contain (--zone, --from-zone, utm_zone column).
+  for (auto& w : decoder.warnings()) warnings.push_back(std::move(w));
+  for (auto& w : encoder.warnings()) warnings.push_back(std::move(w));
+  if (warn_and_commit_standard_output(warnings, output)) return;
+
+  // Provenance sidecar beside the output.
+  const json side = frame_sidecar(o, from_stdin, plan, header, written.rows, warnings);
   publish_with_provenance(output, side.dump(2) + "\n", "the converted rows", o.json, o.output);
 }
 

@@ -185,20 +185,9 @@ int run_compare(const ControlInput& in, const solver::FitOptions& base, bool jso
   return 0;
 }
 
-}  // namespace
-
-int run_fit(const FitCommandOptions& o) {
-  // A fit's memory is a few large arrays (10⁶ marks: the set, the solver's
-  // observations and the per-point results, 0.9 GB at the peak), most of
-  // them built once; glibc would map each large one afresh and unmap it
-  // when freed, so that every phase pays the kernel to zero new pages again
-  // (when the peak was 1.3 GB: 450 000 page faults, a third of the
-  // command's CPU). Here they come from the heap and freed memory is kept
-  // for the next phase (then 30 % fewer page faults, about 0.4 s less), and
-  // given back before the file is written (below). The process ends with
-  // the command, so nothing is held for longer.
-  (void)mallopt(M_MMAP_MAX, 0);
-  (void)mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
+// The options' combinations: one control, one model (or --compare), one
+// place for each output.
+void check_options(const FitCommandOptions& o) {
   if (o.control.empty() == (o.src.empty() || o.dst.empty()) || (o.src.empty() != o.dst.empty())) {
     throw Error(ErrorKind::usage, "E_OPTION",
                 "the control: give CONTROL (one file with both frames' columns) or --src FILE --dst FILE (one frame each, "
@@ -218,6 +207,11 @@ int run_fit(const FitCommandOptions& o) {
     throw Error(ErrorKind::usage, "E_OPTION",
                 "--json and -o -: both would go to standard output; give -o FILE (the JSON report holds the transform too)");
   }
+}
+
+// The solver's options from the flags (those that need the control set
+// are completed once it is read).
+solver::FitOptions fit_options(const FitCommandOptions& o) {
   solver::FitOptions fo;
   fo.model = o.compare ? FitModel::helmert7 : parse_model(o.model, "--model");
   if (o.convention) {
@@ -267,13 +261,12 @@ int run_fit(const FitCommandOptions& o) {
   fo.max_outlier_share = o.max_outlier_share;
   fo.scale_by_sigma0 = o.scale_by_sigma0;
   fo.solutions = o.solution_weighting ? geodesy::SolutionPolicy::weight : geodesy::SolutionPolicy::exclude;
-  // Read before any work: a bad survey file fails before the fit.
-  std::optional<io::SurveyMetadata> survey;
-  if (o.survey_metadata) survey = io::read_survey_metadata(*o.survey_metadata);
-  const io::SurveyMetadata* survey_ptr = survey ? &*survey : nullptr;
+  return fo;
+}
 
-  // Refuse an existing output before any work. With -o - the transform
-  // file goes to standard output and the report to standard error.
+// Refuse an existing output before any work. With -o - the transform
+// file goes to standard output and the report to standard error.
+std::unique_ptr<CommandOutput> open_output(const FitCommandOptions& o) {
   std::unique_ptr<CommandOutput> out;
   if (!o.output.empty()) {
     for (const auto* input : {&o.control, &o.src, &o.dst}) {
@@ -281,8 +274,12 @@ int run_fit(const FitCommandOptions& o) {
     }
     out = std::make_unique<CommandOutput>(o.output, o.overwrite);
   }
-  std::ostream& report = out && out->to_stdout() ? std::cerr : std::cout;
+  return out;
+}
 
+// How the control set is read (ellipsoid, origin, grids, geoid, frames),
+// and the local models' origin and grid in the solver's options.
+io::ControlReadOptions control_read_options(const FitCommandOptions& o, solver::FitOptions& fo) {
   io::ControlReadOptions ro;
   if (o.ellipsoid) ro.ellipsoid = parse_ellipsoid(*o.ellipsoid, "--ellipsoid");
   // The origin's and the site grid's ellipsoid are their frame's, known once the set is read.
@@ -311,8 +308,15 @@ int run_fit(const FitCommandOptions& o) {
   ro.src_geoid = ro.dst_geoid = geoid;
   if (o.source_frame) ro.source_frame.replace = geodesy::Frame::parse(*o.source_frame, "--source-frame");
   if (o.target_frame) ro.target_frame.replace = geodesy::Frame::parse(*o.target_frame, "--target-frame");
-  ControlInput in = o.control.empty() ? read_control_pair_input(o.src, o.dst, ro, o.allow_unmatched, o.json) : read_control_input(o.control, ro, o.json);
-  geodesy::ControlSet& set = in.set;
+  return ro;
+}
+
+// The set as read, checked before the solve (the local models' ellipsoids
+// taken from it, epochs of dynamic frames, swapped axes, far marks, epochs
+// spread over years). Returns what the report says about orthometric input.
+std::vector<std::string> check_control_set(const FitCommandOptions& o, const io::ControlReadOptions& ro, geodesy::ControlSet& set,
+                                           solver::FitOptions& fo) {
+  const geodesy::GeoidGrid* geoid = ro.src_geoid;
   if (fo.nominal_origin && set.origin) fo.nominal_origin->ellipsoid = set.origin->ellipsoid;
   if (fo.site_grid) fo.site_grid->ellipsoid = set.target_input.ellipsoid;
   // A dynamic frame given on the command line needs its epoch as one in the
@@ -336,6 +340,113 @@ int run_fit(const FitCommandOptions& o) {
   if (const auto swap = workflow::likely_lat_lon_swap(set)) throw Error(ErrorKind::input, "E_AXIS_SWAP", *swap);
   if (const auto far = workflow::far_apart_mark(set)) throw Error(ErrorKind::input, "E_MARK_FAR_APART", *far);
   (void)workflow::fixed_fit_epoch(set, fo.model);  // refuses epochs spread over years before the solve
+  return heights;
+}
+
+// The transform file, unless the fit was refused: streamed to `out`, or
+// with --json formed whole (and returned, for the report; else empty).
+std::string write_transform(const FitCommandOptions& o, CommandOutput* out, bool refused, workflow::FitForExport& fitted,
+                            geodesy::ControlSet& set, const solver::FitOptions& fo, const io::SurveyMetadata* survey_ptr) {
+  const solver::FitResult& r = fitted.fit;
+  std::string cmd;
+  for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
+  const std::string generator = "geoanchor " GEOANCHOR_VERSION ": " + cmd;
+  // --json embeds the file's content; otherwise the file is streamed (10⁶
+  // marks' records are never held whole).
+  std::string transform_text;
+  // The metadata contract first: a survey file that contradicts the fit
+  // refuses it before anything is written.
+  const io::MapMetadata contract = workflow::transform_metadata(r, set, survey_ptr);
+  (void)contract;
+  if (o.json) transform_text = io::to_json_text(workflow::transform_file_from_fit(r, set, fo, {}, generator, survey_ptr));
+  if (out && !refused) {
+    if (o.json) {
+      out->stream() << transform_text;
+    } else {
+      const workflow::StreamedTransformFile file =
+          workflow::streamed_transform_file_from_fit(fitted, set, fo, {}, generator, survey_ptr);
+      // The marks are not read again: they and the solver's freed memory
+      // go back to the system before the file is written (10⁶ marks:
+      // 550 MB), where the file's cache pages can reuse them (on this
+      // platform a fresh page costs as much as the bytes written into it)
+      // and the exit has less to free.
+      std::vector<geodesy::ControlPoint>().swap(set.points);
+      (void)malloc_trim(0);
+      io::write_json(out->stream(), file.file, file.points);
+    }
+    out->commit();
+    for (const auto& t : io::take_removed_stale_temporaries()) {
+      std::cerr << "geoanchor: warning: " << io::stale_temporary_warning(t) << '\n';
+    }
+    if (!o.json && !out->to_stdout()) {
+      std::cout << "\nwrote " << o.output << "\n";
+      io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
+    }
+  }
+  return transform_text;
+}
+
+// The report as JSON (geoanchor.fit-report/1, docs/commands/fit.md):
+// what happened, and the transform file's content, written or not.
+void print_report_json(const FitCommandOptions& o, const ControlInput& in, const solver::FitResult& r, bool has_output,
+                       const std::optional<workflow::FitRefusal>& refusal, const std::string& transform_text) {
+  ordered_json j;
+  j["schema"] = "geoanchor.fit-report/1";
+  j["control"] = control_json(in);
+  j["status"] = refusal ? "refused" : has_output ? "written" : "not written";
+  j["output"] = has_output && !refusal ? ordered_json(o.output) : ordered_json(nullptr);
+  j["refusal"] = refusal ? ordered_json{{"code", refusal->code}, {"message", refusal->message}} : ordered_json(nullptr);
+  j["global_test"] = r.global_test.verdict();
+  // The marks failing their point test: flagged (kept) and removed (by
+  // --remove-outliers), in the order data snooping removes them.
+  ordered_json flagged = ordered_json::array(), removed = ordered_json::array();
+  for (const std::size_t i : solver::failing_marks(r)) {
+    const solver::PointResult& p = r.points[i];
+    ordered_json m;
+    m["id"] = p.id;
+    m["snooping_rank"] = p.snooping_rank > 0 ? ordered_json(p.snooping_rank) : ordered_json(nullptr);
+    m["passes_after_rank"] = p.passes_after_rank > 0 ? ordered_json(p.passes_after_rank) : ordered_json(nullptr);
+    m["w_max"] = std::isfinite(p.w_max) ? ordered_json(p.w_max) : ordered_json(nullptr);
+    m["mdb_m"] = std::isfinite(p.mdb_m) ? ordered_json(p.mdb_m) : ordered_json(nullptr);
+    m["point_test"] = {{"statistic", p.point_statistic}, {"dof", p.point_dof}, {"p_value", p.point_p_value}};
+    if (p.outlier) m["because"] = p.removed_because;
+    (p.outlier ? removed : flagged).push_back(std::move(m));
+  }
+  j["flagged"] = std::move(flagged);
+  j["removed"] = std::move(removed);
+  j["warnings"] = r.warnings;
+  j["transform"] = ordered_json::parse(transform_text);
+  print_json(j);
+}
+
+}  // namespace
+
+int run_fit(const FitCommandOptions& o) {
+  // A fit's memory is a few large arrays (10⁶ marks: the set, the solver's
+  // observations and the per-point results, 0.9 GB at the peak), most of
+  // them built once; glibc would map each large one afresh and unmap it
+  // when freed, so that every phase pays the kernel to zero new pages again
+  // (when the peak was 1.3 GB: 450 000 page faults, a third of the
+  // command's CPU). Here they come from the heap and freed memory is kept
+  // for the next phase (then 30 % fewer page faults, about 0.4 s less), and
+  // given back before the file is written (write_transform). The process
+  // ends with the command, so nothing is held for longer.
+  (void)mallopt(M_MMAP_MAX, 0);
+  (void)mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
+  check_options(o);
+  solver::FitOptions fo = fit_options(o);
+  // Read before any work: a bad survey file fails before the fit.
+  std::optional<io::SurveyMetadata> survey;
+  if (o.survey_metadata) survey = io::read_survey_metadata(*o.survey_metadata);
+  const io::SurveyMetadata* survey_ptr = survey ? &*survey : nullptr;
+  const std::unique_ptr<CommandOutput> out = open_output(o);
+  std::ostream& report = out && out->to_stdout() ? std::cerr : std::cout;
+
+  const io::ControlReadOptions ro = control_read_options(o, fo);
+  const geodesy::GeoidGrid* geoid = ro.src_geoid;
+  ControlInput in = o.control.empty() ? read_control_pair_input(o.src, o.dst, ro, o.allow_unmatched, o.json) : read_control_input(o.control, ro, o.json);
+  geodesy::ControlSet& set = in.set;
+  const std::vector<std::string> heights = check_control_set(o, ro, set, fo);
   std::vector<std::string> set_warnings = workflow::control_set_warnings(set);
   // What the join of --src and --dst left out: printed and recorded with the fit.
   set_warnings.insert(set_warnings.end(), in.notes.begin(), in.notes.end());
@@ -369,72 +480,8 @@ int run_fit(const FitCommandOptions& o) {
     io::finish_standard_output("the fit report", out && !refusal && !out->to_stdout() ? "; " + o.output + " was not written"
                                                                                       : std::string());
   }
-  std::string cmd;
-  for (const auto& a : o.argv) cmd += (cmd.empty() ? "" : " ") + a;
-  const std::string generator = "geoanchor " GEOANCHOR_VERSION ": " + cmd;
-  // --json embeds the file's content; otherwise the file is streamed (10⁶
-  // marks' records are never held whole).
-  std::string transform_text;
-  // The metadata contract first: a survey file that contradicts the fit
-  // refuses it before anything is written.
-  const io::MapMetadata contract = workflow::transform_metadata(r, set, survey_ptr);
-  (void)contract;
-  if (o.json) transform_text = io::to_json_text(workflow::transform_file_from_fit(r, set, fo, {}, generator, survey_ptr));
-  if (out && !refusal) {
-    if (o.json) {
-      out->stream() << transform_text;
-    } else {
-      const workflow::StreamedTransformFile file =
-          workflow::streamed_transform_file_from_fit(fitted, set, fo, {}, generator, survey_ptr);
-      // The marks are not read again: they and the solver's freed memory
-      // go back to the system before the file is written (10⁶ marks:
-      // 550 MB), where the file's cache pages can reuse them (on this
-      // platform a fresh page costs as much as the bytes written into it)
-      // and the exit has less to free.
-      std::vector<geodesy::ControlPoint>().swap(set.points);
-      (void)malloc_trim(0);
-      io::write_json(out->stream(), file.file, file.points);
-    }
-    out->commit();
-    for (const auto& t : io::take_removed_stale_temporaries()) {
-      std::cerr << "geoanchor: warning: " << io::stale_temporary_warning(t) << '\n';
-    }
-    if (!o.json && !out->to_stdout()) {
-      std::cout << "\nwrote " << o.output << "\n";
-      io::finish_standard_output("the line \"wrote " + o.output + "\"", "; " + o.output + " was written");
-    }
-  }
-  if (o.json) {
-    // The report as JSON (geoanchor.fit-report/1, docs/commands/fit.md):
-    // what happened, and the transform file's content, written or not.
-    ordered_json j;
-    j["schema"] = "geoanchor.fit-report/1";
-    j["control"] = control_json(in);
-    j["status"] = refusal ? "refused" : out ? "written" : "not written";
-    j["output"] = out && !refusal ? ordered_json(o.output) : ordered_json(nullptr);
-    j["refusal"] = refusal ? ordered_json{{"code", refusal->code}, {"message", refusal->message}} : ordered_json(nullptr);
-    j["global_test"] = r.global_test.verdict();
-    // The marks failing their point test: flagged (kept) and removed (by
-    // --remove-outliers), in the order data snooping removes them.
-    ordered_json flagged = ordered_json::array(), removed = ordered_json::array();
-    for (const std::size_t i : solver::failing_marks(r)) {
-      const solver::PointResult& p = r.points[i];
-      ordered_json m;
-      m["id"] = p.id;
-      m["snooping_rank"] = p.snooping_rank > 0 ? ordered_json(p.snooping_rank) : ordered_json(nullptr);
-      m["passes_after_rank"] = p.passes_after_rank > 0 ? ordered_json(p.passes_after_rank) : ordered_json(nullptr);
-      m["w_max"] = std::isfinite(p.w_max) ? ordered_json(p.w_max) : ordered_json(nullptr);
-      m["mdb_m"] = std::isfinite(p.mdb_m) ? ordered_json(p.mdb_m) : ordered_json(nullptr);
-      m["point_test"] = {{"statistic", p.point_statistic}, {"dof", p.point_dof}, {"p_value", p.point_p_value}};
-      if (p.outlier) m["because"] = p.removed_because;
-      (p.outlier ? removed : flagged).push_back(std::move(m));
-    }
-    j["flagged"] = std::move(flagged);
-    j["removed"] = std::move(removed);
-    j["warnings"] = r.warnings;
-    j["transform"] = ordered_json::parse(transform_text);
-    print_json(j);
-  }
+  const std::string transform_text = write_transform(o, out.get(), refusal.has_value(), fitted, set, fo, survey_ptr);
+  if (o.json) print_report_json(o, in, r, out != nullptr, refusal, transform_text);
   return refusal ? exit_code(ErrorKind::rejected) : 0;
 }
 

@@ -34,7 +34,7 @@ CLI::Validator finite_range(double lo, double hi);          // [lo, hi]
 CLI::Validator finite_positive();                           // > 0, finite
 CLI::Validator integer_range(long long lo, long long hi);   // an integer in [lo, hi]
 
-// The exit codes (ErrorKind, geoanchor/geodesy/error.hpp), the footer of
+// The exit codes (ErrorKind, geoanchor/base/error.hpp), the footer of
 // `geoanchor --help`, of every subcommand's --help and of geoanchor-gui's.
 inline constexpr const char* kExitCodeHelp =
     "Exit codes:\n"
