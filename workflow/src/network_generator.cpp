@@ -31,9 +31,9 @@ constexpr int kBlunderSeparationHops = 2;
 
 [[noreturn]] void bad(const std::string& what) { throw Error(ErrorKind::usage, "E_OPTION", what); }
 
-}  // namespace
-
-GeneratedNetwork generate_network(const NetworkGeneratorOptions& o) {
+// The options checked (a bad one throws, naming its flag), and the number
+// of blunders to plant.
+std::size_t checked_blunders(const NetworkGeneratorOptions& o) {
   const std::size_t n = o.stations;
   if (n < 4) bad("--generate " + std::to_string(n) + ": a network needs at least 4 stations");
   if (!(o.side_km > 0.0) || !std::isfinite(o.side_km)) bad("--side-km " + format_shortest(o.side_km) + ": expected a positive length");
@@ -45,6 +45,108 @@ GeneratedNetwork generate_network(const NetworkGeneratorOptions& o) {
   if (o.held < 1 || o.held > n / 2) bad("--held " + std::to_string(o.held) + ": expected 1 to half the stations (" + std::to_string(n / 2) + ")");
   const std::size_t blunders = o.blunders.value_or(std::clamp<std::size_t>(n / 1000, 1, 10));
   if (blunders > n / 20) bad("--blunders " + std::to_string(blunders) + ": at most one per 20 stations (" + std::to_string(n / 20) + ") can be kept apart");
+  return blunders;
+}
+
+using Edges = std::vector<std::pair<std::size_t, std::size_t>>;  // baselines: station pairs (i < j)
+
+// Baselines to each station's 4–6 nearest, each pair once.
+Edges nearest_baselines(std::size_t n, std::size_t side, const std::vector<Eigen::Vector2d>& plane, std::mt19937_64& rng) {
+  std::vector<std::pair<std::size_t, std::size_t>> edges;
+  std::vector<std::pair<double, std::size_t>> candidates;
+  for (std::size_t i = 0; i < n; ++i) {
+    const long row = static_cast<long>(i / side), col = static_cast<long>(i % side);
+    candidates.clear();
+    for (long r = row - kNeighbourRings; r <= row + kNeighbourRings; ++r) {
+      for (long c = col - kNeighbourRings; c <= col + kNeighbourRings; ++c) {
+        if (r < 0 || c < 0 || c >= static_cast<long>(side)) continue;
+        const std::size_t j = static_cast<std::size_t>(r) * side + static_cast<std::size_t>(c);
+        if (j >= n || j == i) continue;
+        candidates.push_back({(plane[j] - plane[i]).squaredNorm(), j});
+      }
+    }
+    const std::size_t k = std::min<std::size_t>(candidates.size(), 4 + rng() % 3);
+    std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(k), candidates.end());
+    for (std::size_t m = 0; m < k; ++m) edges.push_back({std::min(i, candidates[m].second), std::max(i, candidates[m].second)});
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  return edges;
+}
+
+// Joined into one network: each part beyond the first is tied to its
+// nearest station of another part (rare on a jittered grid).
+void join_parts(Edges& edges, std::size_t n, const std::vector<Eigen::Vector2d>& plane) {
+  for (;;) {
+    std::vector<std::size_t> parent(n);
+    std::iota(parent.begin(), parent.end(), 0);
+    const auto find = [&](std::size_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (const auto& [p, q] : edges) parent[find(p)] = find(q);
+    std::vector<std::pair<std::size_t, std::size_t>> ties;
+    std::vector<bool> tied(n, false);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t root = find(i);
+      if (root == find(0) || tied[root]) continue;
+      double best = INFINITY;
+      std::size_t to = 0;
+      for (std::size_t j = 0; j < n; ++j) {
+        if (find(j) == root) continue;
+        const double d = (plane[j] - plane[i]).squaredNorm();
+        if (d < best) best = d, to = j;
+      }
+      tied[root] = true;
+      ties.push_back({std::min(i, to), std::max(i, to)});
+    }
+    if (ties.empty()) break;
+    edges.insert(edges.end(), ties.begin(), ties.end());
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  }
+}
+
+// Blunders on baselines far apart (no station of one within two
+// baselines of another's).
+void plant_blunders(std::size_t blunders, const Edges& edges, const NetworkGeneratorOptions& o, std::mt19937_64& rng,
+                    std::normal_distribution<double>& normal, GeneratedNetwork& g) {
+  const std::size_t n = o.stations;
+  auto& net = g.network;
+  std::vector<std::vector<std::size_t>> adjacent(n);
+  for (const auto& [p, q] : edges) adjacent[p].push_back(q), adjacent[q].push_back(p);
+  std::vector<bool> near(n, false);
+  std::size_t tries = 0;
+  while (g.blunders.size() < blunders) {
+    if (++tries > 100 * edges.size()) bad("--blunders " + std::to_string(blunders) + ": the network has no room to keep them apart");
+    const std::size_t k = static_cast<std::size_t>(rng() % edges.size());
+    const auto [p, q] = edges[k];
+    if (near[p] || near[q]) continue;
+    std::vector<std::size_t> ring{p, q};
+    for (std::size_t s : ring) near[s] = true;
+    for (int hop = 0; hop < kBlunderSeparationHops; ++hop) {
+      std::vector<std::size_t> further;
+      for (std::size_t s : ring) {
+        for (std::size_t t : adjacent[s]) {
+          if (!near[t]) near[t] = true, further.push_back(t);
+        }
+      }
+      ring.swap(further);
+    }
+    Eigen::Vector3d direction(normal(rng), normal(rng), normal(rng));
+    direction.normalize();
+    PlantedBlunder b{k, o.blunder_m * direction};
+    net.measurements[k].value += b.offset_m;
+    g.blunders.push_back(b);
+  }
+  std::sort(g.blunders.begin(), g.blunders.end(), [](const auto& x, const auto& y) { return x.measurement < y.measurement; });
+}
+
+}  // namespace
+
+GeneratedNetwork generate_network(const NetworkGeneratorOptions& o) {
+  const std::size_t n = o.stations;
+  const std::size_t blunders = checked_blunders(o);
 
   GeneratedNetwork g;
   auto& net = g.network;
@@ -90,56 +192,8 @@ GeneratedNetwork generate_network(const NetworkGeneratorOptions& o) {
     net.stations[i].position = g.truth[i];
   }
 
-  // Baselines to each station's 4–6 nearest, each pair once.
-  std::vector<std::pair<std::size_t, std::size_t>> edges;
-  std::vector<std::pair<double, std::size_t>> candidates;
-  for (std::size_t i = 0; i < n; ++i) {
-    const long row = static_cast<long>(i / side), col = static_cast<long>(i % side);
-    candidates.clear();
-    for (long r = row - kNeighbourRings; r <= row + kNeighbourRings; ++r) {
-      for (long c = col - kNeighbourRings; c <= col + kNeighbourRings; ++c) {
-        if (r < 0 || c < 0 || c >= static_cast<long>(side)) continue;
-        const std::size_t j = static_cast<std::size_t>(r) * side + static_cast<std::size_t>(c);
-        if (j >= n || j == i) continue;
-        candidates.push_back({(plane[j] - plane[i]).squaredNorm(), j});
-      }
-    }
-    const std::size_t k = std::min<std::size_t>(candidates.size(), 4 + rng() % 3);
-    std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(k), candidates.end());
-    for (std::size_t m = 0; m < k; ++m) edges.push_back({std::min(i, candidates[m].second), std::max(i, candidates[m].second)});
-  }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  // Joined into one network: each part beyond the first is tied to its
-  // nearest station of another part (rare on a jittered grid).
-  for (;;) {
-    std::vector<std::size_t> parent(n);
-    std::iota(parent.begin(), parent.end(), 0);
-    const auto find = [&](std::size_t x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
-    for (const auto& [p, q] : edges) parent[find(p)] = find(q);
-    std::vector<std::pair<std::size_t, std::size_t>> ties;
-    std::vector<bool> tied(n, false);
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t root = find(i);
-      if (root == find(0) || tied[root]) continue;
-      double best = INFINITY;
-      std::size_t to = 0;
-      for (std::size_t j = 0; j < n; ++j) {
-        if (find(j) == root) continue;
-        const double d = (plane[j] - plane[i]).squaredNorm();
-        if (d < best) best = d, to = j;
-      }
-      tied[root] = true;
-      ties.push_back({std::min(i, to), std::max(i, to)});
-    }
-    if (ties.empty()) break;
-    edges.insert(edges.end(), ties.begin(), ties.end());
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  }
+  Edges edges = nearest_baselines(n, side, plane, rng);
+  join_parts(edges, n, plane);
 
   for (std::size_t k = 0; k < edges.size(); ++k) {
     const auto [i, j] = edges[k];
@@ -161,35 +215,7 @@ GeneratedNetwork generate_network(const NetworkGeneratorOptions& o) {
     net.measurements.push_back(std::move(m));
   }
 
-  // Blunders on baselines far apart (no station of one within two
-  // baselines of another's).
-  std::vector<std::vector<std::size_t>> adjacent(n);
-  for (const auto& [p, q] : edges) adjacent[p].push_back(q), adjacent[q].push_back(p);
-  std::vector<bool> near(n, false);
-  std::size_t tries = 0;
-  while (g.blunders.size() < blunders) {
-    if (++tries > 100 * edges.size()) bad("--blunders " + std::to_string(blunders) + ": the network has no room to keep them apart");
-    const std::size_t k = static_cast<std::size_t>(rng() % edges.size());
-    const auto [p, q] = edges[k];
-    if (near[p] || near[q]) continue;
-    std::vector<std::size_t> ring{p, q};
-    for (std::size_t s : ring) near[s] = true;
-    for (int hop = 0; hop < kBlunderSeparationHops; ++hop) {
-      std::vector<std::size_t> further;
-      for (std::size_t s : ring) {
-        for (std::size_t t : adjacent[s]) {
-          if (!near[t]) near[t] = true, further.push_back(t);
-        }
-      }
-      ring.swap(further);
-    }
-    Eigen::Vector3d direction(normal(rng), normal(rng), normal(rng));
-    direction.normalize();
-    PlantedBlunder b{k, o.blunder_m * direction};
-    net.measurements[k].value += b.offset_m;
-    g.blunders.push_back(b);
-  }
-  std::sort(g.blunders.begin(), g.blunders.end(), [](const auto& x, const auto& y) { return x.measurement < y.measurement; });
+  plant_blunders(blunders, edges, o, rng, normal, g);
   return g;
 }
 

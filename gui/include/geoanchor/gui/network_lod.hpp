@@ -2,7 +2,7 @@
 // The network plan's level of detail (issue 17 point 6): how a plan of
 // 10⁵ stations and their lines is drawn in a few thousand marks and
 // segments without hiding anything a geodesist looks for. Pure geometry on
-// pixel positions, no graphics: the view (network_view.cpp) draws what it
+// pixel positions, no graphics: the view (network_plan.cpp) draws what it
 // returns, and the tests check it directly.
 //
 // The plan is cut into square cells of `cell_px` pixels. Stations that are

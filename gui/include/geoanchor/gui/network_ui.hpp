@@ -129,6 +129,28 @@ class NetworkUi {
  private:
   void refresh();
   void draw_plan();
+  // The steps of draw_plan (network_plan.cpp), in the order it takes them,
+  // sharing one frame's PlanFrame.
+  struct PlanFrame;
+  void begin_plan(PlanFrame& f);
+  // The plotting area and scale for a footer of `footer_px`.
+  void settle_plan_area(const PlanFrame& f, float footer_px);
+  void find_stations_in_view(PlanFrame& f);
+  void find_flagged(PlanFrame& f);
+  std::string flagged_label(const PlanFrame& f, std::size_t index) const;
+  void settle_footer(PlanFrame& f);
+  std::size_t place_labels(PlanFrame& f);
+  void write_caption(PlanFrame& f, std::size_t flagged_in_view);
+  void draw_ellipses(const PlanFrame& f);
+  void draw_lines(PlanFrame& f);
+  void draw_stations(const PlanFrame& f);
+  void draw_flag_marks(const PlanFrame& f);
+  void draw_labels(const PlanFrame& f);
+  void draw_footer(const PlanFrame& f);
+  void plan_pointer(const PlanFrame& f);
+  void zoom_and_pan(const Eigen::Vector2d& m);
+  bool station_under_pointer(const PlanFrame& f, const Eigen::Vector2d& m, bool hovered, bool clicked);
+  void line_under_pointer(const PlanFrame& f, const Eigen::Vector2d& m, bool hovered);
   void draw_side();
   void draw_station_table(float height);
   void draw_measurement_table(float height);

@@ -186,6 +186,21 @@ class WorkbenchUi {
   void refresh();
   void draw_bar();
   void draw_plan();
+  // The steps of draw_plan (plan_view.cpp), in the order it takes them,
+  // sharing one frame's PlanFrame.
+  struct PlanFrame;
+  void begin_plan(PlanFrame& f);
+  void measure_plan(PlanFrame& f);
+  void layout_plan(PlanFrame& f);
+  void settle_plan_scale(PlanFrame& f);
+  void place_plan_labels(PlanFrame& f);
+  void write_plan_caption(PlanFrame& f);
+  void draw_plan_ellipses(PlanFrame& f);
+  void draw_plan_marks(const PlanFrame& f);
+  void draw_plan_labels(const PlanFrame& f);
+  void draw_plan_footer(const PlanFrame& f);
+  void draw_plan_legend(const PlanFrame& f);
+  void plan_pointer(const PlanFrame& f);
   void draw_histogram();
   void draw_table();
   void draw_parameters();

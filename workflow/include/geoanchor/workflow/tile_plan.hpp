@@ -90,6 +90,23 @@ class TilePlanner {
     std::optional<geodesy::Ellipsoid> ellipsoid;
   };
   io::TileMetadata input_metadata(TilePlan& p) const;
+  // The CRS a LAS/LAZ tile states (its WKT, else its GeoTIFF keys) into
+  // `wkt`, the keys named in `geotiff_keys`; its point count into `p`.
+  void read_las_crs(TilePlan& p, const std::optional<io::TileMetadata>& side, const std::filesystem::path& side_path,
+                    std::optional<io::TileMetadata>& wkt, std::optional<std::string>& geotiff_keys) const;
+  // A tile's coordinates from the flags alone (--from-frame and
+  // --from-origin/--from-zone/--from-tm; a CSV's header names the kind).
+  io::TileMetadata metadata_from_flags(TilePlan& p, const std::string& tile, const std::filesystem::path& side_path) const;
+  // Refuses an input apply cannot move: no frame, no coordinate epoch of a
+  // dynamic frame, orthometric heights.
+  void check_input_frame(const TilePlan& p, const std::string& tile) const;
+  // The output's frame: the tile's own, or the transform's other side once
+  // the tile's frame and epoch are checked against it (p.epoch set for a
+  // time-dependent transform).
+  std::optional<geodesy::Frame> output_frame(TilePlan& p, const std::string& tile) const;
+  // The output in geoanchor's own coordinates: kind, ellipsoid, origin or
+  // projection, heights.
+  void plan_output_coordinates(TilePlan& p, const std::string& tile) const;
   // Refuses a flag that contradicts what the tile states (p.in_frame_source
   // names where); --crs may complete a stated CRS (heights, epoch), which
   // then replaces it in `m`.

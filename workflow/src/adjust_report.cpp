@@ -1,0 +1,284 @@
+// The report of an adjustment: the text `geoanchor adjust` prints and its
+// JSON document (schema geoanchor.adjust-report/1).
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "adjust_outputs.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/base/number_text.hpp"
+#include "geoanchor/workflow/adjust.hpp"
+
+namespace geoanchor::workflow {
+
+using namespace adjust_detail;
+using geodesy::NetworkSpace;
+
+std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
+  const auto& net = prepared.network;
+  std::ostringstream out;
+  out << "geoanchor adjust: " << net.source_name << "\n";
+  out << "  network: " << (net.space == NetworkSpace::ellipsoidal ? "on the ellipsoid " + net.ellipsoid.name() + ", frame " +
+                                                                         (net.frame ? net.frame->to_string() : std::string("?"))
+                                                                   : "local, axes " + net.axes.name())
+      << "; " << net.stations.size() << " stations, " << net.measurements.size() << " measurements\n";
+  for (const auto& n : prepared.notes) out << "  " << n << "\n";
+  out << "  datum: " << r.datum << "\n";
+  out << "  solve: " << r.iterations << " iterations, last correction " << format_fixed(r.largest_correction_m, 6) << " m; "
+      << r.unknowns << " unknowns, " << r.observations << " observations, factor " << r.factor_nonzeros << " nonzeros\n";
+  if (!r.removed_per_pass.empty()) {
+    std::string steps;
+    for (std::size_t k : r.removed_per_pass) steps += (steps.empty() ? "" : ", ") + std::to_string(k);
+    out << "  data snooping: " << r.passes << " adjustments, removing " << steps << " measurement(s) in turn";
+    if (r.passes_downdated > 0) {
+      out << "; " << r.passes_downdated << " of them by taking the removed measurements out of the last factor (a downdate)";
+    }
+    out << "\n";
+  }
+  out << "\n";
+  out << "Statistics\n";
+  out << "  vtpv = " << format_shortest(r.vtpv) << ", dof = " << r.dof;
+  if (r.variance_factor) out << ", variance factor = " << format_fixed(*r.variance_factor, 4) << ", sigma0 = " << format_fixed(*r.sigma0, 4);
+  out << "\n";
+  const auto& g = r.global_test;
+  if (r.dof > 0) {
+    out << "  global test (chi-squared, " << format_shortest(100.0 * (1.0 - o.alpha)) << " %): " << format_fixed(g.statistic, 3)
+        << " in [" << format_fixed(g.critical_lower, 3) << ", " << format_fixed(g.critical_upper, 3) << "]: "
+        << (g.passed ? "PASSED" : g.failed_high() ? "FAILED (high)" : "FAILED (low)") << "\n";
+  }
+  out << "  w-tests: critical |w| = " << format_fixed(r.w_critical, 2) << " (alpha " << format_shortest(o.alpha_point) << ")\n\n";
+  if (prepared.helmert && r.helmert) {
+    const HelmertInFileUnits u = helmert_in_file_units(prepared, r);
+    out << "Helmert of group " << prepared.helmert->name << ": " << prepared.helmert_frame->to_string() << " -> "
+        << net.frame->to_string() << ", " << (prepared.helmert->rates ? "helmert14 at reference epoch " + format_fixed(prepared.helmert->reference_epoch, 4) : "helmert7")
+        << ", " << (prepared.helmert_position_vector ? "position_vector" : "coordinate_frame")
+        << " (sigmas from the a-priori weights)\n";
+    for (std::size_t k = 0; k < u.names.size(); ++k) {
+      const auto i = static_cast<Eigen::Index>(k);
+      char line[160];
+      std::snprintf(line, sizeof line, "  %-22s %14.6f  ± %.6f\n", u.names[k].c_str(), u.value(i), std::sqrt(std::max(0.0, u.covariance(i, i))));
+      out << line;
+    }
+    out << "\n";
+  }
+  out << "Stations (sigmas from the a-priori weights; ellipse 1 sigma)\n";
+  const bool ellipsoidal = net.space == NetworkSpace::ellipsoidal;
+  out << "  id            " << (ellipsoidal ? "sigma_e  sigma_n  sigma_u" : "sigma_x  sigma_y  sigma_z") << "  (mm)   ellipse a/b (mm) az (deg)  constraint\n";
+  for (const auto& s : r.stations) {
+    if (!s.used) continue;
+    const Eigen::Matrix3d& c = s.covariance_local_m2;
+    char line[200];
+    std::snprintf(line, sizeof line, "  %-12s %8.2f %8.2f %8.2f        %7.2f/%-7.2f %7.2f    %s\n", s.id.c_str(),
+                  1e3 * std::sqrt(std::max(0.0, c(0, 0))), 1e3 * std::sqrt(std::max(0.0, c(1, 1))),
+                  1e3 * std::sqrt(std::max(0.0, c(2, 2))), 1e3 * s.ellipse.semi_major_m, 1e3 * s.ellipse.semi_minor_m,
+                  s.ellipse.azimuth_rad * kRadToDeg, s.constraint.c_str());
+    out << line;
+  }
+  // The flagged measurements first, in the order data snooping removes them.
+  const auto p_text = [](double p) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3g", p);
+    return std::string(b);
+  };
+  const auto mdb_text = [&](const solver::AdjustedMeasurement& am, const geodesy::NetworkMeasurement& m) {
+    double largest = 0.0;
+    for (Eigen::Index k = 0; k < am.mdb.size(); ++k) {
+      if (!(am.mdb(k) <= largest)) largest = am.mdb(k);
+    }
+    if (!std::isfinite(largest)) return std::string("-");
+    return angular(m.kind) ? format_fixed(largest * kRadToArcsec, 2) + "\"" : format_fixed(largest * 1e3, 1) + " mm";
+  };
+  const std::vector<std::size_t> failing = solver::failing_measurements(r);
+  std::size_t flagged = 0, removed = 0;
+  for (const auto& am : r.measurements) {
+    const auto st = am.status(r.alpha_point);
+    flagged += st == solver::TestStatus::flagged ? 1u : 0u;
+    removed += st == solver::TestStatus::removed ? 1u : 0u;
+  }
+  if (flagged > 0) {
+    out << "\nFlagged measurements: " << flagged << " fail their test at alpha " << format_shortest(o.alpha_point)
+        << " and are kept (--remove-outliers removes them in the order of their snooping rank, strongest evidence first)\n";
+    out << "  rank  measurement\n";
+    for (const std::size_t k : failing) {
+      const auto& am = r.measurements[k];
+      if (am.status(r.alpha_point) != solver::TestStatus::flagged) continue;
+      const auto& m = net.measurements[am.index];
+      char rank[16];
+      std::snprintf(rank, sizeof rank, "%4s", am.snooping_rank > 0 ? std::to_string(am.snooping_rank).c_str() : "-");
+      out << "  " << rank << "  " << m.source << "  " << geodesy::to_string(m.kind) << " " << stations_of(net, m) << ": max |w| "
+          << format_fixed(am.w_max, 2) << ", test " << format_fixed(am.statistic, 2) << " (chi-squared, " << am.test_dof
+          << " dof), p " << p_text(am.p_value) << ", MDB " << mdb_text(am, m)
+          << (am.passes_after_rank > 0 ? "; passes once rank " + std::to_string(am.passes_after_rank) + " is removed" : std::string())
+          << "\n";
+    }
+  }
+  // The measurements with the largest |w|.
+  std::vector<const solver::AdjustedMeasurement*> by_w;
+  for (const auto& am : r.measurements) {
+    if (std::isfinite(am.w_max)) by_w.push_back(&am);
+  }
+  std::stable_sort(by_w.begin(), by_w.end(), [](auto* a, auto* b) { return a->w_max > b->w_max; });
+  out << "\nMeasurements with the largest |w| (of " << r.measurements.size() << ")\n";
+  for (std::size_t k = 0; k < by_w.size() && k < 20; ++k) {
+    const auto& am = *by_w[k];
+    const auto& m = net.measurements[am.index];
+    out << "  " << m.source << "  " << geodesy::to_string(m.kind) << " " << stations_of(net, m) << ": max |w| "
+        << format_fixed(am.w_max, 2) << ", p " << p_text(am.p_value) << ", " << solver::to_string(am.status(r.alpha_point))
+        << (am.snooping_rank > 0 ? " (snooping rank " + std::to_string(am.snooping_rank) + ")" : std::string()) << "\n";
+  }
+  if (removed > 0) {
+    out << "\nMeasurements removed (--remove-outliers, or a gross misclosure past the input's tolerance): " << removed << "\n";
+    for (const auto& am : r.measurements) {
+      if (am.outlier) out << "  " << net.measurements[am.index].source << ": " << am.removed_because << "\n";
+    }
+  }
+  if (!r.warnings.empty()) {
+    out << "\nWarnings\n";
+    for (const auto& w : r.warnings) out << "  " << w << "\n";
+  }
+  return out.str();
+}
+
+nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
+                                       const solver::AdjustOptions& o, ReportDetail detail) {
+  const bool full = detail == ReportDetail::full;
+  using nlohmann::ordered_json;
+  const auto& net = prepared.network;
+  auto num = [](double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); };
+  ordered_json j;
+  j["schema"] = "geoanchor.adjust-report/1";
+  j["inputs"] = net.source_name;
+  j["space"] = net.space == NetworkSpace::ellipsoidal ? "ellipsoidal" : "local";
+  if (net.frame) j["frame"] = net.frame->to_string();
+  j["ellipsoid"] = net.ellipsoid.name();
+  j["datum"] = r.datum;
+  j["datum_defect"] = r.datum_defect;
+  if (const auto rec = adjust_solution_record(prepared, r)) {
+    ordered_json classes = ordered_json::object();
+    for (const auto s : geodesy::kGnssSolutions) {
+      const io::SolutionTally& c = rec->classes[geodesy::solution_index(s)];
+      classes[std::string(geodesy::to_string(s))] = {
+          {"measurements", c.marks}, {"used", c.used}, {"excluded", c.excluded}, {"sigma_factor", c.sigma_factor}};
+    }
+    j["gnss_solutions"] = {{"policy", std::string(geodesy::to_string(rec->policy))}, {"classes", classes}};
+  }
+  j["notes"] = prepared.notes;
+  j["vtpv"] = r.vtpv;
+  j["dof"] = r.dof;
+  j["variance_factor"] = r.variance_factor ? ordered_json(*r.variance_factor) : ordered_json(nullptr);
+  j["sigma0"] = r.sigma0 ? ordered_json(*r.sigma0) : ordered_json(nullptr);
+  j["global_test"] = {{"statistic", r.global_test.statistic},
+                      {"lower", r.global_test.critical_lower},
+                      {"upper", r.global_test.critical_upper},
+                      {"passed", r.global_test.passed},
+                      {"verdict", r.global_test.verdict()},
+                      {"confidence", 1.0 - o.alpha}};
+  if (prepared.helmert && r.helmert) {
+    const HelmertInFileUnits u = helmert_in_file_units(prepared, r);
+    ordered_json values, sigmas;
+    for (std::size_t k = 0; k < u.names.size(); ++k) {
+      const auto i = static_cast<Eigen::Index>(k);
+      values[u.names[k]] = num(u.value(i));
+      sigmas[u.names[k]] = num(std::sqrt(std::max(0.0, u.covariance(i, i))));
+    }
+    j["helmert"] = {{"group", prepared.helmert->name},
+                    {"model", prepared.helmert->rates ? "helmert14" : "helmert7"},
+                    {"convention", prepared.helmert_position_vector ? "position_vector" : "coordinate_frame"},
+                    {"source_frame", prepared.helmert_frame->to_string()},
+                    {"target_frame", net.frame->to_string()},
+                    {"reference_epoch", prepared.helmert->rates ? num(prepared.helmert->reference_epoch) : ordered_json(nullptr)},
+                    {"measurements", prepared.helmert->measurements.size()},
+                    {"parameters", values},
+                    {"sigmas", sigmas}};
+  }
+  j["w_critical"] = r.w_critical;
+  j["iterations"] = r.iterations;
+  j["snooping"] = {{"adjustments", r.passes}, {"removed_per_step", r.removed_per_pass}, {"downdated", r.passes_downdated}};
+  j["converged"] = r.converged;
+  j["largest_correction_m"] = r.largest_correction_m;
+  j["unknowns"] = r.unknowns;
+  j["observations"] = r.observations;
+  ordered_json stations = ordered_json::array();
+  const double sigma_scale = r.sigma0.value_or(1.0);
+  for (const auto& s : r.stations) {
+    if (!s.used || !full) continue;
+    const Eigen::Matrix3d& c = s.covariance_local_m2;
+    ordered_json st = {{"id", s.id}, {"position_m", {s.position.x(), s.position.y(), s.position.z()}}};
+    if (net.space == NetworkSpace::ellipsoidal) {
+      const auto g = geodesy::geodetic_from_ecef(net.ellipsoid, geodesy::EcefPosition(s.position.x(), s.position.y(), s.position.z()));
+      st["lat_deg"] = g.lat.deg();
+      st["lon_deg"] = g.lon.deg();
+      st["h_m"] = g.h.m;
+      st["sigma_enu_m"] = {std::sqrt(std::max(0.0, c(0, 0))), std::sqrt(std::max(0.0, c(1, 1))), std::sqrt(std::max(0.0, c(2, 2)))};
+      st["sigma_enu_scaled_m"] = {sigma_scale * std::sqrt(std::max(0.0, c(0, 0))), sigma_scale * std::sqrt(std::max(0.0, c(1, 1))),
+                                  sigma_scale * std::sqrt(std::max(0.0, c(2, 2)))};
+    } else {
+      st["sigma_xyz_m"] = {std::sqrt(std::max(0.0, c(0, 0))), std::sqrt(std::max(0.0, c(1, 1))), std::sqrt(std::max(0.0, c(2, 2)))};
+      st["sigma_xyz_scaled_m"] = {sigma_scale * std::sqrt(std::max(0.0, c(0, 0))), sigma_scale * std::sqrt(std::max(0.0, c(1, 1))),
+                                  sigma_scale * std::sqrt(std::max(0.0, c(2, 2)))};
+    }
+    ordered_json cov = ordered_json::array();
+    for (int a = 0; a < 3; ++a) cov.push_back({s.covariance_m2(a, 0), s.covariance_m2(a, 1), s.covariance_m2(a, 2)});
+    st["covariance_m2"] = cov;
+    st["ellipse"] = {{"a_m", s.ellipse.semi_major_m}, {"b_m", s.ellipse.semi_minor_m}, {"azimuth_deg", s.ellipse.azimuth_rad * kRadToDeg}};
+    st["ellipse_confidence"] = {{"a_m", s.ellipse_confidence.semi_major_m}, {"b_m", s.ellipse_confidence.semi_minor_m},
+                                {"confidence", o.confidence}};
+    st["constraint"] = s.constraint;
+    stations.push_back(st);
+  }
+  if (full) j["stations"] = std::move(stations);
+  ordered_json measurements = ordered_json::array(), flagged = ordered_json::array(), removed = ordered_json::array();
+  for (const std::size_t k : solver::failing_measurements(r)) {
+    const auto& am = r.measurements[k];
+    const auto& m = net.measurements[am.index];
+    ordered_json x = {{"source", m.source},
+                      {"kind", kind_key(m.kind)},
+                      {"stations", stations_of(net, m)},
+                      {"snooping_rank", am.snooping_rank > 0 ? ordered_json(am.snooping_rank) : ordered_json(nullptr)},
+                      {"passes_after_rank", am.passes_after_rank > 0 ? ordered_json(am.passes_after_rank) : ordered_json(nullptr)},
+                      {"w_max", num(am.w_max)},
+                      {"test", {{"statistic", num(am.statistic)}, {"dof", am.test_dof}, {"p_value", num(am.p_value)}}}};
+    ordered_json mdb = ordered_json::array();
+    for (Eigen::Index c = 0; c < am.mdb.size(); ++c) mdb.push_back(num(am.mdb(c)));
+    x["mdb"] = mdb;
+    if (am.outlier) x["because"] = am.removed_because;
+    (am.outlier ? removed : flagged).push_back(std::move(x));
+  }
+  for (const auto& am : r.measurements) {
+    const auto& m = net.measurements[am.index];
+    if (am.outlier && am.snooping_rank == 0) removed.push_back({{"source", m.source}, {"kind", kind_key(m.kind)},
+                                                               {"stations", stations_of(net, m)}, {"because", am.removed_because}});
+    if (!full) continue;
+    ordered_json x = {{"source", m.source}, {"kind", kind_key(m.kind)}, {"stations", stations_of(net, m)},
+                      {"unit", angular(m.kind) ? "rad" : "m"}};
+    auto vec = [&](const Eigen::VectorXd& v) {
+      ordered_json a = ordered_json::array();
+      for (Eigen::Index k = 0; k < v.size(); ++k) a.push_back(num(v(k)));
+      return a;
+    };
+    x["observed"] = vec(am.observed);
+    x["adjusted"] = vec(am.adjusted);
+    x["residual"] = vec(am.residual);
+    x["sigma"] = vec(am.sigma);
+    x["residual_sigma"] = vec(am.residual_sigma);
+    x["redundancy"] = vec(am.redundancy);
+    x["w"] = vec(am.w);
+    x["mdb"] = vec(am.mdb);
+    x["test"] = {{"statistic", am.statistic}, {"dof", am.test_dof}, {"p_value", am.p_value}};
+    x["status"] = solver::to_string(am.status(r.alpha_point));
+    x["snooping_rank"] = am.snooping_rank > 0 ? ordered_json(am.snooping_rank) : ordered_json(nullptr);
+    if (!m.frame_step.empty()) x["frame_step"] = m.frame_step;
+    measurements.push_back(std::move(x));
+  }
+  if (full) j["measurements"] = std::move(measurements);
+  j["flagged"] = std::move(flagged);
+  j["removed"] = std::move(removed);
+  j["warnings"] = r.warnings;
+  if (!r.refused_because.empty()) j["refused_because"] = r.refused_because;
+  return j;
+}
+
+}  // namespace geoanchor::workflow
