@@ -7,7 +7,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <span>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 #include "control/control_common.hpp"
@@ -58,13 +60,12 @@ detail::RoleValues role_values(const json& point, const std::string& role, const
     fail(at + ".H_m", "an ellipsoidal (h_m) and an orthometric (H_m) height for one mark; give one");
   }
   if (v.orthometric && !geoid) detail::refuse_orthometric_without_geoid(at + ".H_m");
-  for (const auto& [key, value] : c.items()) {
-    const auto* row = kinds[found];
-    if (key != row[0] && key != row[1] && key != row[2] && !(v.orthometric && key == "H_m")) {
-      fail(at + "." + key, std::string("unknown key for these coordinates; expected ") + row[0] + ", " + row[1] + ", " + row[2] +
-                               (geodetic ? " (h_m ellipsoidal, or H_m orthometric with --geoid; metres)"
-                                         : " (heights ellipsoidal, in metres)"));
-    }
+  const auto* row = kinds[found];
+  const std::string_view keys[4] = {row[0], row[1], row[2], "H_m"};  // H_m only for orthometric heights
+  if (const auto key = detail::first_unknown_key(c, std::span<const std::string_view>(keys, v.orthometric ? 4 : 3))) {
+    fail(at + "." + *key, std::string("unknown key for these coordinates; expected ") + row[0] + ", " + row[1] + ", " + row[2] +
+                              (geodetic ? " (h_m ellipsoidal, or H_m orthometric with --geoid; metres)"
+                                        : " (heights ellipsoidal, in metres)"));
   }
   v.kind = kind_of[found];
   v.a = number_at(c, kinds[found][0], at);
@@ -106,12 +107,8 @@ detail::RoleValues crs_role_values(const json& point, const std::string& role, c
   if (!point.contains(frame) || !point.at(frame).is_object()) fail(where + "." + frame, "missing; expected an object of coordinates");
   const json& c = point.at(frame);
   const std::string at = where + "." + frame;
-  std::string expected;
-  for (const auto& n : columns.names) expected += (expected.empty() ? "" : ", ") + n;
-  for (const auto& [key, value] : c.items()) {
-    if (std::find(columns.names.begin(), columns.names.end(), key) == columns.names.end()) {
-      fail(at + "." + key, "unknown key for the CRS " + columns.crs.display_name() + "; expected " + expected);
-    }
+  if (const auto key = detail::first_unknown_key(c, columns.names)) {
+    fail(at + "." + *key, "unknown key for the CRS " + columns.crs.display_name() + "; expected " + detail::key_list(columns.names));
   }
   // The sigma and covariance as role_values reads them, on a stand-in of
   // ECEF keys (the checks and messages are the same).
@@ -275,12 +272,9 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
   text << in.rdbuf();
   const json doc = parse_json_strict<json>(text.str(), source_name);
   if (!doc.is_object()) fail(source_name, "expected a JSON object with \"points\"");
-  for (const auto& [key, value] : doc.items()) {
-    if (key != "points" && key != "source_frame" && key != "target_frame" && key != "source_crs" &&
-        key != "target_crs" && key != "description") {
-      fail(source_name + ": " + key,
-           "unknown key; expected points, source_frame, target_frame, source_crs, target_crs, description");
-    }
+  static const char* const kKeys[] = {"points", "source_frame", "target_frame", "source_crs", "target_crs", "description"};
+  if (const auto key = detail::first_unknown_key(doc, kKeys)) {
+    fail(source_name + ": " + *key, "unknown key; expected points, source_frame, target_frame, source_crs, target_crs, description");
   }
   // Free text for people; typed so that a misplaced value is not kept as one.
   if (doc.contains("description") && !doc.at("description").is_string()) {
@@ -324,11 +318,9 @@ geodesy::ControlSet read_control_json(std::istream& in, const std::string& sourc
     const std::string where = source_name + ": points[" + std::to_string(i) + "]";
     const json& jp = points[i];
     if (!jp.is_object()) fail(where, "expected an object");
-    for (const auto& [key, value] : jp.items()) {
-      if (!known.count(key)) {
-        fail(where + "." + key, "unknown key; expected id, source, target, sigma_src_m, sigma_dst_m (isotropic, metres), "
-                                "cov_src_m2, cov_dst_m2 (3×3, m²), epoch, use, solution");
-      }
+    if (const auto key = detail::first_unknown_key(jp, known)) {
+      fail(where + "." + *key, "unknown key; expected id, source, target, sigma_src_m, sigma_dst_m (isotropic, metres), "
+                               "cov_src_m2, cov_dst_m2 (3×3, m²), epoch, use, solution");
     }
     geodesy::ControlPoint p;
     if (!jp.contains("id") || !jp.at("id").is_string() || jp.at("id").get<std::string>().empty()) {

@@ -37,13 +37,7 @@ constexpr double kGon = std::numbers::pi / 200.0;
 
 void only_keys(const json& obj, const std::string& where, const std::set<std::string>& allowed) {
   if (!obj.is_object()) fail(where, "expected an object");
-  for (const auto& [key, value] : obj.items()) {
-    if (!allowed.count(key)) {
-      std::string list;
-      for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
-      fail(where + "." + key, "unknown key; expected " + list);
-    }
-  }
+  if (const auto key = first_unknown_key(obj, allowed)) fail(where + "." + *key, "unknown key; expected " + key_list(allowed));
 }
 
 double number(const json& obj, const std::string& key, const std::string& where) {

@@ -13,6 +13,7 @@
 #include "geoanchor/base/utf8.hpp"
 #include "geoanchor/io/json_input.hpp"
 #include "geoanchor/io/tile/tile_metadata.hpp"
+#include "json_fields.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -25,12 +26,8 @@ using nlohmann::json;
 
 void only_keys(const json& j, std::string_view source, const std::string& where, const std::set<std::string>& known) {
   if (!j.is_object()) fail(source, where, "expected a JSON object");
-  for (const auto& [key, value] : j.items()) {
-    if (!known.count(key)) {
-      std::string list;
-      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-      fail(source, where.empty() ? key : where + "." + key, "unknown key; expected one of " + list);
-    }
+  if (const auto key = detail::first_unknown_key(j, known)) {
+    fail(source, where.empty() ? *key : where + "." + *key, "unknown key; expected one of " + detail::key_list(known));
   }
 }
 

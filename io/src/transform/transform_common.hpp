@@ -23,6 +23,7 @@
 #include "geoanchor/base/number_text.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/io/transform/transform_file.hpp"
+#include "json_fields.hpp"
 
 namespace geoanchor::io::detail {
 
@@ -30,12 +31,6 @@ using nlohmann::json;
 
 [[noreturn]] inline void fail(std::string_view source, const std::string& key, const std::string& what) {
   throw Error(ErrorKind::input, "E_TRANSFORM", std::string(source) + ": " + key + ": " + what);
-}
-
-inline std::string joined(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
 }
 
 // A parameter a fit estimates, as the file states it: the canonical key
@@ -93,12 +88,8 @@ inline int count_at(const json& v, const std::string& path, std::string_view sou
 
 // Every key of `obj` must be one of `known`.
 inline void only_keys(const json& obj, const std::string& where, std::string_view source, const std::vector<std::string>& known) {
-  if (!obj.is_object()) fail(source, where, "value " + obj.dump() + " is not an object; expected the keys " + joined(known));
-  for (const auto& [key, value] : obj.items()) {
-    if (std::find(known.begin(), known.end(), key) == known.end()) {
-      fail(source, where + "." + key, "unknown key; expected " + joined(known));
-    }
-  }
+  if (!obj.is_object()) fail(source, where, "value " + obj.dump() + " is not an object; expected the keys " + key_list(known));
+  if (const auto key = first_unknown_key(obj, known)) fail(source, where + "." + *key, "unknown key; expected " + key_list(known));
 }
 
 // A statistic that may be undefined: null (what the writer gives a NaN,

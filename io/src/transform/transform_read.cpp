@@ -77,12 +77,10 @@ class ParameterReader {
       }
     }
     for (const char* pivot : {"px_m", "py_m", "pz_m"}) known.insert(pivot);
-    for (const auto& [key, value] : params_.items()) {
-      if (!known.count(key)) {
-        fail(source_, "parameters." + key,
-             "unknown parameter; expected tx_m ty_m tz_m rx_arcsec ry_arcsec rz_arcsec ds_ppm (mm, mas, ppb also "
-             "read) and, for helmert14, their rates d..._per_year");
-      }
+    if (const auto key = first_unknown_key(params_, known)) {
+      fail(source_, "parameters." + *key,
+           "unknown parameter; expected tx_m ty_m tz_m rx_arcsec ry_arcsec rz_arcsec ds_ppm (mm, mas, ppb also "
+           "read) and, for helmert14, their rates d..._per_year");
     }
   }
 
@@ -255,11 +253,9 @@ TransformFile parse_enu_origin(const json& doc, TransformFile t, ModelParameters
   const json& p = doc.at("parameters");
   const std::set<std::string> known = {"shift_e_m", "shift_n_m", "shift_u_m", "yaw_arcsec", "ds_ppm",
                                        "origin_lat_deg", "origin_lon_deg", "origin_h_m"};
-  for (const auto& [key, value] : p.items()) {
-    if (!known.count(key)) {
-      fail(source, "parameters." + key, "unknown parameter for enu-origin; expected shift_e_m shift_n_m shift_u_m "
-                                        "yaw_arcsec ds_ppm origin_lat_deg origin_lon_deg origin_h_m");
-    }
+  if (const auto key = first_unknown_key(p, known)) {
+    fail(source, "parameters." + *key, "unknown parameter for enu-origin; expected shift_e_m shift_n_m shift_u_m "
+                                       "yaw_arcsec ds_ppm origin_lat_deg origin_lon_deg origin_h_m");
   }
   c.shift_enu_m = Eigen::Vector3d(number_field(p, "shift_e_m", "parameters.", source),
                                   number_field(p, "shift_n_m", "parameters.", source),
@@ -327,10 +323,8 @@ TransformFile parse_site_calibration(const json& doc, TransformFile t, ModelPara
                                               "vertical_shift_m", "slope_n_ppm", "slope_e_ppm"};
   std::vector<std::string> known = estimated;
   for (const char* k : {"centroid_e_m", "centroid_n_m", "grid_lat0_deg", "grid_lon0_deg"}) known.emplace_back(k);
-  for (const auto& [key, value] : p.items()) {
-    if (std::find(known.begin(), known.end(), key) == known.end()) {
-      fail(source, "parameters." + key, "unknown parameter for site-calibration; expected " + joined(known));
-    }
+  if (const auto key = first_unknown_key(p, known)) {
+    fail(source, "parameters." + *key, "unknown parameter for site-calibration; expected " + key_list(known));
   }
   geodesy::SiteCalibrationParams sp;
   sp.shift_e_m = number_field(p, "shift_e_m", "parameters.", source);
@@ -369,11 +363,9 @@ TransformFile parse_site_calibration(const json& doc, TransformFile t, ModelPara
 
 TransformFile parse_transform_doc(const json& doc, std::string_view source, ModelParameters& mp) {
   if (!doc.is_object()) fail(source, "(top level)", "expected a JSON object");
-  for (const auto& [key, value] : doc.items()) {
-    if (!kTopLevelKeys.count(key)) {
-      fail(source, key, "unknown key; expected model, convention, rotation_model, source_frame, target_frame, "
-                        "reference_epoch, parameters (see docs/transform-file.md)");
-    }
+  if (const auto key = first_unknown_key(doc, kTopLevelKeys)) {
+    fail(source, *key, "unknown key; expected model, convention, rotation_model, source_frame, target_frame, "
+                       "reference_epoch, parameters (see docs/transform-file.md)");
   }
   TransformFile t;
   if (!doc.contains("model")) fail(source, "model", "missing; expected helmert7, helmert6, translation3 or helmert14");

@@ -60,7 +60,7 @@ void parse_sigmas(const json& doc, const TransformFile& t, const ModelParameters
         const auto why = mp.no_sigma.find(key);
         fail(source, "sigmas." + key,
              (why != mp.no_sigma.end() ? why->second : "not a parameter of model " + model) +
-                 "; sigmas are read for the estimated parameters, in the units of parameters: " + joined(expected));
+                 "; sigmas are read for the estimated parameters, in the units of parameters: " + key_list(expected));
       }
       if (!value.is_number() || !(value.get<double>() >= 0.0)) {
         fail(source, "sigmas." + key, "value " + value.dump() + " is not a sigma (a finite number >= 0)");
@@ -97,7 +97,7 @@ void parse_sigmas(const json& doc, const TransformFile& t, const ModelParameters
       const std::string where = "correlation_parameters[" + std::to_string(i) + "]";
       const std::string n = string_at((*names)[i], where, source);
       if (!canonical_of.count(n)) {
-        fail(source, where, n + " has no sigma in sigmas; expected the parameters sigmas gives: " + joined(sigma_keys));
+        fail(source, where, n + " has no sigma in sigmas; expected the parameters sigmas gives: " + key_list(sigma_keys));
       }
       if (std::find(order.begin(), order.end(), n) != order.end()) fail(source, where, n + " appears twice");
       order.push_back(n);
