@@ -216,27 +216,13 @@ class XodrReader : public detail::XmlHandler {
   }
   Value number(const XML_Char** attrs, const char* name, const std::string& what, bool required = true) {
     Value v;
-    const char* text = attribute(attrs, name);
-    if (!text) {
-      if (required) fail(what + ": no " + name + " attribute");
-      return v;
+    const detail::AttributeContext at{text_, stream_.byte_index(), stream_.byte_count(), source_, stream_.line(), "E_XODR",
+                                      "expected a plain number", ""};
+    if (const auto read = detail::finite_attribute_number(at, name, attribute(attrs, name), what, required)) {
+      v.span = read->first;
+      v.v = read->second;
+      v.present = true;
     }
-    const auto span = detail::attribute_value_span(text_, stream_.byte_index(), stream_.byte_count(), name);
-    if (!span || text_.substr(static_cast<std::size_t>(span->at), span->length) != text) {
-      fail(what + ": " + name + "='" + text + "' is written with character references; expected a plain number");
-    }
-    const auto d = parse_finite_double(text);
-    if (!d) {
-      std::string low(text);
-      std::transform(low.begin(), low.end(), low.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-      const bool non_finite = low.find("nan") != std::string::npos || low.find("inf") != std::string::npos;
-      throw Error(ErrorKind::input, non_finite ? "E_NON_FINITE" : "E_XODR",
-                  source_ + ":" + std::to_string(stream_.line()) + ": " + what + ": " + name + "='" + text +
-                      "': expected a finite number");
-    }
-    v.span = *span;
-    v.v = *d;
-    v.present = true;
     return v;
   }
 
