@@ -201,7 +201,7 @@ class LasTile {
   // The steps of run().
   void check_records(const LasHeader& h);
   void choose_scale_and_offset(const LasHeader& h, TileApplyResult& r);
-  void output_vlrs(TileApplyResult& r, std::vector<LasVlr>& vlrs, std::vector<LasVlr>& evlrs) const;
+  std::pair<std::vector<LasVlr>, std::vector<LasVlr>> output_vlrs(TileApplyResult& r) const;
   LasHeader output_header(const LasHeader& h, const TileApplyResult& r) const;
   void write_points(std::optional<LasWriter>& writer, LasHeader& oh, const std::vector<LasVlr>& vlrs,
                     const std::vector<LasVlr>& evlrs, const LasCompression& compression, TileApplyResult& r);
@@ -598,10 +598,19 @@ void LasTile::choose_scale_and_offset(const LasHeader& h, TileApplyResult& r) {
   }
 }
 
-void LasTile::output_vlrs(TileApplyResult& r, std::vector<LasVlr>& vlrs, std::vector<LasVlr>& evlrs) const {
+// The output's VLRs and EVLRs.
+std::pair<std::vector<LasVlr>, std::vector<LasVlr>> LasTile::output_vlrs(TileApplyResult& r) const {
   // VLRs: every one but the old CRS (WKT or GeoTIFF), which the new WKT
   // replaces, and a COPC file's records, which describe an octree layout
-  // the output does not have.
+  // the output does not have. The new WKT is the first VLR.
+  LasVlr wkt;
+  wkt.user_id = "LASF_Projection";
+  wkt.record_id = kLasWktRecordId;
+  wkt.description = "OGC WKT2:2019 CRS (geoanchor)";
+  wkt.data.assign(o_.output_wkt.begin(), o_.output_wkt.end());
+  wkt.data.push_back(0);
+  std::vector<LasVlr> vlrs, evlrs;
+  vlrs.push_back(std::move(wkt));
   bool dropped_crs = false, dropped_copc = false;
   for (const auto& v : reader_.vlrs()) {
     if (is_wkt_crs_vlr(v) || is_geotiff_crs_vlr(v)) {
@@ -621,13 +630,7 @@ void LasTile::output_vlrs(TileApplyResult& r, std::vector<LasVlr>& vlrs, std::ve
                          ": geoanchor does not write COPC's octree hierarchy, so its 'copc' records (info VLR, "
                          "hierarchy EVLR) were dropped; the points keep their order");
   }
-  LasVlr wkt;
-  wkt.user_id = "LASF_Projection";
-  wkt.record_id = kLasWktRecordId;
-  wkt.description = "OGC WKT2:2019 CRS (geoanchor)";
-  wkt.data.assign(o_.output_wkt.begin(), o_.output_wkt.end());
-  wkt.data.push_back(0);
-  vlrs.insert(vlrs.begin(), std::move(wkt));
+  return {std::move(vlrs), std::move(evlrs)};
 }
 
 // The input's header with the output's WKT bit, software, date, scale and offset.
@@ -700,8 +703,7 @@ TileApplyResult LasTile::run() {
     choose_scale_and_offset(h, r);
   }
 
-  std::vector<LasVlr> vlrs, evlrs;
-  output_vlrs(r, vlrs, evlrs);
+  const auto [vlrs, evlrs] = output_vlrs(r);
 
   LasHeader oh = output_header(h, r);
   const bool laz = o_.las_output == TileFormat::laz;
