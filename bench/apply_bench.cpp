@@ -391,14 +391,7 @@ const RealisticTile& realistic_tile() {
     h.global_encoding = 1;
     h.offset = {-1000.0, -2000.0, -400.0};  // the generator's scan lines start near (1000, 2000, 480) m
     std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-    for (std::size_t i = 0; i < kLazPoints; ++i) {
-      for (std::size_t k = 0; k < 3; ++k) {
-        std::int32_t q;
-        std::memcpy(&q, records.data() + i * 36 + 4 * k, 4);
-        lo[k] = std::min(lo[k], q * 0.001 + h.offset[k]);
-        hi[k] = std::max(hi[k], q * 0.001 + h.offset[k]);
-      }
-    }
+    testing::widen_record_bounds(records.data(), kLazPoints, 36, h.offset, lo, hi);
     for (const bool laz : {false, true}) {
       std::ofstream out(laz ? r.laz : r.las, std::ios::binary | std::ios::trunc);
       io::LasWriter w(out, h, {}, {}, "bench", {laz, io::kLazDefaultChunkPoints});

@@ -16,6 +16,7 @@
 #include "geoanchor/base/number_text.hpp"
 #include "geoanchor/base/utf8.hpp"
 #include "geoanchor/io/json_input.hpp"
+#include "json_fields.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -25,12 +26,6 @@ using nlohmann::ordered_json;
 
 constexpr double kOriginTolDeg = 1e-8;  // 1.1 mm of latitude: the digits an origin is written with
 constexpr double kOriginTolM = 1e-3;
-
-std::string known_list(const std::set<std::string>& keys) {
-  std::string list;
-  for (const auto& k : keys) list += (list.empty() ? "" : ", ") + k;
-  return list;
-}
 
 std::string origin_text(const MetadataOrigin& o) {
   return format_shortest(o.lat_deg) + "," + format_shortest(o.lon_deg) + "," + format_shortest(o.h_m);
@@ -46,9 +41,7 @@ class Fields {
   }
   void only(const std::set<std::string>& known) const {
     if (!j_.is_object()) fail("", "expected a JSON object");
-    for (const auto& [key, value] : j_.items()) {
-      if (!known.count(key)) fail(key, "unknown key; expected one of " + known_list(known));
-    }
+    if (const auto key = detail::first_unknown_key(j_, known)) fail(*key, "unknown key; expected one of " + detail::key_list(known));
   }
   const json* get(const std::string& key, bool required) const {
     const auto it = j_.find(key);

@@ -7,6 +7,7 @@
 // character references is refused rather than half understood).
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cstdint>
 #include <optional>
@@ -15,7 +16,11 @@
 #include <stdexcept>
 #include <string_view>
 #include <system_error>
+#include <utility>
 #include <vector>
+
+#include "geoanchor/base/error.hpp"
+#include "geoanchor/base/number_text.hpp"
 
 namespace geoanchor::io::detail {
 
@@ -61,6 +66,49 @@ inline std::optional<TextSpan> attribute_value_span(std::string_view text, std::
     ++i;
   }
   return std::nullopt;
+}
+
+// Where a reader reads a numeric attribute, and how it words a refusal.
+struct AttributeContext {
+  std::string_view text;        // the whole XML text
+  std::uint64_t tag_at = 0;     // the start tag being handled (XmlStream::byte_index, byte_count)
+  std::size_t tag_length = 0;
+  const std::string& source;    // the file, for messages "SOURCE:LINE: …"
+  std::size_t line = 0;
+  const char* code;             // the reader's error code (E_NON_FINITE for NaN or infinity)
+  std::string_view references;  // what follows "is written with character references; "
+  std::string_view unit;        // what follows "expected a finite number"
+};
+
+// The finite number `value` of attribute `name` (nullptr: the tag has none)
+// of the start tag `at`, and its span in the text (for rewriting it in
+// place); nullopt for an absent attribute that is not `required`. Throws
+// Error(input) "SOURCE:LINE: WHAT: no NAME attribute", "…: WHAT: NAME='VALUE'
+// is written with character references; …" when the tag's raw value is not
+// what expat read, and "…: WHAT: NAME='VALUE': expected a finite number…"
+// when it is no finite number.
+inline std::optional<std::pair<TextSpan, double>> finite_attribute_number(const AttributeContext& at, const char* name,
+                                                                          const char* value, const std::string& what,
+                                                                          bool required) {
+  const auto place = [&] { return at.source + ":" + std::to_string(at.line) + ": " + what + ": "; };
+  if (!value) {
+    if (required) throw Error(ErrorKind::input, at.code, place() + "no " + name + " attribute");
+    return std::nullopt;
+  }
+  const auto span = attribute_value_span(at.text, at.tag_at, at.tag_length, name);
+  if (!span || at.text.substr(static_cast<std::size_t>(span->at), span->length) != value) {
+    throw Error(ErrorKind::input, at.code,
+                place() + name + "='" + value + "' is written with character references; " + std::string(at.references));
+  }
+  const auto d = parse_finite_double(value);
+  if (!d) {
+    std::string low(value);
+    std::transform(low.begin(), low.end(), low.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+    const bool non_finite = low.find("nan") != std::string::npos || low.find("inf") != std::string::npos;
+    throw Error(ErrorKind::input, non_finite ? "E_NON_FINITE" : at.code,
+                place() + name + "='" + value + "': expected a finite number" + std::string(at.unit));
+  }
+  return std::pair<TextSpan, double>{*span, *d};
 }
 
 // Where a new attribute goes in a start tag: before its '/>' or '>'.

@@ -90,14 +90,7 @@ void write_tile(const fs::path& p, std::uint8_t format, std::size_t extra, const
   h.offset = offset;
   const std::size_t n = records.size() / h.record_length;
   std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-  for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t k = 0; k < 3; ++k) {
-      std::int32_t q;
-      std::memcpy(&q, records.data() + i * h.record_length + 4 * k, 4);
-      lo[k] = std::min(lo[k], q * 0.001 + offset[k]);
-      hi[k] = std::max(hi[k], q * 0.001 + offset[k]);
-    }
-  }
+  testing::widen_record_bounds(records.data(), n, h.record_length, offset, lo, hi);
   if (bounds) lo = {(*bounds)[0], (*bounds)[1], (*bounds)[2]}, hi = {(*bounds)[3], (*bounds)[4], (*bounds)[5]};
   LasVlr vlr{"geoanchor-test", 7, "passes through", {1, 2, 3, 4, 5}, false, 0};
   LasVlr evlr{"geoanchor-test", 8, "passes through too", Bytes(300, 0xAB), true, 0};

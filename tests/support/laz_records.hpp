@@ -4,6 +4,7 @@
 // and the apply benchmark's LAZ tile. No GoogleTest here: bench/ uses it.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -116,6 +117,21 @@ inline Bytes make_records(std::uint8_t format, std::size_t extra, std::size_t n,
     ++pulse;
   }
   return out;
+}
+
+// `lo` and `hi` widened to the bounds of `n` records of `record_length`
+// bytes whose first 12 bytes are X, Y, Z (int32 at scale 0.001, plus
+// `offset`): the bounds a LAS header states.
+inline void widen_record_bounds(const std::uint8_t* records, std::size_t n, std::size_t record_length,
+                                const std::array<double, 3>& offset, std::array<double, 3>& lo, std::array<double, 3>& hi) {
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      std::int32_t q;
+      std::memcpy(&q, records + i * record_length + 4 * k, 4);
+      lo[k] = std::min(lo[k], q * 0.001 + offset[k]);
+      hi[k] = std::max(hi[k], q * 0.001 + offset[k]);
+    }
+  }
 }
 
 }  // namespace geoanchor::testing

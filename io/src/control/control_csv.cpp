@@ -364,20 +364,12 @@ void read_rows_in_parallel(CsvReader& reader, std::vector<ControlPoint>& points,
   }
 }
 
-}  // namespace
+const char* const kCrsFlags[2] = {"--src-crs", "--dst-crs"};
 
-ControlSet read_control_csv(std::istream& in, const std::string& source_name, const ControlReadOptions& o) {
-  CsvReader reader(in, source_name);
-  const auto& header = reader.header();
-  const auto id_col = find_column(header, "id");
-  if (!id_col) {
-    throw Error(ErrorKind::input, "E_COLUMN_MISSING", source_name + ": no 'id' column; every control point needs an id");
-  }
-  // Each frame's CRS: the option, or the file's "# source_crs = …" comment;
-  // both must say the same.
-  std::optional<Crs> crs_of[2] = {o.src_crs, o.dst_crs};
+// Each frame's CRS: the option, or the file's "# source_crs = …" comment;
+// both must say the same.
+void read_crs_comments(const CsvReader& reader, const std::string& source_name, std::optional<Crs> (&crs_of)[2]) {
   const char* crs_keys[2] = {"source_crs", "target_crs"};
-  const char* crs_flags[2] = {"--src-crs", "--dst-crs"};
   for (std::size_t k = 0; k < 2; ++k) {
     for (const auto& c : reader.leading_comments()) {
       const auto text = comment_value(c, crs_keys[k]);
@@ -386,120 +378,114 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
       const Crs stated = Crs::parse(*text, where);
       if (crs_of[k] && !crs_of[k]->same_as(stated)) {
         throw Error(ErrorKind::input, "E_CRS_CONFLICT",
-                    std::string(crs_flags[k]) + " " + crs_of[k]->display_name() + " contradicts " + where + " (" +
+                    std::string(kCrsFlags[k]) + " " + crs_of[k]->display_name() + " contradicts " + where + " (" +
                         stated.display_name() + "); drop the flag or fix the file");
       }
       if (!crs_of[k]) crs_of[k] = stated;
     }
   }
-  // A column that looks like ours but is no name we read is refused before
-  // the coordinates are classified, with what is read instead.
-  std::optional<RoleColumns> crs_roles[2];
-  for (std::size_t k = 0; k < 2; ++k) {
-    if (crs_of[k]) crs_roles[k] = crs_role_columns(header, source_name, k == 0 ? "src" : "dst", *crs_of[k], crs_flags[k]);
+}
+
+void refuse_unreadable_columns(const std::vector<std::string>& header, const std::string& source_name,
+                               const std::optional<RoleColumns> (&crs_roles)[2]) {
+  auto readable = readable_names();
+  for (const auto& rc : crs_roles) {
+    if (rc) readable.insert(readable.end(), rc->crs->names.begin(), rc->crs->names.end());
   }
-  {
-    auto readable = readable_names();
-    for (const auto& rc : crs_roles) {
-      if (rc) readable.insert(readable.end(), rc->crs->names.begin(), rc->crs->names.end());
-    }
-    for (std::size_t i = 0; i < header.size(); ++i) {
-      if (std::find(readable.begin(), readable.end(), header[i]) != readable.end()) continue;
-      if (const auto problem = unread_column_problem(header[i], false)) {
-        throw Error(ErrorKind::input, "E_COLUMN",
-                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] + "': " + *problem);
-      }
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (std::find(readable.begin(), readable.end(), header[i]) != readable.end()) continue;
+    if (const auto problem = unread_column_problem(header[i], false)) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] + "': " + *problem);
     }
   }
-  const RoleColumns src = crs_roles[0] ? *crs_roles[0]
-                                        : role_columns(header, source_name, "src", o.src_projection.has_value(), o.src_geoid != nullptr);
-  const RoleColumns dst = crs_roles[1] ? *crs_roles[1]
-                                        : role_columns(header, source_name, "dst", o.dst_projection.has_value(), o.dst_geoid != nullptr);
-  const auto epoch_col = find_column(header, "epoch");
-  // Velocities: ECEF components per frame, with a required isotropic sigma.
-  struct VelocityColumns {
-    std::array<std::optional<std::size_t>, 3> v;
-    std::optional<std::size_t> sigma;
-  };
-  auto velocity_columns = [&](const std::string& role) {
-    VelocityColumns vc;
-    const char* axes[3] = {"vx_", "vy_", "vz_"};
-    int count = 0;
-    for (int k = 0; k < 3; ++k) {
-      vc.v[static_cast<std::size_t>(k)] = find_column(header, std::string(axes[k]) + role + "_m_per_year");
-      count += vc.v[static_cast<std::size_t>(k)] ? 1 : 0;
-    }
-    vc.sigma = find_column(header, "sigma_v_" + role + "_m_per_year");
-    if (count != 0 && count != 3) {
-      throw Error(ErrorKind::input, "E_COLUMN_MISSING",
-                  source_name + ": velocity columns for " + role + " incomplete; expected vx_" + role + "_m_per_year, vy_" +
-                      role + "_m_per_year, vz_" + role + "_m_per_year (ECEF)");
-    }
-    if (count == 3 && !vc.sigma) {
-      throw Error(ErrorKind::input, "E_COLUMN_MISSING",
-                  source_name + ": velocities for " + role + " need their standard deviation: add sigma_v_" + role +
-                      "_m_per_year (no default is assumed)");
-    }
-    return vc;
-  };
-  const VelocityColumns vel_src = velocity_columns("src"), vel_dst = velocity_columns("dst");
-  if (vel_src.v[0].has_value() != vel_dst.v[0].has_value()) {
+}
+
+// Velocities: ECEF components per frame, with a required isotropic sigma.
+struct VelocityColumns {
+  std::array<std::optional<std::size_t>, 3> v;
+  std::optional<std::size_t> sigma;
+};
+
+VelocityColumns velocity_columns(const std::vector<std::string>& header, const std::string& source_name, const std::string& role) {
+  VelocityColumns vc;
+  const char* axes[3] = {"vx_", "vy_", "vz_"};
+  int count = 0;
+  for (int k = 0; k < 3; ++k) {
+    vc.v[static_cast<std::size_t>(k)] = find_column(header, std::string(axes[k]) + role + "_m_per_year");
+    count += vc.v[static_cast<std::size_t>(k)] ? 1 : 0;
+  }
+  vc.sigma = find_column(header, "sigma_v_" + role + "_m_per_year");
+  if (count != 0 && count != 3) {
     throw Error(ErrorKind::input, "E_COLUMN_MISSING",
-                source_name + ": velocities are given for one frame only; give vx/vy/vz for both src and dst");
+                source_name + ": velocity columns for " + role + " incomplete; expected vx_" + role + "_m_per_year, vy_" +
+                    role + "_m_per_year, vz_" + role + "_m_per_year (ECEF)");
   }
-  const auto use_col = find_column(header, "use");
-  const auto solution_col = find_column(header, "solution");
-  const RowReader rows(header, source_name);
+  if (count == 3 && !vc.sigma) {
+    throw Error(ErrorKind::input, "E_COLUMN_MISSING",
+                source_name + ": velocities for " + role + " need their standard deviation: add sigma_v_" + role +
+                    "_m_per_year (no default is assumed)");
+  }
+  return vc;
+}
 
-  // Every column is read, or an attribute that passes through: a name we
-  // read that is not read here (given twice, or a velocity sigma without
-  // velocities) is refused by name too.
-  {
-    std::vector<bool> read(header.size(), false);
-    auto mark = [&](std::optional<std::size_t> c) {
-      if (c) read[*c] = true;
-    };
-    mark(id_col);
-    mark(epoch_col);
-    mark(use_col);
-    mark(solution_col);
-    for (const RoleColumns* rc : {&src, &dst}) {
-      mark(rc->coords.first);
-      mark(rc->coords.second);
-      mark(rc->coords.third);
-      mark(rc->sigma);
-      for (const auto& c : rc->cov) mark(c);
-    }
-    for (const auto* vc : {&vel_src, &vel_dst}) {
-      for (const auto& c : vc->v) mark(c);
-      if (vc->v[0]) mark(vc->sigma);
-    }
-    for (std::size_t i = 0; i < header.size(); ++i) {
-      if (read[i]) continue;
-      const auto first = std::find(header.begin(), header.end(), header[i]);
-      if (first != header.begin() + static_cast<std::ptrdiff_t>(i) && read[static_cast<std::size_t>(first - header.begin())]) {
-        throw Error(ErrorKind::input, "E_COLUMN",
-                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] +
-                        "': appears twice in the header (also column " +
-                        std::to_string(static_cast<std::size_t>(first - header.begin()) + 1) + "); only one would be read");
-      }
-      if (const auto problem = unread_column_problem(header[i], vel_src.v[0].has_value())) {
-        throw Error(ErrorKind::input, "E_COLUMN",
-                    source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] + "': " + *problem);
-      }
-    }
-  }
+// The columns a control CSV is read from (the caller's, by reference).
+struct CsvColumns {
+  const std::optional<std::size_t>& id_col;
+  const std::optional<std::size_t>& epoch_col;
+  const std::optional<std::size_t>& use_col;
+  const std::optional<std::size_t>& solution_col;
+  const RoleColumns& src;
+  const RoleColumns& dst;
+  const VelocityColumns& vel_src;
+  const VelocityColumns& vel_dst;
+};
 
-  if ((src.coords.kind == CoordinateKind::enu || dst.coords.kind == CoordinateKind::enu) && !o.origin) {
-    throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
-                source_name + ": ENU control coordinates need their nominal origin: give --origin LAT,LON,H");
+// Every column is read, or an attribute that passes through: a name we
+// read that is not read here (given twice, or a velocity sigma without
+// velocities) is refused by name too.
+void refuse_unread_columns(const std::vector<std::string>& header, const std::string& source_name, const CsvColumns& columns) {
+  const auto& [id_col, epoch_col, use_col, solution_col, src, dst, vel_src, vel_dst] = columns;
+  std::vector<bool> read(header.size(), false);
+  auto mark = [&](std::optional<std::size_t> c) {
+    if (c) read[*c] = true;
+  };
+  mark(id_col);
+  mark(epoch_col);
+  mark(use_col);
+  mark(solution_col);
+  for (const RoleColumns* rc : {&src, &dst}) {
+    mark(rc->coords.first);
+    mark(rc->coords.second);
+    mark(rc->coords.third);
+    mark(rc->sigma);
+    for (const auto& c : rc->cov) mark(c);
   }
-  ControlSet set;
-  set.source_name = source_name;
-  // Frames may be declared in leading comments: "# source_frame = ITRF2014@2024.5".
+  for (const auto* vc : {&vel_src, &vel_dst}) {
+    for (const auto& c : vc->v) mark(c);
+    if (vc->v[0]) mark(vc->sigma);
+  }
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (read[i]) continue;
+    const auto first = std::find(header.begin(), header.end(), header[i]);
+    if (first != header.begin() + static_cast<std::ptrdiff_t>(i) && read[static_cast<std::size_t>(first - header.begin())]) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] +
+                      "': appears twice in the header (also column " +
+                      std::to_string(static_cast<std::size_t>(first - header.begin()) + 1) + "); only one would be read");
+    }
+    if (const auto problem = unread_column_problem(header[i], vel_src.v[0].has_value())) {
+      throw Error(ErrorKind::input, "E_COLUMN",
+                  source_name + ": header column " + std::to_string(i + 1) + " '" + header[i] + "': " + *problem);
+    }
+  }
+}
+
+// Frames may be declared in leading comments: "# source_frame = ITRF2014@2024.5".
+void read_frame_comments(const CsvReader& reader, const std::string& source_name, ControlSet& set,
+                         std::string& source_frame_where, std::string& target_frame_where) {
   // (Blank lines before the header are skipped, so a comment's own line is
   // not known; the header's is.)
-  std::string source_frame_where, target_frame_where;
   for (std::size_t i = 0; i < reader.leading_comments().size(); ++i) {
     const std::string& c = reader.leading_comments()[i];
     for (const char* key : {"source_frame", "target_frame"}) {
@@ -515,33 +501,37 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
       (source ? source_frame_where : target_frame_where) = where;
     }
   }
-  set.has_a_priori_sigmas = src.sigma || src.has_cov || dst.sigma || dst.has_cov;
-  set.has_solutions = solution_col.has_value();
-  set.source_input = detail::input_form(src.coords.kind, o.src_projection,
-                                        src.coords.orthometric ? header[*src.coords.third] : std::string(), o.src_geoid);
-  set.target_input = detail::input_form(dst.coords.kind, o.dst_projection,
-                                        dst.coords.orthometric ? header[*dst.coords.third] : std::string(), o.dst_geoid);
-  for (const RoleColumns* rc : {&src, &dst}) {
-    if (rc->crs) detail::adopt_crs(set, rc == &src, *rc->crs, crs_flags[rc == &src ? 0 : 1]);
+}
+
+// Room for the rows up front when the stream can tell its size: a data
+// row is about as long as the header, and growing a vector of 10⁶ points
+// by doubling would touch twice their memory. (An estimate only: a
+// reservation never read is never touched.)
+void reserve_rows(std::istream& in, const std::vector<std::string>& header, std::vector<ControlPoint>& points) {
+  if (const std::streampos here = in.tellg(); here != std::streampos(-1)) {
+    in.seekg(0, std::ios::end);
+    const std::streampos end = in.tellg();
+    in.seekg(here);
+    std::size_t header_bytes = header.size();
+    for (const auto& h : header) header_bytes += h.size();
+    if (in && end != std::streampos(-1) && end > here) {
+      points.reserve(static_cast<std::size_t>(end - here) / std::max<std::size_t>(header_bytes, 32) + 1);
+    }
+    in.clear();
   }
-  detail::apply_caller_frames(set, o);
-  auto uses = [](const RoleColumns& rc) {
-    return !rc.crs && (rc.coords.kind == CoordinateKind::geodetic || rc.coords.kind == CoordinateKind::projected ||
-                       rc.coords.kind == CoordinateKind::enu);
-  };
-  const bool uses_ellipsoid[2] = {uses(src), uses(dst)};
-  detail::resolve_ellipsoids(set, o, uses_ellipsoid);
-  const detail::RoleConverter converter(o, set);
-  set.origin = o.origin;
-  if (set.origin) {
-    set.origin->ellipsoid = src.coords.kind == CoordinateKind::enu || dst.coords.kind != CoordinateKind::enu
-                                ? set.source_input.ellipsoid
-                                : set.target_input.ellipsoid;
-  }
+}
+
+// How one data row becomes a mark: on any thread, for the rows of a batch.
+struct MarkOfRow {
+  const CsvColumns& columns;
+  const RowReader& rows;
+  const detail::RoleConverter& converter;
+  bool has_a_priori_sigmas;
+  const std::string& source_name;
 
   // ECEF position and covariance of one role in one row.
-  auto read_role = [&](const CsvRecord& r, const RoleColumns& rc, geodesy::EcefPosition& p, Eigen::Matrix3d& cov,
-                       Eigen::Vector3d& as_read) {
+  void read_role(const CsvRecord& r, const RoleColumns& rc, geodesy::EcefPosition& p, Eigen::Matrix3d& cov,
+                 Eigen::Vector3d& as_read) const {
     detail::RoleValues v;
     v.kind = rc.coords.kind;
     v.source = rc.role == "src";
@@ -564,26 +554,12 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
       rows.fail(r, col, f == detail::RoleField::covariance ? "covariance of " + rc.role + ": " + message : message);
     };
     as_read = Eigen::Vector3d(v.a, v.b, v.c);
-    as_read.z() += converter.convert(v, set.has_a_priori_sigmas, fail, p, cov);
-  };
-
-  // Room for the rows up front when the stream can tell its size: a data
-  // row is about as long as the header, and growing a vector of 10⁶ points
-  // by doubling would touch twice their memory. (An estimate only: a
-  // reservation never read is never touched.)
-  if (const std::streampos here = in.tellg(); here != std::streampos(-1)) {
-    in.seekg(0, std::ios::end);
-    const std::streampos end = in.tellg();
-    in.seekg(here);
-    std::size_t header_bytes = header.size();
-    for (const auto& h : header) header_bytes += h.size();
-    if (in && end != std::streampos(-1) && end > here) {
-      set.points.reserve(static_cast<std::size_t>(end - here) / std::max<std::size_t>(header_bytes, 32) + 1);
-    }
-    in.clear();
+    as_read.z() += converter.convert(v, has_a_priori_sigmas, fail, p, cov);
   }
+
   // One data row's mark (the row's line number kept for messages).
-  const auto point_of = [&](const CsvRecord& r, ControlPoint& p) {
+  void operator()(const CsvRecord& r, ControlPoint& p) const {
+    const auto& [id_col, epoch_col, use_col, solution_col, src, dst, vel_src, vel_dst] = columns;
     p.id = r.values[*id_col];
     p.line = r.line;
     if (p.id.empty()) rows.fail(r, *id_col, "empty id");
@@ -627,14 +603,86 @@ ControlSet read_control_csv(std::istream& in, const std::string& source_name, co
                                         geodesy::gnss_solution_names() + " (lower case)");
       }
     }
+  }
+};
+
+}  // namespace
+
+ControlSet read_control_csv(std::istream& in, const std::string& source_name, const ControlReadOptions& o) {
+  CsvReader reader(in, source_name);
+  const auto& header = reader.header();
+  const auto id_col = find_column(header, "id");
+  if (!id_col) {
+    throw Error(ErrorKind::input, "E_COLUMN_MISSING", source_name + ": no 'id' column; every control point needs an id");
+  }
+  std::optional<Crs> crs_of[2] = {o.src_crs, o.dst_crs};
+  read_crs_comments(reader, source_name, crs_of);
+  // A column that looks like ours but is no name we read is refused before
+  // the coordinates are classified, with what is read instead.
+  std::optional<RoleColumns> crs_roles[2];
+  for (std::size_t k = 0; k < 2; ++k) {
+    if (crs_of[k]) crs_roles[k] = crs_role_columns(header, source_name, k == 0 ? "src" : "dst", *crs_of[k], kCrsFlags[k]);
+  }
+  refuse_unreadable_columns(header, source_name, crs_roles);
+  const RoleColumns src = crs_roles[0] ? *crs_roles[0]
+                                        : role_columns(header, source_name, "src", o.src_projection.has_value(), o.src_geoid != nullptr);
+  const RoleColumns dst = crs_roles[1] ? *crs_roles[1]
+                                        : role_columns(header, source_name, "dst", o.dst_projection.has_value(), o.dst_geoid != nullptr);
+  const auto epoch_col = find_column(header, "epoch");
+  const VelocityColumns vel_src = velocity_columns(header, source_name, "src"),
+                        vel_dst = velocity_columns(header, source_name, "dst");
+  if (vel_src.v[0].has_value() != vel_dst.v[0].has_value()) {
+    throw Error(ErrorKind::input, "E_COLUMN_MISSING",
+                source_name + ": velocities are given for one frame only; give vx/vy/vz for both src and dst");
+  }
+  const auto use_col = find_column(header, "use");
+  const auto solution_col = find_column(header, "solution");
+  const RowReader rows(header, source_name);
+
+  const CsvColumns columns{id_col, epoch_col, use_col, solution_col, src, dst, vel_src, vel_dst};
+  refuse_unread_columns(header, source_name, columns);
+
+  if ((src.coords.kind == CoordinateKind::enu || dst.coords.kind == CoordinateKind::enu) && !o.origin) {
+    throw Error(ErrorKind::usage, "E_ORIGIN_MISSING",
+                source_name + ": ENU control coordinates need their nominal origin: give --origin LAT,LON,H");
+  }
+  ControlSet set;
+  set.source_name = source_name;
+  std::string source_frame_where, target_frame_where;
+  read_frame_comments(reader, source_name, set, source_frame_where, target_frame_where);
+  set.has_a_priori_sigmas = src.sigma || src.has_cov || dst.sigma || dst.has_cov;
+  set.has_solutions = solution_col.has_value();
+  set.source_input = detail::input_form(src.coords.kind, o.src_projection,
+                                        src.coords.orthometric ? header[*src.coords.third] : std::string(), o.src_geoid);
+  set.target_input = detail::input_form(dst.coords.kind, o.dst_projection,
+                                        dst.coords.orthometric ? header[*dst.coords.third] : std::string(), o.dst_geoid);
+  for (const RoleColumns* rc : {&src, &dst}) {
+    if (rc->crs) detail::adopt_crs(set, rc == &src, *rc->crs, kCrsFlags[rc == &src ? 0 : 1]);
+  }
+  detail::apply_caller_frames(set, o);
+  auto uses = [](const RoleColumns& rc) {
+    return !rc.crs && (rc.coords.kind == CoordinateKind::geodetic || rc.coords.kind == CoordinateKind::projected ||
+                       rc.coords.kind == CoordinateKind::enu);
   };
+  const bool uses_ellipsoid[2] = {uses(src), uses(dst)};
+  detail::resolve_ellipsoids(set, o, uses_ellipsoid);
+  const detail::RoleConverter converter(o, set);
+  set.origin = o.origin;
+  if (set.origin) {
+    set.origin->ellipsoid = src.coords.kind == CoordinateKind::enu || dst.coords.kind != CoordinateKind::enu
+                                ? set.source_input.ellipsoid
+                                : set.target_input.ellipsoid;
+  }
+
+  reserve_rows(in, header, set.points);
+  const MarkOfRow point_of{columns, rows, converter, set.has_a_priori_sigmas, source_name};
   read_rows_in_parallel(reader, set.points, point_of);
   // A frame in a CRS: its three numbers as read, to ECEF on its datum
   // through PROJ, a batch at a time (covariances with the conversion's Jacobian).
   for (const RoleColumns* rc : {&src, &dst}) {
     if (!rc->crs) continue;
     detail::positions_from_crs(
-        set, rc == &src, *rc->crs, crs_flags[rc == &src ? 0 : 1], [&](std::size_t) { return rc->has_cov; },
+        set, rc == &src, *rc->crs, kCrsFlags[rc == &src ? 0 : 1], [&](std::size_t) { return rc->has_cov; },
         [&](const ControlPoint& q) { return source_name + ":" + std::to_string(q.line); });
   }
   detail::refuse_duplicate_ids(

@@ -412,6 +412,92 @@ std::unordered_map<std::string, RoleRow> read_role_rows(RoleFile& f, const detai
   return rows;
 }
 
+// Each file's '# ellipsoid =': the ellipsoid its coordinates are read on
+// when its frame implies none, and held to the one they are read on.
+void read_stated_ellipsoids(const RoleFile (&files)[2], ControlSet& set, const ControlReadOptions& o) {
+  // A file on a frame that implies no ellipsoid (outside the catalog) is
+  // read on the one its '# ellipsoid =' states, unless --ellipsoid says.
+  for (const RoleFile& f : files) {
+    const std::optional<geodesy::Frame>& frame = f.source ? set.source_frame : set.target_frame;
+    if (!f.stated_ellipsoid || f.crs || o.ellipsoid || (frame && geodesy::implied_ellipsoid(*frame))) continue;
+    std::string name = *f.stated_ellipsoid;
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
+    geodesy::ControlInputForm& form = f.source ? set.source_input : set.target_input;
+    // (GRS80 and WGS84 in any case, as before; the other EPSG names as written.)
+    const auto named = geodesy::named_ellipsoid(name == "GRS80" || name == "WGS84" ? name : *f.stated_ellipsoid);
+    if (!named) {
+      throw Error(ErrorKind::input, "E_ELLIPSOID",
+                  f.ellipsoid_where + ": '" + *f.stated_ellipsoid + "': expected one of " + geodesy::named_ellipsoid_list());
+    }
+    form.ellipsoid = *named;
+    if (form.projection) form.projection->ellipsoid = form.ellipsoid;
+  }
+  for (const RoleFile& f : files) {
+    const geodesy::ControlInputForm& form = f.source ? set.source_input : set.target_input;
+    if (f.stated_ellipsoid && !f.crs) {
+      std::string stated = *f.stated_ellipsoid, resolved = form.ellipsoid.name();
+      for (auto* s : {&stated, &resolved}) {
+        std::transform(s->begin(), s->end(), s->begin(), [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
+      }
+      if (stated != resolved) {
+        throw Error(ErrorKind::input, "E_ELLIPSOID",
+                    f.ellipsoid_where + ": the file's coordinates are on " + *f.stated_ellipsoid + ", but they would be read on " +
+                        form.ellipsoid.name() + (o.ellipsoid ? " (--ellipsoid)" : " (the frame's, or the other file's)") +
+                        "; drop --ellipsoid or correct the frame");
+      }
+    }
+  }
+}
+
+// The marks in both files, in the source file's order; the others are named
+// (`only` receives the ids of each file that the other lacks).
+void join_marks(const RoleFile (&files)[2], const std::unordered_map<std::string, RoleRow> (&rows)[2],
+                const std::vector<std::string> (&order)[2], ControlSet& set, std::vector<std::string> (&only)[2]) {
+  for (const auto& id : order[0]) {
+    const auto t = rows[1].find(id);
+    if (t == rows[1].end()) {
+      only[0].push_back(id);
+      continue;
+    }
+    const RoleRow& s = rows[0].at(id);
+    ControlPoint& p = set.points.emplace_back();
+    p.id = id;
+    p.line = s.line;
+    p.source = s.position;
+    p.source_cov_m2 = s.cov_m2;
+    p.source_as_read = s.as_read;
+    p.target = t->second.position;
+    p.target_cov_m2 = t->second.cov_m2;
+    p.target_as_read = t->second.as_read;
+    p.use = s.use && t->second.use;
+    // The solution type of either file; both must say the same.
+    p.solution = s.solution ? s.solution : t->second.solution;
+    if (s.solution && t->second.solution && *s.solution != *t->second.solution) {
+      throw Error(ErrorKind::input, "E_VALUE",
+                  files[0].name + ":" + std::to_string(s.line) + ": solution=" + std::string(geodesy::to_string(*s.solution)) +
+                      " for " + id + " but " + files[1].name + ":" + std::to_string(t->second.line) + " says " +
+                      std::string(geodesy::to_string(*t->second.solution)) + "; one mark has one GNSS solution type");
+    }
+  }
+}
+
+void check_joined_sigmas(const RoleFile (&files)[2], const std::unordered_map<std::string, RoleRow> (&rows)[2],
+                         const ControlSet& set) {
+  // Each joined mark's two covariances together must weigh it: a station
+  // held by the adjustment (zero sigma) needs the other file's sigma.
+  for (const ControlPoint& p : set.points) {
+    const Eigen::Matrix3d both = p.source_cov_m2 + p.target_cov_m2;
+    const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(both, Eigen::EigenvaluesOnly).eigenvalues()(0);
+    if (!(smallest > 1e-12 * std::max(both.trace(), 1e-300))) {
+      throw Error(ErrorKind::input, "E_SIGMA",
+                  p.id + " (" + files[0].name + ":" + std::to_string(p.line) + ", " + files[1].name + ":" +
+                      std::to_string(rows[1].at(p.id).line) + "): the two files' covariances together leave a direction "
+                      "without uncertainty (smallest eigenvalue " + format_shortest(smallest) +
+                      " m²): a held station's zero sigma needs a sigma in the other file");
+    }
+  }
+}
+
 }  // namespace
 
 ControlSet read_control_pair(const std::filesystem::path& source, const std::filesystem::path& target,
@@ -447,38 +533,7 @@ ControlSet read_control_pair(const std::filesystem::path& source, const std::fil
   };
   const bool uses_ellipsoid[2] = {uses(files[0]), uses(files[1])};
   detail::resolve_ellipsoids(set, o, uses_ellipsoid);
-  // A file on a frame that implies no ellipsoid (outside the catalog) is
-  // read on the one its '# ellipsoid =' states, unless --ellipsoid says.
-  for (const RoleFile& f : files) {
-    const std::optional<geodesy::Frame>& frame = f.source ? set.source_frame : set.target_frame;
-    if (!f.stated_ellipsoid || f.crs || o.ellipsoid || (frame && geodesy::implied_ellipsoid(*frame))) continue;
-    std::string name = *f.stated_ellipsoid;
-    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
-    geodesy::ControlInputForm& form = f.source ? set.source_input : set.target_input;
-    // (GRS80 and WGS84 in any case, as before; the other EPSG names as written.)
-    const auto named = geodesy::named_ellipsoid(name == "GRS80" || name == "WGS84" ? name : *f.stated_ellipsoid);
-    if (!named) {
-      throw Error(ErrorKind::input, "E_ELLIPSOID",
-                  f.ellipsoid_where + ": '" + *f.stated_ellipsoid + "': expected one of " + geodesy::named_ellipsoid_list());
-    }
-    form.ellipsoid = *named;
-    if (form.projection) form.projection->ellipsoid = form.ellipsoid;
-  }
-  for (const RoleFile& f : files) {
-    const geodesy::ControlInputForm& form = f.source ? set.source_input : set.target_input;
-    if (f.stated_ellipsoid && !f.crs) {
-      std::string stated = *f.stated_ellipsoid, resolved = form.ellipsoid.name();
-      for (auto* s : {&stated, &resolved}) {
-        std::transform(s->begin(), s->end(), s->begin(), [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
-      }
-      if (stated != resolved) {
-        throw Error(ErrorKind::input, "E_ELLIPSOID",
-                    f.ellipsoid_where + ": the file's coordinates are on " + *f.stated_ellipsoid + ", but they would be read on " +
-                        form.ellipsoid.name() + (o.ellipsoid ? " (--ellipsoid)" : " (the frame's, or the other file's)") +
-                        "; drop --ellipsoid or correct the frame");
-      }
-    }
-  }
+  read_stated_ellipsoids(files, set, o);
   set.origin = o.origin;
   if (set.origin) {
     set.origin->ellipsoid = files[0].coords.kind == CoordinateKind::enu || files[1].coords.kind != CoordinateKind::enu
@@ -491,34 +546,8 @@ ControlSet read_control_pair(const std::filesystem::path& source, const std::fil
   for (std::size_t k = 0; k < 2; ++k) {
     rows[k] = read_role_rows(files[k], converter, k == 0 ? set.source_input : set.target_input, set.has_a_priori_sigmas, set.origin, order[k]);
   }
-  // The marks in both files, in the source file's order; the others are named.
   std::vector<std::string> only[2];
-  for (const auto& id : order[0]) {
-    const auto t = rows[1].find(id);
-    if (t == rows[1].end()) {
-      only[0].push_back(id);
-      continue;
-    }
-    const RoleRow& s = rows[0].at(id);
-    ControlPoint& p = set.points.emplace_back();
-    p.id = id;
-    p.line = s.line;
-    p.source = s.position;
-    p.source_cov_m2 = s.cov_m2;
-    p.source_as_read = s.as_read;
-    p.target = t->second.position;
-    p.target_cov_m2 = t->second.cov_m2;
-    p.target_as_read = t->second.as_read;
-    p.use = s.use && t->second.use;
-    // The solution type of either file; both must say the same.
-    p.solution = s.solution ? s.solution : t->second.solution;
-    if (s.solution && t->second.solution && *s.solution != *t->second.solution) {
-      throw Error(ErrorKind::input, "E_VALUE",
-                  files[0].name + ":" + std::to_string(s.line) + ": solution=" + std::string(geodesy::to_string(*s.solution)) +
-                      " for " + id + " but " + files[1].name + ":" + std::to_string(t->second.line) + " says " +
-                      std::string(geodesy::to_string(*t->second.solution)) + "; one mark has one GNSS solution type");
-    }
-  }
+  join_marks(files, rows, order, set, only);
   set.has_solutions = files[0].solution.has_value() || files[1].solution.has_value();
   for (const auto& id : order[1]) {
     if (!rows[0].count(id)) only[1].push_back(id);
@@ -549,21 +578,7 @@ ControlSet read_control_pair(const std::filesystem::path& source, const std::fil
                        " and are not part of the control: " + listed(only[k]));
     }
   }
-  // Each joined mark's two covariances together must weigh it: a station
-  // held by the adjustment (zero sigma) needs the other file's sigma.
-  if (set.has_a_priori_sigmas) {
-    for (const ControlPoint& p : set.points) {
-      const Eigen::Matrix3d both = p.source_cov_m2 + p.target_cov_m2;
-      const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(both, Eigen::EigenvaluesOnly).eigenvalues()(0);
-      if (!(smallest > 1e-12 * std::max(both.trace(), 1e-300))) {
-        throw Error(ErrorKind::input, "E_SIGMA",
-                    p.id + " (" + files[0].name + ":" + std::to_string(p.line) + ", " + files[1].name + ":" +
-                        std::to_string(rows[1].at(p.id).line) + "): the two files' covariances together leave a direction "
-                        "without uncertainty (smallest eigenvalue " + format_shortest(smallest) +
-                        " m²): a held station's zero sigma needs a sigma in the other file");
-      }
-    }
-  }
+  if (set.has_a_priori_sigmas) check_joined_sigmas(files, rows, set);
   for (const RoleFile& f : files) {
     if (!f.crs) continue;
     const auto& rows_of = rows[f.source ? 0 : 1];

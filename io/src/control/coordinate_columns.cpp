@@ -103,12 +103,15 @@ bool is_coordinate_column_name(std::string_view name) {
   return contains(kCoordinateStems, low.substr(0, low.find('_')));
 }
 
-CoordinateColumns classify_coordinate_header(const std::vector<std::string>& header, std::string_view source,
-                                             std::string_view role) {
-  std::map<std::string, std::size_t> found;  // stem -> column
-  std::optional<std::size_t> epoch, utm_zone;
-  const std::string role_infix = role.empty() ? std::string() : "_" + std::string(role);
+namespace {
 
+// The header's coordinate columns by stem (lat, x, easting, H, …), its epoch
+// and UTM zone columns; a name that looks like a coordinate but is none we
+// read (no unit, another unit, other case) is refused by name.
+void find_coordinate_columns(const std::vector<std::string>& header, std::string_view source, std::string_view role,
+                             std::map<std::string, std::size_t>& found, std::optional<std::size_t>& epoch,
+                             std::optional<std::size_t>& utm_zone) {
+  const std::string role_infix = role.empty() ? std::string() : "_" + std::string(role);
   for (std::size_t i = 0; i < header.size(); ++i) {
     const std::string& name = header[i];
     if (name.empty()) fail(source, i, name, "empty column name; every column needs a name");
@@ -165,6 +168,38 @@ CoordinateColumns classify_coordinate_header(const std::vector<std::string>& hea
     }
     // Anything else is an attribute column and passes through.
   }
+}
+
+// A header that names no coordinates: what it could name.
+[[noreturn]] void refuse_no_coordinates(const std::vector<std::string>& header, std::string_view source,
+                                        const std::string& role_infix) {
+  // Tabs or semicolons inside the names: another separator, which the CSV
+  // reader refuses when the header has no comma at all.
+  std::string separator;
+  for (const auto& name : header) {
+    if (separator.empty() && name.find('\t') != std::string::npos) separator = "tabs";
+    if (separator.empty() && name.find(';') != std::string::npos) separator = "semicolons (';')";
+  }
+  throw Error(ErrorKind::input, "E_COLUMN",
+              std::string(source) + ": header names no coordinates; expected lat" + role_infix + "_deg,lon" +
+                  role_infix + "_deg[,h" + role_infix + "_m] | x" + role_infix + "_m,y" + role_infix + "_m,z" +
+                  role_infix + "_m | e" + role_infix + "_m,n" + role_infix + "_m,u" + role_infix + "_m | n" +
+                  role_infix + "_m,e" + role_infix + "_m,d" + role_infix + "_m | easting" + role_infix +
+                  "_m,northing" + role_infix + "_m[,h" + role_infix + "_m]" +
+                  (separator.empty() ? std::string()
+                                     : " (its names hold " + separator +
+                                           ": geoanchor reads comma-separated files; only commas separate columns)"));
+}
+
+}  // namespace
+
+CoordinateColumns classify_coordinate_header(const std::vector<std::string>& header, std::string_view source,
+                                             std::string_view role) {
+  std::map<std::string, std::size_t> found;  // stem -> column
+  std::optional<std::size_t> epoch, utm_zone;
+  const std::string role_infix = role.empty() ? std::string() : "_" + std::string(role);
+
+  find_coordinate_columns(header, source, role, found, epoch, utm_zone);
 
   auto has = [&](std::string_view stem) { return found.count(std::string(stem)) > 0; };
   auto col = [&](std::string_view stem) { return found.at(std::string(stem)); };
@@ -182,24 +217,7 @@ CoordinateColumns classify_coordinate_header(const std::vector<std::string>& hea
     kinds.emplace_back(has("d") ? CoordinateKind::ned : CoordinateKind::enu, has("d") ? "n/e/d" : "e/n/u");
   }
   const auto names = [&](CoordinateKind k) { return coordinate_column_names(k, role); };
-  if (kinds.empty()) {
-    // Tabs or semicolons inside the names: another separator, which the CSV
-    // reader refuses when the header has no comma at all.
-    std::string separator;
-    for (const auto& name : header) {
-      if (separator.empty() && name.find('\t') != std::string::npos) separator = "tabs";
-      if (separator.empty() && name.find(';') != std::string::npos) separator = "semicolons (';')";
-    }
-    throw Error(ErrorKind::input, "E_COLUMN",
-                std::string(source) + ": header names no coordinates; expected lat" + role_infix + "_deg,lon" +
-                    role_infix + "_deg[,h" + role_infix + "_m] | x" + role_infix + "_m,y" + role_infix + "_m,z" +
-                    role_infix + "_m | e" + role_infix + "_m,n" + role_infix + "_m,u" + role_infix + "_m | n" +
-                    role_infix + "_m,e" + role_infix + "_m,d" + role_infix + "_m | easting" + role_infix +
-                    "_m,northing" + role_infix + "_m[,h" + role_infix + "_m]" +
-                    (separator.empty() ? std::string()
-                                       : " (its names hold " + separator +
-                                             ": geoanchor reads comma-separated files; only commas separate columns)"));
-  }
+  if (kinds.empty()) refuse_no_coordinates(header, source, role_infix);
   if (kinds.size() > 1) {
     throw Error(ErrorKind::input, "E_COLUMN_MIX",
                 std::string(source) + ": header mixes coordinate kinds (" + kinds[0].second + " and " +

@@ -175,78 +175,17 @@ class Reader final : public XmlHandler {
       return;
     }
     if (name == "network" && parent == "gama-local") {
-      if (network_seen_) fail(line(), "a second <network>; geoanchor reads one network per file");
-      network_seen_ = true;
-      only(name, a, {"axes-xy", "angles"});
-      const std::string axes = a.count("axes-xy") ? trim(a.at("axes-xy")) : "ne";
-      const std::string valid = "ne sw es wn en nw se ws";
-      if (axes.size() != 2 || valid.find(axes) == std::string::npos) {
-        fail(line(), "<network> axes-xy=\"" + axes + "\"; expected one of ne, sw, es, wn, en, nw, se, ws");
-      }
-      const std::string angles = a.count("angles") ? trim(a.at("angles")) : "left-handed";
-      if (angles != "left-handed" && angles != "right-handed") {
-        fail(line(), "<network> angles=\"" + angles + "\"; expected left-handed (clockwise) or right-handed");
-      }
-      const bool first = net_.stations.empty() && net_.measurements.empty();
-      first_network_ = first;
-      if (!first && net_.space != geodesy::NetworkSpace::local) {
-        fail(line(), "a local network, but the other inputs are on the ellipsoid");
-      }
-      geodesy::LocalAxes axes_here;
-      axes_here.x = axes[0];
-      axes_here.y = axes[1];
-      axes_here.angles_clockwise = angles == "left-handed";
-      if (!first && (net_.axes.x != axes_here.x || net_.axes.y != axes_here.y ||
-                     net_.axes.angles_clockwise != axes_here.angles_clockwise)) {
-        fail(line(), "axes-xy=\"" + axes + "\" angles=\"" + angles + "\" differ from another input's (" + net_.axes.name() + ")");
-      }
-      net_.space = geodesy::NetworkSpace::local;
-      net_.axes = axes_here;
+      network(name, a);
       return;
     }
     if (!network_seen_) fail(line(), "<" + name + "> outside <network>");
     if (name == "description" && parent == "network") return;
     if (name == "parameters" && parent == "network") {
-      only(name, a, {"sigma-apr", "conf-pr", "tol-abs", "sigma-act", "update-constrained-coordinates", "algorithm",
-                     "cov-band", "angles", "language", "encoding"});
-      if (const auto s = optional_number(name, a, "sigma-apr")) {
-        if (!(*s > 0.0)) fail(line(), "<parameters> sigma-apr must be > 0");
-        sigma_apr_mm_ = *s;
-      }
-      if (const auto t = optional_number(name, a, "tol-abs")) {
-        if (!(*t > 0.0)) fail(line(), "<parameters> tol-abs must be > 0");
-        tol_abs_mm_ = *t;
-      }
-      if (a.count("conf-pr")) {
-        net_.warnings.push_back(where(line()) + ": conf-pr=\"" + a.at("conf-pr") +
-                                "\": geoanchor's --confidence and --alpha set the tests' levels");
-      }
+      parameters(name, a);
       return;
     }
     if (name == "points-observations" && parent == "network") {
-      only(name, a, {"distance-stdev", "direction-stdev", "angle-stdev", "zenith-angle-stdev", "azimuth-stdev"});
-      defaults_ = {};
-      distance_abc_.clear();
-      if (a.count("distance-stdev")) {
-        std::istringstream in(a.at("distance-stdev"));
-        std::string word;
-        std::vector<double> abc;
-        while (in >> word) abc.push_back(number(name, "distance-stdev", word));
-        if (abc.empty() || abc.size() > 3) fail(line(), "distance-stdev=\"" + a.at("distance-stdev") + "\"; expected a [b [c]]");
-        distance_abc_ = {abc[0], abc.size() > 1 ? abc[1] : 0.0, abc.size() > 2 ? abc[2] : 1.0};
-        if (!(distance_abc_[0] > 0.0) || distance_abc_[1] < 0.0 || distance_abc_[2] < 0.0) {
-          fail(line(), "distance-stdev=\"" + a.at("distance-stdev") + "\": a must be > 0 and b, c >= 0 (σ = a + b·D_km^c mm)");
-        }
-      }
-      defaults_.direction = optional_number(name, a, "direction-stdev");
-      defaults_.angle = optional_number(name, a, "angle-stdev");
-      defaults_.zenith = optional_number(name, a, "zenith-angle-stdev");
-      defaults_.azimuth = optional_number(name, a, "azimuth-stdev");
-      for (const char* key : {"direction-stdev", "angle-stdev", "zenith-angle-stdev", "azimuth-stdev"}) {
-        if (const auto v = optional_number(name, a, key); v && !(*v > 0.0)) {
-          fail(line(), std::string(key) + "=\"" + a.at(key) + "\" must be > 0");
-        }
-      }
+      points_observations(name, a);
       return;
     }
     if (parent == "points-observations") {
@@ -269,75 +208,162 @@ class Reader final : public XmlHandler {
       fail(line(), "element <" + name + "> in <points-observations>; expected point, obs, height-differences, vectors or coordinates");
     }
     if (name == "cov-mat" && (parent == "obs" || parent == "height-differences" || parent == "vectors" || parent == "coordinates")) {
-      only(name, a, {"dim", "band"});
-      const double dim = required_number(name, a, "dim"), band = required_number(name, a, "band");
-      if (!(dim >= 0.0 && dim <= 1e6 && dim == std::floor(dim)) || !(band >= 0.0 && band <= 1e6 && band == std::floor(band))) {
-        fail(line(), "<cov-mat dim=\"" + a.at("dim") + "\" band=\"" + a.at("band") + "\">: expected whole numbers >= 0");
-      }
-      cov_dim_ = static_cast<long>(dim);
-      cov_band_ = std::min(static_cast<long>(band), std::max(cov_dim_ - 1, 0L));  // a band past the last column is the full matrix
-      cov_line_ = line();
+      cov_mat(name, a);
       return;
     }
     if (parent == "obs") return observation(name, a);
-    if (parent == "height-differences") {
-      if (name != "dh") fail(line(), "element <" + name + "> in <height-differences>; expected dh or cov-mat");
-      only(name, a, {"from", "to", "val", "stdev", "dist", "extern"});
-      Pending p;
-      p.line = line();
-      p.element = name;
-      p.m.kind = MeasurementKind::height_difference;
-      p.m.stations = {station(required_text(name, a, "from")), station(required_text(name, a, "to"))};
-      p.m.value = Eigen::VectorXd::Constant(1, required_number(name, a, "val"));
-      p.sigma_unit = kMm;
-      p.sigma = stdev(name, a, std::nullopt, kMm);
-      if (!p.sigma) {
-        const auto dist = optional_number(name, a, "dist");
-        if (!dist) fail(line(), "<dh> has neither stdev (mm) nor dist (km) for its standard deviation");
-        if (!(*dist > 0.0)) fail(line(), "<dh> dist=\"" + a.at("dist") + "\" must be > 0 (km)");
-        p.sigma = sigma_apr_mm_ * std::sqrt(*dist) * kMm;
-      }
-      three_d_.push_back({p.m.stations, line()});
-      group_.push_back(std::move(p));
-      return;
-    }
-    if (parent == "vectors") {
-      if (name != "vec") fail(line(), "element <" + name + "> in <vectors>; expected vec or cov-mat");
-      only(name, a, {"from", "to", "dx", "dy", "dz", "from_dh", "to_dh", "extern"});
-      Pending p;
-      p.line = line();
-      p.element = name;
-      p.m.kind = MeasurementKind::gnss_baselines;
-      p.m.stations = {station(required_text(name, a, "from")), station(required_text(name, a, "to"))};
-      // Between the instrument points: the marks differ by dz + from_dh − to_dh.
-      const double from_dh = optional_number(name, a, "from_dh").value_or(0.0);
-      const double to_dh = optional_number(name, a, "to_dh").value_or(0.0);
-      p.m.value = Eigen::Vector3d(required_number(name, a, "dx"), required_number(name, a, "dy"),
-                                  required_number(name, a, "dz") + from_dh - to_dh);
-      p.sigma_unit = kMm;
-      three_d_.push_back({p.m.stations, line()});
-      group_.push_back(std::move(p));
-      return;
-    }
-    if (parent == "coordinates") {
-      if (name != "point") fail(line(), "element <" + name + "> in <coordinates>; expected point or cov-mat");
-      only(name, a, {"id", "x", "y", "z", "extern"});
-      Pending p;
-      p.line = line();
-      p.element = "coordinates point";
-      p.m.kind = MeasurementKind::gnss_points;
-      p.m.stations = {station(required_text(name, a, "id"))};
-      const auto x = optional_number(name, a, "x"), y = optional_number(name, a, "y"), z = optional_number(name, a, "z");
-      if (!x || !y || !z) {
-        fail(line(), "an observed point with only some of x, y, z: geoanchor reads observed coordinates with all three");
-      }
-      p.m.value = Eigen::Vector3d(*x, *y, *z);
-      p.sigma_unit = kMm;
-      three_d_.push_back({p.m.stations, line()});
-      group_.push_back(std::move(p));
-      return;
-    }
+    if (parent == "height-differences") return height_difference(name, a);
+    if (parent == "vectors") return gnss_vector(name, a);
+    if (parent == "coordinates") return observed_point(name, a);
     fail(line(), "element <" + name + "> in <" + parent + "> is not read by geoanchor");
+  }
+
+  // <network>: its axes and angles, the same as the other inputs'.
+  void network(const std::string& name, const Attributes& a) {
+    if (network_seen_) fail(line(), "a second <network>; geoanchor reads one network per file");
+    network_seen_ = true;
+    only(name, a, {"axes-xy", "angles"});
+    const std::string axes = a.count("axes-xy") ? trim(a.at("axes-xy")) : "ne";
+    const std::string valid = "ne sw es wn en nw se ws";
+    if (axes.size() != 2 || valid.find(axes) == std::string::npos) {
+      fail(line(), "<network> axes-xy=\"" + axes + "\"; expected one of ne, sw, es, wn, en, nw, se, ws");
+    }
+    const std::string angles = a.count("angles") ? trim(a.at("angles")) : "left-handed";
+    if (angles != "left-handed" && angles != "right-handed") {
+      fail(line(), "<network> angles=\"" + angles + "\"; expected left-handed (clockwise) or right-handed");
+    }
+    const bool first = net_.stations.empty() && net_.measurements.empty();
+    first_network_ = first;
+    if (!first && net_.space != geodesy::NetworkSpace::local) {
+      fail(line(), "a local network, but the other inputs are on the ellipsoid");
+    }
+    geodesy::LocalAxes axes_here;
+    axes_here.x = axes[0];
+    axes_here.y = axes[1];
+    axes_here.angles_clockwise = angles == "left-handed";
+    if (!first && (net_.axes.x != axes_here.x || net_.axes.y != axes_here.y ||
+                   net_.axes.angles_clockwise != axes_here.angles_clockwise)) {
+      fail(line(), "axes-xy=\"" + axes + "\" angles=\"" + angles + "\" differ from another input's (" + net_.axes.name() + ")");
+    }
+    net_.space = geodesy::NetworkSpace::local;
+    net_.axes = axes_here;
+  }
+
+  // <parameters>: sigma-apr and tol-abs; conf-pr noted.
+  void parameters(const std::string& name, const Attributes& a) {
+    only(name, a, {"sigma-apr", "conf-pr", "tol-abs", "sigma-act", "update-constrained-coordinates", "algorithm",
+                   "cov-band", "angles", "language", "encoding"});
+    if (const auto s = optional_number(name, a, "sigma-apr")) {
+      if (!(*s > 0.0)) fail(line(), "<parameters> sigma-apr must be > 0");
+      sigma_apr_mm_ = *s;
+    }
+    if (const auto t = optional_number(name, a, "tol-abs")) {
+      if (!(*t > 0.0)) fail(line(), "<parameters> tol-abs must be > 0");
+      tol_abs_mm_ = *t;
+    }
+    if (a.count("conf-pr")) {
+      net_.warnings.push_back(where(line()) + ": conf-pr=\"" + a.at("conf-pr") +
+                              "\": geoanchor's --confidence and --alpha set the tests' levels");
+    }
+  }
+
+  // <points-observations>: the group's default standard deviations.
+  void points_observations(const std::string& name, const Attributes& a) {
+    only(name, a, {"distance-stdev", "direction-stdev", "angle-stdev", "zenith-angle-stdev", "azimuth-stdev"});
+    defaults_ = {};
+    distance_abc_.clear();
+    if (a.count("distance-stdev")) {
+      std::istringstream in(a.at("distance-stdev"));
+      std::string word;
+      std::vector<double> abc;
+      while (in >> word) abc.push_back(number(name, "distance-stdev", word));
+      if (abc.empty() || abc.size() > 3) fail(line(), "distance-stdev=\"" + a.at("distance-stdev") + "\"; expected a [b [c]]");
+      distance_abc_ = {abc[0], abc.size() > 1 ? abc[1] : 0.0, abc.size() > 2 ? abc[2] : 1.0};
+      if (!(distance_abc_[0] > 0.0) || distance_abc_[1] < 0.0 || distance_abc_[2] < 0.0) {
+        fail(line(), "distance-stdev=\"" + a.at("distance-stdev") + "\": a must be > 0 and b, c >= 0 (σ = a + b·D_km^c mm)");
+      }
+    }
+    defaults_.direction = optional_number(name, a, "direction-stdev");
+    defaults_.angle = optional_number(name, a, "angle-stdev");
+    defaults_.zenith = optional_number(name, a, "zenith-angle-stdev");
+    defaults_.azimuth = optional_number(name, a, "azimuth-stdev");
+    for (const char* key : {"direction-stdev", "angle-stdev", "zenith-angle-stdev", "azimuth-stdev"}) {
+      if (const auto v = optional_number(name, a, key); v && !(*v > 0.0)) {
+        fail(line(), std::string(key) + "=\"" + a.at(key) + "\" must be > 0");
+      }
+    }
+  }
+
+  // <cov-mat>: the dimension and band of the group's covariance (its text follows).
+  void cov_mat(const std::string& name, const Attributes& a) {
+    only(name, a, {"dim", "band"});
+    const double dim = required_number(name, a, "dim"), band = required_number(name, a, "band");
+    if (!(dim >= 0.0 && dim <= 1e6 && dim == std::floor(dim)) || !(band >= 0.0 && band <= 1e6 && band == std::floor(band))) {
+      fail(line(), "<cov-mat dim=\"" + a.at("dim") + "\" band=\"" + a.at("band") + "\">: expected whole numbers >= 0");
+    }
+    cov_dim_ = static_cast<long>(dim);
+    cov_band_ = std::min(static_cast<long>(band), std::max(cov_dim_ - 1, 0L));  // a band past the last column is the full matrix
+    cov_line_ = line();
+  }
+
+  // <dh> in <height-differences>.
+  void height_difference(const std::string& name, const Attributes& a) {
+    if (name != "dh") fail(line(), "element <" + name + "> in <height-differences>; expected dh or cov-mat");
+    only(name, a, {"from", "to", "val", "stdev", "dist", "extern"});
+    Pending p;
+    p.line = line();
+    p.element = name;
+    p.m.kind = MeasurementKind::height_difference;
+    p.m.stations = {station(required_text(name, a, "from")), station(required_text(name, a, "to"))};
+    p.m.value = Eigen::VectorXd::Constant(1, required_number(name, a, "val"));
+    p.sigma_unit = kMm;
+    p.sigma = stdev(name, a, std::nullopt, kMm);
+    if (!p.sigma) {
+      const auto dist = optional_number(name, a, "dist");
+      if (!dist) fail(line(), "<dh> has neither stdev (mm) nor dist (km) for its standard deviation");
+      if (!(*dist > 0.0)) fail(line(), "<dh> dist=\"" + a.at("dist") + "\" must be > 0 (km)");
+      p.sigma = sigma_apr_mm_ * std::sqrt(*dist) * kMm;
+    }
+    three_d_.push_back({p.m.stations, line()});
+    group_.push_back(std::move(p));
+  }
+
+  // <vec> in <vectors>.
+  void gnss_vector(const std::string& name, const Attributes& a) {
+    if (name != "vec") fail(line(), "element <" + name + "> in <vectors>; expected vec or cov-mat");
+    only(name, a, {"from", "to", "dx", "dy", "dz", "from_dh", "to_dh", "extern"});
+    Pending p;
+    p.line = line();
+    p.element = name;
+    p.m.kind = MeasurementKind::gnss_baselines;
+    p.m.stations = {station(required_text(name, a, "from")), station(required_text(name, a, "to"))};
+    // Between the instrument points: the marks differ by dz + from_dh − to_dh.
+    const double from_dh = optional_number(name, a, "from_dh").value_or(0.0);
+    const double to_dh = optional_number(name, a, "to_dh").value_or(0.0);
+    p.m.value = Eigen::Vector3d(required_number(name, a, "dx"), required_number(name, a, "dy"),
+                                required_number(name, a, "dz") + from_dh - to_dh);
+    p.sigma_unit = kMm;
+    three_d_.push_back({p.m.stations, line()});
+    group_.push_back(std::move(p));
+  }
+
+  // <point> in <coordinates>: an observed point.
+  void observed_point(const std::string& name, const Attributes& a) {
+    if (name != "point") fail(line(), "element <" + name + "> in <coordinates>; expected point or cov-mat");
+    only(name, a, {"id", "x", "y", "z", "extern"});
+    Pending p;
+    p.line = line();
+    p.element = "coordinates point";
+    p.m.kind = MeasurementKind::gnss_points;
+    p.m.stations = {station(required_text(name, a, "id"))};
+    const auto x = optional_number(name, a, "x"), y = optional_number(name, a, "y"), z = optional_number(name, a, "z");
+    if (!x || !y || !z) {
+      fail(line(), "an observed point with only some of x, y, z: geoanchor reads observed coordinates with all three");
+    }
+    p.m.value = Eigen::Vector3d(*x, *y, *z);
+    p.sigma_unit = kMm;
+    three_d_.push_back({p.m.stations, line()});
+    group_.push_back(std::move(p));
   }
 
   void point(const Attributes& a) {

@@ -37,13 +37,7 @@ constexpr double kGon = std::numbers::pi / 200.0;
 
 void only_keys(const json& obj, const std::string& where, const std::set<std::string>& allowed) {
   if (!obj.is_object()) fail(where, "expected an object");
-  for (const auto& [key, value] : obj.items()) {
-    if (!allowed.count(key)) {
-      std::string list;
-      for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
-      fail(where + "." + key, "unknown key; expected " + list);
-    }
-  }
+  if (const auto key = first_unknown_key(obj, allowed)) fail(where + "." + *key, "unknown key; expected " + key_list(allowed));
 }
 
 double number(const json& obj, const std::string& key, const std::string& where) {
@@ -190,6 +184,300 @@ geodesy::StationConstraint constraint_of(const json& s, const std::string& where
   return c;
 }
 
+// The input's "ellipsoid", which must agree with the frame's when the frame
+// implies one.
+void read_ellipsoid(const json& doc, const std::string& source, geodesy::Network& net) {
+  // By its EPSG name, or {"a_m", "rf", "name"}.
+  const json& ej = doc.at("ellipsoid");
+  std::optional<geodesy::Ellipsoid> named;
+  std::string e;
+  if (ej.is_object()) {
+    const std::string where = source + ".ellipsoid";
+    only_keys(ej, where, {"a_m", "rf", "name"});
+    if (!ej.contains("a_m") || !ej.contains("rf")) fail(where, "an ellipsoid given by its parameters needs a_m and rf");
+    try {
+      named = geodesy::Ellipsoid::custom(number(ej, "a_m", where), number(ej, "rf", where),
+                                         ej.contains("name") ? text(ej, "name", where) : "custom");
+    } catch (const Error& x) {
+      fail(where, x.what());
+    }
+    e = named->name();
+  } else {
+    e = text(doc, "ellipsoid", source);
+    named = geodesy::named_ellipsoid(e);
+    if (!named) fail(source + ".ellipsoid", "'" + e + "': expected one of " + geodesy::named_ellipsoid_list() + ", or {\"a_m\", \"rf\"}");
+  }
+  const geodesy::Ellipsoid given = *named;
+  if (net.frame) {
+    if (const auto implied = geodesy::implied_ellipsoid(*net.frame); implied && !(*implied == given)) {
+      fail(source + ".ellipsoid", e + " contradicts the frame " + net.frame->to_string() + ", which is on " + implied->name());
+    }
+  }
+  net.ellipsoid = given;
+  net.ellipsoid_stated = true;
+}
+
+// A local network's "local": its axes, angle sense and dimensions.
+void read_local(const json& doc, const std::string& source, geodesy::NetworkSpace this_space, geodesy::Network& net) {
+  if (this_space == geodesy::NetworkSpace::local) {
+    if (!doc.contains("local")) fail(source + ".local", "missing: a local network states its axes, angle sense and dimensions");
+    const json& l = doc.at("local");
+    const std::string at = source + ".local";
+    only_keys(l, at, {"axes", "angles", "dimensions"});
+    const std::string axes = text(l, "axes", at);
+    constexpr std::array<std::string_view, 8> kAxes{"ne", "en", "nw", "wn", "se", "es", "sw", "ws"};
+    if (std::find(kAxes.begin(), kAxes.end(), axes) == kAxes.end()) {
+      fail(at + ".axes", "'" + axes + "': expected one of ne en nw wn se es sw ws");
+    }
+    net.axes.x = axes[0];
+    net.axes.y = axes[1];
+    const std::string angles = text(l, "angles", at);
+    if (angles != "clockwise" && angles != "counterclockwise") fail(at + ".angles", "'" + angles + "': expected clockwise or counterclockwise");
+    net.axes.angles_clockwise = angles == "clockwise";
+    const double dims = number(l, "dimensions", at);
+    if (dims != 1.0 && dims != 2.0 && dims != 3.0) fail(at + ".dimensions", "expected 1 (heights), 2 (x, y) or 3");
+    net.local_dimensions = static_cast<int>(dims);
+  } else if (doc.contains("local")) {
+    fail(source + ".local", "given for a network on the ellipsoid (space \"ellipsoidal\")");
+  }
+}
+
+// The stations: each defined at its position, with its constraint.
+void read_stations(const json& doc, const std::string& source, geodesy::Network& net, NetworkBuilder& b) {
+  if (doc.contains("stations")) {
+    const json& stations = doc.at("stations");
+    if (!stations.is_array()) fail(source + ".stations", "expected an array");
+    for (std::size_t i = 0; i < stations.size(); ++i) {
+      const std::string at = source + ": stations[" + std::to_string(i) + "]";
+      const json& s = stations[i];
+      only_keys(s, at, {"id", "x_m", "y_m", "z_m", "lat_deg", "lon_deg", "h_m", "constraint", "constraint_sigma_m", "description"});
+      b.define(text(s, "id", at), position(s, net, at), constraint_of(s, at), at);
+    }
+  }
+}
+
+// One element of "measurements" as it is read: its stations by key, what
+// every kind may state (ignore, group), and the keys of its kind.
+struct MeasurementInput {
+  const json& m;
+  const std::string& at;
+  NetworkBuilder& b;
+
+  std::size_t station(const char* key) const { return b.reference(text(m, key, at), at + "." + key); }
+  void common(geodesy::NetworkMeasurement& x) const {
+    x.source = at;
+    if (m.contains("ignore")) {
+      if (!m.at("ignore").is_boolean()) fail(at + ".ignore", "expected true or false");
+      x.ignore = m.at("ignore").get<bool>();
+    }
+    if (m.contains("group")) x.group = text(m, "group", at);
+  }
+  std::set<std::string> with(std::set<std::string> keys) const {
+    const std::set<std::string> base = {"kind", "ignore", "group", "description"};
+    keys.insert(base.begin(), base.end());
+    return keys;
+  }
+};
+
+// A GNSS baseline, baseline cluster or point cluster: its vectors and their
+// covariance (joint, per item, or an isotropic sigma).
+void read_gnss(const MeasurementInput& in, const std::string& kind, geodesy::NetworkMeasurement& x) {
+  const json& m = in.m;
+  const std::string& at = in.at;
+  NetworkBuilder& b = in.b;
+  const bool points = kind == "gnss_point_cluster";
+  const bool single = kind == "gnss_baseline";
+  only_keys(m, at, single ? in.with({"from", "to", "dx_m", "dy_m", "dz_m", "cov_m2", "sigma_m", "frame", "solution"})
+                          : in.with({points ? "points" : "baselines", "cov_m2", "frame", "solution"}));
+  if (m.contains("solution")) {
+    const json& sv = m.at("solution");
+    if (sv.is_string()) x.solution = geodesy::parse_gnss_solution(sv.get<std::string>());
+    if (!x.solution) {
+      fail(at + ".solution", "value " + sv.dump() + " is not a GNSS solution type; expected one of " +
+                                 geodesy::gnss_solution_names() + " (lower case)");
+    }
+  }
+  x.kind = points ? MeasurementKind::gnss_points : MeasurementKind::gnss_baselines;
+  std::vector<Eigen::Vector3d> values;
+  auto read_vector = [&](const json& v, const std::string& w, const char* a, const char* bb, const char* c) {
+    values.emplace_back(number(v, a, w), number(v, bb, w), number(v, c, w));
+  };
+  std::vector<Eigen::Matrix3d> blocks;  // per-item 3×3 when the joint covariance is not given
+  if (single) {
+    x.stations = {in.station("from"), in.station("to")};
+    read_vector(m, at, "dx_m", "dy_m", "dz_m");
+  } else {
+    const char* list = points ? "points" : "baselines";
+    if (!m.contains(list) || !m.at(list).is_array() || m.at(list).empty()) fail(at + "." + list, "expected a non-empty array");
+    for (std::size_t k = 0; k < m.at(list).size(); ++k) {
+      const json& item = m.at(list)[k];
+      const std::string w = at + "." + list + "[" + std::to_string(k) + "]";
+      if (points) {
+        only_keys(item, w, {"id", "x_m", "y_m", "z_m", "cov_m2", "sigma_m"});
+        x.stations.push_back(b.reference(text(item, "id", w), w + ".id"));
+        read_vector(item, w, "x_m", "y_m", "z_m");
+      } else {
+        only_keys(item, w, {"from", "to", "dx_m", "dy_m", "dz_m", "cov_m2", "sigma_m"});
+        x.stations.push_back(b.reference(text(item, "from", w), w + ".from"));
+        x.stations.push_back(b.reference(text(item, "to", w), w + ".to"));
+        read_vector(item, w, "dx_m", "dy_m", "dz_m");
+      }
+      if (item.contains("cov_m2") && item.contains("sigma_m")) fail(w, "both cov_m2 and sigma_m; give one");
+      if (item.contains("cov_m2")) blocks.push_back(matrix(item.at("cov_m2"), 3, w + ".cov_m2"));
+      if (item.contains("sigma_m")) {
+        const double sg = positive(number(item, "sigma_m", w), w + ".sigma_m");
+        blocks.push_back(Eigen::Matrix3d::Identity() * sg * sg);
+      }
+    }
+    if (!blocks.empty() && blocks.size() != values.size()) fail(at, "some items have a covariance and some not");
+    if (!blocks.empty() && m.contains("cov_m2")) fail(at, "a joint cov_m2 and per-item covariances; give one");
+  }
+  const Eigen::Index n = static_cast<Eigen::Index>(3 * values.size());
+  x.value.resize(n);
+  for (std::size_t k = 0; k < values.size(); ++k) x.value.segment<3>(static_cast<Eigen::Index>(3 * k)) = values[k];
+  if (m.contains("cov_m2")) {
+    if (single && m.contains("sigma_m")) fail(at, "both cov_m2 and sigma_m; give one");
+    x.covariance = matrix(m.at("cov_m2"), n, at + ".cov_m2");
+  } else if (single && m.contains("sigma_m")) {
+    const double sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
+    x.covariance = Eigen::Matrix3d::Identity() * sg * sg;
+  } else if (!blocks.empty()) {
+    x.covariance = Eigen::MatrixXd::Zero(n, n);
+    for (std::size_t k = 0; k < blocks.size(); ++k) {
+      x.covariance.block<3, 3>(static_cast<Eigen::Index>(3 * k), static_cast<Eigen::Index>(3 * k)) = blocks[k];
+    }
+  } else {
+    fail(at, "no covariance: give cov_m2 (" + std::to_string(n) + "×" + std::to_string(n) + ", m²) or sigma_m");
+  }
+  if (m.contains("frame")) x.frame = geodesy::Frame::parse(text(m, "frame", at), at + ".frame");
+}
+
+// A direction set: one measurement per direction, each of the set.
+void read_direction_set(const MeasurementInput& in, geodesy::Network& net) {
+  const json& m = in.m;
+  const std::string& at = in.at;
+  NetworkBuilder& b = in.b;
+  only_keys(m, at, in.with({"at", "directions", "instrument_height_m"}));
+  const std::size_t from = in.station("at");
+  const std::size_t set = net.direction_sets.size();
+  net.direction_sets.push_back({from, at});
+  if (!m.contains("directions") || !m.at("directions").is_array() || m.at("directions").empty()) {
+    fail(at + ".directions", "expected a non-empty array");
+  }
+  for (std::size_t k = 0; k < m.at("directions").size(); ++k) {
+    const json& d = m.at("directions")[k];
+    const std::string w = at + ".directions[" + std::to_string(k) + "]";
+    std::set<std::string> keys = kAngleKeys;
+    keys.insert({"to", "target_height_m", "ignore"});
+    only_keys(d, w, keys);
+    geodesy::NetworkMeasurement dir;
+    in.common(dir);
+    dir.source = w;
+    if (d.contains("ignore")) dir.ignore = d.at("ignore").is_boolean() && d.at("ignore").get<bool>();
+    dir.kind = MeasurementKind::direction;
+    dir.stations = {from, b.reference(text(d, "to", w), w + ".to")};
+    dir.value = Eigen::VectorXd::Constant(1, angle_value(d, MeasurementKind::direction, w, net.warnings));
+    const double sg = angle_sigma(d, w);
+    dir.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
+    dir.set = set;
+    if (m.contains("instrument_height_m")) dir.instrument_height_m = number(m, "instrument_height_m", at);
+    if (d.contains("target_height_m")) dir.target_height_m = number(d, "target_height_m", w);
+    net.measurements.push_back(dir);
+  }
+}
+
+// The measurements, each as its kind says.
+void read_measurements(const json& doc, const std::string& source, geodesy::Network& net, NetworkBuilder& b) {
+  if (!doc.contains("measurements")) return;
+  const json& ms = doc.at("measurements");
+  if (!ms.is_array()) fail(source + ".measurements", "expected an array");
+  for (std::size_t i = 0; i < ms.size(); ++i) {
+    const std::string at = source + ": measurements[" + std::to_string(i) + "]";
+    const json& m = ms[i];
+    if (!m.is_object()) fail(at, "expected an object");
+    const std::string kind = text(m, "kind", at);
+    const MeasurementInput in{m, at, b};
+    geodesy::NetworkMeasurement x;
+    in.common(x);
+    if (kind == "gnss_baseline" || kind == "gnss_baseline_cluster" || kind == "gnss_point_cluster") {
+      read_gnss(in, kind, x);
+    } else if (kind == "slope_distance" || kind == "horizontal_distance" || kind == "ellipsoid_arc") {
+      only_keys(m, at, in.with({"from", "to", "value_m", "sigma_m", "instrument_height_m", "target_height_m"}));
+      x.kind = kind == "slope_distance" ? MeasurementKind::slope_distance
+               : kind == "horizontal_distance" ? MeasurementKind::horizontal_distance
+                                               : MeasurementKind::ellipsoid_arc;
+      x.stations = {in.station("from"), in.station("to")};
+      x.value = Eigen::VectorXd::Constant(1, positive(number(m, "value_m", at), at + ".value_m"));
+      const double sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
+      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
+      if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
+      if (m.contains("target_height_m")) x.target_height_m = number(m, "target_height_m", at);
+      if (x.kind == MeasurementKind::ellipsoid_arc && (m.contains("instrument_height_m") || m.contains("target_height_m"))) {
+        fail(at, "an ellipsoid arc is between footpoints: no instrument or target height");
+      }
+    } else if (kind == "direction_set") {
+      read_direction_set(in, net);
+      continue;
+    } else if (kind == "horizontal_angle") {
+      std::set<std::string> keys = in.with({"at", "from", "to", "instrument_height_m"});
+      keys.insert(kAngleKeys.begin(), kAngleKeys.end());
+      only_keys(m, at, keys);
+      x.kind = MeasurementKind::horizontal_angle;
+      x.stations = {in.station("at"), in.station("from"), in.station("to")};
+      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
+      const double sg = angle_sigma(m, at);
+      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
+      if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
+    } else if (kind == "zenith_angle" || kind == "vertical_angle" || kind == "azimuth") {
+      std::set<std::string> keys = in.with({"from", "to", "instrument_height_m", "target_height_m"});
+      keys.insert(kAngleKeys.begin(), kAngleKeys.end());
+      only_keys(m, at, keys);
+      x.kind = kind == "zenith_angle" ? MeasurementKind::zenith_angle
+               : kind == "vertical_angle" ? MeasurementKind::vertical_angle
+                                          : MeasurementKind::azimuth;
+      x.stations = {in.station("from"), in.station("to")};
+      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
+      const double sg = angle_sigma(m, at);
+      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
+      if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
+      if (m.contains("target_height_m")) x.target_height_m = number(m, "target_height_m", at);
+    } else if (kind == "height_difference") {
+      only_keys(m, at, in.with({"from", "to", "value_m", "sigma_m", "sigma_mm_per_sqrt_km", "length_km"}));
+      x.kind = MeasurementKind::height_difference;
+      x.stations = {in.station("from"), in.station("to")};
+      x.value = Eigen::VectorXd::Constant(1, number(m, "value_m", at));
+      double sg = 0.0;
+      if (m.contains("sigma_m") == m.contains("sigma_mm_per_sqrt_km")) {
+        fail(at, "expected sigma_m, or sigma_mm_per_sqrt_km with length_km");
+      }
+      if (m.contains("sigma_m")) {
+        if (m.contains("length_km")) fail(at + ".length_km", "only with sigma_mm_per_sqrt_km");
+        sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
+      } else {
+        sg = 1e-3 * positive(number(m, "sigma_mm_per_sqrt_km", at), at + ".sigma_mm_per_sqrt_km") *
+             std::sqrt(positive(number(m, "length_km", at), at + ".length_km"));
+      }
+      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
+    } else if (kind == "ellipsoidal_height" || kind == "orthometric_height") {
+      only_keys(m, at, in.with({"at", "value_m", "sigma_m"}));
+      x.kind = kind == "ellipsoidal_height" ? MeasurementKind::ellipsoidal_height : MeasurementKind::orthometric_height;
+      x.stations = {in.station("at")};
+      x.value = Eigen::VectorXd::Constant(1, number(m, "value_m", at));
+      const double sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
+      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
+    } else {
+      fail(at + ".kind", "'" + kind + "': expected gnss_baseline, gnss_baseline_cluster, gnss_point_cluster, slope_distance, "
+                                      "horizontal_distance, ellipsoid_arc, direction_set, horizontal_angle, zenith_angle, "
+                                      "vertical_angle, azimuth, height_difference, ellipsoidal_height or orthometric_height");
+    }
+    if (net.space == geodesy::NetworkSpace::local &&
+        (x.kind == MeasurementKind::ellipsoid_arc || x.kind == MeasurementKind::azimuth || x.frame)) {
+      fail(at, std::string(geodesy::to_string(x.kind)) + (x.frame ? " with a frame" : "") + " in a local network");
+    }
+    net.measurements.push_back(std::move(x));
+  }
+}
+
 }  // namespace
 
 void read_network_json(std::string_view text_in, std::string_view source_in, geodesy::Network& into) {
@@ -215,260 +503,12 @@ void read_network_json(std::string_view text_in, std::string_view source_in, geo
     net.frame = f;
     if (const auto e = geodesy::implied_ellipsoid(f)) net.ellipsoid = *e, net.ellipsoid_stated = true;
   }
-  if (doc.contains("ellipsoid")) {
-    // By its EPSG name, or {"a_m", "rf", "name"}.
-    const json& ej = doc.at("ellipsoid");
-    std::optional<geodesy::Ellipsoid> named;
-    std::string e;
-    if (ej.is_object()) {
-      const std::string where = source + ".ellipsoid";
-      only_keys(ej, where, {"a_m", "rf", "name"});
-      if (!ej.contains("a_m") || !ej.contains("rf")) fail(where, "an ellipsoid given by its parameters needs a_m and rf");
-      try {
-        named = geodesy::Ellipsoid::custom(number(ej, "a_m", where), number(ej, "rf", where),
-                                           ej.contains("name") ? text(ej, "name", where) : "custom");
-      } catch (const Error& x) {
-        fail(where, x.what());
-      }
-      e = named->name();
-    } else {
-      e = text(doc, "ellipsoid", source);
-      named = geodesy::named_ellipsoid(e);
-      if (!named) fail(source + ".ellipsoid", "'" + e + "': expected one of " + geodesy::named_ellipsoid_list() + ", or {\"a_m\", \"rf\"}");
-    }
-    const geodesy::Ellipsoid given = *named;
-    if (net.frame) {
-      if (const auto implied = geodesy::implied_ellipsoid(*net.frame); implied && !(*implied == given)) {
-        fail(source + ".ellipsoid", e + " contradicts the frame " + net.frame->to_string() + ", which is on " + implied->name());
-      }
-    }
-    net.ellipsoid = given;
-    net.ellipsoid_stated = true;
-  }
-  if (this_space == geodesy::NetworkSpace::local) {
-    if (!doc.contains("local")) fail(source + ".local", "missing: a local network states its axes, angle sense and dimensions");
-    const json& l = doc.at("local");
-    const std::string at = source + ".local";
-    only_keys(l, at, {"axes", "angles", "dimensions"});
-    const std::string axes = text(l, "axes", at);
-    constexpr std::array<std::string_view, 8> kAxes{"ne", "en", "nw", "wn", "se", "es", "sw", "ws"};
-    if (std::find(kAxes.begin(), kAxes.end(), axes) == kAxes.end()) {
-      fail(at + ".axes", "'" + axes + "': expected one of ne en nw wn se es sw ws");
-    }
-    net.axes.x = axes[0];
-    net.axes.y = axes[1];
-    const std::string angles = text(l, "angles", at);
-    if (angles != "clockwise" && angles != "counterclockwise") fail(at + ".angles", "'" + angles + "': expected clockwise or counterclockwise");
-    net.axes.angles_clockwise = angles == "clockwise";
-    const double dims = number(l, "dimensions", at);
-    if (dims != 1.0 && dims != 2.0 && dims != 3.0) fail(at + ".dimensions", "expected 1 (heights), 2 (x, y) or 3");
-    net.local_dimensions = static_cast<int>(dims);
-  } else if (doc.contains("local")) {
-    fail(source + ".local", "given for a network on the ellipsoid (space \"ellipsoidal\")");
-  }
+  if (doc.contains("ellipsoid")) read_ellipsoid(doc, source, net);
+  read_local(doc, source, this_space, net);
 
   NetworkBuilder b(net);
-  if (doc.contains("stations")) {
-    const json& stations = doc.at("stations");
-    if (!stations.is_array()) fail(source + ".stations", "expected an array");
-    for (std::size_t i = 0; i < stations.size(); ++i) {
-      const std::string at = source + ": stations[" + std::to_string(i) + "]";
-      const json& s = stations[i];
-      only_keys(s, at, {"id", "x_m", "y_m", "z_m", "lat_deg", "lon_deg", "h_m", "constraint", "constraint_sigma_m", "description"});
-      b.define(text(s, "id", at), position(s, net, at), constraint_of(s, at), at);
-    }
-  }
-  if (!doc.contains("measurements")) return;
-  const json& ms = doc.at("measurements");
-  if (!ms.is_array()) fail(source + ".measurements", "expected an array");
-  for (std::size_t i = 0; i < ms.size(); ++i) {
-    const std::string at = source + ": measurements[" + std::to_string(i) + "]";
-    const json& m = ms[i];
-    if (!m.is_object()) fail(at, "expected an object");
-    const std::string kind = text(m, "kind", at);
-    auto station = [&](const char* key) { return b.reference(text(m, key, at), at + "." + key); };
-    auto common = [&](geodesy::NetworkMeasurement& x) {
-      x.source = at;
-      if (m.contains("ignore")) {
-        if (!m.at("ignore").is_boolean()) fail(at + ".ignore", "expected true or false");
-        x.ignore = m.at("ignore").get<bool>();
-      }
-      if (m.contains("group")) x.group = text(m, "group", at);
-    };
-    geodesy::NetworkMeasurement x;
-    common(x);
-    const std::set<std::string> base = {"kind", "ignore", "group", "description"};
-    auto with = [&](std::set<std::string> keys) {
-      keys.insert(base.begin(), base.end());
-      return keys;
-    };
-    if (kind == "gnss_baseline" || kind == "gnss_baseline_cluster" || kind == "gnss_point_cluster") {
-      const bool points = kind == "gnss_point_cluster";
-      const bool single = kind == "gnss_baseline";
-      only_keys(m, at, single ? with({"from", "to", "dx_m", "dy_m", "dz_m", "cov_m2", "sigma_m", "frame", "solution"})
-                              : with({points ? "points" : "baselines", "cov_m2", "frame", "solution"}));
-      if (m.contains("solution")) {
-        const json& sv = m.at("solution");
-        if (sv.is_string()) x.solution = geodesy::parse_gnss_solution(sv.get<std::string>());
-        if (!x.solution) {
-          fail(at + ".solution", "value " + sv.dump() + " is not a GNSS solution type; expected one of " +
-                                     geodesy::gnss_solution_names() + " (lower case)");
-        }
-      }
-      x.kind = points ? MeasurementKind::gnss_points : MeasurementKind::gnss_baselines;
-      std::vector<Eigen::Vector3d> values;
-      auto read_vector = [&](const json& v, const std::string& w, const char* a, const char* bb, const char* c) {
-        values.emplace_back(number(v, a, w), number(v, bb, w), number(v, c, w));
-      };
-      std::vector<Eigen::Matrix3d> blocks;  // per-item 3×3 when the joint covariance is not given
-      if (single) {
-        x.stations = {station("from"), station("to")};
-        read_vector(m, at, "dx_m", "dy_m", "dz_m");
-      } else {
-        const char* list = points ? "points" : "baselines";
-        if (!m.contains(list) || !m.at(list).is_array() || m.at(list).empty()) fail(at + "." + list, "expected a non-empty array");
-        for (std::size_t k = 0; k < m.at(list).size(); ++k) {
-          const json& item = m.at(list)[k];
-          const std::string w = at + "." + list + "[" + std::to_string(k) + "]";
-          if (points) {
-            only_keys(item, w, {"id", "x_m", "y_m", "z_m", "cov_m2", "sigma_m"});
-            x.stations.push_back(b.reference(text(item, "id", w), w + ".id"));
-            read_vector(item, w, "x_m", "y_m", "z_m");
-          } else {
-            only_keys(item, w, {"from", "to", "dx_m", "dy_m", "dz_m", "cov_m2", "sigma_m"});
-            x.stations.push_back(b.reference(text(item, "from", w), w + ".from"));
-            x.stations.push_back(b.reference(text(item, "to", w), w + ".to"));
-            read_vector(item, w, "dx_m", "dy_m", "dz_m");
-          }
-          if (item.contains("cov_m2") && item.contains("sigma_m")) fail(w, "both cov_m2 and sigma_m; give one");
-          if (item.contains("cov_m2")) blocks.push_back(matrix(item.at("cov_m2"), 3, w + ".cov_m2"));
-          if (item.contains("sigma_m")) {
-            const double sg = positive(number(item, "sigma_m", w), w + ".sigma_m");
-            blocks.push_back(Eigen::Matrix3d::Identity() * sg * sg);
-          }
-        }
-        if (!blocks.empty() && blocks.size() != values.size()) fail(at, "some items have a covariance and some not");
-        if (!blocks.empty() && m.contains("cov_m2")) fail(at, "a joint cov_m2 and per-item covariances; give one");
-      }
-      const Eigen::Index n = static_cast<Eigen::Index>(3 * values.size());
-      x.value.resize(n);
-      for (std::size_t k = 0; k < values.size(); ++k) x.value.segment<3>(static_cast<Eigen::Index>(3 * k)) = values[k];
-      if (m.contains("cov_m2")) {
-        if (single && m.contains("sigma_m")) fail(at, "both cov_m2 and sigma_m; give one");
-        x.covariance = matrix(m.at("cov_m2"), n, at + ".cov_m2");
-      } else if (single && m.contains("sigma_m")) {
-        const double sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
-        x.covariance = Eigen::Matrix3d::Identity() * sg * sg;
-      } else if (!blocks.empty()) {
-        x.covariance = Eigen::MatrixXd::Zero(n, n);
-        for (std::size_t k = 0; k < blocks.size(); ++k) {
-          x.covariance.block<3, 3>(static_cast<Eigen::Index>(3 * k), static_cast<Eigen::Index>(3 * k)) = blocks[k];
-        }
-      } else {
-        fail(at, "no covariance: give cov_m2 (" + std::to_string(n) + "×" + std::to_string(n) + ", m²) or sigma_m");
-      }
-      if (m.contains("frame")) x.frame = geodesy::Frame::parse(text(m, "frame", at), at + ".frame");
-    } else if (kind == "slope_distance" || kind == "horizontal_distance" || kind == "ellipsoid_arc") {
-      only_keys(m, at, with({"from", "to", "value_m", "sigma_m", "instrument_height_m", "target_height_m"}));
-      x.kind = kind == "slope_distance" ? MeasurementKind::slope_distance
-               : kind == "horizontal_distance" ? MeasurementKind::horizontal_distance
-                                               : MeasurementKind::ellipsoid_arc;
-      x.stations = {station("from"), station("to")};
-      x.value = Eigen::VectorXd::Constant(1, positive(number(m, "value_m", at), at + ".value_m"));
-      const double sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
-      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
-      if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
-      if (m.contains("target_height_m")) x.target_height_m = number(m, "target_height_m", at);
-      if (x.kind == MeasurementKind::ellipsoid_arc && (m.contains("instrument_height_m") || m.contains("target_height_m"))) {
-        fail(at, "an ellipsoid arc is between footpoints: no instrument or target height");
-      }
-    } else if (kind == "direction_set") {
-      only_keys(m, at, with({"at", "directions", "instrument_height_m"}));
-      const std::size_t from = station("at");
-      const std::size_t set = net.direction_sets.size();
-      net.direction_sets.push_back({from, at});
-      if (!m.contains("directions") || !m.at("directions").is_array() || m.at("directions").empty()) {
-        fail(at + ".directions", "expected a non-empty array");
-      }
-      for (std::size_t k = 0; k < m.at("directions").size(); ++k) {
-        const json& d = m.at("directions")[k];
-        const std::string w = at + ".directions[" + std::to_string(k) + "]";
-        std::set<std::string> keys = kAngleKeys;
-        keys.insert({"to", "target_height_m", "ignore"});
-        only_keys(d, w, keys);
-        geodesy::NetworkMeasurement dir;
-        common(dir);
-        dir.source = w;
-        if (d.contains("ignore")) dir.ignore = d.at("ignore").is_boolean() && d.at("ignore").get<bool>();
-        dir.kind = MeasurementKind::direction;
-        dir.stations = {from, b.reference(text(d, "to", w), w + ".to")};
-        dir.value = Eigen::VectorXd::Constant(1, angle_value(d, MeasurementKind::direction, w, net.warnings));
-        const double sg = angle_sigma(d, w);
-        dir.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
-        dir.set = set;
-        if (m.contains("instrument_height_m")) dir.instrument_height_m = number(m, "instrument_height_m", at);
-        if (d.contains("target_height_m")) dir.target_height_m = number(d, "target_height_m", w);
-        net.measurements.push_back(dir);
-      }
-      continue;
-    } else if (kind == "horizontal_angle") {
-      std::set<std::string> keys = with({"at", "from", "to", "instrument_height_m"});
-      keys.insert(kAngleKeys.begin(), kAngleKeys.end());
-      only_keys(m, at, keys);
-      x.kind = MeasurementKind::horizontal_angle;
-      x.stations = {station("at"), station("from"), station("to")};
-      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
-      const double sg = angle_sigma(m, at);
-      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
-      if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
-    } else if (kind == "zenith_angle" || kind == "vertical_angle" || kind == "azimuth") {
-      std::set<std::string> keys = with({"from", "to", "instrument_height_m", "target_height_m"});
-      keys.insert(kAngleKeys.begin(), kAngleKeys.end());
-      only_keys(m, at, keys);
-      x.kind = kind == "zenith_angle" ? MeasurementKind::zenith_angle
-               : kind == "vertical_angle" ? MeasurementKind::vertical_angle
-                                          : MeasurementKind::azimuth;
-      x.stations = {station("from"), station("to")};
-      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
-      const double sg = angle_sigma(m, at);
-      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
-      if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
-      if (m.contains("target_height_m")) x.target_height_m = number(m, "target_height_m", at);
-    } else if (kind == "height_difference") {
-      only_keys(m, at, with({"from", "to", "value_m", "sigma_m", "sigma_mm_per_sqrt_km", "length_km"}));
-      x.kind = MeasurementKind::height_difference;
-      x.stations = {station("from"), station("to")};
-      x.value = Eigen::VectorXd::Constant(1, number(m, "value_m", at));
-      double sg = 0.0;
-      if (m.contains("sigma_m") == m.contains("sigma_mm_per_sqrt_km")) {
-        fail(at, "expected sigma_m, or sigma_mm_per_sqrt_km with length_km");
-      }
-      if (m.contains("sigma_m")) {
-        if (m.contains("length_km")) fail(at + ".length_km", "only with sigma_mm_per_sqrt_km");
-        sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
-      } else {
-        sg = 1e-3 * positive(number(m, "sigma_mm_per_sqrt_km", at), at + ".sigma_mm_per_sqrt_km") *
-             std::sqrt(positive(number(m, "length_km", at), at + ".length_km"));
-      }
-      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
-    } else if (kind == "ellipsoidal_height" || kind == "orthometric_height") {
-      only_keys(m, at, with({"at", "value_m", "sigma_m"}));
-      x.kind = kind == "ellipsoidal_height" ? MeasurementKind::ellipsoidal_height : MeasurementKind::orthometric_height;
-      x.stations = {station("at")};
-      x.value = Eigen::VectorXd::Constant(1, number(m, "value_m", at));
-      const double sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
-      x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
-    } else {
-      fail(at + ".kind", "'" + kind + "': expected gnss_baseline, gnss_baseline_cluster, gnss_point_cluster, slope_distance, "
-                                      "horizontal_distance, ellipsoid_arc, direction_set, horizontal_angle, zenith_angle, "
-                                      "vertical_angle, azimuth, height_difference, ellipsoidal_height or orthometric_height");
-    }
-    if (net.space == geodesy::NetworkSpace::local &&
-        (x.kind == MeasurementKind::ellipsoid_arc || x.kind == MeasurementKind::azimuth || x.frame)) {
-      fail(at, std::string(geodesy::to_string(x.kind)) + (x.frame ? " with a frame" : "") + " in a local network");
-    }
-    net.measurements.push_back(std::move(x));
-  }
+  read_stations(doc, source, net, b);
+  read_measurements(doc, source, net, b);
 }
 
 }  // namespace geoanchor::io::detail

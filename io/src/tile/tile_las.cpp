@@ -27,12 +27,14 @@
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/base/number_text.hpp"
 #include "geoanchor/las/las.hpp"
+#include "tile/las_record_source.hpp"
 #include "tile/tile_common.hpp"
 
 namespace geoanchor::io {
 namespace {
 
 using detail::Bounds;
+using detail::RecordSource;
 
 // Metres per degree of latitude (mean, to 1 %): only used to turn a
 // quantization step in metres into one in degrees and back.
@@ -140,87 +142,6 @@ using Int3 = std::array<std::int32_t, 3>;
 constexpr Int3 kInt3Max{INT32_MAX, INT32_MAX, INT32_MAX};
 constexpr Int3 kInt3Min{INT32_MIN, INT32_MIN, INT32_MIN};
 
-// The records of any run of the tile's points, for any thread. A run that
-// is one of the file's chunks (an uncompressed file's runs of
-// kLasChunkPoints, a LAZ file written with the unit's chunk size) is read
-// straight into the caller's buffer; otherwise the chunks it overlaps are
-// decompressed once, by the first thread that asks, and kept until every
-// run that needs a part of them has taken it.
-class RecordSource {
- public:
-  RecordSource(const LasReader& reader, std::uint64_t unit_points) : r_(reader), unit_(unit_points) {
-    firsts_.reserve(r_.chunk_count());
-    for (std::size_t i = 0; i < r_.chunk_count(); ++i) firsts_.push_back(r_.chunk_first_point(i));
-  }
-
-  // The chunk holding point `p` (0-based).
-  std::size_t chunk_of(std::uint64_t p) const {
-    return static_cast<std::size_t>(std::upper_bound(firsts_.begin(), firsts_.end(), p) - firsts_.begin()) - 1;
-  }
-
-  // Records [first, first + n) into `out` (n × record length bytes).
-  void fetch(std::uint64_t first, std::size_t n, Bytes& out) {
-    const std::size_t len = r_.header().record_length;
-    std::size_t i = chunk_of(first);
-    if (r_.chunk_first_point(i) == first && r_.chunk_points(i) == n) {
-      r_.decode_chunk(i, out);
-      return;
-    }
-    out.resize(n * len);
-    for (std::uint64_t at = first; at < first + n; ++i) {
-      const std::uint64_t c0 = r_.chunk_first_point(i), c1 = c0 + r_.chunk_points(i);
-      const std::uint64_t to = std::min<std::uint64_t>(c1, first + n);
-      const std::shared_ptr<const Bytes> records = acquire(i);
-      std::memcpy(out.data() + (at - first) * len, records->data() + (at - c0) * len, static_cast<std::size_t>(to - at) * len);
-      release(i);
-      at = to;
-    }
-  }
-
- private:
-  struct Cached {
-    std::shared_future<std::shared_ptr<const Bytes>> records;
-    std::uint64_t takers = 0;  // runs that have yet to take their part
-  };
-  std::shared_ptr<const Bytes> acquire(std::size_t i) {
-    std::promise<std::shared_ptr<const Bytes>> promise;
-    std::shared_future<std::shared_ptr<const Bytes>> records;
-    bool mine = false;
-    {
-      const std::lock_guard<std::mutex> lock(m_);
-      auto it = cache_.find(i);
-      if (it == cache_.end()) {
-        const std::uint64_t c0 = r_.chunk_first_point(i), c1 = c0 + r_.chunk_points(i);
-        Cached c{promise.get_future().share(), (c1 - 1) / unit_ - c0 / unit_ + 1};
-        it = cache_.emplace(i, std::move(c)).first;
-        mine = true;
-      }
-      records = it->second.records;
-    }
-    if (mine) {
-      try {
-        auto b = std::make_shared<Bytes>();
-        r_.decode_chunk(i, *b);
-        promise.set_value(std::move(b));
-      } catch (...) {
-        promise.set_exception(std::current_exception());
-      }
-    }
-    return records.get();  // rethrows the chunk's error for every run that needs it
-  }
-  void release(std::size_t i) {
-    const std::lock_guard<std::mutex> lock(m_);
-    const auto it = cache_.find(i);
-    if (it != cache_.end() && --it->second.takers == 0) cache_.erase(it);
-  }
-
-  const LasReader& r_;
-  const std::uint64_t unit_;
-  std::vector<std::uint64_t> firsts_;
-  std::mutex m_;
-  std::map<std::size_t, Cached> cache_;
-};
-
 // What a pass does with each unit's moved points.
 enum class PassKind {
   write,   // quantize, scatter into the records, compress (LAZ), write
@@ -277,6 +198,13 @@ class LasTile {
   // not after a unit that failed. wait_crs_turn: false after a failure.
   bool wait_crs_turn(std::uint64_t unit);
   void pass_crs_turn(std::uint64_t unit, bool failed);
+  // The steps of run().
+  void check_records(const LasHeader& h);
+  void choose_scale_and_offset(const LasHeader& h, TileApplyResult& r);
+  std::pair<std::vector<LasVlr>, std::vector<LasVlr>> output_vlrs(TileApplyResult& r) const;
+  LasHeader output_header(const LasHeader& h, const TileApplyResult& r) const;
+  void write_points(std::optional<LasWriter>& writer, LasHeader& oh, const std::vector<LasVlr>& vlrs,
+                    const std::vector<LasVlr>& evlrs, const LasCompression& compression, TileApplyResult& r);
 
   LasReader reader_;
   std::ostream& out_;
@@ -591,16 +519,15 @@ void LasTile::pass(PassKind kind, LasWriter* writer, const std::array<double, 3>
   if (failure) std::rethrow_exception(failure);
 }
 
-TileApplyResult LasTile::run() {
-  const LasHeader& h = reader_.header();
+// What the tile's kind and records must carry: ENU (not NED) coordinates,
+// GPS times that say the week for per-point epochs, and a GNSS solution
+// code as an unscaled uint8 extra byte.
+void LasTile::check_records(const LasHeader& h) {
   for (const ArrayFrame* f : {&o_.from, &o_.to}) {
     if (!o_.keep_coordinates && f->kind == CoordinateKind::ned) {
       throw Error(ErrorKind::usage, "E_TILE_KIND", reader_.path().string() + ": LAS tiles are ENU, not NED");
     }
   }
-  TileApplyResult r;
-  r.points = h.point_count;
-  r.storage = "int32_scaled";
   if (o_.epochs_from_gps_time) {
     if (h.point_format == 0 || h.point_format == 2) {
       throw Error(ErrorKind::input, "E_GPS_TIME",
@@ -626,56 +553,64 @@ TileApplyResult LasTile::run() {
     }
     solution_offset_ = a.offset;
   }
+}
 
-  if (o_.keep_coordinates) {
-    r.scale = h.scale;
-    r.offset = h.offset;
-  } else {
-    // Scale: the input's resolution (or --resolution), in the output's units.
-    std::array<double, 2> res = input_resolution_m(h, o_.from, o_.file_in);
-    if (o_.resolution_m) res = {*o_.resolution_m, *o_.resolution_m};
-    r.scale = output_scale(res, o_.to, o_.file_out);
-    // Angles in and out in the same unit: the input's steps stay (a step in
-    // metres would shrink by cos(latitude) on each pass).
-    const bool angular_in = o_.file_in ? o_.file_in->angular : o_.from.kind == CoordinateKind::geodetic;
-    const bool angular_out = o_.file_out ? o_.file_out->angular : o_.to.kind == CoordinateKind::geodetic;
-    const double unit_in = o_.file_in ? o_.file_in->horizontal_unit : 1.0;
-    const double unit_out = o_.file_out ? o_.file_out->horizontal_unit : 1.0;
-    if (!o_.resolution_m && angular_in && angular_out && unit_in == unit_out) {
-      r.scale[0] = h.scale[0];
-      r.scale[1] = h.scale[1];
-    }
-
-    // Offset: the middle of the header's bounds carried through the chain.
-    std::array<double, 3> lo = h.min, hi = h.max;
-    std::vector<double> ca, cb, cc;
-    for (int corner = 0; corner < 8; ++corner) {
-      const double x = corner & 1 ? hi[0] : lo[0];
-      const double y = corner & 2 ? hi[1] : lo[1];
-      const double z = corner & 4 ? hi[2] : lo[2];
-      const bool geo_in = detail::lon_first_in_files(o_.from);
-      ca.push_back(geo_in ? y : x);
-      cb.push_back(geo_in ? x : y);
-      cc.push_back(z);
-    }
-    // Only an estimate for the offset: any epoch moves the corners by
-    // centimetres at most, far inside the int32 range.
-    constexpr double kAnyEpoch = 2000.0;
-    const std::vector<double> any_epoch(ca.size(), kAnyEpoch);
-    detail::estimate_points(chain_, o_, ca, cb, cc, o_.epochs_from_gps_time ? &any_epoch : nullptr);
-    const bool geo_out = detail::lon_first_in_files(o_.to);
-    Bounds est;
-    est.add(geo_out ? cb : ca, geo_out ? ca : cb, cc);
-    for (std::size_t k = 0; k < 3; ++k) {
-      r.offset[k] = std::isfinite(est.min[k]) && std::isfinite(est.max[k]) ? centred_offset(est.min[k], est.max[k], r.scale[k])
-                                                                           : 0.0;
-    }
+// Scale and offset of the output's coordinates.
+void LasTile::choose_scale_and_offset(const LasHeader& h, TileApplyResult& r) {
+  // Scale: the input's resolution (or --resolution), in the output's units.
+  std::array<double, 2> res = input_resolution_m(h, o_.from, o_.file_in);
+  if (o_.resolution_m) res = {*o_.resolution_m, *o_.resolution_m};
+  r.scale = output_scale(res, o_.to, o_.file_out);
+  // Angles in and out in the same unit: the input's steps stay (a step in
+  // metres would shrink by cos(latitude) on each pass).
+  const bool angular_in = o_.file_in ? o_.file_in->angular : o_.from.kind == CoordinateKind::geodetic;
+  const bool angular_out = o_.file_out ? o_.file_out->angular : o_.to.kind == CoordinateKind::geodetic;
+  const double unit_in = o_.file_in ? o_.file_in->horizontal_unit : 1.0;
+  const double unit_out = o_.file_out ? o_.file_out->horizontal_unit : 1.0;
+  if (!o_.resolution_m && angular_in && angular_out && unit_in == unit_out) {
+    r.scale[0] = h.scale[0];
+    r.scale[1] = h.scale[1];
   }
 
+  // Offset: the middle of the header's bounds carried through the chain.
+  std::array<double, 3> lo = h.min, hi = h.max;
+  std::vector<double> ca, cb, cc;
+  for (int corner = 0; corner < 8; ++corner) {
+    const double x = corner & 1 ? hi[0] : lo[0];
+    const double y = corner & 2 ? hi[1] : lo[1];
+    const double z = corner & 4 ? hi[2] : lo[2];
+    const bool geo_in = detail::lon_first_in_files(o_.from);
+    ca.push_back(geo_in ? y : x);
+    cb.push_back(geo_in ? x : y);
+    cc.push_back(z);
+  }
+  // Only an estimate for the offset: any epoch moves the corners by
+  // centimetres at most, far inside the int32 range.
+  constexpr double kAnyEpoch = 2000.0;
+  const std::vector<double> any_epoch(ca.size(), kAnyEpoch);
+  detail::estimate_points(chain_, o_, ca, cb, cc, o_.epochs_from_gps_time ? &any_epoch : nullptr);
+  const bool geo_out = detail::lon_first_in_files(o_.to);
+  Bounds est;
+  est.add(geo_out ? cb : ca, geo_out ? ca : cb, cc);
+  for (std::size_t k = 0; k < 3; ++k) {
+    r.offset[k] = std::isfinite(est.min[k]) && std::isfinite(est.max[k]) ? centred_offset(est.min[k], est.max[k], r.scale[k])
+                                                                         : 0.0;
+  }
+}
+
+// The output's VLRs and EVLRs.
+std::pair<std::vector<LasVlr>, std::vector<LasVlr>> LasTile::output_vlrs(TileApplyResult& r) const {
   // VLRs: every one but the old CRS (WKT or GeoTIFF), which the new WKT
   // replaces, and a COPC file's records, which describe an octree layout
-  // the output does not have.
+  // the output does not have. The new WKT is the first VLR.
+  LasVlr wkt;
+  wkt.user_id = "LASF_Projection";
+  wkt.record_id = kLasWktRecordId;
+  wkt.description = "OGC WKT2:2019 CRS (geoanchor)";
+  wkt.data.assign(o_.output_wkt.begin(), o_.output_wkt.end());
+  wkt.data.push_back(0);
   std::vector<LasVlr> vlrs, evlrs;
+  vlrs.push_back(std::move(wkt));
   bool dropped_crs = false, dropped_copc = false;
   for (const auto& v : reader_.vlrs()) {
     if (is_wkt_crs_vlr(v) || is_geotiff_crs_vlr(v)) {
@@ -695,14 +630,11 @@ TileApplyResult LasTile::run() {
                          ": geoanchor does not write COPC's octree hierarchy, so its 'copc' records (info VLR, "
                          "hierarchy EVLR) were dropped; the points keep their order");
   }
-  LasVlr wkt;
-  wkt.user_id = "LASF_Projection";
-  wkt.record_id = kLasWktRecordId;
-  wkt.description = "OGC WKT2:2019 CRS (geoanchor)";
-  wkt.data.assign(o_.output_wkt.begin(), o_.output_wkt.end());
-  wkt.data.push_back(0);
-  vlrs.insert(vlrs.begin(), std::move(wkt));
+  return {std::move(vlrs), std::move(evlrs)};
+}
 
+// The input's header with the output's WKT bit, software, date, scale and offset.
+LasHeader LasTile::output_header(const LasHeader& h, const TileApplyResult& r) const {
   LasHeader oh = h;
   oh.global_encoding = static_cast<std::uint16_t>(oh.global_encoding | LasHeader::kWktBit);
   oh.generating_software.fill(0);
@@ -715,11 +647,14 @@ TileApplyResult LasTile::run() {
   oh.creation_year = static_cast<std::uint16_t>(utc.tm_year + 1900);
   oh.scale = r.scale;
   oh.offset = r.offset;
-  const bool laz = o_.las_output == TileFormat::laz;
-  const LasCompression compression{laz, unit_points_};
-  std::optional<LasWriter> writer;
-  writer.emplace(out_, oh, vlrs, evlrs, out_name_, compression);
+  return oh;
+}
 
+// Every point through a write pass; on an int32 overflow, once more from the
+// middle of the output's true bounds.
+void LasTile::write_points(std::optional<LasWriter>& writer, LasHeader& oh, const std::vector<LasVlr>& vlrs,
+                           const std::vector<LasVlr>& evlrs, const LasCompression& compression, TileApplyResult& r) {
+  const bool laz = compression.laz;
   try {
     pass(PassKind::write, &*writer, r.scale, r.offset);
   } catch (const Overflow&) {
@@ -752,6 +687,31 @@ TileApplyResult LasTile::run() {
                       " on this axis); give a coarser --resolution or split the tile. Values are never clamped");
     }
   }
+}
+
+TileApplyResult LasTile::run() {
+  const LasHeader& h = reader_.header();
+  check_records(h);
+  TileApplyResult r;
+  r.points = h.point_count;
+  r.storage = "int32_scaled";
+
+  if (o_.keep_coordinates) {
+    r.scale = h.scale;
+    r.offset = h.offset;
+  } else {
+    choose_scale_and_offset(h, r);
+  }
+
+  const auto [vlrs, evlrs] = output_vlrs(r);
+
+  LasHeader oh = output_header(h, r);
+  const bool laz = o_.las_output == TileFormat::laz;
+  const LasCompression compression{laz, unit_points_};
+  std::optional<LasWriter> writer;
+  writer.emplace(out_, oh, vlrs, evlrs, out_name_, compression);
+
+  write_points(writer, oh, vlrs, evlrs, compression, r);
   for (std::size_t k = 0; k < 3; ++k) {
     r.min[k] = r.points ? static_cast<double>(qmin_[k]) * r.scale[k] + r.offset[k] : 0.0;
     r.max[k] = r.points ? static_cast<double>(qmax_[k]) * r.scale[k] + r.offset[k] : 0.0;

@@ -13,6 +13,7 @@
 #include "geoanchor/base/utf8.hpp"
 #include "geoanchor/io/json_input.hpp"
 #include "geoanchor/io/tile/tile_metadata.hpp"
+#include "json_fields.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -25,12 +26,8 @@ using nlohmann::json;
 
 void only_keys(const json& j, std::string_view source, const std::string& where, const std::set<std::string>& known) {
   if (!j.is_object()) fail(source, where, "expected a JSON object");
-  for (const auto& [key, value] : j.items()) {
-    if (!known.count(key)) {
-      std::string list;
-      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-      fail(source, where.empty() ? key : where + "." + key, "unknown key; expected one of " + list);
-    }
+  if (const auto key = detail::first_unknown_key(j, known)) {
+    fail(source, where.empty() ? *key : where + "." + *key, "unknown key; expected one of " + detail::key_list(known));
   }
 }
 
@@ -89,6 +86,192 @@ nlohmann::ordered_json ellipsoid_json(const geodesy::Ellipsoid& e) {
   return nlohmann::ordered_json{{"name", e.name()}, {"a_m", e.a_m()}, {"rf", e.rf()}};
 }
 
+// Coordinates of kind "crs": the CRS (WKT2, with its coordinate epoch), and
+// the frame it is on, which a frame named beside it must be.
+void read_crs(const json* crs, TileMetadata& m, std::string_view source) {
+  if (!crs) fail(source, "crs", "missing for kind \"crs\": {\"wkt2\": \"...\", \"coordinate_epoch\": YEAR}");
+  only_keys(*crs, source, "crs", {"wkt2", "coordinate_epoch"});
+  const json* w = member(*crs, "wkt2", source, "crs");
+  if (!w) fail(source, "crs.wkt2", "missing: the CRS as WKT2");
+  std::string definition = text(*w, source, "crs.wkt2");
+  if (const json* e = member(*crs, "coordinate_epoch", source, "crs")) {
+    definition += "@" + geodesy::format_decimal_year(
+                            geodesy::DecimalYear{number(*e, source, "crs.coordinate_epoch", 1900, 2200, "[1900, 2200]")});
+  }
+  m.crs = Crs::parse(definition, std::string(source) + ": crs");
+  const auto& d = m.crs->description();
+  if (m.frame && d.catalog_frame.empty()) {
+    // The CRS's datum is the frame: another one named beside it would
+    // pick a transform for points that PROJ moves on the CRS's datum.
+    fail(source, "frame", "\"" + m.frame->to_string() + "\" but the CRS " + m.crs->display_name() + " is on datum '" +
+                              d.datum + "', which is no frame of geoanchor's catalog; remove the key (the CRS states "
+                              "the datum)");
+  }
+  if (m.frame && !d.catalog_frame.empty() && m.frame->name() != d.catalog_frame) {
+    fail(source, "frame", "\"" + m.frame->to_string() + "\" but the CRS's datum is " + d.catalog_frame);
+  }
+  if (m.frame && m.crs->epoch() && !(m.frame->epoch() && m.frame->epoch()->year == m.crs->epoch()->year)) {
+    fail(source, "frame", "\"" + m.frame->to_string() + "\" but crs.coordinate_epoch is " +
+                              geodesy::format_decimal_year(*m.crs->epoch()));
+  }
+  if (!m.frame && !d.catalog_frame.empty()) {
+    m.frame = geodesy::Frame::parse(
+        d.catalog_frame + (m.crs->epoch() ? "@" + geodesy::format_decimal_year(*m.crs->epoch()) : ""),
+        std::string(source) + ": crs");
+  }
+}
+
+// The ENU (or NED) origin: on the coordinates' ellipsoid, its height ellipsoidal.
+void read_enu_origin(const json* origin, const std::string& k, TileMetadata& m, std::string_view source) {
+  m.coordinates.kind = k == "enu" ? CoordinateKind::enu : CoordinateKind::ned;
+  if (!origin) fail(source, "enu_origin", "missing for " + k + " coordinates: {\"lat_deg\", \"lon_deg\", \"h_m\", \"height_type\", \"source\"}");
+  only_keys(*origin, source, "enu_origin", {"lat_deg", "lon_deg", "h_m", "height_type", "source"});
+  const json* lat = member(*origin, "lat_deg", source, "enu_origin");
+  const json* lon = member(*origin, "lon_deg", source, "enu_origin");
+  const json* h = member(*origin, "h_m", source, "enu_origin");
+  const json* ht = member(*origin, "height_type", source, "enu_origin");
+  if (!lat || !lon || !h) fail(source, "enu_origin", "needs lat_deg, lon_deg and h_m");
+  if (!ht || text(*ht, source, "enu_origin.height_type") != "ellipsoidal") {
+    fail(source, "enu_origin.height_type",
+         std::string(ht ? "value " + ht->dump() : "missing") + "; an ENU origin's height must be \"ellipsoidal\"");
+  }
+  geodesy::LocalOrigin o;
+  o.ellipsoid = m.coordinates.ellipsoid;
+  o.point.lat = geodesy::Angle::degrees(number(*lat, source, "enu_origin.lat_deg", -90, 90, "[-90, 90]"));
+  o.point.lon = geodesy::Angle::degrees(number(*lon, source, "enu_origin.lon_deg", -180, 180, "[-180, 180]"));
+  o.point.h = geodesy::EllipsoidalHeight{number(*h, source, "enu_origin.h_m", geodesy::kMinEllipsoidalHeight_m,
+                                                geodesy::kMaxEllipsoidalHeight_m, geodesy::physical_height_range_text())};
+  m.coordinates.origin = o;
+  if (const json* src = member(*origin, "source", source, "enu_origin")) m.origin_source = text(*src, source, "enu_origin.source");
+}
+
+// The projection of utm or tm coordinates: a UTM zone, or a transverse
+// Mercator's parameters.
+void read_projection(const json* projection, const std::string& k, TileMetadata& m, std::string_view source) {
+  m.coordinates.kind = CoordinateKind::projected;
+  if (!projection) fail(source, "projection", "missing for " + k + " coordinates");
+  only_keys(*projection, source, "projection", {"utm_zone", "tm"});
+  // Each kind reads one of the two; the other would be ignored.
+  if (const char* other = k == "utm" ? "tm" : "utm_zone"; projection->contains(other)) {
+    fail(source, std::string("projection.") + other, "given for " + k + " coordinates, which read projection." +
+                                                          (k == "utm" ? "utm_zone" : "tm") + " only; remove it");
+  }
+  if (k == "utm") {
+    const json* z = member(*projection, "utm_zone", source, "projection");
+    if (!z) fail(source, "projection.utm_zone", "missing for utm coordinates (e.g. \"32N\")");
+    m.coordinates.projection = geodesy::utm_projection(
+        m.coordinates.ellipsoid,
+        geodesy::parse_utm_zone(text(*z, source, "projection.utm_zone"), std::string(source) + ": projection.utm_zone"));
+  } else {
+    const json* t = member(*projection, "tm", source, "projection");
+    if (!t) fail(source, "projection.tm", "missing for tm coordinates");
+    only_keys(*t, source, "projection.tm", {"lat0_deg", "lon0_deg", "k0", "false_easting_m", "false_northing_m"});
+    for (const char* key : {"lat0_deg", "lon0_deg", "k0", "false_easting_m", "false_northing_m"}) {
+      if (!member(*t, key, source, "projection.tm")) fail(source, std::string("projection.tm.") + key, "missing");
+    }
+    geodesy::TransverseMercatorParams p;
+    p.lat0 = geodesy::Angle::degrees(number((*t)["lat0_deg"], source, "projection.tm.lat0_deg", -90, 90, "[-90, 90]"));
+    p.lon0 = geodesy::Angle::degrees(number((*t)["lon0_deg"], source, "projection.tm.lon0_deg", -180, 180, "[-180, 180]"));
+    p.k0 = number((*t)["k0"], source, "projection.tm.k0", 0.5, 1.5, "[0.5, 1.5]");
+    p.false_easting_m = number((*t)["false_easting_m"], source, "projection.tm.false_easting_m", -1e8, 1e8, "[-1e8, 1e8] m");
+    p.false_northing_m = number((*t)["false_northing_m"], source, "projection.tm.false_northing_m", -1e8, 1e8, "[-1e8, 1e8] m");
+    m.coordinates.projection = geodesy::ProjectionDef{m.coordinates.ellipsoid, p, std::nullopt};
+  }
+}
+
+void read_vertical(const json& v, TileMetadata& m, std::string_view source) {
+  only_keys(v, source, "vertical", {"datum", "height_type", "geoid_model"});
+  if (const json* d = member(v, "datum", source, "vertical")) m.vertical_datum = text(*d, source, "vertical.datum");
+  if (const json* ht = member(v, "height_type", source, "vertical")) {
+    m.height_type = text(*ht, source, "vertical.height_type");
+    if (m.height_type != "ellipsoidal" && m.height_type != "orthometric") {
+      fail(source, "vertical.height_type", "value \"" + m.height_type + "\" unknown; expected ellipsoidal or orthometric");
+    }
+  }
+  if (const json* g = member_or_null(v, "geoid_model")) m.geoid_model = text(*g, source, "vertical.geoid_model");
+}
+
+void heights_from_crs(TileMetadata& m, std::string_view source) {
+  // The CRS states its heights: the sidecar's labels may repeat them,
+  // never contradict them (horizontal_crs is a label for readers).
+  const TileMetadata c = tile_metadata_from_crs(*m.crs, source);
+  const std::string what = " but the CRS " + m.crs->display_name() + " says ";
+  if (!m.height_type.empty() && m.height_type != c.height_type) {
+    fail(source, "vertical.height_type",
+         "\"" + m.height_type + "\"" + what +
+             (c.height_type.empty() ? "it has no height axis (2-D: its Z values are no heights)" : "\"" + c.height_type + "\""));
+  }
+  if (!m.vertical_datum.empty() && m.vertical_datum != c.vertical_datum) {
+    fail(source, "vertical.datum", "\"" + m.vertical_datum + "\"" + what +
+                                       (c.vertical_datum.empty() ? "none" : "\"" + c.vertical_datum + "\""));
+  }
+  if (m.geoid_model && m.geoid_model != c.geoid_model) {
+    fail(source, "vertical.geoid_model", "\"" + *m.geoid_model + "\"" + what +
+                                             (c.geoid_model ? "\"" + *c.geoid_model + "\"" : "none (no orthometric heights)"));
+  }
+  m.height_type = c.height_type;
+  m.vertical_datum = c.vertical_datum;
+  m.geoid_model = c.geoid_model;
+}
+
+void read_provenance(const json* p, TileMetadata& m, std::string_view source) {
+  if (!p->is_object()) fail(source, "provenance", "expected a JSON object");
+  // apply's record of how the tile was made: kept as is, and written only,
+  // except the keys apply reads back to decide whether an output is up to
+  // date (a value of the wrong type there would make it compare wrongly).
+  const std::pair<const char*, const char*> resume_keys[] = {
+      {"input_sha256", "a string"}, {"transform_sha256", "a string or null"}, {"request", "an object"},
+      {"output_size_bytes", "a byte count"}, {"points", "a point count"}, {"output_sha256", "a string"}};
+  for (const auto& [key, expected] : resume_keys) {
+    const auto it = p->find(key);
+    if (it == p->end()) continue;
+    const std::string_view name(key);
+    const bool ok = name == "input_sha256" || name == "output_sha256" ? it->is_string()
+                    : name == "transform_sha256" ? it->is_string() || it->is_null()
+                    : name == "request"          ? it->is_object()
+                                                 : it->is_number_unsigned();
+    if (!ok) fail(source, std::string("provenance.") + key, "value " + it->dump() + " is not " + expected);
+  }
+  m.provenance_json = p->dump();
+}
+
+// A geoanchor.tile/2 sidecar's map metadata contract, held to the sidecar's own keys.
+void read_contract(const json& j, TileMetadata& m, std::string_view source) {
+  const json* meta = member(j, "metadata", source, "");
+  if (!meta) fail(source, "metadata", "missing: a geoanchor.tile/2 sidecar carries the map metadata contract");
+  m.metadata = parse_map_metadata(meta->dump(), std::string(source) + ": metadata");
+  // The contract says what the sidecar's own keys say: each of those
+  // fields is the same, never "unknown" beside a stated value.
+  MapMetadataBuilder b{std::string(source)};
+  tile_contract_fields(b, m, "the sidecar's own keys");
+  const MapMetadata& own = b.metadata();
+  const MapMetadata& c = *m.metadata;
+  const auto unknown_beside = [&](bool own_known, bool contract_known, const char* key) {
+    if (own_known && !contract_known) fail(source, std::string("metadata.") + key, "\"unknown\" but the sidecar states it");
+  };
+  unknown_beside(own.frame.has_value(), c.frame.has_value(), "frame");
+  unknown_beside(own.coordinate_epoch.has_value(), c.coordinate_epoch.has_value(), "coordinate_epoch");
+  unknown_beside(own.enu_origin.has_value(), c.enu_origin.has_value(), "enu_origin");
+  unknown_beside(own.enu_origin_source.has_value(), c.enu_origin_source.has_value(), "enu_origin_source");
+  unknown_beside(own.horizontal_crs.has_value(), c.horizontal_crs.has_value(), "horizontal_crs");
+  unknown_beside(own.vertical_datum.has_value(), c.vertical_datum.has_value(), "vertical_datum");
+  unknown_beside(own.geoid_model.has_value(), c.geoid_model.has_value(), "geoid_model");
+  unknown_beside(own.rtk_fixed_percent.has_value(), c.rtk_fixed_percent.has_value(), "rtk_fixed_percent");
+  unknown_beside(own.coordinate_storage.has_value(), c.coordinate_storage.has_value(), "coordinate_storage");
+  const std::string who = "its metadata";
+  if (c.frame) b.frame(*c.frame, who);
+  if (c.coordinate_epoch) b.coordinate_epoch(*c.coordinate_epoch, who);
+  if (c.coordinate_epoch_range && own.coordinate_epoch) b.coordinate_epoch_range(*c.coordinate_epoch_range, who);
+  if (c.enu_origin && own.enu_origin) b.enu_origin(*c.enu_origin, who);
+  using T = MapMetadataBuilder::Text;
+  if (c.enu_origin_source && own.enu_origin_source) b.text(T::enu_origin_source, *c.enu_origin_source, who);
+  if (c.horizontal_crs) b.text(T::horizontal_crs, *c.horizontal_crs, who);
+  if (c.vertical_datum) b.text(T::vertical_datum, *c.vertical_datum, who);
+  if (c.geoid_model && own.geoid_model) b.text(T::geoid_model, *c.geoid_model, who);
+  if (c.coordinate_storage) b.text(T::coordinate_storage, *c.coordinate_storage, who);
+  if (c.rtk_fixed_percent) b.rtk_fixed_percent(*c.rtk_fixed_percent, who, false);
+}
+
 }  // namespace
 
 std::string kind_name(const ArrayFrame& f) {
@@ -141,38 +324,7 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
   if (frame) m.frame = geodesy::Frame::parse(text(*frame, source, "frame"), std::string(source) + ": frame");
   const json* crs = member(j, "crs", source, "");
   if (crs && !crs_kind) fail(source, "crs", "given for coordinates that are not of kind \"crs\"; remove it or say kind \"crs\"");
-  if (crs_kind) {
-    if (!crs) fail(source, "crs", "missing for kind \"crs\": {\"wkt2\": \"...\", \"coordinate_epoch\": YEAR}");
-    only_keys(*crs, source, "crs", {"wkt2", "coordinate_epoch"});
-    const json* w = member(*crs, "wkt2", source, "crs");
-    if (!w) fail(source, "crs.wkt2", "missing: the CRS as WKT2");
-    std::string definition = text(*w, source, "crs.wkt2");
-    if (const json* e = member(*crs, "coordinate_epoch", source, "crs")) {
-      definition += "@" + geodesy::format_decimal_year(
-                              geodesy::DecimalYear{number(*e, source, "crs.coordinate_epoch", 1900, 2200, "[1900, 2200]")});
-    }
-    m.crs = Crs::parse(definition, std::string(source) + ": crs");
-    const auto& d = m.crs->description();
-    if (m.frame && d.catalog_frame.empty()) {
-      // The CRS's datum is the frame: another one named beside it would
-      // pick a transform for points that PROJ moves on the CRS's datum.
-      fail(source, "frame", "\"" + m.frame->to_string() + "\" but the CRS " + m.crs->display_name() + " is on datum '" +
-                                d.datum + "', which is no frame of geoanchor's catalog; remove the key (the CRS states "
-                                "the datum)");
-    }
-    if (m.frame && !d.catalog_frame.empty() && m.frame->name() != d.catalog_frame) {
-      fail(source, "frame", "\"" + m.frame->to_string() + "\" but the CRS's datum is " + d.catalog_frame);
-    }
-    if (m.frame && m.crs->epoch() && !(m.frame->epoch() && m.frame->epoch()->year == m.crs->epoch()->year)) {
-      fail(source, "frame", "\"" + m.frame->to_string() + "\" but crs.coordinate_epoch is " +
-                                geodesy::format_decimal_year(*m.crs->epoch()));
-    }
-    if (!m.frame && !d.catalog_frame.empty()) {
-      m.frame = geodesy::Frame::parse(
-          d.catalog_frame + (m.crs->epoch() ? "@" + geodesy::format_decimal_year(*m.crs->epoch()) : ""),
-          std::string(source) + ": crs");
-    }
-  }
+  if (crs_kind) read_crs(crs, m, source);
 
   const json* coords = member(j, "coordinates", source, "");
   if (!coords) fail(source, "coordinates", "missing: {\"kind\", \"ellipsoid\", \"storage\"}");
@@ -200,60 +352,13 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
   const json* origin = member(j, "enu_origin", source, "");
   const json* projection = member(j, "projection", source, "");
   if (k == "enu" || k == "ned") {
-    m.coordinates.kind = k == "enu" ? CoordinateKind::enu : CoordinateKind::ned;
-    if (!origin) fail(source, "enu_origin", "missing for " + k + " coordinates: {\"lat_deg\", \"lon_deg\", \"h_m\", \"height_type\", \"source\"}");
-    only_keys(*origin, source, "enu_origin", {"lat_deg", "lon_deg", "h_m", "height_type", "source"});
-    const json* lat = member(*origin, "lat_deg", source, "enu_origin");
-    const json* lon = member(*origin, "lon_deg", source, "enu_origin");
-    const json* h = member(*origin, "h_m", source, "enu_origin");
-    const json* ht = member(*origin, "height_type", source, "enu_origin");
-    if (!lat || !lon || !h) fail(source, "enu_origin", "needs lat_deg, lon_deg and h_m");
-    if (!ht || text(*ht, source, "enu_origin.height_type") != "ellipsoidal") {
-      fail(source, "enu_origin.height_type",
-           std::string(ht ? "value " + ht->dump() : "missing") + "; an ENU origin's height must be \"ellipsoidal\"");
-    }
-    geodesy::LocalOrigin o;
-    o.ellipsoid = m.coordinates.ellipsoid;
-    o.point.lat = geodesy::Angle::degrees(number(*lat, source, "enu_origin.lat_deg", -90, 90, "[-90, 90]"));
-    o.point.lon = geodesy::Angle::degrees(number(*lon, source, "enu_origin.lon_deg", -180, 180, "[-180, 180]"));
-    o.point.h = geodesy::EllipsoidalHeight{number(*h, source, "enu_origin.h_m", geodesy::kMinEllipsoidalHeight_m,
-                                                  geodesy::kMaxEllipsoidalHeight_m, geodesy::physical_height_range_text())};
-    m.coordinates.origin = o;
-    if (const json* src = member(*origin, "source", source, "enu_origin")) m.origin_source = text(*src, source, "enu_origin.source");
+    read_enu_origin(origin, k, m, source);
   } else if (k == "ecef" || k == "crs") {
     m.coordinates.kind = CoordinateKind::ecef;
   } else if (k == "geodetic") {
     m.coordinates.kind = CoordinateKind::geodetic;
   } else if (k == "utm" || k == "tm") {
-    m.coordinates.kind = CoordinateKind::projected;
-    if (!projection) fail(source, "projection", "missing for " + k + " coordinates");
-    only_keys(*projection, source, "projection", {"utm_zone", "tm"});
-    // Each kind reads one of the two; the other would be ignored.
-    if (const char* other = k == "utm" ? "tm" : "utm_zone"; projection->contains(other)) {
-      fail(source, std::string("projection.") + other, "given for " + k + " coordinates, which read projection." +
-                                                            (k == "utm" ? "utm_zone" : "tm") + " only; remove it");
-    }
-    if (k == "utm") {
-      const json* z = member(*projection, "utm_zone", source, "projection");
-      if (!z) fail(source, "projection.utm_zone", "missing for utm coordinates (e.g. \"32N\")");
-      m.coordinates.projection = geodesy::utm_projection(
-          m.coordinates.ellipsoid,
-          geodesy::parse_utm_zone(text(*z, source, "projection.utm_zone"), std::string(source) + ": projection.utm_zone"));
-    } else {
-      const json* t = member(*projection, "tm", source, "projection");
-      if (!t) fail(source, "projection.tm", "missing for tm coordinates");
-      only_keys(*t, source, "projection.tm", {"lat0_deg", "lon0_deg", "k0", "false_easting_m", "false_northing_m"});
-      for (const char* key : {"lat0_deg", "lon0_deg", "k0", "false_easting_m", "false_northing_m"}) {
-        if (!member(*t, key, source, "projection.tm")) fail(source, std::string("projection.tm.") + key, "missing");
-      }
-      geodesy::TransverseMercatorParams p;
-      p.lat0 = geodesy::Angle::degrees(number((*t)["lat0_deg"], source, "projection.tm.lat0_deg", -90, 90, "[-90, 90]"));
-      p.lon0 = geodesy::Angle::degrees(number((*t)["lon0_deg"], source, "projection.tm.lon0_deg", -180, 180, "[-180, 180]"));
-      p.k0 = number((*t)["k0"], source, "projection.tm.k0", 0.5, 1.5, "[0.5, 1.5]");
-      p.false_easting_m = number((*t)["false_easting_m"], source, "projection.tm.false_easting_m", -1e8, 1e8, "[-1e8, 1e8] m");
-      p.false_northing_m = number((*t)["false_northing_m"], source, "projection.tm.false_northing_m", -1e8, 1e8, "[-1e8, 1e8] m");
-      m.coordinates.projection = geodesy::ProjectionDef{m.coordinates.ellipsoid, p, std::nullopt};
-    }
+    read_projection(projection, k, m, source);
   } else {
     fail(source, "coordinates.kind", "value \"" + k + "\" unknown; expected enu, ned, ecef, geodetic, utm, tm or crs");
   }
@@ -261,39 +366,8 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
   if (projection && !m.coordinates.projection) fail(source, "projection", "given for " + k + " coordinates, which have none");
 
   if (const json* hc = member(j, "horizontal_crs", source, "")) m.horizontal_crs = text(*hc, source, "horizontal_crs");
-  if (const json* v = member(j, "vertical", source, "")) {
-    only_keys(*v, source, "vertical", {"datum", "height_type", "geoid_model"});
-    if (const json* d = member(*v, "datum", source, "vertical")) m.vertical_datum = text(*d, source, "vertical.datum");
-    if (const json* ht = member(*v, "height_type", source, "vertical")) {
-      m.height_type = text(*ht, source, "vertical.height_type");
-      if (m.height_type != "ellipsoidal" && m.height_type != "orthometric") {
-        fail(source, "vertical.height_type", "value \"" + m.height_type + "\" unknown; expected ellipsoidal or orthometric");
-      }
-    }
-    if (const json* g = member_or_null(*v, "geoid_model")) m.geoid_model = text(*g, source, "vertical.geoid_model");
-  }
-  if (m.crs) {
-    // The CRS states its heights: the sidecar's labels may repeat them,
-    // never contradict them (horizontal_crs is a label for readers).
-    const TileMetadata c = tile_metadata_from_crs(*m.crs, source);
-    const std::string what = " but the CRS " + m.crs->display_name() + " says ";
-    if (!m.height_type.empty() && m.height_type != c.height_type) {
-      fail(source, "vertical.height_type",
-           "\"" + m.height_type + "\"" + what +
-               (c.height_type.empty() ? "it has no height axis (2-D: its Z values are no heights)" : "\"" + c.height_type + "\""));
-    }
-    if (!m.vertical_datum.empty() && m.vertical_datum != c.vertical_datum) {
-      fail(source, "vertical.datum", "\"" + m.vertical_datum + "\"" + what +
-                                         (c.vertical_datum.empty() ? "none" : "\"" + c.vertical_datum + "\""));
-    }
-    if (m.geoid_model && m.geoid_model != c.geoid_model) {
-      fail(source, "vertical.geoid_model", "\"" + *m.geoid_model + "\"" + what +
-                                               (c.geoid_model ? "\"" + *c.geoid_model + "\"" : "none (no orthometric heights)"));
-    }
-    m.height_type = c.height_type;
-    m.vertical_datum = c.vertical_datum;
-    m.geoid_model = c.geoid_model;
-  }
+  if (const json* v = member(j, "vertical", source, "")) read_vertical(*v, m, source);
+  if (m.crs) heights_from_crs(m, source);
   const bool has_heights = m.coordinates.kind == CoordinateKind::geodetic || m.coordinates.kind == CoordinateKind::projected;
   if (has_heights && m.height_type.empty()) {
     fail(source, "vertical.height_type",
@@ -309,61 +383,8 @@ TileMetadata parse_tile_metadata(std::string_view text_in, std::string_view sour
       m.rtk_fixed_percent = number(*r, source, "survey.rtk_fixed_percent", 0, 100, "[0, 100] %");
     }
   }
-  if (const json* p = member(j, "provenance", source, "")) {
-    if (!p->is_object()) fail(source, "provenance", "expected a JSON object");
-    // apply's record of how the tile was made: kept as is, and written only,
-    // except the keys apply reads back to decide whether an output is up to
-    // date (a value of the wrong type there would make it compare wrongly).
-    const std::pair<const char*, const char*> resume_keys[] = {
-        {"input_sha256", "a string"}, {"transform_sha256", "a string or null"}, {"request", "an object"},
-        {"output_size_bytes", "a byte count"}, {"points", "a point count"}, {"output_sha256", "a string"}};
-    for (const auto& [key, expected] : resume_keys) {
-      const auto it = p->find(key);
-      if (it == p->end()) continue;
-      const std::string_view name(key);
-      const bool ok = name == "input_sha256" || name == "output_sha256" ? it->is_string()
-                      : name == "transform_sha256" ? it->is_string() || it->is_null()
-                      : name == "request"          ? it->is_object()
-                                                   : it->is_number_unsigned();
-      if (!ok) fail(source, std::string("provenance.") + key, "value " + it->dump() + " is not " + expected);
-    }
-    m.provenance_json = p->dump();
-  }
-  if (v2) {
-    const json* meta = member(j, "metadata", source, "");
-    if (!meta) fail(source, "metadata", "missing: a geoanchor.tile/2 sidecar carries the map metadata contract");
-    m.metadata = parse_map_metadata(meta->dump(), std::string(source) + ": metadata");
-    // The contract says what the sidecar's own keys say: each of those
-    // fields is the same, never "unknown" beside a stated value.
-    MapMetadataBuilder b{std::string(source)};
-    tile_contract_fields(b, m, "the sidecar's own keys");
-    const MapMetadata& own = b.metadata();
-    const MapMetadata& c = *m.metadata;
-    const auto unknown_beside = [&](bool own_known, bool contract_known, const char* key) {
-      if (own_known && !contract_known) fail(source, std::string("metadata.") + key, "\"unknown\" but the sidecar states it");
-    };
-    unknown_beside(own.frame.has_value(), c.frame.has_value(), "frame");
-    unknown_beside(own.coordinate_epoch.has_value(), c.coordinate_epoch.has_value(), "coordinate_epoch");
-    unknown_beside(own.enu_origin.has_value(), c.enu_origin.has_value(), "enu_origin");
-    unknown_beside(own.enu_origin_source.has_value(), c.enu_origin_source.has_value(), "enu_origin_source");
-    unknown_beside(own.horizontal_crs.has_value(), c.horizontal_crs.has_value(), "horizontal_crs");
-    unknown_beside(own.vertical_datum.has_value(), c.vertical_datum.has_value(), "vertical_datum");
-    unknown_beside(own.geoid_model.has_value(), c.geoid_model.has_value(), "geoid_model");
-    unknown_beside(own.rtk_fixed_percent.has_value(), c.rtk_fixed_percent.has_value(), "rtk_fixed_percent");
-    unknown_beside(own.coordinate_storage.has_value(), c.coordinate_storage.has_value(), "coordinate_storage");
-    const std::string who = "its metadata";
-    if (c.frame) b.frame(*c.frame, who);
-    if (c.coordinate_epoch) b.coordinate_epoch(*c.coordinate_epoch, who);
-    if (c.coordinate_epoch_range && own.coordinate_epoch) b.coordinate_epoch_range(*c.coordinate_epoch_range, who);
-    if (c.enu_origin && own.enu_origin) b.enu_origin(*c.enu_origin, who);
-    using T = MapMetadataBuilder::Text;
-    if (c.enu_origin_source && own.enu_origin_source) b.text(T::enu_origin_source, *c.enu_origin_source, who);
-    if (c.horizontal_crs) b.text(T::horizontal_crs, *c.horizontal_crs, who);
-    if (c.vertical_datum) b.text(T::vertical_datum, *c.vertical_datum, who);
-    if (c.geoid_model && own.geoid_model) b.text(T::geoid_model, *c.geoid_model, who);
-    if (c.coordinate_storage) b.text(T::coordinate_storage, *c.coordinate_storage, who);
-    if (c.rtk_fixed_percent) b.rtk_fixed_percent(*c.rtk_fixed_percent, who, false);
-  }
+  if (const json* p = member(j, "provenance", source, "")) read_provenance(p, m, source);
+  if (v2) read_contract(j, m, source);
   return m;
 }
 

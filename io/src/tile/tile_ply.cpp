@@ -155,14 +155,8 @@ double read_coordinate(const std::uint8_t* p, const Property& prop) {
   return d;
 }
 
-}  // namespace
-
-TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& out, const std::string& out_name,
-                               const PointChain& chain, const TileApplyOptions& o) {
-  std::ifstream file(in, std::ios::binary);
-  if (!file) throw Error(ErrorKind::io, "E_READ", in.string() + ": cannot open");
-  const std::string source = in.string();
-  const PlyHeader h = read_header(file, source);
+// float32 x/y/z only for map-local ENU/NED offsets.
+void check_float32(const PlyHeader& h, const std::string& source, const TileApplyOptions& o) {
   if (h.coordinates_float32 && o.file_in) {
     fail(source, std::to_string(h.element_line + 1),
          "float32 x/y/z hold coordinates of a CRS; float32 is accepted only for map-local ENU/NED offsets");
@@ -173,6 +167,9 @@ TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& ou
              " coordinates; float32 is accepted only for map-local ENU/NED offsets (its step is 0.5 m at ECEF "
              "magnitudes)");
   }
+}
+
+void write_header(const PlyHeader& h, std::ostream& out) {
   // Header: the same, with x, y, z as double.
   for (std::size_t i = 0; i < h.lines.size(); ++i) {
     std::string line = h.lines[i];
@@ -184,6 +181,18 @@ TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& ou
     if (i == 1) line = h.binary ? "format binary_little_endian 1.0" : "format ascii 1.0";
     out << line << '\n';
   }
+}
+
+}  // namespace
+
+TileApplyResult apply_ply_tile(const std::filesystem::path& in, std::ostream& out, const std::string& out_name,
+                               const PointChain& chain, const TileApplyOptions& o) {
+  std::ifstream file(in, std::ios::binary);
+  if (!file) throw Error(ErrorKind::io, "E_READ", in.string() + ": cannot open");
+  const std::string source = in.string();
+  const PlyHeader h = read_header(file, source);
+  check_float32(h, source, o);
+  write_header(h, out);
   TileApplyResult r;
   r.storage = "float64";
   detail::Bounds in_bounds, out_bounds;

@@ -10,6 +10,7 @@
 #include "geoanchor/base/error.hpp"
 #include "geoanchor/base/number_text.hpp"
 #include "geoanchor/io/json_input.hpp"
+#include "json_fields.hpp"
 #include "tile/tile_common.hpp"
 #include "vector/vector_map_internal.hpp"
 
@@ -202,12 +203,9 @@ VectorMapStatement geojson_statement(const std::filesystem::path& map) {
     return s;
   }
   if (!g->is_object()) fail(source, kMember, "expected an object (written by geoanchor apply)");
-  for (auto it = g->begin(); it != g->end(); ++it) {
-    static const char* const kKeys[] = {"frame", "coordinates", "ellipsoid", "height_type", "crs", "sidecar", "note"};
-    if (std::find(std::begin(kKeys), std::end(kKeys), it.key()) == std::end(kKeys)) {
-      fail(source, std::string(kMember) + "." + it.key(),
-           "unknown key; expected frame, coordinates, ellipsoid, height_type, crs, sidecar, note");
-    }
+  static const char* const kKeys[] = {"frame", "coordinates", "ellipsoid", "height_type", "crs", "sidecar", "note"};
+  if (const auto key = detail::first_unknown_key(*g, kKeys)) {
+    fail(source, std::string(kMember) + "." + *key, "unknown key; expected frame, coordinates, ellipsoid, height_type, crs, sidecar, note");
   }
   const auto kind_it = g->find("coordinates");
   if (kind_it != g->end() && !kind_it->is_string()) fail(source, "geoanchor.coordinates", "expected geodetic or crs");

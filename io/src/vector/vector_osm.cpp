@@ -95,28 +95,14 @@ class OsmReader : public detail::XmlHandler {
   Value number(const XML_Char** attrs, const char* name, const std::string& what, bool required) {
     Value v;
     v.line = stream_.line();
-    const char* text = attribute(attrs, name);
-    if (!text) {
-      if (required) fail(what + ": no " + name + " attribute");
-      return v;
+    const detail::AttributeContext at{text_, stream_.byte_index(), stream_.byte_count(), source_, v.line, "E_OSM",
+                                      "geoanchor rewrites plain numbers only",
+                                      std::string_view(name) == "v" ? " (metres)" : " (degrees or metres)"};
+    if (const auto read = detail::finite_attribute_number(at, name, attribute(attrs, name), what, required)) {
+      v.span = read->first;
+      v.v = read->second;
+      v.present = true;
     }
-    const auto span = detail::attribute_value_span(text_, stream_.byte_index(), stream_.byte_count(), name);
-    if (!span || text_.substr(static_cast<std::size_t>(span->at), span->length) != text) {
-      fail(what + ": " + name + "='" + text + "' is written with character references; geoanchor rewrites plain "
-                                                "numbers only");
-    }
-    const auto d = parse_finite_double(text);
-    if (!d) {
-      std::string low(text);
-      std::transform(low.begin(), low.end(), low.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-      const bool non_finite = low.find("nan") != std::string::npos || low.find("inf") != std::string::npos;
-      throw Error(ErrorKind::input, non_finite ? "E_NON_FINITE" : "E_OSM",
-                  source_ + ":" + std::to_string(v.line) + ": " + what + ": " + name + "='" + text +
-                      "': expected a finite number" + (std::string(name) == "v" ? " (metres)" : " (degrees or metres)"));
-    }
-    v.span = *span;
-    v.v = *d;
-    v.present = true;
     return v;
   }
 

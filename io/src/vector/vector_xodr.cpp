@@ -216,27 +216,13 @@ class XodrReader : public detail::XmlHandler {
   }
   Value number(const XML_Char** attrs, const char* name, const std::string& what, bool required = true) {
     Value v;
-    const char* text = attribute(attrs, name);
-    if (!text) {
-      if (required) fail(what + ": no " + name + " attribute");
-      return v;
+    const detail::AttributeContext at{text_, stream_.byte_index(), stream_.byte_count(), source_, stream_.line(), "E_XODR",
+                                      "expected a plain number", ""};
+    if (const auto read = detail::finite_attribute_number(at, name, attribute(attrs, name), what, required)) {
+      v.span = read->first;
+      v.v = read->second;
+      v.present = true;
     }
-    const auto span = detail::attribute_value_span(text_, stream_.byte_index(), stream_.byte_count(), name);
-    if (!span || text_.substr(static_cast<std::size_t>(span->at), span->length) != text) {
-      fail(what + ": " + name + "='" + text + "' is written with character references; expected a plain number");
-    }
-    const auto d = parse_finite_double(text);
-    if (!d) {
-      std::string low(text);
-      std::transform(low.begin(), low.end(), low.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-      const bool non_finite = low.find("nan") != std::string::npos || low.find("inf") != std::string::npos;
-      throw Error(ErrorKind::input, non_finite ? "E_NON_FINITE" : "E_XODR",
-                  source_ + ":" + std::to_string(stream_.line()) + ": " + what + ": " + name + "='" + text +
-                      "': expected a finite number");
-    }
-    v.span = *span;
-    v.v = *d;
-    v.present = true;
     return v;
   }
 
@@ -383,6 +369,72 @@ std::string trimmed(std::string s) {
   return s.substr(first, last - first + 1);
 }
 
+// Every road's reference line, sampled: the samples in the plane, their
+// heights, and the road each is on.
+struct RoadSamples {
+  std::vector<Sample> plane;
+  std::vector<double> z;
+  std::vector<std::size_t> road_of;
+  std::size_t geometries = 0;
+};
+
+RoadSamples sample_roads(const XodrReader& reader) {
+  RoadSamples out;
+  std::vector<Sample>& plane = out.plane;
+  std::vector<double>& z = out.z;
+  std::vector<std::size_t>& road_of = out.road_of;
+  std::size_t& geometries = out.geometries;
+  for (std::size_t r = 0; r < reader.roads.size(); ++r) {
+    const Road& road = reader.roads[r];
+    for (const auto& g : road.geometries) {
+      const std::size_t first = plane.size();
+      sample_geometry(g, plane);
+      ++geometries;
+      for (std::size_t k = first; k < plane.size(); ++k) {
+        z.push_back(elevation_at(road, plane[k].s));
+        road_of.push_back(r);
+      }
+    }
+  }
+  return out;
+}
+
+// The new header's edits: the geoReference when the projection's ellipsoid
+// or parameters change (`geo_reference_after`), and the offset's `values`.
+std::vector<detail::TextEdit> header_edits(const XodrReader& reader, const std::string& text, const TileApplyOptions& o,
+                                           const std::pair<const char*, double> (&values)[4],
+                                           std::string& geo_reference_after) {
+  std::vector<detail::TextEdit> edits;
+  if (o.to.projection && o.from.projection && !(*o.to.projection == *o.from.projection)) {
+    geo_reference_after = xodr_geo_reference(*o.to.projection);
+    edits.push_back({reader.geo_reference_element.at, reader.geo_reference_element.length,
+                     "<geoReference><![CDATA[" + geo_reference_after + "]]></geoReference>"});
+  }
+  if (reader.has_offset) {
+    const Value* have[4] = {&reader.ox, &reader.oy, &reader.oz, &reader.ohdg};
+    const auto insert_at = detail::attribute_insert_point(text, reader.offset_tag.at, reader.offset_tag.length);
+    for (std::size_t k = 0; k < 4; ++k) {
+      const std::string v = detail::plain_number(values[k].second);
+      if (have[k]->present) {
+        edits.push_back({have[k]->span.at, have[k]->span.length, v});
+      } else {
+        edits.push_back({insert_at, 0, std::string(" ") + values[k].first + "=\"" + v + "\""});
+      }
+    }
+  } else {
+    // After the geoReference, indented as it is.
+    const std::uint64_t at = reader.geo_reference_element.at;
+    const auto line_start = text.rfind('\n', static_cast<std::size_t>(at));
+    std::string indent = line_start == std::string::npos ? std::string() : text.substr(line_start + 1, static_cast<std::size_t>(at) - line_start - 1);
+    if (indent.find_first_not_of(" \t") != std::string::npos) indent.clear();
+    std::string element = "\n" + indent + "<offset";
+    for (const auto& [name, v] : values) element += std::string(" ") + name + "=\"" + detail::plain_number(v) + "\"";
+    element += "/>";
+    edits.push_back({at + reader.geo_reference_element.length, 0, element});
+  }
+  return edits;
+}
+
 }  // namespace
 
 std::string xodr_geo_reference(const geodesy::ProjectionDef& p) {
@@ -490,22 +542,11 @@ TileApplyResult apply_xodr_map(const std::filesystem::path& in, std::ostream& ou
   const double co = std::cos(ohdg), so = std::sin(ohdg);
 
   // Every road's reference line, sampled.
-  std::vector<Sample> plane;
-  std::vector<double> z;
-  std::vector<std::size_t> road_of;
-  std::size_t geometries = 0;
-  for (std::size_t r = 0; r < reader.roads.size(); ++r) {
-    const Road& road = reader.roads[r];
-    for (const auto& g : road.geometries) {
-      const std::size_t first = plane.size();
-      sample_geometry(g, plane);
-      ++geometries;
-      for (std::size_t k = first; k < plane.size(); ++k) {
-        z.push_back(elevation_at(road, plane[k].s));
-        road_of.push_back(r);
-      }
-    }
-  }
+  const RoadSamples samples = sample_roads(reader);
+  const std::vector<Sample>& plane = samples.plane;
+  const std::vector<double>& z = samples.z;
+  const std::vector<std::size_t>& road_of = samples.road_of;
+  const std::size_t geometries = samples.geometries;
   const std::size_t n = plane.size();
   if (n == 0) {
     throw Error(ErrorKind::input, "E_XODR_GEOMETRY", source + ": no road has a <planView> geometry; nothing to re-anchor");
@@ -585,38 +626,11 @@ TileApplyResult apply_xodr_map(const std::filesystem::path& in, std::ostream& ou
 
   // The new header: the geoReference when the projection's ellipsoid or
   // parameters change, and the offset.
-  std::vector<detail::TextEdit> edits;
   std::string geo_reference_after = trimmed(reader.geo_reference);
-  if (o.to.projection && o.from.projection && !(*o.to.projection == *o.from.projection)) {
-    geo_reference_after = xodr_geo_reference(*o.to.projection);
-    edits.push_back({reader.geo_reference_element.at, reader.geo_reference_element.length,
-                     "<geoReference><![CDATA[" + geo_reference_after + "]]></geoReference>"});
-  }
   double hdg = std::remainder(theta, 2.0 * kPi);
   if (hdg == -kPi) hdg = kPi;
   const std::pair<const char*, double> values[4] = {{"x", tx}, {"y", ty}, {"z", new_z}, {"hdg", hdg}};
-  if (reader.has_offset) {
-    const Value* have[4] = {&reader.ox, &reader.oy, &reader.oz, &reader.ohdg};
-    const auto insert_at = detail::attribute_insert_point(text, reader.offset_tag.at, reader.offset_tag.length);
-    for (std::size_t k = 0; k < 4; ++k) {
-      const std::string v = detail::plain_number(values[k].second);
-      if (have[k]->present) {
-        edits.push_back({have[k]->span.at, have[k]->span.length, v});
-      } else {
-        edits.push_back({insert_at, 0, std::string(" ") + values[k].first + "=\"" + v + "\""});
-      }
-    }
-  } else {
-    // After the geoReference, indented as it is.
-    const std::uint64_t at = reader.geo_reference_element.at;
-    const auto line_start = text.rfind('\n', static_cast<std::size_t>(at));
-    std::string indent = line_start == std::string::npos ? std::string() : text.substr(line_start + 1, static_cast<std::size_t>(at) - line_start - 1);
-    if (indent.find_first_not_of(" \t") != std::string::npos) indent.clear();
-    std::string element = "\n" + indent + "<offset";
-    for (const auto& [name, v] : values) element += std::string(" ") + name + "=\"" + detail::plain_number(v) + "\"";
-    element += "/>";
-    edits.push_back({at + reader.geo_reference_element.length, 0, element});
-  }
+  std::vector<detail::TextEdit> edits = header_edits(reader, text, o, values, geo_reference_after);
   detail::write_with_edits(out, text, std::move(edits));
   if (!out) throw Error(ErrorKind::io, "E_WRITE", out_name + ": write failed");
 
