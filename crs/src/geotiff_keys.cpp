@@ -214,16 +214,75 @@ std::optional<UserDefinedCrs> libgeotiff_proj_string(const Bytes& directory, con
   return out;
 }
 
-}  // namespace
+// geotiff_crs's reading of one GeoKeyDirectory: the records, the keys as
+// read, the horizontal CRS as it is found, and the steps, which read() takes
+// in order.
+struct GeoKeyReader {
+  GeoKeyReader(const GeoKeyRecords& records_in, const std::string& where_in, bool set_aside, GeoTiffCrs& out_in)
+      : records(records_in), where(where_in), set_aside_unread(set_aside), out(out_in) {}
 
-GeoTiffCrs geotiff_crs(const GeoKeyRecords& records, const std::string& where, bool set_aside_unread) {
-  GeoTiffCrs out;
-  // A key geoanchor does not read: refused, or (set_aside_unread) listed.
-  const auto unread = [&](const std::string& what) {
-    if (!set_aside_unread) throw Error(ErrorKind::input, "E_GEOTIFF_KEYS_UNREAD", where + ": GeoTIFF CRS keys: " + what);
-    out.set_aside.push_back(what);
-  };
+  const GeoKeyRecords& records;
+  const std::string& where;
+  bool set_aside_unread;
+  GeoTiffCrs& out;
   const Bytes* dir = &records.directory;
+  const Bytes* doubles = records.doubles;  // GeoDoubleParamsTag: the values of double-valued keys
+  const Bytes* ascii = records.ascii;      // GeoAsciiParamsTag: citations
+  std::vector<std::uint16_t> unread_keys;  // refused below unless a user-defined CRS reads them
+  std::optional<std::string> to_wgs84;     // GeogTOWGS84GeoKey, described
+  std::map<std::uint16_t, std::uint16_t> short_values;
+  std::map<std::uint16_t, double> double_values;
+  std::string horizontal;
+  std::optional<std::uint16_t> model;
+  bool projected_model = false;
+
+  void read();
+  // A key geoanchor does not read: refused, or (set_aside_unread) listed.
+  void unread(const std::string& what);
+  void read_directory();
+  std::optional<std::uint16_t> value(std::uint16_t id) const;
+  // A user-defined CRS's keys; false when they are set aside (nothing more is read).
+  bool read_user_defined();
+  void projection_on_base_code();
+  bool parameters_given(const UserDefinedCrs& user);
+  void put_on_base(const UserDefinedCrs& user);
+  void check_user_units() const;
+  // Keys beside CRS codes; false when no CRS the keys state is left.
+  bool set_aside_code_keys();
+  void horizontal_from_codes();
+  void check_repeated_keys();
+  void read_vertical();
+};
+
+void GeoKeyReader::read() {
+  read_directory();
+  // A user-defined projected or geographic CRS (code 32767, its projection
+  // and datum as parameter keys): read through libgeotiff into PROJ's
+  // string of it, put on the geographic CRS the keys name by code; its
+  // units, datum keys and Z unit are then checked as for a code.
+  model = value(kModelType);
+  projected_model = model == 1 || (!model && value(kProjectedCsType));
+  const bool user_defined = projected_model ? value(kProjectedCsType) == kUserDefined
+                                            : (model == 2 || (!model && value(kGeographicType))) &&
+                                                  value(kGeographicType) == kUserDefined;
+  if (user_defined) {
+    if (!read_user_defined()) return;
+  } else if (!set_aside_code_keys()) {
+    return;
+  }
+  if (!user_defined) horizontal_from_codes();
+  out.crs = horizontal;
+  check_repeated_keys();
+  read_vertical();
+  if (to_wgs84) out.description += ", GeogTOWGS84GeoKey " + *to_wgs84 + " (a datum-shift hint, not used: PROJ's operations are)";
+}
+
+void GeoKeyReader::unread(const std::string& what) {
+  if (!set_aside_unread) throw Error(ErrorKind::input, "E_GEOTIFF_KEYS_UNREAD", where + ": GeoTIFF CRS keys: " + what);
+  out.set_aside.push_back(what);
+}
+
+void GeoKeyReader::read_directory() {
   const auto& d = *dir;
   const auto u16 = [&](std::size_t i) {
     std::uint16_t x = 0;
@@ -236,12 +295,6 @@ GeoTiffCrs geotiff_crs(const GeoKeyRecords& records, const std::string& where, b
   if (d.size() < 8 * (keys + 1)) {
     fail(where, "the GeoKeyDirectory lists " + std::to_string(keys) + " keys in " + std::to_string(d.size()) + " bytes");
   }
-  const Bytes* doubles = records.doubles;  // GeoDoubleParamsTag: the values of double-valued keys
-  const Bytes* ascii = records.ascii;      // GeoAsciiParamsTag: citations
-  std::vector<std::uint16_t> unread_keys;  // refused below unless a user-defined CRS reads them
-  std::optional<std::string> to_wgs84;     // GeogTOWGS84GeoKey, described
-  std::map<std::uint16_t, std::uint16_t> short_values;
-  std::map<std::uint16_t, double> double_values;
   for (std::size_t k = 0; k < keys; ++k) {
     const std::uint16_t id = u16(4 * (k + 1)), location = u16(4 * (k + 1) + 1), value = u16(4 * (k + 1) + 3);
     switch (id) {
@@ -314,141 +367,156 @@ GeoTiffCrs geotiff_crs(const GeoKeyRecords& records, const std::string& where, b
         continue;
     }
   }
-  const auto value = [&](std::uint16_t id) -> std::optional<std::uint16_t> {
-    const auto it = short_values.find(id);
-    return it == short_values.end() ? std::nullopt : std::optional(it->second);
+}
+
+std::optional<std::uint16_t> GeoKeyReader::value(std::uint16_t id) const {
+  const auto it = short_values.find(id);
+  return it == short_values.end() ? std::nullopt : std::optional(it->second);
+}
+
+bool GeoKeyReader::read_user_defined() {
+  const std::string what = std::string("the user-defined ") + (projected_model ? "projected" : "geographic") + " CRS (code 32767)";
+  if (value(kVerticalCsType) || value(kVerticalDatum)) {
+    unread("a vertical CRS beside a user-defined horizontal one is not read; give the tile's CRS with --crs");
+    return false;
+  }
+  projection_on_base_code();
+  // Otherwise the parameters, through libgeotiff.
+  const auto user = horizontal.empty() ? libgeotiff_proj_string(*dir, doubles, ascii) : std::nullopt;
+  if (horizontal.empty() && !user) {
+    unread(what + " could not be read from its parameter keys (libgeotiff); give the tile's CRS with --crs");
+    return false;
+  }
+  if (user && projected_model &&
+      std::find(std::begin(kExactMethods), std::end(kExactMethods), user->method) == std::end(kExactMethods)) {
+    unread(what + ": its coordinate transformation (ProjCoordTransGeoKey " + std::to_string(user->method) +
+           ") is not one geoanchor reads exactly from keys; give the tile's CRS with --crs");
+    return false;
+  }
+  if (user && projected_model && (!value(kProjection) || value(kProjection) == kUserDefined) && !parameters_given(*user)) {
+    return false;
+  }
+  if (user && !values_in_proj_string(user->proj, user->values)) {
+    unread(what + ": libgeotiff's PROJ string of it (" + user->proj +
+           ") does not carry every parameter at full precision; give the tile's CRS with --crs");
+    return false;
+  }
+  if (user) {
+    horizontal = user->proj;
+    out.description = what.substr(4) + " read from its keys by libgeotiff: " + user->proj;
+  }
+  if (user) put_on_base(*user);
+  check_user_units();
+  return true;
+}
+
+// A projection named by its EPSG code (ProjectionGeoKey, e.g. 16032 UTM
+// zone 32N) on a geographic CRS named by its code, as GDAL writes a CRS
+// EPSG has no code for: built by PROJ from the two codes.
+void GeoKeyReader::projection_on_base_code() {
+  const auto projection = value(kProjection), base_code = value(kGeographicType);
+  if (projected_model && projection && *projection != kUserDefined && base_code && *base_code != kUserDefined) {
+    const auto units = value(kProjLinearUnits).value_or(9001);
+    const auto unit_m = linear_unit_m(units);
+    if (!unit_m) fail(where, "ProjLinearUnitsGeoKey " + std::to_string(units) + " is not a linear unit geoanchor reads (9001, 9002, 9003, 9036)");
+    const char* unit_name = units == 9001 ? "metre" : units == 9002 ? "foot" : units == 9003 ? "US survey foot" : "kilometre";
+    const detail::PjContext ctx = detail::quiet_context();
+    detail::Pj conversion(proj_create_from_database(ctx.get(), "EPSG", std::to_string(*projection).c_str(),
+                                                    PJ_CATEGORY_COORDINATE_OPERATION, false, nullptr));
+    detail::Pj geographic(proj_create(ctx.get(), ("EPSG:" + std::to_string(*base_code)).c_str()));
+    if (!conversion || proj_get_type(conversion.get()) != PJ_TYPE_CONVERSION) {
+      fail(where, "ProjectionGeoKey " + std::to_string(*projection) + " is not a projection PROJ knows");
+    }
+    if (!geographic) fail(where, "GeographicTypeGeoKey " + std::to_string(*base_code) + " is not a CRS PROJ knows");
+    detail::Pj cs(proj_create_cartesian_2D_cs(ctx.get(), PJ_CART2D_EASTING_NORTHING, unit_name, *unit_m));
+    const std::string name = "EPSG:" + std::to_string(*projection) + " on EPSG:" + std::to_string(*base_code);
+    detail::Pj crs(cs ? proj_create_projected_crs(ctx.get(), name.c_str(), geographic.get(), conversion.get(), cs.get()) : nullptr);
+    const char* wkt = crs ? proj_as_wkt(ctx.get(), crs.get(), PJ_WKT2_2019, nullptr) : nullptr;
+    if (!wkt) fail(where, "PROJ cannot put projection EPSG:" + std::to_string(*projection) + " on EPSG:" + std::to_string(*base_code));
+    horizontal = wkt;
+    out.description = "user-defined projected CRS (code 32767): projection " + name + ", in units " + std::to_string(units);
+  }
+}
+
+// A projection named by its own code (ProjectionGeoKey, e.g. 16032 UTM
+// zone 32N) takes its parameters from EPSG; one given by parameters
+// must give each (libgeotiff takes a missing one as 0). GeoTIFF 1.0
+// section 6.3.3.3: a false easting may be FalseEasting,
+// FalseOriginEasting or CenterEasting, and so on.
+bool GeoKeyReader::parameters_given(const UserDefinedCrs& user) {
+  static const std::vector<std::vector<std::uint16_t>> kAliases = {
+      {3080, 3084, 3088}, {3081, 3085, 3089}, {3082, 3086, 3090}, {3083, 3087, 3091}, {3092, 3093}};
+  const auto given = [&](std::uint16_t id) {
+    return std::find(unread_keys.begin(), unread_keys.end(), id) != unread_keys.end() || short_values.count(id) ||
+           double_values.count(id);
   };
-  // A user-defined projected or geographic CRS (code 32767, its projection
-  // and datum as parameter keys): read through libgeotiff into PROJ's
-  // string of it, put on the geographic CRS the keys name by code; its
-  // units, datum keys and Z unit are then checked as for a code.
-  std::string horizontal;
-  const auto model = value(kModelType);
-  const bool projected_model = model == 1 || (!model && value(kProjectedCsType));
-  const bool user_defined = projected_model ? value(kProjectedCsType) == kUserDefined
-                                            : (model == 2 || (!model && value(kGeographicType))) &&
-                                                  value(kGeographicType) == kUserDefined;
-  if (user_defined) {
-    const std::string what = std::string("the user-defined ") + (projected_model ? "projected" : "geographic") + " CRS (code 32767)";
-    if (value(kVerticalCsType) || value(kVerticalDatum)) {
-      unread("a vertical CRS beside a user-defined horizontal one is not read; give the tile's CRS with --crs");
-      return out;
+  for (const std::uint16_t id : user.parameters) {
+    bool present = given(id);
+    for (const auto& group : kAliases) {
+      if (std::find(group.begin(), group.end(), id) == group.end()) continue;
+      for (const std::uint16_t other : group) present = present || given(other);
     }
-    // A projection named by its EPSG code (ProjectionGeoKey, e.g. 16032 UTM
-    // zone 32N) on a geographic CRS named by its code, as GDAL writes a CRS
-    // EPSG has no code for: built by PROJ from the two codes.
-    const auto projection = value(kProjection), base_code = value(kGeographicType);
-    if (projected_model && projection && *projection != kUserDefined && base_code && *base_code != kUserDefined) {
-      const auto units = value(kProjLinearUnits).value_or(9001);
-      const auto unit_m = linear_unit_m(units);
-      if (!unit_m) fail(where, "ProjLinearUnitsGeoKey " + std::to_string(units) + " is not a linear unit geoanchor reads (9001, 9002, 9003, 9036)");
-      const char* unit_name = units == 9001 ? "metre" : units == 9002 ? "foot" : units == 9003 ? "US survey foot" : "kilometre";
-      const detail::PjContext ctx = detail::quiet_context();
-      detail::Pj conversion(proj_create_from_database(ctx.get(), "EPSG", std::to_string(*projection).c_str(),
-                                                      PJ_CATEGORY_COORDINATE_OPERATION, false, nullptr));
-      detail::Pj geographic(proj_create(ctx.get(), ("EPSG:" + std::to_string(*base_code)).c_str()));
-      if (!conversion || proj_get_type(conversion.get()) != PJ_TYPE_CONVERSION) {
-        fail(where, "ProjectionGeoKey " + std::to_string(*projection) + " is not a projection PROJ knows");
-      }
-      if (!geographic) fail(where, "GeographicTypeGeoKey " + std::to_string(*base_code) + " is not a CRS PROJ knows");
-      detail::Pj cs(proj_create_cartesian_2D_cs(ctx.get(), PJ_CART2D_EASTING_NORTHING, unit_name, *unit_m));
-      const std::string name = "EPSG:" + std::to_string(*projection) + " on EPSG:" + std::to_string(*base_code);
-      detail::Pj crs(cs ? proj_create_projected_crs(ctx.get(), name.c_str(), geographic.get(), conversion.get(), cs.get()) : nullptr);
-      const char* wkt = crs ? proj_as_wkt(ctx.get(), crs.get(), PJ_WKT2_2019, nullptr) : nullptr;
-      if (!wkt) fail(where, "PROJ cannot put projection EPSG:" + std::to_string(*projection) + " on EPSG:" + std::to_string(*base_code));
-      horizontal = wkt;
-      out.description = "user-defined projected CRS (code 32767): projection " + name + ", in units " + std::to_string(units);
-    }
-    // Otherwise the parameters, through libgeotiff.
-    const auto user = horizontal.empty() ? libgeotiff_proj_string(*dir, doubles, ascii) : std::nullopt;
-    if (horizontal.empty() && !user) {
-      unread(what + " could not be read from its parameter keys (libgeotiff); give the tile's CRS with --crs");
-      return out;
-    }
-    if (user && projected_model &&
-        std::find(std::begin(kExactMethods), std::end(kExactMethods), user->method) == std::end(kExactMethods)) {
-      unread(what + ": its coordinate transformation (ProjCoordTransGeoKey " + std::to_string(user->method) +
-             ") is not one geoanchor reads exactly from keys; give the tile's CRS with --crs");
-      return out;
-    }
-    // A projection named by its own code (ProjectionGeoKey, e.g. 16032 UTM
-    // zone 32N) takes its parameters from EPSG; one given by parameters
-    // must give each (libgeotiff takes a missing one as 0). GeoTIFF 1.0
-    // section 6.3.3.3: a false easting may be FalseEasting,
-    // FalseOriginEasting or CenterEasting, and so on.
-    if (user && projected_model && (!value(kProjection) || value(kProjection) == kUserDefined)) {
-      static const std::vector<std::vector<std::uint16_t>> kAliases = {
-          {3080, 3084, 3088}, {3081, 3085, 3089}, {3082, 3086, 3090}, {3083, 3087, 3091}, {3092, 3093}};
-      const auto given = [&](std::uint16_t id) {
-        return std::find(unread_keys.begin(), unread_keys.end(), id) != unread_keys.end() || short_values.count(id) ||
-               double_values.count(id);
-      };
-      for (const std::uint16_t id : user->parameters) {
-        bool present = given(id);
-        for (const auto& group : kAliases) {
-          if (std::find(group.begin(), group.end(), id) == group.end()) continue;
-          for (const std::uint16_t other : group) present = present || given(other);
-        }
-        if (!present) {
-          unread("the user-defined projection takes its parameter from key " + std::to_string(id) +
-                 ", which the keys do not give; give the tile's CRS with --crs");
-          return out;
-        }
-      }
-    }
-    if (user && !values_in_proj_string(user->proj, user->values)) {
-      unread(what + ": libgeotiff's PROJ string of it (" + user->proj +
-             ") does not carry every parameter at full precision; give the tile's CRS with --crs");
-      return out;
-    }
-    if (user) {
-      horizontal = user->proj;
-      out.description = what.substr(4) + " read from its keys by libgeotiff: " + user->proj;
-    }
-    // A projection on a geographic CRS the keys name by code: that CRS (its
-    // datum, which a PROJ string cannot carry) under the projection.
-    if (const auto base = value(kGeographicType); user && projected_model && base && *base != kUserDefined) {
-      const detail::PjContext ctx = detail::quiet_context();
-      detail::Pj crs(proj_create(ctx.get(), user->proj.c_str()));
-      detail::Pj geographic(proj_create(ctx.get(), ("EPSG:" + std::to_string(*base)).c_str()));
-      if (!crs || !geographic) fail(where, "GeographicTypeGeoKey " + std::to_string(*base) + " is not a CRS PROJ knows");
-      detail::Pj altered(proj_crs_alter_geodetic_crs(ctx.get(), crs.get(), geographic.get()));
-      const char* wkt = altered ? proj_as_wkt(ctx.get(), altered.get(), PJ_WKT2_2019, nullptr) : nullptr;
-      if (!wkt) fail(where, "the user-defined projection cannot be put on GeographicTypeGeoKey " + std::to_string(*base));
-      horizontal = wkt;
-      out.description += " on EPSG:" + std::to_string(*base);
-    }
-    if (const auto units = value(kProjLinearUnits); units && projected_model) {
-      const auto m = linear_unit_m(*units);
-      const double crs_m = first_axis_unit(horizontal, where);
-      if (!m || std::abs(*m - crs_m) > 1e-12 * crs_m) {
-        fail(where, "ProjLinearUnitsGeoKey " + std::to_string(*units) + " contradicts the user-defined CRS, whose axes are in units of " +
-                        format_shortest(crs_m) + " m");
-      }
-    }
-  } else {
-    // A projection code beside a CRS code says what the code says; not read.
-    if (value(kProjection)) unread_keys.push_back(kProjection);
-    for (const std::uint16_t id : unread_keys) {
-      unread("key " + std::to_string(id) +
-             " is not read by geoanchor (a user-defined CRS's parameters, or a key of another kind): give "
-             "the tile's CRS with --crs (EPSG code or WKT), or a WKT record");
-    }
-    for (const std::uint16_t id : {kModelType, kGeographicType, kProjectedCsType, kVerticalCsType, kVerticalDatum,
-                                   kGeogGeodeticDatum, kGeogPrimeMeridian, kGeogEllipsoid, kGeogLinearUnits,
-                                   kGeogAngularUnits, kGeogAzimuthUnits, kProjLinearUnits, kVerticalUnits}) {
-      if (value(id) == kUserDefined) {
-        unread("key " + std::to_string(id) +
-               " is user-defined (32767): its CRS is stated by parameters geoanchor does not read; give the "
-               "tile's CRS with --crs");
-        short_values.erase(id);  // set aside: as if absent
-        if (id == kProjectedCsType || id == kGeographicType || id == kModelType) return out;  // no CRS the keys state
-      }
+    if (!present) {
+      unread("the user-defined projection takes its parameter from key " + std::to_string(id) +
+             ", which the keys do not give; give the tile's CRS with --crs");
+      return false;
     }
   }
-  if (user_defined) {
-    // read above
-  } else if (model == 1 || (!model && value(kProjectedCsType))) {
+  return true;
+}
+
+// A projection on a geographic CRS the keys name by code: that CRS (its
+// datum, which a PROJ string cannot carry) under the projection.
+void GeoKeyReader::put_on_base(const UserDefinedCrs& user) {
+  if (const auto base = value(kGeographicType); projected_model && base && *base != kUserDefined) {
+    const detail::PjContext ctx = detail::quiet_context();
+    detail::Pj crs(proj_create(ctx.get(), user.proj.c_str()));
+    detail::Pj geographic(proj_create(ctx.get(), ("EPSG:" + std::to_string(*base)).c_str()));
+    if (!crs || !geographic) fail(where, "GeographicTypeGeoKey " + std::to_string(*base) + " is not a CRS PROJ knows");
+    detail::Pj altered(proj_crs_alter_geodetic_crs(ctx.get(), crs.get(), geographic.get()));
+    const char* wkt = altered ? proj_as_wkt(ctx.get(), altered.get(), PJ_WKT2_2019, nullptr) : nullptr;
+    if (!wkt) fail(where, "the user-defined projection cannot be put on GeographicTypeGeoKey " + std::to_string(*base));
+    horizontal = wkt;
+    out.description += " on EPSG:" + std::to_string(*base);
+  }
+}
+
+void GeoKeyReader::check_user_units() const {
+  if (const auto units = value(kProjLinearUnits); units && projected_model) {
+    const auto m = linear_unit_m(*units);
+    const double crs_m = first_axis_unit(horizontal, where);
+    if (!m || std::abs(*m - crs_m) > 1e-12 * crs_m) {
+      fail(where, "ProjLinearUnitsGeoKey " + std::to_string(*units) + " contradicts the user-defined CRS, whose axes are in units of " +
+                      format_shortest(crs_m) + " m");
+    }
+  }
+}
+
+bool GeoKeyReader::set_aside_code_keys() {
+  // A projection code beside a CRS code says what the code says; not read.
+  if (value(kProjection)) unread_keys.push_back(kProjection);
+  for (const std::uint16_t id : unread_keys) {
+    unread("key " + std::to_string(id) +
+           " is not read by geoanchor (a user-defined CRS's parameters, or a key of another kind): give "
+           "the tile's CRS with --crs (EPSG code or WKT), or a WKT record");
+  }
+  for (const std::uint16_t id : {kModelType, kGeographicType, kProjectedCsType, kVerticalCsType, kVerticalDatum,
+                                 kGeogGeodeticDatum, kGeogPrimeMeridian, kGeogEllipsoid, kGeogLinearUnits,
+                                 kGeogAngularUnits, kGeogAzimuthUnits, kProjLinearUnits, kVerticalUnits}) {
+    if (value(id) == kUserDefined) {
+      unread("key " + std::to_string(id) +
+             " is user-defined (32767): its CRS is stated by parameters geoanchor does not read; give the "
+             "tile's CRS with --crs");
+      short_values.erase(id);  // set aside: as if absent
+      if (id == kProjectedCsType || id == kGeographicType || id == kModelType) return false;  // no CRS the keys state
+    }
+  }
+  return true;
+}
+
+// The horizontal CRS the codes name.
+void GeoKeyReader::horizontal_from_codes() {
+  if (model == 1 || (!model && value(kProjectedCsType))) {
     if (!value(kProjectedCsType)) fail(where, "model type 1 (projected) without ProjectedCSTypeGeoKey (3072)");
     horizontal = "EPSG:" + std::to_string(*value(kProjectedCsType));
     out.description = "ProjectedCSTypeGeoKey " + std::to_string(*value(kProjectedCsType));
@@ -471,11 +539,13 @@ GeoTiffCrs geotiff_crs(const GeoKeyRecords& records, const std::string& where, b
   } else {
     fail(where, "no GTModelTypeGeoKey and no CRS code: the keys state no CRS");
   }
-  out.crs = horizontal;
-  // Keys that repeat what the CRS code states (a datum, an ellipsoid, a
-  // prime meridian and their numbers, units' sizes) are read and must
-  // agree with it: a tile whose keys name EPSG:4326 but Clarke 1866 is
-  // refused, not moved as either.
+}
+
+// Keys that repeat what the CRS code states (a datum, an ellipsoid, a
+// prime meridian and their numbers, units' sizes) are read and must
+// agree with it: a tile whose keys name EPSG:4326 but Clarke 1866 is
+// refused, not moved as either.
+void GeoKeyReader::check_repeated_keys() {
   const double rad_per_deg = M_PI / 180.0;
   if (const auto a = value(kGeogAngularUnits); a && *a != 9102) {
     fail(where, "GeogAngularUnitsGeoKey " + std::to_string(*a) + ": geoanchor reads degrees (9102)");
@@ -529,6 +599,10 @@ GeoTiffCrs geotiff_crs(const GeoKeyRecords& records, const std::string& where, b
     }
     out.description += ", with its datum keys";
   }
+}
+
+// The vertical CRS, or the unit of Z alone.
+void GeoKeyReader::read_vertical() {
   if (const auto v = value(kVerticalCsType)) {
     const std::string vertical = "EPSG:" + std::to_string(*v);
     out.crs = horizontal + "+" + std::to_string(*v);
@@ -561,7 +635,14 @@ GeoTiffCrs geotiff_crs(const GeoKeyRecords& records, const std::string& where, b
     }
     out.description += ", VerticalUnitsGeoKey " + std::to_string(*units);
   }
-  if (to_wgs84) out.description += ", GeogTOWGS84GeoKey " + *to_wgs84 + " (a datum-shift hint, not used: PROJ's operations are)";
+}
+
+}  // namespace
+
+GeoTiffCrs geotiff_crs(const GeoKeyRecords& records, const std::string& where, bool set_aside_unread) {
+  GeoTiffCrs out;
+  GeoKeyReader reader(records, where, set_aside_unread, out);
+  reader.read();
   return out;
 }
 

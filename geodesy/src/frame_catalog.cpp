@@ -56,8 +56,8 @@ CatalogTransformation from_iers(const char* from, double epoch, const IersRow& r
 #define ITRF2014_OLD_RATES 0.1, -0.5, -3.3, 0.12, 0.00, 0.00, 0.02
 #define ITRF2008_OLD_RATES 0.1, -0.5, -3.2, 0.09, 0.00, 0.00, 0.02
 
-std::vector<CatalogTransformation> build_catalog() {
-  std::vector<CatalogTransformation> out;
+// The IERS sets between ITRF realizations.
+void add_itrf_sets(std::vector<CatalogTransformation>& out) {
   // IERS (Altamimi et al.), "Transformation parameters from ITRF2020 to past
   // ITRFs", itrf.ign.fr/docs/solutions/itrf2020/Transfo-ITRF2020_TRFs.txt
   // (2022); epoch 2015.0; XS = X + T + D·X + R·X (position vector).
@@ -115,7 +115,10 @@ std::vector<CatalogTransformation> build_catalog() {
       {"ITRF88", 22.8, 2.6, -125.2, 10.41, 0.10, 0.00, 0.06, ITRF2008_OLD_RATES, 0.01, "EPSG:6291"},
   };
   for (const auto& r : kFrom2008) out.push_back(from_iers("ITRF2008", 2000.0, r, t2008));
+}
 
+// The EUREF sets from ITRF realizations to ETRF ones.
+void add_etrf_sets(std::vector<CatalogTransformation>& out) {
   // EUREF Technical Note 1 (Altamimi, "Relationship and transformation
   // between the International and the European Terrestrial Reference
   // Systems"): each ETRFyy from its ITRFyy by the rotation of stable Eurasia
@@ -155,7 +158,10 @@ std::vector<CatalogTransformation> build_catalog() {
   out.push_back(from_iers("ITRF2020", 1989.0,
                           {"ETRF2020", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.086, 0.519, -0.753, 0.0, ""},
                           tn1 + " (ITRF2020 to ETRF2020, 2023 edition)", false));
+}
 
+// The national frames and WGS 84's realizations.
+void add_national_and_wgs84_sets(std::vector<CatalogTransformation>& out) {
   // National and WGS 84 frames, each as its producer publishes it. Rows are
   // in the position-vector convention, mm, mas and ppb; where the source
   // (and EPSG) uses the coordinate-frame convention the rotations and their
@@ -241,6 +247,13 @@ std::vector<CatalogTransformation> build_catalog() {
        "NGA, WGS 84 (G1762) to (G2139) (coordinate frame, rotations negated)"},
   };
   for (const auto& n : kNational) out.push_back(from_iers(n.from, n.epoch, n.row, n.source, false));
+}
+
+std::vector<CatalogTransformation> build_catalog() {
+  std::vector<CatalogTransformation> out;
+  add_itrf_sets(out);
+  add_etrf_sets(out);
+  add_national_and_wgs84_sets(out);
   return out;
 }
 

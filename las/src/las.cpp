@@ -123,6 +123,245 @@ std::size_t las_min_record_length(std::uint8_t point_format) {
   }
 }
 
+namespace {
+
+// The format byte and the legacy point count as the header stores them.
+struct StoredCounts {
+  std::uint8_t raw_format = 0;
+  std::uint32_t legacy_count = 0;
+};
+
+// The fields every version's header has, from its first bytes `b`.
+StoredCounts read_header_fields(const std::vector<std::uint8_t>& b, LasHeader& h) {
+  h.file_source_id = get<std::uint16_t>(&b[4]);
+  h.global_encoding = get<std::uint16_t>(&b[6]);
+  std::memcpy(h.project_guid.data(), &b[8], 16);
+  h.version_major = b[24];
+  h.version_minor = b[25];
+  std::memcpy(h.system_identifier.data(), &b[26], 32);
+  std::memcpy(h.generating_software.data(), &b[58], 32);
+  h.creation_day = get<std::uint16_t>(&b[90]);
+  h.creation_year = get<std::uint16_t>(&b[92]);
+  h.header_size = get<std::uint16_t>(&b[94]);
+  h.offset_to_points = get<std::uint32_t>(&b[96]);
+  h.vlr_count = get<std::uint32_t>(&b[100]);
+  const std::uint8_t raw_format = b[104];
+  h.record_length = get<std::uint16_t>(&b[105]);
+  const std::uint32_t legacy_count = get<std::uint32_t>(&b[107]);
+  for (std::size_t i = 0; i < 5; ++i) h.points_by_return[i] = get<std::uint32_t>(&b[111 + 4 * i]);
+  for (std::size_t a = 0; a < 3; ++a) {
+    h.scale[a] = get<double>(&b[131 + 8 * a]);
+    h.offset[a] = get<double>(&b[155 + 8 * a]);
+    h.max[a] = get<double>(&b[179 + 16 * a]);
+    h.min[a] = get<double>(&b[187 + 16 * a]);
+  }
+  return {raw_format, legacy_count};
+}
+
+// The version, and the header size against it and the file.
+void check_version(const std::filesystem::path& path, std::uint64_t file_size, const LasHeader& h) {
+  if (h.version_major != 1 || h.version_minor < 2 || h.version_minor > 4) {
+    throw malformed(path, 24, "LAS version " + std::to_string(h.version_major) + "." +
+                                  std::to_string(h.version_minor) + " is not supported; expected 1.2, 1.3 or 1.4");
+  }
+  const std::uint16_t min_header =
+      h.version_minor == 2 ? kHeaderSize12 : (h.version_minor == 3 ? kHeaderSize13 : kHeaderSize14);
+  if (h.header_size < min_header) {
+    throw malformed(path, 94, "header size " + std::to_string(h.header_size) + " is too small for LAS 1." +
+                                  std::to_string(h.version_minor) + " (expected at least " +
+                                  std::to_string(min_header) + ")");
+  }
+  if (file_size < h.header_size) {
+    throw malformed(path, file_size, "truncated LAS header: header size is " + std::to_string(h.header_size) +
+                                         " bytes, the file has " + std::to_string(file_size));
+  }
+}
+
+// The point format (its compression bits cleared in h), the record length
+// and the scales and offsets; returns whether the points are compressed.
+bool read_point_format(const std::filesystem::path& path, std::uint8_t raw_format, LasHeader& h) {
+  // LAZ: bit 7 (or 6, in early LASzip files) set on the format; the
+  // laszip VLR, read below, says how.
+  const bool compressed = (raw_format & 0xC0) != 0;
+  h.point_format = compressed ? static_cast<std::uint8_t>(raw_format & 0x3F) : raw_format;
+  const std::size_t min_len = las_min_record_length(h.point_format);
+  if (min_len == 0 && compressed) {
+    const std::uint8_t f = h.point_format;
+    const bool waveform = f == 4 || f == 5 || f == 9 || f == 10;
+    throw Error(ErrorKind::input, waveform ? "E_LAZ_UNSUPPORTED" : "E_LAS",
+                path.string() + ": byte 104: LAZ point data record format " + std::to_string(f) +
+                    (waveform ? std::string(" (waveform packets, ") + (f < 6 ? "WAVEPACKET13" : "WAVEPACKET14") +
+                                    " items) is not supported"
+                              : std::string(" is unknown")) +
+                    "; expected 0, 1, 2, 3, 6, 7 or 8");
+  }
+  if (min_len == 0) {
+    throw malformed(path, 104, "point data record format " + std::to_string(raw_format) +
+                                   (raw_format <= 10 ? " (waveform) is not supported" : " is unknown") +
+                                   "; expected 0, 1, 2, 3, 6, 7 or 8");
+  }
+  const std::uint8_t format = h.point_format;
+  if (format >= 6 && h.version_minor < 4) {
+    throw malformed(path, 104, "point data record format " + std::to_string(format) + " needs LAS 1.4, the file says 1." +
+                                   std::to_string(h.version_minor));
+  }
+  if (h.record_length < min_len) {
+    throw malformed(path, 105, "point data record length " + std::to_string(h.record_length) +
+                                   " is shorter than format " + std::to_string(format) + "'s " +
+                                   std::to_string(min_len) + " bytes");
+  }
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (!(std::isfinite(h.scale[a]) && h.scale[a] > 0.0) || !std::isfinite(h.offset[a])) {
+      throw malformed(path, 131 + 8 * a, std::string("scale/offset of ") + "XYZ"[a] +
+                                             " must be finite with a positive scale");
+    }
+  }
+  return compressed;
+}
+
+// The point count: the legacy one, or LAS 1.4's 64-bit one (and where the
+// EVLRs start).
+void read_point_count(const std::filesystem::path& path, const std::vector<std::uint8_t>& b, std::uint32_t legacy_count,
+                      bool compressed, LasHeader& h) {
+  const std::uint8_t format = h.point_format;
+  h.point_count = legacy_count;
+  if (h.version_minor == 4) {
+    h.evlr_start = get<std::uint64_t>(&b[235]);
+    h.evlr_count = get<std::uint32_t>(&b[243]);
+    const std::uint64_t count64 = get<std::uint64_t>(&b[247]);
+    for (std::size_t i = 0; i < 15; ++i) h.points_by_return[i] = get<std::uint64_t>(&b[255 + 8 * i]);
+    if (legacy_count != 0 && count64 != legacy_count) {
+      throw malformed(path, 107, "legacy point count " + std::to_string(legacy_count) +
+                                     " disagrees with the 64-bit point count " + std::to_string(count64));
+    }
+    // PDAL's COPC writer fills the legacy count of formats 6-8 (equal to
+    // the 64-bit one, checked above); LAZ readers accept it, so does this one.
+    if (format >= 6 && legacy_count != 0 && !compressed) {
+      throw malformed(path, 107, "legacy point count must be 0 for point format " + std::to_string(format));
+    }
+    h.point_count = count64;
+  }
+}
+
+// The VLRs between the header and the point data, appended to `vlrs`; the
+// laszip VLR kept apart and returned (required when `compressed`).
+std::optional<LasVlr> read_vlrs(int fd, const std::filesystem::path& path, std::uint64_t file_size, bool compressed,
+                                std::uint8_t raw_format, const LasHeader& h, std::vector<LasVlr>& vlrs) {
+  std::optional<LasVlr> laz_vlr;
+  // VLRs: between the header and the point data.
+  std::uint64_t at = h.header_size;
+  if (h.offset_to_points < h.header_size || h.offset_to_points > file_size) {
+    throw malformed(path, 96, "offset to point data " + std::to_string(h.offset_to_points) +
+                                  " is outside [header size " + std::to_string(h.header_size) + ", file size " +
+                                  std::to_string(file_size) + "]");
+  }
+  for (std::uint32_t i = 0; i < h.vlr_count; ++i) {
+    std::uint8_t vh[kVlrHeaderSize];
+    if (at + kVlrHeaderSize > h.offset_to_points || !read_at(fd, at, vh, kVlrHeaderSize)) {
+      throw malformed(path, at, "VLR " + std::to_string(i + 1) + " of " + std::to_string(h.vlr_count) +
+                                    " runs past the start of the point data at byte " +
+                                    std::to_string(h.offset_to_points));
+    }
+    LasVlr v;
+    v.file_offset = at;
+    v.user_id = fixed_text(vh + 2, 16);
+    v.record_id = get<std::uint16_t>(vh + 18);
+    const std::uint16_t len = get<std::uint16_t>(vh + 20);
+    v.description = fixed_text(vh + 22, 32);
+    if (at + kVlrHeaderSize + len > h.offset_to_points) {
+      throw malformed(path, at, "VLR " + std::to_string(i + 1) + " ('" + v.user_id + "' " +
+                                    std::to_string(v.record_id) + ", " + std::to_string(len) +
+                                    " bytes) runs past the start of the point data at byte " +
+                                    std::to_string(h.offset_to_points));
+    }
+    v.data.resize(len);
+    if (len && !read_at(fd, at + kVlrHeaderSize, v.data.data(), len)) throw malformed(path, at, "cannot read VLR");
+    at += kVlrHeaderSize + len;
+    if (is_laz_vlr(v)) {  // kept apart: a compression record is not passed through
+      if (compressed && laz_vlr) {
+        throw Error(ErrorKind::input, "E_LAZ_VLR",
+                    path.string() + ": byte " + std::to_string(v.file_offset) + ": a second laszip VLR (the first is at byte " +
+                        std::to_string(laz_vlr->file_offset) + ")");
+      }
+      laz_vlr = std::move(v);
+      continue;
+    }
+    vlrs.push_back(std::move(v));
+  }
+  if (compressed && !laz_vlr) {
+    throw Error(ErrorKind::input, "E_LAZ_VLR",
+                path.string() + ": byte 104: point data record format byte " + std::to_string(raw_format) +
+                    " marks compressed (LAZ) points, but there is no laszip VLR ('" + kLazVlrUserId + "' " +
+                    std::to_string(kLazVlrRecordId) + ") saying how");
+  }
+  return laz_vlr;
+}
+
+// Point data against the file size (and the EVLRs that follow it); a
+// LAZ file's chunk table is checked once the EVLRs are read.
+void check_point_data(const std::filesystem::path& path, std::uint64_t file_size, bool compressed, const LasHeader& h) {
+  if (compressed) {
+    if (h.evlr_count > 0 && (h.evlr_start < h.offset_to_points || h.evlr_start > file_size)) {
+      throw malformed(path, 235, "start of the EVLRs " + std::to_string(h.evlr_start) + " is outside [offset to point data " +
+                                     std::to_string(h.offset_to_points) + ", file size " + std::to_string(file_size) + "]");
+    }
+  }
+  if (!compressed) {
+    const std::uint64_t points_bytes = h.point_count * h.record_length;
+    if (h.record_length != 0 && points_bytes / h.record_length != h.point_count) {
+      throw malformed(path, 247, "point count " + std::to_string(h.point_count) + " overflows the file size");
+    }
+    const std::uint64_t points_end = h.offset_to_points + points_bytes;
+    const std::uint64_t data_end = h.evlr_count > 0 ? h.evlr_start : file_size;
+    if (points_end > file_size) {
+      throw malformed(path, file_size, "truncated point data: " + std::to_string(h.point_count) + " points of " +
+                                           std::to_string(h.record_length) + " bytes need " +
+                                           std::to_string(points_end) + " bytes, the file has " +
+                                           std::to_string(file_size));
+    }
+    if (points_end != data_end) {
+      throw malformed(path, points_end, "point count " + std::to_string(h.point_count) + " disagrees with the " +
+                                            (h.evlr_count > 0 ? "start of the EVLRs at byte " : "file size ") +
+                                            std::to_string(data_end) + ": the points end at byte " +
+                                            std::to_string(points_end));
+    }
+  }
+}
+
+// The EVLRs, from the header's start of them, appended to `vlrs`.
+void read_evlrs(int fd, const std::filesystem::path& path, std::uint64_t file_size, const LasHeader& h,
+                std::vector<LasVlr>& vlrs) {
+  std::uint64_t at = h.evlr_start;
+  for (std::uint32_t i = 0; i < h.evlr_count; ++i) {
+    std::uint8_t eh[kEvlrHeaderSize];
+    if (at + kEvlrHeaderSize > file_size || !read_at(fd, at, eh, kEvlrHeaderSize)) {
+      throw malformed(path, at, "EVLR " + std::to_string(i + 1) + " of " + std::to_string(h.evlr_count) +
+                                    " runs past the end of the file (" + std::to_string(file_size) + " bytes)");
+    }
+    LasVlr v;
+    v.extended = true;
+    v.file_offset = at;
+    v.user_id = fixed_text(eh + 2, 16);
+    v.record_id = get<std::uint16_t>(eh + 18);
+    const std::uint64_t len = get<std::uint64_t>(eh + 20);
+    v.description = fixed_text(eh + 28, 32);
+    if (len > file_size || at + kEvlrHeaderSize + len > file_size) {
+      throw malformed(path, at, "EVLR " + std::to_string(i + 1) + " ('" + v.user_id + "' " +
+                                    std::to_string(v.record_id) + ", " + std::to_string(len) +
+                                    " bytes) runs past the end of the file (" + std::to_string(file_size) +
+                                    " bytes)");
+    }
+    v.data.resize(static_cast<std::size_t>(len));
+    if (len && !read_at(fd, at + kEvlrHeaderSize, v.data.data(), v.data.size())) {
+      throw malformed(path, at, "cannot read EVLR");
+    }
+    at += kEvlrHeaderSize + len;
+    vlrs.push_back(std::move(v));
+  }
+}
+
+}  // namespace
+
 LasReader::LasReader(const std::filesystem::path& path) : path_(path) {
   fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) throw Error(ErrorKind::io, "E_READ", path.string() + ": cannot open: " + std::strerror(errno));
@@ -141,201 +380,13 @@ LasReader::LasReader(const std::filesystem::path& path) : path_(path) {
     }
     if (std::memcmp(b.data(), "LASF", 4) != 0) throw malformed(path, 0, "not a LAS file (signature is not 'LASF')");
     LasHeader& h = header_;
-    std::optional<LasVlr> laz_vlr;
-    h.file_source_id = get<std::uint16_t>(&b[4]);
-    h.global_encoding = get<std::uint16_t>(&b[6]);
-    std::memcpy(h.project_guid.data(), &b[8], 16);
-    h.version_major = b[24];
-    h.version_minor = b[25];
-    std::memcpy(h.system_identifier.data(), &b[26], 32);
-    std::memcpy(h.generating_software.data(), &b[58], 32);
-    h.creation_day = get<std::uint16_t>(&b[90]);
-    h.creation_year = get<std::uint16_t>(&b[92]);
-    h.header_size = get<std::uint16_t>(&b[94]);
-    h.offset_to_points = get<std::uint32_t>(&b[96]);
-    h.vlr_count = get<std::uint32_t>(&b[100]);
-    const std::uint8_t raw_format = b[104];
-    h.record_length = get<std::uint16_t>(&b[105]);
-    const std::uint32_t legacy_count = get<std::uint32_t>(&b[107]);
-    for (std::size_t i = 0; i < 5; ++i) h.points_by_return[i] = get<std::uint32_t>(&b[111 + 4 * i]);
-    for (std::size_t a = 0; a < 3; ++a) {
-      h.scale[a] = get<double>(&b[131 + 8 * a]);
-      h.offset[a] = get<double>(&b[155 + 8 * a]);
-      h.max[a] = get<double>(&b[179 + 16 * a]);
-      h.min[a] = get<double>(&b[187 + 16 * a]);
-    }
-
-    if (h.version_major != 1 || h.version_minor < 2 || h.version_minor > 4) {
-      throw malformed(path, 24, "LAS version " + std::to_string(h.version_major) + "." +
-                                    std::to_string(h.version_minor) + " is not supported; expected 1.2, 1.3 or 1.4");
-    }
-    const std::uint16_t min_header =
-        h.version_minor == 2 ? kHeaderSize12 : (h.version_minor == 3 ? kHeaderSize13 : kHeaderSize14);
-    if (h.header_size < min_header) {
-      throw malformed(path, 94, "header size " + std::to_string(h.header_size) + " is too small for LAS 1." +
-                                    std::to_string(h.version_minor) + " (expected at least " +
-                                    std::to_string(min_header) + ")");
-    }
-    if (file_size < h.header_size) {
-      throw malformed(path, file_size, "truncated LAS header: header size is " + std::to_string(h.header_size) +
-                                           " bytes, the file has " + std::to_string(file_size));
-    }
-    // LAZ: bit 7 (or 6, in early LASzip files) set on the format; the
-    // laszip VLR, read below, says how.
-    const bool compressed = (raw_format & 0xC0) != 0;
-    h.point_format = compressed ? static_cast<std::uint8_t>(raw_format & 0x3F) : raw_format;
-    const std::size_t min_len = las_min_record_length(h.point_format);
-    if (min_len == 0 && compressed) {
-      const std::uint8_t f = h.point_format;
-      const bool waveform = f == 4 || f == 5 || f == 9 || f == 10;
-      throw Error(ErrorKind::input, waveform ? "E_LAZ_UNSUPPORTED" : "E_LAS",
-                  path.string() + ": byte 104: LAZ point data record format " + std::to_string(f) +
-                      (waveform ? std::string(" (waveform packets, ") + (f < 6 ? "WAVEPACKET13" : "WAVEPACKET14") +
-                                      " items) is not supported"
-                                : std::string(" is unknown")) +
-                      "; expected 0, 1, 2, 3, 6, 7 or 8");
-    }
-    if (min_len == 0) {
-      throw malformed(path, 104, "point data record format " + std::to_string(raw_format) +
-                                     (raw_format <= 10 ? " (waveform) is not supported" : " is unknown") +
-                                     "; expected 0, 1, 2, 3, 6, 7 or 8");
-    }
-    const std::uint8_t format = h.point_format;
-    if (format >= 6 && h.version_minor < 4) {
-      throw malformed(path, 104, "point data record format " + std::to_string(format) + " needs LAS 1.4, the file says 1." +
-                                     std::to_string(h.version_minor));
-    }
-    if (h.record_length < min_len) {
-      throw malformed(path, 105, "point data record length " + std::to_string(h.record_length) +
-                                     " is shorter than format " + std::to_string(format) + "'s " +
-                                     std::to_string(min_len) + " bytes");
-    }
-    for (std::size_t a = 0; a < 3; ++a) {
-      if (!(std::isfinite(h.scale[a]) && h.scale[a] > 0.0) || !std::isfinite(h.offset[a])) {
-        throw malformed(path, 131 + 8 * a, std::string("scale/offset of ") + "XYZ"[a] +
-                                               " must be finite with a positive scale");
-      }
-    }
-    h.point_count = legacy_count;
-    if (h.version_minor == 4) {
-      h.evlr_start = get<std::uint64_t>(&b[235]);
-      h.evlr_count = get<std::uint32_t>(&b[243]);
-      const std::uint64_t count64 = get<std::uint64_t>(&b[247]);
-      for (std::size_t i = 0; i < 15; ++i) h.points_by_return[i] = get<std::uint64_t>(&b[255 + 8 * i]);
-      if (legacy_count != 0 && count64 != legacy_count) {
-        throw malformed(path, 107, "legacy point count " + std::to_string(legacy_count) +
-                                       " disagrees with the 64-bit point count " + std::to_string(count64));
-      }
-      // PDAL's COPC writer fills the legacy count of formats 6-8 (equal to
-      // the 64-bit one, checked above); LAZ readers accept it, so does this one.
-      if (format >= 6 && legacy_count != 0 && !compressed) {
-        throw malformed(path, 107, "legacy point count must be 0 for point format " + std::to_string(format));
-      }
-      h.point_count = count64;
-    }
-
-    // VLRs: between the header and the point data.
-    std::uint64_t at = h.header_size;
-    if (h.offset_to_points < h.header_size || h.offset_to_points > file_size) {
-      throw malformed(path, 96, "offset to point data " + std::to_string(h.offset_to_points) +
-                                    " is outside [header size " + std::to_string(h.header_size) + ", file size " +
-                                    std::to_string(file_size) + "]");
-    }
-    for (std::uint32_t i = 0; i < h.vlr_count; ++i) {
-      std::uint8_t vh[kVlrHeaderSize];
-      if (at + kVlrHeaderSize > h.offset_to_points || !read_at(fd_, at, vh, kVlrHeaderSize)) {
-        throw malformed(path, at, "VLR " + std::to_string(i + 1) + " of " + std::to_string(h.vlr_count) +
-                                      " runs past the start of the point data at byte " +
-                                      std::to_string(h.offset_to_points));
-      }
-      LasVlr v;
-      v.file_offset = at;
-      v.user_id = fixed_text(vh + 2, 16);
-      v.record_id = get<std::uint16_t>(vh + 18);
-      const std::uint16_t len = get<std::uint16_t>(vh + 20);
-      v.description = fixed_text(vh + 22, 32);
-      if (at + kVlrHeaderSize + len > h.offset_to_points) {
-        throw malformed(path, at, "VLR " + std::to_string(i + 1) + " ('" + v.user_id + "' " +
-                                      std::to_string(v.record_id) + ", " + std::to_string(len) +
-                                      " bytes) runs past the start of the point data at byte " +
-                                      std::to_string(h.offset_to_points));
-      }
-      v.data.resize(len);
-      if (len && !read_at(fd_, at + kVlrHeaderSize, v.data.data(), len)) throw malformed(path, at, "cannot read VLR");
-      at += kVlrHeaderSize + len;
-      if (is_laz_vlr(v)) {  // kept apart: a compression record is not passed through
-        if (compressed && laz_vlr) {
-          throw Error(ErrorKind::input, "E_LAZ_VLR",
-                      path.string() + ": byte " + std::to_string(v.file_offset) + ": a second laszip VLR (the first is at byte " +
-                          std::to_string(laz_vlr->file_offset) + ")");
-        }
-        laz_vlr = std::move(v);
-        continue;
-      }
-      vlrs_.push_back(std::move(v));
-    }
-    if (compressed && !laz_vlr) {
-      throw Error(ErrorKind::input, "E_LAZ_VLR",
-                  path.string() + ": byte 104: point data record format byte " + std::to_string(raw_format) +
-                      " marks compressed (LAZ) points, but there is no laszip VLR ('" + kLazVlrUserId + "' " +
-                      std::to_string(kLazVlrRecordId) + ") saying how");
-    }
-    if (compressed) {
-      if (h.evlr_count > 0 && (h.evlr_start < h.offset_to_points || h.evlr_start > file_size)) {
-        throw malformed(path, 235, "start of the EVLRs " + std::to_string(h.evlr_start) + " is outside [offset to point data " +
-                                       std::to_string(h.offset_to_points) + ", file size " + std::to_string(file_size) + "]");
-      }
-    }
-
-    // Point data against the file size (and the EVLRs that follow it); a
-    // LAZ file's chunk table is checked once the EVLRs are read.
-    if (!compressed) {
-      const std::uint64_t points_bytes = h.point_count * h.record_length;
-      if (h.record_length != 0 && points_bytes / h.record_length != h.point_count) {
-        throw malformed(path, 247, "point count " + std::to_string(h.point_count) + " overflows the file size");
-      }
-      const std::uint64_t points_end = h.offset_to_points + points_bytes;
-      const std::uint64_t data_end = h.evlr_count > 0 ? h.evlr_start : file_size;
-      if (points_end > file_size) {
-        throw malformed(path, file_size, "truncated point data: " + std::to_string(h.point_count) + " points of " +
-                                             std::to_string(h.record_length) + " bytes need " +
-                                             std::to_string(points_end) + " bytes, the file has " +
-                                             std::to_string(file_size));
-      }
-      if (points_end != data_end) {
-        throw malformed(path, points_end, "point count " + std::to_string(h.point_count) + " disagrees with the " +
-                                              (h.evlr_count > 0 ? "start of the EVLRs at byte " : "file size ") +
-                                              std::to_string(data_end) + ": the points end at byte " +
-                                              std::to_string(points_end));
-      }
-    }
-    at = h.evlr_start;
-    for (std::uint32_t i = 0; i < h.evlr_count; ++i) {
-      std::uint8_t eh[kEvlrHeaderSize];
-      if (at + kEvlrHeaderSize > file_size || !read_at(fd_, at, eh, kEvlrHeaderSize)) {
-        throw malformed(path, at, "EVLR " + std::to_string(i + 1) + " of " + std::to_string(h.evlr_count) +
-                                      " runs past the end of the file (" + std::to_string(file_size) + " bytes)");
-      }
-      LasVlr v;
-      v.extended = true;
-      v.file_offset = at;
-      v.user_id = fixed_text(eh + 2, 16);
-      v.record_id = get<std::uint16_t>(eh + 18);
-      const std::uint64_t len = get<std::uint64_t>(eh + 20);
-      v.description = fixed_text(eh + 28, 32);
-      if (len > file_size || at + kEvlrHeaderSize + len > file_size) {
-        throw malformed(path, at, "EVLR " + std::to_string(i + 1) + " ('" + v.user_id + "' " +
-                                      std::to_string(v.record_id) + ", " + std::to_string(len) +
-                                      " bytes) runs past the end of the file (" + std::to_string(file_size) +
-                                      " bytes)");
-      }
-      v.data.resize(static_cast<std::size_t>(len));
-      if (len && !read_at(fd_, at + kEvlrHeaderSize, v.data.data(), v.data.size())) {
-        throw malformed(path, at, "cannot read EVLR");
-      }
-      at += kEvlrHeaderSize + len;
-      vlrs_.push_back(std::move(v));
-    }
+    const StoredCounts stored = read_header_fields(b, h);
+    check_version(path, file_size, h);
+    const bool compressed = read_point_format(path, stored.raw_format, h);
+    read_point_count(path, b, stored.legacy_count, compressed, h);
+    const std::optional<LasVlr> laz_vlr = read_vlrs(fd_, path, file_size, compressed, stored.raw_format, h, vlrs_);
+    check_point_data(path, file_size, compressed, h);
+    read_evlrs(fd_, path, file_size, h, vlrs_);
     if (compressed) open_laz(file_size, *laz_vlr);
   } catch (...) {
     ::close(fd_);

@@ -1,6 +1,7 @@
 #pragma once
-// What las.cpp (LAS) and las_laz.cpp (LAZ) share: little-endian fields,
-// positioned reads, the LAS error message, the record headers' sizes.
+// What las.cpp (LAS) and las_laz.cpp (LAZ) share: little-endian fields
+// (laz.cpp's too), positioned reads, the LAS error message, the record
+// headers' sizes.
 
 #include <unistd.h>
 

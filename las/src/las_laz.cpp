@@ -15,6 +15,7 @@
 #include "las_internal.hpp"
 #include "laz_chunk.hpp"
 #include "laz_entropy.hpp"
+#include "laz_layout.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -35,24 +36,6 @@ constexpr std::uint64_t kScanSlackBytes = 1 << 16;
 
 Error table_error(const std::filesystem::path& p, std::uint64_t offset, const std::string& what) {
   return Error(ErrorKind::input, "E_LAZ_CHUNK_TABLE", p.string() + ": byte " + std::to_string(offset) + ": " + what);
-}
-
-laz::ChunkLayout layout_of(const LazVlr& vlr, std::uint16_t record_length) {
-  laz::ChunkLayout l;
-  l.layered = vlr.compressor == 3;
-  l.record_length = record_length;
-  for (const auto& item : vlr.items) {
-    switch (static_cast<LazItemType>(item.type)) {
-      case LazItemType::gpstime11: l.gps_time = true; break;
-      case LazItemType::rgb12:
-      case LazItemType::rgb14: l.rgb = true; break;
-      case LazItemType::rgbnir14: l.rgb = l.nir = true; break;
-      case LazItemType::byte:
-      case LazItemType::byte14: l.extra_bytes = item.size; break;
-      default: break;
-    }
-  }
-  return l;
 }
 
 std::string plural(std::uint64_t n, const char* what) { return std::to_string(n) + " " + what + (n == 1 ? "" : "s"); }
@@ -204,7 +187,7 @@ void LasReader::scan_laz_chunks(std::uint64_t data_end) {
   const LasHeader& h = header_;
   check_chunk_points(std::min<std::uint64_t>(laz_->chunk_size, h.point_count), std::uint64_t{h.offset_to_points} + 8,
                      "chunk 0 (no chunk table)");
-  laz::ChunkDecoder decoder(layout_of(*laz_, h.record_length));
+  laz::ChunkDecoder decoder(chunk_layout(*laz_, h.record_length));
   const std::uint64_t count = (h.point_count + laz_->chunk_size - 1) / laz_->chunk_size;
   std::uint64_t offset = std::uint64_t{h.offset_to_points} + 8, first = 0;
   std::vector<std::uint8_t> coded, records;
@@ -329,7 +312,7 @@ void LasReader::decode_chunk(std::size_t i, std::vector<std::uint8_t>& records) 
       decoders_.pop_back();
     }
   }
-  if (!borrowed.decoder) borrowed.decoder = std::make_unique<laz::ChunkDecoder>(layout_of(*laz_, header_.record_length));
+  if (!borrowed.decoder) borrowed.decoder = std::make_unique<laz::ChunkDecoder>(chunk_layout(*laz_, header_.record_length));
   std::size_t used = 0;
   try {
     used = borrowed.decoder->decode(coded.data(), coded.size(), c.points, records.data());

@@ -3,21 +3,20 @@
 #include <cstring>
 
 #include "geoanchor/base/error.hpp"
+#include "geoanchor/las/las.hpp"
+#include "las_internal.hpp"
 #include "laz_chunk.hpp"
 #include "laz_entropy.hpp"
+#include "laz_layout.hpp"
 
 namespace geoanchor::io {
 namespace {
 
+using las_internal::get;
+
 constexpr std::size_t kVlrFixedBytes = 34;
 constexpr std::size_t kItemBytes = 6;
 
-template <class T>
-T get(const std::uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
 // Appends v's little-endian bytes one by one (GCC 12 reports false
 // overflows on a ranged insert or a memcpy into a vector here).
 template <class T>
@@ -43,23 +42,19 @@ std::string describe(const std::vector<LazItem>& items) {
   return s;
 }
 
-// The record bytes a point format's items cover, before extra bytes.
-std::size_t standard_size(std::uint8_t format) {
-  switch (format) {
-    case 0: return 20;
-    case 1: return 28;
-    case 2: return 26;
-    case 3: return 34;
-    case 6: return 30;
-    case 7: return 36;
-    case 8: return 38;
-    default: return 0;
-  }
+// The record bytes the items cover.
+std::uint16_t items_size(const LazVlr& vlr) {
+  std::uint16_t size = 0;
+  for (const auto& item : vlr.items) size = static_cast<std::uint16_t>(size + item.size);
+  return size;
 }
 
-laz::ChunkLayout layout_of(const LazVlr& vlr) {
+}  // namespace
+
+laz::ChunkLayout chunk_layout(const LazVlr& vlr, std::uint16_t record_length) {
   laz::ChunkLayout l;
   l.layered = vlr.compressor == 3;
+  l.record_length = record_length;
   for (const auto& item : vlr.items) {
     switch (static_cast<LazItemType>(item.type)) {
       case LazItemType::gpstime11: l.gps_time = true; break;
@@ -70,12 +65,9 @@ laz::ChunkLayout layout_of(const LazVlr& vlr) {
       case LazItemType::byte14: l.extra_bytes = item.size; break;
       default: break;
     }
-    l.record_length = static_cast<std::uint16_t>(l.record_length + item.size);
   }
   return l;
 }
-
-}  // namespace
 
 std::string laz_item_name(std::uint16_t type) {
   switch (type) {
@@ -150,7 +142,7 @@ LazVlr LazVlr::parse(const std::vector<std::uint8_t>& payload, const std::string
 
 LazVlr LazVlr::for_format(std::uint8_t point_format, std::uint16_t record_length, std::uint32_t chunk_points) {
   const std::string where = "LAZ output";
-  const std::size_t base = standard_size(point_format);
+  const std::size_t base = las_min_record_length(point_format);
   if (base == 0) {
     const bool waveform = point_format == 4 || point_format == 5 || point_format == 9 || point_format == 10;
     throw unsupported(where, "point format " + std::to_string(point_format) +
@@ -190,7 +182,7 @@ void LazVlr::check(std::uint8_t point_format, std::uint16_t record_length, const
       throw unsupported(where, "laszip VLR: item " + describe(i) + " (waveform packets) is not supported");
     }
   }
-  const std::size_t base = standard_size(point_format);
+  const std::size_t base = las_min_record_length(point_format);
   if (base == 0) {
     throw unsupported(where, "LAZ point format " + std::to_string(point_format) +
                                  " is not supported; formats 0-3 and 6-8 are");
@@ -237,7 +229,7 @@ struct LazChunkEncoder::Impl {
 };
 
 LazChunkEncoder::LazChunkEncoder(const LazVlr& vlr) {
-  const laz::ChunkLayout l = layout_of(vlr);
+  const laz::ChunkLayout l = chunk_layout(vlr, items_size(vlr));
   impl_ = std::make_unique<Impl>(l);
   record_length_ = l.record_length;
 }
@@ -256,7 +248,7 @@ struct LazChunkDecoder::Impl {
 };
 
 LazChunkDecoder::LazChunkDecoder(const LazVlr& vlr) {
-  const laz::ChunkLayout l = layout_of(vlr);
+  const laz::ChunkLayout l = chunk_layout(vlr, items_size(vlr));
   impl_ = std::make_unique<Impl>(l);
   record_length_ = l.record_length;
 }
