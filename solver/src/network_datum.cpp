@@ -3,6 +3,7 @@
 #include "network_datum.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 
 #include <algorithm>

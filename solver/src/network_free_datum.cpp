@@ -4,6 +4,7 @@
 #include "network_free_datum.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 
 #include <algorithm>
