@@ -33,7 +33,7 @@
 #include "network_singularity.hpp"
 #include "network_station_statistics.hpp"
 #include "point_statistics.hpp"
-#include "sparse_factor.hpp"
+#include "sparse/sparse_factor.hpp"
 
 namespace geoanchor::solver {
 

@@ -13,7 +13,7 @@
 
 #include "network_normal_equations.hpp"
 #include "network_problem.hpp"
-#include "sparse_factor.hpp"
+#include "sparse/sparse_factor.hpp"
 
 namespace geoanchor::solver {
 

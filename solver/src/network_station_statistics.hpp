@@ -10,7 +10,7 @@
 #include "geoanchor/solver/network_adjustment.hpp"
 #include "network_free_datum.hpp"
 #include "network_problem.hpp"
-#include "sparse_factor.hpp"
+#include "sparse/sparse_factor.hpp"
 
 namespace geoanchor::solver {
 

@@ -2,7 +2,7 @@
 // gathers its columns of N, subtracts the update of every supernode below
 // it whose rows reach its columns, and factors its block.
 
-#include "supernodal_cholesky.hpp"
+#include "sparse/supernodal_cholesky.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -13,7 +13,7 @@
 #include <system_error>
 #include <thread>
 
-#include "dense_kernels.hpp"
+#include "sparse/dense_kernels.hpp"
 #include "geoanchor/geodesy/parallel.hpp"
 
 namespace geoanchor::solver {

@@ -15,8 +15,8 @@
 #include <optional>
 #include <vector>
 
-#include "sparse_factor.hpp"
-#include "supernodal_cholesky.hpp"
+#include "sparse/sparse_factor.hpp"
+#include "sparse/supernodal_cholesky.hpp"
 
 namespace geoanchor::solver {
 

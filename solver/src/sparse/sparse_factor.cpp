@@ -1,6 +1,6 @@
 // CHOLMOD's sparse Cholesky and the Takahashi equations on its factor.
 
-#include "sparse_factor.hpp"
+#include "sparse/sparse_factor.hpp"
 
 #include <cholmod.h>
 #include <sys/resource.h>
@@ -23,9 +23,9 @@
 
 #include "geoanchor/geodesy/error.hpp"
 #include "geoanchor/geodesy/parallel.hpp"
-#include "dense_kernels.hpp"
-#include "sparse_factor_impl.hpp"
-#include "supernodal_cholesky.hpp"
+#include "sparse/dense_kernels.hpp"
+#include "sparse/sparse_factor_impl.hpp"
+#include "sparse/supernodal_cholesky.hpp"
 
 namespace geoanchor::solver {
 
