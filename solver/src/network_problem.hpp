@@ -79,8 +79,8 @@ struct NetworkProblem {
   std::vector<Eigen::MatrixXd> whitening;  // per measurement: W with Wᵀ W = C⁻¹
   std::vector<bool> active;                // measurements in the adjustment
   // Measurements removed by data snooping whose entries stay in the normal
-  // matrix as zeros, so that its pattern (and CHOLMOD's analysis) is the
-  // first pass's: the next pass refactors numerically only.
+  // matrix as zeros, so that its pattern (and its ordering and symbolic
+  // analysis) is the first pass's: the next pass refactors numerically only.
   std::vector<bool> pattern_only;
   std::vector<bool> station_used;
   UnknownLayout layout;
