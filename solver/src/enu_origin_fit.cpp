@@ -71,6 +71,132 @@ struct EnuOriginCost {
   }
 };
 
+// Per point: map ENU, target relative to the nominal origin, whitening of
+// C_target + J C_source Jᵀ with J the linear part of the correction (the
+// identity before the first solve; the yaw turns the map's covariance).
+struct Obs {
+  Eigen::Vector3d enu, target_rel;
+  Eigen::Matrix3d w;
+};
+
+Eigen::Matrix3d whitening(const geodesy::ControlSet& control, const geodesy::ControlPoint& p, const Eigen::Matrix3d& j) {
+  const Eigen::Matrix3d c = control.has_a_priori_sigmas ? Eigen::Matrix3d(p.target_cov_m2 + j * p.source_cov_m2 * j.transpose())
+                                                        : Eigen::Matrix3d::Identity();
+  const Eigen::LLT<Eigen::Matrix3d> llt(c);
+  if (llt.info() != Eigen::Success) {
+    throw Error(ErrorKind::input, "E_SIGMA", control.source_name + ":" + std::to_string(p.line) + ": id=" + p.id +
+                                                 ": combined covariance is not positive definite");
+  }
+  return Eigen::Matrix3d(llt.matrixL().solve(Eigen::Matrix3d::Identity()));
+}
+
+// The nominal origin's radii and axes.
+Nominal nominal_at(const geodesy::LocalOrigin& origin, const geodesy::LocalTangentPlane& plane) {
+  const geodesy::Ellipsoid& e = origin.ellipsoid;
+  Nominal nominal;
+  nominal.lat_rad = origin.point.lat.rad();
+  nominal.lon_rad = origin.point.lon.rad();
+  const double sphi = std::sin(nominal.lat_rad);
+  const double w2 = 1.0 - e.e2() * sphi * sphi;
+  nominal.meridian_radius_m = e.a_m() * (1.0 - e.e2()) / (w2 * std::sqrt(w2)) + origin.point.h.m;
+  nominal.normal_radius_m = e.a_m() / std::sqrt(w2) + origin.point.h.m;
+  nominal.enu_from_ecef = plane.enu_from_ecef_rotation();
+  return nominal;
+}
+
+// The correction as solved: shift (m), yaw·L and ds·L (the Ceres problem
+// holds these blocks), its problem and the solver's summary. The blocks lie
+// in memory in this order, yaw and ds below shift: ceres::Covariance takes
+// the parameter blocks in the order of their addresses, and the
+// covariance's last bits follow that order.
+struct EnuOriginSolution {
+  double yaw[1] = {0}, ds[1] = {0}, shift[3] = {0, 0, 0};
+  std::unique_ptr<ceres::Problem> problem;
+  std::vector<const double*> blocks;
+  ceres::Solver::Summary summary;
+};
+
+// Solves over the marks in use, with weights from J of the estimate until J
+// settles (`weights_j`: the J the weights were made with, carried between
+// passes of the fit).
+void solve_enu_origin(EnuOriginSolution& s, std::vector<Obs>& all, const std::vector<std::size_t>& active,
+                      const geodesy::ControlSet& control, const FitOptions& o, const Nominal& nominal,
+                      Eigen::Matrix3d& weights_j) {
+  constexpr int kMaxWeightPasses = 5;
+  constexpr double kWeightChange = 1e-12;  // change of J between passes
+  for (int pass = 0; pass < kMaxWeightPasses; ++pass) {
+    s.problem = std::make_unique<ceres::Problem>();
+    for (std::size_t i : active) {
+      s.problem->AddResidualBlock(new ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1>(
+                                      new EnuOriginCost{all[i].enu, all[i].target_rel, all[i].w, &nominal}),
+                                  nullptr, s.shift, s.yaw, s.ds);
+    }
+    s.blocks = {s.shift};
+    if (o.enu_yaw) {
+      s.blocks.push_back(s.yaw);
+    } else {
+      s.problem->SetParameterBlockConstant(s.yaw);
+    }
+    if (o.enu_scale) {
+      s.blocks.push_back(s.ds);
+    } else {
+      s.problem->SetParameterBlockConstant(s.ds);
+    }
+    s.summary = solve_tightly(*s.problem, ceres::DENSE_QR, o.max_solver_iterations);
+    if (!control.has_a_priori_sigmas) break;
+    const Eigen::Matrix3d j = geodesy::enu_origin_correction(*o.nominal_origin, Eigen::Vector3d(s.shift[0], s.shift[1], s.shift[2]),
+                                                             Angle::radians(s.yaw[0] / nominal.l_m),
+                                                             geodesy::ScaleDifference::unitless(s.ds[0] / nominal.l_m))
+                                  .linear();
+    if ((j - weights_j).cwiseAbs().maxCoeff() <= kWeightChange) break;
+    weights_j = j;
+    for (std::size_t i = 0; i < control.points.size(); ++i) all[i].w = whitening(control, control.points[i], weights_j);
+  }
+}
+
+// Parameters in their reporting units, covariance likewise; the corrected
+// origin with sigmas from the shift's.
+void report_enu_origin(FitResult& result, const FitOptions& o, const Nominal& nominal, const Eigen::MatrixXd& cov_scaled,
+                       const EnuOriginSolution& s, const geodesy::GeodeticPosition& corrected, double yaw_rad,
+                       double ds_unitless) {
+  const int u = static_cast<int>(cov_scaled.rows());
+  const double* shift = s.shift;
+  Eigen::MatrixXd cov = cov_scaled;
+  if (o.scale_by_sigma0 && result.sigma0) cov *= *result.sigma0 * *result.sigma0;
+  result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && result.sigma0.has_value();
+  std::vector<double> factor = {1.0, 1.0, 1.0};
+  result.covariance_names = {"shift_e_m", "shift_n_m", "shift_u_m"};
+  if (o.enu_yaw) {
+    factor.push_back(kArcsecPerRad / nominal.l_m);
+    result.covariance_names.emplace_back("yaw_arcsec");
+  }
+  if (o.enu_scale) {
+    factor.push_back(1e6 / nominal.l_m);
+    result.covariance_names.emplace_back("ds_ppm");
+  }
+  const Eigen::VectorXd f = Eigen::Map<Eigen::VectorXd>(factor.data(), u);
+  result.covariance = symmetric(f.asDiagonal() * cov * f.asDiagonal());
+  result.correlation = correlation_of(result.covariance);
+  auto sigma_of = [&](const std::string& name) {
+    for (int a = 0; a < u; ++a) {
+      if (result.covariance_names[static_cast<std::size_t>(a)] == name) return std::sqrt(result.covariance(a, a));
+    }
+    return 0.0;
+  };
+  result.parameters = {
+      Parameter{"shift_e_m", shift[0], sigma_of("shift_e_m"), true},
+      Parameter{"shift_n_m", shift[1], sigma_of("shift_n_m"), true},
+      Parameter{"shift_u_m", shift[2], sigma_of("shift_u_m"), true},
+      Parameter{"yaw_arcsec", yaw_rad * kArcsecPerRad, sigma_of("yaw_arcsec"), o.enu_yaw},
+      Parameter{"ds_ppm", ds_unitless * 1e6, sigma_of("ds_ppm"), o.enu_scale},
+      // The corrected origin, with sigmas from the shift's (E, N, U -> degrees, degrees, metres).
+      Parameter{"origin_lat_deg", corrected.lat.deg(), sigma_of("shift_n_m") / nominal.meridian_radius_m * 180.0 / M_PI, false},
+      Parameter{"origin_lon_deg", corrected.lon.deg(),
+                sigma_of("shift_e_m") / (nominal.normal_radius_m * std::cos(nominal.lat_rad)) * 180.0 / M_PI, false},
+      Parameter{"origin_h_m", corrected.h.m, sigma_of("shift_u_m"), false},
+  };
+}
+
 }  // namespace
 
 FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& options) {
@@ -85,15 +211,7 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
   result.nominal_origin = o.nominal_origin;
   note_missing_sigmas(result, o, control);
   const geodesy::LocalTangentPlane plane(*o.nominal_origin);
-  const geodesy::Ellipsoid& e = o.nominal_origin->ellipsoid;
-  Nominal nominal;
-  nominal.lat_rad = o.nominal_origin->point.lat.rad();
-  nominal.lon_rad = o.nominal_origin->point.lon.rad();
-  const double sphi = std::sin(nominal.lat_rad);
-  const double w2 = 1.0 - e.e2() * sphi * sphi;
-  nominal.meridian_radius_m = e.a_m() * (1.0 - e.e2()) / (w2 * std::sqrt(w2)) + o.nominal_origin->point.h.m;
-  nominal.normal_radius_m = e.a_m() / std::sqrt(w2) + o.nominal_origin->point.h.m;
-  nominal.enu_from_ecef = plane.enu_from_ecef_rotation();
+  Nominal nominal = nominal_at(*o.nominal_origin, plane);
 
   std::vector<std::size_t> active = init_points(result, control, o);
   const int u = 3 + (o.enu_yaw ? 1 : 0) + (o.enu_scale ? 1 : 0);
@@ -101,27 +219,10 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
   result.w_critical = levels.w_critical;
   const geodesy::GeocentricConverter geocentric(geodesy::Ellipsoid::wgs84());
 
-  // Per point: map ENU, target relative to the nominal origin, whitening of
-  // C_target + J C_source Jᵀ with J the linear part of the correction (the
-  // identity before the first solve; the yaw turns the map's covariance).
-  struct Obs {
-    Eigen::Vector3d enu, target_rel;
-    Eigen::Matrix3d w;
-  };
-  auto whitening = [&](const geodesy::ControlPoint& p, const Eigen::Matrix3d& j) {
-    const Eigen::Matrix3d c = control.has_a_priori_sigmas ? Eigen::Matrix3d(p.target_cov_m2 + j * p.source_cov_m2 * j.transpose())
-                                                          : Eigen::Matrix3d::Identity();
-    const Eigen::LLT<Eigen::Matrix3d> llt(c);
-    if (llt.info() != Eigen::Success) {
-      throw Error(ErrorKind::input, "E_SIGMA", control.source_name + ":" + std::to_string(p.line) + ": id=" + p.id +
-                                                   ": combined covariance is not positive definite");
-    }
-    return Eigen::Matrix3d(llt.matrixL().solve(Eigen::Matrix3d::Identity()));
-  };
   std::vector<Obs> all(control.points.size());
   for (std::size_t i = 0; i < control.points.size(); ++i) {
     const auto& p = control.points[i];
-    all[i] = Obs{plane.enu_from_ecef(p.source).enu_m, p.target.m - plane.origin_ecef_m(), whitening(p, Eigen::Matrix3d::Identity())};
+    all[i] = Obs{plane.enu_from_ecef(p.source).enu_m, p.target.m - plane.origin_ecef_m(), whitening(control, p, Eigen::Matrix3d::Identity())};
   }
   Eigen::Matrix3d weights_j = Eigen::Matrix3d::Identity();  // the J the weights were made with
 
@@ -138,42 +239,12 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
       reject("E_FIT_COINCIDENT", "the map points lie within " + fmt(nominal.l_m) +
                                      " m of the origin horizontally: yaw and scale are not observable; use --fix-yaw");
     }
-
-    double shift[3] = {0, 0, 0}, yaw[1] = {0}, ds[1] = {0};
-    std::unique_ptr<ceres::Problem> problem;
-    std::vector<const double*> blocks;
-    ceres::Solver::Summary summary;
-    constexpr int kMaxWeightPasses = 5;
-    constexpr double kWeightChange = 1e-12;  // change of J between passes
-    for (int pass = 0; pass < kMaxWeightPasses; ++pass) {
-      problem = std::make_unique<ceres::Problem>();
-      for (std::size_t i : active) {
-        problem->AddResidualBlock(new ceres::AutoDiffCostFunction<EnuOriginCost, 3, 3, 1, 1>(
-                                      new EnuOriginCost{all[i].enu, all[i].target_rel, all[i].w, &nominal}),
-                                  nullptr, shift, yaw, ds);
-      }
-      blocks = {shift};
-      if (o.enu_yaw) {
-        blocks.push_back(yaw);
-      } else {
-        problem->SetParameterBlockConstant(yaw);
-      }
-      if (o.enu_scale) {
-        blocks.push_back(ds);
-      } else {
-        problem->SetParameterBlockConstant(ds);
-      }
-      summary = solve_tightly(*problem, ceres::DENSE_QR, o.max_solver_iterations);
-      if (!control.has_a_priori_sigmas) break;
-      const Eigen::Matrix3d j = geodesy::enu_origin_correction(*o.nominal_origin, Eigen::Vector3d(shift[0], shift[1], shift[2]),
-                                                               Angle::radians(yaw[0] / nominal.l_m),
-                                                               geodesy::ScaleDifference::unitless(ds[0] / nominal.l_m))
-                                    .linear();
-      if ((j - weights_j).cwiseAbs().maxCoeff() <= kWeightChange) break;
-      weights_j = j;
-      for (std::size_t i = 0; i < control.points.size(); ++i) all[i].w = whitening(control.points[i], weights_j);
-    }
-    const Eigen::MatrixXd cov_scaled = covariance_or_reject(*problem, blocks, u);
+    EnuOriginSolution solution;
+    solve_enu_origin(solution, all, active, control, o, nominal, weights_j);
+    double* shift = solution.shift;
+    double* yaw = solution.yaw;
+    double* ds = solution.ds;
+    const Eigen::MatrixXd cov_scaled = covariance_or_reject(*solution.problem, solution.blocks, u);
     // Every estimated parameter moves the points by metres at the map's RMS
     // radius (yaw and scale are solved times L): the geometry check applies as is.
     const GeometryDilution gd = geometry_dilution(cov_scaled, {0, 1, 2});
@@ -238,49 +309,15 @@ FitResult fit_enu_origin(const geodesy::ControlSet& control, const FitOptions& o
       if (!in_fit[i]) tests(i, control.points[i].target.m - result.ecef_map->apply(control.points[i].source.m), false, 0);
     }
 
-    // Parameters in their reporting units, covariance likewise.
-    Eigen::MatrixXd cov = cov_scaled;
-    if (o.scale_by_sigma0 && result.sigma0) cov *= *result.sigma0 * *result.sigma0;
-    result.covariance_scaled_by_sigma0 = o.scale_by_sigma0 && result.sigma0.has_value();
-    std::vector<double> factor = {1.0, 1.0, 1.0};
-    result.covariance_names = {"shift_e_m", "shift_n_m", "shift_u_m"};
-    if (o.enu_yaw) {
-      factor.push_back(kArcsecPerRad / nominal.l_m);
-      result.covariance_names.emplace_back("yaw_arcsec");
-    }
-    if (o.enu_scale) {
-      factor.push_back(1e6 / nominal.l_m);
-      result.covariance_names.emplace_back("ds_ppm");
-    }
-    const Eigen::VectorXd f = Eigen::Map<Eigen::VectorXd>(factor.data(), u);
-    result.covariance = symmetric(f.asDiagonal() * cov * f.asDiagonal());
-    result.correlation = correlation_of(result.covariance);
-    auto sigma_of = [&](const std::string& name) {
-      for (int a = 0; a < u; ++a) {
-        if (result.covariance_names[static_cast<std::size_t>(a)] == name) return std::sqrt(result.covariance(a, a));
-      }
-      return 0.0;
-    };
-    result.parameters = {
-        Parameter{"shift_e_m", shift[0], sigma_of("shift_e_m"), true},
-        Parameter{"shift_n_m", shift[1], sigma_of("shift_n_m"), true},
-        Parameter{"shift_u_m", shift[2], sigma_of("shift_u_m"), true},
-        Parameter{"yaw_arcsec", yaw_rad * kArcsecPerRad, sigma_of("yaw_arcsec"), o.enu_yaw},
-        Parameter{"ds_ppm", ds_unitless * 1e6, sigma_of("ds_ppm"), o.enu_scale},
-        // The corrected origin, with sigmas from the shift's (E, N, U -> degrees, degrees, metres).
-        Parameter{"origin_lat_deg", corrected.lat.deg(), sigma_of("shift_n_m") / nominal.meridian_radius_m * 180.0 / M_PI, false},
-        Parameter{"origin_lon_deg", corrected.lon.deg(),
-                  sigma_of("shift_e_m") / (nominal.normal_radius_m * std::cos(nominal.lat_rad)) * 180.0 / M_PI, false},
-        Parameter{"origin_h_m", corrected.h.m, sigma_of("shift_u_m"), false},
-    };
+    report_enu_origin(result, o, nominal, cov_scaled, solution, corrected, yaw_rad, ds_unitless);
     if (!(gd.dilution <= kWarnDilution)) {
       result.warnings.push_back("weak geometry: the map points determine the " +
                                 std::string(o.enu_scale ? "yaw and scale" : "yaw") + " " + fmt(gd.dilution, 3) +
                                 " times less precisely than the shift");
     }
     add_statistics_warnings(result, options);
-    result.ceres_iterations = static_cast<int>(summary.iterations.size());
-    result.ceres_report = summary.BriefReport();
+    result.ceres_iterations = static_cast<int>(solution.summary.iterations.size());
+    result.ceres_report = solution.summary.BriefReport();
     return result;
   }
 }

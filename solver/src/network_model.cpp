@@ -69,6 +69,252 @@ Eigen::RowVector3d to_local(const Eigen::Vector3d& g, const StationState& st) {
   return (st.axes * g).transpose();
 }
 
+// One measurement's evaluation under way: the measurement, its context and
+// the Evaluation being filled, with what every model uses; a method per
+// kind of measurement (evaluate picks it).
+struct Evaluator {
+  Evaluator(const geodesy::NetworkMeasurement& measurement, const ModelContext& context);
+
+  const geodesy::NetworkMeasurement& m;
+  const ModelContext& c;
+  const geodesy::Network& net;
+  const bool local;
+  const std::vector<StationState>& st;
+  Evaluation ev;
+
+  void put(Eigen::Index row, std::size_t which, const Eigen::Vector3d& g) {
+    ev.d_local.block<1, 3>(row, static_cast<Eigen::Index>(3 * which)) = to_local(g, st[m.stations[which]]);
+  }
+  const StationState& station_of(std::size_t which) const { return st[m.stations[which]]; }
+  void need_horizontal(const Sight& s) const {
+    if (!(s.horizontal > 1e-6)) {
+      fail(m, "E_NETWORK_GEOMETRY",
+           "stations " + net.stations[m.stations[0]].id + " and " + net.stations[m.stations[1]].id +
+               " are on one vertical: no horizontal direction or distance between them");
+    }
+  }
+  // The geoid undulation at a station, for orthometric heights.
+  double undulation(std::size_t station) const {
+    if (!c.options.geoid) {
+      fail(m, "E_GEOID_MISSING",
+           "orthometric heights need the geoid: give --geoid NAME|PATH (EGM96, a grid PROJ reads)");
+    }
+    const StationState& s = st[station];
+    return c.options.geoid->undulation_m(geodesy::Angle::radians(s.lat_rad), geodesy::Angle::radians(s.lon_rad),
+                                        m.source + ": station " + net.stations[station].id);
+  }
+
+  // GNSS baselines: the differences of their ends' positions.
+  void gnss_baselines();
+  // A GNSS point cluster: the positions themselves.
+  void gnss_points();
+  // The distance between the instrument and target points.
+  void slope_distance();
+  // That distance in the instrument's horizon.
+  void horizontal_distance();
+  // The geodesic between the stations' footpoints on the ellipsoid.
+  void ellipsoid_arc();
+  // The chord between the stations' footpoints on the ellipsoid.
+  void chord_distance();
+  // A station's geodetic latitude or longitude.
+  void geodetic_coordinate();
+  // A direction (less its set's orientation) or an azimuth.
+  void bearing_to();
+  // The angle at a station from one target to another.
+  void horizontal_angle();
+  // A zenith or vertical angle, with refraction.
+  void zenith_angle();
+  // A levelled height difference (orthometric heights on the ellipsoid).
+  void height_difference();
+  // A station's ellipsoidal or orthometric height.
+  void height();
+};
+
+Evaluator::Evaluator(const geodesy::NetworkMeasurement& measurement, const ModelContext& context)
+    : m(measurement), c(context), net(context.net), local(context.net.space == NetworkSpace::local), st(context.stations) {
+  ev.stations = m.stations;
+  const Eigen::Index rows = m.value.size();
+  ev.computed = Eigen::VectorXd::Zero(rows);
+  ev.d_local = Eigen::MatrixXd::Zero(rows, static_cast<Eigen::Index>(3 * m.stations.size()));
+}
+
+void Evaluator::gnss_baselines() {
+  for (std::size_t p = 0; p + 1 < m.stations.size(); p += 2) {
+    const Eigen::Index row = static_cast<Eigen::Index>(3 * (p / 2));
+    ev.computed.segment<3>(row) = station_of(p + 1).x - station_of(p).x;
+    for (int k = 0; k < 3; ++k) {
+      put(row + k, p + 1, Eigen::Vector3d::Unit(k));
+      put(row + k, p, -Eigen::Vector3d::Unit(k));
+    }
+  }
+}
+
+void Evaluator::gnss_points() {
+  for (std::size_t p = 0; p < m.stations.size(); ++p) {
+    const Eigen::Index row = static_cast<Eigen::Index>(3 * p);
+    ev.computed.segment<3>(row) = station_of(p).x;
+    for (int k = 0; k < 3; ++k) put(row + k, p, Eigen::Vector3d::Unit(k));
+  }
+}
+
+void Evaluator::slope_distance() {
+  const Sight s = sight(m, station_of(0), station_of(1));
+  if (!(s.slope > 1e-6)) fail(m, "E_NETWORK_GEOMETRY", "the two points coincide");
+  ev.computed(0) = s.slope;
+  put(0, 1, s.d / s.slope);
+  put(0, 0, -s.d / s.slope);
+}
+
+void Evaluator::horizontal_distance() {
+  const Sight s = sight(m, station_of(0), station_of(1));
+  need_horizontal(s);
+  ev.computed(0) = s.horizontal;
+  const Eigen::Vector3d g = (s.east * s.e + s.north * s.n) / s.horizontal;
+  put(0, 1, g);
+  put(0, 0, -g);
+}
+
+void Evaluator::ellipsoid_arc() {
+  if (local) fail(m, "E_NETWORK_KIND", "an ellipsoid arc needs a network on the ellipsoid");
+  const StationState& a = station_of(0);
+  const StationState& b = station_of(1);
+  const auto line = geodesy::geodesic_inverse(net.ellipsoid, geodesy::Angle::radians(a.lat_rad), geodesy::Angle::radians(a.lon_rad),
+                                              geodesy::Angle::radians(b.lat_rad), geodesy::Angle::radians(b.lon_rad));
+  ev.computed(0) = line.length_m;
+  // Moving an end along its local north or east moves its footpoint by
+  // that much times ρ/(ρ + h) (ρ: the meridian or prime-vertical radius).
+  auto gradient = [&](const StationState& s, geodesy::Angle azimuth, double sign) {
+    const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
+    const double w = std::sqrt(1.0 - e2 * std::sin(s.lat_rad) * std::sin(s.lat_rad));
+    const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
+    const Eigen::Vector3d e = s.local_from_xyz.row(0).transpose(), n = s.local_from_xyz.row(1).transpose();
+    return Eigen::Vector3d(sign * (std::cos(azimuth.rad()) * meridian / (meridian + s.h_m) * n +
+                                   std::sin(azimuth.rad()) * prime / (prime + s.h_m) * e));
+  };
+  put(0, 1, gradient(b, line.azimuth2, 1.0));
+  put(0, 0, gradient(a, line.azimuth1, -1.0));
+}
+
+void Evaluator::chord_distance() {
+  if (local) fail(m, "E_NETWORK_KIND", "a chord distance needs a network on the ellipsoid");
+  // The footpoints: each station moved down its normal to the ellipsoid.
+  const StationState& a = station_of(0);
+  const StationState& b = station_of(1);
+  const Eigen::Vector3d fa = a.x - a.h_m * a.local_from_xyz.row(2).transpose();
+  const Eigen::Vector3d fb = b.x - b.h_m * b.local_from_xyz.row(2).transpose();
+  const Eigen::Vector3d d = fb - fa;
+  const double chord = d.norm();
+  if (!(chord > 1e-6)) fail(m, "E_NETWORK_GEOMETRY", "the two footpoints coincide");
+  ev.computed(0) = chord;
+  // A footpoint moves with its station's horizontal motion scaled by ρ/(ρ + h).
+  auto gradient = [&](const StationState& s, double sign) {
+    const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
+    const double w = std::sqrt(1.0 - e2 * std::sin(s.lat_rad) * std::sin(s.lat_rad));
+    const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
+    const Eigen::Vector3d e = s.local_from_xyz.row(0).transpose(), n = s.local_from_xyz.row(1).transpose();
+    const Eigen::Vector3d unit = d / chord;
+    return Eigen::Vector3d(sign * (unit.dot(n) * meridian / (meridian + s.h_m) * n + unit.dot(e) * prime / (prime + s.h_m) * e));
+  };
+  put(0, 1, gradient(b, 1.0));
+  put(0, 0, gradient(a, -1.0));
+}
+
+void Evaluator::geodetic_coordinate() {
+  if (local) fail(m, "E_NETWORK_KIND", "a geodetic latitude or longitude needs a network on the ellipsoid");
+  const StationState& a = station_of(0);
+  const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
+  const double w = std::sqrt(1.0 - e2 * std::sin(a.lat_rad) * std::sin(a.lat_rad));
+  const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
+  if (m.kind == MeasurementKind::geodetic_latitude) {
+    ev.computed(0) = a.lat_rad;
+    put(0, 0, a.local_from_xyz.row(1).transpose() / (meridian + a.h_m));
+  } else {
+    ev.computed(0) = a.lon_rad;
+    put(0, 0, a.local_from_xyz.row(0).transpose() / ((prime + a.h_m) * std::cos(a.lat_rad)));
+  }
+}
+
+void Evaluator::bearing_to() {
+  const Sight s = sight(m, station_of(0), station_of(1));
+  need_horizontal(s);
+  Eigen::Vector3d g;
+  const double b = bearing(s, net, g);
+  if (m.kind == MeasurementKind::direction) {
+    ev.computed(0) = b - c.orientations[*m.set];
+    ev.orientation = true;
+  } else {
+    ev.computed(0) = b;
+  }
+  put(0, 1, g);
+  put(0, 0, -g);
+}
+
+void Evaluator::horizontal_angle() {
+  // at, from (backsight), to (foresight)
+  const StationState& at = station_of(0);
+  const Sight back = sight(m, at, station_of(1));
+  const Sight fore = sight(m, at, station_of(2));
+  need_horizontal(back);
+  need_horizontal(fore);
+  Eigen::Vector3d gb, gf;
+  const double bb = bearing(back, net, gb), bf = bearing(fore, net, gf);
+  ev.computed(0) = bf - bb;
+  put(0, 2, gf);
+  put(0, 1, -gb);
+  put(0, 0, gb - gf);
+}
+
+void Evaluator::zenith_angle() {
+  const Sight s = sight(m, station_of(0), station_of(1));
+  need_horizontal(s);
+  const double z = std::atan2(s.horizontal, s.up);
+  const double r2 = s.horizontal * s.horizontal + s.up * s.up;
+  const Eigen::Vector3d dh = (s.east * s.e + s.north * s.n) / s.horizontal;
+  Eigen::Vector3d g = (s.up * dh - s.horizontal * s.u) / r2;
+  double value = z;
+  if (c.options.refraction_k != 0.0 && !local) {
+    // The line of sight bends towards the ground: the observed zenith
+    // angle is smaller than the geometric one by k·s / (2R).
+    const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
+    const double sl = std::sin(station_of(0).lat_rad);
+    const double radius = a_m * std::sqrt(1.0 - e2) / (1.0 - e2 * sl * sl);  // Gaussian mean radius
+    value -= c.options.refraction_k * s.slope / (2.0 * radius);
+    g -= c.options.refraction_k / (2.0 * radius) * s.d / s.slope;
+  }
+  if (m.kind == MeasurementKind::vertical_angle) {
+    value = std::numbers::pi / 2.0 - value;
+    g = -g;
+  }
+  ev.computed(0) = value;
+  put(0, 1, g);
+  put(0, 0, -g);
+}
+
+void Evaluator::height_difference() {
+  const StationState& a = station_of(0);
+  const StationState& b = station_of(1);
+  if (local) {
+    ev.computed(0) = b.x.z() - a.x.z();
+    put(0, 1, Eigen::Vector3d::UnitZ());
+    put(0, 0, -Eigen::Vector3d::UnitZ());
+  } else {
+    ev.computed(0) = (b.h_m - undulation(m.stations[1])) - (a.h_m - undulation(m.stations[0]));
+    put(0, 1, b.local_from_xyz.row(2).transpose());
+    put(0, 0, -a.local_from_xyz.row(2).transpose());
+  }
+}
+
+void Evaluator::height() {
+  const StationState& a = station_of(0);
+  if (local) {
+    ev.computed(0) = a.x.z();
+    put(0, 0, Eigen::Vector3d::UnitZ());
+  } else {
+    ev.computed(0) = a.h_m - (m.kind == MeasurementKind::orthometric_height ? undulation(m.stations[0]) : 0.0);
+    put(0, 0, a.local_from_xyz.row(2).transpose());
+  }
+}
+
 }  // namespace
 
 bool is_angular(MeasurementKind k) {
@@ -109,220 +355,50 @@ Eigen::VectorXd misclosure(const geodesy::NetworkMeasurement& m, const Eigen::Ve
 }
 
 Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c) {
-  const geodesy::Network& net = c.net;
-  const bool local = net.space == NetworkSpace::local;
-  const auto& st = c.stations;
-  Evaluation ev;
-  ev.stations = m.stations;
-  const Eigen::Index rows = m.value.size();
-  ev.computed = Eigen::VectorXd::Zero(rows);
-  ev.d_local = Eigen::MatrixXd::Zero(rows, static_cast<Eigen::Index>(3 * m.stations.size()));
-  auto put = [&](Eigen::Index row, std::size_t which, const Eigen::Vector3d& g) {
-    ev.d_local.block<1, 3>(row, static_cast<Eigen::Index>(3 * which)) = to_local(g, st[m.stations[which]]);
-  };
-  auto station_of = [&](std::size_t which) -> const StationState& { return st[m.stations[which]]; };
-  auto need_horizontal = [&](const Sight& s) {
-    if (!(s.horizontal > 1e-6)) {
-      fail(m, "E_NETWORK_GEOMETRY",
-           "stations " + net.stations[m.stations[0]].id + " and " + net.stations[m.stations[1]].id +
-               " are on one vertical: no horizontal direction or distance between them");
-    }
-  };
-  // The geoid undulation at a station, for orthometric heights.
-  auto undulation = [&](std::size_t station) {
-    if (!c.options.geoid) {
-      fail(m, "E_GEOID_MISSING",
-           "orthometric heights need the geoid: give --geoid NAME|PATH (EGM96, a grid PROJ reads)");
-    }
-    const StationState& s = st[station];
-    return c.options.geoid->undulation_m(geodesy::Angle::radians(s.lat_rad), geodesy::Angle::radians(s.lon_rad),
-                                        m.source + ": station " + net.stations[station].id);
-  };
-
+  Evaluator e(m, c);
   switch (m.kind) {
-    case MeasurementKind::gnss_baselines: {
-      for (std::size_t p = 0; p + 1 < m.stations.size(); p += 2) {
-        const Eigen::Index row = static_cast<Eigen::Index>(3 * (p / 2));
-        ev.computed.segment<3>(row) = station_of(p + 1).x - station_of(p).x;
-        for (int k = 0; k < 3; ++k) {
-          put(row + k, p + 1, Eigen::Vector3d::Unit(k));
-          put(row + k, p, -Eigen::Vector3d::Unit(k));
-        }
-      }
+    case MeasurementKind::gnss_baselines:
+      e.gnss_baselines();
       break;
-    }
-    case MeasurementKind::gnss_points: {
-      for (std::size_t p = 0; p < m.stations.size(); ++p) {
-        const Eigen::Index row = static_cast<Eigen::Index>(3 * p);
-        ev.computed.segment<3>(row) = station_of(p).x;
-        for (int k = 0; k < 3; ++k) put(row + k, p, Eigen::Vector3d::Unit(k));
-      }
+    case MeasurementKind::gnss_points:
+      e.gnss_points();
       break;
-    }
-    case MeasurementKind::slope_distance: {
-      const Sight s = sight(m, station_of(0), station_of(1));
-      if (!(s.slope > 1e-6)) fail(m, "E_NETWORK_GEOMETRY", "the two points coincide");
-      ev.computed(0) = s.slope;
-      put(0, 1, s.d / s.slope);
-      put(0, 0, -s.d / s.slope);
+    case MeasurementKind::slope_distance:
+      e.slope_distance();
       break;
-    }
-    case MeasurementKind::horizontal_distance: {
-      const Sight s = sight(m, station_of(0), station_of(1));
-      need_horizontal(s);
-      ev.computed(0) = s.horizontal;
-      const Eigen::Vector3d g = (s.east * s.e + s.north * s.n) / s.horizontal;
-      put(0, 1, g);
-      put(0, 0, -g);
+    case MeasurementKind::horizontal_distance:
+      e.horizontal_distance();
       break;
-    }
-    case MeasurementKind::ellipsoid_arc: {
-      if (local) fail(m, "E_NETWORK_KIND", "an ellipsoid arc needs a network on the ellipsoid");
-      const StationState& a = station_of(0);
-      const StationState& b = station_of(1);
-      const auto line = geodesy::geodesic_inverse(net.ellipsoid, geodesy::Angle::radians(a.lat_rad), geodesy::Angle::radians(a.lon_rad),
-                                                  geodesy::Angle::radians(b.lat_rad), geodesy::Angle::radians(b.lon_rad));
-      ev.computed(0) = line.length_m;
-      // Moving an end along its local north or east moves its footpoint by
-      // that much times ρ/(ρ + h) (ρ: the meridian or prime-vertical radius).
-      auto gradient = [&](const StationState& s, geodesy::Angle azimuth, double sign) {
-        const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
-        const double w = std::sqrt(1.0 - e2 * std::sin(s.lat_rad) * std::sin(s.lat_rad));
-        const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
-        const Eigen::Vector3d e = s.local_from_xyz.row(0).transpose(), n = s.local_from_xyz.row(1).transpose();
-        return Eigen::Vector3d(sign * (std::cos(azimuth.rad()) * meridian / (meridian + s.h_m) * n +
-                                       std::sin(azimuth.rad()) * prime / (prime + s.h_m) * e));
-      };
-      put(0, 1, gradient(b, line.azimuth2, 1.0));
-      put(0, 0, gradient(a, line.azimuth1, -1.0));
+    case MeasurementKind::ellipsoid_arc:
+      e.ellipsoid_arc();
       break;
-    }
-    case MeasurementKind::chord_distance: {
-      if (local) fail(m, "E_NETWORK_KIND", "a chord distance needs a network on the ellipsoid");
-      // The footpoints: each station moved down its normal to the ellipsoid.
-      const StationState& a = station_of(0);
-      const StationState& b = station_of(1);
-      const Eigen::Vector3d fa = a.x - a.h_m * a.local_from_xyz.row(2).transpose();
-      const Eigen::Vector3d fb = b.x - b.h_m * b.local_from_xyz.row(2).transpose();
-      const Eigen::Vector3d d = fb - fa;
-      const double chord = d.norm();
-      if (!(chord > 1e-6)) fail(m, "E_NETWORK_GEOMETRY", "the two footpoints coincide");
-      ev.computed(0) = chord;
-      // A footpoint moves with its station's horizontal motion scaled by ρ/(ρ + h).
-      auto gradient = [&](const StationState& s, double sign) {
-        const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
-        const double w = std::sqrt(1.0 - e2 * std::sin(s.lat_rad) * std::sin(s.lat_rad));
-        const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
-        const Eigen::Vector3d e = s.local_from_xyz.row(0).transpose(), n = s.local_from_xyz.row(1).transpose();
-        const Eigen::Vector3d unit = d / chord;
-        return Eigen::Vector3d(sign * (unit.dot(n) * meridian / (meridian + s.h_m) * n + unit.dot(e) * prime / (prime + s.h_m) * e));
-      };
-      put(0, 1, gradient(b, 1.0));
-      put(0, 0, gradient(a, -1.0));
+    case MeasurementKind::chord_distance:
+      e.chord_distance();
       break;
-    }
     case MeasurementKind::geodetic_latitude:
-    case MeasurementKind::geodetic_longitude: {
-      if (local) fail(m, "E_NETWORK_KIND", "a geodetic latitude or longitude needs a network on the ellipsoid");
-      const StationState& a = station_of(0);
-      const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
-      const double w = std::sqrt(1.0 - e2 * std::sin(a.lat_rad) * std::sin(a.lat_rad));
-      const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
-      if (m.kind == MeasurementKind::geodetic_latitude) {
-        ev.computed(0) = a.lat_rad;
-        put(0, 0, a.local_from_xyz.row(1).transpose() / (meridian + a.h_m));
-      } else {
-        ev.computed(0) = a.lon_rad;
-        put(0, 0, a.local_from_xyz.row(0).transpose() / ((prime + a.h_m) * std::cos(a.lat_rad)));
-      }
+    case MeasurementKind::geodetic_longitude:
+      e.geodetic_coordinate();
       break;
-    }
     case MeasurementKind::direction:
-    case MeasurementKind::azimuth: {
-      const Sight s = sight(m, station_of(0), station_of(1));
-      need_horizontal(s);
-      Eigen::Vector3d g;
-      const double b = bearing(s, net, g);
-      if (m.kind == MeasurementKind::direction) {
-        ev.computed(0) = b - c.orientations[*m.set];
-        ev.orientation = true;
-      } else {
-        ev.computed(0) = b;
-      }
-      put(0, 1, g);
-      put(0, 0, -g);
+    case MeasurementKind::azimuth:
+      e.bearing_to();
       break;
-    }
-    case MeasurementKind::horizontal_angle: {
-      // at, from (backsight), to (foresight)
-      const StationState& at = station_of(0);
-      const Sight back = sight(m, at, station_of(1));
-      const Sight fore = sight(m, at, station_of(2));
-      need_horizontal(back);
-      need_horizontal(fore);
-      Eigen::Vector3d gb, gf;
-      const double bb = bearing(back, net, gb), bf = bearing(fore, net, gf);
-      ev.computed(0) = bf - bb;
-      put(0, 2, gf);
-      put(0, 1, -gb);
-      put(0, 0, gb - gf);
+    case MeasurementKind::horizontal_angle:
+      e.horizontal_angle();
       break;
-    }
     case MeasurementKind::zenith_angle:
-    case MeasurementKind::vertical_angle: {
-      const Sight s = sight(m, station_of(0), station_of(1));
-      need_horizontal(s);
-      const double z = std::atan2(s.horizontal, s.up);
-      const double r2 = s.horizontal * s.horizontal + s.up * s.up;
-      const Eigen::Vector3d dh = (s.east * s.e + s.north * s.n) / s.horizontal;
-      Eigen::Vector3d g = (s.up * dh - s.horizontal * s.u) / r2;
-      double value = z;
-      if (c.options.refraction_k != 0.0 && !local) {
-        // The line of sight bends towards the ground: the observed zenith
-        // angle is smaller than the geometric one by k·s / (2R).
-        const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
-        const double sl = std::sin(station_of(0).lat_rad);
-        const double radius = a_m * std::sqrt(1.0 - e2) / (1.0 - e2 * sl * sl);  // Gaussian mean radius
-        value -= c.options.refraction_k * s.slope / (2.0 * radius);
-        g -= c.options.refraction_k / (2.0 * radius) * s.d / s.slope;
-      }
-      if (m.kind == MeasurementKind::vertical_angle) {
-        value = std::numbers::pi / 2.0 - value;
-        g = -g;
-      }
-      ev.computed(0) = value;
-      put(0, 1, g);
-      put(0, 0, -g);
+    case MeasurementKind::vertical_angle:
+      e.zenith_angle();
       break;
-    }
-    case MeasurementKind::height_difference: {
-      const StationState& a = station_of(0);
-      const StationState& b = station_of(1);
-      if (local) {
-        ev.computed(0) = b.x.z() - a.x.z();
-        put(0, 1, Eigen::Vector3d::UnitZ());
-        put(0, 0, -Eigen::Vector3d::UnitZ());
-      } else {
-        ev.computed(0) = (b.h_m - undulation(m.stations[1])) - (a.h_m - undulation(m.stations[0]));
-        put(0, 1, b.local_from_xyz.row(2).transpose());
-        put(0, 0, -a.local_from_xyz.row(2).transpose());
-      }
+    case MeasurementKind::height_difference:
+      e.height_difference();
       break;
-    }
     case MeasurementKind::ellipsoidal_height:
-    case MeasurementKind::orthometric_height: {
-      const StationState& a = station_of(0);
-      if (local) {
-        ev.computed(0) = a.x.z();
-        put(0, 0, Eigen::Vector3d::UnitZ());
-      } else {
-        ev.computed(0) = a.h_m - (m.kind == MeasurementKind::orthometric_height ? undulation(m.stations[0]) : 0.0);
-        put(0, 0, a.local_from_xyz.row(2).transpose());
-      }
+    case MeasurementKind::orthometric_height:
+      e.height();
       break;
-    }
   }
-  return ev;
+  return std::move(e.ev);
 }
 
 }  // namespace geoanchor::solver

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "snooping.hpp"
-#include "sparse_factor.hpp"
+#include "sparse/sparse_factor.hpp"
 
 namespace geoanchor::solver {
 

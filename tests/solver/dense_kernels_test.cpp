@@ -13,7 +13,7 @@
 #include <tuple>
 #include <vector>
 
-#include "dense_kernels.hpp"
+#include "sparse/dense_kernels.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor::solver {

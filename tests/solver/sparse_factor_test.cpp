@@ -18,7 +18,7 @@
 #include <utility>
 #include <vector>
 
-#include "sparse_factor.hpp"
+#include "sparse/sparse_factor.hpp"
 #include "test_support.hpp"
 
 namespace geoanchor::solver {

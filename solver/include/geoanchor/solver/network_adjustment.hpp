@@ -8,9 +8,11 @@
 // Unknowns: each station's corrections along its local east, north and up
 // (ellipsoidal) or x, y, z (local), less the components its constraint
 // fixes, and one orientation per direction set. Gauss–Newton: the normal
-// matrix AᵀPA, assembled sparse, is factored by CHOLMOD (supernodal, with
-// a fill-reducing ordering) each iteration, until the largest coordinate
-// correction is below `convergence_m`. The statistics come from the final
+// matrix AᵀPA, assembled sparse, is factored each iteration by a
+// supernodal Cholesky (a fill-reducing ordering and CHOLMOD's symbolic
+// analysis, then geoanchor's own numeric factorization on several
+// threads, solver/src/sparse/), until the largest coordinate correction is
+// below `convergence_m`. The statistics come from the final
 // factor: station covariances, covariances between stations that share a
 // measurement and every measurement's redundancy from the entries of N⁻¹
 // on the factor's pattern (Takahashi's selected inversion), never a dense
@@ -190,7 +192,7 @@ struct RelativePrecision {
 // change from run to run).
 struct AdjustmentTimings {
   double assemble = 0.0;        // linearization and the normal matrix's entries
-  double factor = 0.0;          // CHOLMOD: analysis (first pass) and numeric factorizations
+  double factor = 0.0;          // ordering and CHOLMOD's symbolic analysis (first pass), numeric factorizations
   double solve = 0.0;           // Gauss–Newton solves
   double select_inverse = 0.0;  // N⁻¹ on the factor's pattern
   double downdate = 0.0;        // data snooping: measurements taken out of the factor and N⁻¹

@@ -1,9 +1,9 @@
 // The dense kernels for the x86-64 baseline, and the choice of set.
 
 #define GEOANCHOR_KERNEL_NAMESPACE baseline
-#include "dense_kernels.inc"
+#include "sparse/dense_kernels.inc"
 
-#include "dense_kernels.hpp"
+#include "sparse/dense_kernels.hpp"
 
 namespace geoanchor::solver {
 

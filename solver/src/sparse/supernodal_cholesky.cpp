@@ -2,7 +2,7 @@
 // gathers its columns of N, subtracts the update of every supernode below
 // it whose rows reach its columns, and factors its block.
 
-#include "supernodal_cholesky.hpp"
+#include "sparse/supernodal_cholesky.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -13,8 +13,8 @@
 #include <system_error>
 #include <thread>
 
-#include "dense_kernels.hpp"
 #include "geoanchor/base/parallel.hpp"
+#include "sparse/dense_kernels.hpp"
 
 namespace geoanchor::solver {
 
@@ -63,34 +63,32 @@ Updates find_updates(const SupernodalLayout& l, const SupernodalTree& tree) {
   return u;
 }
 
-}  // namespace
-
-SupernodalTree::SupernodalTree(const SupernodalLayout& l) : parent(at(l.nsuper), -1), super_of(at(l.n), 0) {
-  for (std::int64_t k = 0; k < l.nsuper; ++k) {
-    for (std::int64_t j = l.super[k]; j < l.super[k + 1]; ++j) super_of[at(j)] = k;
-  }
-  for (std::int64_t k = 0; k < l.nsuper; ++k) {
-    const std::int64_t nscol = l.super[k + 1] - l.super[k];
-    if (l.pi[k + 1] - l.pi[k] > nscol) parent[at(k)] = super_of[at(l.rows[l.pi[k] + nscol])];
-  }
-}
-
-std::int64_t factor_supernodal(const SupernodalLayout& l, const SupernodalTree& tree, const std::int64_t* ap,
-                               const std::int64_t* ai, const double* ax, double* lx, int jobs) {
-  if (l.nsuper == 0) return -1;
-  const DenseKernels& kernels = dense_kernels();
-  const Updates updates = find_updates(l, tree);
+// One supernode's numeric factorization (factor_supernodal), into `lx`.
+struct SupernodeFactor {
+  const SupernodalLayout& l;
+  const Updates& updates;
+  const DenseKernels& kernels;
+  const std::int64_t* ap;
+  const std::int64_t* ai;
+  const double* ax;
+  double* lx;
 
   // Supernode s, on `jobs_here` threads; returns −1 or its first failed
   // column. `map` (n entries, the caller's) is left holding s's rows'
   // positions.
-  const auto process = [&](std::int64_t s, std::vector<std::int64_t>& map, int jobs_here) -> std::int64_t {
-    const std::int64_t k1 = l.super[s], nscol = l.super[s + 1] - k1, nsrow = l.pi[s + 1] - l.pi[s];
+  std::int64_t operator()(std::int64_t s, std::vector<std::int64_t>& map, int jobs_here) const {
+    const std::int64_t nsrow = l.pi[s + 1] - l.pi[s];
     const std::int64_t* srows = l.rows + l.pi[s];
     double* ls = lx + l.px[s];
     for (std::int64_t r = 0; r < nsrow; ++r) map[at(srows[r])] = r;
     const std::int64_t* position = map.data();
-    // Its columns of N, less the updates from below, a slice at a time.
+    gather(s, ls, position, jobs_here);
+    return factor_block(s, ls, jobs_here);
+  }
+
+  // Its columns of N, less the updates from below, a slice at a time.
+  void gather(std::int64_t s, double* ls, const std::int64_t* position, int jobs_here) const {
+    const std::int64_t k1 = l.super[s], nscol = l.super[s + 1] - k1, nsrow = l.pi[s + 1] - l.pi[s];
     const std::int64_t slices = (nscol + kSliceColumns - 1) / kSliceColumns;
     for_chunks(at(slices), 1, jobs_here, [&](std::size_t first, std::size_t last) {
       thread_local KernelSpace space;  // (aligned: the same bits on any thread)
@@ -121,7 +119,12 @@ std::int64_t factor_supernodal(const SupernodalLayout& l, const SupernodalTree& 
         }
       }
     });
-    // Its own Cholesky, a panel at a time (right-looking within it).
+  }
+
+  // Its own Cholesky, a panel at a time (right-looking within it); −1 or
+  // its first failed column.
+  std::int64_t factor_block(std::int64_t s, double* ls, int jobs_here) const {
+    const std::int64_t k1 = l.super[s], nscol = l.super[s + 1] - k1, nsrow = l.pi[s + 1] - l.pi[s];
     for (std::int64_t c0 = 0; c0 < nscol; c0 += kPanelColumns) {
       const std::int64_t c1 = std::min(nscol, c0 + kPanelColumns), width = c1 - c0;
       double* diagonal = ls + c0 + c0 * nsrow;
@@ -145,16 +148,25 @@ std::int64_t factor_supernodal(const SupernodalLayout& l, const SupernodalTree& 
     }
     for (std::int64_t c = 1; c < nscol; ++c) std::fill(ls + c * nsrow, ls + c * nsrow + c, 0.0);
     return -1;
-  };
+  }
+};
 
-  // A supernode needs only the supernodes below it, so disjoint subtrees of
-  // the supernodal elimination tree go to threads: the largest subtrees are
-  // split until there are enough to share out; their roots, and every
-  // supernode above them, are done afterwards, in order, on every thread.
-  const int threads = std::max(1, jobs);
-  std::vector<std::vector<std::int64_t>> children(at(l.nsuper));
+// A supernode needs only the supernodes below it, so disjoint subtrees of
+// the supernodal elimination tree go to threads: the largest subtrees are
+// split until there are enough to share out; their roots, and every
+// supernode above them, are done afterwards, in order, on every thread.
+struct SubtreeSplit {
+  std::vector<std::vector<std::int64_t>> children;
+  std::vector<std::int64_t> pending;  // roots of the subtrees, largest first
+  std::vector<std::int64_t> top;      // the supernodes above them, ascending
+};
+
+SubtreeSplit split_subtrees(const SupernodalLayout& l, const SupernodalTree& tree, int threads) {
+  SubtreeSplit split;
+  std::vector<std::vector<std::int64_t>>& children = split.children;
+  children.resize(at(l.nsuper));
   std::vector<double> subtree(at(l.nsuper), 0.0);
-  std::vector<std::int64_t> pending;  // roots of subtrees
+  std::vector<std::int64_t>& pending = split.pending;  // roots of subtrees
   for (std::int64_t k = 0; k < l.nsuper; ++k) {  // children before parents: a child's index is lower
     const auto nscol = static_cast<double>(l.super[k + 1] - l.super[k]), nsrow = static_cast<double>(l.pi[k + 1] - l.pi[k]);
     subtree[at(k)] += nscol * nsrow * nsrow;
@@ -168,7 +180,7 @@ std::int64_t factor_supernodal(const SupernodalLayout& l, const SupernodalTree& 
   }
   double total = 0.0;
   for (const std::int64_t k : pending) total += subtree[at(k)];
-  std::vector<std::int64_t> top;  // supernodes above the subtrees
+  std::vector<std::int64_t>& top = split.top;  // supernodes above the subtrees
   const auto by_cost = [&](std::int64_t a, std::int64_t b) { return subtree[at(a)] < subtree[at(b)]; };
   if (threads > 1) {
     std::make_heap(pending.begin(), pending.end(), by_cost);
@@ -184,6 +196,32 @@ std::int64_t factor_supernodal(const SupernodalLayout& l, const SupernodalTree& 
     std::sort(pending.begin(), pending.end(), [&](std::int64_t a, std::int64_t b) { return by_cost(b, a); });
     std::sort(top.begin(), top.end());
   }
+  return split;
+}
+
+}  // namespace
+
+SupernodalTree::SupernodalTree(const SupernodalLayout& l) : parent(at(l.nsuper), -1), super_of(at(l.n), 0) {
+  for (std::int64_t k = 0; k < l.nsuper; ++k) {
+    for (std::int64_t j = l.super[k]; j < l.super[k + 1]; ++j) super_of[at(j)] = k;
+  }
+  for (std::int64_t k = 0; k < l.nsuper; ++k) {
+    const std::int64_t nscol = l.super[k + 1] - l.super[k];
+    if (l.pi[k + 1] - l.pi[k] > nscol) parent[at(k)] = super_of[at(l.rows[l.pi[k] + nscol])];
+  }
+}
+
+std::int64_t factor_supernodal(const SupernodalLayout& l, const SupernodalTree& tree, const std::int64_t* ap,
+                               const std::int64_t* ai, const double* ax, double* lx, int jobs) {
+  if (l.nsuper == 0) return -1;
+  const DenseKernels& kernels = dense_kernels();
+  const Updates updates = find_updates(l, tree);
+  const SupernodeFactor process{l, updates, kernels, ap, ai, ax, lx};
+  const int threads = std::max(1, jobs);
+  const SubtreeSplit split = split_subtrees(l, tree, threads);
+  const std::vector<std::vector<std::int64_t>>& children = split.children;
+  const std::vector<std::int64_t>& pending = split.pending;
+  const std::vector<std::int64_t>& top = split.top;
   // Each subtree stops at its first failed column; the others go on, so
   // that the first failed column of all is the one a single thread finds.
   constexpr std::int64_t kNone = std::numeric_limits<std::int64_t>::max();

@@ -17,7 +17,7 @@
 #include <stdexcept>
 
 #include "geoanchor/base/parallel.hpp"
-#include "sparse_factor_impl.hpp"
+#include "sparse/sparse_factor_impl.hpp"
 
 namespace geoanchor::solver {
 namespace {

@@ -6,10 +6,10 @@
 #if defined(__AVX2__) && defined(__FMA__)
 #define Eigen geoanchor_eigen_avx2
 #define GEOANCHOR_KERNEL_NAMESPACE avx2
-#include "dense_kernels.inc"
+#include "sparse/dense_kernels.inc"
 #undef Eigen
 
-#include "dense_kernels.hpp"
+#include "sparse/dense_kernels.hpp"
 
 namespace geoanchor::solver {
 extern const DenseKernels kAvx2DenseKernels{"avx2+fma", avx2::outer_product, avx2::cholesky, avx2::solve_lower_transposed_right,

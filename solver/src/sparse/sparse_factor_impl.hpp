@@ -1,7 +1,8 @@
 #pragma once
 // NormalFactor's state (sparse_factor.hpp), for the files that implement
-// it: sparse_factor.cpp (factorization, solves, selected inversion,
-// downdates) and sparse_paths.cpp (solves along the elimination tree).
+// it: sparse_factor.cpp (ordering, factorization, solves),
+// selected_inversion.cpp (selected inversion, downdates) and
+// sparse_paths.cpp (solves along the elimination tree).
 //
 // Private to solver.
 
@@ -15,8 +16,8 @@
 #include <optional>
 #include <vector>
 
-#include "sparse_factor.hpp"
-#include "supernodal_cholesky.hpp"
+#include "sparse/sparse_factor.hpp"
+#include "sparse/supernodal_cholesky.hpp"
 
 namespace geoanchor::solver {
 

@@ -1,11 +1,14 @@
 #pragma once
 // The normal matrix of a least-squares problem, factored once: a sparse
-// Cholesky by CHOLMOD (supernodal, fill-reducing ordering), its solves, and
-// the entries of its inverse on the factor's pattern by the Takahashi
-// equations (selected inversion): every pair of unknowns that share a
+// supernodal Cholesky (a fill-reducing ordering on the matrix's quotient
+// graph by CHOLMOD's AMD or METIS, CHOLMOD's symbolic analysis, and
+// geoanchor's own numeric factorization, supernodal_cholesky.hpp), its
+// solves (CHOLMOD's, with that factor), and the entries of its inverse on
+// the factor's pattern by the Takahashi equations (selected inversion,
+// selected_inversion.cpp): every pair of unknowns that share a
 // measurement is on that pattern, so station covariances, covariances
 // between connected stations and every measurement's redundancy come from
-// it without a dense inverse. A dense mode (Eigen's LDLᵀ and the full
+// it without a dense inverse. A dense mode (Eigen's LLᵀ and the full
 // inverse) is the tests' reference for small problems.
 //
 // Private to solver.
@@ -123,7 +126,8 @@ class NormalFactor {
   std::int64_t elimination_step(std::int64_t unknown) const;
 
   // The factor's size: nonzeros of L, and floating-point work of the
-  // factorization (CHOLMOD's flop count; 0 in dense mode).
+  // factorization (the flop count of CHOLMOD's symbolic analysis; 0 in
+  // dense mode).
   std::int64_t factor_nonzeros() const;
   double factor_flops() const;
 
