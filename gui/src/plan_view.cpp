@@ -94,11 +94,7 @@ void WorkbenchUi::draw_plan() {
   draw_plan_ellipses(f);
   draw_plan_marks(f);
   draw_plan_labels(f);
-  // North arrow.
-  const ImVec2 na(g.left + font * 1.2f, g.top + font * 3.0f);
-  dl->AddTriangleFilled(ImVec2(na.x, na.y - font * 1.6f), ImVec2(na.x - font * 0.4f, na.y), ImVec2(na.x + font * 0.4f, na.y),
-                        col(palette::kInk));
-  detail::label(audit_, dl, ImVec2(na.x - font * 0.3f, na.y + 2), col(palette::kInk), "N", "plan: north arrow");
+  detail::north_arrow(audit_, dl, g.left, g.top, font, "plan: north arrow");
   dl->PopClipRect();
 
   draw_plan_footer(f);
@@ -410,13 +406,8 @@ void WorkbenchUi::draw_plan_footer(const PlanFrame& f) {
   const float font = f.font;
   const float wrap_w = f.wrap_w;
   const std::string& caption = f.caption;
-  const float bar_px = static_cast<float>(g.scale_bar_m * g.px_per_m);
-  const float by = g.bottom + font * 0.7f, bx = g.left + font * 0.5f;
-  dl->AddRectFilled(ImVec2(bx, by), ImVec2(bx + bar_px, by + 4), col(palette::kInk));
-  dl->AddLine(ImVec2(bx, by - 4), ImVec2(bx, by + 8), col(palette::kInk), 1.5f);
-  dl->AddLine(ImVec2(bx + bar_px, by - 4), ImVec2(bx + bar_px, by + 8), col(palette::kInk), 1.5f);
-  detail::label(audit_, dl, ImVec2(bx + bar_px + font * 0.5f, by - font * 0.5f), col(palette::kInk), detail::length_label(g.scale_bar_m),
-                "plan: scale bar");
+  const float bx = g.left + font * 0.5f;
+  detail::scale_bar(audit_, dl, g.left, g.bottom, font, g.scale_bar_m, static_cast<float>(g.scale_bar_m * g.px_per_m), "plan: scale bar");
   detail::label(audit_, dl, ImVec2(bx, g.bottom + font * 1.5f), col(palette::kInk), caption, "plan: caption", detail::kNoBound_lo,
                 detail::kNoBound_hi, regular, font, wrap_w - font * 0.5f);
 }

@@ -129,6 +129,26 @@ inline void label(TextAudit& audit, ImDrawList* dl, ImVec2 pos, ImU32 colour, co
               std::min(hi.y, cb.y));
 }
 
+// A plan's north arrow in its top-left corner; `where` names it for the
+// text audit ("plan: north arrow").
+inline void north_arrow(TextAudit& audit, ImDrawList* dl, float left, float top, float font, std::string_view where) {
+  const ImVec2 na(left + font * 1.2f, top + font * 3.0f);
+  dl->AddTriangleFilled(ImVec2(na.x, na.y - font * 1.6f), ImVec2(na.x - font * 0.4f, na.y), ImVec2(na.x + font * 0.4f, na.y),
+                        col(palette::kInk));
+  label(audit, dl, ImVec2(na.x - font * 0.3f, na.y + 2), col(palette::kInk), "N", where);
+}
+
+// A plan's scale bar of `bar_m` metres (`bar_px` pixels) under the plan's
+// bottom-left corner, with its length; `where` names it for the text audit.
+inline void scale_bar(TextAudit& audit, ImDrawList* dl, float left, float bottom, float font, double bar_m, float bar_px,
+                      std::string_view where) {
+  const float by = bottom + font * 0.7f, bx = left + font * 0.5f;
+  dl->AddRectFilled(ImVec2(bx, by), ImVec2(bx + bar_px, by + 4), col(palette::kInk));
+  dl->AddLine(ImVec2(bx, by - 4), ImVec2(bx, by + 8), col(palette::kInk), 1.5f);
+  dl->AddLine(ImVec2(bx + bar_px, by - 4), ImVec2(bx + bar_px, by + 8), col(palette::kInk), 1.5f);
+  label(audit, dl, ImVec2(bx + bar_px + font * 0.5f, by - font * 0.5f), col(palette::kInk), length_label(bar_m), where);
+}
+
 // A table's header row (what ImGui::TableHeadersRow draws), each header
 // checked against its column: ImGui would shorten it with "…". A sortable
 // column keeps room for the sort arrow.
