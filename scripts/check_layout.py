@@ -24,7 +24,7 @@ import sys
 MAX_FILE_LINES = 800
 MAX_FUNCTION_LINES = 150
 SOURCE_SUFFIXES = {".cpp", ".hpp", ".h", ".inc"}
-SIZE_FOLDERS = ["base", "geodesy", "crs", "las", "io", "solver", "workflow", "gui", "cli", "bench", "fuzz"]
+SIZE_FOLDERS = ["base", "geodesy", "crs", "las", "io", "solver", "workflow", "gui", "cli", "tests", "bench", "fuzz"]
 
 # Library -> the libraries of ours it may include (directly or not).
 ALLOWED = {
