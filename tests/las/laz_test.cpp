@@ -1,4 +1,4 @@
-// LAZ: geoanchor's LASzip codec (io/laz.hpp, LasReader, LasWriter) against
+// LAZ: geoanchor's LASzip codec (las/laz.hpp, LasReader, LasWriter) against
 // LAZ files written by the LASzip library and by PDAL (tests/data/laz, see
 // its SOURCES.md), against the independent decoder laz-perf (npm, run by
 // tests/las-verify/laz-decode.mjs), on generated and random records of every

@@ -1,4 +1,4 @@
-// The sparse factor the network adjustment uses (solver/src/sparse_factor,
+// The sparse factor the network adjustment uses (solver/src/sparse/,
 // private to solver), against Eigen's dense Cholesky of the same matrix:
 // solves, the selected inverse on the pattern (Takahashi on CHOLMOD's
 // supernodal factor), and refactorizations that reuse the analysis (same

@@ -1,6 +1,6 @@
 #pragma once
 // Point records with realistic content for every supported point format,
-// for the LAZ tests (tests/io/laz_test.cpp, the LAZ tiles of apply's tests)
+// for the LAZ tests (tests/las/laz_test.cpp, the LAZ tiles of apply's tests)
 // and the apply benchmark's LAZ tile. No GoogleTest here: bench/ uses it.
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 // The network generator (workflow/network_generator.hpp) and the network
-// writers (io/network_output.hpp): what is written reads back to the same
+// writers (io/network/network_output.hpp): what is written reads back to the same
 // network in both formats; a generated network adjusted as `geoanchor
 // adjust` reads it agrees with the generator's truth within the adjusted
 // covariances, and data snooping finds the planted blunders. The expected

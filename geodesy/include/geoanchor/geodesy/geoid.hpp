@@ -49,7 +49,7 @@ class GeoidGrid {
   // spline); its model name says so.
   static const GeoidGrid& egm96_nga();
 
-  // A grid another library evaluates (io/proj_geoid.hpp: PROJ's
+  // A grid another library evaluates (crs/proj_geoid.hpp: PROJ's
   // vgridshift on any grid format PROJ reads): `n_at(lat_deg, lon_deg)`
   // returns N in metres, NaN outside the grid. It must be safe to call from
   // several threads.

@@ -2,7 +2,7 @@
 // The uncertainty a transform file gives a transformed position: what
 // `apply` records for each tile (its worst bounding-box corner) and what the
 // workbench can show. The file's sigmas and correlation are the parameters'
-// covariance Σθ (validated when the file is read: io/transform_file.hpp);
+// covariance Σθ (validated when the file is read: io/transform/transform_file.hpp);
 // the Jacobian is taken by central differences of ±σ on each parameter as
 // the file spells it, so every model (Helmert, Molodensky-Badekas,
 // enu-origin, site-calibration; forward or inverse) is covered by the one

@@ -1,7 +1,7 @@
 #pragma once
 // One tile through a PointChain, streamed in bounded chunks: LAS or LAZ in,
 // LAS or LAZ out; CSV or PLY in, the same format out. Vector maps (GeoJSON,
-// Lanelet2 OSM XML, OpenDRIVE) are moved by io/vector_map.hpp with the same
+// Lanelet2 OSM XML, OpenDRIVE) are moved by io/vector/vector_map.hpp with the same
 // options and result. Everything but the coordinates passes through unchanged. The caller owns the output (an
 // AtomicOutputFile) so that the tile and its sidecar are committed together.
 
@@ -24,7 +24,7 @@ namespace geoanchor::io {
 
 // A tile's file format. LAS and LAZ hold the same records (LAZ compressed,
 // io/laz.hpp); a COPC file (.copc.laz) is read as the LAZ file it is.
-// geojson, osm and xodr are vector maps (io/vector_map.hpp).
+// geojson, osm and xodr are vector maps (io/vector/vector_map.hpp).
 enum class TileFormat { las, laz, csv, ply, geojson, osm, xodr };
 std::string_view to_string(TileFormat f);  // "las", "laz", "csv", "ply", "geojson", "osm", "xodr"
 inline bool is_las_family(TileFormat f) { return f == TileFormat::las || f == TileFormat::laz; }
@@ -114,7 +114,7 @@ struct TileApplyOptions {
   // was written to `out`). Without it, that retry is a std::logic_error.
   std::function<std::ostream&()> restart_output = {};
   // Lanelet2 OSM: the local projection of the nodes' local_x/local_y tags
-  // (io/vector_map.hpp, LocalXy); needed when a node has them. The tags
+  // (io/vector/vector_map.hpp, LocalXy); needed when a node has them. The tags
   // must agree with lat/lon within `local_xy_tolerance_m` before the move.
   std::optional<std::string> local_xy = std::nullopt;
   double local_xy_tolerance_m = 0.01;
