@@ -2,7 +2,17 @@
 # Installs the Debian 12 packages geoanchor builds, tests and benchmarks with.
 # Idempotent: packages already installed are left alone, and apt is not touched
 # at all when nothing is missing. Must run as root (or with sudo available).
+#   bash scripts/setup.sh           what the build and the example need
+#   bash scripts/setup.sh --tests   and npm, for the test-only independent LAS
+#                                   reader (tests/las-verify; scripts/test.sh)
 set -euo pipefail
+
+tests=false
+case "${1:-}" in
+  "") ;;
+  --tests) tests=true ;;
+  *) echo "usage: bash scripts/setup.sh [--tests]" >&2; exit 2 ;;
+esac
 
 packages=(
   # toolchain
@@ -28,6 +38,12 @@ for p in "${packages[@]}"; do
     missing+=("$p")
   fi
 done
+
+# npm by its command, not by a package: a Node.js from elsewhere (NodeSource's
+# nodejs, which brings its own npm and conflicts with Debian's) serves as well.
+if $tests && ! command -v npm >/dev/null; then
+  missing+=(npm)
+fi
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#packages[@]} packages present"

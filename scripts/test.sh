@@ -12,7 +12,7 @@ case "${1:-}" in
   *) echo "usage: bash scripts/test.sh [--asan]" >&2; exit 2 ;;
 esac
 
-bash scripts/setup.sh
+bash scripts/setup.sh --tests
 # The independent LAS reader the apply tests compare with (test-only, npm;
 # versions pinned by the committed package-lock.json).
 if [ ! -d tests/las-verify/node_modules/copc ] || [ tests/las-verify/package-lock.json -nt tests/las-verify/node_modules ]; then
