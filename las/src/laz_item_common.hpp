@@ -15,16 +15,13 @@
 #include <memory>
 #include <vector>
 
+#include "las_internal.hpp"
 #include "laz_entropy.hpp"
 
 namespace geoanchor::io::laz {
 
-template <class T>
-T load(const std::uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
+// A record's little-endian field, read as LAS reads it; and written.
+using las_internal::get;
 template <class T>
 void store(std::uint8_t* p, T v) {
   std::memcpy(p, &v, sizeof v);

@@ -97,11 +97,11 @@ struct Point14Context {
     intensity.reset();
     scan_angle.reset();
     source.reset();
-    gps.reset(load<std::uint64_t>(from + 22));
+    gps.reset(get<std::uint64_t>(from + 22));
     for (auto& m : mx) m.reset();
     for (auto& m : my) m.reset();
-    heights.fill(load<std::int32_t>(from + 8));
-    intensities.fill(load<std::uint16_t>(from + 12));
+    heights.fill(get<std::int32_t>(from + 8));
+    intensities.fill(get<std::uint16_t>(from + 12));
     std::memcpy(last, from, 30);
     last_gps_changed = false;
     in_use = true;
@@ -151,9 +151,9 @@ class Point14Coder {
     const unsigned channel = channel_of(item);
     if (channel != current_ && contexts_[channel] && contexts_[channel]->in_use) last = contexts_[channel]->last;
 
-    const bool source_changed = load<std::uint16_t>(item + 20) != load<std::uint16_t>(last + 20);
-    const bool gps_changed = load<std::uint64_t>(item + 22) != load<std::uint64_t>(last + 22);
-    const bool scan_changed = load<std::int16_t>(item + 18) != load<std::int16_t>(last + 18);
+    const bool source_changed = get<std::uint16_t>(item + 20) != get<std::uint16_t>(last + 20);
+    const bool gps_changed = get<std::uint64_t>(item + 22) != get<std::uint64_t>(last + 22);
+    const bool scan_changed = get<std::int16_t>(item + 18) != get<std::int16_t>(last + 18);
     const std::uint32_t last_n = number_of_returns(last), last_r = return_number(last);
     const std::uint32_t n = number_of_returns(item), r = return_number(item);
     std::uint32_t sym = (std::uint32_t{channel != current_} << 6) | (std::uint32_t{source_changed} << 5) |
@@ -183,13 +183,13 @@ class Point14Coder {
     const std::uint32_t cpr = current_return_kind(n, r);
     const std::size_t slot = (m << 1) | std::uint32_t{gps_changed};
 
-    const auto dx = static_cast<std::int32_t>(load<std::uint32_t>(item) - load<std::uint32_t>(last));
+    const auto dx = static_cast<std::int32_t>(get<std::uint32_t>(item) - get<std::uint32_t>(last));
     cur->dx.encode(xy, cur->mx[slot].get(), dx, n == 1);
     cur->mx[slot].add(dx);
-    const auto dy = static_cast<std::int32_t>(load<std::uint32_t>(item + 4) - load<std::uint32_t>(last + 4));
+    const auto dy = static_cast<std::int32_t>(get<std::uint32_t>(item + 4) - get<std::uint32_t>(last + 4));
     cur->dy.encode(xy, cur->my[slot].get(), dy, (n == 1) + y_context(cur->dx.k()));
     cur->my[slot].add(dy);
-    const auto z = load<std::int32_t>(item + 8);
+    const auto z = get<std::int32_t>(item + 8);
     cur->z.encode(*e[kZ], cur->heights[l], z, (n == 1) + z_context((cur->dx.k() + cur->dy.k()) / 2));
     cur->heights[l] = z;
 
@@ -201,25 +201,25 @@ class Point14Coder {
     changed[kFlags] = changed[kFlags] || flags != last_flags;
     e[kFlags]->encode_symbol(cur->flags.at(last_flags), flags);
 
-    const auto intensity = load<std::uint16_t>(item + 12);
-    changed[kIntensity] = changed[kIntensity] || intensity != load<std::uint16_t>(last + 12);
+    const auto intensity = get<std::uint16_t>(item + 12);
+    changed[kIntensity] = changed[kIntensity] || intensity != get<std::uint16_t>(last + 12);
     const std::size_t islot = (cpr << 1) | std::uint32_t{gps_changed};
     cur->intensity.encode(*e[kIntensity], cur->intensities[islot], intensity, cpr);
     cur->intensities[islot] = intensity;
 
     if (scan_changed) {
       changed[kScanAngle] = true;
-      cur->scan_angle.encode(*e[kScanAngle], load<std::int16_t>(last + 18), load<std::int16_t>(item + 18), gps_changed);
+      cur->scan_angle.encode(*e[kScanAngle], get<std::int16_t>(last + 18), get<std::int16_t>(item + 18), gps_changed);
     }
     changed[kUserData] = changed[kUserData] || item[17] != last[17];
     e[kUserData]->encode_symbol(cur->user_data.at(last[17] / 4u), item[17]);
     if (source_changed) {
       changed[kPointSource] = true;
-      cur->source.encode(*e[kPointSource], load<std::uint16_t>(last + 20), load<std::uint16_t>(item + 20), 0);
+      cur->source.encode(*e[kPointSource], get<std::uint16_t>(last + 20), get<std::uint16_t>(item + 20), 0);
     }
     if (gps_changed) {
       changed[kGpsTime] = true;
-      cur->gps.encode(*e[kGpsTime], load<std::uint64_t>(item + 22));
+      cur->gps.encode(*e[kGpsTime], get<std::uint64_t>(item + 22));
     }
     std::memcpy(cur->last, item, 30);
     cur->last_gps_changed = gps_changed;
@@ -261,10 +261,10 @@ class Point14Coder {
 
     const std::int32_t dx = cur->dx.decode(xy, cur->mx[slot].get(), n == 1);
     cur->mx[slot].add(dx);
-    store(last, load<std::uint32_t>(last) + static_cast<std::uint32_t>(dx));
+    store(last, get<std::uint32_t>(last) + static_cast<std::uint32_t>(dx));
     const std::int32_t dy = cur->dy.decode(xy, cur->my[slot].get(), (n == 1) + y_context(cur->dx.k()));
     cur->my[slot].add(dy);
-    store(last + 4, load<std::uint32_t>(last + 4) + static_cast<std::uint32_t>(dy));
+    store(last + 4, get<std::uint32_t>(last + 4) + static_cast<std::uint32_t>(dy));
     if (present[kZ]) {
       const std::int32_t z = cur->z.decode(d[kZ], cur->heights[l], (n == 1) + z_context((cur->dx.k() + cur->dy.k()) / 2));
       cur->heights[l] = z;
@@ -284,11 +284,11 @@ class Point14Coder {
       store(last + 12, v);
     }
     if (present[kScanAngle] && (sym & 8)) {
-      store(last + 18, static_cast<std::uint16_t>(cur->scan_angle.decode(d[kScanAngle], load<std::int16_t>(last + 18), gps_changed)));
+      store(last + 18, static_cast<std::uint16_t>(cur->scan_angle.decode(d[kScanAngle], get<std::int16_t>(last + 18), gps_changed)));
     }
     if (present[kUserData]) last[17] = low_byte(d[kUserData].decode_symbol(cur->user_data.at(last[17] / 4u)));
     if (present[kPointSource] && (sym & 32)) {
-      store(last + 20, static_cast<std::uint16_t>(cur->source.decode(d[kPointSource], load<std::uint16_t>(last + 20), 0)));
+      store(last + 20, static_cast<std::uint16_t>(cur->source.decode(d[kPointSource], get<std::uint16_t>(last + 20), 0)));
     }
     if (present[kGpsTime] && gps_changed) store(last + 22, cur->gps.decode(d[kGpsTime]));
     std::memcpy(out, last, 30);
@@ -349,9 +349,9 @@ class Colour14Coder {
     auto& last = switch_to(channel);
     ColourContext& c = *contexts_[current_];
     if (encode_rgb(rgb, c.rgb, last.data(), item) != 0) rgb_changed = true;
-    for (std::size_t k = 0; k < 3; ++k) last[k] = load<std::uint16_t>(item + 2 * k);
+    for (std::size_t k = 0; k < 3; ++k) last[k] = get<std::uint16_t>(item + 2 * k);
     if (nir_) {
-      const auto v = load<std::uint16_t>(item + 6);
+      const auto v = get<std::uint16_t>(item + 6);
       if (encode_nir(*nir, c.nir, last[3], v) != 0) nir_changed = true;
       last[3] = v;
     }
@@ -378,8 +378,8 @@ class Colour14Coder {
     ColourContext& c = *contexts_[channel];
     c.rgb.reset();
     c.nir.reset();
-    for (std::size_t k = 0; k < 3; ++k) c.last[k] = load<std::uint16_t>(from + 2 * k);
-    c.last[3] = nir_ ? load<std::uint16_t>(from + 6) : 0;
+    for (std::size_t k = 0; k < 3; ++k) c.last[k] = get<std::uint16_t>(from + 2 * k);
+    c.last[3] = nir_ ? get<std::uint16_t>(from + 6) : 0;
     c.in_use = true;
   }
   // Makes `channel` current; returns the reference value for this point.
@@ -543,13 +543,13 @@ class LayeredCoder final : public ChunkCoder {
     std::memcpy(out, data, len);
     // The chunk's own point count must be the one the header and the chunk
     // table give it: fewer would drop the rest silently (issue 40 point 8).
-    const auto stored = load<std::uint32_t>(data + len);
+    const auto stored = get<std::uint32_t>(data + len);
     if (stored != n) throw ChunkCountMismatch{stored};
     const std::uint8_t* at = data + len + 4;
     std::vector<std::size_t> sizes(layers);
     std::size_t total = len + 4 * (1 + layers);
     for (std::size_t k = 0; k < layers; ++k, at += 4) {
-      sizes[k] = load<std::uint32_t>(at);
+      sizes[k] = get<std::uint32_t>(at);
       total += sizes[k];
     }
     if (total > size) throw StreamCorrupt{"its layers are longer than the chunk"};

@@ -66,9 +66,9 @@ class Point10Coder {
   void encode(RangeEncoder& e, const std::uint8_t* item) {
     const std::uint32_t r = item[14] & 7u, n = (item[14] >> 3) & 7u;
     const std::uint32_t m = kReturnMap[n][r], l = kReturnLevel[n][r];
-    const auto intensity = load<std::uint16_t>(item + 12);
-    const auto source = load<std::uint16_t>(item + 18);
-    const auto last_source = load<std::uint16_t>(last_ + 18);
+    const auto intensity = get<std::uint16_t>(item + 12);
+    const auto source = get<std::uint16_t>(item + 18);
+    const auto last_source = get<std::uint16_t>(last_ + 18);
     const std::uint32_t changed = (std::uint32_t{last_[14] != item[14]} << 5) |
                                   (std::uint32_t{intensities_[m] != intensity} << 4) |
                                   (std::uint32_t{last_[15] != item[15]} << 3) | (std::uint32_t{last_[16] != item[16]} << 2) |
@@ -89,7 +89,7 @@ class Point10Coder {
     mx_[m].add(dx);
     dy_.encode(e, my_[m].get(), dy, (n == 1) + y_context(dx_.k()));
     my_[m].add(dy);
-    const auto z = load<std::int32_t>(item + 8);
+    const auto z = get<std::int32_t>(item + 8);
     z_.encode(e, heights_[l], z, (n == 1) + z_context((dx_.k() + dy_.k()) / 2));
     heights_[l] = z;
     std::memcpy(last_, item, 20);
@@ -111,15 +111,15 @@ class Point10Coder {
       }
       if (changed & 2) last_[17] = low_byte(d.decode_symbol(user_data_.at(last_[17])));
       if (changed & 1) {
-        store(last_ + 18, static_cast<std::uint16_t>(source_.decode(d, load<std::uint16_t>(last_ + 18), 0)));
+        store(last_ + 18, static_cast<std::uint16_t>(source_.decode(d, get<std::uint16_t>(last_ + 18), 0)));
       }
     }
     const std::int32_t dx = dx_.decode(d, mx_[m].get(), n == 1);
     mx_[m].add(dx);
-    store(last_, wrap_add(load<std::int32_t>(last_), dx));
+    store(last_, wrap_add(get<std::int32_t>(last_), dx));
     const std::int32_t dy = dy_.decode(d, my_[m].get(), (n == 1) + y_context(dx_.k()));
     my_[m].add(dy);
-    store(last_ + 4, wrap_add(load<std::int32_t>(last_ + 4), dy));
+    store(last_ + 4, wrap_add(get<std::int32_t>(last_ + 4), dy));
     const std::int32_t z = z_.decode(d, heights_[l], (n == 1) + z_context((dx_.k() + dy_.k()) / 2));
     heights_[l] = z;
     store(last_ + 8, z);
@@ -128,7 +128,7 @@ class Point10Coder {
 
  private:
   std::int32_t difference(const std::uint8_t* item, std::size_t at) const {
-    return static_cast<std::int32_t>(load<std::uint32_t>(item + at) - load<std::uint32_t>(last_ + at));
+    return static_cast<std::int32_t>(get<std::uint32_t>(item + at) - get<std::uint32_t>(last_ + at));
   }
   static std::int32_t wrap_add(std::int32_t a, std::int32_t b) {
     return static_cast<std::int32_t>(static_cast<std::uint32_t>(a) + static_cast<std::uint32_t>(b));
@@ -196,12 +196,12 @@ class PointwiseCoder final : public ChunkCoder {
       point_.encode(e, rec);
       std::size_t at = 20;
       if (gps_) {
-        gps_->encode(e, load<std::uint64_t>(rec + at));
+        gps_->encode(e, get<std::uint64_t>(rec + at));
         at += 8;
       }
       if (rgb_) {
         encode_rgb(e, *rgb_, last_rgb_.data(), rec + at);
-        for (std::size_t k = 0; k < 3; ++k) last_rgb_[k] = load<std::uint16_t>(rec + at + 2 * k);
+        for (std::size_t k = 0; k < 3; ++k) last_rgb_[k] = get<std::uint16_t>(rec + at + 2 * k);
         at += 6;
       }
       if (bytes_) bytes_->encode(e, rec + at);
@@ -243,12 +243,12 @@ class PointwiseCoder final : public ChunkCoder {
     point_.reset(first, decoding_);
     std::size_t at = 20;
     if (gps_) {
-      gps_->reset(load<std::uint64_t>(first + at));
+      gps_->reset(get<std::uint64_t>(first + at));
       at += 8;
     }
     if (rgb_) {
       rgb_->reset();
-      for (std::size_t k = 0; k < 3; ++k) last_rgb_[k] = load<std::uint16_t>(first + at + 2 * k);
+      for (std::size_t k = 0; k < 3; ++k) last_rgb_[k] = get<std::uint16_t>(first + at + 2 * k);
       at += 6;
     }
     if (bytes_) bytes_->reset(first + at);

@@ -32,7 +32,7 @@ struct RgbModels {
 // Returns the "changed" symbol (0 when nothing differs from `last` and the
 // colour is grey).
 inline std::uint32_t encode_rgb(RangeEncoder& e, RgbModels& m, const std::uint16_t* last, const std::uint8_t* item) {
-  const std::uint16_t c[3] = {load<std::uint16_t>(item), load<std::uint16_t>(item + 2), load<std::uint16_t>(item + 4)};
+  const std::uint16_t c[3] = {get<std::uint16_t>(item), get<std::uint16_t>(item + 2), get<std::uint16_t>(item + 4)};
   std::uint32_t sym = 0;
   for (std::size_t k = 0; k < 3; ++k) {
     sym |= std::uint32_t{lo8(last[k]) != lo8(c[k])} << (2 * k);
