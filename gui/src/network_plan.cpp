@@ -587,17 +587,9 @@ void NetworkUi::draw_labels(const PlanFrame& f) {
 
   // Footer: the scale bar and the caption.
 void NetworkUi::draw_footer(const PlanFrame& f) {
-  NetworkGeometry& g = plan_;
-  ImDrawList* dl = f.dl;
-  ImFont* regular = f.regular;
-  const float font = f.font;
-  const float wrap_w = f.wrap_w;
-  const std::string& caption = f.caption;
-  const float bx = g.left + font * 0.5f;
-  if (!g.schematic)
-    detail::scale_bar(audit_, dl, g.left, g.bottom, font, g.scale_bar_m, static_cast<float>(g.scale_bar_m * g.px_per_m), "network: scale bar");
-  detail::label(audit_, dl, ImVec2(bx, g.bottom + font * 1.5f), col(palette::kInk), caption, "network: caption", detail::kNoBound_lo,
-                detail::kNoBound_hi, regular, font, wrap_w - font * 0.5f);
+  const NetworkGeometry& g = plan_;
+  detail::plan_footer(audit_, f.dl, g.left, g.bottom, f.font, !g.schematic, g.scale_bar_m, g.px_per_m, f.caption, f.regular, f.wrap_w,
+                      "network");
 }
 
   // Under the mouse: a station (tooltip; a click leaves it out or takes it

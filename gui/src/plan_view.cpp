@@ -400,16 +400,8 @@ void WorkbenchUi::draw_plan_labels(const PlanFrame& f) {
 
   // Footer: scale bar and what the arrows and ellipses mean.
 void WorkbenchUi::draw_plan_footer(const PlanFrame& f) {
-  PlanGeometry& g = plan_;
-  ImDrawList* dl = f.dl;
-  ImFont* regular = f.regular;
-  const float font = f.font;
-  const float wrap_w = f.wrap_w;
-  const std::string& caption = f.caption;
-  const float bx = g.left + font * 0.5f;
-  detail::scale_bar(audit_, dl, g.left, g.bottom, font, g.scale_bar_m, static_cast<float>(g.scale_bar_m * g.px_per_m), "plan: scale bar");
-  detail::label(audit_, dl, ImVec2(bx, g.bottom + font * 1.5f), col(palette::kInk), caption, "plan: caption", detail::kNoBound_lo,
-                detail::kNoBound_hi, regular, font, wrap_w - font * 0.5f);
+  const PlanGeometry& g = plan_;
+  detail::plan_footer(audit_, f.dl, g.left, g.bottom, f.font, true, g.scale_bar_m, g.px_per_m, f.caption, f.regular, f.wrap_w, "plan");
 }
 
   // Legend: the vertical residual's colour scale, and the symbols.

@@ -138,15 +138,22 @@ inline void north_arrow(TextAudit& audit, ImDrawList* dl, float left, float top,
   label(audit, dl, ImVec2(na.x - font * 0.3f, na.y + 2), col(palette::kInk), "N", where);
 }
 
-// A plan's scale bar of `bar_m` metres (`bar_px` pixels) under the plan's
-// bottom-left corner, with its length; `where` names it for the text audit.
-inline void scale_bar(TextAudit& audit, ImDrawList* dl, float left, float bottom, float font, double bar_m, float bar_px,
-                      std::string_view where) {
+// A plan's footer under its bottom-left corner: the scale bar of `bar_m`
+// metres with its length (unless `with_bar` is false), then the caption
+// wrapped at `wrap_px`. `view` names both for the text audit ("plan": "plan:
+// scale bar", "plan: caption").
+inline void plan_footer(TextAudit& audit, ImDrawList* dl, float left, float bottom, float font, bool with_bar, double bar_m,
+                        double px_per_m, const std::string& caption, ImFont* caption_font, float wrap_px, const std::string& view) {
   const float by = bottom + font * 0.7f, bx = left + font * 0.5f;
-  dl->AddRectFilled(ImVec2(bx, by), ImVec2(bx + bar_px, by + 4), col(palette::kInk));
-  dl->AddLine(ImVec2(bx, by - 4), ImVec2(bx, by + 8), col(palette::kInk), 1.5f);
-  dl->AddLine(ImVec2(bx + bar_px, by - 4), ImVec2(bx + bar_px, by + 8), col(palette::kInk), 1.5f);
-  label(audit, dl, ImVec2(bx + bar_px + font * 0.5f, by - font * 0.5f), col(palette::kInk), length_label(bar_m), where);
+  if (with_bar) {
+    const float bar_px = static_cast<float>(bar_m * px_per_m);
+    dl->AddRectFilled(ImVec2(bx, by), ImVec2(bx + bar_px, by + 4), col(palette::kInk));
+    dl->AddLine(ImVec2(bx, by - 4), ImVec2(bx, by + 8), col(palette::kInk), 1.5f);
+    dl->AddLine(ImVec2(bx + bar_px, by - 4), ImVec2(bx + bar_px, by + 8), col(palette::kInk), 1.5f);
+    label(audit, dl, ImVec2(bx + bar_px + font * 0.5f, by - font * 0.5f), col(palette::kInk), length_label(bar_m), view + ": scale bar");
+  }
+  label(audit, dl, ImVec2(bx, bottom + font * 1.5f), col(palette::kInk), caption, view + ": caption", kNoBound_lo, kNoBound_hi,
+        caption_font, font, wrap_px - font * 0.5f);
 }
 
 // A table's header row (what ImGui::TableHeadersRow draws), each header
