@@ -80,7 +80,11 @@ workflow::AdjustRequest network_request(const std::vector<std::string>& inputs, 
       }
     }
   }
-  if (o.geoid) so.geoid = &parse_geoid(*o.geoid, "--geoid");
+  if (o.geoid) {
+    const workflow::NetworkGeoid g = workflow::parse_network_geoid(*o.geoid, "--geoid");
+    so.geoid = g.grid;
+    request.station_geoid = g.stations;
+  }
   return request;
 }
 

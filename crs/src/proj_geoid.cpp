@@ -42,6 +42,8 @@ struct Evaluator {
 
 }  // namespace
 
+std::optional<std::filesystem::path> find_geoid_file(std::string_view name_or_path) { return find(name_or_path); }
+
 geodesy::GeoidGrid proj_geoid_grid(std::string_view text, std::string_view flag) {
   const auto path = find(text);
   if (!path) {
@@ -65,9 +67,14 @@ geodesy::GeoidGrid proj_geoid_grid(std::string_view text, std::string_view flag)
   const std::string def = "+proj=vgridshift +grids=\"" + path->string() + "\" +multiplier=1";
   e->op.reset(proj_create(e->ctx.get(), def.c_str()));
   if (!e->op) {
+    std::error_code ec;
+    const auto size = fs::file_size(*path, ec);
     throw Error(ErrorKind::input, "E_GEOID",
-                std::string(flag) + " " + std::string(text) + ": " + path->string() + ": PROJ cannot read it as a vertical "
-                "grid (" + detail::text_or(proj_context_errno_string(e->ctx.get(), proj_context_errno(e->ctx.get()))) + ")");
+                std::string(flag) + " " + std::string(text) + ": " + path->string() + " (" + std::to_string(ec ? 0 : size) +
+                    " bytes) is a file PROJ cannot read as a vertical grid (PROJ: " +
+                    detail::text_or(proj_context_errno_string(e->ctx.get(), proj_context_errno(e->ctx.get()))) +
+                    "); geoanchor reads a GTX or GeoTIFF geoid grid through PROJ, an NTv2 geoid grid in AUSGeoid's form "
+                    "(NUM_OREC header, SYSTEM_T AHD_1971) and, for adjust, DynAdjust's per-station .geo file");
   }
   auto n_at = [e](double lat_deg, double lon_deg) {
     std::lock_guard<std::mutex> lock(e->m);
@@ -88,7 +95,9 @@ std::string geoid_record_json(const geodesy::GeoidGrid& grid) {
       {"model", grid.model_name()},
       {"grid", grid.path().string()},
       {"sha256", sha256_file_hex(grid.path())},
-      {"interpolation", nga ? "4 x 4 natural cubic spline (NGA INTPT)" : "bilinear (PROJ vgridshift)"}};
+      {"interpolation", nga ? "4 x 4 natural cubic spline (NGA INTPT)"
+                        : grid.interpolation() == geodesy::GeoidInterpolation::bicubic ? geodesy::to_string(grid.interpolation())
+                                                                                        : "bilinear (PROJ vgridshift)"}};
   return j.dump();
 }
 

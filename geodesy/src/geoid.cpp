@@ -144,6 +144,52 @@ GeoidGrid GeoidGrid::from_evaluator(std::string model_name, std::filesystem::pat
   return g;
 }
 
+namespace {
+
+// The Catmull–Rom cubic through y0..y3 at x = 0, 1, 2, 3, evaluated at
+// 1 + u, u in [0, 1]: the Hermite cubic between y1 and y2 whose end
+// derivatives are the central differences (y2 − y0)/2 and (y3 − y1)/2.
+double catmull_rom(double y0, double y1, double y2, double y3, double u) {
+  return y1 + 0.5 * u * ((y2 - y0) + u * ((2.0 * y0 - 5.0 * y1 + 4.0 * y2 - y3) + u * (3.0 * (y1 - y2) + y3 - y0)));
+}
+
+}  // namespace
+
+double GeoidGrid::sample(const std::vector<float>& field, double lat_deg, double lon_deg) const {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double y = (lat_deg - lat0_deg_) / dlat_deg_;
+  double x = (lon_deg - lon0_deg_) / dlon_deg_;
+  if (!std::isfinite(x) || !std::isfinite(y)) return nan;
+  if (global_lon_) x = std::fmod(std::fmod(x, cols_) + cols_, cols_);
+  if (y < 0 || y > rows_ - 1) return nan;
+  if (!global_lon_ && (x < 0 || x > cols_ - 1)) return nan;
+  const auto at = [&](std::int32_t r, std::int32_t c) {
+    // Nodes past the edge repeat it; columns wrap on a global grid.
+    r = std::clamp(r, 0, rows_ - 1);
+    c = global_lon_ ? (c % cols_ + cols_) % cols_ : std::clamp(c, 0, cols_ - 1);
+    return static_cast<double>(field[static_cast<std::size_t>(r) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(c)]);
+  };
+  const auto r0 = static_cast<std::int32_t>(std::floor(y));
+  const auto c0 = static_cast<std::int32_t>(std::floor(x));
+  const double fy = y - r0, fx = x - c0;
+  switch (interpolation_) {
+    case GeoidInterpolation::nga_spline:
+      if (&field == &values_m_) return spline_m(y, x);
+      break;
+    case GeoidInterpolation::bicubic: {
+      double column[4];
+      for (std::int32_t k = 0; k < 4; ++k) {
+        const std::int32_t r = r0 - 1 + k;
+        column[k] = catmull_rom(at(r, c0 - 1), at(r, c0), at(r, c0 + 1), at(r, c0 + 2), fx);
+      }
+      return catmull_rom(column[0], column[1], column[2], column[3], fy);
+    }
+    case GeoidInterpolation::bilinear:
+      break;
+  }
+  return (1 - fy) * ((1 - fx) * at(r0, c0) + fx * at(r0, c0 + 1)) + fy * ((1 - fx) * at(r0 + 1, c0) + fx * at(r0 + 1, c0 + 1));
+}
+
 double GeoidGrid::undulation_m(Angle lat, Angle lon) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (external_) {
@@ -151,32 +197,24 @@ double GeoidGrid::undulation_m(Angle lat, Angle lon) const {
     const double n = (*external_)(lat.deg(), lon.deg());
     return std::isfinite(n) ? n : nan;
   }
-  const double y = (lat.deg() - lat0_deg_) / dlat_deg_;
-  double x = (lon.deg() - lon0_deg_) / dlon_deg_;
-  if (!std::isfinite(x) || !std::isfinite(y)) return nan;
-  if (global_lon_) x = std::fmod(std::fmod(x, cols_) + cols_, cols_);
-  if (y < 0 || y > rows_ - 1) return nan;
-  if (interpolation_ == GeoidInterpolation::nga_spline && (global_lon_ || (x >= 0 && x <= cols_ - 1))) {
-    return spline_m(y, x);
+  return sample(values_m_, lat.deg(), lon.deg());
+}
+
+std::optional<Deflection> GeoidGrid::deflection(Angle lat, Angle lon) const {
+  if (xi_arcsec_.empty()) return std::nullopt;
+  const double xi = sample(xi_arcsec_, lat.deg(), lon.deg()), eta = sample(eta_arcsec_, lat.deg(), lon.deg());
+  if (!std::isfinite(xi) || !std::isfinite(eta)) return std::nullopt;
+  constexpr double kRadPerArcsec = 3.14159265358979323846 / 648000.0;
+  return Deflection{xi * kRadPerArcsec, eta * kRadPerArcsec};
+}
+
+const char* to_string(GeoidInterpolation i) {
+  switch (i) {
+    case GeoidInterpolation::bilinear: return "bilinear";
+    case GeoidInterpolation::nga_spline: return "4 x 4 natural cubic spline (NGA INTPT)";
+    case GeoidInterpolation::bicubic: return "bicubic (Catmull-Rom, 4 x 4 nodes)";
   }
-  const auto r0 = static_cast<std::int32_t>(std::floor(y));
-  const auto c0 = static_cast<std::int32_t>(std::floor(x));
-  const std::int32_t r1 = std::min(r0 + 1, rows_ - 1);
-  std::int32_t c1 = c0 + 1;
-  if (c1 >= cols_) {
-    if (!global_lon_) {
-      if (x > cols_ - 1) return nan;
-      c1 = cols_ - 1;
-    } else {
-      c1 = 0;
-    }
-  }
-  if (c0 < 0) return nan;
-  const double fy = y - r0, fx = x - c0;
-  const auto at = [&](std::int32_t r, std::int32_t c) {
-    return static_cast<double>(values_m_[static_cast<std::size_t>(r) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(c)]);
-  };
-  return (1 - fy) * ((1 - fx) * at(r0, c0) + fx * at(r0, c1)) + fy * ((1 - fx) * at(r1, c0) + fx * at(r1, c1));
+  return "bilinear";
 }
 
 }  // namespace geoanchor::geodesy

@@ -36,6 +36,10 @@ const char* to_string(MeasurementKind k) {
     case MeasurementKind::orthometric_height: return "orthometric height";
     case MeasurementKind::geodetic_latitude: return "geodetic latitude";
     case MeasurementKind::geodetic_longitude: return "geodetic longitude";
+    case MeasurementKind::astronomic_latitude: return "astronomic latitude";
+    case MeasurementKind::astronomic_longitude: return "astronomic longitude";
+    case MeasurementKind::astronomic_azimuth: return "astronomic azimuth";
+    case MeasurementKind::msl_arc: return "MSL arc";
   }
   return "measurement";
 }

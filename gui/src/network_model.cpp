@@ -243,6 +243,8 @@ std::vector<std::pair<std::size_t, std::size_t>> line_ends(const geodesy::Networ
     case MeasurementKind::orthometric_height:
     case MeasurementKind::geodetic_latitude:
     case MeasurementKind::geodetic_longitude:
+    case MeasurementKind::astronomic_latitude:
+    case MeasurementKind::astronomic_longitude:
       break;  // at the stations themselves: no line
     default:
       if (m.stations.size() == 2) add(m.stations[0], m.stations[1]);

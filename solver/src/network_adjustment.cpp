@@ -99,7 +99,9 @@ void set_constraints_aside(NetworkProblem& p, AdjustmentResult& result) {
 void initial_state(NetworkProblem& p) {
   const auto& net = p.net;
   const auto& o = p.o;
-  for (const auto& s : net.stations) p.states.push_back(station_state(net, p.geocentric, s.position));
+  for (std::size_t s = 0; s < net.stations.size(); ++s) {
+    p.states.push_back(station_state(net, p.geocentric, net.stations[s].position, s, o.geoid));
+  }
   p.orientations.assign(net.direction_sets.size(), 0.0);
   if (o.helmert) begin_helmert_group(p);
   std::vector<bool> seeded(net.direction_sets.size(), false);

@@ -35,13 +35,19 @@ struct Sight {
   double horizontal = 0, slope = 0;
 };
 
-Sight sight(const geodesy::NetworkMeasurement& m, const StationState& from, const StationState& to) {
+// Instrument and target heights run along the ellipsoid normals (as
+// DynAdjust's; the plumb line differs by ξ, η: 0.05 mm over 1.5 m at 7″);
+// the sight's axes are the instrument's astronomic horizon (the plumb line
+// it is levelled to), or its geodetic one for a geodetic azimuth.
+Sight sight(const geodesy::NetworkMeasurement& m, const StationState& from, const StationState& to, bool astronomic = true) {
   Sight s;
-  s.e = from.local_from_xyz.row(0).transpose();
-  s.n = from.local_from_xyz.row(1).transpose();
-  s.u = from.local_from_xyz.row(2).transpose();
+  const Eigen::Matrix3d& axes = astronomic ? from.astro_from_xyz : from.local_from_xyz;
+  s.e = axes.row(0).transpose();
+  s.n = axes.row(1).transpose();
+  s.u = axes.row(2).transpose();
+  const Eigen::Vector3d up_from = from.local_from_xyz.row(2).transpose();
   const Eigen::Vector3d up_to = to.local_from_xyz.row(2).transpose();
-  s.d = (to.x + m.target_height_m * up_to) - (from.x + m.instrument_height_m * s.u);
+  s.d = (to.x + m.target_height_m * up_to) - (from.x + m.instrument_height_m * up_from);
   s.east = s.d.dot(s.e);
   s.north = s.d.dot(s.n);
   s.up = s.d.dot(s.u);
@@ -93,13 +99,16 @@ struct Evaluator {
                " are on one vertical: no horizontal direction or distance between them");
     }
   }
-  // The geoid undulation at a station, for orthometric heights.
+  // The geoid undulation at a station (its own geoid's, else the grid's),
+  // for orthometric heights and MSL arcs.
   double undulation(std::size_t station) const {
+    const StationState& s = st[station];
+    if (s.n_known) return s.n_m;
     if (!c.options.geoid) {
       fail(m, "E_GEOID_MISSING",
-           "orthometric heights need the geoid: give --geoid NAME|PATH (EGM96, a grid PROJ reads)");
+           "orthometric heights need the geoid: give --geoid NAME|PATH (EGM96, a grid PROJ reads, an NTv2 geoid grid, "
+           "or DynAdjust's per-station .geo file holding station " + net.stations[station].id + ")");
     }
-    const StationState& s = st[station];
     return c.options.geoid->undulation_m(geodesy::Angle::radians(s.lat_rad), geodesy::Angle::radians(s.lon_rad),
                                         m.source + ": station " + net.stations[station].id);
   }
@@ -116,8 +125,10 @@ struct Evaluator {
   void ellipsoid_arc();
   // The chord between the stations' footpoints on the ellipsoid.
   void chord_distance();
-  // A station's geodetic latitude or longitude.
+  // A station's geodetic latitude or longitude, or its astronomic one.
   void geodetic_coordinate();
+  // The arc on the geoid between the stations (DynAdjust's M).
+  void msl_arc();
   // A direction (less its set's orientation) or an azimuth.
   void bearing_to();
   // The angle at a station from one target to another.
@@ -225,17 +236,56 @@ void Evaluator::geodetic_coordinate() {
   const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
   const double w = std::sqrt(1.0 - e2 * std::sin(a.lat_rad) * std::sin(a.lat_rad));
   const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
-  if (m.kind == MeasurementKind::geodetic_latitude) {
-    ev.computed(0) = a.lat_rad;
+  // Astronomic: the plumb line's direction, Φ = φ + ξ, Λ = λ + η / cos φ
+  // (ξ, η held: their derivatives are the geodetic ones).
+  const bool astronomic = m.kind == MeasurementKind::astronomic_latitude || m.kind == MeasurementKind::astronomic_longitude;
+  if (m.kind == MeasurementKind::geodetic_latitude || m.kind == MeasurementKind::astronomic_latitude) {
+    ev.computed(0) = a.lat_rad + (astronomic ? a.deflection.xi_rad : 0.0);
     put(0, 0, a.local_from_xyz.row(1).transpose() / (meridian + a.h_m));
   } else {
-    ev.computed(0) = a.lon_rad;
+    ev.computed(0) = a.lon_rad + (astronomic ? a.deflection.eta_rad / std::cos(a.lat_rad) : 0.0);
     put(0, 0, a.local_from_xyz.row(0).transpose() / ((prime + a.h_m) * std::cos(a.lat_rad)));
   }
 }
 
+void Evaluator::msl_arc() {
+  if (local) fail(m, "E_NETWORK_KIND", "an MSL arc needs a network on the ellipsoid");
+  // The stations brought down their normals to the geoid (ellipsoidal
+  // height N), the chord between those points, and the arc of that chord
+  // on the sphere of radius √(ρν) + N̄ at the mean latitude: DynAdjust's
+  // MSL arc (its MSLArcDistance, include/functions/dnatemplategeodesyfuncs.hpp).
+  const StationState& a = station_of(0);
+  const StationState& b = station_of(1);
+  const double na = undulation(m.stations[0]), nb = undulation(m.stations[1]);
+  const Eigen::Vector3d ua = a.local_from_xyz.row(2).transpose(), ub = b.local_from_xyz.row(2).transpose();
+  const Eigen::Vector3d d = (b.x - (b.h_m - nb) * ub) - (a.x - (a.h_m - na) * ua);
+  const double chord = d.norm();
+  if (!(chord > 1e-6)) fail(m, "E_NETWORK_GEOMETRY", "the two points on the geoid coincide");
+  const double e2 = net.ellipsoid.e2(), a_m = net.ellipsoid.a_m();
+  const double sl = std::sin(0.5 * (a.lat_rad + b.lat_rad));
+  const double w2 = 1.0 - e2 * sl * sl;
+  const double r = a_m * std::sqrt(1.0 - e2) / w2 + 0.5 * (na + nb);  // √(ρν) + N̄
+  const double half = chord / (2.0 * r);
+  if (!(half < 1.0)) fail(m, "E_NETWORK_GEOMETRY", "the stations are farther apart than a half circle of the geoid");
+  ev.computed(0) = 2.0 * r * std::asin(half);
+  const double d_arc = 1.0 / std::sqrt(1.0 - half * half);  // ∂arc / ∂chord
+  // A point on the geoid moves with its station's horizontal motion scaled by (ρ + N)/(ρ + h).
+  auto gradient = [&](const StationState& s, double n, double sign) {
+    const double w = std::sqrt(1.0 - e2 * std::sin(s.lat_rad) * std::sin(s.lat_rad));
+    const double meridian = a_m * (1.0 - e2) / (w * w * w), prime = a_m / w;
+    const Eigen::Vector3d e = s.local_from_xyz.row(0).transpose(), nn = s.local_from_xyz.row(1).transpose();
+    const Eigen::Vector3d unit = d / chord;
+    return Eigen::Vector3d(sign * d_arc * (unit.dot(nn) * (meridian + n) / (meridian + s.h_m) * nn +
+                                           unit.dot(e) * (prime + n) / (prime + s.h_m) * e));
+  };
+  put(0, 1, gradient(b, nb, 1.0));
+  put(0, 0, gradient(a, na, -1.0));
+}
+
 void Evaluator::bearing_to() {
-  const Sight s = sight(m, station_of(0), station_of(1));
+  // A geodetic azimuth in the ellipsoid's horizon; a direction and an
+  // astronomic azimuth in the plumb line's.
+  const Sight s = sight(m, station_of(0), station_of(1), m.kind != MeasurementKind::azimuth);
   need_horizontal(s);
   Eigen::Vector3d g;
   const double b = bearing(s, net, g);
@@ -326,6 +376,9 @@ bool is_angular(MeasurementKind k) {
     case MeasurementKind::azimuth:
     case MeasurementKind::geodetic_latitude:
     case MeasurementKind::geodetic_longitude:
+    case MeasurementKind::astronomic_latitude:
+    case MeasurementKind::astronomic_longitude:
+    case MeasurementKind::astronomic_azimuth:
       return true;
     default:
       return false;
@@ -333,7 +386,7 @@ bool is_angular(MeasurementKind k) {
 }
 
 StationState station_state(const geodesy::Network& net, const geodesy::GeocentricConverter& geocentric,
-                           const Eigen::Vector3d& x) {
+                           const Eigen::Vector3d& x, std::size_t station, const geodesy::GeoidGrid* geoid) {
   StationState s;
   s.x = x;
   if (net.space == NetworkSpace::local) return s;
@@ -343,6 +396,23 @@ StationState station_state(const geodesy::Network& net, const geodesy::Geocentri
   s.h_m = g.h.m;
   s.local_from_xyz = geodesy::enu_from_ecef_rotation(g.lat, g.lon);
   s.axes = s.local_from_xyz;
+  s.astro_from_xyz = s.local_from_xyz;
+  if (const auto& own = net.stations[station].geoid) {
+    s.n_m = own->n_m;
+    s.n_known = true;
+    s.deflection = own->deflection;
+    s.deflection_known = true;
+  } else if (geoid) {
+    s.n_m = geoid->undulation_m(g.lat, g.lon);  // NaN outside: refused where a measurement needs it
+    if (const auto d = geoid->deflection(g.lat, g.lon)) {
+      s.deflection = *d;
+      s.deflection_known = true;
+    }
+  }
+  if (s.deflection.xi_rad != 0.0 || s.deflection.eta_rad != 0.0) {
+    s.astro_from_xyz = geodesy::enu_from_ecef_rotation(geodesy::Angle::radians(s.lat_rad + s.deflection.xi_rad),
+                                                      geodesy::Angle::radians(s.lon_rad + s.deflection.eta_rad / std::cos(s.lat_rad)));
+  }
   return s;
 }
 
@@ -377,10 +447,16 @@ Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c)
       break;
     case MeasurementKind::geodetic_latitude:
     case MeasurementKind::geodetic_longitude:
+    case MeasurementKind::astronomic_latitude:
+    case MeasurementKind::astronomic_longitude:
       e.geodetic_coordinate();
+      break;
+    case MeasurementKind::msl_arc:
+      e.msl_arc();
       break;
     case MeasurementKind::direction:
     case MeasurementKind::azimuth:
+    case MeasurementKind::astronomic_azimuth:
       e.bearing_to();
       break;
     case MeasurementKind::horizontal_angle:

@@ -33,11 +33,22 @@ struct StationState {
   // does not change from one iteration to the next.
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
   double lat_rad = 0.0, lon_rad = 0.0, h_m = 0.0;  // ellipsoidal
+  // The geoid there: N (NaN when neither the station's geoid nor the grid
+  // gives one) and the deflection of the vertical (zero without one).
+  double n_m = 0.0;
+  bool n_known = false;
+  geodesy::Deflection deflection;
+  bool deflection_known = false;
+  // Rows: the astronomic east, north and up (the plumb line's horizon) in
+  // the position's axes: local_from_xyz at Φ = φ + ξ, Λ = λ + η / cos φ.
+  Eigen::Matrix3d astro_from_xyz = Eigen::Matrix3d::Identity();
 };
 
-// Each station's state from its position (geodetic position and local axes).
+// Each station's state from its position (geodetic position and local
+// axes) and its geoid: station s's own (StationGeoid), else `geoid`'s at
+// that position (nullptr: none).
 StationState station_state(const geodesy::Network& net, const geodesy::GeocentricConverter& geocentric,
-                           const Eigen::Vector3d& x);
+                           const Eigen::Vector3d& x, std::size_t s, const geodesy::GeoidGrid* geoid);
 
 struct Evaluation {
   Eigen::VectorXd computed;           // f(x), SI

@@ -211,7 +211,7 @@ std::pair<double, std::size_t> apply_corrections(NetworkProblem& p, const Eigen:
       if (changed) x = p.geocentric.ecef_from_geodetic(g).m;
     }
     const Eigen::Matrix3d axes = p.states[s].axes;
-    p.states[s] = station_state(net, p.geocentric, x);
+    p.states[s] = station_state(net, p.geocentric, x, s, p.o.geoid);
     p.states[s].axes = axes;
   }
   for (std::size_t k = 0; k < p.orientations.size(); ++k) {

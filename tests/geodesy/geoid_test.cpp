@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -140,6 +141,52 @@ TEST(GeoidGrid, RefusesFilesThatAreNotGtxGridsNamingThem) {
     EXPECT_NE(std::string(e.what()).find("1000 bytes; a 721 × 1440 .gtx grid has 4153000"), std::string::npos) << e.what();
   }
   EXPECT_THROW((void)GeoidGrid::load_gtx(dir / "geoanchor_none.gtx", "x"), Error);
+}
+
+
+// An NTv2 geoid grid in AUSGeoid's form: DynAdjust's sample clip of
+// AUSGeoid09 (sampleData/urban-network-geoid.gsb, fixtures/networks) at
+// three stations of its urban network, against the N, xi, eta DynAdjust
+// publishes for them in sampleData/urban-network.geo (dnageoid, bicubic by
+// default). The stations' latitude and longitude are PROJ's (cs2cs
+// EPSG:28355 -> EPSG:4283 of their UTM coordinates in urban-network.stn).
+// The .geo values are written to 1 mm and 0.001"; they differ from the clip
+// by up to 1.5 mm and 0.012" (the clip's float32 nodes, and a grid edge two
+// nodes away): the tolerances say so.
+TEST(GeoidNtv2, AusGeoidClipMatchesDynAdjustsStationValues) {
+  constexpr double kNTol_m = 0.002;          // published to 1 mm; the clip's nodes
+  constexpr double kDeflectionTol_arcsec = 0.02;
+  constexpr double kArcsec = 3.14159265358979323846 / 648000.0;
+  const GeoidGrid g = GeoidGrid::load_ntv2(std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/dynadjust/urban-network-geoid.gsb",
+                                           GeoidInterpolation::bicubic);
+  ASSERT_TRUE(g.has_deflections());
+  struct Case {
+    double lat, lon, n, xi, eta;
+  };
+  const Case cases[] = {{-37.8038056346, 144.9580517107, 4.780, -7.168, -4.144},   // station 1
+                        {-37.7996094759, 144.9602945073, 4.801, -7.066, -4.034},   // station 1002
+                        {-37.8006751325, 144.9593559074, 4.795, -7.094, -4.069}};  // station 1008
+  for (const Case& c : cases) {
+    const double n = g.undulation_m(Angle::degrees(c.lat), Angle::degrees(c.lon));
+    const auto d = g.deflection(Angle::degrees(c.lat), Angle::degrees(c.lon));
+    ASSERT_TRUE(d.has_value());
+    EXPECT_LE(std::abs(n - c.n), kNTol_m) << c.lat;  // NaN fails: the comparison is false
+    EXPECT_LE(std::abs(d->xi_rad / kArcsec - c.xi), kDeflectionTol_arcsec) << c.lat;
+    EXPECT_LE(std::abs(d->eta_rad / kArcsec - c.eta), kDeflectionTol_arcsec) << c.lat;
+  }
+  // Outside the clip: no value.
+  EXPECT_TRUE(std::isnan(g.undulation_m(Angle::degrees(-37.9), Angle::degrees(144.95))));
+  EXPECT_FALSE(g.deflection(Angle::degrees(-37.9), Angle::degrees(144.95)).has_value());
+}
+
+TEST(GeoidNtv2, HorizontalShiftGridsAreNoGeoid) {
+  // PROJ's Swiss CH1903 -> CH1903+ grid (proj-data): SYSTEM_T names a datum.
+  try {
+    (void)GeoidGrid::load_ntv2("/usr/share/proj/CHENYX06.gsb", GeoidInterpolation::bicubic);
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("horizontal shift grid"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

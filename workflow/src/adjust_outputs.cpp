@@ -43,6 +43,10 @@ std::string kind_key(MeasurementKind k) {
     case MeasurementKind::height_difference: return "height_difference";
     case MeasurementKind::ellipsoidal_height: return "ellipsoidal_height";
     case MeasurementKind::orthometric_height: return "orthometric_height";
+    case MeasurementKind::astronomic_latitude: return "astronomic_latitude";
+    case MeasurementKind::astronomic_longitude: return "astronomic_longitude";
+    case MeasurementKind::astronomic_azimuth: return "astronomic_azimuth";
+    case MeasurementKind::msl_arc: return "msl_arc";
   }
   return "measurement";
 }
@@ -50,7 +54,8 @@ std::string kind_key(MeasurementKind k) {
 bool angular(MeasurementKind k) {
   return k == MeasurementKind::direction || k == MeasurementKind::horizontal_angle || k == MeasurementKind::zenith_angle ||
          k == MeasurementKind::vertical_angle || k == MeasurementKind::azimuth || k == MeasurementKind::geodetic_latitude ||
-         k == MeasurementKind::geodetic_longitude;
+         k == MeasurementKind::geodetic_longitude || k == MeasurementKind::astronomic_latitude ||
+         k == MeasurementKind::astronomic_longitude || k == MeasurementKind::astronomic_azimuth;
 }
 
 std::string stations_of(const geodesy::Network& net, const geodesy::NetworkMeasurement& m) {

@@ -226,6 +226,7 @@ void resolve_helmert_group(const AdjustRequest& request, const geodesy::Network&
 geodesy::Network read_inputs(const AdjustRequest& request) {
   io::NetworkReadOptions read_options;
   read_options.geoid = request.options.geoid;
+  read_options.station_geoid = request.station_geoid.get();
   if (request.sinex_frame) {
     read_options.sinex_frame = geodesy::Frame::parse(*request.sinex_frame, "--sinex-frame");
     const auto known = geodesy::catalog_frame_names();

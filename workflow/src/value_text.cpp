@@ -1,6 +1,7 @@
 #include "geoanchor/workflow/value_text.hpp"
 
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -127,6 +128,22 @@ solver::Convention parse_convention(std::string_view text, std::string_view flag
   throw Error(ErrorKind::usage, "E_OPTION", std::string(flag) + " " + std::string(text) + ": expected position_vector or coordinate_frame");
 }
 
+namespace {
+
+// The first bytes of the file --geoid names (empty: no such file, or a name
+// only PROJ resolves): what its content is decides how it is read.
+std::string file_head(std::string_view text) {
+  const auto path = io::find_geoid_file(text);
+  if (!path) return {};
+  std::ifstream in(*path, std::ios::binary);
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  return head;
+}
+
+}  // namespace
+
 const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view flag) {
   if (text == "EGM96") return geodesy::GeoidGrid::egm96();
   if (text == "EGM96-NGA") return geodesy::GeoidGrid::egm96_nga();
@@ -140,8 +157,34 @@ const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view fl
   static std::map<std::string, std::unique_ptr<geodesy::GeoidGrid>, std::less<>> loaded;
   std::lock_guard<std::mutex> lock(m);
   if (const auto it = loaded.find(text); it != loaded.end()) return *it->second;
-  auto grid = std::make_unique<geodesy::GeoidGrid>(io::proj_geoid_grid(text, flag));
+  std::unique_ptr<geodesy::GeoidGrid> grid;
+  const std::string head = file_head(text);
+  if (geodesy::GeoidGrid::looks_like_ntv2(head)) {
+    try {
+      grid = std::make_unique<geodesy::GeoidGrid>(geodesy::GeoidGrid::load_ntv2(*io::find_geoid_file(text), geodesy::GeoidInterpolation::bicubic));
+    } catch (const Error& e) {
+      throw Error(e.kind(), e.code(), std::string(flag) + " " + std::string(text) + ": " + e.what());
+    }
+  } else if (io::looks_like_dna_geoid(head)) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                std::string(flag) + " " + std::string(text) + ": a DynAdjust per-station geoid file (.geo: N and deflections of "
+                                    "named stations) serves `adjust` only; give a geoid grid here");
+  } else {
+    grid = std::make_unique<geodesy::GeoidGrid>(io::proj_geoid_grid(text, flag));
+  }
   return *loaded.emplace(std::string(text), std::move(grid)).first->second;
+}
+
+NetworkGeoid parse_network_geoid(std::string_view text, std::string_view flag) {
+  const std::string head = file_head(text);
+  if (io::looks_like_dna_geoid(head)) {
+    try {
+      return {nullptr, std::make_shared<const io::StationGeoidTable>(io::load_dna_geoid(*io::find_geoid_file(text)))};
+    } catch (const Error& e) {
+      throw Error(e.kind(), e.code(), std::string(flag) + " " + std::string(text) + ": " + e.what());
+    }
+  }
+  return {&parse_geoid(text, flag), nullptr};
 }
 
 namespace {

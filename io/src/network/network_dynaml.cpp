@@ -39,16 +39,25 @@
 #include "network/network_readers.hpp"
 
 namespace geoanchor::io::detail {
-namespace {
 
-using dynaml::Reader;
-
-void warn_approximate_heights(std::string_view source, std::size_t count, geodesy::Network& into) {
+void dynaml::warn_approximate_heights(std::string_view source, std::size_t count, geodesy::Network& into) {
   if (count == 0) return;
   into.warnings.push_back(std::string(source) + ": " + std::to_string(count) +
                           " free station(s) have orthometric heights and there is no --geoid: each starts the iteration "
                           "at h = H (metres off where N is metres; their adjusted heights do not depend on it)");
 }
+
+void dynaml::require_ellipsoidal(std::string_view source, const char* format, geodesy::Network& into) {
+  if (!into.stations.empty() && into.space != geodesy::NetworkSpace::ellipsoidal) {
+    throw Error(ErrorKind::input, "E_NETWORK", std::string(source) + ": " + format + " is a network on the ellipsoid; the other inputs are local");
+  }
+  into.space = geodesy::NetworkSpace::ellipsoidal;
+}
+
+namespace {
+
+using dynaml::Reader;
+using dynaml::warn_approximate_heights;
 
 // The line breaks in `t` as expat counts them (XML's end-of-line rule): LF,
 // CR LF and a CR alone are one each. A part's line offset counted in LFs
@@ -210,10 +219,7 @@ bool read_dynaml_in_parts(std::string_view text, std::string_view source, geodes
 }  // namespace
 
 void read_dynaml(std::string_view text, std::string_view source, geodesy::Network& into, const NetworkReadOptions& options) {
-  if (!into.stations.empty() && into.space != geodesy::NetworkSpace::ellipsoidal) {
-    throw Error(ErrorKind::input, "E_NETWORK", std::string(source) + ": DynaML is a network on the ellipsoid; the other inputs are local");
-  }
-  into.space = geodesy::NetworkSpace::ellipsoidal;
+  dynaml::require_ellipsoidal(source, "DynaML", into);
   if (read_dynaml_in_parts(text, source, into, options)) return;
   Reader reader(source, into, options);
   reader.parse(text);

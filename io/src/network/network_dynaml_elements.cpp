@@ -14,6 +14,25 @@
 
 namespace geoanchor::io::detail::dynaml {
 
+void Reader::set_root(const std::string& frame_name, const std::string& epoch_text, std::size_t at, const std::string& what) {
+  frame_name_ = frame_name;
+  epoch_text_ = epoch_text;
+  if (root_warnings_ && (frame_name_.empty() || epoch_text_.empty())) {
+    net_.warnings.push_back(source_ + ": " + what + " names no " +
+                            std::string(frame_name_.empty() ? "reference frame" : "epoch") +
+                            ": DynaML.xsd's default (GDA2020, 01.01.2020) applies");
+  }
+  root_frame_ = frame_of(frame_name_.empty() ? "GDA2020" : frame_name_, epoch_text_.empty() ? "01.01.2020" : epoch_text_, at, what);
+  if (!net_.frame) {
+    net_.frame = root_frame_;
+    if (const auto e = geodesy::implied_ellipsoid(*root_frame_)) {
+      net_.ellipsoid = *e;
+      net_.ellipsoid_stated = true;
+      geocentric_ = geodesy::GeocentricConverter(net_.ellipsoid);
+    }
+  }
+}
+
 void Reader::start(const std::string& name, const XML_Char** attributes) {
   text_.clear();
   const Tag tag = tag_of(name);
@@ -31,21 +50,7 @@ void Reader::start(const std::string& name, const XML_Char** attributes) {
                          "\" is not read by geoanchor; expected type, referenceframe, epoch");
       }
     }
-    if (root_warnings_ && (frame_name_.empty() || epoch_text_.empty())) {
-      net_.warnings.push_back(source_ + ": <DnaXmlFormat> names no " +
-                              std::string(frame_name_.empty() ? "referenceframe" : "epoch") +
-                              ": DynaML.xsd's default (GDA2020, 01.01.2020) applies");
-    }
-    root_frame_ = frame_of(frame_name_.empty() ? "GDA2020" : frame_name_, epoch_text_.empty() ? "01.01.2020" : epoch_text_, line(),
-                           "<DnaXmlFormat>");
-    if (!net_.frame) {
-      net_.frame = root_frame_;
-      if (const auto e = geodesy::implied_ellipsoid(*root_frame_)) {
-        net_.ellipsoid = *e;
-        net_.ellipsoid_stated = true;
-        geocentric_ = geodesy::GeocentricConverter(net_.ellipsoid);
-      }
-    }
+    set_root(frame_name_, epoch_text_, line(), "<DnaXmlFormat>");
     return;
   }
   if (path_.size() == 2) {

@@ -79,7 +79,7 @@ void Reader::scalar(const Finishing& fin, MeasurementKind kind, double value, do
 // A packed sexagesimal <Value> of `kind`, within its range.
 double Reader::angle(const Finishing& fin, MeasurementKind kind, const Fields& f, std::size_t at) const {
   const std::string& written = text(f, Tag::Value);
-  const std::string at_value = where(at) + ": " + fin.what + " <Value>";
+  const std::string at_value = where(at) + ": " + fin.what + " " + field(Tag::Value);
   const double v = packed_dms_to_rad(written, at_value, net_.warnings);
   check_angle_range(kind, v, written, AngleUnit::packed_dms, at_value);
   return v;
@@ -112,7 +112,7 @@ void Reader::finish_measurement() {
   const std::string first = m.firsts.empty() ? "" : m.firsts.front();
   const std::string second = m.seconds.empty() ? "" : m.seconds.front();
   const Finishing fin{m, type, what, x, first, second};
-  if (type.size() != 1) fail(m.line, "<Type> '" + type + "': expected one letter (A, B, C, D, E, G, H, I, J, K, L, P, Q, R, S, V, X, Y, Z)");
+  if (type.size() != 1) fail(m.line, field(Tag::Type) + " '" + type + "': expected one letter (A, B, C, D, E, G, H, I, J, K, L, M, P, Q, R, S, V, X, Y, Z)");
   switch (type[0]) {
     case 'G':
     case 'X':
@@ -123,9 +123,12 @@ void Reader::finish_measurement() {
       break;
     case 'S':
     case 'E':
+    case 'M':
     case 'C': {
       const bool slope = type[0] == 'S';
-      scalar(fin, slope ? MeasurementKind::slope_distance : type[0] == 'E' ? MeasurementKind::ellipsoid_arc : MeasurementKind::chord_distance,
+      scalar(fin, slope ? MeasurementKind::slope_distance : type[0] == 'E' ? MeasurementKind::ellipsoid_arc
+                                                           : type[0] == 'M' ? MeasurementKind::msl_arc
+                                                                            : MeasurementKind::chord_distance,
              number(m.fields, Tag::Value, m.line, what), linear_sigma(fin));
       x.stations = {station(fin, first, "First"), station(fin, second, "Second")};
       if (slope) heights(fin);
@@ -139,9 +142,10 @@ void Reader::finish_measurement() {
     }
     case 'B':
     case 'K': {
-      // K, an astronomic azimuth, is read as geodetic: the deflections of
-      // the vertical are taken as zero (docs/commands/adjust.md).
-      scalar(fin, MeasurementKind::azimuth, angle(fin, MeasurementKind::azimuth, m.fields, m.line), angle_sigma(fin, m.fields, m.line));
+      // K, an astronomic azimuth: in the plumb line's horizon (the
+      // station's deflection of the vertical, docs/network-format.md).
+      const MeasurementKind kind = type[0] == 'B' ? MeasurementKind::azimuth : MeasurementKind::astronomic_azimuth;
+      scalar(fin, kind, angle(fin, kind, m.fields, m.line), angle_sigma(fin, m.fields, m.line));
       x.stations = {station(fin, first, "First"), station(fin, second, "Second")};
       break;
     }
@@ -169,9 +173,11 @@ void Reader::finish_measurement() {
     case 'Q':
     case 'I':
     case 'J': {
-      // I and J, astronomic, are read as geodetic (deflections zero).
-      const MeasurementKind kind =
-          type[0] == 'P' || type[0] == 'I' ? MeasurementKind::geodetic_latitude : MeasurementKind::geodetic_longitude;
+      // I and J, astronomic: of the plumb line (the station's deflection).
+      const MeasurementKind kind = type[0] == 'P'   ? MeasurementKind::geodetic_latitude
+                                   : type[0] == 'Q' ? MeasurementKind::geodetic_longitude
+                                   : type[0] == 'I' ? MeasurementKind::astronomic_latitude
+                                                    : MeasurementKind::astronomic_longitude;
       scalar(fin, kind, angle(fin, kind, m.fields, m.line), angle_sigma(fin, m.fields, m.line));
       x.stations = {station(fin, first, "First")};
       break;
@@ -179,10 +185,8 @@ void Reader::finish_measurement() {
     case 'D':
       direction_set(fin);
       return;
-    case 'M':
-      fail(m.line, what + ": an MSL arc is not read by geoanchor (give it as an ellipsoid arc, type E)");
     default:
-      fail(m.line, "<Type> '" + type + "': expected one of A, B, C, D, E, G, H, I, J, K, L, P, Q, R, S, V, X, Y, Z");
+      fail(m.line, field(Tag::Type) + " '" + type + "': expected one of A, B, C, D, E, G, H, I, J, K, L, M, P, Q, R, S, V, X, Y, Z");
   }
   net_.measurements.push_back(std::move(x));
 }
@@ -196,10 +200,10 @@ void Reader::gnss_baselines(const Finishing& fin) {
   geodesy::NetworkMeasurement& x = fin.x;
   const std::string& first = fin.first;
   const std::string& second = fin.second;
-  if (m.items.empty()) fail(m.line, what + ": no <GPSBaseline>");
+  if (m.items.empty()) fail(m.line, what + ": no " + field(Tag::GPSBaseline));
   if (type[0] == 'X' && !text(m.fields, Tag::Total).empty() &&
       number(m.fields, Tag::Total, m.line, what) != static_cast<double>(m.items.size())) {
-    fail(m.line, what + ": <Total> " + text(m.fields, Tag::Total) + " but " + std::to_string(m.items.size()) + " <GPSBaseline>");
+    fail(m.line, what + ": " + field(Tag::Total) + " " + text(m.fields, Tag::Total) + " but " + std::to_string(m.items.size()) + " " + field(Tag::GPSBaseline));
   }
   x.kind = MeasurementKind::gnss_baselines;
   x.value.resize(static_cast<Eigen::Index>(3 * m.items.size()));
@@ -222,12 +226,12 @@ void Reader::gnss_points(const Finishing& fin) {
   const Measurement& m = fin.m;
   const std::string& what = fin.what;
   geodesy::NetworkMeasurement& x = fin.x;
-  if (m.items.empty()) fail(m.line, what + ": no <Clusterpoint>");
+  if (m.items.empty()) fail(m.line, what + ": no " + field(Tag::Clusterpoint));
   if (!text(m.fields, Tag::Total).empty() && number(m.fields, Tag::Total, m.line, what) != static_cast<double>(m.items.size())) {
-    fail(m.line, what + ": <Total> " + text(m.fields, Tag::Total) + " but " + std::to_string(m.items.size()) + " <Clusterpoint>");
+    fail(m.line, what + ": " + field(Tag::Total) + " " + text(m.fields, Tag::Total) + " but " + std::to_string(m.items.size()) + " " + field(Tag::Clusterpoint));
   }
   const std::string coords = text(m.fields, Tag::Coords);
-  if (coords != "XYZ" && coords != "LLH") fail(m.line, what + ": <Coords> '" + coords + "': expected XYZ or LLH");
+  if (coords != "XYZ" && coords != "LLH") fail(m.line, what + ": " + field(Tag::Coords) + " '" + coords + "': expected XYZ or LLH");
   x.kind = MeasurementKind::gnss_points;
   const std::size_t n = m.items.size();
   x.value.resize(static_cast<Eigen::Index>(3 * n));
@@ -243,13 +247,13 @@ void Reader::gnss_points(const Finishing& fin) {
     }
     // LLH: latitude and longitude (packed), orthometric height; the
     // covariance in (latitude rad, longitude rad, height m).
-    const std::string at_lat = where(it.line) + ": " + what + " <X> (latitude)";
-    const std::string at_lon = where(it.line) + ": " + what + " <Y> (longitude)";
+    const std::string at_lat = where(it.line) + ": " + what + " " + field(Tag::X) + " (latitude)";
+    const std::string at_lon = where(it.line) + ": " + what + " " + field(Tag::Y) + " (longitude)";
     const double lat = packed_dms_to_rad(text(it.fields, Tag::X), at_lat, net_.warnings);
     const double lon = packed_dms_to_rad(text(it.fields, Tag::Y), at_lon, net_.warnings);
     check_angle_range(MeasurementKind::geodetic_latitude, lat, text(it.fields, Tag::X), AngleUnit::packed_dms, at_lat);
     check_angle_range(MeasurementKind::geodetic_longitude, lon, text(it.fields, Tag::Y), AngleUnit::packed_dms, at_lon);
-    const auto n_m = undulation(lat, lon, it.line);
+    const auto n_m = undulation(it.first, lat, lon, it.line);
     if (!n_m) fail(it.line, what + ": a point cluster of orthometric heights (Coords LLH) needs the geoid: give --geoid");
     const double h = number(it.fields, Tag::Z, it.line, what) + *n_m;
     const geodesy::GeodeticPosition g{geodesy::Angle::radians(lat), geodesy::Angle::radians(lon), geodesy::EllipsoidalHeight{h}};
@@ -295,7 +299,7 @@ void Reader::direction_set(const Finishing& fin) {
   net_.measurements.push_back(ro);
   if (!text(m.fields, Tag::Total).empty() &&
       number(m.fields, Tag::Total, m.line, what) != static_cast<double>(m.directions.size())) {
-    fail(m.line, what + ": <Total> " + text(m.fields, Tag::Total) + " but " + std::to_string(m.directions.size()) + " <Directions>");
+    fail(m.line, what + ": " + field(Tag::Total) + " " + text(m.fields, Tag::Total) + " but " + std::to_string(m.directions.size()) + " " + field(Tag::Directions));
   }
   for (const auto& d : m.directions) {
     geodesy::NetworkMeasurement dir = ro;
@@ -318,7 +322,7 @@ void Reader::scale(geodesy::NetworkMeasurement& x, const Measurement& m, const s
     const std::string& t = text(m.fields, key);
     if (t.empty()) return 1.0;
     const auto v = parse_finite_double(t);
-    if (!v || !(*v > 0.0)) fail(m.line, what + ": <" + name_of(key) + "> '" + t + "': expected a factor > 0");
+    if (!v || !(*v > 0.0)) fail(m.line, what + ": " + field(key) + " '" + t + "': expected a factor > 0");
     return *v;
   };
   x.covariance *= factor(Tag::Vscale);

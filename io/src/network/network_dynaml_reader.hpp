@@ -183,14 +183,40 @@ class Reader final : public XmlHandler {
     if (!root_seen_) fail(1, "no <DnaXmlFormat> root element");
   }
 
+  // DynAdjust's DNA text (network_dna.cpp): the same records read from
+  // fixed columns, finished as DynaML's elements are, so that a network
+  // reads the same from either form. `labels` name each field (and its
+  // columns) in messages; the header's frame and epoch are the root's.
+  using Labels = std::array<std::string, kTagCount>;
+  void begin_dna(const Labels& labels, const std::string& frame, const std::string& epoch, std::size_t header_line) {
+    dna_ = &labels;
+    root_seen_ = true;
+    set_root(frame, epoch, header_line, "the DNA header");
+  }
+  Station& dna_station(std::size_t at) {
+    station_.clear();
+    station_.line = at;
+    return station_;
+  }
+  Measurement& dna_measurement(std::size_t at) {
+    measurement_.clear();
+    measurement_.line = at;
+    return measurement_;
+  }
+  void finish_dna_station() { finish_station(); }
+  void finish_dna_measurement() { finish_measurement(); }
+
   void start_element(const std::string& name, const XML_Char** attributes) override { start(name, attributes); }
   void end_element(const std::string& name) override { end(name); }
   void character_data(const char* s, std::size_t n) override { text_.append(s, n); }
 
  private:
   [[noreturn]] void fail(std::size_t line, const std::string& what) const {
-    throw Error(ErrorKind::input, "E_DYNAML", source_ + ":" + std::to_string(line) + ": " + what);
+    throw Error(ErrorKind::input, dna_ ? "E_DNA" : "E_DYNAML", source_ + ":" + std::to_string(line) + ": " + what);
   }
+  // A field in messages: DynaML's element (<Value>), or DNA text's field
+  // and columns (dna_labels).
+  std::string field(Tag t) const { return dna_ ? (*dna_)[static_cast<std::size_t>(t)] : "<" + name_of(t) + ">"; }
   std::size_t line() const { return xml_.line(); }
   std::string where(std::size_t at) const { return source_ + ":" + std::to_string(at); }
 
@@ -204,14 +230,19 @@ class Reader final : public XmlHandler {
     return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
   }
 
+  // The file's frame and epoch (DynaML's root attributes, DNA's header):
+  // DynaML.xsd's defaults when not given, with a warning; the network's
+  // frame and ellipsoid when it has none yet (network_dynaml_elements.cpp).
+  void set_root(const std::string& frame_name, const std::string& epoch_text, std::size_t at, const std::string& what);
+
   // A frame at a DynaML date dd.mm.yyyy (network_dynaml_stations.cpp).
   geodesy::Frame frame_of(const std::string& name, const std::string& date, std::size_t at, const std::string& what) const;
 
   double number(const Fields& f, Tag key, std::size_t at, const std::string& what) const {
     const std::string* t = f.find(key);
-    if (!t || t->empty()) fail(at, what + ": <" + name_of(key) + "> missing");
+    if (!t || t->empty()) fail(at, what + ": " + field(key) + " missing");
     const auto v = parse_finite_double(*t);
-    if (!v) fail(at, what + ": <" + name_of(key) + "> '" + *t + "' is not a number");
+    if (!v) fail(at, what + ": " + field(key) + " '" + *t + "' is not a number");
     return *v;
   }
   const std::string& text(const Fields& f, Tag key) const {
@@ -224,8 +255,14 @@ class Reader final : public XmlHandler {
     return v;
   }
 
-  // Orthometric height H to ellipsoidal at (lat, lon), when the geoid is there.
-  std::optional<double> undulation(double lat_rad, double lon_rad, std::size_t at) const {
+  // Orthometric height H to ellipsoidal at station `name` (lat, lon): the
+  // per-station geoid file's N, else the grid's, when there is one.
+  std::optional<double> undulation(const std::string& name, double lat_rad, double lon_rad, std::size_t at) const {
+    if (options_.station_geoid) {
+      if (const auto it = options_.station_geoid->by_station.find(name); it != options_.station_geoid->by_station.end()) {
+        return it->second.n_m;
+      }
+    }
     if (!options_.geoid) return std::nullopt;
     return options_.geoid->undulation_m(geodesy::Angle::radians(lat_rad), geodesy::Angle::radians(lon_rad), where(at));
   }
@@ -261,6 +298,7 @@ class Reader final : public XmlHandler {
   std::vector<Tag> path_;
   std::string text_;
   bool root_seen_ = false, root_warnings_ = true;
+  const Labels* dna_ = nullptr;  // reading DNA text (begin_dna)
   std::string frame_name_, epoch_text_;
   std::optional<geodesy::Frame> root_frame_;
   // The element being read, kept from one to the next (Reused, Fields).
@@ -271,5 +309,11 @@ class Reader final : public XmlHandler {
   mutable std::optional<geodesy::Frame> last_frame_;
   std::size_t approximate_heights_ = 0;
 };
+
+// The warning for free stations whose orthometric heights start the
+// iteration without a geoid (network_dynaml.cpp).
+void warn_approximate_heights(std::string_view source, std::size_t count, geodesy::Network& into);
+// DynaML and DNA networks are on the ellipsoid: refused beside local inputs.
+void require_ellipsoidal(std::string_view source, const char* format, geodesy::Network& into);
 
 }  // namespace geoanchor::io::detail::dynaml

@@ -31,11 +31,11 @@ void Reader::finish_station() {
   const Station& s = station_;
   const std::string name = text(s.fields, Tag::Name);
   const std::string what = "station " + name;
-  if (name.empty()) fail(s.line, "a <DnaStation> without a <Name>");
+  if (name.empty()) fail(s.line, dna_ ? "a station record without a " + field(Tag::Name) : "a <DnaStation> without a <Name>");
   std::string code = text(s.fields, Tag::Constraints);
   if (code.empty()) code = "FFF";
   if (code.size() != 3 || code.find_first_not_of("CFcf") != std::string::npos) {
-    fail(s.line, what + ": <Constraints> '" + code + "': expected three letters C (constrained) or F (free)");
+    fail(s.line, what + ": " + field(Tag::Constraints) + " '" + code + "': expected three letters C (constrained) or F (free)");
   }
   const std::string type = text(s.fields, Tag::Type);
   geodesy::StationConstraint c;
@@ -45,13 +45,13 @@ void Reader::finish_station() {
   if (type == "XYZ") {
     position = {number(s.coord, Tag::XAxis, s.line, what), number(s.coord, Tag::YAxis, s.line, what), height};
   } else if (type == "LLH" || type == "LLh") {
-    lat = packed_dms_to_rad(text(s.coord, Tag::XAxis), where(s.line) + ": " + what + " <XAxis> (latitude)", net_.warnings);
-    lon = packed_dms_to_rad(text(s.coord, Tag::YAxis), where(s.line) + ": " + what + " <YAxis> (longitude)", net_.warnings);
+    lat = packed_dms_to_rad(text(s.coord, Tag::XAxis), where(s.line) + ": " + what + " " + field(Tag::XAxis) + " (latitude)", net_.warnings);
+    lon = packed_dms_to_rad(text(s.coord, Tag::YAxis), where(s.line) + ": " + what + " " + field(Tag::YAxis) + " (longitude)", net_.warnings);
     if (!(std::fabs(lat) <= std::numbers::pi / 2.0)) {
-      fail(s.line, what + ": latitude <XAxis> " + text(s.coord, Tag::XAxis) + " is not within ±90°");
+      fail(s.line, what + ": latitude " + field(Tag::XAxis) + " " + text(s.coord, Tag::XAxis) + " is not within ±90°");
     }
     if (!(std::fabs(lon) <= std::numbers::pi)) {
-      fail(s.line, what + ": longitude <YAxis> " + text(s.coord, Tag::YAxis) + " is not within ±180°");
+      fail(s.line, what + ": longitude " + field(Tag::YAxis) + " " + text(s.coord, Tag::YAxis) + " is not within ±180°");
     }
     orthometric = type == "LLH";
   } else if (type == "UTM") {
@@ -62,12 +62,12 @@ void Reader::finish_station() {
       // Australia's, south of the equator. Elsewhere the hemisphere must be said.
       const std::string frame = net_.frame ? net_.frame->name() : "";
       if (frame.rfind("GDA", 0) != 0) {
-        fail(s.line, what + ": <HemisphereZone> '" + zone_text + "' names no hemisphere and the frame " + frame +
+        fail(s.line, what + ": " + field(Tag::HemisphereZone) + " '" + zone_text + "' names no hemisphere and the frame " + frame +
                          " does not imply one; write it as " + zone_text + "N or " + zone_text + "S");
       }
       zone += "S";
     }
-    const auto def = geodesy::utm_projection(net_.ellipsoid, geodesy::parse_utm_zone(zone, where(s.line) + ": " + what + " <HemisphereZone>"));
+    const auto def = geodesy::utm_projection(net_.ellipsoid, geodesy::parse_utm_zone(zone, where(s.line) + ": " + what + " " + field(Tag::HemisphereZone)));
     const geodesy::TransverseMercator tm(def);
     geodesy::ProjectedPosition p;
     p.easting_m = number(s.coord, Tag::XAxis, s.line, what);
@@ -79,12 +79,12 @@ void Reader::finish_station() {
     lon = g->lon.rad();
     orthometric = true;
   } else {
-    fail(s.line, what + ": <Type> '" + type + "': expected XYZ, LLH, LLh or UTM");
+    fail(s.line, what + ": " + field(Tag::Type) + " '" + type + "': expected XYZ, LLH, LLh or UTM");
   }
   if (type != "XYZ") {
     double h = height;
     if (orthometric) {
-      if (const auto n = undulation(lat, lon, s.line)) {
+      if (const auto n = undulation(name, lat, lon, s.line)) {
         h = height + *n;
       } else if (code[2] == 'C' || code[2] == 'c') {
         fail(s.line, what + ": its orthometric height is held (Constraints " + code +
@@ -99,7 +99,7 @@ void Reader::finish_station() {
   // up (or X, Y, Z) otherwise. geoanchor's order is latitude, longitude, height.
   for (std::size_t k = 0; k < 3; ++k) code[k] = static_cast<char>(std::toupper(static_cast<unsigned char>(code[k])));
   if (type == "XYZ" && code != "CCC" && code != "FFF") {
-    fail(s.line, what + ": <Constraints> " + code + " holds some of X, Y, Z: geoanchor holds latitude, longitude and "
+    fail(s.line, what + ": " + field(Tag::Constraints) + " " + code + " holds some of X, Y, Z: geoanchor holds latitude, longitude and "
                      "height; give CCC, FFF or the station in LLh");
   }
   c.code = type == "LLH" || type == "XYZ" ? std::array<char, 3>{code[0], code[1], code[2]}

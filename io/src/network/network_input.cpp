@@ -188,6 +188,9 @@ std::optional<AngleRange> angle_range(geodesy::MeasurementKind kind) {
     case MeasurementKind::direction: return AngleRange{0.0, 360.0, false, "a direction", "[0, 2π]"};
     case MeasurementKind::horizontal_angle: return AngleRange{0.0, 360.0, false, "a horizontal angle", "[0, 2π]"};
     case MeasurementKind::azimuth: return AngleRange{0.0, 360.0, false, "an azimuth", "[0, 2π]"};
+    case MeasurementKind::astronomic_azimuth: return AngleRange{0.0, 360.0, false, "an astronomic azimuth", "[0, 2π]"};
+    case MeasurementKind::astronomic_latitude: return AngleRange{-90.0, 90.0, false, "an astronomic latitude", "[-π/2, π/2]"};
+    case MeasurementKind::astronomic_longitude: return AngleRange{-180.0, 360.0, true, "an astronomic longitude", "[-π, 2π)"};
     // From the zenith down to the nadir: anything else is no zenith angle
     // (a vertical angle, or a face-II reading not reduced).
     case MeasurementKind::zenith_angle: return AngleRange{0.0, 180.0, false, "a zenith angle", "[0, π]"};
@@ -243,6 +246,7 @@ const char* to_string(NetworkFormat f) {
   switch (f) {
     case NetworkFormat::json: return "geoanchor network JSON";
     case NetworkFormat::dynaml: return "DynaML";
+    case NetworkFormat::dna: return "DynAdjust DNA text";
     case NetworkFormat::sinex: return "SINEX";
     case NetworkFormat::gama_local: return "GNU Gama local-network XML";
   }
@@ -255,6 +259,7 @@ NetworkFormat detect_network_format(std::string_view text, std::string_view sour
   while (at < text.size() && std::isspace(static_cast<unsigned char>(text[at]))) ++at;
   const std::string_view t = text.substr(at);
   if (t.substr(0, 5) == "%=SNX") return NetworkFormat::sinex;
+  if (t.substr(0, 6) == "!#=DNA") return NetworkFormat::dna;
   if (!t.empty() && t[0] == '{') return NetworkFormat::json;
   if (!t.empty() && t[0] == '<') {
     // The root element, past the XML declaration, processing instructions,
@@ -296,7 +301,7 @@ NetworkFormat detect_network_format(std::string_view text, std::string_view sour
   }
   throw Error(ErrorKind::input, "E_NETWORK_FORMAT",
               std::string(source) + ": not a network input geoanchor reads: expected geoanchor's network JSON, DynaML, "
-                                    "SINEX (%=SNX) or GNU Gama's local-network XML");
+                                    "DynAdjust DNA text (!#=DNA), SINEX (%=SNX) or GNU Gama's local-network XML");
 }
 
 void read_network_text(std::string_view text, std::string_view source, geodesy::Network& into,
@@ -308,6 +313,7 @@ void read_network_text(std::string_view text, std::string_view source, geodesy::
   switch (detect_network_format(text, source)) {
     case NetworkFormat::json: detail::read_network_json(text, source, into); break;
     case NetworkFormat::dynaml: detail::read_dynaml(text, source, into, options); break;
+    case NetworkFormat::dna: detail::read_dna(text, source, into, options); break;
     case NetworkFormat::sinex: detail::read_sinex(text, source, into, options); break;
     case NetworkFormat::gama_local: detail::read_gama_local(text, source, into); break;
   }
@@ -368,6 +374,20 @@ geodesy::Network read_network(const std::vector<std::string>& inputs, const Netw
   if (from_points > 0) {
     net.warnings.push_back(std::to_string(from_points) + " station(s) defined by no station input take their a-priori "
                            "position from the point measurement that gives it (free, in that measurement's frame and epoch)");
+  }
+  if (options.station_geoid) {
+    const std::size_t unused = attach_station_geoid(*options.station_geoid, net);
+    std::size_t without = 0;
+    for (const auto& s : net.stations) without += s.geoid ? 0u : 1u;
+    if (unused > 0) {
+      net.warnings.push_back(options.station_geoid->path.string() + ": " + std::to_string(unused) +
+                             " station(s) of the geoid file are in no input (not used)");
+    }
+    if (without > 0) {
+      net.warnings.push_back(options.station_geoid->path.string() + ": " + std::to_string(without) +
+                             " station(s) have no N, xi, eta in the geoid file: their deflections of the vertical are taken "
+                             "as zero, and an orthometric height or levelled difference at them is refused");
+    }
   }
   if (options.sinex_frame && !sinex_read) {
     throw Error(ErrorKind::usage, "E_OPTION", "--sinex-frame " + options.sinex_frame->to_string() + ": no input is a SINEX file");

@@ -12,6 +12,8 @@ namespace geoanchor::io::detail {
 void read_network_json(std::string_view text, std::string_view source, geodesy::Network& into);  // network_json.cpp
 void read_dynaml(std::string_view text, std::string_view source, geodesy::Network& into,
                  const NetworkReadOptions& options);                                               // network_dynaml.cpp
+void read_dna(std::string_view text, std::string_view source, geodesy::Network& into,
+              const NetworkReadOptions& options);                                                  // network_dna.cpp
 void read_sinex(std::string_view text, std::string_view source, geodesy::Network& into,
                 const NetworkReadOptions& options);                                                // network_sinex.cpp
 void read_gama_local(std::string_view text, std::string_view source, geodesy::Network& into);    // network_gama.cpp

@@ -4,6 +4,8 @@
 // where PROJ finds grids (its data directories, no network), with PROJ's
 // own bilinear interpolation.
 
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -15,6 +17,10 @@ namespace geoanchor::io {
 // and PROJ's search paths when no such file exists; (input, E_GEOID) when
 // PROJ cannot read it as a vertical grid.
 geodesy::GeoidGrid proj_geoid_grid(std::string_view name_or_path, std::string_view flag);
+
+// The file `--geoid NAME|PATH` names: the path as given, else a grid of that
+// name where PROJ looks; nullopt when there is none.
+std::optional<std::filesystem::path> find_geoid_file(std::string_view name_or_path);
 
 // What an output records of the geoid it used (JSON text): the model, the
 // grid file and its SHA-256, and how it is interpolated.

@@ -1,8 +1,10 @@
 #pragma once
 // Geoid undulations from a grid: N such that h (ellipsoidal) = H
 // (orthometric) + N. The grid is read from a NOAA VDatum ".gtx" file, the
-// format of PROJ's egm96_15.gtx (proj-data), and interpolated in one of two
-// ways:
+// format of PROJ's egm96_15.gtx (proj-data), from an AUSGeoid-style NTv2
+// file that also carries the deflections of the vertical (load_ntv2), or
+// evaluated by PROJ (from_evaluator). A .gtx grid is interpolated in one of
+// two ways:
 //  - bilinear in latitude and longitude, as PROJ's vgridshift does, so that
 //    geoanchor and a PROJ pipeline on the same grid give the same heights
 //    (model "EGM96");
@@ -21,6 +23,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -33,13 +36,37 @@
 
 namespace geoanchor::geodesy {
 
-enum class GeoidInterpolation { bilinear, nga_spline };
+// bicubic: the tensor product of Catmull–Rom cubics through the 4 × 4
+// nodes around the point (a bicubic Hermite patch whose node derivatives
+// are central differences: Numerical Recipes' bcuint as DynAdjust's
+// dnageoid evaluates AUSGeoid; nodes past the grid's edge repeat the edge).
+enum class GeoidInterpolation { bilinear, nga_spline, bicubic };
+
+const char* to_string(GeoidInterpolation i);  // "bilinear", "bicubic", …
+
+// The deflection of the vertical: ξ = Φ − φ (north–south component,
+// positive when the astronomic zenith lies north of the ellipsoid normal)
+// and η = (Λ − λ) cos φ (east–west, positive to the east); radians.
+struct Deflection {
+  double xi_rad = 0.0;
+  double eta_rad = 0.0;
+};
 
 class GeoidGrid {
  public:
   // Throws geoanchor::Error: io when the file cannot be read, input when it
   // is not a .gtx grid (header, size), naming the file.
   static GeoidGrid load_gtx(const std::filesystem::path& path, std::string model_name);
+
+  // A geoid grid in NTv2 form as AUSGeoid is distributed (Geoscience
+  // Australia; DynAdjust's dnageoid reads and writes it): one sub-grid in
+  // arc-seconds, longitudes positive west, each node's four float32 fields
+  // N (m), ξ (″), η (″) and an unused fourth; SYSTEM_T names the height
+  // datum (AHD_1971). Throws geoanchor::Error naming the file and why it is
+  // no such grid (a horizontal shift grid, several sub-grids, a short file).
+  static GeoidGrid load_ntv2(const std::filesystem::path& path, GeoidInterpolation interpolation);
+  // Whether `bytes` begin as an NTv2 file does (NUM_OREC, either byte order).
+  static bool looks_like_ntv2(std::string_view bytes);
 
   // EGM96 from PROJ's data directory ($PROJ_DATA, $PROJ_LIB, then
   // /usr/share/proj), loaded once. Throws as load_gtx, saying which package
@@ -62,6 +89,11 @@ class GeoidGrid {
   // model outside the grid.
   double undulation_m(Angle lat, Angle lon, std::string_view where) const;
 
+  // ξ and η at (lat, lon), interpolated as N is; nullopt when the grid
+  // carries no deflections, outside the grid, or for NaN input.
+  std::optional<Deflection> deflection(Angle lat, Angle lon) const;
+  bool has_deflections() const { return !xi_arcsec_.empty(); }
+
   const std::string& model_name() const { return name_; }
   GeoidInterpolation interpolation() const { return interpolation_; }
   const std::filesystem::path& path() const { return path_; }
@@ -74,7 +106,10 @@ class GeoidGrid {
   bool global_lon_ = false;  // the columns span 360°: longitudes wrap
   GeoidInterpolation interpolation_ = GeoidInterpolation::bilinear;
   double spline_m(double row, double col) const;
+  // A field of the grid at (lat, lon) by the grid's interpolation; NaN outside.
+  double sample(const std::vector<float>& field, double lat_deg, double lon_deg) const;
   std::vector<float> values_m_;  // rows_ × cols_, south row first, west to east
+  std::vector<float> xi_arcsec_, eta_arcsec_;  // the same nodes' deflections (NTv2 geoid grids), else empty
   std::shared_ptr<const std::function<double(double, double)>> external_;  // from_evaluator
 };
 

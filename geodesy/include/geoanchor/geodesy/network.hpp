@@ -9,8 +9,9 @@
 // Two spaces:
 //  - ellipsoidal: 3-D on the ellipsoid of `ellipsoid`; station positions
 //    are ECEF metres (X through Greenwich); terrestrial measurements are
-//    modelled in the local geodetic horizon at the instrument (the
-//    ellipsoid normal: deflections of the vertical zero);
+//    modelled in the local astronomic horizon at the instrument: the
+//    ellipsoid normal turned by the deflection of the vertical there (the
+//    station's StationGeoid, else the geoid grid's; zero without either);
 //  - local: a plane local Cartesian system (GNU Gama's local networks):
 //    x, y horizontal in the input's own axis convention, z up; 1-D
 //    (levelling: z only), 2-D (x, y) or 3-D.
@@ -26,6 +27,7 @@
 #include "geoanchor/geodesy/gnss_solution.hpp"
 #include "geoanchor/geodesy/ellipsoid.hpp"
 #include "geoanchor/geodesy/frame.hpp"
+#include "geoanchor/geodesy/geoid.hpp"
 #include "geoanchor/geodesy/units.hpp"
 
 namespace geoanchor::geodesy {
@@ -57,6 +59,14 @@ struct StationConstraint {
   std::string text() const;  // "CCF"
 };
 
+// The geoid at a station as a per-station file gives it (DynAdjust's .geo:
+// N and the deflection of the vertical), used instead of a grid's.
+struct StationGeoid {
+  double n_m = 0.0;
+  Deflection deflection;  // geoid.hpp: ξ, η in radians
+  std::string source;     // "file:line"
+};
+
 struct NetworkStation {
   std::string id;
   // A-priori coordinates: ECEF metres (ellipsoidal network, in the
@@ -67,6 +77,7 @@ struct NetworkStation {
   bool defined = true;         // false: only named by a measurement so far (while reading)
   StationConstraint constraint;
   std::string source;  // "file:line" or "file: stations[3]"
+  std::optional<StationGeoid> geoid;  // N, ξ, η from a per-station geoid file
 };
 
 enum class MeasurementKind {
@@ -89,6 +100,12 @@ enum class MeasurementKind {
   orthometric_height,   // at
   geodetic_latitude,    // at (radians)
   geodetic_longitude,   // at (radians)
+  // Astronomic: of the plumb line at the station (its deflection, ξ and η,
+  // from the station's geoid or the grid; zero without either, warned).
+  astronomic_latitude,   // at: Φ = φ + ξ
+  astronomic_longitude,  // at: Λ = λ + η / cos φ
+  astronomic_azimuth,    // from, to: in the astronomic horizon at `from`, from astronomic north
+  msl_arc,               // from, to: the arc on the geoid (mean sea level) between the stations
 };
 
 // "gnss baselines", "slope distance", … for messages.

@@ -8,12 +8,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "geoanchor/geodesy/network.hpp"
 #include "geoanchor/io/transform/transform_file.hpp"
+#include "geoanchor/io/network/station_geoid.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 
 namespace geoanchor::workflow {
@@ -32,6 +34,9 @@ struct AdjustRequest {
   // covariance × geodesy::solution_sigma_factor²; dead_reckoned left out).
   geodesy::SolutionPolicy solutions = geodesy::SolutionPolicy::exclude;
   solver::AdjustOptions options;
+  // adjust --geoid FILE.geo: DynAdjust's per-station N, ξ, η (the grid, if
+  // any, is options.geoid).
+  std::shared_ptr<const io::StationGeoidTable> station_geoid;
 };
 
 struct PreparedNetwork {

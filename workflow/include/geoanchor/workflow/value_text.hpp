@@ -6,11 +6,13 @@
 
 #include <optional>
 #include <string>
+#include <memory>
 #include <string_view>
 #include <vector>
 
 #include "geoanchor/geodesy/ellipsoid.hpp"
 #include "geoanchor/geodesy/geoid.hpp"
+#include "geoanchor/io/network/station_geoid.hpp"
 #include "geoanchor/geodesy/positions.hpp"
 #include "geoanchor/geodesy/projection.hpp"
 #include "geoanchor/io/control/control_csv.hpp"
@@ -49,7 +51,20 @@ std::vector<double> split_numbers(std::string_view text, std::string_view flag, 
 // The geoid model named by --geoid: EGM96 (PROJ's egm96_15.gtx, bilinear as
 // vgridshift) or EGM96-NGA (the same grid, NGA's spline). Throws
 // geoanchor::Error (usage) for any other name, saying which are available.
+//
+// A file is read by its content: an NTv2 geoid grid in AUSGeoid's form (N
+// and the deflections, bicubic as DynAdjust's dnageoid interpolates it),
+// else a grid PROJ reads (GTX, GeoTIFF; bilinear). A DynAdjust per-station
+// .geo file is refused here (it serves adjust: parse_network_geoid).
 const geodesy::GeoidGrid& parse_geoid(std::string_view text, std::string_view flag);
+
+// adjust's --geoid: a grid as parse_geoid reads it, or DynAdjust's
+// per-station .geo file (N, ξ, η of named stations).
+struct NetworkGeoid {
+  const geodesy::GeoidGrid* grid = nullptr;
+  std::shared_ptr<const io::StationGeoidTable> stations;
+};
+NetworkGeoid parse_network_geoid(std::string_view text, std::string_view flag);
 
 // translation3, helmert6, helmert7, helmert14, molodensky-badekas,
 // enu-origin or site-calibration.

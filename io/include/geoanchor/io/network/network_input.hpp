@@ -2,7 +2,8 @@
 // The inputs of `geoanchor adjust`, each detected from its content and read
 // into one network (geodesy/network.hpp):
 //  - geoanchor's own JSON (schema "geoanchor.network/1", docs/network-format.md);
-//  - DynAdjust's DynaML station and measurement files (XML);
+//  - DynAdjust's DynaML station and measurement files (XML), and their DNA
+//    text twins (.stn, .msr: the '!#=DNA' header);
 //  - SINEX (SOLUTION/ESTIMATE with SOLUTION/MATRIX_ESTIMATE: a point cluster);
 //  - GNU Gama's local-network XML (gama-local).
 // Stations are matched by name across the inputs; a station given twice
@@ -17,10 +18,11 @@
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/geoid.hpp"
 #include "geoanchor/geodesy/network.hpp"
+#include "geoanchor/io/network/station_geoid.hpp"
 
 namespace geoanchor::io {
 
-enum class NetworkFormat { json, dynaml, sinex, gama_local };
+enum class NetworkFormat { json, dynaml, dna, sinex, gama_local };
 const char* to_string(NetworkFormat f);
 
 // The format of a file's content; throws geoanchor::Error (input) naming
@@ -33,6 +35,10 @@ struct NetworkReadOptions {
   // refused where they are measured or held, and otherwise only start the
   // iteration (with a warning).
   const geodesy::GeoidGrid* geoid = nullptr;
+  // A per-station geoid file (DynAdjust's .geo): its N makes the named
+  // stations' orthometric heights ellipsoidal (before the grid's), and
+  // read_network gives each named station its N, ξ, η (NetworkStation::geoid).
+  const StationGeoidTable* station_geoid = nullptr;
   // The frame of SINEX inputs' estimates (SINEX names none; --sinex-frame),
   // without an epoch: each file's REF_EPOCH is theirs. Given with no SINEX
   // input, read_network refuses it (usage).
