@@ -378,6 +378,19 @@ TEST(NetworkGvx, EachRefusalNamesWhatAndWhere) {
   }
 }
 
+// The fuzz corpus's seeds in both layouts are read (the same first
+// vector), and its SESSION seed is refused.
+TEST(NetworkGvx, TheFuzzSeedsOfBothLayoutsAreRead) {
+  const std::string dir = std::string(GEOANCHOR_SOURCE_DIR) + "/fuzz/corpus/gvx/";
+  const geodesy::Network a = read_network({dir + "schema_layout.gvx"});
+  const geodesy::Network b = read_network({dir + "ngs_writer_layout.gvx"});
+  ASSERT_EQ(a.measurements.size(), 2u);
+  ASSERT_EQ(b.measurements.size(), 2u);
+  EXPECT_EQ(a.measurements[0].value, b.measurements[0].value);
+  EXPECT_EQ(a.measurements[0].covariance, b.measurements[0].covariance);
+  EXPECT_THROW((void)read_network({dir + "session_refused.gvx"}), Error);
+}
+
 TEST(NetworkGvx, RefusesALocalNetworkAndAFileWithoutVectors) {
   geodesy::Network net;
   net.space = geodesy::NetworkSpace::local;
