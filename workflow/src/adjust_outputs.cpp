@@ -75,6 +75,29 @@ std::string csv_field(const std::string& v) {
   return out + "\"";
 }
 
+std::string metadata_text(const geodesy::NetworkMeasurement& m) {
+  std::string out;
+  const auto put = [&out](const std::string& s) {
+    for (const char ch : s) {
+      switch (ch) {
+        case '%': out += "%25"; break;
+        case ';': out += "%3B"; break;
+        case '=': out += "%3D"; break;
+        case '\n': out += "%0A"; break;
+        case '\r': out += "%0D"; break;
+        default: out += ch;
+      }
+    }
+  };
+  for (std::size_t k = 0; k < m.metadata.size(); ++k) {
+    if (k > 0) out += ';';
+    put(m.metadata[k].first);
+    out += '=';
+    put(m.metadata[k].second);
+  }
+  return out;
+}
+
 double correlation(const Eigen::Matrix3d& c, int a, int b) {
   const double d = std::sqrt(c(a, a) * c(b, b));
   if (!(d > 0.0) || !std::isfinite(c(a, b))) return 0.0;
@@ -243,6 +266,7 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
       const char* status = am ? solver::to_string(am->status(r.alpha_point)) : "ignored";
       const std::string rank = am && am->snooping_rank > 0 ? std::to_string(am->snooping_rank) : std::string();
       const std::string source = csv_field(m.source), stations = csv_field(stations_of(net, m));
+      const std::string metadata = csv_field(metadata_text(m));
       const auto at = [&](const Eigen::VectorXd* v, Eigen::Index k) {
         return v && k < v->size() ? (*v)(k) : std::numeric_limits<double>::quiet_NaN();
       };
@@ -280,12 +304,14 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
         out += status;
         out += ',';
         out += rank;
+        out += ',';
+        out += metadata;
         out += '\n';
       }
     }
   });
   std::string out = "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,"
-                    "mdb,status,snooping_rank\n";
+                    "mdb,status,snooping_rank,metadata\n";
   std::size_t size = out.size();
   for (const auto& part : parts) size += part.size();
   out.reserve(size);

@@ -30,6 +30,12 @@ std::string stations_of(const geodesy::Network& net, const geodesy::NetworkMeasu
 // A CSV field, quoted where it holds a comma, quote or line break.
 std::string csv_field(const std::string& v);
 
+// A measurement's metadata as the measurements CSV's `metadata` column
+// writes it: key=value pairs joined by ';', each '%', ';', '=' and line
+// break inside a key or value written as %25, %3B, %3D, %0A, %0D (so the
+// pairs split back exactly); "" for none.
+std::string metadata_text(const geodesy::NetworkMeasurement& m);
+
 // Within [−1, 1] (rounding of a nearly dependent pair can put it a few
 // parts in 10⁶ outside); 0 where a component is fixed (σ = 0).
 double correlation(const Eigen::Matrix3d& c, int a, int b);

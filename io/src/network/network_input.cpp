@@ -249,6 +249,7 @@ const char* to_string(NetworkFormat f) {
     case NetworkFormat::dna: return "DynAdjust DNA text";
     case NetworkFormat::sinex: return "SINEX";
     case NetworkFormat::gama_local: return "GNU Gama local-network XML";
+    case NetworkFormat::gvx: return "NGS GNSS Vector Exchange (GVX)";
   }
   return "network";
 }
@@ -294,14 +295,15 @@ NetworkFormat detect_network_format(std::string_view text, std::string_view sour
       if (rest.substr(0, 12) == "DnaXmlFormat") return NetworkFormat::dynaml;
       if (rest.substr(0, 10) == "gama-local") return NetworkFormat::gama_local;
       const std::size_t end = rest.find_first_of(" \t\r\n>/");
+      if (rest.substr(0, end) == "GVX") return NetworkFormat::gvx;
       throw Error(ErrorKind::input, "E_NETWORK_FORMAT",
                   std::string(source) + ": an XML file whose root element is <" + std::string(rest.substr(0, end)) +
-                      ">; expected <DnaXmlFormat> (DynaML) or <gama-local> (GNU Gama)");
+                      ">; expected <DnaXmlFormat> (DynaML), <gama-local> (GNU Gama) or <GVX> (NGS GNSS Vector Exchange)");
     }
   }
   throw Error(ErrorKind::input, "E_NETWORK_FORMAT",
               std::string(source) + ": not a network input geoanchor reads: expected geoanchor's network JSON, DynaML, "
-                                    "DynAdjust DNA text (!#=DNA), SINEX (%=SNX) or GNU Gama's local-network XML");
+                                    "DynAdjust DNA text (!#=DNA), SINEX (%=SNX), GNU Gama's local-network XML or NGS GVX");
 }
 
 void read_network_text(std::string_view text, std::string_view source, geodesy::Network& into,
@@ -316,6 +318,7 @@ void read_network_text(std::string_view text, std::string_view source, geodesy::
     case NetworkFormat::dna: detail::read_dna(text, source, into, options); break;
     case NetworkFormat::sinex: detail::read_sinex(text, source, into, options); break;
     case NetworkFormat::gama_local: detail::read_gama_local(text, source, into); break;
+    case NetworkFormat::gvx: detail::read_gvx(text, source, into); break;
   }
 }
 

@@ -17,5 +17,6 @@ void read_dna(std::string_view text, std::string_view source, geodesy::Network& 
 void read_sinex(std::string_view text, std::string_view source, geodesy::Network& into,
                 const NetworkReadOptions& options);                                                // network_sinex.cpp
 void read_gama_local(std::string_view text, std::string_view source, geodesy::Network& into);    // network_gama.cpp
+void read_gvx(std::string_view text, std::string_view source, geodesy::Network& into);           // network_gvx.cpp
 
 }  // namespace geoanchor::io::detail

@@ -2,7 +2,7 @@
 // A survey network as it was measured: stations with their a-priori
 // coordinates and datum constraints, and measurements with their a-priori
 // covariance (docs/commands/adjust.md). Readers (io/) fill it from
-// geoanchor's JSON, DynaML, SINEX and GNU Gama's XML; the adjustment
+// geoanchor's JSON, DynaML, SINEX, GNU Gama's XML and NGS GVX; the adjustment
 // (solver/network_adjustment.hpp) estimates the stations from it.
 //
 // Units inside are SI: metres, radians, square metres and square radians.
@@ -22,6 +22,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "geoanchor/geodesy/gnss_solution.hpp"
@@ -134,6 +135,11 @@ struct NetworkMeasurement {
   // station (DynAdjust's Pscale, Lscale, Hscale), applied once the
   // stations' positions are known; 1 when none.
   Eigen::Vector3d local_variance_scale = Eigen::Vector3d::Ones();
+  // What the input says of the measurement beyond its value and weight
+  // (NGS GVX: the receivers and antennas, PDOP, the solution type, the
+  // occupation times, …): key and text, in the input's order; written as
+  // the measurements CSV's `metadata` column. Empty for most inputs.
+  std::vector<std::pair<std::string, std::string>> metadata;
 };
 
 struct DirectionSet {

@@ -5,7 +5,9 @@
 //  - DynAdjust's DynaML station and measurement files (XML), and their DNA
 //    text twins (.stn, .msr: the '!#=DNA' header);
 //  - SINEX (SOLUTION/ESTIMATE with SOLUTION/MATRIX_ESTIMATE: a point cluster);
-//  - GNU Gama's local-network XML (gama-local).
+//  - GNU Gama's local-network XML (gama-local);
+//  - NGS GNSS Vector Exchange (GVX 1.0, XML): GNSS vectors with the
+//    a-priori coordinates of their ends and their metadata.
 // Stations are matched by name across the inputs; a station given twice
 // with different coordinates is an error naming both places.
 
@@ -22,7 +24,7 @@
 
 namespace geoanchor::io {
 
-enum class NetworkFormat { json, dynaml, dna, sinex, gama_local };
+enum class NetworkFormat { json, dynaml, dna, sinex, gama_local, gvx };
 const char* to_string(NetworkFormat f);
 
 // The format of a file's content; throws geoanchor::Error (input) naming
