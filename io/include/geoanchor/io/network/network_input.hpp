@@ -4,7 +4,9 @@
 //  - geoanchor's own JSON (schema "geoanchor.network/1", docs/network-format.md);
 //  - DynAdjust's DynaML station and measurement files (XML);
 //  - SINEX (SOLUTION/ESTIMATE with SOLUTION/MATRIX_ESTIMATE: a point cluster);
-//  - GNU Gama's local-network XML (gama-local).
+//  - GNU Gama's local-network XML (gama-local);
+//  - STAR*NET data files (.dat: C, E and terrestrial measurement lines,
+//    read as a local network; docs/network-format.md).
 // Stations are matched by name across the inputs; a station given twice
 // with different coordinates is an error naming both places.
 
@@ -20,7 +22,7 @@
 
 namespace geoanchor::io {
 
-enum class NetworkFormat { json, dynaml, sinex, gama_local };
+enum class NetworkFormat { json, dynaml, sinex, gama_local, starnet };
 const char* to_string(NetworkFormat f);
 
 // The format of a file's content; throws geoanchor::Error (input) naming
