@@ -43,7 +43,7 @@ std::string refusal(const std::string& text) {
   try {
     read(text);
   } catch (const Error& e) {
-    return e.what();
+    return e.code() + ": " + e.what();
   }
   ADD_FAILURE() << "read without refusal:\n" << text;
   return "";

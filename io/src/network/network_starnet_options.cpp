@@ -75,7 +75,7 @@ std::string keyword(std::string_view w, const std::vector<std::string>& names, c
 const std::vector<std::string> kOptionNames = {
     "2D",       "3D",        "3REDUCE",  "ADDCENTERING", "ALIAS",     "COPYINPUT",  "CURVE",      "DATA",
     "DELTA",    "EDM",       "ELEVATION", "ELLIPSE",     "END",       "GPS",        "INCLUDE",    "INSTRUMENT",
-    "LEVEL",    "LONGITUDE", "LOSTSTATIONS", "LWEIGHT",  "MAPMODE",   "MULTIPLIER", "PELEVATION", "PRISM",
+    "LEVEL",    "LONGITUDE", "LOSTSTATIONS", "LWEIGHT",  "MAPMODE",   "MULTIPLIER", "ORDER",      "PELEVATION", "PRISM",
     "PTOLERANCE", "REFRACTION", "RELATIVE", "SCALE",     "SEPARATOR", "UNITS",      "VLEVEL"};
 
 // Why each option geoanchor refuses is refused.
