@@ -250,9 +250,44 @@ const char* to_string(NetworkFormat f) {
     case NetworkFormat::sinex: return "SINEX";
     case NetworkFormat::gama_local: return "GNU Gama local-network XML";
     case NetworkFormat::gvx: return "NGS GNSS Vector Exchange (GVX)";
+    case NetworkFormat::starnet: return "STAR*NET data file";
   }
   return "network";
 }
+
+namespace {
+
+// STAR*NET data files have no header: the first line that is neither
+// blank nor a '#' comment must be an inline option ('.' and a letter or
+// digit: .2D, .UNITS) or a STAR*NET record code followed by a blank. JSON
+// ('{'), XML ('<'), SINEX ('%=SNX') and DynAdjust's DNA text ('!#=DNA')
+// start otherwise, and are tested first.
+bool starnet_content(std::string_view t) {
+  static const char* const kCodes[] = {"C",  "CH", "P",  "PH", "E",  "EH", "A",  "D",  "V",  "B",  "M",  "BM", "DV", "L",
+                                       "DB", "DN", "DM", "DE", "G0", "G1", "G2", "G3", "G4", "T",  "TB", "TE", "SS"};
+  std::size_t at = 0;
+  while (at < t.size()) {
+    std::size_t end = t.find_first_of("\r\n", at);
+    if (end == std::string_view::npos) end = t.size();
+    std::string_view line = t.substr(at, end - at);
+    at = end + 1;
+    const std::size_t b = line.find_first_not_of(" \t");
+    if (b == std::string_view::npos || line[b] == '#') continue;
+    line = line.substr(b);
+    if (line[0] == '.') return line.size() > 1 && std::isalnum(static_cast<unsigned char>(line[1]));
+    const std::size_t blank = line.find_first_of(" \t");
+    if (blank == std::string_view::npos) return false;
+    std::string code(line.substr(0, blank));
+    for (char& c : code) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    for (const char* k : kCodes) {
+      if (code == k) return true;
+    }
+    return false;
+  }
+  return false;
+}
+
+}  // namespace
 
 NetworkFormat detect_network_format(std::string_view text, std::string_view source) {
   std::size_t at = 0;
@@ -301,9 +336,10 @@ NetworkFormat detect_network_format(std::string_view text, std::string_view sour
                       ">; expected <DnaXmlFormat> (DynaML), <gama-local> (GNU Gama) or <GVX> (NGS GNSS Vector Exchange)");
     }
   }
+  if (!t.empty() && t[0] != '{' && t[0] != '<' && t[0] != '%' && t[0] != '!' && starnet_content(t)) return NetworkFormat::starnet;
   throw Error(ErrorKind::input, "E_NETWORK_FORMAT",
               std::string(source) + ": not a network input geoanchor reads: expected geoanchor's network JSON, DynaML, "
-                                    "DynAdjust DNA text (!#=DNA), SINEX (%=SNX), GNU Gama's local-network XML or NGS GVX");
+                                    "DynAdjust DNA text (!#=DNA), SINEX (%=SNX), GNU Gama's local-network XML, NGS GVX or a STAR*NET data file");
 }
 
 void read_network_text(std::string_view text, std::string_view source, geodesy::Network& into,
@@ -319,6 +355,7 @@ void read_network_text(std::string_view text, std::string_view source, geodesy::
     case NetworkFormat::sinex: detail::read_sinex(text, source, into, options); break;
     case NetworkFormat::gama_local: detail::read_gama_local(text, source, into); break;
     case NetworkFormat::gvx: detail::read_gvx(text, source, into); break;
+    case NetworkFormat::starnet: detail::read_starnet(text, source, into); break;
   }
 }
 

@@ -8,6 +8,8 @@
 //  - GNU Gama's local-network XML (gama-local);
 //  - NGS GNSS Vector Exchange (GVX 1.0, XML): GNSS vectors with the
 //    a-priori coordinates of their ends and their metadata.
+//  - STAR*NET data files (.dat: C, E and terrestrial measurement lines,
+//    read as a local network; docs/network-format.md).
 // Stations are matched by name across the inputs; a station given twice
 // with different coordinates is an error naming both places.
 
@@ -24,7 +26,7 @@
 
 namespace geoanchor::io {
 
-enum class NetworkFormat { json, dynaml, dna, sinex, gama_local, gvx };
+enum class NetworkFormat { json, dynaml, dna, sinex, gama_local, gvx, starnet };
 const char* to_string(NetworkFormat f);
 
 // The format of a file's content; throws geoanchor::Error (input) naming

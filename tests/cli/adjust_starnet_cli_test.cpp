@@ -1,0 +1,71 @@
+// geoanchor adjust with STAR*NET data files (issue 42 point 6): each bad
+// input is refused naming the file, the line and the value, and leaves no
+// output; a good file adjusts and writes every output.
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "cli_support.hpp"
+
+namespace geoanchor {
+namespace {
+
+using testing::CliTest;
+using testing::RunResult;
+
+class AdjustStarnetCli : public CliTest {};
+
+// A braced quadrilateral: A and B fixed, C and D from angles and distances.
+const std::string kHeader = "# quadrilateral\n.2D\n.UNITS Meters DMS\n.ORDER NE AtFromTo\n";
+const std::string kGood = kHeader +
+                          "C A 1000 1000 ! !\nC B 1000 1100 ! !\nC C 1100 1100\nC D 1100 1000\n"
+                          "M A-B-C 45-00-00 141.4214 2 0.003\nM A-B-D 90-00-00 100.0000 2 0.003\n"
+                          "M B-C-D 45-00-00 141.4214 2 0.003\nD C-D 100.0000 0.003\n";
+
+TEST_F(AdjustStarnetCli, BadInputIsRefusedByNameWithNoOutput) {
+  struct Case {
+    std::string name, text;
+    std::vector<std::string> message;
+  };
+  const std::vector<Case> cases = {
+      {"a measurement without its standard error", kHeader + "C A 0 0 ! !\nD A-B 100\n", {"E_STARNET", "net.dat:6", "project options"}},
+      {"a value before .UNITS", "# x\n.2D\n.ORDER NE\nC A 0 0 ! !\n", {"E_STARNET", "net.dat:4", "before any .UNITS"}},
+      {"a refraction coefficient in the file", kHeader + ".REFRACTION 0.07\n", {"E_STARNET", "net.dat:5", "--refraction K"}},
+      {"a GPS vector", kHeader + "G1 A-B 1 2 3\n", {"E_STARNET", "G1 (a GPS vector line)"}},
+      {"an angle past the circle", kHeader + "C A 0 0 ! !\nA A-B-C 361-00-00 2\n", {"E_ANGLE", "net.dat:6", "361-00-00"}},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    write("net.dat", c.text);
+    const RunResult r = run("adjust '" + path("net.dat").string() + "' -o '" + path("st.csv").string() + "' --measurements '" +
+                            path("m.csv").string() + "' --report '" + path("r.txt").string() + "'");
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    for (const auto& piece : c.message) EXPECT_NE(r.err.find(piece), std::string::npos) << piece << " in: " << r.err;
+    EXPECT_EQ(leftovers({"net.dat"}), std::vector<std::string>{});
+  }
+}
+
+TEST_F(AdjustStarnetCli, AGoodFileAdjustsAndWritesEveryOutput) {
+  write("net.dat", kGood);
+  const RunResult r = run("adjust '" + path("net.dat").string() + "' -o '" + path("st.csv").string() + "' --measurements '" +
+                          path("m.csv").string() + "' --report '" + path("r.txt").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(leftovers({"net.dat"}), (std::vector<std::string>{"m.csv", "r.txt", "st.csv", "st.csv.geoanchor.json"}));
+  // C is 1100 north, 1100 east: the angles and distances were computed
+  // from it and rounded to 0.1 mm (141.4214 for 100·√2 = 141.42136).
+  constexpr double kRounding_m = 1e-3;
+  const std::string st = testing::slurp(path("st.csv").string());
+  const std::size_t row = st.find("\nC,");
+  ASSERT_NE(row, std::string::npos) << st;
+  char* end = nullptr;
+  const double x = std::strtod(st.c_str() + row + 3, &end);
+  const double y = std::strtod(end + 1, nullptr);
+  EXPECT_NEAR(x, 1100.0, kRounding_m) << st;
+  EXPECT_NEAR(y, 1100.0, kRounding_m) << st;
+}
+
+}  // namespace
+}  // namespace geoanchor
