@@ -21,7 +21,7 @@ class AdjustStarnetCli : public CliTest {};
 // A braced quadrilateral: A and B fixed, C and D from angles and distances.
 const std::string kHeader = "# quadrilateral\n.2D\n.UNITS Meters DMS\n.ORDER NE AtFromTo\n";
 const std::string kGood = kHeader +
-                          "C A 1000 1000 ! !\nC B 1000 1100 ! !\nC C 1100 1100\nC D 1100 1000\n"
+                          "C A 1000 1000 ! !\nC B 1000 1100 ! !\nC C 899 1101\nC D 901 999\n"
                           "M A-B-C 45-00-00 141.4214 2 0.003\nM A-B-D 90-00-00 100.0000 2 0.003\n"
                           "M B-C-D 45-00-00 141.4214 2 0.003\nD C-D 100.0000 0.003\n";
 
@@ -54,8 +54,10 @@ TEST_F(AdjustStarnetCli, AGoodFileAdjustsAndWritesEveryOutput) {
                           path("m.csv").string() + "' --report '" + path("r.txt").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(leftovers({"net.dat"}), (std::vector<std::string>{"m.csv", "r.txt", "st.csv", "st.csv.geoanchor.json"}));
-  // C is 1100 north, 1100 east: the angles and distances were computed
-  // from it and rounded to 0.1 mm (141.4214 for 100·√2 = 141.42136).
+  // C is 900 north, 1100 east: the angles (clockwise from the backsight,
+  // STAR*NET's sense) and distances were computed from A, B fixed and C, D
+  // south of them, and rounded to 0.1 mm (141.4214 for 100·√2 = 141.42136);
+  // C and D start a metre off.
   constexpr double kRounding_m = 1e-3;
   const std::string st = testing::slurp(path("st.csv").string());
   const std::size_t row = st.find("\nC,");
@@ -63,7 +65,7 @@ TEST_F(AdjustStarnetCli, AGoodFileAdjustsAndWritesEveryOutput) {
   char* end = nullptr;
   const double x = std::strtod(st.c_str() + row + 3, &end);
   const double y = std::strtod(end + 1, nullptr);
-  EXPECT_NEAR(x, 1100.0, kRounding_m) << st;
+  EXPECT_NEAR(x, 900.0, kRounding_m) << st;
   EXPECT_NEAR(y, 1100.0, kRounding_m) << st;
 }
 

@@ -70,7 +70,8 @@ TEST(NetworkStarnet, DetectionIsByContentAndNeverCapturesTheOtherFormats) {
   EXPECT_EQ(detect_network_format("\xEF\xBB\xBF" "m 1-2-3 10-00-00 5\n", "x"), NetworkFormat::starnet);
   EXPECT_EQ(detect_network_format("{\"schema\": \"geoanchor.network/1\"}", "x.dat"), NetworkFormat::json);
   EXPECT_EQ(detect_network_format("%=SNX 2.02 XXX\n", "x.dat"), NetworkFormat::sinex);
-  for (const std::string other : {"!#=DNA 3.01 STN 01.01.2020 GDA2020 01.01.2020 2\n", "# c\n{}", "Cx A 1 2\n", "hello world\n",
+  EXPECT_EQ(detect_network_format("!#=DNA 3.01 STN 01.01.2020 GDA2020 01.01.2020 2\n", "x.dat"), NetworkFormat::dna);
+  for (const std::string other : {"# c\n{}", "Cx A 1 2\n", "hello world\n",
                                   "# only comments\n", ".\n", "C\n", "<?xml version=\"1.0\"?>\n<root/>"}) {
     EXPECT_THROW(detect_network_format(other, "x.dat"), Error) << other;
   }

@@ -470,8 +470,10 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
                                       "horizontal_distance, ellipsoid_arc, direction_set, horizontal_angle, zenith_angle, "
                                       "vertical_angle, azimuth, height_difference, ellipsoidal_height or orthometric_height");
     }
-    if (net.space == geodesy::NetworkSpace::local &&
-        (x.kind == MeasurementKind::ellipsoid_arc || x.kind == MeasurementKind::azimuth || x.frame)) {
+    // A local network's azimuth is a bearing from +x turning as its angles
+    // do (GNU Gama's and STAR*NET's grid bearing); an ellipsoid arc has no
+    // meaning there.
+    if (net.space == geodesy::NetworkSpace::local && (x.kind == MeasurementKind::ellipsoid_arc || x.frame)) {
       fail(at, std::string(geodesy::to_string(x.kind)) + (x.frame ? " with a frame" : "") + " in a local network");
     }
     net.measurements.push_back(std::move(x));
