@@ -31,7 +31,7 @@ std::vector<CLI::Option*> add_network_options(CLI::App* cmd, NetworkOptions& o) 
                     "Adjust GNSS measurements whose 'solution' is float, dgps, sbas or standalone with their covariances "
                     "scaled by 10², 25², 75² or 250² (default: left out; dead_reckoned always is)"),
       cmd->add_option("--geoid", o.geoid,
-                      "Geoid for orthometric heights and levelled height differences: EGM96, EGM96-NGA, a grid name PROJ finds or a PATH"),
+                      "Geoid for orthometric heights, levelled height differences and deflections of the vertical: EGM96, EGM96-NGA, a grid name PROJ finds or a PATH (GTX, GeoTIFF, an AUSGeoid-style NTv2 grid with deflections, or DynAdjust's per-station .geo file)"),
       cmd->add_option("--refraction", o.refraction, "Coefficient of refraction for zenith angles (default 0; 0.13 is typical by day)")
           ->check(finite_range(-1.0, 1.0)),
       cmd->add_option("--convergence", o.convergence_m, "Stop when no station moves more than this (m; default 1e-5)")

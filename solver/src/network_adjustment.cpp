@@ -219,6 +219,14 @@ void begin_pass(NetworkProblem& p) {
                     " parts that no measurement joins: " + list + "; adjust them separately or join them");
   }
   p.layout = make_layout(p);
+  // Every component of every station measured is held, and no direction
+  // set or Helmert is estimated: nothing to adjust (it ran out of memory
+  // on an empty factor before).
+  if (p.layout.count == 0) {
+    throw Error(ErrorKind::input, "E_NETWORK_NOTHING_TO_ESTIMATE",
+                where + ": every station the measurements reach is held in all its components and nothing else is "
+                        "estimated: there is nothing to adjust; free a station (its constraint F, or --constrain ID=FFF)");
+  }
 }
 
 // A GNSS network (linear, its matrix the same at every state) that lost

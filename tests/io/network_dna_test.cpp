@@ -149,5 +149,24 @@ TEST(NetworkDna, StationGeoidFileIsReadByColumn) {
   }
 }
 
+
+TEST(NetworkDna, HeightsAreTheTwoNumbersAfterTheStandardDeviation) {
+  // As DynAdjust's own writer put them in its dsg.msr sample: a column to
+  // the right of the columns its reader cuts (which would read 1.65 and 1).
+  const std::string stn = header("STN") +
+                          "A                   CCC LLh      -37.4752000000      144.5737000000             43.1640\n"
+                          "B                   FFF LLh      -37.4753000000      144.5738000000             44.1640\n";
+  const std::string msr = header("MSR") +
+                          "S A                   B                                          200.0000                 0.0159   1.650  1.651\n";
+  geodesy::Network net;
+  read_network_text(stn, "t.stn", net);
+  read_network_text(msr, "t.msr", net);
+  ASSERT_EQ(net.measurements.size(), 1u);
+  EXPECT_EQ(net.measurements[0].instrument_height_m, 1.650);
+  EXPECT_EQ(net.measurements[0].target_height_m, 1.651);
+  expect_refused(header("MSR") + "S A                   B                                          200.0000                 0.0159   1.650  1.651  2\n",
+                 "expected the instrument and the target height");
+}
+
 }  // namespace
 }  // namespace geoanchor::io

@@ -505,5 +505,24 @@ TEST(NetworkDatum, Issue39_TheRowsRFactorResolvesWhatASumOfSquaresCannot) {
   EXPECT_LT(sv.z() / sv.x(), kNullRelative);
 }
 
+
+// Every station held and nothing else estimated: refused by name (an empty
+// factor ran out of memory, E_INTERNAL std::bad_alloc, before).
+TEST(NetworkDatum, Issue42_ANetworkWithNothingToEstimateIsRefusedByName) {
+  std::mt19937 rng(3);
+  const Site s = make_site(3, rng);
+  Network net = network_of(s);
+  for (auto& st : net.stations) st.constraint.code = {'C', 'C', 'C'};
+  add_baseline(net, s, 0, 1, nullptr);
+  add_baseline(net, s, 1, 2, nullptr);
+  try {
+    (void)adjust_network(net, AdjustOptions{});
+    ADD_FAILURE() << "adjusted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "E_NETWORK_NOTHING_TO_ESTIMATE") << e.what();
+    EXPECT_NE(std::string(e.what()).find("free a station"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace geoanchor::solver

@@ -102,8 +102,8 @@ dynaml::Reader::Labels labels(const Layout& l, bool stations) {
   set(Tag::Value, "value (" + columns(l.linear) + ", or " + columns(Column{l.ang_d.at, l.ang_s.end() - l.ang_d.at}) +
                       " as degrees, minutes and seconds)");
   set(Tag::StdDev, "standard deviation (" + columns(l.stddev) + ")");
-  set(Tag::InstHeight, "instrument height (" + columns(l.inst_height) + ")");
-  set(Tag::TargHeight, "target height (" + columns(l.targ_height) + ")");
+  set(Tag::InstHeight, "instrument height (the first number in " + columns(Column{l.inst_height.at, l.epoch.at - l.inst_height.at}) + ")");
+  set(Tag::TargHeight, "target height (the second number in " + columns(Column{l.inst_height.at, l.epoch.at - l.inst_height.at}) + ")");
   set(Tag::Vscale, "V-scale (" + columns(l.scale[0]) + ")");
   set(Tag::Pscale, "P-scale (" + columns(l.scale[1]) + ")");
   set(Tag::Lscale, "L-scale (" + columns(l.scale[2]) + ")");
@@ -186,6 +186,7 @@ class DnaReader {
   void station(Line l);
   void measurement(std::size_t& index);
   void gnss(dynaml::Measurement& m, Line& l, char type, std::size_t& index);
+  void heights(dynaml::Measurement& m, Line& l) const;
   void directions(dynaml::Measurement& m, std::size_t count, std::size_t& index);
 
   std::vector<std::string_view> lines_;
@@ -306,6 +307,31 @@ void DnaReader::directions(dynaml::Measurement& m, std::size_t count, std::size_
   }
 }
 
+// The instrument and target heights of S, V and Z: the two numbers between
+// the standard deviation and the epoch (columns 100–122 in 3.01). DynAdjust
+// reads them at 100–106 and 107–113, but its own writer has put them one
+// column to the right (its dsg.msr sample: "0.0159   0.000  0.000"), where
+// those columns would cut a digit off each: read as the numbers written.
+void DnaReader::heights(dynaml::Measurement& m, Line& l) const {
+  const Column region{layout_.inst_height.at, layout_.epoch.at - layout_.inst_height.at};
+  const std::string text = take(l, region);
+  std::vector<std::string> tokens;
+  std::string token;
+  for (char c : text + " ") {
+    if (c != ' ') {
+      token += c;
+    } else if (!token.empty()) {
+      tokens.push_back(token);
+      token.clear();
+    }
+  }
+  if (tokens.size() > 2) {
+    fail(l.number, "'" + text + "' in " + columns(region) + ": expected the instrument and the target height (two numbers)");
+  }
+  if (!tokens.empty()) m.fields.emplace(Tag::InstHeight, tokens[0]);
+  if (tokens.size() == 2) m.fields.emplace(Tag::TargHeight, tokens[1]);
+}
+
 // G, X and Y: the first line's scalars, frame and epoch, then per
 // baseline or point its values and covariance (lower triangle) and the
 // cross-covariance blocks with the later ones.
@@ -392,14 +418,14 @@ void DnaReader::measurement(std::size_t& index) {
       if (t == 'D') put(m.fields, Tag::Total, l, layout_.third);
       if (const std::string a = angle(l); !a.empty()) m.fields.emplace(Tag::Value, a);
       put(m.fields, Tag::StdDev, l, layout_.stddev);
-      if (t == 'V' || t == 'Z') put(m.fields, Tag::InstHeight, l, layout_.inst_height), put(m.fields, Tag::TargHeight, l, layout_.targ_height);
+      if (t == 'V' || t == 'Z') heights(m, l);
       break;
     }
     case 'C': case 'E': case 'M': case 'S': case 'L': case 'H': case 'R': case 'I': case 'J': case 'P': case 'Q': {
       if (t != 'H' && t != 'R' && t != 'I' && t != 'J' && t != 'P' && t != 'Q') station(Tag::Second, layout_.second);
       put(m.fields, Tag::Value, l, layout_.linear);
       put(m.fields, Tag::StdDev, l, layout_.stddev);
-      if (t == 'S') put(m.fields, Tag::InstHeight, l, layout_.inst_height), put(m.fields, Tag::TargHeight, l, layout_.targ_height);
+      if (t == 'S') heights(m, l);
       break;
     }
     case 'G': case 'X': case 'Y':
