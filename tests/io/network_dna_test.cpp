@@ -111,6 +111,9 @@ TEST(NetworkDna, RefusesWhatItDoesNotRead) {
   // A value one column to the left of its field: text between fields.
   expect_refused(header("MSR") + "H 1042                                                   43.0859                         0.065000\n",
                  "'43.08' in columns 58-62 is in no field of a H record");
+  // A station record whose name is not in columns 1-20.
+  expect_refused(header("STN") + "                    CCC UTM         320236.2750        5813988.8399             31.4770 55 1\n",
+                 "a station record without a station name (columns 1-20)");
   // A tab in a fixed-column record.
   expect_refused(header("MSR") + "H 1042\t43.0859\n", "tab character");
   // An unknown measurement type, and an ignore flag that is not '*'.

@@ -276,7 +276,11 @@ void DnaReader::header() {
 void DnaReader::station(Line l) {
   dynaml::Station& s = reader_.dna_station(l.number);
   put(s.fields, Tag::Name, l, layout_.name);
-  if (!s.fields.count(Tag::Name)) return;  // DynAdjust: a record without a name is no station
+  if (!s.fields.count(Tag::Name)) {
+    // (DynAdjust skips such a line: its coordinates would go unread.)
+    fail(l.number, "a station record without a " + labels_[static_cast<std::size_t>(Tag::Name)] +
+                       ": is the line shifted to the right?");
+  }
   put(s.fields, Tag::Constraints, l, layout_.constraints);
   put(s.fields, Tag::Type, l, layout_.coord_type);
   put(s.coord, Tag::XAxis, l, layout_.x);
