@@ -408,6 +408,17 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
   p.network = read_inputs(request);
   geodesy::Network& net = p.network;
   for (const auto& w : net.warnings) p.notes.push_back("warning: " + w);
+  // Which geoid, and what it gives (N, the deflections): the report says so.
+  if (request.station_geoid) {
+    std::size_t named = 0;
+    for (const auto& s : net.stations) named += s.geoid ? 1u : 0u;
+    p.notes.push_back("geoid: " + request.station_geoid->path.string() + " (DynAdjust per-station file): N and deflections of the "
+                      "vertical (xi, eta) of " + std::to_string(named) + " of " + std::to_string(net.stations.size()) + " stations");
+  } else if (request.options.geoid && net.space == NetworkSpace::ellipsoidal) {
+    const auto& g = *request.options.geoid;
+    p.notes.push_back("geoid: " + g.model_name() +
+                      (g.has_deflections() ? ": N and the deflections of the vertical" : ": N; deflections of the vertical zero"));
+  }
   apply_solution_types(request, p);
   apply_variance_scales(net);
   if (net.space == NetworkSpace::ellipsoidal) {
