@@ -1,5 +1,7 @@
 #include "geoanchor/geodesy/network.hpp"
 
+#include <stdexcept>
+
 namespace geoanchor::geodesy {
 namespace {
 
@@ -40,8 +42,46 @@ const char* to_string(MeasurementKind k) {
     case MeasurementKind::astronomic_longitude: return "astronomic longitude";
     case MeasurementKind::astronomic_azimuth: return "astronomic azimuth";
     case MeasurementKind::msl_arc: return "MSL arc";
+    case MeasurementKind::observation_set: return "observation set";
   }
   return "measurement";
+}
+
+std::span<const NetworkMeasurement> parts_of(const NetworkMeasurement& m) {
+  if (m.kind == MeasurementKind::observation_set) return m.parts;
+  return {&m, 1};
+}
+
+MeasurementKind component_kind(const NetworkMeasurement& m, Eigen::Index k) {
+  if (m.kind != MeasurementKind::observation_set) return m.kind;
+  return m.parts.at(static_cast<std::size_t>(k)).kind;
+}
+
+NetworkMeasurement make_observation_set(std::vector<NetworkMeasurement> parts, const Eigen::MatrixXd& covariance,
+                                        std::string source) {
+  const auto n = static_cast<Eigen::Index>(parts.size());
+  if (covariance.rows() != n || covariance.cols() != n) {
+    throw std::invalid_argument("make_observation_set: a covariance of " + std::to_string(covariance.rows()) + " rows for " +
+                                std::to_string(n) + " observations");
+  }
+  NetworkMeasurement set;
+  set.kind = MeasurementKind::observation_set;
+  set.value.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    NetworkMeasurement& part = parts[static_cast<std::size_t>(k)];
+    if (part.kind == MeasurementKind::gnss_baselines || part.kind == MeasurementKind::gnss_points ||
+        part.kind == MeasurementKind::observation_set || part.value.size() != 1) {
+      throw std::invalid_argument("make_observation_set: " + part.source + ": " + to_string(part.kind) +
+                                  " is not one terrestrial value");
+    }
+    set.value(k) = part.value(0);
+    set.stations.insert(set.stations.end(), part.stations.begin(), part.stations.end());
+    part.covariance = Eigen::MatrixXd::Constant(1, 1, covariance(k, k));
+  }
+  set.covariance = covariance;
+  set.parts = std::move(parts);
+  set.source = std::move(source);
+  return set;
 }
 
 std::optional<std::size_t> Network::find(const std::string& id) const {

@@ -238,6 +238,12 @@ std::vector<std::pair<std::size_t, std::size_t>> line_ends(const geodesy::Networ
         add(m.stations[0], m.stations[2]);
       }
       break;
+    case MeasurementKind::observation_set:  // each observation's
+      for (const auto& part : m.parts) {
+        const auto ends = line_ends(part);
+        out.insert(out.end(), ends.begin(), ends.end());
+      }
+      break;
     case MeasurementKind::gnss_points:
     case MeasurementKind::ellipsoidal_height:
     case MeasurementKind::orthometric_height:

@@ -49,6 +49,8 @@ std::string stations_text(const geodesy::Network& net, const geodesy::NetworkMea
     case MeasurementKind::horizontal_angle:
       if (m.stations.size() == 3) return id(0) + ": " + id(1) + "→" + id(2);
       break;
+    case MeasurementKind::observation_set:
+      return std::to_string(m.parts.size()) + " observations at " + id(0);
     default:
       if (m.stations.size() == 2) return id(0) + "→" + id(1);
       if (m.stations.size() == 1) return id(0);

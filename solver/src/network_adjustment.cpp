@@ -53,6 +53,29 @@ void refuse_empty(const geodesy::Network& network) {
   }
 }
 
+// An observation set whose parts are not one terrestrial value each, or
+// whose value, stations or covariance are not its parts'
+// (geodesy::make_observation_set makes them so).
+void refuse_malformed_sets(const geodesy::Network& network) {
+  for (const auto& m : network.measurements) {
+    if (m.kind != MeasurementKind::observation_set) continue;
+    const auto n = static_cast<Eigen::Index>(m.parts.size());
+    bool ok = n > 0 && m.value.size() == n && m.covariance.rows() == n && m.covariance.cols() == n;
+    std::size_t station = 0;
+    for (Eigen::Index k = 0; ok && k < n; ++k) {
+      const auto& part = m.parts[static_cast<std::size_t>(k)];
+      ok = part.value.size() == 1 && part.value(0) == m.value(k) && part.kind != MeasurementKind::observation_set &&
+           part.kind != MeasurementKind::gnss_baselines && part.kind != MeasurementKind::gnss_points;
+      for (std::size_t s : part.stations) ok = ok && station < m.stations.size() && m.stations[station++] == s;
+    }
+    if (!ok || station != m.stations.size()) {
+      throw Error(ErrorKind::input, "E_NETWORK_KIND",
+                  m.source + ": observation set: its parts must be terrestrial observations of one value each, and its "
+                  "value, stations and covariance theirs in order");
+    }
+  }
+}
+
 // Whitening of each measurement's covariance, on threads (each its own;
 // the first failure in the measurements' order is the one reported).
 void whiten_measurements(NetworkProblem& p, int jobs) {
@@ -107,11 +130,13 @@ void initial_state(NetworkProblem& p) {
   std::vector<bool> seeded(net.direction_sets.size(), false);
   const ModelContext ctx{net, o, p.states, p.orientations};
   for (std::size_t mi : p.order) {
-    const auto& m = net.measurements[mi];
-    if (m.kind != MeasurementKind::direction || m.ignore || !m.set || seeded[*m.set]) continue;
-    const Evaluation ev = evaluate(m, ctx);  // computed = bearing − 0
-    p.orientations[*m.set] = ev.computed(0) - m.value(0);
-    seeded[*m.set] = true;
+    if (net.measurements[mi].ignore) continue;
+    for (const auto& m : geodesy::parts_of(net.measurements[mi])) {  // an observation set's directions too
+      if (m.kind != MeasurementKind::direction || !m.set || seeded[*m.set]) continue;
+      const Evaluation ev = evaluate(m, ctx);  // computed = bearing − 0
+      p.orientations[*m.set] = ev.computed(0) - m.value(0);
+      seeded[*m.set] = true;
+    }
   }
 }
 
@@ -134,14 +159,20 @@ std::vector<std::string> set_aside_gross_misclosures(NetworkProblem& p, Adjustme
         continue;  // its geometry is judged by the adjustment
       }
       const Eigen::VectorXd w = misclosure(m, ev.computed);
-      double length = 1.0;
-      if (is_angular(m.kind) && m.stations.size() >= 2) {
-        length = 0.0;
-        for (std::size_t k = 1; k < m.stations.size(); ++k) {
-          length = std::max(length, (p.states[m.stations[k]].x - p.states[m.stations[0]].x).norm());
+      // Each observation's (an observation set's: the largest of its parts').
+      double gross = 0.0;
+      Eigen::Index row = 0;
+      for (const auto& part : geodesy::parts_of(m)) {
+        double length = 1.0;
+        if (is_angular(part.kind) && part.stations.size() >= 2) {
+          length = 0.0;
+          for (std::size_t k = 1; k < part.stations.size(); ++k) {
+            length = std::max(length, (p.states[part.stations[k]].x - p.states[part.stations[0]].x).norm());
+          }
         }
+        gross = std::max(gross, w.segment(row, part.value.size()).cwiseAbs().maxCoeff() * length);
+        row += part.value.size();
       }
-      const double gross = w.cwiseAbs().maxCoeff() * length;
       if (gross > net.gross_misclosure_m) {
         p.active[mi] = false;
         gross_why[mi] = "misclosure " + fmt_m(gross) + " at the a-priori coordinates exceeds the input's tolerance " +
@@ -441,6 +472,7 @@ AdjustmentResult adjust_placed(const geodesy::Network& network, const AdjustOpti
 
 AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOptions& o) {
   refuse_empty(network);
+  refuse_malformed_sets(network);
   std::size_t unplaced = 0;
   for (const auto& s : network.stations) unplaced += s.position_known ? 0u : 1u;
   if (unplaced > 0) return adjust_placed(network, o, unplaced);

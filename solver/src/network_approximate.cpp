@@ -37,6 +37,12 @@ void approximate_positions(geodesy::Network& net) {
     }
   }
   const double sign = net.axes.bearing_sign();
+  // Every observation by itself (an observation set's parts too).
+  std::vector<const geodesy::NetworkMeasurement*> observations;
+  for (const auto& m : net.measurements) {
+    if (m.ignore) continue;
+    for (const auto& part : geodesy::parts_of(m)) observations.push_back(&part);
+  }
   auto place = [&](std::size_t s, const Eigen::Vector3d& x) {
     net.stations[s].position = x;
     known[s] = true;
@@ -48,16 +54,17 @@ void approximate_positions(geodesy::Network& net) {
     progress = false;
     // Orientations of the direction sets whose instrument and one target are placed.
     std::vector<std::optional<double>> orientation(net.direction_sets.size());
-    for (const auto& m : net.measurements) {
-      if (m.ignore || m.kind != MeasurementKind::direction || !m.set || orientation[*m.set]) continue;
+    for (const auto* observation : observations) {
+      const auto& m = *observation;
+      if (m.kind != MeasurementKind::direction || !m.set || orientation[*m.set]) continue;
       const std::size_t a = m.stations[0], b = m.stations[1];
       if (!known[a] || !known[b]) continue;
       const Eigen::Vector3d d = net.stations[b].position - net.stations[a].position;
       if (d.head<2>().norm() == 0.0) continue;
       orientation[*m.set] = sign * std::atan2(d.y(), d.x()) - m.value(0);
     }
-    for (const auto& m : net.measurements) {
-      if (m.ignore) continue;
+    for (const auto* observation : observations) {
+      const auto& m = *observation;
       switch (m.kind) {
         case MeasurementKind::gnss_points:
           for (std::size_t k = 0; k < m.stations.size(); ++k) {
@@ -85,8 +92,9 @@ void approximate_positions(geodesy::Network& net) {
     if (net.local_dimensions == 1) continue;
     // Polar: a bearing (an oriented direction, or an azimuth) and a length
     // from a placed instrument.
-    for (const auto& m : net.measurements) {
-      if (m.ignore || (m.kind != MeasurementKind::direction && m.kind != MeasurementKind::azimuth)) continue;
+    for (const auto* observation : observations) {
+      const auto& m = *observation;
+      if ((m.kind != MeasurementKind::direction && m.kind != MeasurementKind::azimuth)) continue;
       const std::size_t a = m.stations[0], b = m.stations[1];
       if (!known[a] || known[b]) continue;
       double bearing = m.value(0);
@@ -95,8 +103,9 @@ void approximate_positions(geodesy::Network& net) {
         bearing += *orientation[*m.set];
       }
       std::optional<double> horizontal, slope, zenith, rise;
-      for (const auto& n : net.measurements) {
-        if (n.ignore || n.stations.size() < 2) continue;
+      for (const auto* other : observations) {
+        const auto& n = *other;
+        if (n.stations.size() < 2) continue;
         const bool forward = n.stations[0] == a && n.stations[1] == b;
         const bool backward = n.stations[0] == b && n.stations[1] == a;
         if (!forward && !backward) continue;

@@ -42,6 +42,16 @@ int compare_content(const geodesy::Network& net, const geodesy::NetworkMeasureme
   for (int k = 0; k < 3; ++k) {
     if (ma.local_variance_scale(k) != mb.local_variance_scale(k)) return three_way(ma.local_variance_scale(k), mb.local_variance_scale(k));
   }
+  // An observation set's parts: their stations and values are the set's
+  // (above), their kinds and heights here.
+  if (ma.parts.size() != mb.parts.size()) return three_way(ma.parts.size(), mb.parts.size());
+  for (std::size_t k = 0; k < ma.parts.size(); ++k) {
+    const auto& pa = ma.parts[k];
+    const auto& pb = mb.parts[k];
+    if (pa.kind != pb.kind) return three_way(pa.kind, pb.kind);
+    if (pa.instrument_height_m != pb.instrument_height_m) return three_way(pa.instrument_height_m, pb.instrument_height_m);
+    if (pa.target_height_m != pb.target_height_m) return three_way(pa.target_height_m, pb.target_height_m);
+  }
   return three_way(ma.ignore, mb.ignore);
 }
 
@@ -50,8 +60,9 @@ int compare_content(const geodesy::Network& net, const geodesy::NetworkMeasureme
 std::vector<std::size_t> canonical_set_order(const geodesy::Network& net) {
   std::vector<std::vector<std::size_t>> members(net.direction_sets.size());
   for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
-    const auto& m = net.measurements[mi];
-    if (m.set && *m.set < members.size()) members[*m.set].push_back(mi);
+    for (const auto& part : geodesy::parts_of(net.measurements[mi])) {
+      if (part.set && *part.set < members.size()) members[*part.set].push_back(mi);
+    }
   }
   for (auto& list : members) {
     std::stable_sort(list.begin(), list.end(), [&](std::size_t a, std::size_t b) {
@@ -80,11 +91,16 @@ std::vector<std::size_t> set_ranks(const std::vector<std::size_t>& set_order) {
   return rank;
 }
 
+std::size_t direction_set_rank(const geodesy::NetworkMeasurement& m, const std::vector<std::size_t>& ranks) {
+  for (const auto& part : geodesy::parts_of(m)) {
+    if (part.set && *part.set < ranks.size()) return ranks[*part.set] + 1;
+  }
+  return 0;
+}
+
 std::vector<std::size_t> canonical_order(const geodesy::Network& net, const std::vector<std::size_t>& set_order) {
   const std::vector<std::size_t> rank = set_ranks(set_order);
-  const auto set_rank = [&](const geodesy::NetworkMeasurement& m) {
-    return m.set && *m.set < rank.size() ? rank[*m.set] + 1 : std::size_t{0};
-  };
+  const auto set_rank = [&](const geodesy::NetworkMeasurement& m) { return direction_set_rank(m, rank); };
   std::vector<std::size_t> order(net.measurements.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
@@ -112,6 +128,11 @@ std::string measurement_key(const geodesy::Network& net, const geodesy::NetworkM
   key += "\x1f" + (m.frame ? m.frame->to_string() : std::string()) + "\x1f" + m.group + "\x1f" + std::to_string(set_rank);
   key += "\x1f" + (m.solution ? std::to_string(static_cast<int>(*m.solution)) : std::string());
   for (int k = 0; k < 3; ++k) add(m.local_variance_scale(k));
+  for (const auto& part : m.parts) {
+    key += "\x1f" + std::string(geodesy::to_string(part.kind));
+    add(part.instrument_height_m);
+    add(part.target_height_m);
+  }
   key += m.ignore ? "\x1fignored" : "";
   return key;
 }

@@ -2,8 +2,11 @@
 
 #include "network_data_snooping.hpp"
 
+#include <Eigen/QR>
+
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "fit_common.hpp"
@@ -40,10 +43,46 @@ std::vector<std::size_t> failing_by_content(const NetworkProblem& p, const Adjus
     if (!result.measurements[k].fails_test(o.alpha_point)) continue;
     failing.push_back(k);
     const auto& m = net.measurements[result.measurements[k].index];
-    keys[k] = measurement_key(net, m, m.set && *m.set < set_rank.size() ? set_rank[*m.set] + 1 : 0);
+    keys[k] = measurement_key(net, m, direction_set_rank(m, set_rank));
   }
   std::stable_sort(failing.begin(), failing.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
   return failing;
+}
+
+// Per direction set, how many measurements in the adjustment have a
+// direction in it.
+std::vector<std::size_t> set_users(const NetworkProblem& p) {
+  std::vector<std::size_t> users(p.net.direction_sets.size(), 0);
+  for (std::size_t mi = 0; mi < p.net.measurements.size(); ++mi) {
+    if (!p.active[mi]) continue;
+    std::vector<std::size_t> sets;
+    for (const auto& part : geodesy::parts_of(p.net.measurements[mi])) {
+      if (part.set && std::find(sets.begin(), sets.end(), *part.set) == sets.end()) sets.push_back(*part.set);
+    }
+    for (std::size_t s : sets) ++users[s];
+  }
+  return users;
+}
+
+// An orthonormal basis (k × (k − m)) of what a candidate's whitened rows
+// leave beside the m unknowns only it observes (an observation set's own
+// direction-set orientations: a common turn of its directions), or none
+// (m = 0). Its residual has no redundancy along those (Q(t, t) and every
+// Q(i, t) vanish there) and they leave with it, so snooping tests and
+// removes it over the rest.
+std::optional<Eigen::MatrixXd> beside_own_unknowns(const NetworkProblem& p, const MeasurementRows& r,
+                                                   const std::vector<std::size_t>& users) {
+  std::vector<Eigen::Index> own;
+  for (std::size_t j = 0; j < r.unknowns.size(); ++j) {
+    const auto [set, component] = p.layout.owner[static_cast<std::size_t>(r.unknowns[j])];
+    if (component == 3 && users[set] == 1) own.push_back(static_cast<Eigen::Index>(j));
+  }
+  if (own.empty()) return std::nullopt;
+  Eigen::MatrixXd g(r.a.rows(), static_cast<Eigen::Index>(own.size()));
+  for (std::size_t j = 0; j < own.size(); ++j) g.col(static_cast<Eigen::Index>(j)) = r.a.col(own[j]);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(g);
+  const Eigen::MatrixXd full = qr.householderQ() * Eigen::MatrixXd::Identity(g.rows(), g.rows());
+  return Eigen::MatrixXd(full.rightCols(g.rows() - g.cols()));
 }
 
 // The failing measurements as snooping's candidates (their whitened
@@ -52,6 +91,7 @@ std::vector<SnoopingCandidate> snooping_candidates(const NetworkProblem& p, cons
                                                    const std::vector<std::size_t>& failing, std::vector<std::string>& keys,
                                                    NetworkCofactors& cofactors) {
   std::vector<SnoopingCandidate> candidates(failing.size());
+  const std::vector<std::size_t> users = set_users(p);
   for (std::size_t c = 0; c < failing.size(); ++c) {
     const AdjustedMeasurement& am = result.measurements[failing[c]];
     const std::size_t mi = am.index;
@@ -61,8 +101,12 @@ std::vector<SnoopingCandidate> snooping_candidates(const NetworkProblem& p, cons
     if (!f.inverse_block(r.unknowns.data(), nu, q.data())) {
       throw std::logic_error("adjust_network: a measurement's unknowns are off the factor's pattern");
     }
-    const Eigen::Index k = r.a.rows();
     candidates[c].v = p.whitening[mi] * am.residual;
+    if (const auto e = beside_own_unknowns(p, r, users)) {
+      candidates[c].v = (e->transpose() * candidates[c].v).eval();
+      r.a = (e->transpose() * r.a).eval();
+    }
+    const Eigen::Index k = r.a.rows();
     candidates[c].q = Eigen::MatrixXd::Identity(k, k) - r.a * q * r.a.transpose();
     candidates[c].key = std::move(keys[failing[c]]);
     cofactors.add(std::move(r.unknowns), std::move(r.a));

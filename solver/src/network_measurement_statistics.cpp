@@ -49,7 +49,9 @@ bool measure(const NetworkProblem& p, const NormalFactor& f, const MeasurementRe
   if (was_outlier) {
     testable = true;
     for (std::size_t s : m.stations) testable = testable && p.station_used[s];
-    if (m.set) testable = testable && p.layout.orientation[*m.set] >= 0;  // its set still has an orientation
+    for (const auto& part : geodesy::parts_of(m)) {
+      if (part.set) testable = testable && p.layout.orientation[*part.set] >= 0;  // its set still has an orientation
+    }
   }
   am = AdjustedMeasurement{};
   am.index = mi;

@@ -291,7 +291,7 @@ void Evaluator::bearing_to() {
   const double b = bearing(s, net, g);
   if (m.kind == MeasurementKind::direction) {
     ev.computed(0) = b - c.orientations[*m.set];
-    ev.orientation = true;
+    ev.orientation.emplace_back(0, *m.set);
   } else {
     ev.computed(0) = b;
   }
@@ -418,13 +418,37 @@ StationState station_state(const geodesy::Network& net, const geodesy::Geocentri
 
 Eigen::VectorXd misclosure(const geodesy::NetworkMeasurement& m, const Eigen::VectorXd& computed) {
   Eigen::VectorXd r = m.value - computed;
-  if (is_angular(m.kind)) {
-    for (Eigen::Index k = 0; k < r.size(); ++k) r(k) = wrap(r(k));
+  for (Eigen::Index k = 0; k < r.size(); ++k) {
+    if (is_angular(geodesy::component_kind(m, k))) r(k) = wrap(r(k));
   }
   return r;
 }
 
+namespace {
+
+// An observation set: its parts' evaluations stacked in order (the set's
+// stations are its parts', in that order).
+Evaluation evaluate_set(const geodesy::NetworkMeasurement& m, const ModelContext& c) {
+  Evaluation ev;
+  ev.stations = m.stations;
+  ev.computed = Eigen::VectorXd::Zero(m.value.size());
+  ev.d_local = Eigen::MatrixXd::Zero(m.value.size(), static_cast<Eigen::Index>(3 * m.stations.size()));
+  Eigen::Index row = 0, column = 0;
+  for (const auto& part : m.parts) {
+    const Evaluation e = evaluate(part, c);
+    ev.computed.segment(row, e.computed.size()) = e.computed;
+    ev.d_local.block(row, column, e.d_local.rows(), e.d_local.cols()) = e.d_local;
+    for (const auto& [r, set] : e.orientation) ev.orientation.emplace_back(row + r, set);
+    row += e.computed.size();
+    column += e.d_local.cols();
+  }
+  return ev;
+}
+
+}  // namespace
+
 Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c) {
+  if (m.kind == MeasurementKind::observation_set) return evaluate_set(m, c);
   Evaluator e(m, c);
   switch (m.kind) {
     case MeasurementKind::gnss_baselines:
@@ -473,6 +497,8 @@ Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c)
     case MeasurementKind::orthometric_height:
       e.height();
       break;
+    case MeasurementKind::observation_set:
+      break;  // evaluate_set, above
   }
   return std::move(e.ev);
 }

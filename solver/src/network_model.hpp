@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "geoanchor/geodesy/geocentric.hpp"
@@ -54,7 +55,9 @@ struct Evaluation {
   Eigen::VectorXd computed;           // f(x), SI
   std::vector<std::size_t> stations;  // whose coordinates f depends on
   Eigen::MatrixXd d_local;            // rows × 3·stations.size(): ∂f / ∂(each station's local axes)
-  bool orientation = false;           // a direction: ∂f / ∂(its set's orientation) = −1
+  // The rows that are directions, with their direction set: ∂f / ∂(the
+  // set's orientation) = −1 there.
+  std::vector<std::pair<Eigen::Index, std::size_t>> orientation;
 };
 
 struct ModelContext {
@@ -64,12 +67,14 @@ struct ModelContext {
   const std::vector<double>& orientations;  // per direction set, radians
 };
 
+// An observation set's evaluation is its parts' stacked in order.
 // Throws geoanchor::Error (input) naming the measurement: coincident
 // stations for a distance or direction, a height without a geoid, a point
 // outside the geoid grid, a kind the network's space has no model for.
 Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c);
 
-// observed − computed, with angles brought to (−π, π].
+// observed − computed, with angles (an observation set's angular parts)
+// brought to (−π, π].
 Eigen::VectorXd misclosure(const geodesy::NetworkMeasurement& m, const Eigen::VectorXd& computed);
 
 // Whether the kind's values are angles (radians).

@@ -54,7 +54,8 @@ MeasurementRows NetworkProblem::linearize(std::size_t mi, const UnknownLayout& l
   r.computed = ev.computed;
   // The columns in the order their unknowns first come (a measurement has
   // a handful: a linear search), in a matrix as wide as they can be.
-  const Eigen::Index most = static_cast<Eigen::Index>(3 * ev.stations.size()) + (ev.orientation ? 1 : 0) + d_helmert.cols();
+  const Eigen::Index most =
+      static_cast<Eigen::Index>(3 * ev.stations.size() + ev.orientation.size()) + d_helmert.cols();
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(ev.computed.size(), most);
   r.unknowns.reserve(static_cast<std::size_t>(most));
   auto column = [&](Index unknown) {
@@ -72,9 +73,9 @@ MeasurementRows NetworkProblem::linearize(std::size_t mi, const UnknownLayout& l
       a.col(k) += ev.d_local.col(static_cast<Eigen::Index>(3 * s + static_cast<std::size_t>(c)));
     }
   }
-  if (ev.orientation) {
-    const Eigen::Index k = column(l.orientation[*m.set]);
-    a.col(k).array() -= 1.0;
+  for (const auto& [row, set] : ev.orientation) {
+    const Eigen::Index k = column(l.orientation[set]);
+    a(row, k) -= 1.0;
   }
   for (Eigen::Index j = 0; j < d_helmert.cols(); ++j) {
     const Eigen::Index k = column(l.helmert[static_cast<std::size_t>(j)]);
@@ -165,8 +166,10 @@ UnknownLayout make_layout(const NetworkProblem& p, bool all_free) {
   // removed as outliers has none to determine it).
   std::vector<bool> observed(net.direction_sets.size(), false);
   for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
-    const auto& m = net.measurements[mi];
-    if (m.set && p.active[mi]) observed[*m.set] = true;
+    if (!p.active[mi]) continue;
+    for (const auto& part : geodesy::parts_of(net.measurements[mi])) {
+      if (part.set) observed[*part.set] = true;
+    }
   }
   l.orientation.assign(net.direction_sets.size(), -1);
   for (std::size_t k : p.set_order) {

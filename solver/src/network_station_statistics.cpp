@@ -125,15 +125,16 @@ std::vector<std::pair<std::size_t, std::size_t>> joined_pairs(const NetworkProbl
   for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
     if (!p.active[mi]) continue;
     // The stations a measurement joins: a baseline's ends, a terrestrial
-    // measurement's stations (not a point cluster's points, which it
-    // positions each on its own).
-    const auto& m = net.measurements[mi];
-    const auto& st = m.stations;
-    if (m.kind == MeasurementKind::gnss_points) continue;
-    for (std::size_t a = 0; a < st.size(); ++a) {
-      for (std::size_t b = a + 1; b < st.size(); ++b) {
-        if (m.kind == MeasurementKind::gnss_baselines && !(a % 2 == 0 && b == a + 1)) continue;
-        if (st[a] != st[b]) pairs.push_back({std::min(st[a], st[b]), std::max(st[a], st[b])});
+    // observation's stations (an observation set's each on its own; not a
+    // point cluster's points, which it positions each on its own).
+    for (const auto& m : geodesy::parts_of(net.measurements[mi])) {
+      const auto& st = m.stations;
+      if (m.kind == MeasurementKind::gnss_points) continue;
+      for (std::size_t a = 0; a < st.size(); ++a) {
+        for (std::size_t b = a + 1; b < st.size(); ++b) {
+          if (m.kind == MeasurementKind::gnss_baselines && !(a % 2 == 0 && b == a + 1)) continue;
+          if (st[a] != st[b]) pairs.push_back({std::min(st[a], st[b]), std::max(st[a], st[b])});
+        }
       }
     }
   }

@@ -136,6 +136,14 @@ TEST_F(AdjustCli, Issue14_FormatFaultsAreRefusedByNameWithNoOutput) {
       {"Gama: a zenith angle past the nadir", "t.gkf",
        replace(testing::slurp(f + "gama/tst-tetrahedron-1.gkf"), "val=\" 39.181085\"", "val=\"239.181085\""), "", 3,
        {"E_ANGLE", "t.gkf:", "<z-angle> val=239.181085", "[0, 200] gon"}},
+      {"Gama: a correlated set whose covariance is not positive definite (a correlation past 1)", "j.gkf",
+       replace(testing::slurp(f + "gama/jezerka-ang.gkf"), "19.22 -9.61   19.22 -9.61   19.22 -9.61   19.22 -9.61   19.22",
+               "19.22 -29.61   19.22 -9.61   19.22 -9.61   19.22 -9.61   19.22"),
+       "", 3, {"E_COVARIANCE", "j.gkf:28 <obs>: observation set: the covariance is not positive definite", "smallest eigenvalue -"}},
+      {"Gama: a correlated set's cov-mat one value short", "j.gkf",
+       replace(testing::slurp(f + "gama/jezerka-ang.gkf"), "19.22 -9.61   19.22 -9.61   19.22 -9.61   19.22 -9.61   19.22",
+               "19.22 -9.61   19.22 -9.61   19.22 -9.61   19.22 -9.61"),
+       "", 3, {"E_GAMA", "j.gkf:40: <cov-mat dim=\"5\" band=\"1\"> holds 8 values; expected 9 (the upper band by rows)"}},
       {"SINEX: a value shifted into the next column", "s.snx",
        replace(good_snx, "m    1 -.405205265910111E+07", "m    1  -.405205265910111E+07"), "--sinex-frame ITRF2005", 3,
        {"E_SINEX", "s.snx:3", "column 69"}},
@@ -166,6 +174,53 @@ TEST_F(AdjustCli, Issue14_FormatFaultsAreRefusedByNameWithNoOutput) {
   write("s.snx", good_snx);
   const RunResult ok = run("adjust '" + path("s.snx").string() + "' --sinex-frame ITRF2005 -o '" + path("st.csv").string() + "'");
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
+// GNU Gama's correlated angles (jezerka-ang.gkf: one observation set of
+// angles per station): the measurements CSV has a row per observation, its
+// own source, kind and stations, and the set named in `set`; the JSON
+// report lists each set's observations with their units.
+TEST_F(AdjustCli, Issue42_AnObservationSetHasARowPerObservationWithItsSetNamed) {
+  const std::string file = std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/gama/jezerka-ang.gkf";
+  const RunResult r = run("adjust '" + file + "' -o '" + path("st.csv").string() + "' --measurements '" + path("m.csv").string() +
+                          "' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string csv = slurp(path("m.csv"));
+  std::vector<std::string> rows;
+  for (std::size_t at = 0, end; (end = csv.find('\n', at)) != std::string::npos; at = end + 1) rows.push_back(csv.substr(at, end - at));
+  ASSERT_EQ(rows.size(), 1u + 55u);  // 34 angles, 21 distances
+  EXPECT_EQ(rows[0].substr(rows[0].rfind(',')), ",metadata");  // set, then metadata (NGS GVX's), last
+  std::size_t angles = 0, in_sets = 0;
+  for (const auto& row : rows) {
+    if (row.find(",horizontal_angle,") != std::string::npos) {
+      ++angles;
+      EXPECT_NE(row.find(" <angle>,horizontal_angle,"), std::string::npos) << row;
+      EXPECT_NE(row.find(" <obs>"), std::string::npos) << row;  // the set, last
+      const std::string head = row.substr(0, row.rfind(','));  // less metadata (empty here)
+      in_sets += head.substr(head.rfind(',')).find(" <obs>") != std::string::npos ? 1u : 0u;
+    }
+    if (row.find(",horizontal_distance,") != std::string::npos) {
+      EXPECT_EQ(row.substr(row.size() - 2), ",,") << row;  // no set, no metadata
+    }
+  }
+  EXPECT_EQ(angles, 34u);
+  EXPECT_EQ(in_sets, 34u);
+  // The first set: the angles at 51, lines 35–39, the set at line 28.
+  EXPECT_NE(csv.find("jezerka-ang.gkf:35 <angle>,horizontal_angle,51 54 55,"), std::string::npos);
+  EXPECT_NE(csv.find("jezerka-ang.gkf:28 <obs>,\n"), std::string::npos);
+  const auto report = nlohmann::json::parse(r.out);
+  std::size_t sets = 0;
+  for (const auto& m : report.at("measurements")) {
+    if (m.at("kind") != "observation_set") continue;
+    ++sets;
+    EXPECT_FALSE(m.contains("unit"));
+    ASSERT_EQ(m.at("parts").size(), m.at("observed").size());
+    for (const auto& part : m.at("parts")) {
+      EXPECT_EQ(part.at("kind"), "horizontal_angle");
+      EXPECT_EQ(part.at("unit"), "rad");
+    }
+  }
+  EXPECT_EQ(sets, 8u);
 }
 
 // Motions that move no station are no datum: one held station and a
@@ -492,9 +547,9 @@ TEST_F(AdjustCli, Issue39_TheMeasurementsCsvSaysWhatBecameOfEachMeasurement) {
   const std::string csv = testing::slurp(path("m.csv"));
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
             "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,mdb,"
-            "status,snooping_rank,metadata");
-  EXPECT_NE(csv.find(",ignored,,\n"), std::string::npos);
-  EXPECT_NE(csv.find(",flagged,1,\n"), std::string::npos);
+            "status,snooping_rank,set,metadata");  // set: empty but for an observation set's observations
+  EXPECT_NE(csv.find(",ignored,,,\n"), std::string::npos);
+  EXPECT_NE(csv.find(",flagged,1,,\n"), std::string::npos);
   EXPECT_EQ(csv.find(",removed,"), std::string::npos);
   const auto report = nlohmann::json::parse(flagged.out);
   ASSERT_FALSE(report.at("flagged").empty());
@@ -504,7 +559,7 @@ TEST_F(AdjustCli, Issue39_TheMeasurementsCsvSaysWhatBecameOfEachMeasurement) {
                                 path("m2.csv").string() + "' --remove-outliers --json");
   ASSERT_EQ(removed.exit_code, 0) << removed.err;
   const std::string csv2 = testing::slurp(path("m2.csv"));
-  EXPECT_NE(csv2.find(",removed,1,\n"), std::string::npos);
+  EXPECT_NE(csv2.find(",removed,1,,\n"), std::string::npos);
   const auto report2 = nlohmann::json::parse(removed.out);
   ASSERT_FALSE(report2.at("removed").empty());
   EXPECT_EQ(report2.at("removed").front().at("snooping_rank"), 1);

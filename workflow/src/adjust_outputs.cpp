@@ -47,6 +47,7 @@ std::string kind_key(MeasurementKind k) {
     case MeasurementKind::astronomic_longitude: return "astronomic_longitude";
     case MeasurementKind::astronomic_azimuth: return "astronomic_azimuth";
     case MeasurementKind::msl_arc: return "msl_arc";
+    case MeasurementKind::observation_set: return "observation_set";
   }
   return "measurement";
 }
@@ -61,6 +62,15 @@ bool angular(MeasurementKind k) {
 std::string stations_of(const geodesy::Network& net, const geodesy::NetworkMeasurement& m) {
   std::string s;
   const bool pairs = m.kind == MeasurementKind::gnss_baselines;
+  if (m.kind == MeasurementKind::observation_set) {
+    std::vector<std::size_t> seen;
+    for (std::size_t st : m.stations) {
+      if (std::find(seen.begin(), seen.end(), st) != seen.end()) continue;
+      s += (seen.empty() ? "" : " ") + net.stations[st].id;
+      seen.push_back(st);
+    }
+    return s;
+  }
   for (std::size_t k = 0; k < m.stations.size(); ++k) {
     s += (k == 0 ? "" : pairs && k % 2 == 1 ? "->" : " ") + net.stations[m.stations[k]].id;
   }
@@ -261,10 +271,11 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
     for (std::size_t mi = begin; mi < end; ++mi) {
       const auto& m = net.measurements[mi];
       const solver::AdjustedMeasurement* am = slot_of[mi] == kNone ? nullptr : &r.measurements[slot_of[mi]];
-      const bool ang = angular(m.kind);
-      const double value_scale = ang ? kRadToDeg : 1.0, small_scale = ang ? kRadToArcsec : 1.0;
       const char* status = am ? solver::to_string(am->status(r.alpha_point)) : "ignored";
       const std::string rank = am && am->snooping_rank > 0 ? std::to_string(am->snooping_rank) : std::string();
+      // An observation set: a row per observation, named by its own source,
+      // kind and stations, with the set's source in `set`.
+      const bool set = m.kind == MeasurementKind::observation_set;
       const std::string source = csv_field(m.source), stations = csv_field(stations_of(net, m));
       const std::string metadata = csv_field(metadata_text(m));
       const auto at = [&](const Eigen::VectorXd* v, Eigen::Index k) {
@@ -272,13 +283,16 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
       };
       for (Eigen::Index k = 0; k < m.value.size(); ++k) {
         static constexpr const char* kAxis[] = {"x", "y", "z"};
-        out += source;
+        const geodesy::NetworkMeasurement& part = set ? m.parts[static_cast<std::size_t>(k)] : m;
+        const bool ang = angular(part.kind);
+        const double value_scale = ang ? kRadToDeg : 1.0, small_scale = ang ? kRadToArcsec : 1.0;
+        out += set ? csv_field(part.source) : source;
         out += ',';
-        out += kind_key(m.kind);
+        out += kind_key(part.kind);
         out += ',';
-        out += stations;
+        out += set ? csv_field(stations_of(net, part)) : stations;
         out += ',';
-        if (m.value.size() != 1) {
+        if (m.value.size() != 1 && !set) {
           if (m.kind == MeasurementKind::gnss_points) out += net.stations[m.stations[static_cast<std::size_t>(k / 3)]].id;
           else out += std::to_string(k / 3);
           out += '.';
@@ -305,13 +319,15 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
         out += ',';
         out += rank;
         out += ',';
+        if (set) out += source;
+        out += ',';
         out += metadata;
         out += '\n';
       }
     }
   });
   std::string out = "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,"
-                    "mdb,status,snooping_rank,metadata\n";
+                    "mdb,status,snooping_rank,set,metadata\n";
   std::size_t size = out.size();
   for (const auto& part : parts) size += part.size();
   out.reserve(size);

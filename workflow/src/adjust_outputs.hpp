@@ -24,7 +24,8 @@ std::string kind_key(geodesy::MeasurementKind k);
 bool angular(geodesy::MeasurementKind k);
 
 // The stations a measurement names: "A->B" (from, to), "A->B C->D" for
-// baselines, "A B C" for a point cluster.
+// baselines, "A B C" for a point cluster or an observation set (each once,
+// in the order its parts name them).
 std::string stations_of(const geodesy::Network& net, const geodesy::NetworkMeasurement& m);
 
 // A CSV field, quoted where it holds a comma, quote or line break.

@@ -83,13 +83,34 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
     std::snprintf(b, sizeof b, "%.3g", p);
     return std::string(b);
   };
+  // The largest MDB (an observation set's: of its lengths and of its angles).
   const auto mdb_text = [&](const solver::AdjustedMeasurement& am, const geodesy::NetworkMeasurement& m) {
-    double largest = 0.0;
+    double largest[2] = {0.0, 0.0};  // lengths, angles
+    bool has[2] = {false, false};
     for (Eigen::Index k = 0; k < am.mdb.size(); ++k) {
-      if (!(am.mdb(k) <= largest)) largest = am.mdb(k);
+      const int a = angular(geodesy::component_kind(m, k)) ? 1 : 0;
+      has[a] = true;
+      if (!(am.mdb(k) <= largest[a])) largest[a] = am.mdb(k);
     }
-    if (!std::isfinite(largest)) return std::string("-");
-    return angular(m.kind) ? format_fixed(largest * kRadToArcsec, 2) + "\"" : format_fixed(largest * 1e3, 1) + " mm";
+    std::string text;
+    for (int a = 0; a < 2; ++a) {
+      if (!has[a]) continue;
+      text += text.empty() ? "" : ", ";
+      if (!std::isfinite(largest[a])) text += "-";
+      else text += a ? format_fixed(largest[a] * kRadToArcsec, 2) + "\"" : format_fixed(largest[a] * 1e3, 1) + " mm";
+    }
+    return text;
+  };
+  // An observation set's observation with the largest |w|.
+  const auto worst_part = [&](const solver::AdjustedMeasurement& am, const geodesy::NetworkMeasurement& m) {
+    if (m.kind != geodesy::MeasurementKind::observation_set) return std::string();
+    Eigen::Index worst = -1;
+    for (Eigen::Index k = 0; k < am.w.size(); ++k) {
+      if (std::isfinite(am.w(k)) && (worst < 0 || std::fabs(am.w(k)) > std::fabs(am.w(worst)))) worst = k;
+    }
+    if (worst < 0) return std::string();
+    const auto& part = m.parts[static_cast<std::size_t>(worst)];
+    return " (largest at " + part.source + " " + geodesy::to_string(part.kind) + " " + stations_of(net, part) + ")";
   };
   const std::vector<std::size_t> failing = solver::failing_measurements(r);
   std::size_t flagged = 0, removed = 0;
@@ -109,7 +130,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
       char rank[16];
       std::snprintf(rank, sizeof rank, "%4s", am.snooping_rank > 0 ? std::to_string(am.snooping_rank).c_str() : "-");
       out << "  " << rank << "  " << m.source << "  " << geodesy::to_string(m.kind) << " " << stations_of(net, m) << ": max |w| "
-          << format_fixed(am.w_max, 2) << ", test " << format_fixed(am.statistic, 2) << " (chi-squared, " << am.test_dof
+          << format_fixed(am.w_max, 2) << worst_part(am, m) << ", test " << format_fixed(am.statistic, 2) << " (chi-squared, " << am.test_dof
           << " dof), p " << p_text(am.p_value) << ", MDB " << mdb_text(am, m)
           << (am.passes_after_rank > 0 ? "; passes once rank " + std::to_string(am.passes_after_rank) + " is removed" : std::string())
           << "\n";
@@ -126,7 +147,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
     const auto& am = *by_w[k];
     const auto& m = net.measurements[am.index];
     out << "  " << m.source << "  " << geodesy::to_string(m.kind) << " " << stations_of(net, m) << ": max |w| "
-        << format_fixed(am.w_max, 2) << ", p " << p_text(am.p_value) << ", " << solver::to_string(am.status(r.alpha_point))
+        << format_fixed(am.w_max, 2) << worst_part(am, m) << ", p " << p_text(am.p_value) << ", " << solver::to_string(am.status(r.alpha_point))
         << (am.snooping_rank > 0 ? " (snooping rank " + std::to_string(am.snooping_rank) + ")" : std::string()) << "\n";
   }
   if (removed > 0) {
@@ -252,8 +273,18 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
     if (am.outlier && am.snooping_rank == 0) removed.push_back({{"source", m.source}, {"kind", kind_key(m.kind)},
                                                                {"stations", stations_of(net, m)}, {"because", am.removed_because}});
     if (!full) continue;
-    ordered_json x = {{"source", m.source}, {"kind", kind_key(m.kind)}, {"stations", stations_of(net, m)},
-                      {"unit", angular(m.kind) ? "rad" : "m"}};
+    ordered_json x = {{"source", m.source}, {"kind", kind_key(m.kind)}, {"stations", stations_of(net, m)}};
+    if (m.kind == geodesy::MeasurementKind::observation_set) {
+      // Its components' observations, each with its own unit.
+      ordered_json parts = ordered_json::array();
+      for (const auto& part : m.parts) {
+        parts.push_back({{"source", part.source}, {"kind", kind_key(part.kind)}, {"stations", stations_of(net, part)},
+                         {"unit", angular(part.kind) ? "rad" : "m"}});
+      }
+      x["parts"] = std::move(parts);
+    } else {
+      x["unit"] = angular(m.kind) ? "rad" : "m";
+    }
     auto vec = [&](const Eigen::VectorXd& v) {
       ordered_json a = ordered_json::array();
       for (Eigen::Index k = 0; k < v.size(); ++k) a.push_back(num(v(k)));

@@ -16,7 +16,9 @@
 //    distances (horizontal), angles, s-distances, z-angles (zenith),
 //    azimuths (bearings from +x); <height-differences> (dh), <vectors>
 //    (vec dx dy dz) and <coordinates> (observed points), each group with an
-//    optional <cov-mat dim band> (upper band by rows);
+//    optional <cov-mat dim band> (upper band by rows, in the group's order;
+//    mm², cc² or ″² and their products): a cov-mat that correlates two
+//    terrestrial observations makes the group one observation set;
 //  - lengths in metres, their standard deviations in millimetres; angles
 //    in gon (400 a circle) with standard deviations in cc (1e-4 gon), or
 //    as d-m-s text "57-32-28.428" with standard deviations in arc-seconds;
@@ -318,9 +320,8 @@ class Reader final : public XmlHandler {
     p.m.value = Eigen::VectorXd::Constant(1, required_number(name, a, "val"));
     p.sigma_unit = kMm;
     p.sigma = stdev(name, a, std::nullopt, kMm);
-    if (!p.sigma) {
-      const auto dist = optional_number(name, a, "dist");
-      if (!dist) fail(line(), "<dh> has neither stdev (mm) nor dist (km) for its standard deviation");
+    // Neither: its group's cov-mat must give it (close_group).
+    if (const auto dist = optional_number(name, a, "dist"); !p.sigma && dist) {
       if (!(*dist > 0.0)) fail(line(), "<dh> dist=\"" + a.at("dist") + "\" must be > 0 (km)");
       p.sigma = sigma_apr_mm_ * std::sqrt(*dist) * kMm;
     }
@@ -517,6 +518,10 @@ class Reader final : public XmlHandler {
       }
       std::size_t at = 0;
       for (const auto& p : group_) {
+        if (!p.sigma && p.element == "dh") {
+          fail(p.line, "<dh> has neither stdev (mm) nor dist (km) for its standard deviation, and its "
+                       "<height-differences> no <cov-mat>");
+        }
         if (!p.sigma) {
           fail(p.line, "<" + p.element + "> has no stdev and <points-observations> gives no default for it");
         }
@@ -539,23 +544,23 @@ class Reader final : public XmlHandler {
       m.source = where(group_line_) + " <" + element + ">";
       if (dim > 0) net_.measurements.push_back(std::move(m));
     } else {
-      // Terrestrial observations are measurements of one value each: a
-      // correlation between them is not held.
+      // Terrestrial observations: each a measurement of its own, or, when
+      // the cov-mat correlates any two, one observation set of them all.
+      bool correlated = false;
       for (Eigen::Index i = 0; i < cov.rows(); ++i) {
-        for (Eigen::Index j = 0; j < i; ++j) {
-          if (cov(i, j) != 0.0) {
-            fail(cov_line_, "<cov-mat> correlates observations " + std::to_string(j + 1) + " and " + std::to_string(i + 1) +
-                                " of <" + element + ">; geoanchor adjusts correlated terrestrial observations only as "
-                                "vectors or coordinates (give band=\"0\" or split the group)");
-          }
-        }
+        for (Eigen::Index j = 0; j < i; ++j) correlated = correlated || cov(i, j) != 0.0;
       }
+      std::vector<geodesy::NetworkMeasurement> parts;
       Eigen::Index at = 0;
       for (auto& p : group_) {
         p.m.covariance = Eigen::MatrixXd::Constant(1, 1, cov(at, at));
         ++at;
         p.m.source = where(p.line) + " <" + p.element + ">";
-        net_.measurements.push_back(std::move(p.m));
+        if (correlated) parts.push_back(std::move(p.m));
+        else net_.measurements.push_back(std::move(p.m));
+      }
+      if (correlated) {
+        net_.measurements.push_back(geodesy::make_observation_set(std::move(parts), cov, where(group_line_) + " <" + element + ">"));
       }
     }
     group_.clear();
@@ -567,14 +572,16 @@ class Reader final : public XmlHandler {
   void finish() {
     // The dimension: heights only, plane only, or both.
     bool horizontal = false, vertical = !three_d_.empty();
-    for (const auto& m : net_.measurements) {
-      switch (m.kind) {
-        case MeasurementKind::height_difference: break;
-        case MeasurementKind::slope_distance:
-        case MeasurementKind::zenith_angle:
-        case MeasurementKind::gnss_baselines:
-        case MeasurementKind::gnss_points: horizontal = vertical = true; break;
-        default: horizontal = true; break;
+    for (const auto& set : net_.measurements) {
+      for (const auto& m : geodesy::parts_of(set)) {
+        switch (m.kind) {
+          case MeasurementKind::height_difference: break;
+          case MeasurementKind::slope_distance:
+          case MeasurementKind::zenith_angle:
+          case MeasurementKind::gnss_baselines:
+          case MeasurementKind::gnss_points: horizontal = vertical = true; break;
+          default: horizontal = true; break;
+        }
       }
     }
     for (const auto& [id, p] : points_) {

@@ -21,6 +21,7 @@
 #include <array>
 #include <cstddef>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -107,6 +108,10 @@ enum class MeasurementKind {
   astronomic_longitude,  // at: Λ = λ + η / cos φ
   astronomic_azimuth,    // from, to: in the astronomic horizon at `from`, from astronomic north
   msl_arc,               // from, to: the arc on the geoid (mean sea level) between the stations
+  // Terrestrial observations with a joint covariance (GNU Gama's <obs> or
+  // <height-differences> with a correlating <cov-mat>): `parts`, one value
+  // each, adjusted as one measurement whitened by the joint covariance.
+  observation_set,
 };
 
 // "gnss baselines", "slope distance", … for messages.
@@ -140,7 +145,29 @@ struct NetworkMeasurement {
   // occupation times, …): key and text, in the input's order; written as
   // the measurements CSV's `metadata` column. Empty for most inputs.
   std::vector<std::pair<std::string, std::string>> metadata;
+  // observation_set: its observations in the covariance's order, each a
+  // terrestrial measurement of one value with its own kind, stations,
+  // heights, direction set and source (its covariance is its variance in
+  // the set). The set's stations and value are its parts' in that order,
+  // its covariance the joint one (make_observation_set).
+  std::vector<NetworkMeasurement> parts;
 };
+
+// The observations a measurement is made of: an observation set's parts,
+// or the measurement itself.
+std::span<const NetworkMeasurement> parts_of(const NetworkMeasurement& m);
+
+// The kind of component `k` of a measurement's value: its part's kind in
+// an observation set, else the measurement's.
+MeasurementKind component_kind(const NetworkMeasurement& m, Eigen::Index k);
+
+// An observation set of `parts` (terrestrial, one value each) with their
+// joint covariance (SI², parts.size() square); its stations and value are
+// the parts' in order and each part's covariance its variance. Throws
+// std::invalid_argument for a part that is not one terrestrial value or a
+// covariance of another size (a reader's mistake, not the input's).
+NetworkMeasurement make_observation_set(std::vector<NetworkMeasurement> parts, const Eigen::MatrixXd& covariance,
+                                        std::string source);
 
 struct DirectionSet {
   std::size_t station = 0;  // the instrument
