@@ -57,5 +57,29 @@ TEST_F(GeoidFilesCli, Issue42_FilesNoReaderTakesAreNamedAndLeaveNoOutput) {
   }
 }
 
+
+TEST_F(GeoidFilesCli, Issue42_AstronomicMeasurementsWithoutADeflectionAreSaidOnce) {
+  // Ellipsoidal heights (LLh): no geoid needed but for the deflection.
+  write("k.stn", "!#=DNA 3.01 STN    12.12.2018         GDA94    01.01.1994         3\n"
+                 "1013                CCF LLh      -37.4801664550      144.5728376570             41.5521\n"
+                 "1014                CCC LLh      -37.4801444060      144.5729820340             42.7148\n"
+                 "1017                CCC LLh      -37.4801686470      144.5727483410             40.8815\n");
+  write("k.msr", "!#=DNA 3.01 MSR    12.12.2018         GDA94    01.01.1994         3\n"
+                 "V 1013                1014                                                   90 24 31.0000   20.000  1.545  0.125\n"
+                 "V 1013                1017                                                   91 47 53.0000   20.000  1.545  1.530\n"
+                 "K 1013                1017                                                  268 17 00.0000   20.000\n");
+  const RunResult r = run("adjust '" + path("k.stn").string() + "' '" + path("k.msr").string() + "' -o '" + path("k.csv").string() +
+                          "' --report '" + path("k.txt").string() + "' --accept-failed-global-test");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("1 astronomic measurement(s) (azimuth, latitude, longitude) at stations without a deflection of the vertical: "
+                       "adjusted with it zero"),
+            std::string::npos)
+      << r.err;
+  const RunResult g = run("adjust '" + path("k.stn").string() + "' '" + path("k.msr").string() + "' -o '" + path("k.csv").string() +
+                          "' --geoid '" + kDir + "urban-network.geo' --overwrite --accept-failed-global-test");
+  EXPECT_EQ(g.exit_code, 0) << g.err;
+  EXPECT_EQ(g.err.find("astronomic measurement(s)"), std::string::npos) << g.err;  // the .geo file gives 1013's
+}
+
 }  // namespace
 }  // namespace geoanchor

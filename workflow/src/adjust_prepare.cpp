@@ -419,6 +419,22 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
     p.notes.push_back("geoid: " + g.model_name() +
                       (g.has_deflections() ? ": N and the deflections of the vertical" : ": N; deflections of the vertical zero"));
   }
+  // Astronomic measurements where nothing gives the deflection of the
+  // vertical: adjusted with it zero, said once.
+  if (net.space == NetworkSpace::ellipsoidal && !(request.options.geoid && request.options.geoid->has_deflections())) {
+    std::size_t astronomic = 0;
+    for (const auto& m : net.measurements) {
+      const bool astro = m.kind == geodesy::MeasurementKind::astronomic_azimuth || m.kind == geodesy::MeasurementKind::astronomic_latitude ||
+                         m.kind == geodesy::MeasurementKind::astronomic_longitude;
+      if (astro && !m.ignore && !net.stations[m.stations[0]].geoid) ++astronomic;
+    }
+    if (astronomic > 0) {
+      const std::string w = std::to_string(astronomic) + " astronomic measurement(s) (azimuth, latitude, longitude) at stations without a "
+                            "deflection of the vertical: adjusted with it zero (--geoid a grid with deflections or a per-station .geo file gives it)";
+      net.warnings.push_back(w);
+      p.notes.push_back("warning: " + w);
+    }
+  }
   apply_solution_types(request, p);
   apply_variance_scales(net);
   if (net.space == NetworkSpace::ellipsoidal) {
