@@ -195,7 +195,6 @@ class DnaReader {
   Layout layout_;
   dynaml::Reader::Labels labels_;
   bool stations_ = false;
-  std::size_t records_ = 0;
 };
 
 void DnaReader::check_all_read(const Line& l, const std::string& record) const {
@@ -290,7 +289,6 @@ void DnaReader::station(Line l) {
   put(s.fields, Tag::Description, l, Column{layout_.description, l.text.size()});
   check_all_read(l, "a station record");
   reader_.finish_dna_station();
-  ++records_;
 }
 
 void DnaReader::directions(dynaml::Measurement& m, std::size_t count, std::size_t& index) {
@@ -438,7 +436,6 @@ void DnaReader::measurement(std::size_t& index) {
       if (t != 'G') put(m.fields, Tag::Total, l, layout_.third);
       gnss(m, l, t, index);
       reader_.finish_dna_measurement();
-      ++records_;
       return;
     default:
       fail(l.number, "measurement type '" + type + "' (column 1): expected one of A, B, C, D, E, G, H, I, J, K, L, M, P, Q, R, S, V, X, Y, Z");
@@ -457,7 +454,6 @@ void DnaReader::measurement(std::size_t& index) {
     directions(m, static_cast<std::size_t>(*count), index);
   }
   reader_.finish_dna_measurement();
-  ++records_;
 }
 
 void DnaReader::read() {
