@@ -296,6 +296,7 @@ int run_adjust(const AdjustCommandOptions& o) {
 
   const workflow::PreparedNetwork prepared = workflow::prepare_network(request);
   so.helmert = prepared.helmert;
+  so.refraction_k = prepared.refraction_k;
   const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
   const std::string text = workflow::report_text(prepared, r, so);
   show_report(o, outputs, prepared, r, so, text);

@@ -32,7 +32,7 @@ std::vector<CLI::Option*> add_network_options(CLI::App* cmd, NetworkOptions& o) 
                     "scaled by 10², 25², 75² or 250² (default: left out; dead_reckoned always is)"),
       cmd->add_option("--geoid", o.geoid,
                       "Geoid for orthometric heights, levelled height differences and deflections of the vertical: EGM96, EGM96-NGA, a grid name PROJ finds or a PATH (GTX, GeoTIFF, an AUSGeoid-style NTv2 grid with deflections, or DynAdjust's per-station .geo file)"),
-      cmd->add_option("--refraction", o.refraction, "Coefficient of refraction for zenith angles (default 0; 0.13 is typical by day)")
+      cmd->add_option("--refraction", o.refraction, "Coefficient of refraction for zenith angles (default: the inputs' own, a STAR*NET .REFRACTION, else 0; 0.13 is typical by day)")
           ->check(finite_range(-1.0, 1.0)),
       cmd->add_option("--convergence", o.convergence_m, "Stop when no station moves more than this (m; default 1e-5)")
           ->check(finite_range(1e-9, 1.0)),
@@ -65,7 +65,8 @@ workflow::AdjustRequest network_request(const std::vector<std::string>& inputs, 
   }
   so.data_snooping = true;
   so.remove_outliers = o.remove_outliers;
-  so.refraction_k = o.refraction;
+  so.refraction_k = o.refraction.value_or(0.0);
+  request.refraction_given = o.refraction.has_value();
   so.convergence_m = o.convergence_m;
   so.max_iterations = o.max_iterations;
   so.free = o.free;
@@ -93,6 +94,7 @@ NetworkSession open_network(const std::vector<std::string>& inputs, const Networ
   const workflow::AdjustRequest request = network_request(inputs, o, helmert_convention);
   NetworkSession s{workflow::prepare_network(request), request.options, nullptr};
   s.options.helmert = s.prepared.helmert;
+  s.options.refraction_k = s.prepared.refraction_k;
   s.model = std::make_unique<gui::NetworkModel>(s.prepared.network, s.options);
   s.model->wait();
   return s;

@@ -32,7 +32,7 @@ struct NetworkOptions {
   bool remove_outliers = false;  // iterative data snooping removes the failing measurements
   bool solution_weighting = false;  // GNSS measurements of float and worse weighted instead of left out
   std::optional<std::string> geoid;
-  double refraction = 0.0;
+  std::optional<double> refraction;  // --refraction (else the inputs' own, else 0)
   double convergence_m = 1e-5;
   int max_iterations = 25;
   std::optional<std::string> estimate_helmert;

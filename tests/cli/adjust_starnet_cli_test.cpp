@@ -33,8 +33,9 @@ TEST_F(AdjustStarnetCli, BadInputIsRefusedByNameWithNoOutput) {
   const std::vector<Case> cases = {
       {"a measurement without its standard error", kHeader + "C A 0 0 ! !\nD A-B 100\n", {"E_STARNET", "net.dat:6", "project options"}},
       {"a value before .UNITS", "# x\n.2D\n.ORDER NE\nC A 0 0 ! !\n", {"E_STARNET", "net.dat:4", "before any .UNITS"}},
-      {"a refraction coefficient in the file", kHeader + ".REFRACTION 0.07\n", {"E_STARNET", "net.dat:5", "--refraction K"}},
-      {"a GPS vector", kHeader + "G1 A-B 1 2 3\n", {"E_STARNET", "G1 (a GPS vector line)"}},
+      {"a refraction coefficient in a local network", kHeader + ".REFRACTION 0.07\n",
+       {"E_STARNET", "net.dat:5", ".REFRACTION 0.07 in a local network"}},
+      {"a GPS vector with no frame before it", kHeader + "G1 A-B 1 2 3\n", {"E_STARNET", "net.dat:5", "G1: a STAR*NET data file names no datum"}},
       {"an angle past the circle", kHeader + "C A 0 0 ! !\nA A-B-C 361-00-00 2\n", {"E_ANGLE", "net.dat:6", "361-00-00"}},
   };
   for (const auto& c : cases) {
@@ -67,6 +68,38 @@ TEST_F(AdjustStarnetCli, AGoodFileAdjustsAndWritesEveryOutput) {
   const double y = std::strtod(end + 1, nullptr);
   EXPECT_NEAR(x, 900.0, kRounding_m) << st;
   EXPECT_NEAR(y, 1100.0, kRounding_m) << st;
+}
+
+// An ellipsoidal network: a network JSON anchor names the frame, the
+// STAR*NET file adds geodetic positions, GPS vectors and a zenith angle
+// under .REFRACTION 0.07.
+const std::string kAnchor = R"({"schema": "geoanchor.network/1", "frame": "ITRF2014@2020.0", "stations": [
+    {"id": "A", "lat_deg": 45, "lon_deg": -120, "h_m": 100, "constraint": "CCC"}], "measurements": []})";
+// B 30″ north of A (926.1 m) and 3.5 m up: ΔX ΔY ΔZ from GRS80's closed form,
+// rounded to 0.1 mm; the zenith angle from the normal at A, to the second.
+const std::string kGeodetic = "# vectors\n.3D\n.UNITS Meters DMS\n.DELTA OFF\n.LONGITUDE NegativeWest\n.GPS WEIGHT StdErrCorr\n"
+                              ".REFRACTION 0.07\nPH B 45-00-30 -120-00-00 103.5\n"
+                              "G1 A-B 326.2171 565.0245 657.2887\nG2 0.002 0.002 0.003\nG3 0.1 0.2 0.3\nV A-B 89-47-15 5\n";
+
+TEST_F(AdjustStarnetCli, ARefractionOptionThatDiffersFromTheFilesIsRefusedWithNoOutput) {
+  write("anchor.json", kAnchor);
+  write("net.dat", kGeodetic);
+  const RunResult r = run("adjust '" + path("anchor.json").string() + "' '" + path("net.dat").string() + "' --refraction 0.13 -o '" +
+                          path("st.csv").string() + "' --report '" + path("r.txt").string() + "'");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--refraction 0.13 differs from the 0.07 of " + path("net.dat").string() + ":7"), std::string::npos) << r.err;
+  EXPECT_EQ(leftovers({"anchor.json", "net.dat"}), std::vector<std::string>{});
+}
+
+TEST_F(AdjustStarnetCli, GeodeticPositionsAndVectorsAdjustOnTheAnchorsFrame) {
+  write("anchor.json", kAnchor);
+  write("net.dat", kGeodetic);
+  const RunResult r = run("adjust '" + path("anchor.json").string() + "' '" + path("net.dat").string() + "' -o '" +
+                          path("st.csv").string() + "' --report '" + path("r.txt").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(leftovers({"anchor.json", "net.dat"}), (std::vector<std::string>{"r.txt", "st.csv", "st.csv.geoanchor.json"}));
+  const std::string report = testing::slurp(path("r.txt").string());
+  EXPECT_NE(report.find("coefficient of refraction 0.07 from " + path("net.dat").string() + ":7"), std::string::npos) << report;
 }
 
 }  // namespace

@@ -161,7 +161,7 @@ TEST(NetworkStarnet, AnglesAreClockwiseAtFromTo) {
   expect_refused(k2d + "A 2-1 90-00-00 2\n", {"expected 3 station name(s) joined by '-'"});
   expect_refused(k2d + "A 2-1-3 90-00-00\n", {"0 standard error(s) for 1 observation"});
   expect_refused(k2d + "A 2-1-3 90-00-00 !\n", {"'!' (a fixed observation)"});
-  expect_refused(k2d + "A 2-1-3 90-00-00 *\n", {"'*' (a free observation)"});
+  // '*' (a free observation) is read, ignored: network_starnet_geodetic_test.cpp.
   expect_refused(k2d + "A 2-1-3 90-00-00 &\n", {"'&' (the project's default)"});
   expect_refused(k2d + "A 2-1-3 90-00-00 0\n", {"standard error '0'", "> 0"});
   expect_refused(k2d + "A 2-1-3 90-00-00 2 1.5/1.6\n", {"HI/HT '1.5/1.6'", "without a 3D distance"});
@@ -261,24 +261,24 @@ TEST(NetworkStarnet, InlineOptionsAndTheirRefusals) {
   expect_refused(".DELTA MAYBE\n", {".DELTA MAYBE", "expected one of ON, OFF"});
   expect_refused(".2D 3\n", {"with 1 argument(s); expected 0"});
   expect_refused(".SEPARATOR ab\n", {"expected one character"});
-  expect_refused(".ELEVATION Ellipsoidal\n", {"ellipsoid heights in a local network"});
-  expect_refused(".REFRACTION 0.07\n", {".REFRACTION", "--refraction K"});
+  expect_refused(".2D\n.UNITS Meters\n.ELEVATION Ellipsoidal\nE A 3\n", {"n.dat:4", "E under .ELEVATION Ellipsoidal", "names no datum"});
+  expect_refused(".REFRACTION 0.07\n", {"n.dat:1", ".REFRACTION 0.07 in a local network"});
   expect_refused(".SCALE 0.9996\n", {".SCALE", "scale factor"});
   expect_refused(".INSTRUMENT TS1\n", {".INSTRUMENT", "library of standard errors"});
   expect_refused(".PRISM 0.03\n", {".PRISM", "prism constant"});
   expect_refused(".MULT 3.28083333\n", {".MULTIPLIER", "use .UNITS"});
   expect_refused(".LEVEL\n", {".LEVEL", "E and L lines"});
-  expect_refused(".GPS WEIGHT COVARIANCE\n", {".GPS", "GPS vectors"});
   // .UNITS alone returns to the project's units, which the file does not hold.
   expect_refused(k2d + ".UNITS\nD A-B 10 0.003\n", {"before any .UNITS"});
 }
 
 TEST(NetworkStarnet, RecordsGeoanchorDoesNotModelAreRefusedByName) {
-  expect_refused(k3d + "P A 45-00-00 -120-00-00 100\n", {"n.dat:5", "P (geodetic positions)", "name no datum"});
-  expect_refused(k3d + "PH A 45-00-00 -120-00-00 100\n", {"PH (geodetic positions)"});
-  expect_refused(k3d + "CH A 1 2 3\n", {"CH (ellipsoid heights)"});
-  expect_refused(".UNITS Meters\nEH A 3\n", {"EH (ellipsoid heights)"});
-  expect_refused(k3d + "G0 'V1\nG1 A-B 1 2 3\n", {"G0 (a GPS vector line)", "frame"});
+  // Geodetic data need the frame of an input before (network_starnet_geodetic_test.cpp).
+  expect_refused(k3d + "P A 45-00-00 -120-00-00 100\n", {"n.dat:5", "P: a STAR*NET data file names no datum"});
+  expect_refused(k3d + "PH A 45-00-00 -120-00-00 100\n", {"n.dat:5", "PH: a STAR*NET data file names no datum"});
+  expect_refused(k3d + "CH A 1 2 3\n", {"CH (grid coordinates with an ellipsoid height)"});
+  expect_refused(".UNITS Meters\nEH A 3\n", {"EH: a STAR*NET data file names no datum"});
+  expect_refused(k3d + "G0 'V1\nG1 A-B 1 2 3\n", {"n.dat:5", "G0: a STAR*NET data file names no datum"});
   expect_refused(k2d + "TB N45-00-00E\n", {"TB (traverse or sideshot data)"});
   expect_refused(k2d + "X A 1\n", {"record 'X' is not a STAR*NET data code"});
 }

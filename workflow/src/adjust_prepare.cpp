@@ -447,6 +447,16 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
     throw Error(ErrorKind::usage, "E_OPTION", "--estimate-helmert: the network is local (" + net.source_name + "): it has no frame to relate a datum to");
   }
   apply_constraints(request, p);
+  p.refraction_k = request.options.refraction_k;
+  if (net.refraction_k) {
+    if (request.refraction_given && request.options.refraction_k != *net.refraction_k) {
+      throw Error(ErrorKind::usage, "E_OPTION", "--refraction " + format_shortest(request.options.refraction_k) + " differs from the " +
+                                                    format_shortest(*net.refraction_k) + " of " + net.refraction_source +
+                                                    ": give one coefficient of refraction");
+    }
+    p.refraction_k = *net.refraction_k;
+    p.notes.push_back("coefficient of refraction " + format_shortest(p.refraction_k) + " from " + net.refraction_source);
+  }
   return p;
 }
 

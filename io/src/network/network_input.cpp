@@ -355,7 +355,7 @@ void read_network_text(std::string_view text, std::string_view source, geodesy::
     case NetworkFormat::sinex: detail::read_sinex(text, source, into, options); break;
     case NetworkFormat::gama_local: detail::read_gama_local(text, source, into); break;
     case NetworkFormat::gvx: detail::read_gvx(text, source, into); break;
-    case NetworkFormat::starnet: detail::read_starnet(text, source, into); break;
+    case NetworkFormat::starnet: detail::read_starnet(text, source, into, options); break;
   }
 }
 

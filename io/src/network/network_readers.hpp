@@ -19,6 +19,7 @@ void read_sinex(std::string_view text, std::string_view source, geodesy::Network
 void read_gama_local(std::string_view text, std::string_view source, geodesy::Network& into);    // network_gama.cpp
 void read_gvx(std::string_view text, std::string_view source, geodesy::Network& into);           // network_gvx.cpp
 // STAR*NET data file; .INCLUDE files are read relative to `source`'s folder.
-void read_starnet(std::string_view text, std::string_view source, geodesy::Network& into);       // network_starnet.cpp
+void read_starnet(std::string_view text, std::string_view source, geodesy::Network& into,
+                  const NetworkReadOptions& options);  // network_starnet.cpp
 
 }  // namespace geoanchor::io::detail

@@ -35,6 +35,11 @@ struct Settings {
   std::string linear_unit;               // its name, for messages
   std::optional<bool> gons;              // .UNITS DMS (false) or GONS (true)
   char separator = '-';                  // .SEPARATOR: between the station names of a line
+  std::optional<bool> positive_west;     // .LONGITUDE PositiveWest (true) or NegativeWest (false)
+  std::optional<bool> gps_covariance;    // .GPS WEIGHT Covariance (true) or StdErrCorrelation (false)
+  bool ellipsoid_heights = false;        // .ELEVATION Ellipsoidal: C, P and E elevations are ellipsoid heights
+  std::optional<double> refraction;      // .REFRACTION k: the coefficient for the zenith angles that follow
+  std::string refraction_where;          // its line
 };
 
 // The words of a line: blank-separated, past a '#' comment and a "'"
@@ -60,5 +65,21 @@ double azimuth_rad(std::string_view w, const Settings& s, const std::string& whe
 // An angular standard error: arc-seconds under DMS, milligons under GONS
 // (manual 5.9, .UNITS), in radians.
 double angle_sigma_rad(std::string_view w, const Settings& s, const std::string& where);
+
+// Geodetic positions and GPS vectors (network_starnet_geodetic.cpp; the
+// STAR*NET-PRO supplement's data types, docs/network-format.md).
+//
+// A latitude DDD-MM-SS.s (north positive) in radians, in [-90°, 90°].
+double latitude_rad(std::string_view w, const Settings& s, const std::string& where, std::vector<std::string>& warnings);
+// A longitude DDD-MM-SS.s in the sign convention of .LONGITUDE, as
+// geoanchor's east-positive radians.
+double longitude_rad(std::string_view w, const Settings& s, const std::string& where, std::vector<std::string>& warnings);
+// G1's ΔX ΔY ΔZ (metres: .UNITS Meters is required).
+Eigen::Vector3d gps_delta(const std::vector<std::string_view>& w, const Settings& s, const std::string& where);
+// The 3×3 covariance of a vector from its G2 (variances, or standard
+// errors) and G3 (covariances XY XZ YZ, or correlations) lines, as .GPS
+// WEIGHT says; refused when not positive definite.
+Eigen::Matrix3d gps_covariance(const std::vector<std::string_view>& g2, const std::string& g2_where,
+                               const std::vector<std::string_view>& g3, const std::string& g3_where, const Settings& s);
 
 }  // namespace geoanchor::io::detail::starnet

@@ -80,17 +80,12 @@ const std::vector<std::string> kOptionNames = {
 
 // Why each option geoanchor refuses is refused.
 std::string refusal(const std::string& name) {
-  if (name == "REFRACTION") {
-    return "a refraction coefficient in the data file: geoanchor applies one coefficient to the whole adjustment; give it "
-           "with --refraction K";
-  }
   if (name == "SCALE") return "a scale factor whose application (which lengths, which coordinates) geoanchor does not model";
   if (name == "INSTRUMENT") return "an instrument of the project's library of standard errors, which the data file does not hold";
   if (name == "PRISM") return "a prism constant correction, which geoanchor does not apply";
   if (name == "MULTIPLIER") return "a multiplier into the project's units, which the data file does not state; use .UNITS";
   if (name == "LEVEL") return "a data type geoanchor does not read; levelling networks are E and L lines";
   if (name == "3REDUCE") return "3D data reduced to 2D, which geoanchor does not do; use .2D lines or a 3D network";
-  if (name == "GPS") return "GPS vector weighting: geoanchor does not read STAR*NET GPS vectors (they name no reference frame)";
   return "an inline option geoanchor does not read";
 }
 
@@ -172,11 +167,28 @@ std::string apply_inline_option(const std::vector<std::string_view>& w, Settings
   } else if (name == "ELEVATION") {
     // Legacy (manual 5.9): whether C, P and E elevations are orthometric
     // or ellipsoid heights. A local network's z is an elevation.
+    // Ellipsoidal: read as the CH, PH and EH codes (refused in a local
+    // network, by the record that gives such a height).
     arguments(1, 1);
-    if (keyword(w[1], {"Orthometric", "Ellipsoidal"}, option, where) == "Ellipsoidal") {
-      fail(where, option + " Ellipsoidal: ellipsoid heights in a local network of C coordinates; geoanchor reads "
-                           "elevations (orthometric) there");
-    }
+    s.ellipsoid_heights = keyword(w[1], {"Orthometric", "Ellipsoidal"}, option, where) == "Ellipsoidal";
+  } else if (name == "LONGITUDE") {
+    // The sign of longitudes on P lines (manual 5.9): the project's
+    // convention (positive west by default) is not in the data file.
+    arguments(1, 1);
+    s.positive_west = keyword(w[1], {"PositiveWest", "NegativeWest"}, option, where) == "PositiveWest";
+  } else if (name == "GPS") {
+    // .GPS WEIGHT Covariance|StdErrCorrelation: what G2 and G3 hold.
+    arguments(2, 2);
+    keyword(w[1], {"WEIGHT"}, option, where);
+    s.gps_covariance = keyword(w[2], {"Covariance", "StdErrCorrelation"}, option + " WEIGHT", where) == "Covariance";
+  } else if (name == "REFRACTION") {
+    // The coefficient for the zenith angles that follow (manual 5.9);
+    // network_starnet.cpp makes it the network's one coefficient.
+    arguments(1, 1);
+    const auto k = parse_finite_double(w[1]);
+    if (!k || *k < -1.0 || *k > 1.0) fail(where, option + " '" + std::string(w[1]) + "': expected a coefficient in [-1, 1]");
+    s.refraction = *k;
+    s.refraction_where = where;
   } else if (name == "INCLUDE") {
     arguments(1, 1);
     return std::string(w[1]);

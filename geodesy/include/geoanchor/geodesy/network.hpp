@@ -199,6 +199,12 @@ struct Network {
   // (metres; angles times their sight length) are set aside before the
   // adjustment with a warning (GNU Gama's tol-abs); 0: none is.
   double gross_misclosure_m = 0.0;
+  // The coefficient of refraction an input states for its zenith angles
+  // (STAR*NET's .REFRACTION): adjust uses it when --refraction is not
+  // given and refuses a --refraction that differs; `refraction_source`
+  // names the line.
+  std::optional<double> refraction_k;
+  std::string refraction_source;
   std::string source_name;  // the input file(s), for messages
   std::vector<std::string> warnings;
 

@@ -34,6 +34,9 @@ struct AdjustRequest {
   // covariance × geodesy::solution_sigma_factor²; dead_reckoned left out).
   geodesy::SolutionPolicy solutions = geodesy::SolutionPolicy::exclude;
   solver::AdjustOptions options;
+  // options.refraction_k was given (--refraction): an input's own
+  // coefficient (geodesy::Network::refraction_k) must then agree with it.
+  bool refraction_given = false;
   // adjust --geoid FILE.geo: DynAdjust's per-station N, ξ, η (the grid, if
   // any, is options.geoid).
   std::shared_ptr<const io::StationGeoidTable> station_geoid;
@@ -51,6 +54,9 @@ struct PreparedNetwork {
   // and the measurements it left out.
   std::optional<geodesy::SolutionPolicy> solution_policy;
   std::vector<std::size_t> solution_excluded;
+  // The coefficient of refraction to adjust with: the inputs' own
+  // (STAR*NET .REFRACTION), else the request's options.refraction_k.
+  double refraction_k = 0.0;
 };
 
 // Per GNSS solution type, the measurements that state it, those adjusted
@@ -71,7 +77,8 @@ std::optional<io::GnssSolutionRecord> adjust_solution_record(const PreparedNetwo
 // measurement frame the catalog cannot reach (naming the measurement), a
 // change of epoch in a dynamic frame (which needs velocities: refused
 // naming the measurement), an ellipsoidal network without a frame, a
-// --constrain that names no station or is malformed.
+// --constrain that names no station or is malformed, a --refraction that
+// differs from the inputs' own coefficient (usage).
 PreparedNetwork prepare_network(const AdjustRequest& request);
 
 // The adjusted stations as CSV: a network on the ellipsoid
