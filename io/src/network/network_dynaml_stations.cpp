@@ -42,6 +42,11 @@ void Reader::finish_station() {
   Eigen::Vector3d position;
   bool orthometric = false;
   double lat = 0, lon = 0, height = number(s.coord, Tag::Height, s.line, what);
+  if (type != "XYZ" && !net_.ellipsoid_stated) {
+    // Latitudes, longitudes and UTM are on the frame's ellipsoid: never GRS80 by default.
+    fail(s.line, what + ": " + field(Tag::Type) + " " + type + " in the frame " + (net_.frame ? net_.frame->to_string() : "") +
+                     ", whose ellipsoid neither geoanchor's frame catalog nor PROJ's database knows; give the station as XYZ");
+  }
   if (type == "XYZ") {
     position = {number(s.coord, Tag::XAxis, s.line, what), number(s.coord, Tag::YAxis, s.line, what), height};
   } else if (type == "LLH" || type == "LLh") {
