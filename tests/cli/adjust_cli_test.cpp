@@ -449,7 +449,7 @@ TEST_F(AdjustCli, Issue39_AFrameOutsideTheCatalogNeedsItsEllipsoid) {
     const std::string measurements = baseline("A", "B", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", frame) + "," +
                                      baseline("B", "C", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", frame) + "," +
                                      baseline("A", "C", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", frame);
-    return R"({"schema": "geoanchor.network/1", "frame": ")" + frame + "", " + ellipsoid + R"("stations": [)" + stations +
+    return R"({"schema": "geoanchor.network/1", "frame": ")" + frame + R"(", )" + ellipsoid + R"("stations": [)" + stations +
            R"(], "measurements": [)" + measurements + "]}";
   };
   const auto with = [&](const std::string& ellipsoid) { return in_frame("NZGD1949", ellipsoid); };

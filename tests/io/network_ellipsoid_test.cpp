@@ -13,13 +13,17 @@
 
 #include <GeographicLib/Geocentric.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "geoanchor/base/error.hpp"
 #include "geoanchor/crs/frame_ellipsoid.hpp"
 #include "geoanchor/io/network/network_input.hpp"
+#include "proj_reference.hpp"
 
 namespace geoanchor::io {
 namespace {
@@ -130,6 +134,8 @@ TEST(NetworkEllipsoid, Issue42_ContradictionsAndUnknownFramesAreRefusedByName) {
        {"net.json.ellipsoid", "custom (a 6378388 m, 1/f 297) contradicts the frame OSGB36", "Airy 1830"}},
       {head + R"("frame": "ED50", "crs": "EPSG:4277", )" + kStation + "}",
        {"net.json.crs", "EPSG:4277 (OSGB36) is on Airy 1830, which contradicts the frame ED50", "International 1924"}},
+      {head + R"("frame": "GDA2020", "crs": "EPSG:4283", )" + kStation + "}",
+       {"net.json.crs", "EPSG:4283 (GDA94) is on the datum 'Geocentric Datum of Australia 1994' (frame GDA94), not the frame GDA2020"}},
       {head + R"("crs": "EPSG:27700", )" + kStation + "}",
        {"net.json.crs", "is a projected CRS; expected a geographic or geocentric one"}},
       {head + R"("frame": "SITEGRID", )" + kStation + "}",
@@ -170,6 +176,50 @@ TEST(NetworkEllipsoid, Issue42_ADynamlFrameOutsideTheCatalogTakesProjsEllipsoid)
                             "neither geoanchor's frame catalog nor PROJ's database knows"}) {
     EXPECT_NE(e.find(piece), std::string::npos) << piece << " in: " << e;
   }
+}
+
+// A DNA header's frame: DynAdjust's urban sample (149 UTM zone 55
+// stations, fixtures/networks/dynadjust/urban-network.stn) with its header
+// saying AGD66 instead of GDA94 is read on the Australian National Spheroid:
+// each station where PROJ puts its easting, northing and height through UTM
+// zone 55 S and geocentric on that ellipsoid (heights orthometric, no geoid:
+// taken as they are, as the reader does without one; every station left
+// free, since a held one would need the geoid).
+TEST(NetworkEllipsoid, Issue42_ADnaHeadersFrameOutsideTheCatalogTakesProjsEllipsoid) {
+  std::ifstream in(std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/dynadjust/urban-network.stn", std::ios::binary);
+  std::ostringstream content;
+  content << in.rdbuf();
+  std::string text = content.str();
+  const auto at = text.find("GDA94   ");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 5, "AGD66");  // the same columns
+  // Every station free: a held orthometric height needs a geoid, which is not the point here.
+  for (std::size_t from = 0; from < text.size();) {
+    const std::size_t end = std::min(text.find('\n', from), text.size());
+    if (end - from >= 87 && text.compare(from + 24, 3, "UTM") == 0) text.replace(from + 20, 3, "FFF");
+    from = end + 1;
+  }
+  geodesy::Network net;
+  read_network_text(text, "urban-agd66.stn", net);
+  expect_ellipsoid(net.ellipsoid, kFrames[9]);
+  ASSERT_EQ(net.stations.size(), 149u);
+  const testing::ProjPipeline utm(
+      "+proj=pipeline +step +inv +proj=utm +zone=55 +south +a=6378160 +rf=298.25 +step +proj=cart +a=6378160 +rf=298.25");
+  std::istringstream lines(text);
+  std::string line;
+  std::size_t checked = 0;
+  while (std::getline(lines, line)) {
+    // DNA 3.01 station records: name 0-19, constraints 20-22, type 24-26,
+    // easting 27-46, northing 47-66, height 67-86 (network_dna.cpp).
+    if (line.size() < 87 || line[0] == '*' || line[0] == '!' || line.compare(24, 3, "UTM") != 0) continue;
+    const std::string id = line.substr(0, line.find(' '));
+    const auto s = net.find(id);
+    ASSERT_TRUE(s.has_value()) << id;
+    const Eigen::Vector3d e_n_h(std::stod(line.substr(27, 20)), std::stod(line.substr(47, 20)), std::stod(line.substr(67, 20)));
+    EXPECT_LT((net.stations[*s].position - utm.forward(e_n_h)).norm(), kSamePosition_m) << id;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 149u);
 }
 
 }  // namespace

@@ -63,10 +63,11 @@ void Reader::finish_station() {
     const std::string zone_text = text(s.coord, Tag::HemisphereZone);
     std::string zone = zone_text;
     if (!zone.empty() && std::isdigit(static_cast<unsigned char>(zone.back()))) {
-      // DynaML writes the zone number alone; its frames (GDA94, GDA2020) are
-      // Australia's, south of the equator. Elsewhere the hemisphere must be said.
+      // DynaML writes the zone number alone; its frames (GDA94, GDA2020, and
+      // before them AGD66, AGD84) are Australia's, south of the equator.
+      // Elsewhere the hemisphere must be said.
       const std::string frame = net_.frame ? net_.frame->name() : "";
-      if (frame.rfind("GDA", 0) != 0) {
+      if (frame.rfind("GDA", 0) != 0 && frame.rfind("AGD", 0) != 0) {
         fail(s.line, what + ": " + field(Tag::HemisphereZone) + " '" + zone_text + "' names no hemisphere and the frame " + frame +
                          " does not imply one; write it as " + zone_text + "N or " + zone_text + "S");
       }

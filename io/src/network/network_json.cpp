@@ -262,6 +262,13 @@ void read_crs(const json& doc, const std::string& source, std::optional<ImpliedE
     fail(where, crs.display_name() + " is on " + e.name() + ", which contradicts " + implied->by + ", which is on " +
                     implied->ellipsoid.name());
   }
+  // A frame of the catalog and a CRS on another datum contradict each other
+  // even on one ellipsoid (GDA2020 and EPSG:4283, GDA94).
+  if (net.frame && (!d.catalog_frame.empty() || geodesy::implied_ellipsoid(*net.frame)) && d.catalog_frame != net.frame->name()) {
+    fail(where, crs.display_name() + " is on the datum '" + d.datum + "'" +
+                    (d.catalog_frame.empty() ? std::string() : " (frame " + d.catalog_frame + ")") + ", not the frame " +
+                    net.frame->to_string());
+  }
   if (!net.frame) {
     std::string name;  // a frame name has no spaces: "Pulkovo 1942" is Pulkovo1942
     for (char ch : !d.catalog_frame.empty() ? d.catalog_frame : d.name) {
