@@ -481,10 +481,12 @@ TEST_F(AdjustCli, Issue39_BadInputIsRefusedByNameWithNoOutput) {
   EXPECT_EQ(leftovers({"net.json"}), std::vector<std::string>{});
 }
 
-// A frame outside geoanchor's catalog names no ellipsoid: never GRS80 by
-// default (the terrestrial models, the local axes and the heights are on
-// it). Stated by its EPSG name, it is taken; a stated ellipsoid that its
-// frame contradicts is refused at its key.
+// A frame outside geoanchor's catalog takes its ellipsoid from PROJ's
+// database (NZGD1949: NZGD49, EPSG:4272, on International 1924); a frame
+// neither knows names no ellipsoid: never GRS80 by default (the terrestrial
+// models, the local axes and the heights are on it). Stated by its EPSG
+// name, it is taken; a stated ellipsoid that its frame contradicts is
+// refused at its key.
 TEST_F(AdjustCli, Issue39_AFrameOutsideTheCatalogNeedsItsEllipsoid) {
   const auto run_in = [&](const std::string& json) {
     write("net.json", json);
@@ -498,19 +500,24 @@ TEST_F(AdjustCli, Issue39_AFrameOutsideTheCatalogNeedsItsEllipsoid) {
                   x.z(), i == 0 ? R"(, "constraint": "CCC")" : "");
     stations += st;
   }
-  const std::string measurements = baseline("A", "B", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", "NZGD1949") + "," +
-                                   baseline("B", "C", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", "NZGD1949") + "," +
-                                   baseline("A", "C", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", "NZGD1949");
-  const auto with = [&](const std::string& ellipsoid) {
-    return R"({"schema": "geoanchor.network/1", "frame": "NZGD1949", )" + ellipsoid + R"("stations": [)" + stations +
+  const auto in_frame = [&](const std::string& frame, const std::string& ellipsoid) {
+    const std::string measurements = baseline("A", "B", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", frame) + "," +
+                                     baseline("B", "C", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", frame) + "," +
+                                     baseline("A", "C", "[[1e-6,0,0],[0,1e-6,0],[0,0,1e-6]]", frame);
+    return R"({"schema": "geoanchor.network/1", "frame": ")" + frame + R"(", )" + ellipsoid + R"("stations": [)" + stations +
            R"(], "measurements": [)" + measurements + "]}";
   };
-  const RunResult unknown = run_in(with(""));
+  const auto with = [&](const std::string& ellipsoid) { return in_frame("NZGD1949", ellipsoid); };
+  const RunResult unknown = run_in(in_frame("SITEGRID", ""));
   EXPECT_EQ(unknown.exit_code, 3) << unknown.err;
-  for (const char* piece : {"E_ELLIPSOID", "net.json", "the frame NZGD1949 is not in geoanchor's catalog", "International 1924"}) {
+  for (const char* piece : {"E_ELLIPSOID", "net.json", "the frame SITEGRID is in neither geoanchor's frame catalog nor PROJ's database",
+                            "International 1924"}) {
     EXPECT_NE(unknown.err.find(piece), std::string::npos) << piece << " in: " << unknown.err;
   }
   EXPECT_EQ(leftovers({"net.json"}), std::vector<std::string>{});
+  const RunResult from_proj = run_in(with(""));
+  EXPECT_EQ(from_proj.exit_code, 0) << from_proj.err;
+  for (const char* f : {"st.csv", "st.csv.geoanchor.json"}) std::filesystem::remove(path(f));
   const RunResult stated = run_in(with(R"("ellipsoid": "International 1924", )"));
   EXPECT_EQ(stated.exit_code, 0) << stated.err;
   for (const char* f : {"st.csv", "st.csv.geoanchor.json"}) std::filesystem::remove(path(f));

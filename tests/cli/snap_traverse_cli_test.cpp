@@ -22,6 +22,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
@@ -34,7 +35,12 @@ namespace {
 using testing::CliTest;
 using testing::RunResult;
 
-class SnapTraverseCli : public CliTest {};
+class SnapTraverseCli : public CliTest {
+ protected:
+  // adjust on `net` (testopt.json or a variant) must give SNAP's listing,
+  // with the stations' frame `frame` on International 1924.
+  void expect_snaps_listing(const std::string& net, const std::string& frame);
+};
 
 // Degrees, minutes, seconds as the listing prints them; south and west negative.
 double dms(int d, int m, double s, char hemisphere) {
@@ -113,14 +119,14 @@ constexpr double kSrTol = 0.005;            // printed to 0.01
 constexpr double kSnapLowRedundancy = 0.10;  // the @ flag
 // "Residuals outside the 95.000% confidence limit are flagged ?": none is.
 
-TEST_F(SnapTraverseCli, TestoptTraverseMatchesSnapsPublishedListing) {
-  const std::string net = std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/snap/testopt.json";
+void SnapTraverseCli::expect_snaps_listing(const std::string& net, const std::string& frame) {
+  for (const char* f : {"st.csv", "st.csv.geoanchor.json", "m.csv", "r.txt"}) std::filesystem::remove(path(f));
   const RunResult r = run("adjust '" + net + "' -o '" + path("st.csv").string() + "' --measurements '" +
                           path("m.csv").string() + "' --report '" + path("r.txt").string() +
                           "' --json --accept-failed-global-test");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
-  EXPECT_EQ(j.at("frame").get<std::string>(), "NZGD1949");
+  EXPECT_EQ(j.at("frame").get<std::string>(), frame);
   EXPECT_EQ(j.at("ellipsoid").get<std::string>(), "International 1924");
 
   // SOLUTION SUMMARY.
@@ -208,6 +214,32 @@ TEST_F(SnapTraverseCli, TestoptTraverseMatchesSnapsPublishedListing) {
   }
   EXPECT_TRUE(j.at("flagged").empty());
   EXPECT_TRUE(j.at("removed").empty());
+}
+
+TEST_F(SnapTraverseCli, TestoptTraverseMatchesSnapsPublishedListing) {
+  expect_snaps_listing(std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/snap/testopt.json", "NZGD1949");
+}
+
+// Issue 42 point 4: the same network naming only its frame (NZGD1949 is not
+// in geoanchor's catalog; PROJ's database gives NZGD49, EPSG:4272, on
+// International 1924), or only its CRS EPSG:4272 (the frame is then the
+// CRS's name), gives SNAP's listing just the same: the ellipsoid was never
+// GRS80 by default.
+TEST_F(SnapTraverseCli, Issue42_TheFrameOrTheCrsAloneGiveTheEllipsoid) {
+  nlohmann::json j = nlohmann::json::parse(testing::slurp(std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/snap/testopt.json"));
+  ASSERT_EQ(j.erase("ellipsoid"), 1u);
+  write("frame_only.json", j.dump(1));
+  {
+    SCOPED_TRACE("frame only");
+    expect_snaps_listing(path("frame_only.json").string(), "NZGD1949");
+  }
+  ASSERT_EQ(j.erase("frame"), 1u);
+  j["crs"] = "EPSG:4272";
+  write("crs_only.json", j.dump(1));
+  {
+    SCOPED_TRACE("crs only");
+    expect_snaps_listing(path("crs_only.json").string(), "NZGD49");
+  }
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <cmath>
 
 #include "geoanchor/base/error.hpp"
+#include "geoanchor/crs/frame_ellipsoid.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/geodesy/local_frame.hpp"
@@ -309,21 +310,23 @@ Frame adjustment_frame(const AdjustRequest& request, geodesy::Network& net) {
   geodesy::require_epoch_if_dynamic(*target, request.frame ? "--frame" : net.source_name + ": the stations' frame",
                                     ErrorKind::usage);
   // The stations are ECEF already; heights and terrestrial models use the
-  // adjustment frame's own ellipsoid.
-  if (const auto e = geodesy::implied_ellipsoid(*target)) {
-    if (net.ellipsoid_stated && !(net.ellipsoid == *e)) {
+  // adjustment frame's own ellipsoid: the catalog's, else PROJ's.
+  const std::string where = request.frame ? "--frame" : net.source_name + ": the stations' frame";
+  if (const auto e = io::frame_ellipsoid(*target, where)) {
+    if (net.ellipsoid_stated && !io::same_ellipsoid(net.ellipsoid, e->ellipsoid)) {
       throw Error(ErrorKind::input, "E_ELLIPSOID",
                   net.source_name + ": the network states the ellipsoid " + net.ellipsoid.name() + ", but its frame " +
-                      target->to_string() + " is on " + e->name());
+                      target->to_string() + " is on " + e->ellipsoid.name() + " (" + e->source + ")");
     }
-    net.ellipsoid = *e;
+    net.ellipsoid = e->ellipsoid;
   } else if (!net.ellipsoid_stated) {
-    // Never a default ellipsoid for a frame geoanchor does not know: the
-    // terrestrial models, the local axes and the stations' heights are on it.
+    // Never a default ellipsoid for a frame nobody knows: the terrestrial
+    // models, the local axes and the stations' heights are on it.
     throw Error(ErrorKind::input, "E_ELLIPSOID",
                 net.source_name + ": the frame " + target->to_string() +
-                    " is not in geoanchor's catalog, so its ellipsoid is unknown: give the network's \"ellipsoid\" (" +
-                    geodesy::named_ellipsoid_list() + ", or {\"a_m\", \"rf\"})");
+                    " is in neither geoanchor's frame catalog nor PROJ's database, so its ellipsoid is unknown: give "
+                    "the network's \"ellipsoid\" (" +
+                    geodesy::named_ellipsoid_list() + ", or {\"a_m\", \"rf\"}) or its \"crs\" (e.g. EPSG:4272)");
   }
   return *target;
 }

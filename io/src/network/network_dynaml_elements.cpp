@@ -9,6 +9,7 @@
 #include <set>
 #include <string>
 
+#include "geoanchor/crs/frame_ellipsoid.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "network/network_dynaml_reader.hpp"
 
@@ -25,8 +26,10 @@ void Reader::set_root(const std::string& frame_name, const std::string& epoch_te
   root_frame_ = frame_of(frame_name_.empty() ? "GDA2020" : frame_name_, epoch_text_.empty() ? "01.01.2020" : epoch_text_, at, what);
   if (!net_.frame) {
     net_.frame = root_frame_;
-    if (const auto e = geodesy::implied_ellipsoid(*root_frame_)) {
-      net_.ellipsoid = *e;
+    // The frame's ellipsoid: the catalog's, else PROJ's (AGD66: the
+    // Australian National Spheroid); unknown, adjust refuses the network.
+    if (const auto e = frame_ellipsoid(*root_frame_, where(at) + ": " + what + " reference frame")) {
+      net_.ellipsoid = e->ellipsoid;
       net_.ellipsoid_stated = true;
       geocentric_ = geodesy::GeocentricConverter(net_.ellipsoid);
     }

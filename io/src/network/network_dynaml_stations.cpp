@@ -42,6 +42,11 @@ void Reader::finish_station() {
   Eigen::Vector3d position;
   bool orthometric = false;
   double lat = 0, lon = 0, height = number(s.coord, Tag::Height, s.line, what);
+  if (type != "XYZ" && !net_.ellipsoid_stated) {
+    // Latitudes, longitudes and UTM are on the frame's ellipsoid: never GRS80 by default.
+    fail(s.line, what + ": " + field(Tag::Type) + " " + type + " in the frame " + (net_.frame ? net_.frame->to_string() : "") +
+                     ", whose ellipsoid neither geoanchor's frame catalog nor PROJ's database knows; give the station as XYZ");
+  }
   if (type == "XYZ") {
     position = {number(s.coord, Tag::XAxis, s.line, what), number(s.coord, Tag::YAxis, s.line, what), height};
   } else if (type == "LLH" || type == "LLh") {
@@ -58,10 +63,11 @@ void Reader::finish_station() {
     const std::string zone_text = text(s.coord, Tag::HemisphereZone);
     std::string zone = zone_text;
     if (!zone.empty() && std::isdigit(static_cast<unsigned char>(zone.back()))) {
-      // DynaML writes the zone number alone; its frames (GDA94, GDA2020) are
-      // Australia's, south of the equator. Elsewhere the hemisphere must be said.
+      // DynaML writes the zone number alone; its frames (GDA94, GDA2020, and
+      // before them AGD66, AGD84) are Australia's, south of the equator.
+      // Elsewhere the hemisphere must be said.
       const std::string frame = net_.frame ? net_.frame->name() : "";
-      if (frame.rfind("GDA", 0) != 0) {
+      if (frame.rfind("GDA", 0) != 0 && frame.rfind("AGD", 0) != 0) {
         fail(s.line, what + ": " + field(Tag::HemisphereZone) + " '" + zone_text + "' names no hemisphere and the frame " + frame +
                          " does not imply one; write it as " + zone_text + "N or " + zone_text + "S");
       }

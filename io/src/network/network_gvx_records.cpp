@@ -25,6 +25,7 @@
 
 #include "geoanchor/base/error.hpp"
 #include "geoanchor/base/number_text.hpp"
+#include "geoanchor/crs/frame_ellipsoid.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
@@ -162,7 +163,11 @@ Point point_of(const Context& c, const Record& p) {
     fail(c, p.find("COORDINATES/GEODETIC_COORDINATES/ELLIPSOIDAL_HEIGHT")->line,
          name + "ELLIPSOIDAL_HEIGHT " + format_shortest(h) + " m is not a height on the Earth: expected " + geodesy::physical_height_range_text());
   }
-  const geodesy::Ellipsoid e = geodesy::implied_ellipsoid(frame).value_or(geodesy::Ellipsoid::grs80());
+  // The frame's own ellipsoid, never a default (every frame frame_name
+  // accepts is in the catalog, which knows its ellipsoid).
+  const auto on = frame_ellipsoid(frame, where);
+  if (!on) fail(c, p.line, name + "frame " + frame.name() + ": its ellipsoid is unknown");
+  const geodesy::Ellipsoid e = on->ellipsoid;
   const Eigen::Vector3d xyz =
       geodesy::ecef_from_geodetic(e, {geodesy::Angle::degrees(lat), geodesy::Angle::degrees(lon), geodesy::EllipsoidalHeight{h}}).m;
   const int given = (p.find("COORDINATES/GEOCENTRIC_COORDINATES/X") ? 1 : 0) + (p.find("COORDINATES/GEOCENTRIC_COORDINATES/Y") ? 1 : 0) +
@@ -311,7 +316,7 @@ void read_records(const Document& doc, const std::string& source, geodesy::Netwo
     const std::string at = source + ":" + std::to_string(p.line);
     if (!net.frame) {
       net.frame = pt.frame;
-      if (const auto e = geodesy::implied_ellipsoid(pt.frame)) net.ellipsoid = *e, net.ellipsoid_stated = true;
+      if (const auto e = frame_ellipsoid(pt.frame, at)) net.ellipsoid = e->ellipsoid, net.ellipsoid_stated = true;
     }
     if (!(*net.frame == pt.frame) && notes.other_frame++ == 0) {
       notes.first_other_frame = "POINT " + p.text("ID") + " (" + at + ") in " + pt.frame.to_string();

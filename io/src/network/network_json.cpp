@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "geoanchor/base/error.hpp"
+#include "geoanchor/crs/crs.hpp"
+#include "geoanchor/crs/frame_ellipsoid.hpp"
 #include "geoanchor/geodesy/geocentric.hpp"
 #include "geoanchor/base/number_text.hpp"
 #include "geoanchor/geodesy/physical_range.hpp"
@@ -142,8 +144,12 @@ Eigen::Vector3d position(const json& s, const geodesy::Network& net, const std::
     return p;
   }
   if (xyz) return {number(s, "x_m", where), number(s, "y_m", where), number(s, "z_m", where)};
-  if (!net.frame && !net.ellipsoid_stated) {
-    fail(where, "latitude and longitude without an ellipsoid: give the input's \"frame\" or \"ellipsoid\"");
+  if (!net.ellipsoid_stated) {
+    fail(where, net.frame ? "latitude and longitude in the frame " + net.frame->to_string() +
+                                ", which neither geoanchor's frame catalog nor PROJ's database knows: give the input's "
+                                "\"ellipsoid\" (or its \"crs\", e.g. EPSG:4272)"
+                          : std::string("latitude and longitude without an ellipsoid: give the input's \"frame\", \"crs\" "
+                                        "or \"ellipsoid\""));
   }
   const double lat = number(s, "lat_deg", where), lon = number(s, "lon_deg", where), h = number(s, "h_m", where);
   if (!(std::fabs(lat) <= 90.0)) fail(where + ".lat_deg", "latitude " + format_shortest(lat) + " not in [-90, 90]");
@@ -184,9 +190,17 @@ geodesy::StationConstraint constraint_of(const json& s, const std::string& where
   return c;
 }
 
-// The input's "ellipsoid", which must agree with the frame's when the frame
-// implies one.
-void read_ellipsoid(const json& doc, const std::string& source, geodesy::Network& net) {
+// The ellipsoid the input's frame or CRS puts its coordinates on, and
+// where that came from ("the frame NZGD1949 (PROJ: EPSG:4272 'NZGD49')").
+struct ImpliedEllipsoid {
+  geodesy::Ellipsoid ellipsoid;
+  std::string by;
+};
+
+// The input's "ellipsoid", which must agree with the frame's or CRS's when
+// they imply one.
+void read_ellipsoid(const json& doc, const std::string& source, const std::optional<ImpliedEllipsoid>& implied,
+                    geodesy::Network& net) {
   // By its EPSG name, or {"a_m", "rf", "name"}.
   const json& ej = doc.at("ellipsoid");
   std::optional<geodesy::Ellipsoid> named;
@@ -201,20 +215,73 @@ void read_ellipsoid(const json& doc, const std::string& source, geodesy::Network
     } catch (const Error& x) {
       fail(where, x.what());
     }
-    e = named->name();
+    e = named->name() + " (a " + format_shortest(named->a_m()) + " m, 1/f " + format_shortest(named->rf()) + ")";
   } else {
     e = text(doc, "ellipsoid", source);
     named = geodesy::named_ellipsoid(e);
     if (!named) fail(source + ".ellipsoid", "'" + e + "': expected one of " + geodesy::named_ellipsoid_list() + ", or {\"a_m\", \"rf\"}");
   }
   const geodesy::Ellipsoid given = *named;
-  if (net.frame) {
-    if (const auto implied = geodesy::implied_ellipsoid(*net.frame); implied && !(*implied == given)) {
-      fail(source + ".ellipsoid", e + " contradicts the frame " + net.frame->to_string() + ", which is on " + implied->name());
+  if (implied && !same_ellipsoid(implied->ellipsoid, given)) {
+    fail(source + ".ellipsoid",
+         e + " contradicts " + implied->by + ", which is on " + implied->ellipsoid.name() + " (a " +
+             format_shortest(implied->ellipsoid.a_m()) + " m, 1/f " + format_shortest(implied->ellipsoid.rf()) +
+             "); give one of them, or both agreeing");
+  }
+  net.ellipsoid = implied ? implied->ellipsoid : given;
+  net.ellipsoid_stated = true;
+}
+
+// The ellipsoid of the network's frame: the catalog's, else PROJ's.
+std::optional<ImpliedEllipsoid> frame_implied(const geodesy::Frame& f, const std::string& where) {
+  const auto e = frame_ellipsoid(f, where);
+  if (!e) return std::nullopt;
+  return ImpliedEllipsoid{e->ellipsoid, "the frame " + f.to_string() + " (" + e->source + ")"};
+}
+
+// The input's "crs": a geographic or geocentric CRS PROJ knows (EPSG:4272,
+// WKT, PROJJSON) whose datum the coordinates are on. It gives the ellipsoid,
+// and the frame when the input names none: the catalog's frame of its datum,
+// else the CRS's name as a frame name ("NZGD49").
+void read_crs(const json& doc, const std::string& source, std::optional<ImpliedEllipsoid>& implied, geodesy::Network& net) {
+  const std::string where = source + ".crs";
+  const Crs crs = Crs::parse(text(doc, "crs", source), where);
+  const CrsDescription& d = crs.description();
+  if (d.type != "geographic 2D" && d.type != "geographic 3D" && d.type != "geocentric") {
+    fail(where, crs.display_name() + " is a " + d.type +
+                    " CRS; expected a geographic or geocentric one (the stations are latitude, longitude and "
+                    "ellipsoidal height, or ECEF)");
+  }
+  geodesy::Ellipsoid e = geodesy::Ellipsoid::grs80();
+  try {
+    e = crs_ellipsoid(crs);
+  } catch (const Error& x) {
+    fail(where, crs.display_name() + ": " + x.what());
+  }
+  if (implied && !same_ellipsoid(implied->ellipsoid, e)) {
+    fail(where, crs.display_name() + " is on " + e.name() + ", which contradicts " + implied->by + ", which is on " +
+                    implied->ellipsoid.name());
+  }
+  // A frame of the catalog and a CRS on another datum contradict each other
+  // even on one ellipsoid (GDA2020 and EPSG:4283, GDA94).
+  if (net.frame && (!d.catalog_frame.empty() || geodesy::implied_ellipsoid(*net.frame)) && d.catalog_frame != net.frame->name()) {
+    fail(where, crs.display_name() + " is on the datum '" + d.datum + "'" +
+                    (d.catalog_frame.empty() ? std::string() : " (frame " + d.catalog_frame + ")") + ", not the frame " +
+                    net.frame->to_string());
+  }
+  if (!net.frame) {
+    std::string name;  // a frame name has no spaces: "Pulkovo 1942" is Pulkovo1942
+    for (char ch : !d.catalog_frame.empty() ? d.catalog_frame : d.name) {
+      if (ch != ' ') name += ch;
+    }
+    if (crs.epoch()) name += "@" + geodesy::format_decimal_year(*crs.epoch());
+    try {
+      net.frame = geodesy::Frame::parse(name, where);
+    } catch (const Error&) {
+      // A CRS whose name is no frame name: the network has no frame (adjust asks for --frame).
     }
   }
-  net.ellipsoid = given;
-  net.ellipsoid_stated = true;
+  implied = ImpliedEllipsoid{e, "the CRS " + crs.display_name()};
 }
 
 // A local network's "local": its axes, angle sense and dimensions.
@@ -485,7 +552,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
 void read_network_json(std::string_view text_in, std::string_view source_in, geodesy::Network& into) {
   const std::string source(source_in);
   const json doc = parse_json_strict<json>(text_in, source);
-  only_keys(doc, source, {"schema", "space", "frame", "ellipsoid", "local", "stations", "measurements", "description"});
+  only_keys(doc, source, {"schema", "space", "frame", "crs", "ellipsoid", "local", "stations", "measurements", "description"});
   if (text(doc, "schema", source) != "geoanchor.network/1") {
     fail(source + ".schema", "'" + doc.at("schema").get<std::string>() + "': expected geoanchor.network/1");
   }
@@ -503,9 +570,17 @@ void read_network_json(std::string_view text_in, std::string_view source_in, geo
       fail(source + ".frame", f.to_string() + " but another input is in " + net.frame->to_string());
     }
     net.frame = f;
-    if (const auto e = geodesy::implied_ellipsoid(f)) net.ellipsoid = *e, net.ellipsoid_stated = true;
   }
-  if (doc.contains("ellipsoid")) read_ellipsoid(doc, source, net);
+  if (doc.contains("crs")) {
+    if (this_space == geodesy::NetworkSpace::local) fail(source + ".crs", "a local network has no CRS");
+  }
+  // The ellipsoid: the frame's (catalog, else PROJ), the CRS's, the input's
+  // "ellipsoid"; where several are given they agree.
+  std::optional<ImpliedEllipsoid> implied;
+  if (net.frame) implied = frame_implied(*net.frame, source + (doc.contains("frame") ? ".frame" : ""));
+  if (doc.contains("crs")) read_crs(doc, source, implied, net);
+  if (implied) net.ellipsoid = implied->ellipsoid, net.ellipsoid_stated = true;
+  if (doc.contains("ellipsoid")) read_ellipsoid(doc, source, implied, net);
   read_local(doc, source, this_space, net);
 
   NetworkBuilder b(net);

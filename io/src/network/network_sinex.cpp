@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "geoanchor/base/error.hpp"
+#include "geoanchor/crs/frame_ellipsoid.hpp"
 #include "geoanchor/geodesy/frame.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/base/number_text.hpp"
@@ -351,8 +352,8 @@ class Reader {
     if (!net_.frame) {
       // The first input that names a frame gives the network its own (as DynaML does).
       net_.frame = msr.frame;
-      if (const auto e = geodesy::implied_ellipsoid(*net_.frame)) {
-        net_.ellipsoid = *e;
+      if (const auto e = frame_ellipsoid(*net_.frame, "--sinex-frame")) {
+        net_.ellipsoid = e->ellipsoid;
         net_.ellipsoid_stated = true;
       }
     }
