@@ -18,6 +18,7 @@
 #include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/frame_catalog.hpp"
 #include "geoanchor/io/network/network_input.hpp"
+#include "accuracy.hpp"
 #include "gvx_text.hpp"
 
 namespace geoanchor::io {
@@ -112,7 +113,7 @@ TEST(NetworkGvx, VectorIsABaselineWithItsCovariance) {
   Eigen::Matrix3d expected;
   expected << 4e-6, 3e-6, -2e-6, 3e-6, 9e-6, 1.2e-6, -2e-6, 1.2e-6, 16e-6;
   constexpr double kCov_m2 = 1e-18;  // the products above are exact to a few ulps of 1e-6
-  EXPECT_LT((m.covariance - expected).cwiseAbs().maxCoeff(), kCov_m2) << m.covariance;
+  EXPECT_LT(testing::max_abs_component(m.covariance - expected), kCov_m2) << m.covariance;  // NaN fails
   const std::string t = base();
   const auto line = std::count(t.begin(), t.begin() + static_cast<std::ptrdiff_t>(t.find("<GNSS_VECTOR>")), '\n') + 1;
   EXPECT_EQ(m.source, "net.gvx:" + std::to_string(line));

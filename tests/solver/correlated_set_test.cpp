@@ -31,6 +31,7 @@
 #include "geoanchor/base/error.hpp"
 #include "geoanchor/geodesy/network.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
+#include "accuracy.hpp"
 
 namespace geoanchor::solver {
 namespace {
@@ -333,7 +334,7 @@ TEST(CorrelatedSet, ASetWithoutCorrelationsIsItsObservationsAdjustedOneByOne) {
   for (const char* id : {"P", "Q"}) {
     EXPECT_LE((station(rs, id).position - station(ra, id).position).norm(), kSameSums_m) << id;
     const Eigen::Matrix3d& cs = station(rs, id).covariance_m2;
-    EXPECT_LE((cs - station(ra, id).covariance_m2).cwiseAbs().maxCoeff(), cs.cwiseAbs().maxCoeff() * kSameSumsRelative) << id;
+    EXPECT_LE(testing::max_abs_component(cs - station(ra, id).covariance_m2), testing::max_abs_component(cs) * kSameSumsRelative) << id;
   }
   // The set's observations have the residuals, redundancy numbers and
   // w-tests they have as measurements of their own (the measurements in
