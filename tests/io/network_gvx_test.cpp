@@ -33,12 +33,7 @@ constexpr double kEcef_m = 1e-8;
 // The decimal year of a GPS second, to 3e-11 yr (1 ms).
 constexpr double kEpoch_yr = 3e-11;
 
-Eigen::Vector3d truth(const GvxPoint& p) {
-  static const GeographicLib::Geocentric grs80(6378137.0, 1.0 / 298.257222101);  // GRS 1980 (NAD 83's)
-  Eigen::Vector3d x;
-  grs80.Forward(p.lat_deg, p.lon_deg, p.h_m, x.x(), x.y(), x.z());
-  return x;
-}
+Eigen::Vector3d truth(const GvxPoint& p) { return testing::gvx_ecef(p); }
 
 const std::vector<GvxPoint> kPoints = {
     {"P1", "BASE1", 40.0, -105.25, 1650.0, "Keyed-in", "E1"},

@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include <GeographicLib/Geocentric.hpp>
+
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -135,6 +137,15 @@ inline std::string gvx_document(const std::vector<GvxPoint>& points, const std::
   for (const auto& p : points) out += gvx_point(p);
   for (const auto& v : vectors) out += gvx_vector(v);
   return out + "  <REMARK>end of file</REMARK>\n</GVX>\n";
+}
+
+// A point's geocentric position on GRS 1980 (NAD 83's ellipsoid), by
+// GeographicLib: the truth both GVX tests compare with.
+inline Eigen::Vector3d gvx_ecef(const GvxPoint& p) {
+  static const GeographicLib::Geocentric grs80(6378137.0, 1.0 / 298.257222101);
+  Eigen::Vector3d x;
+  grs80.Forward(p.lat_deg, p.lon_deg, p.h_m, x.x(), x.y(), x.z());
+  return x;
 }
 
 }  // namespace geoanchor::testing

@@ -36,12 +36,7 @@ using testing::gvx_number;
 constexpr double kSameAdjustment_m = 1e-9;
 constexpr double kSameVtpvRelative = 1e-9;
 
-Eigen::Vector3d ecef(const GvxPoint& p) {
-  static const GeographicLib::Geocentric grs80(6378137.0, 1.0 / 298.257222101);  // GRS 1980 (NAD 83's)
-  Eigen::Vector3d x;
-  grs80.Forward(p.lat_deg, p.lon_deg, p.h_m, x.x(), x.y(), x.z());
-  return x;
-}
+Eigen::Vector3d ecef(const GvxPoint& p) { return testing::gvx_ecef(p); }
 
 struct Truth {
   std::vector<GvxPoint> points;

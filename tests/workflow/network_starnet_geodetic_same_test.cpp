@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "dms_text.hpp"
 #include "geoanchor/base/error.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 #include "geoanchor/workflow/adjust.hpp"
@@ -61,16 +62,7 @@ std::string dms(double deg) {
   std::snprintf(buf, sizeof buf, "%s%ld-%02ld-%02ld", deg < 0 ? "-" : "", s / 3600, (s / 60) % 60, s % 60);
   return buf;
 }
-std::string dms_fine(double deg) {  // DDD-MM-SS.ssssss for observed angles
-  long micro = std::lround(deg * 3600.0 * 1e6);
-  const long d = micro / 3600000000L;
-  micro -= d * 3600000000L;
-  const long m = micro / 60000000L;
-  micro -= m * 60000000L;
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%ld-%02ld-%09.6f", d, m, static_cast<double>(micro) * 1e-6);
-  return buf;
-}
+std::string dms_fine(double deg) { return testing::dms_micro_text(deg); }  // DDD-MM-SS.ssssss for observed angles
 
 struct Files {
   std::string anchor, dat, json;

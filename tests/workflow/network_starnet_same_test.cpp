@@ -15,6 +15,7 @@
 #include <numbers>
 #include <string>
 
+#include "dms_text.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 #include "geoanchor/workflow/adjust.hpp"
 #include "temp_folder.hpp"
@@ -45,17 +46,7 @@ double horizontal(const std::string& from, const std::string& to) {
 }
 
 // Decimal degrees as DDD-MM-SS.ssssss, shared by both files.
-std::string dms(double deg) {
-  deg = std::fmod(deg + 360.0, 360.0);
-  long micro = std::lround(deg * 3600.0 * 1e6);  // micro-arc-seconds
-  const long d = micro / 3600000000L;
-  micro -= d * 3600000000L;
-  const long m = micro / 60000000L;
-  micro -= m * 60000000L;
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%ld-%02ld-%09.6f", d, m, static_cast<double>(micro) * 1e-6);
-  return buf;
-}
+std::string dms(double deg) { return testing::dms_micro_text(std::fmod(deg + 360.0, 360.0)); }
 std::string fixed(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.6f", v);
