@@ -7,7 +7,8 @@
 //  - GNU Gama's Jezerka with correlated angles (observation sets), and the
 //    same network as directions;
 //  - DynAdjust's GNSS sample network (DynaML; baselines in ITRF2008 and
-//    ITRF2014 at their epochs brought to GDA2020).
+//    ITRF2014 at their epochs brought to GDA2020);
+//  - DynAdjust's urban sample network (DNA text) with its geoid file.
 
 #include <gtest/gtest.h>
 
@@ -22,11 +23,15 @@
 
 #include <Eigen/LU>
 
+#include "accuracy.hpp"
 #include "temp_folder.hpp"
 #include "test_support.hpp"
 #include "geoanchor/base/error.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
 #include "geoanchor/workflow/adjust.hpp"
+#include "geoanchor/workflow/value_text.hpp"
+#include "geoanchor/geodesy/geocentric.hpp"
+#include "geoanchor/geodesy/local_frame.hpp"
 
 namespace {
 const std::string kDir = std::string(GEOANCHOR_FIXTURES_DIR) + "/networks/";
@@ -256,6 +261,97 @@ TEST(NetworkPublished, DynAdjustGnssSample) {
     ++compared;
   }
   EXPECT_EQ(compared, 43u);
+}
+
+
+// DynAdjust's urban sample network (DNA text, 149 stations, 1 182
+// observations of every terrestrial type) with its per-station geoid file,
+// against the adjustment DynAdjust publishes (urban.phased.adj.expected).
+// That file was written by DynAdjust 1.0.3 (October 2020), which reduced
+// zenith distances (V) for the deflection of the vertical with the wrong
+// sign: DynAdjust issue #160 (GeoscienceAustralia/DynAdjust, "Deflection of
+// vertical correction incorrectly applied to zenith angles", 2021-07-07:
+// "The correction for the deflection of the vertical of zenith angles (type
+// V) should be added instead of subtracted"), fixed in DynAdjust's commit
+// 36b42d8 (2021-07-14); the sample's expected file was not written again.
+// geoanchor reduces them as the fix and the literature do (ζ = z + ξ cos α +
+// η sin α). To compare with the published numbers, the test gives
+// geoanchor the zenith distances 1.0.3 effectively adjusted: each measured z
+// less 2(ξ cos α + η sin α) at its instrument, so that geoanchor's
+// reduction lands where 1.0.3's did. Nothing else is changed.
+TEST(NetworkPublished, DynAdjustUrbanSampleWithItsGeoidFile) {
+  workflow::AdjustRequest request;
+  request.inputs = {kDir + "dynadjust/urban-network.stn", kDir + "dynadjust/urban-network.msr"};
+  const workflow::NetworkGeoid geoid = workflow::parse_network_geoid(kDir + "dynadjust/urban-network.geo", "--geoid");
+  ASSERT_TRUE(geoid.stations);
+  request.station_geoid = geoid.stations;
+  AdjustOptions o;
+  request.options = o;
+  workflow::PreparedNetwork prepared = workflow::prepare_network(request);
+  geodesy::Network& net = prepared.network;
+  std::size_t emulated = 0;
+  for (auto& m : net.measurements) {
+    if (m.kind != geodesy::MeasurementKind::zenith_angle) continue;
+    const auto& from = net.stations[m.stations[0]];
+    const auto& to = net.stations[m.stations[1]];
+    ASSERT_TRUE(from.geoid) << from.id;
+    const geodesy::GeodeticPosition g =
+        geodesy::geodetic_from_ecef(geodesy::Ellipsoid::grs80(), geodesy::EcefPosition(from.position.x(), from.position.y(), from.position.z()));
+    const Eigen::Vector3d enu = geodesy::enu_from_ecef_rotation(g.lat, g.lon) * (to.position - from.position);
+    const double alpha = std::atan2(enu.x(), enu.y());
+    const auto& d = from.geoid->deflection;
+    m.value(0) -= 2.0 * (d.xi_rad * std::cos(alpha) + d.eta_rad * std::sin(alpha));
+    ++emulated;
+  }
+  EXPECT_EQ(emulated, 300u);
+  const AdjustmentResult r = adjust_network(net, o);
+  ASSERT_TRUE(r.converged);
+  // DynAdjust: 440 unknowns, 1 182 measurements, dof 742, χ² 627.05,
+  // "Rigorous Sigma Zero" (the variance factor) 0.845; it holds every free
+  // station with a 10 m a-priori standard deviation and prints the
+  // measurements with 4 decimals: χ² within 0.3 %.
+  EXPECT_EQ(r.unknowns, 440u);
+  EXPECT_EQ(r.observations, 1182u);
+  EXPECT_EQ(r.dof, 742);
+  constexpr double kDynAdjustVtpvRelative = 3e-3;
+  EXPECT_NEAR(r.vtpv, 627.05, 627.05 * kDynAdjustVtpvRelative);
+  ASSERT_TRUE(r.variance_factor);
+  EXPECT_NEAR(*r.variance_factor, 0.845, 0.845 * kDynAdjustVtpvRelative + 0.0005);
+  // Published coordinates (0.1 mm) and standard deviations (0.1 mm). Measured:
+  // 0.53 mm at worst in 3-D (rms 0.28 mm); standard deviations within 0.05 mm.
+  // As given (the fixed sign), the same stations are up to 28 mm away, 14 mm
+  // with no deflections at all.
+  constexpr double kDynAdjustCoordinate_m = 1.0e-3;
+  constexpr double kDynAdjustSigma_m = 0.06e-3;  // half the printed 0.1 mm, and a little
+  std::ifstream in(kDir + "dynadjust/urban.phased.adj.expected.csv");
+  std::string line;
+  std::size_t compared = 0;
+  double worst_m = 0.0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line.rfind("id,", 0) == 0) continue;
+    std::stringstream ss(line);
+    std::string id, field;
+    std::getline(ss, id, ',');
+    double v[6];
+    for (double& x : v) {
+      std::getline(ss, field, ',');
+      x = std::stod(field);
+    }
+    const AdjustedStation& s = station(r, id);
+    const double apart_m = (s.position - Eigen::Vector3d(v[0], v[1], v[2])).norm();
+    worst_m = testing::nan_max(worst_m, apart_m);
+    EXPECT_LE(apart_m, kDynAdjustCoordinate_m) << id;
+    for (int k = 0; k < 3; ++k) {
+      // A held component's variance is zero to the last bits (either sign).
+      constexpr double kHeldVariance_m2 = 1e-18;
+      const double variance = s.covariance_local_m2(k, k);
+      const double sd = variance < 0.0 && variance > -kHeldVariance_m2 ? 0.0 : std::sqrt(variance);  // NaN stays NaN
+      EXPECT_NEAR(sd, v[3 + k], kDynAdjustSigma_m) << id << " component " << k;
+    }
+    ++compared;
+  }
+  EXPECT_EQ(compared, 149u);
+  EXPECT_LE(worst_m, kDynAdjustCoordinate_m);  // NaN fails
 }
 
 }  // namespace
