@@ -65,6 +65,58 @@ const AdjustedStation& station(const AdjustmentResult& r, const std::string& id)
   throw std::runtime_error("no station " + id);
 }
 
+// DynAdjust's published statistics: unknowns, measurements, dof, χ² and
+// its "Rigorous Sigma Zero" (geoanchor's variance factor). DynAdjust holds
+// every free station with a 10 m a-priori standard deviation and prints
+// measurements with fewer digits: χ² and the variance factor within 0.3 %
+// (and half the variance factor's last printed digit).
+void expect_dynadjust_statistics(const AdjustmentResult& r, std::size_t unknowns, std::size_t observations, int dof, double chi2,
+                                 double variance_factor) {
+  constexpr double kDynAdjustVtpvRelative = 3e-3;
+  EXPECT_EQ(r.unknowns, unknowns);
+  EXPECT_EQ(r.observations, observations);
+  EXPECT_EQ(r.dof, dof);
+  EXPECT_NEAR(r.vtpv, chi2, chi2 * kDynAdjustVtpvRelative);
+  ASSERT_TRUE(r.variance_factor);
+  EXPECT_NEAR(*r.variance_factor, variance_factor, variance_factor * kDynAdjustVtpvRelative + 0.0005);
+}
+
+// DynAdjust's published stations, transcribed (id, X, Y, Z, SD e, n, up),
+// against an adjustment: each within `coordinate_m` in 3-D and each standard
+// deviation within `sigma_m`. Returns how many were compared and the worst
+// 3-D distance (NaN if any was NaN).
+std::pair<std::size_t, double> compare_with_dynadjust(const AdjustmentResult& r, const std::string& expected_csv, double coordinate_m,
+                                                      double sigma_m) {
+  std::ifstream in(kDir + expected_csv);
+  std::string line;
+  std::size_t compared = 0;
+  double worst_m = 0.0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line.rfind("id,", 0) == 0) continue;
+    std::stringstream ss(line);
+    std::string id, field;
+    std::getline(ss, id, ',');
+    double v[6];
+    for (double& x : v) {
+      std::getline(ss, field, ',');
+      x = std::stod(field);
+    }
+    const AdjustedStation& s = station(r, id);
+    const double apart_m = (s.position - Eigen::Vector3d(v[0], v[1], v[2])).norm();
+    worst_m = testing::nan_max(worst_m, apart_m);
+    EXPECT_LE(apart_m, coordinate_m) << id;
+    for (int k = 0; k < 3; ++k) {
+      // A held component's variance is zero to the last bits (either sign).
+      constexpr double kHeldVariance_m2 = 1e-18;
+      const double variance = s.covariance_local_m2(k, k);
+      const double sd = variance < 0.0 && variance > -kHeldVariance_m2 ? 0.0 : std::sqrt(variance);  // NaN stays NaN
+      EXPECT_NEAR(sd, v[3 + k], sigma_m) << id << " component " << k;
+    }
+    ++compared;
+  }
+  return {compared, worst_m};
+}
+
 TEST(NetworkPublished, GamaLevellingStronerA) {
   // sigma-apr 3 mm, sigma-act apriori: Gama's weights are σ_apr²/σ², so its
   // vᵀPv is σ_apr² times geoanchor's and its ratio m0/σ_apr is our σ0.
@@ -226,40 +278,15 @@ TEST(NetworkPublished, DynAdjustGnssSample) {
   // As given (the default: flagged, none removed), as DynAdjust's
   // simultaneous run adjusts it.
   const AdjustmentResult r = adjust_file({"dynadjust/gnss-networkstn.xml", "dynadjust/gnss-networkmsr.xml"});
-  EXPECT_EQ(r.observations, 417u);
-  EXPECT_EQ(r.unknowns, 129u);
-  EXPECT_EQ(r.dof, 288);
   // DynAdjust: χ² 336.64, variance factor 1.169, from the DNA text twin
-  // whose VCVs carry fewer digits, with 10 m pseudo-observations on every
-  // free station: within 0.3 % of ours.
-  constexpr double kDynAdjustVtpvRelative = 3e-3;
-  EXPECT_NEAR(r.vtpv, 336.64, 336.64 * kDynAdjustVtpvRelative);
-  ASSERT_TRUE(r.variance_factor);
-  EXPECT_NEAR(*r.variance_factor, 1.169, 1.169 * kDynAdjustVtpvRelative);
+  // whose VCVs carry fewer digits.
+  expect_dynadjust_statistics(r, 129, 417, 288, 336.64, 1.169);
   // Published coordinates (0.1 mm) and standard deviations (0.1 mm): the
   // bounds docs/commands/adjust.md claims (0.17 mm measured at most).
   constexpr double kDynAdjustCoordinate_m = 0.2e-3;
   constexpr double kDynAdjustSigma_m = 0.06e-3;  // half the printed 0.1 mm, and a little
-  std::ifstream in(kDir + "dynadjust/gnss.simult.adj.expected.csv");
-  std::string line;
-  std::size_t compared = 0;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#' || line.rfind("id,", 0) == 0) continue;
-    std::stringstream ss(line);
-    std::string id, field;
-    std::getline(ss, id, ',');
-    double v[6];
-    for (double& x : v) {
-      std::getline(ss, field, ',');
-      x = std::stod(field);
-    }
-    const AdjustedStation& s = station(r, id);
-    EXPECT_LE((s.position - Eigen::Vector3d(v[0], v[1], v[2])).norm(), kDynAdjustCoordinate_m) << id;
-    for (int k = 0; k < 3; ++k) {
-      EXPECT_NEAR(std::sqrt(s.covariance_local_m2(k, k)), v[3 + k], kDynAdjustSigma_m) << id << " component " << k;
-    }
-    ++compared;
-  }
+  const auto [compared, worst_m] = compare_with_dynadjust(r, "dynadjust/gnss.simult.adj.expected.csv", kDynAdjustCoordinate_m, kDynAdjustSigma_m);
+  EXPECT_LE(worst_m, kDynAdjustCoordinate_m);  // NaN fails
   EXPECT_EQ(compared, 43u);
 }
 
@@ -307,49 +334,15 @@ TEST(NetworkPublished, DynAdjustUrbanSampleWithItsGeoidFile) {
   const AdjustmentResult r = adjust_network(net, o);
   ASSERT_TRUE(r.converged);
   // DynAdjust: 440 unknowns, 1 182 measurements, dof 742, χ² 627.05,
-  // "Rigorous Sigma Zero" (the variance factor) 0.845; it holds every free
-  // station with a 10 m a-priori standard deviation and prints the
-  // measurements with 4 decimals: χ² within 0.3 %.
-  EXPECT_EQ(r.unknowns, 440u);
-  EXPECT_EQ(r.observations, 1182u);
-  EXPECT_EQ(r.dof, 742);
-  constexpr double kDynAdjustVtpvRelative = 3e-3;
-  EXPECT_NEAR(r.vtpv, 627.05, 627.05 * kDynAdjustVtpvRelative);
-  ASSERT_TRUE(r.variance_factor);
-  EXPECT_NEAR(*r.variance_factor, 0.845, 0.845 * kDynAdjustVtpvRelative + 0.0005);
+  // variance factor 0.845.
+  expect_dynadjust_statistics(r, 440, 1182, 742, 627.05, 0.845);
   // Published coordinates (0.1 mm) and standard deviations (0.1 mm). Measured:
   // 0.53 mm at worst in 3-D (rms 0.28 mm); standard deviations within 0.05 mm.
   // As given (the fixed sign), the same stations are up to 28 mm away, 14 mm
   // with no deflections at all.
   constexpr double kDynAdjustCoordinate_m = 1.0e-3;
   constexpr double kDynAdjustSigma_m = 0.06e-3;  // half the printed 0.1 mm, and a little
-  std::ifstream in(kDir + "dynadjust/urban.phased.adj.expected.csv");
-  std::string line;
-  std::size_t compared = 0;
-  double worst_m = 0.0;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#' || line.rfind("id,", 0) == 0) continue;
-    std::stringstream ss(line);
-    std::string id, field;
-    std::getline(ss, id, ',');
-    double v[6];
-    for (double& x : v) {
-      std::getline(ss, field, ',');
-      x = std::stod(field);
-    }
-    const AdjustedStation& s = station(r, id);
-    const double apart_m = (s.position - Eigen::Vector3d(v[0], v[1], v[2])).norm();
-    worst_m = testing::nan_max(worst_m, apart_m);
-    EXPECT_LE(apart_m, kDynAdjustCoordinate_m) << id;
-    for (int k = 0; k < 3; ++k) {
-      // A held component's variance is zero to the last bits (either sign).
-      constexpr double kHeldVariance_m2 = 1e-18;
-      const double variance = s.covariance_local_m2(k, k);
-      const double sd = variance < 0.0 && variance > -kHeldVariance_m2 ? 0.0 : std::sqrt(variance);  // NaN stays NaN
-      EXPECT_NEAR(sd, v[3 + k], kDynAdjustSigma_m) << id << " component " << k;
-    }
-    ++compared;
-  }
+  const auto [compared, worst_m] = compare_with_dynadjust(r, "dynadjust/urban.phased.adj.expected.csv", kDynAdjustCoordinate_m, kDynAdjustSigma_m);
   EXPECT_EQ(compared, 149u);
   EXPECT_LE(worst_m, kDynAdjustCoordinate_m);  // NaN fails
 }
