@@ -40,6 +40,9 @@ std::vector<CLI::Option*> add_network_options(CLI::App* cmd, NetworkOptions& o) 
       cmd->add_option("--estimate-helmert", o.estimate_helmert,
                       "GROUP[:helmert7|helmert14]: a Helmert from the datum of a group of GNSS measurements (their 'group', or an input "
                       "file) to the network's frame, estimated with the stations"),
+      cmd->add_option("--vce", o.vce,
+                      "kind|group|model: estimate a variance factor per group of measurements (by kind, by their 'group', or by "
+                      "their error model) and adjust with the covariances so scaled"),
   };
 }
 
@@ -80,6 +83,13 @@ workflow::AdjustRequest network_request(const std::vector<std::string>& inputs, 
         id += c;
       }
     }
+  }
+  if (o.vce) {
+    using Groups = solver::AdjustOptions::VarianceGroups;
+    if (*o.vce == "kind") so.variance_components = Groups::kind;
+    else if (*o.vce == "group") so.variance_components = Groups::group;
+    else if (*o.vce == "model") so.variance_components = Groups::model;
+    else throw Error(ErrorKind::usage, "E_OPTION", "--vce " + *o.vce + ": expected kind, group or model");
   }
   if (o.geoid) {
     const workflow::NetworkGeoid g = workflow::parse_network_geoid(*o.geoid, "--geoid");

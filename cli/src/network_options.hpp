@@ -36,12 +36,13 @@ struct NetworkOptions {
   double convergence_m = 1e-5;
   int max_iterations = 25;
   std::optional<std::string> estimate_helmert;
+  std::optional<std::string> vce;  // kind|group|model
 };
 
 // --frame, --sinex-frame, --constrain, --free, --inner-constraints,
 // --confidence, --alpha, --max-outlier-share, --remove-outliers,
 // --no-snooping, --geoid,
-// --refraction, --convergence, --max-iterations, --estimate-helmert. Returns
+// --refraction, --convergence, --max-iterations, --estimate-helmert, --vce. Returns
 // the options added (to tell which were given).
 std::vector<CLI::Option*> add_network_options(CLI::App* cmd, NetworkOptions& o);
 

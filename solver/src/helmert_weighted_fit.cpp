@@ -24,8 +24,6 @@ namespace {
 
 constexpr double kCoincidentSpread_m = 1.0; // RELIABILITY #4
 constexpr double kCollinearRatio = 1e-6;    // second/first singular value of the source spread
-constexpr int kMaxVceIterations = 50;
-constexpr double kVceTolerance = 1e-5;
 
 // The whitened residual's cofactor I ∓ A N⁻¹ Aᵀ: − in the fit, + for a
 // point tested against it (a prediction).

@@ -32,6 +32,7 @@
 #include "network_problem.hpp"
 #include "network_singularity.hpp"
 #include "network_station_statistics.hpp"
+#include "network_vce.hpp"
 #include "point_statistics.hpp"
 #include "sparse/sparse_factor.hpp"
 
@@ -417,7 +418,7 @@ void conclude(const NetworkProblem& p, const std::vector<std::string>& datum_war
                                                                 "standard deviations allow"
                                                               : "low: the residuals are smaller than the a-priori standard "
                                                                 "deviations suggest (too pessimistic?)") +
-                              " (variance factor " + format_shortest(result.variance_factor.value_or(kNaN)) + ")");
+                              (result.variance_factor ? " (variance factor " + format_fixed(*result.variance_factor, 4) + ")" : std::string()));
   }
   result.converged = true;
 }
@@ -471,6 +472,11 @@ AdjustmentResult adjust_placed(const geodesy::Network& network, const AdjustOpti
 }  // namespace
 
 AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOptions& o) {
+  if (o.variance_components != AdjustOptions::VarianceGroups::none) {
+    return adjust_with_variance_components(network, o, [](const geodesy::Network& n, const AdjustOptions& once) {
+      return adjust_network(n, once);
+    });
+  }
   refuse_empty(network);
   refuse_malformed_sets(network);
   std::size_t unplaced = 0;

@@ -494,8 +494,24 @@ std::string datum_in_words(const NetworkProblem& p) {
     return "free network: " + list + " held by inner constraints over " + std::to_string(p.inner.size()) + " station" +
            (p.inner.size() == 1 ? "" : "s");
   }
+  // Positions measured with their covariance (GNSS point clusters) hold
+  // the datum as weighted constraints do: say so, or "0 fixed, 0 held"
+  // reads as a network held by nothing.
+  std::size_t clusters = 0;
+  std::vector<char> positioned(net.stations.size(), 0);
+  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
+    const auto& m = net.measurements[mi];
+    if (!p.active[mi] || m.kind != geodesy::MeasurementKind::gnss_points) continue;
+    ++clusters;
+    for (std::size_t st : m.stations) positioned[st] = 1;
+  }
+  const auto points = static_cast<std::size_t>(std::count(positioned.begin(), positioned.end(), 1));
+  const std::string by_positions =
+      clusters == 0 ? ""
+                    : "; positions of " + std::to_string(points) + " station" + (points == 1 ? "" : "s") + " measured in " +
+                          std::to_string(clusters) + " GNSS point cluster" + (clusters == 1 ? "" : "s") + " with their covariance";
   return std::to_string(fixed) + " coordinate component" + (fixed == 1 ? "" : "s") + " fixed, " +
-         std::to_string(weighted) + " held with a standard deviation" +
+         std::to_string(weighted) + " held with a standard deviation" + by_positions +
          (p.free ? " (free network: the measurements define the datum)" : "");
 }
 

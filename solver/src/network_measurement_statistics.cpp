@@ -68,8 +68,8 @@ bool measure(const NetworkProblem& p, const NormalFactor& f, const MeasurementRe
     return true;
   }
   const MeasurementRows r = p.linearize(mi);
-  am.adjusted = r.computed;
   am.residual = -misclosure(m, r.computed);  // adjusted − observed
+  am.adjusted = adjusted_value(m, am.residual);
   // A Q Aᵀ over the measurement's unknowns, from the selected inverse.
   const std::size_t nu = r.unknowns.size();
   Eigen::MatrixXd q(static_cast<Eigen::Index>(nu), static_cast<Eigen::Index>(nu));

@@ -416,6 +416,29 @@ StationState station_state(const geodesy::Network& net, const geodesy::Geocentri
   return s;
 }
 
+Eigen::VectorXd adjusted_value(const geodesy::NetworkMeasurement& m, const Eigen::VectorXd& residual) {
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  Eigen::VectorXd v = m.value + residual;
+  for (Eigen::Index k = 0; k < v.size(); ++k) {
+    switch (geodesy::component_kind(m, k)) {
+      case MeasurementKind::direction:
+      case MeasurementKind::horizontal_angle:
+      case MeasurementKind::azimuth:
+      case MeasurementKind::astronomic_azimuth:
+        v(k) -= kTwoPi * std::floor(v(k) / kTwoPi);  // [0, 2π)
+        if (v(k) >= kTwoPi) v(k) = 0.0;               // −1e-17 rounds to 2π
+        break;
+      case MeasurementKind::geodetic_longitude:
+      case MeasurementKind::astronomic_longitude:
+        v(k) = wrap(v(k));  // (−π, π]
+        break;
+      default:
+        break;
+    }
+  }
+  return v;
+}
+
 Eigen::VectorXd misclosure(const geodesy::NetworkMeasurement& m, const Eigen::VectorXd& computed) {
   Eigen::VectorXd r = m.value - computed;
   for (Eigen::Index k = 0; k < r.size(); ++k) {

@@ -75,6 +75,11 @@ Evaluation evaluate(const geodesy::NetworkMeasurement& m, const ModelContext& c)
 
 // observed − computed, with angles (an observation set's angular parts)
 // brought to (−π, π].
+// The adjusted value of a measurement: observed + residual, an angle on the
+// circle (direction, horizontal angle, azimuth) in [0, 2π) and a longitude
+// in (−π, π], as the observed values are given (a direction set's computed
+// value carries the set's orientation and may lie anywhere).
+Eigen::VectorXd adjusted_value(const geodesy::NetworkMeasurement& m, const Eigen::VectorXd& residual);
 Eigen::VectorXd misclosure(const geodesy::NetworkMeasurement& m, const Eigen::VectorXd& computed);
 
 // Whether the kind's values are angles (radians).

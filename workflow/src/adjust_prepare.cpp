@@ -1,6 +1,6 @@
 // `geoanchor adjust` as a library (adjust.hpp): the network prepared for
-// the solver (inputs read, GNSS solution types, variance scales, frames, the
-// Helmert group, constraints). Its outputs, report and Helmert transform
+// the solver (inputs read, GNSS solution types, variance scales, frames,
+// error models, the Helmert group, constraints). Its outputs, report and Helmert transform
 // file are in adjust_outputs.cpp, adjust_report.cpp, adjust_helmert_file.cpp.
 
 #include "geoanchor/workflow/adjust.hpp"
@@ -18,6 +18,7 @@
 #include "geoanchor/geodesy/local_frame.hpp"
 #include "geoanchor/base/number_text.hpp"
 #include "geoanchor/io/network/network_input.hpp"
+#include "geoanchor/solver/error_models.hpp"
 
 namespace geoanchor::workflow {
 namespace {
@@ -448,6 +449,16 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
     throw Error(ErrorKind::usage, "E_OPTION", "--frame " + *request.frame + ": the network is local (" + net.source_name + "): it has no frame");
   } else if (request.estimate_helmert) {
     throw Error(ErrorKind::usage, "E_OPTION", "--estimate-helmert: the network is local (" + net.source_name + "): it has no frame to relate a datum to");
+  }
+  if (!net.error_models.empty()) {
+    // The instruments' error models, from the geometry in the network's
+    // frame (solver/error_models.hpp).
+    solver::apply_error_models(net);
+    std::size_t modelled = 0;
+    for (const auto& m : net.measurements) modelled += m.error_model ? 1u : 0u;
+    std::string names;
+    for (const auto& e : net.error_models) names += (names.empty() ? "" : ", ") + e.name;
+    p.notes.push_back("error models " + names + " added to the covariances of " + std::to_string(modelled) + " measurement(s)");
   }
   apply_constraints(request, p);
   p.refraction_k = request.options.refraction_k;

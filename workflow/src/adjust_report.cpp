@@ -17,6 +17,80 @@ namespace geoanchor::workflow {
 using namespace adjust_detail;
 using geodesy::NetworkSpace;
 
+namespace {
+
+// The adjusted coordinates as the text report lists them: geodetic
+// latitude and longitude (degrees, 9 decimals: 0.1 mm), ellipsoidal height
+// and ECEF X, Y, Z (metres, 4 decimals), with the shift from the a-priori
+// position (mm); a local network's x, y, z.
+std::string adjusted_coordinates_text(const geodesy::Network& net, const solver::AdjustmentResult& r) {
+  std::ostringstream out;
+  const bool ellipsoidal = net.space == NetworkSpace::ellipsoidal;
+  if (ellipsoidal) {
+    out << "Adjusted coordinates (" << (net.frame ? net.frame->to_string() : std::string("?")) << ", ellipsoid " << net.ellipsoid.name()
+        << "; latitude, longitude in degrees, h ellipsoidal, X Y Z ECEF in metres; shift from the a-priori position)\n";
+    out << "  id            latitude       longitude          h (m)          X (m)           Y (m)           Z (m)   shift (mm)\n";
+  } else {
+    out << "Adjusted coordinates (local, axes " << net.axes.name() << "; metres; shift from the a-priori position)\n";
+    out << "  id                   x (m)           y (m)           z (m)   shift (mm)\n";
+  }
+  for (const auto& s : r.stations) {
+    if (!s.used) continue;
+    const double shift_mm = 1e3 * (s.position - s.a_priori).norm();
+    char line[240];
+    if (ellipsoidal) {
+      const geodesy::GeodeticPosition g =
+          geodesy::geodetic_from_ecef(net.ellipsoid, geodesy::EcefPosition(s.position.x(), s.position.y(), s.position.z()));
+      std::snprintf(line, sizeof line, "  %-12s %14.9f %15.9f %10.4f %15.4f %15.4f %15.4f %10.1f\n", s.id.c_str(), g.lat.deg(),
+                    g.lon.deg(), g.h.m, s.position.x(), s.position.y(), s.position.z(), shift_mm);
+    } else {
+      std::snprintf(line, sizeof line, "  %-12s %15.4f %15.4f %15.4f %10.1f\n", s.id.c_str(), s.position.x(), s.position.y(),
+                    s.position.z(), shift_mm);
+    }
+    out << line;
+  }
+  return out.str();
+}
+
+// --vce: each group's factor, in the text report (empty without).
+std::string variance_components_text(const solver::AdjustmentResult& r) {
+  if (r.variance_components.empty()) return "";
+  std::ostringstream out;
+  out << "Variance components (--vce: each group's a-priori covariances scaled by its factor; " << r.vce_iterations
+      << " adjustments)\n";
+  out << "  group                                  measurements  redundancy    factor  sigma\n";
+  for (const auto& c : r.variance_components) {
+    char line[200];
+    if (c.estimated) {
+      std::snprintf(line, sizeof line, "  %-38s %12zu %11.2f %9.3f  %.3f\n", c.name.c_str(), c.measurements, c.redundancy, c.factor,
+                    c.sigma);
+    } else {
+      std::snprintf(line, sizeof line, "  %-38s %12zu %11.2f   not estimated (factor 1 kept)\n", c.name.c_str(), c.measurements,
+                    c.redundancy);
+    }
+    out << line;
+  }
+  out << "\n";
+  return out.str();
+}
+
+// --vce: the JSON report's variance_components.
+nlohmann::ordered_json variance_components_document(const solver::AdjustmentResult& r) {
+  using nlohmann::ordered_json;
+  ordered_json components = ordered_json::array();
+  for (const auto& c : r.variance_components) {
+    components.push_back({{"group", c.name},
+                          {"measurements", c.measurements},
+                          {"redundancy", c.redundancy},
+                          {"estimated", c.estimated},
+                          {"factor", c.factor},
+                          {"sigma", c.estimated ? ordered_json(c.sigma) : ordered_json(nullptr)}});
+  }
+  return {{"iterations", r.vce_iterations}, {"groups", components}};
+}
+
+}  // namespace
+
 std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
   const auto& net = prepared.network;
   std::ostringstream out;
@@ -40,7 +114,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
   }
   out << "\n";
   out << "Statistics\n";
-  out << "  vtpv = " << format_shortest(r.vtpv) << ", dof = " << r.dof;
+  out << "  vtpv = " << format_fixed(r.vtpv, 3) << ", dof = " << r.dof;
   if (r.variance_factor) out << ", variance factor = " << format_fixed(*r.variance_factor, 4) << ", sigma0 = " << format_fixed(*r.sigma0, 4);
   out << "\n";
   const auto& g = r.global_test;
@@ -50,6 +124,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
         << (g.passed ? "PASSED" : g.failed_high() ? "FAILED (high)" : "FAILED (low)") << "\n";
   }
   out << "  w-tests: critical |w| = " << format_fixed(r.w_critical, 2) << " (alpha " << format_shortest(o.alpha_point) << ")\n\n";
+  out << variance_components_text(r);
   if (prepared.helmert && r.helmert) {
     const HelmertInFileUnits u = helmert_in_file_units(prepared, r);
     out << "Helmert of group " << prepared.helmert->name << ": " << prepared.helmert_frame->to_string() << " -> "
@@ -77,6 +152,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
                   s.ellipse.azimuth_rad * kRadToDeg, s.constraint.c_str());
     out << line;
   }
+  out << "\n" << adjusted_coordinates_text(net, r);
   // The flagged measurements first, in the order data snooping removes them.
   const auto p_text = [](double p) {
     char b[32];
@@ -197,6 +273,7 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
                       {"passed", r.global_test.passed},
                       {"verdict", r.global_test.verdict()},
                       {"confidence", 1.0 - o.alpha}};
+  if (!r.variance_components.empty()) j["variance_components"] = variance_components_document(r);
   if (prepared.helmert && r.helmert) {
     const HelmertInFileUnits u = helmert_in_file_units(prepared, r);
     ordered_json values, sigmas;

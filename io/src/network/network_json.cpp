@@ -85,8 +85,9 @@ double angle_value(const json& m, MeasurementKind kind, const std::string& where
   return v;
 }
 
-// An angle's standard deviation: exactly one of sigma_arcsec, sigma_deg, sigma_cc, sigma_mgon, sigma_rad.
-double angle_sigma(const json& m, const std::string& where) {
+// An angle's standard deviation: exactly one of sigma_arcsec, sigma_deg,
+// sigma_cc, sigma_mgon, sigma_rad; or none when an error model gives it (0).
+double angle_sigma(const json& m, const std::string& where, bool modelled = false) {
   int given = 0;
   double v = 0.0;
   if (m.contains("sigma_arcsec")) v = number(m, "sigma_arcsec", where) * kArcsec, ++given;
@@ -94,7 +95,11 @@ double angle_sigma(const json& m, const std::string& where) {
   if (m.contains("sigma_cc")) v = number(m, "sigma_cc", where) * kGon / 10000.0, ++given;
   if (m.contains("sigma_mgon")) v = number(m, "sigma_mgon", where) * kGon / 1000.0, ++given;
   if (m.contains("sigma_rad")) v = number(m, "sigma_rad", where), ++given;
-  if (given != 1) fail(where, "expected one of sigma_arcsec, sigma_deg, sigma_cc, sigma_mgon, sigma_rad");
+  if (given == 0 && modelled) return 0.0;
+  if (given != 1) {
+    fail(where, std::string("expected one of sigma_arcsec, sigma_deg, sigma_cc, sigma_mgon, sigma_rad") +
+                    (given == 0 ? " (or an error_model that gives it)" : ""));
+  }
   return positive(v, where + ".sigma");
 }
 
@@ -329,6 +334,17 @@ struct MeasurementInput {
   const json& m;
   const std::string& at;
   NetworkBuilder& b;
+  const geodesy::Network& net;
+
+  // An error model named: its standard deviations may stand for the
+  // measurement's own.
+  bool modelled() const { return m.contains("error_model"); }
+  // A length's standard deviation: sigma_m, or none under an error model (0).
+  double sigma_m() const {
+    if (!m.contains("sigma_m") && modelled()) return 0.0;
+    if (!m.contains("sigma_m")) fail(at + ".sigma_m", "missing (or give an error_model that gives it)");
+    return positive(number(m, "sigma_m", at), at + ".sigma_m");
+  }
 
   std::size_t station(const char* key) const { return b.reference(text(m, key, at), at + "." + key); }
   void common(geodesy::NetworkMeasurement& x) const {
@@ -338,9 +354,21 @@ struct MeasurementInput {
       x.ignore = m.at("ignore").get<bool>();
     }
     if (m.contains("group")) x.group = text(m, "group", at);
+    if (modelled()) {
+      const std::string name = text(m, "error_model", at);
+      std::string names;
+      for (std::size_t k = 0; k < net.error_models.size(); ++k) {
+        if (net.error_models[k].name == name) x.error_model = k;
+        names += (names.empty() ? "" : ", ") + net.error_models[k].name;
+      }
+      if (!x.error_model) {
+        fail(at + ".error_model", "'" + name + "' names no error model of the file" +
+                                      (names.empty() ? std::string(" (it has no error_models)") : "; expected one of " + names));
+      }
+    }
   }
   std::set<std::string> with(std::set<std::string> keys) const {
-    const std::set<std::string> base = {"kind", "ignore", "group", "description"};
+    const std::set<std::string> base = {"kind", "ignore", "group", "description", "error_model"};
     keys.insert(base.begin(), base.end());
     return keys;
   }
@@ -413,8 +441,10 @@ void read_gnss(const MeasurementInput& in, const std::string& kind, geodesy::Net
     for (std::size_t k = 0; k < blocks.size(); ++k) {
       x.covariance.block<3, 3>(static_cast<Eigen::Index>(3 * k), static_cast<Eigen::Index>(3 * k)) = blocks[k];
     }
+  } else if (in.modelled()) {
+    x.covariance = Eigen::MatrixXd::Zero(n, n);  // the error model's alone
   } else {
-    fail(at, "no covariance: give cov_m2 (" + std::to_string(n) + "×" + std::to_string(n) + ", m²) or sigma_m");
+    fail(at, "no covariance: give cov_m2 (" + std::to_string(n) + "×" + std::to_string(n) + ", m²), sigma_m or an error_model");
   }
   if (m.contains("frame")) x.frame = geodesy::Frame::parse(text(m, "frame", at), at + ".frame");
 }
@@ -444,12 +474,65 @@ void read_direction_set(const MeasurementInput& in, geodesy::Network& net) {
     dir.kind = MeasurementKind::direction;
     dir.stations = {from, b.reference(text(d, "to", w), w + ".to")};
     dir.value = Eigen::VectorXd::Constant(1, angle_value(d, MeasurementKind::direction, w, net.warnings));
-    const double sg = angle_sigma(d, w);
+    const double sg = angle_sigma(d, w, in.modelled());
     dir.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
     dir.set = set;
     if (m.contains("instrument_height_m")) dir.instrument_height_m = number(m, "instrument_height_m", at);
     if (d.contains("target_height_m")) dir.target_height_m = number(d, "target_height_m", w);
     net.measurements.push_back(dir);
+  }
+}
+
+// "error_models": {NAME: {TERM: value, …}, …}: each term a standard
+// deviation >= 0 in the unit its key names, at least one > 0
+// (geodesy::ErrorModel), held in the order of their names. A name another
+// input already defined is refused.
+void read_error_models(const json& doc, const std::string& source, geodesy::Network& net) {
+  if (!doc.contains("error_models")) return;
+  const json& models = doc.at("error_models");
+  if (!models.is_object() || models.empty()) fail(source + ".error_models", "expected an object of named error models");
+  constexpr double kMm = 1e-3, kPpm = 1.0;
+  struct Term {
+    const char* key;
+    double geodesy::ErrorModel::*field;
+    double scale;
+  };
+  const std::array<Term, 14> terms{{{"distance_constant_mm", &geodesy::ErrorModel::distance_constant_m, kMm},
+                                    {"distance_ppm", &geodesy::ErrorModel::distance_ppm, kPpm},
+                                    {"direction_pointing_arcsec", &geodesy::ErrorModel::direction_pointing_rad, kArcsec},
+                                    {"direction_reading_arcsec", &geodesy::ErrorModel::direction_reading_rad, kArcsec},
+                                    {"zenith_pointing_arcsec", &geodesy::ErrorModel::zenith_pointing_rad, kArcsec},
+                                    {"zenith_reading_arcsec", &geodesy::ErrorModel::zenith_reading_rad, kArcsec},
+                                    {"instrument_centring_mm", &geodesy::ErrorModel::instrument_centring_m, kMm},
+                                    {"target_centring_mm", &geodesy::ErrorModel::target_centring_m, kMm},
+                                    {"instrument_height_mm", &geodesy::ErrorModel::instrument_height_m, kMm},
+                                    {"target_height_mm", &geodesy::ErrorModel::target_height_m, kMm},
+                                    {"gnss_horizontal_mm", &geodesy::ErrorModel::gnss_horizontal_m, kMm},
+                                    {"gnss_horizontal_ppm", &geodesy::ErrorModel::gnss_horizontal_ppm, kPpm},
+                                    {"gnss_vertical_mm", &geodesy::ErrorModel::gnss_vertical_m, kMm},
+                                    {"gnss_vertical_ppm", &geodesy::ErrorModel::gnss_vertical_ppm, kPpm}}};
+  std::set<std::string> keys = {"description"};
+  for (const auto& t : terms) keys.insert(t.key);
+  for (const auto& [name, model] : models.items()) {
+    const std::string at = source + ".error_models." + name;
+    if (name.empty()) fail(source + ".error_models", "an error model with an empty name");
+    for (const auto& e : net.error_models) {
+      if (e.name == name) fail(at, "defined twice (first at " + e.source + ")");
+    }
+    only_keys(model, at, keys);
+    geodesy::ErrorModel e;
+    e.name = name;
+    e.source = at;
+    bool any = false;
+    for (const auto& t : terms) {
+      if (!model.contains(t.key)) continue;
+      const double v = number(model, t.key, at);
+      if (!(v >= 0.0)) fail(at + "." + t.key, "value " + format_shortest(v) + " must be >= 0");
+      e.*(t.field) = v * t.scale;
+      any = any || v > 0.0;
+    }
+    if (!any) fail(at, "no term above 0; expected at least one of " + key_list(keys));
+    net.error_models.push_back(std::move(e));
   }
 }
 
@@ -463,7 +546,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
     const json& m = ms[i];
     if (!m.is_object()) fail(at, "expected an object");
     const std::string kind = text(m, "kind", at);
-    const MeasurementInput in{m, at, b};
+    const MeasurementInput in{m, at, b, net};
     geodesy::NetworkMeasurement x;
     in.common(x);
     if (kind == "gnss_baseline" || kind == "gnss_baseline_cluster" || kind == "gnss_point_cluster") {
@@ -475,7 +558,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
                                                : MeasurementKind::ellipsoid_arc;
       x.stations = {in.station("from"), in.station("to")};
       x.value = Eigen::VectorXd::Constant(1, positive(number(m, "value_m", at), at + ".value_m"));
-      const double sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
+      const double sg = in.sigma_m();
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
       if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
       if (m.contains("target_height_m")) x.target_height_m = number(m, "target_height_m", at);
@@ -492,7 +575,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
       x.kind = MeasurementKind::horizontal_angle;
       x.stations = {in.station("at"), in.station("from"), in.station("to")};
       x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
-      const double sg = angle_sigma(m, at);
+      const double sg = angle_sigma(m, at, in.modelled());
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
       if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
     } else if (kind == "zenith_angle" || kind == "vertical_angle" || kind == "azimuth") {
@@ -504,7 +587,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
                                           : MeasurementKind::azimuth;
       x.stations = {in.station("from"), in.station("to")};
       x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
-      const double sg = angle_sigma(m, at);
+      const double sg = angle_sigma(m, at, in.modelled());
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
       if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
       if (m.contains("target_height_m")) x.target_height_m = number(m, "target_height_m", at);
@@ -552,7 +635,8 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
 void read_network_json(std::string_view text_in, std::string_view source_in, geodesy::Network& into) {
   const std::string source(source_in);
   const json doc = parse_json_strict<json>(text_in, source);
-  only_keys(doc, source, {"schema", "space", "frame", "crs", "ellipsoid", "local", "stations", "measurements", "description"});
+  only_keys(doc, source,
+            {"schema", "space", "frame", "crs", "ellipsoid", "local", "stations", "measurements", "error_models", "description"});
   if (text(doc, "schema", source) != "geoanchor.network/1") {
     fail(source + ".schema", "'" + doc.at("schema").get<std::string>() + "': expected geoanchor.network/1");
   }
@@ -585,6 +669,7 @@ void read_network_json(std::string_view text_in, std::string_view source_in, geo
 
   NetworkBuilder b(net);
   read_stations(doc, source, net, b);
+  read_error_models(doc, source, net);
   read_measurements(doc, source, net, b);
 }
 

@@ -117,6 +117,31 @@ enum class MeasurementKind {
 // "gnss baselines", "slope distance", … for messages.
 const char* to_string(MeasurementKind k);
 
+// An instrument's error model (network JSON "error_models"): standard
+// deviations a measurement's own does not hold, added to its covariance
+// from the geometry once the stations' positions are known
+// (solver/error_models.hpp; docs/network-format.md "Error models"). Every
+// term is a standard deviation; each is added in quadrature; 0: none.
+struct ErrorModel {
+  std::string name;
+  // Distances: c + ppm · D (the EDM's constant and scale error).
+  double distance_constant_m = 0.0, distance_ppm = 0.0;
+  // Each horizontal pointing and circle reading (a direction or an azimuth
+  // has one of each, a horizontal angle two of each); zenith and vertical
+  // angles the same with their own pair.
+  double direction_pointing_rad = 0.0, direction_reading_rad = 0.0;
+  double zenith_pointing_rad = 0.0, zenith_reading_rad = 0.0;
+  // Set-up: centring of the instrument and of the target (per horizontal
+  // axis), and the measured instrument and target heights.
+  double instrument_centring_m = 0.0, target_centring_m = 0.0;
+  double instrument_height_m = 0.0, target_height_m = 0.0;
+  // GNSS baselines: horizontal and vertical, each c + ppm · L in the local
+  // horizon at the baseline's first station; points: the constants.
+  double gnss_horizontal_m = 0.0, gnss_horizontal_ppm = 0.0;
+  double gnss_vertical_m = 0.0, gnss_vertical_ppm = 0.0;
+  std::string source;  // where it was defined
+};
+
 struct NetworkMeasurement {
   MeasurementKind kind = MeasurementKind::slope_distance;
   std::vector<std::size_t> stations;  // indices into Network::stations, as the kind says
@@ -151,6 +176,9 @@ struct NetworkMeasurement {
   // the set). The set's stations and value are its parts' in that order,
   // its covariance the joint one (make_observation_set).
   std::vector<NetworkMeasurement> parts;
+  // Its error model (an index into Network::error_models): added to
+  // `covariance` once, by solver::apply_error_models (adjust's preparation).
+  std::optional<std::size_t> error_model;
 };
 
 // The observations a measurement is made of: an observation set's parts,
@@ -191,6 +219,7 @@ struct Network {
   std::vector<NetworkStation> stations;
   std::vector<NetworkMeasurement> measurements;
   std::vector<DirectionSet> direction_sets;
+  std::vector<ErrorModel> error_models;
   // Stations whose minimum-norm correction holds whatever datum defect the
   // constraints leave (GNU Gama's constrained points, upper-case `adj`):
   // used only when there is such a defect.

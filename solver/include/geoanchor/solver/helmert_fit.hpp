@@ -59,6 +59,11 @@ enum class FitModel { translation3, helmert6, helmert7, helmert14, molodensky_ba
 std::string_view to_string(FitModel m);
 enum class Convention { position_vector, coordinate_frame };
 
+// Variance-component estimation (fit --vce, adjust --vce): the factors are
+// iterated until none changes by more than this share, at most this often.
+inline constexpr double kVceTolerance = 1e-5;
+inline constexpr int kMaxVceIterations = 50;
+
 struct FitOptions {
   FitModel model = FitModel::helmert7;
   // Required for models with rotations; never defaulted.
@@ -100,7 +105,7 @@ struct FitOptions {
   double robust_k = 1.5;
   // Variance-component estimation for the source and target groups: their
   // covariances are rescaled by estimated factors until consistent.
-  bool vce = false;
+  bool vce = false;  // kVceTolerance, kMaxVceIterations
   // Scale the parameter covariance by σ0² (a posteriori) instead of using
   // the a-priori σ0 = 1. Forced when the control set has no a-priori sigmas.
   bool scale_by_sigma0 = false;

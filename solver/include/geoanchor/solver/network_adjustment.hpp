@@ -113,6 +113,30 @@ struct AdjustOptions {
   std::uint64_t memory_budget_bytes = 0;
   // A Helmert transformation estimated with the stations (above).
   std::optional<HelmertGroup> helmert;
+  // Variance components (adjust --vce): the measurements in groups (by
+  // kind, by their `group`, or by their error model), each group's
+  // covariances scaled by a factor estimated from its residuals until no
+  // factor changes by kVceTolerance (helmert_fit.hpp; Förstner's iteration, as fit --vce:
+  // θ_k ← θ_k · vᵀP Q_k P v / tr(P Q_k P Q_vv), for disjoint groups
+  // θ_k · Ω_k / r_k); the estimation adjusts without data snooping, the
+  // final adjustment with these options on the scaled covariances.
+  enum class VarianceGroups { none, kind, group, model };
+  VarianceGroups variance_components = VarianceGroups::none;
+};
+
+// A group with less redundancy than this keeps its factor of 1 (reported
+// as not estimable): its estimate would rest on a fraction of one residual.
+inline constexpr double kMinVceRedundancy = 2.0;
+
+// One variance component: a group of measurements and the factor its
+// a-priori covariances were scaled by.
+struct VarianceComponent {
+  std::string name;             // "GNSS", "distances", a group or an error model's name
+  std::size_t measurements = 0; // in the adjustment
+  double redundancy = 0.0;      // r_k, the sum of its redundancy numbers
+  double factor = 1.0;          // the estimated variance factor (1: the a-priori weights were right)
+  double sigma = 0.0;           // its standard deviation, factor · √(2 / r_k)
+  bool estimated = false;       // false: redundancy below kMinVceRedundancy, factor 1 kept
 };
 
 // The estimated Helmert of AdjustOptions::helmert: p0 then the rates, in
@@ -245,6 +269,10 @@ struct AdjustmentResult {
   std::int64_t factor_nonzeros = 0;
   AdjustmentTimings seconds;
   std::optional<EstimatedHelmert> helmert;
+  // With AdjustOptions::variance_components: each group's estimate, and
+  // the estimation's iterations (adjustments).
+  std::vector<VarianceComponent> variance_components;
+  int vce_iterations = 0;
 };
 
 // The measurements that fail their test (flagged, or removed by data
