@@ -127,7 +127,7 @@ TEST(AccuracyStandard, AFileThatIsNotUnderstoodIsRefusedNamingFileKeyAndValue) {
       {head + R"({"relative_horizontal": {"quantity": "relative_ellipse_semi_major", "definition": "d", "confidence": 0.95, "constant_m": "2 cm", "ppm": 50, "distance": "spatial"}}})",
        {"constant_m", "\"2 cm\"", "not a number"}},
       {head + R"({"relative_horizontal": {"quantity": "relative_ellipse_semi_major", "definition": "d", "confidence": 0.95, "constant_m": 1e999, "ppm": 50, "distance": "spatial"}}})",
-       {"E_STANDARD"}},
+       {"1e999", "line 1"}},
       {head + R"({"relative_horizontal": {"quantity": "relative_up", "definition": "d", "confidence": 0.95, "constant_m": 0.02, "ppm": 50, "distance": "spatial"}}})",
        {"criteria.relative_horizontal.quantity", "\"relative_up\"", "relative_ellipse_semi_major"}},
       {head + R"({"relative_horizontal": {"quantity": "relative_ellipse_semi_major", "definition": "d", "confidence": 0.95, "constant_m": 0.02, "ppm": 50, "distance": "chord"}}})",
