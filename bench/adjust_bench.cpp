@@ -234,38 +234,52 @@ void check_against_truth(const GeneratedNetwork& g, const solver::AdjustmentResu
   k.factor_nonzeros = r.factor_nonzeros;
 }
 
-// The adjustment in a child process: its numbers through a pipe, its peak
-// resident set from wait4.
-std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t dense_max, int jobs = 0) {
+// `work` in a forked child: its result (trivially copyable) through a
+// pipe, the child's peak resident set (wait4) and exit status in `run`; a
+// default Result when the child did not answer (its seconds are -1).
+template <class Result, class Work>
+Result in_child(const Work& work, Run& run) {
   int fds[2];
   if (pipe(fds) != 0) std::exit(1);
   const pid_t pid = fork();
   if (pid == 0) {
     close(fds[0]);
-    KernelRun k;
-    const auto t0 = Clock::now();
-    solver::AdjustOptions options;
-    options.jobs = jobs;
-    options.remove_outliers = true;
-    const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
-    k.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (!r.converged) k.seconds = -1.0;
-    check_against_truth(g, r, k);
-    if (g.network.stations.size() <= dense_max) k.dense_difference = dense_check(g, r);
-    if (write(fds[1], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) _exit(1);
+    const Result r = work();
+    if (write(fds[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) _exit(1);
     _exit(0);
   }
   close(fds[1]);
-  KernelRun k;
-  if (read(fds[0], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) k.seconds = -1.0;
+  Result r;
+  if (read(fds[0], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) r = Result{};
   close(fds[0]);
   struct rusage usage {};
   int status = 0;
   wait4(pid, &status, 0, &usage);
-  Run run;
-  run.seconds = k.seconds;
   run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
   run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
+
+// The adjustment in a child process: its numbers through a pipe, its peak
+// resident set from wait4.
+std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t dense_max, int jobs = 0) {
+  Run run;
+  const KernelRun k = in_child<KernelRun>(
+      [&] {
+        KernelRun kr;
+        const auto t0 = Clock::now();
+        solver::AdjustOptions options;
+        options.jobs = jobs;
+        options.remove_outliers = true;
+        const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
+        kr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+        if (!r.converged) kr.seconds = -1.0;
+        check_against_truth(g, r, kr);
+        if (g.network.stations.size() <= dense_max) kr.dense_difference = dense_check(g, r);
+        return kr;
+      },
+      run);
+  run.seconds = k.seconds;
   return {k, run};
 }
 
@@ -284,32 +298,24 @@ struct RelativeRun {
   std::size_t pairs = 0;
 };
 RelativeRun relative_in_child(const GeneratedNetwork& g, solver::RelativePairs pairs, double radius_m) {
-  int fds[2];
-  if (pipe(fds) != 0) std::exit(1);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fds[0]);
-    RelativeRun k;
-    solver::AdjustOptions options;
-    options.jobs = 2;
-    options.data_snooping = false;
-    options.relative.pairs = pairs;
-    options.relative.radius_m = radius_m;
-    const auto t0 = Clock::now();
-    const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
-    k.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    k.stations_seconds = r.seconds.stations;
-    k.pairs = r.relative.size();
-    if (write(fds[1], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) _exit(1);
-    _exit(0);
-  }
-  close(fds[1]);
-  RelativeRun k;
-  if (read(fds[0], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) k.seconds = -1.0;
-  close(fds[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) k.seconds = -1.0;
+  Run run;
+  RelativeRun k = in_child<RelativeRun>(
+      [&] {
+        RelativeRun kr;
+        solver::AdjustOptions options;
+        options.jobs = 2;
+        options.data_snooping = false;
+        options.relative.pairs = pairs;
+        options.relative.radius_m = radius_m;
+        const auto t0 = Clock::now();
+        const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
+        kr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+        kr.stations_seconds = r.seconds.stations;
+        kr.pairs = r.relative.size();
+        return kr;
+      },
+      run);
+  if (run.status != 0) k.seconds = -1.0;
   return k;
 }
 
