@@ -29,6 +29,16 @@
 // run's pass/fail.
 //
 //   geoanchor_adjust_bench [--sizes 1000,10000,100000] [--repetitions 3] [--command-max 100000] [--kernel-max 1000000] [--dense-max 2000] [--threads-max 100000]
+//                          [--relative-sizes 10000,100000] [--relative-only]
+//
+// Relative precision (adjust --relative radius:R, issue 43): per size of
+// --relative-sizes, the adjustment (no data snooping) with the connected
+// pairs and with every pair within R = 2 grid spacings (the generator's
+// side / √N: about 12 neighbours a station, most sharing no baseline), in
+// a child each: the pairs, the seconds of the stations' part (covariances,
+// ellipses, relative precision: AdjustmentTimings::stations) and of the
+// whole adjustment, against the bare factor-and-solve. --relative-only
+// skips the first tables.
 //
 // Up to --threads-max stations the adjustment runs once more on one thread:
 // the speed-up of two threads is printed with the parts.
@@ -224,38 +234,52 @@ void check_against_truth(const GeneratedNetwork& g, const solver::AdjustmentResu
   k.factor_nonzeros = r.factor_nonzeros;
 }
 
-// The adjustment in a child process: its numbers through a pipe, its peak
-// resident set from wait4.
-std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t dense_max, int jobs = 0) {
+// `work` in a forked child: its result (trivially copyable) through a
+// pipe, the child's peak resident set (wait4) and exit status in `run`; a
+// default Result when the child did not answer (its seconds are -1).
+template <class Result, class Work>
+Result in_child(const Work& work, Run& run) {
   int fds[2];
   if (pipe(fds) != 0) std::exit(1);
   const pid_t pid = fork();
   if (pid == 0) {
     close(fds[0]);
-    KernelRun k;
-    const auto t0 = Clock::now();
-    solver::AdjustOptions options;
-    options.jobs = jobs;
-    options.remove_outliers = true;
-    const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
-    k.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (!r.converged) k.seconds = -1.0;
-    check_against_truth(g, r, k);
-    if (g.network.stations.size() <= dense_max) k.dense_difference = dense_check(g, r);
-    if (write(fds[1], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) _exit(1);
+    const Result r = work();
+    if (write(fds[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) _exit(1);
     _exit(0);
   }
   close(fds[1]);
-  KernelRun k;
-  if (read(fds[0], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) k.seconds = -1.0;
+  Result r;
+  if (read(fds[0], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) r = Result{};
   close(fds[0]);
   struct rusage usage {};
   int status = 0;
   wait4(pid, &status, 0, &usage);
-  Run run;
-  run.seconds = k.seconds;
   run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
   run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
+
+// The adjustment in a child process: its numbers through a pipe, its peak
+// resident set from wait4.
+std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t dense_max, int jobs = 0) {
+  Run run;
+  const KernelRun k = in_child<KernelRun>(
+      [&] {
+        KernelRun kr;
+        const auto t0 = Clock::now();
+        solver::AdjustOptions options;
+        options.jobs = jobs;
+        options.remove_outliers = true;
+        const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
+        kr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+        if (!r.converged) kr.seconds = -1.0;
+        check_against_truth(g, r, kr);
+        if (g.network.stations.size() <= dense_max) kr.dense_difference = dense_check(g, r);
+        return kr;
+      },
+      run);
+  run.seconds = k.seconds;
   return {k, run};
 }
 
@@ -264,10 +288,47 @@ struct BenchOptions {
   std::vector<std::size_t> sizes{1000, 10000, 100000};
   int repetitions = 3;
   std::size_t command_max = 100000, kernel_max = 1000000, dense_max = 2000, threads_max = 100000;
+  std::vector<std::size_t> relative_sizes{10000, 100000};
+  bool relative_only = false;
 };
+
+// One adjustment for the relative-precision table, in a child.
+struct RelativeRun {
+  double seconds = -1.0, stations_seconds = 0.0;
+  std::size_t pairs = 0;
+};
+RelativeRun relative_in_child(const GeneratedNetwork& g, solver::RelativePairs pairs, double radius_m) {
+  Run run;
+  RelativeRun k = in_child<RelativeRun>(
+      [&] {
+        RelativeRun kr;
+        solver::AdjustOptions options;
+        options.jobs = 2;
+        options.data_snooping = false;
+        options.relative.pairs = pairs;
+        options.relative.radius_m = radius_m;
+        const auto t0 = Clock::now();
+        const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
+        kr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+        kr.stations_seconds = r.seconds.stations;
+        kr.pairs = r.relative.size();
+        return kr;
+      },
+      run);
+  if (run.status != 0) k.seconds = -1.0;
+  return k;
+}
 
 // False (after printing the usage) for an unknown flag.
 bool parse_options(int argc, char** argv, BenchOptions& b) {
+  // The one flag without a value, first; then flag-value pairs.
+  std::vector<char*> args{argv[0]};
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--relative-only") b.relative_only = true;
+    else args.push_back(argv[i]);
+  }
+  argc = static_cast<int>(args.size());
+  argv = args.data();
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--sizes") b.sizes = parse_sizes(argv[i + 1]);
@@ -275,9 +336,10 @@ bool parse_options(int argc, char** argv, BenchOptions& b) {
     else if (flag == "--dense-max") b.dense_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
     else if (flag == "--kernel-max") b.kernel_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
     else if (flag == "--repetitions") b.repetitions = std::max(1, std::atoi(argv[i + 1]));
+    else if (flag == "--relative-sizes") b.relative_sizes = parse_sizes(argv[i + 1]);
     else if (flag == "--command-max") b.command_max = static_cast<std::size_t>(std::atol(argv[i + 1]));
     else {
-      std::fprintf(stderr, "usage: %s [--sizes N,N...] [--repetitions R] [--command-max N] [--kernel-max N] [--dense-max N] [--threads-max N]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--sizes N,N...] [--repetitions R] [--command-max N] [--kernel-max N] [--dense-max N] [--threads-max N] [--relative-sizes N,N...] [--relative-only]\n", argv[0]);
       return false;
     }
   }
@@ -451,6 +513,34 @@ void print_parts(const std::vector<std::pair<std::size_t, KernelRun>>& kernels) 
               "cover: station components within 1.96 sigma of the truth; eNe/n: e'Ne / n over the free stations' components\n");
 }
 
+// The relative-precision table (the usage at the top of this file).
+bool measure_relative(const BenchOptions& b) {
+  if (b.relative_sizes.empty()) return true;
+  std::printf("\nrelative precision, --relative radius:R (R = 2 grid spacings), against connected pairs; s = wall seconds;\n"
+              "stations s = the stations' part (covariances, ellipses, relative precision); ratio = / bare factor-and-solve\n"
+              "%-8s %8s %9s | %10s %10s | %9s %10s %10s | %8s %8s\n",
+              "stations", "R m", "bare s", "conn pairs", "stations s", "R pairs", "stations s", "adjust s", "R part/b", "adj/bare");
+  for (const std::size_t n : b.relative_sizes) {
+    const GeneratedNetwork g = make_network(n);
+    const workflow::NetworkGeneratorOptions defaults;
+    const double radius_m = 2.0 * defaults.side_km * 1000.0 / std::sqrt(static_cast<double>(n));
+    BareRuns bare_runs;
+    if (!time_bare(g, 1, bare_runs)) return false;
+    const double bare = median(bare_runs.seconds);
+    const RelativeRun connected = relative_in_child(g, solver::RelativePairs::connected, 0.0);
+    const RelativeRun radius = relative_in_child(g, solver::RelativePairs::radius, radius_m);
+    if (connected.seconds < 0.0 || radius.seconds < 0.0) {
+      std::fprintf(stderr, "the adjustment of %zu stations with relative precision failed\n", n);
+      return false;
+    }
+    std::printf("%-8zu %8.0f %9.2f | %10zu %10.2f | %9zu %10.2f %10.2f | %8.2f %8.2f\n", n, radius_m, bare, connected.pairs,
+                connected.stations_seconds, radius.pairs, radius.stations_seconds, radius.seconds,
+                (radius.stations_seconds - connected.stations_seconds) / bare, radius.seconds / bare);
+    std::fflush(stdout);
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -463,12 +553,15 @@ int main(int argc, char** argv) {
   char folder_template[] = "/tmp/geoanchor_adjust_bench_XXXXXX";
   if (!mkdtemp(folder_template)) return 1;
   const fs::path folder = folder_template;
-  print_table_header(b.repetitions);
-  std::vector<std::pair<std::size_t, KernelRun>> kernels;
-  for (const std::size_t n : b.sizes) {
-    if (!measure_size(n, b, folder, kernels)) return 1;
+  if (!b.relative_only) {
+    print_table_header(b.repetitions);
+    std::vector<std::pair<std::size_t, KernelRun>> kernels;
+    for (const std::size_t n : b.sizes) {
+      if (!measure_size(n, b, folder, kernels)) return 1;
+    }
+    print_parts(kernels);
   }
-  print_parts(kernels);
+  if (!measure_relative(b)) return 1;
   fs::remove_all(folder);
   return 0;
 }

@@ -30,6 +30,13 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_option("--report", o.report, "Write the text report to this file (else it goes to standard output, or standard error with -o -)");
   cmd->add_flag("--json", o.json, "Print the report as JSON (schema geoanchor.adjust-report/1) on standard output");
   cmd->add_option("--sinex", o.sinex, "Write the adjusted stations with their covariance as SINEX");
+  cmd->add_option("--relative", o.relative,
+                  "Relative precision between: connected (stations a measurement joins; default), all (every pair), radius:R_M (every "
+                  "pair within R metres horizontally), pairs:FILE (a CSV with header from,to)");
+  cmd->add_option("--standard", o.standard,
+                  "Judge the relative precision (and positions) against an accuracy standard: a shipped NAME (alta-nsps-2021) or a "
+                  "standard's JSON FILE (docs/standards.md)");
+  cmd->add_option("--relative-output", o.relative_output, "Write the relative precision of every pair (and the standard's verdicts) as CSV");
   add_network_options(cmd, o.network);
   cmd->add_option("--convention", o.convention, "--estimate-helmert: position_vector|coordinate_frame, the convention of the written transform (required)");
   cmd->add_option("--helmert-output", o.helmert_output, "--estimate-helmert: the transform file (default: STATIONS less .csv, plus .helmert.json)");
@@ -56,8 +63,10 @@ namespace {
 
 int run_generate(const AdjustCommandOptions& o) {
   if (!o.out_dir) throw Error(ErrorKind::usage, "E_OPTION", "--generate: give the folder for the network with --out-dir");
-  if (!o.inputs.empty() || !o.output.empty() || o.measurements || o.report || o.sinex || o.json) {
-    throw Error(ErrorKind::usage, "E_OPTION", "--generate writes a network and adjusts nothing: give no INPUT, -o, --measurements, --report, --sinex or --json");
+  if (!o.inputs.empty() || !o.output.empty() || o.measurements || o.report || o.sinex || o.json || o.relative_output || o.standard) {
+    throw Error(ErrorKind::usage, "E_OPTION",
+                "--generate writes a network and adjusts nothing: give no INPUT, -o, --measurements, --report, --sinex, --json, "
+                "--relative-output or --standard");
   }
   workflow::NetworkGeneratorOptions g;
   g.stations = *o.generate;
@@ -121,6 +130,7 @@ void refuse_shared_paths(const AdjustCommandOptions& o, const std::optional<std:
   if (o.measurements) outputs.push_back({"--measurements", *o.measurements});
   if (o.report) outputs.push_back({"--report", *o.report});
   if (o.sinex) outputs.push_back({"--sinex", *o.sinex});
+  if (o.relative_output) outputs.push_back({"--relative-output", *o.relative_output});
   if (helmert_path) outputs.push_back({"--estimate-helmert's transform file", *helmert_path});
   for (std::size_t a = 0; a < outputs.size(); ++a) {
     for (std::size_t b = a + 1; b < outputs.size(); ++b) {
@@ -149,12 +159,13 @@ struct AdjustOutputs {
     if (o.measurements) measurements = std::make_unique<io::AtomicOutputFile>(*o.measurements, overwrite);
     if (o.report) report = std::make_unique<io::AtomicOutputFile>(*o.report, overwrite);
     if (o.sinex) sinex = std::make_unique<io::AtomicOutputFile>(*o.sinex, overwrite);
+    if (o.relative_output) relative = std::make_unique<io::AtomicOutputFile>(*o.relative_output, overwrite);
     if (helmert_path) helmert = std::make_unique<io::AtomicOutputFile>(*helmert_path, overwrite);
   }
   const io::Overwrite overwrite;
   io::DataOutput stations;
   std::unique_ptr<io::AtomicOutputFile> measurements, report;
-  std::unique_ptr<io::AtomicOutputFile> sinex, helmert;
+  std::unique_ptr<io::AtomicOutputFile> sinex, helmert, relative;
 };
 
 // The report, shown whether or not the results are written, with the
@@ -255,6 +266,7 @@ void write_outputs(const AdjustCommandOptions& o, AdjustOutputs& outputs, const 
   if (outputs.helmert) helmert_text = helmert_file_text(o, prepared, r, so, *helmert_path);
   stations.stream() << workflow::stations_csv(prepared.network, r, so);
   const std::string measurements_text = outputs.measurements ? workflow::measurements_csv(prepared.network, r, o.jobs) : std::string();
+  const std::string relative_text = outputs.relative ? workflow::relative_csv(prepared, r, so) : std::string();
   if (sidecar_text.valid()) stations.sidecar() << sidecar_text.get() << "\n";
   // One group (RELIABILITY 41): every output written before any is
   // published, the stations' CSV last; a failure leaves none of them.
@@ -270,6 +282,10 @@ void write_outputs(const AdjustCommandOptions& o, AdjustOutputs& outputs, const 
   if (outputs.measurements) {
     outputs.measurements->stream() << measurements_text;
     group.push_back(outputs.measurements.get());
+  }
+  if (outputs.relative) {
+    outputs.relative->stream() << relative_text;
+    group.push_back(outputs.relative.get());
   }
   if (outputs.report) {
     outputs.report->stream() << text;
@@ -290,6 +306,8 @@ int run_adjust(const AdjustCommandOptions& o) {
   auto& so = request.options;
   so.joint_covariance = o.sinex.has_value();
   so.jobs = o.jobs;
+  request.relative = o.relative;
+  request.standard = o.standard;
   if (o.max_memory_gb) so.memory_budget_bytes = static_cast<std::uint64_t>(std::max(1.0, *o.max_memory_gb * 1e9));
   refuse_shared_paths(o, helmert_path);
   AdjustOutputs outputs(o, helmert_path);
@@ -297,6 +315,7 @@ int run_adjust(const AdjustCommandOptions& o) {
   const workflow::PreparedNetwork prepared = workflow::prepare_network(request);
   so.helmert = prepared.helmert;
   so.refraction_k = prepared.refraction_k;
+  so.relative = prepared.relative;
   const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
   const std::string text = workflow::report_text(prepared, r, so);
   show_report(o, outputs, prepared, r, so, text);

@@ -20,6 +20,9 @@ struct AdjustCommandOptions {
   std::vector<std::string> inputs;
   std::string output;  // stations CSV ("-": standard output)
   std::optional<std::string> measurements, report, sinex;
+  // --relative connected|all|radius:R_M|pairs:FILE, --standard NAME|FILE, --relative-output CSV.
+  std::string relative = "connected";
+  std::optional<std::string> standard, relative_output;
   std::optional<std::string> convention;      // of the estimated Helmert's file
   std::optional<std::string> helmert_output;  // default: -o's name less .csv, plus .helmert.json
   bool json = false;

@@ -274,6 +274,76 @@ Eigen::Matrix3d DatumCofactors::between(std::size_t s1, std::size_t s2) const {
   return q;
 }
 
+std::vector<Eigen::Matrix<double, 6, 6>> DatumCofactors::with_each(std::size_t s, const std::vector<std::size_t>& others) const {
+  const NetworkProblem& p = p_;
+  // A station's unknowns and their components.
+  struct Unknowns {
+    std::vector<std::int64_t> u;
+    std::vector<int> component;
+  };
+  const auto unknowns_of = [&p](std::size_t st) {
+    Unknowns x;
+    for (int c = 0; c < 3; ++c) {
+      const Index uc = p.layout.station[st][static_cast<std::size_t>(c)];
+      if (uc >= 0) x.u.push_back(uc), x.component.push_back(c);
+    }
+    return x;
+  };
+  const Unknowns first = unknowns_of(s);
+  const auto k1 = static_cast<Eigen::Index>(first.u.size());
+  std::vector<Eigen::Matrix<double, 6, 6>> out(others.size(), Eigen::Matrix<double, 6, 6>::Zero());
+  // Per pair: its unknowns (s's, then the other's) and their cofactor.
+  std::vector<std::vector<std::int64_t>> pair_u(others.size());
+  std::vector<std::vector<Eigen::Index>> pair_at(others.size());
+  std::vector<Eigen::MatrixXd> z(others.size());
+  std::vector<std::size_t> off;  // pairs off the pattern
+  for (std::size_t k = 0; k < others.size(); ++k) {
+    const Unknowns second = unknowns_of(others[k]);
+    pair_u[k] = first.u;
+    for (std::size_t a = 0; a < first.u.size(); ++a) pair_at[k].push_back(first.component[a]);
+    for (std::size_t a = 0; a < second.u.size(); ++a) pair_u[k].push_back(second.u[a]), pair_at[k].push_back(3 + second.component[a]);
+    const auto n = static_cast<Eigen::Index>(pair_u[k].size());
+    z[k].resize(n, n);
+    if (n > 0 && !f_.inverse_block(pair_u[k].data(), pair_u[k].size(), z[k].data())) off.push_back(k);
+  }
+  if (!off.empty()) {
+    // One solve along the tree per station: s first, then each other off the pattern.
+    std::vector<std::vector<std::int64_t>> blocks{first.u};
+    std::vector<Eigen::MatrixXd> rows{Eigen::MatrixXd::Identity(k1, k1)};
+    for (const std::size_t k : off) {
+      blocks.emplace_back(pair_u[k].begin() + k1, pair_u[k].end());
+      const auto k2 = static_cast<Eigen::Index>(blocks.back().size());
+      rows.push_back(Eigen::MatrixXd::Identity(k2, k2));
+    }
+    const Eigen::MatrixXd all = f_.inverse_between(blocks, rows);
+    Eigen::Index at = k1;
+    for (const std::size_t k : off) {
+      const auto k2 = static_cast<Eigen::Index>(pair_u[k].size()) - k1;
+      z[k].topLeftCorner(k1, k1) = all.topLeftCorner(k1, k1);
+      z[k].topRightCorner(k1, k2) = all.block(0, at, k1, k2);
+      z[k].bottomLeftCorner(k2, k1) = all.block(at, 0, k2, k1);
+      z[k].bottomRightCorner(k2, k2) = all.block(at, at, k2, k2);
+      at += k2;
+    }
+  }
+  for (std::size_t k = 0; k < others.size(); ++k) {
+    const auto n = static_cast<Eigen::Index>(pair_u[k].size());
+    if (transformed_ && n > 0) {
+      // S Z Sᵀ over these unknowns, S = I − D M Eᵀ.
+      Eigen::MatrixXd dm(n, inner_.m.cols()), zes(n, ze_.cols());
+      for (Eigen::Index a = 0; a < n; ++a) {
+        dm.row(a) = p.defect.row(pair_u[k][static_cast<std::size_t>(a)]) * inner_.m;
+        zes.row(a) = ze_.row(pair_u[k][static_cast<std::size_t>(a)]);
+      }
+      z[k] += -dm * zes.transpose() - zes * dm.transpose() + dm * eze_ * dm.transpose();
+    }
+    for (Eigen::Index a = 0; a < n; ++a) {
+      for (Eigen::Index b = 0; b < n; ++b) out[k](pair_at[k][static_cast<std::size_t>(a)], pair_at[k][static_cast<std::size_t>(b)]) = z[k](a, b);
+    }
+  }
+  return out;
+}
+
 Eigen::MatrixXd DatumCofactors::selected(const Eigen::MatrixXd& sel) const {
   const Eigen::MatrixXd z = f_.solve(sel);
   Eigen::MatrixXd q = sel.transpose() * z;  // local axes

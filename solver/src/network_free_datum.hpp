@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <vector>
 
 #include "network_normal_equations.hpp"
 #include "network_problem.hpp"
@@ -61,6 +62,15 @@ class DatumCofactors {
   // The 3 × 3 block between stations s1 and s2, along their unknowns' axes
   // (zero for a component that is no unknown).
   Eigen::Matrix3d between(std::size_t s1, std::size_t s2) const;
+  // The joint cofactor of station s with each of `others` (6 × 6 each:
+  // s's 3 components then the other's, along their unknowns' axes; zero
+  // for a component that is no unknown), S-transformed as between(). A
+  // pair on the factor's pattern (sharing a measurement, or joined by
+  // fill) from the selected inverse; the others' cross cofactors from one
+  // NormalFactor::inverse_between over s and them (forward solves along
+  // the elimination tree, never a dense inverse): one path solve per
+  // station rather than two per pair.
+  std::vector<Eigen::Matrix<double, 6, 6>> with_each(std::size_t s, const std::vector<std::size_t>& others) const;
   // The cofactor over the unknowns `sel` selects (u × k, a 1 per column),
   // by solves for every column of N⁻¹ they need (k × k, symmetric).
   Eigen::MatrixXd selected(const Eigen::MatrixXd& sel) const;

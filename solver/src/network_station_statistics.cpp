@@ -13,6 +13,7 @@
 #include "geoanchor/base/number_text.hpp"
 #include "geoanchor/base/parallel.hpp"
 #include "network_helmert.hpp"
+#include "network_relative_precision.hpp"
 
 namespace geoanchor::solver {
 
@@ -35,24 +36,12 @@ ErrorEllipse ellipse_of(const Eigen::Matrix2d& en) {
   return e;
 }
 
-// The horizontal ellipse of a station's covariance in its local components:
-// east, north (ellipsoidal: azimuth from north towards east) or x, y (local:
-// from +x towards +y, a bearing when x is north and y east, as GNU Gama
-// orients its ellipses). ellipse_of measures from its second axis towards
-// its first, so a local network's x, y go in swapped.
-ErrorEllipse horizontal_ellipse(const Eigen::Matrix2d& c, geodesy::NetworkSpace space) {
-  if (space == geodesy::NetworkSpace::ellipsoidal) return ellipse_of(c);
-  Eigen::Matrix2d yx;
-  yx << c(1, 1), c(1, 0), c(0, 1), c(0, 0);
-  return ellipse_of(yx);
-}
-
 // Per station its position, covariance (in the position's axes and the
 // local ones) and error ellipses.
 void adjusted_stations(const NetworkProblem& p, const DatumCofactors& cofactors, AdjustmentResult& result, int jobs) {
   const auto& net = p.net;
   const auto& o = p.o;
-  const double confidence_scale = std::sqrt(-2.0 * std::log(1.0 - o.confidence));  // √χ²₂(p)
+  const double confidence_scale = ellipse_confidence_scale(o.confidence);
   // Each station its own (on threads).
   result.stations.assign(net.stations.size(), AdjustedStation{});
   for_chunks(net.stations.size(), kMeasurementChunk, jobs, [&](std::size_t begin, std::size_t end) {
@@ -117,59 +106,19 @@ void joint_covariance(const NetworkProblem& p, const DatumCofactors& cofactors, 
   }
 }
 
-// The pairs of stations a measurement in the adjustment joins, each once,
-// in order.
-std::vector<std::pair<std::size_t, std::size_t>> joined_pairs(const NetworkProblem& p) {
-  const auto& net = p.net;
-  std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  for (std::size_t mi = 0; mi < net.measurements.size(); ++mi) {
-    if (!p.active[mi]) continue;
-    // The stations a measurement joins: a baseline's ends, a terrestrial
-    // observation's stations (an observation set's each on its own; not a
-    // point cluster's points, which it positions each on its own).
-    for (const auto& m : geodesy::parts_of(net.measurements[mi])) {
-      const auto& st = m.stations;
-      if (m.kind == MeasurementKind::gnss_points) continue;
-      for (std::size_t a = 0; a < st.size(); ++a) {
-        for (std::size_t b = a + 1; b < st.size(); ++b) {
-          if (m.kind == MeasurementKind::gnss_baselines && !(a % 2 == 0 && b == a + 1)) continue;
-          if (st[a] != st[b]) pairs.push_back({std::min(st[a], st[b]), std::max(st[a], st[b])});
-        }
-      }
-    }
-  }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  return pairs;
-}
-
-// Relative precision between stations that share a measurement.
-void relative_precision(const NetworkProblem& p, const DatumCofactors& cofactors, AdjustmentResult& result, int jobs) {
-  const auto& net = p.net;
-  const std::vector<std::pair<std::size_t, std::size_t>> pairs = joined_pairs(p);
-  result.relative.assign(pairs.size(), RelativePrecision{});
-  for_chunks(pairs.size(), kMeasurementChunk, jobs, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t k = begin; k < end; ++k) {
-      const auto [s1, s2] = pairs[k];
-      // In the axes of the first station; a local network's axes are one.
-      const Eigen::Matrix3d a1 = p.states[s1].axes, a2 = p.states[s2].axes, r1 = p.states[s1].local_from_xyz;
-      const Eigen::Matrix3d c11 = a1.transpose() * cofactors.between(s1, s1) * a1, c22 = a2.transpose() * cofactors.between(s2, s2) * a2;
-      const Eigen::Matrix3d c12 = a1.transpose() * cofactors.between(s1, s2) * a2;
-      const Eigen::Matrix3d diff = r1 * (c11 + c22 - c12 - c12.transpose()) * r1.transpose();
-      RelativePrecision rp;
-      rp.from = s1;
-      rp.to = s2;
-      const Eigen::Vector3d dxyz = p.states[s2].x - p.states[s1].x;
-      rp.distance_m = dxyz.norm();
-      const Eigen::Vector3d unit_local = r1 * dxyz / std::max(rp.distance_m, 1e-12);
-      rp.sigma_distance_m = std::sqrt(std::max(0.0, unit_local.dot(diff * unit_local)));
-      rp.ellipse = horizontal_ellipse(diff.topLeftCorner<2, 2>(), net.space);
-      result.relative[k] = rp;
-    }
-  });
-}
-
 }  // namespace
+
+// The horizontal ellipse of a covariance in its local components:
+// east, north (ellipsoidal: azimuth from north towards east) or x, y (local:
+// from +x towards +y, a bearing when x is north and y east, as GNU Gama
+// orients its ellipses). ellipse_of measures from its second axis towards
+// its first, so a local network's x, y go in swapped.
+ErrorEllipse horizontal_ellipse(const Eigen::Matrix2d& c, geodesy::NetworkSpace space) {
+  if (space == geodesy::NetworkSpace::ellipsoidal) return ellipse_of(c);
+  Eigen::Matrix2d yx;
+  yx << c(1, 1), c(1, 0), c(0, 1), c(0, 0);
+  return ellipse_of(yx);
+}
 
 void station_statistics(const NetworkProblem& p, const NormalFactor& f, const InnerConstraints& inner, AdjustmentResult& result,
                         int jobs) {

@@ -4,8 +4,10 @@
 // estimated Helmert in the transform file's units.
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include <numbers>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -50,5 +52,15 @@ struct HelmertInFileUnits {
 };
 
 HelmertInFileUnits helmert_in_file_units(const PreparedNetwork& prepared, const solver::AdjustmentResult& r);
+
+// The relative precision's section of the text report (the worst pairs)
+// and the standard's verdicts (counts, the worst margin), from
+// adjust_relative.cpp.
+void relative_report_text(std::ostream& out, const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
+                          const solver::AdjustOptions& o);
+// The JSON report's `relative_pairs` (which pairs, how many), `relative`
+// (each pair; full detail only) and `standard` (with --standard).
+void relative_report_document(nlohmann::ordered_json& j, const PreparedNetwork& prepared, const solver::AdjustmentResult& r,
+                              const solver::AdjustOptions& o, bool full);
 
 }  // namespace geoanchor::workflow::adjust_detail

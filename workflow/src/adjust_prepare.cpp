@@ -409,6 +409,8 @@ void apply_constraints(const AdjustRequest& request, PreparedNetwork& p) {
 
 PreparedNetwork prepare_network(const AdjustRequest& request) {
   PreparedNetwork p;
+  // The standard first: a name that is not shipped fails before the inputs are read.
+  if (request.standard) p.standard = std::make_shared<const AccuracyStandard>(load_standard(*request.standard));
   p.network = read_inputs(request);
   geodesy::Network& net = p.network;
   for (const auto& w : net.warnings) p.notes.push_back("warning: " + w);
@@ -471,6 +473,8 @@ PreparedNetwork prepare_network(const AdjustRequest& request) {
     p.refraction_k = *net.refraction_k;
     p.notes.push_back("coefficient of refraction " + format_shortest(p.refraction_k) + " from " + net.refraction_source);
   }
+  p.relative = relative_options(request.relative, net);
+  p.relative_spec = request.relative;
   return p;
 }
 

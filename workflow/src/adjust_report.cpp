@@ -232,6 +232,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
       if (am.outlier) out << "  " << net.measurements[am.index].source << ": " << am.removed_because << "\n";
     }
   }
+  relative_report_text(out, prepared, r, o);
   if (!r.warnings.empty()) {
     out << "\nWarnings\n";
     for (const auto& w : r.warnings) out << "  " << w << "\n";
@@ -384,6 +385,7 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
   if (full) j["measurements"] = std::move(measurements);
   j["flagged"] = std::move(flagged);
   j["removed"] = std::move(removed);
+  relative_report_document(j, prepared, r, o, full);
   j["warnings"] = r.warnings;
   if (!r.refused_because.empty()) j["refused_because"] = r.refused_because;
   return j;

@@ -39,6 +39,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "geoanchor/geodesy/geoid.hpp"
@@ -65,6 +66,25 @@ struct HelmertGroup {
   double reference_epoch = 0.0;           // decimal year (rates)
   std::vector<double> epochs;             // rates: each member's epoch (decimal year), as `measurements`
   std::string name;                       // for messages
+};
+
+// The pairs of stations whose relative precision is computed
+// (adjust --relative; RelativePrecision): those a measurement joins, every
+// pair, every pair within a horizontal distance, or a listed set.
+enum class RelativePairs { connected, all, radius, listed };
+
+// RelativePairs::all is refused above this many pairs (E_OPTION): a
+// network of about 1400 stations; past it --relative radius:R.
+inline constexpr std::size_t kMaxAllRelativePairs = 1'000'000;
+
+struct RelativeOptions {
+  RelativePairs pairs = RelativePairs::connected;
+  // radius: every pair whose horizontal distance (in the first station's
+  // local horizon; a local network's x, y) is at most this (metres).
+  double radius_m = 0.0;
+  // listed: pairs of indices into Network::stations, each once (from < to
+  // is not required; a station with itself is refused by the reader).
+  std::vector<std::pair<std::size_t, std::size_t>> listed;
 };
 
 struct AdjustOptions {
@@ -113,6 +133,8 @@ struct AdjustOptions {
   std::uint64_t memory_budget_bytes = 0;
   // A Helmert transformation estimated with the stations (above).
   std::optional<HelmertGroup> helmert;
+  // The pairs whose relative precision is computed (AdjustmentResult::relative).
+  RelativeOptions relative;
   // Variance components (adjust --vce): the measurements in groups (by
   // kind, by their `group`, or by their error model), each group's
   // covariances scaled by a factor estimated from its residuals until no
@@ -138,6 +160,14 @@ struct VarianceComponent {
   double sigma = 0.0;           // its standard deviation, factor · √(2 / r_k)
   bool estimated = false;       // false: redundancy below kMinVceRedundancy, factor 1 kept
 };
+
+// The factor that takes a 1σ horizontal error ellipse to the ellipse that
+// holds `confidence` (0 < p < 1) of a 2-D normal error: √χ²₂(p) =
+// √(−2 ln(1 − p)) (2.4477 at 95 %); and a 1σ standard deviation of one
+// component to the half-width of its two-sided interval at `confidence`:
+// the normal quantile at (1 + p) / 2 (1.9600 at 95 %).
+double ellipse_confidence_scale(double confidence);
+double interval_confidence_scale(double confidence);
 
 // The estimated Helmert of AdjustOptions::helmert: p0 then the rates, in
 // SI (tx, ty, tz m; rx, ry, rz rad; ds unitless; the rates per year), and
@@ -204,11 +234,19 @@ struct AdjustedMeasurement {
   }
 };
 
+// The precision of the difference `to` − `from` of two adjusted stations,
+// in the local horizon of `from` (east, north, up; a local network's x, y,
+// z), from their joint cofactor (S-transformed for a free network; σ0 = 1).
 struct RelativePrecision {
   std::size_t from = 0, to = 0;  // indices into AdjustmentResult::stations
-  double distance_m = 0.0;
-  double sigma_distance_m = 0.0;  // of the distance between them
+  double distance_m = 0.0;        // spatial (3-D)
+  double horizontal_distance_m = 0.0;  // in the horizon of `from`
+  double sigma_distance_m = 0.0;  // of the (3-D) distance between them
   ErrorEllipse ellipse;           // of their horizontal difference, 1σ
+  ErrorEllipse ellipse_confidence;  // at AdjustOptions::confidence (2-D χ² scale, as the stations')
+  double sigma_up_m = 0.0;          // of the difference in up (local: z)
+  double up_confidence_m = 0.0;     // half-width at AdjustOptions::confidence (1-D, two-sided)
+  Eigen::Matrix3d covariance_local_m2 = Eigen::Matrix3d::Zero();  // of the difference, in the horizon of `from`
 };
 
 // Wall seconds of the adjustment's parts, summed over every pass (for the
@@ -232,7 +270,7 @@ struct AdjustmentResult {
   // measurements CSV lists them, status "ignored").
   std::vector<AdjustedMeasurement> measurements;
   std::vector<double> orientations_rad, orientation_sigmas_rad;  // per direction set
-  std::vector<RelativePrecision> relative;  // between stations that share a measurement
+  std::vector<RelativePrecision> relative;  // the pairs of AdjustOptions::relative, ordered by (from, to)
   double vtpv = 0.0;                // vᵀ Σ⁻¹ v, Σ the a-priori covariance
   int dof = 0;
   std::optional<double> variance_factor;  // vtpv / dof

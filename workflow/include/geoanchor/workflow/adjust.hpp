@@ -17,6 +17,7 @@
 #include "geoanchor/io/transform/transform_file.hpp"
 #include "geoanchor/io/network/station_geoid.hpp"
 #include "geoanchor/solver/network_adjustment.hpp"
+#include "geoanchor/workflow/accuracy_standard.hpp"
 
 namespace geoanchor::workflow {
 
@@ -40,6 +41,10 @@ struct AdjustRequest {
   // adjust --geoid FILE.geo: DynAdjust's per-station N, ξ, η (the grid, if
   // any, is options.geoid).
   std::shared_ptr<const io::StationGeoidTable> station_geoid;
+  // --relative connected|all|radius:R_M|pairs:FILE (relative_options) and
+  // --standard NAME|FILE (accuracy_standard.hpp).
+  std::string relative = "connected";
+  std::optional<std::string> standard;
 };
 
 struct PreparedNetwork {
@@ -57,6 +62,11 @@ struct PreparedNetwork {
   // The coefficient of refraction to adjust with: the inputs' own
   // (STAR*NET .REFRACTION), else the request's options.refraction_k.
   double refraction_k = 0.0;
+  // The pairs of --relative over this network (the caller puts them in
+  // AdjustOptions::relative), its text for the reports, and --standard.
+  solver::RelativeOptions relative;
+  std::string relative_spec = "connected";
+  std::shared_ptr<const AccuracyStandard> standard;
 };
 
 // Per GNSS solution type, the measurements that state it, those adjusted
@@ -80,6 +90,22 @@ std::optional<io::GnssSolutionRecord> adjust_solution_record(const PreparedNetwo
 // --constrain that names no station or is malformed, a --refraction that
 // differs from the inputs' own coefficient (usage).
 PreparedNetwork prepare_network(const AdjustRequest& request);
+
+// adjust --relative SPEC over the network's stations: connected (the pairs
+// a measurement joins), all, radius:R_M (every pair within R metres
+// horizontally; R finite and positive), pairs:FILE (a CSV with the header
+// `from,to` and a pair of station ids per row; docs/commands/adjust.md).
+// Throws geoanchor::Error: a SPEC of none of these forms, `all` for more
+// than solver::kMaxAllRelativePairs pairs (usage, E_OPTION, naming the
+// count); a pairs file that cannot be read (io, E_READ), without the
+// header, with an unknown id or a station paired with itself (input,
+// E_PAIRS, naming file, line and id).
+solver::RelativeOptions relative_options(const std::string& spec, const geodesy::Network& net);
+
+// adjust --relative-output: one row per pair of r.relative (header in
+// docs/commands/adjust.md), with the standard's verdicts when
+// prepared.standard is set. Every field finite.
+std::string relative_csv(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
 
 // The adjusted stations as CSV: a network on the ellipsoid
 //   id,x_m,y_m,z_m,lat_deg,lon_deg,h_m,sigma_e_m,sigma_n_m,sigma_u_m,
