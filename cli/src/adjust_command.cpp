@@ -33,6 +33,9 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   add_network_options(cmd, o.network);
   cmd->add_option("--convention", o.convention, "--estimate-helmert: position_vector|coordinate_frame, the convention of the written transform (required)");
   cmd->add_option("--helmert-output", o.helmert_output, "--estimate-helmert: the transform file (default: STATIONS less .csv, plus .helmert.json)");
+  cmd->add_flag("--preanalysis", o.preanalysis,
+                "Pre-analysis: from the design at the a-priori coordinates and the a-priori errors alone (measured values "
+                "optional, not used): predicted ellipses, redundancy, MDB and external reliability; no residuals");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
   cmd->add_option("--jobs", o.jobs, "Threads for the assembly and the statistics (default: the machine's cores); the results do not depend on it")
@@ -289,6 +292,8 @@ int run_adjust(const AdjustCommandOptions& o) {
   workflow::AdjustRequest request = network_request(o.inputs, o.network, o.convention);
   auto& so = request.options;
   so.joint_covariance = o.sinex.has_value();
+  so.preanalysis = o.preanalysis;
+  if (o.preanalysis) so.data_snooping = false;  // nothing to snoop: no residuals
   so.jobs = o.jobs;
   if (o.max_memory_gb) so.memory_budget_bytes = static_cast<std::uint64_t>(std::max(1.0, *o.max_memory_gb * 1e9));
   refuse_shared_paths(o, helmert_path);

@@ -25,6 +25,7 @@ struct AdjustCommandOptions {
   bool json = false;
   NetworkOptions network;
   bool accept_failed_global_test = false;
+  bool preanalysis = false;  // --preanalysis
   bool overwrite = false;
   int jobs = 0;  // threads; 0: the machine's cores
   std::optional<double> max_memory_gb;

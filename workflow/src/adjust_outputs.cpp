@@ -299,7 +299,7 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
           out += kAxis[k % 3];
         }
         out += ',';
-        number(out, m.value(k) * value_scale);
+        if (m.value_known) number(out, m.value(k) * value_scale);  // a planned measurement (pre-analysis): empty
         out += ',';
         number(out, at(am ? &am->adjusted : nullptr, k) * value_scale);
         out += ang ? ",deg," : ",m,";
@@ -321,13 +321,31 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
         out += ',';
         if (set) out += source;
         out += ',';
+        // External reliability: the largest effect of a blunder of its MDB
+        // on any station (3-D, horizontal, vertical; metres) and where.
+        const solver::ExternalReliability* e =
+            am && static_cast<std::size_t>(k) < am->external.size() ? &am->external[static_cast<std::size_t>(k)] : nullptr;
+        const bool has_e = e && std::isfinite(e->effect_m);
+        number(out, has_e ? e->effect_m : std::numeric_limits<double>::quiet_NaN());
+        out += ',';
+        if (has_e) out += csv_field(r.stations[e->station].id);
+        out += ',';
+        number(out, has_e ? e->horizontal_m : std::numeric_limits<double>::quiet_NaN());
+        out += ',';
+        if (has_e) out += csv_field(r.stations[e->horizontal_station].id);
+        out += ',';
+        number(out, has_e ? e->vertical_m : std::numeric_limits<double>::quiet_NaN());
+        out += ',';
+        if (has_e) out += csv_field(r.stations[e->vertical_station].id);
+        out += ',';
         out += metadata;
         out += '\n';
       }
     }
   });
   std::string out = "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,"
-                    "mdb,status,snooping_rank,set,metadata\n";
+                    "mdb,status,snooping_rank,set,external_m,external_station,external_horizontal_m,external_horizontal_station,"
+                    "external_vertical_m,external_vertical_station,metadata\n";
   std::size_t size = out.size();
   for (const auto& part : parts) size += part.size();
   out.reserve(size);

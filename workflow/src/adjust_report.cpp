@@ -17,17 +17,104 @@ namespace geoanchor::workflow {
 using namespace adjust_detail;
 using geodesy::NetworkSpace;
 
+namespace {
+
+constexpr std::size_t kReportRows = 20;
+
+// A component's name in the reports: "" for one value, "0.x" or a point's
+// "ID.x" for a GNSS measurement, an observation set's part by its source.
+std::string component_text(const geodesy::Network& net, const geodesy::NetworkMeasurement& m, Eigen::Index k) {
+  static constexpr const char* kAxis[] = {"x", "y", "z"};
+  if (m.kind == geodesy::MeasurementKind::observation_set) return " [" + m.parts[static_cast<std::size_t>(k)].source + "]";
+  if (m.value.size() == 1) return "";
+  const std::string whose = m.kind == geodesy::MeasurementKind::gnss_points ? net.stations[m.stations[static_cast<std::size_t>(k / 3)]].id
+                                                                            : std::to_string(k / 3);
+  return " [" + whose + "." + kAxis[k % 3] + "]";
+}
+
+// The MDB of component k in its unit (mm or arc seconds).
+std::string mdb_component_text(const geodesy::NetworkMeasurement& m, double mdb, Eigen::Index k) {
+  if (!std::isfinite(mdb)) return "-";
+  return angular(geodesy::component_kind(m, k)) ? format_fixed(mdb * kRadToArcsec, 2) + "\"" : format_fixed(mdb * 1e3, 1) + " mm";
+}
+
+// The measurement components whose blunder of MDB size moves a station
+// most (external reliability), largest first.
+std::string external_reliability_text(const geodesy::Network& net, const solver::AdjustmentResult& r) {
+  struct Row {
+    const solver::AdjustedMeasurement* am;
+    Eigen::Index k;
+  };
+  std::vector<Row> rows;
+  for (const auto& am : r.measurements) {
+    for (std::size_t k = 0; k < am.external.size(); ++k) {
+      if (std::isfinite(am.external[k].effect_m)) rows.push_back({&am, static_cast<Eigen::Index>(k)});
+    }
+  }
+  if (rows.empty()) return "";
+  const auto effect = [](const Row& a) { return a.am->external[static_cast<std::size_t>(a.k)].effect_m; };
+  std::stable_sort(rows.begin(), rows.end(), [&](const Row& a, const Row& b) { return effect(a) > effect(b); });
+  std::ostringstream out;
+  out << "\nExternal reliability: the largest effects on a station of an undetected blunder of MDB size (of " << rows.size()
+      << " components)\n";
+  for (std::size_t i = 0; i < rows.size() && i < kReportRows; ++i) {
+    const auto& am = *rows[i].am;
+    const auto& m = net.measurements[am.index];
+    const auto& e = am.external[static_cast<std::size_t>(rows[i].k)];
+    out << "  " << m.source << "  " << geodesy::to_string(m.kind) << " " << stations_of(net, m) << component_text(net, m, rows[i].k)
+        << ": MDB " << mdb_component_text(m, am.mdb(rows[i].k), rows[i].k) << " moves " << r.stations[e.station].id << " by "
+        << format_fixed(e.effect_m * 1e3, 1) << " mm (horizontal " << format_fixed(e.horizontal_m * 1e3, 1) << " mm at "
+        << r.stations[e.horizontal_station].id << ", vertical " << format_fixed(e.vertical_m * 1e3, 1) << " mm at "
+        << r.stations[e.vertical_station].id << ")\n";
+  }
+  return out.str();
+}
+
+// Pre-analysis: the measurement components least controlled by the others.
+std::string least_redundant_text(const geodesy::Network& net, const solver::AdjustmentResult& r) {
+  struct Row {
+    const solver::AdjustedMeasurement* am;
+    Eigen::Index k;
+  };
+  std::vector<Row> rows;
+  for (const auto& am : r.measurements) {
+    if (!am.used) continue;
+    for (Eigen::Index k = 0; k < am.redundancy.size(); ++k) rows.push_back({&am, k});
+  }
+  const auto red = [](const Row& a) { return a.am->redundancy(a.k); };
+  std::stable_sort(rows.begin(), rows.end(), [&](const Row& a, const Row& b) { return red(a) < red(b); });
+  std::ostringstream out;
+  out << "\nLeast redundant measurement components (redundancy number, MDB; of " << rows.size() << ")\n";
+  for (std::size_t i = 0; i < rows.size() && i < kReportRows; ++i) {
+    const auto& am = *rows[i].am;
+    const auto& m = net.measurements[am.index];
+    out << "  " << m.source << "  " << geodesy::to_string(m.kind) << " " << stations_of(net, m) << component_text(net, m, rows[i].k)
+        << ": r " << format_fixed(am.redundancy(rows[i].k), 3) << ", MDB " << mdb_component_text(m, am.mdb(rows[i].k), rows[i].k)
+        << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace
+
 std::string report_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
   const auto& net = prepared.network;
   std::ostringstream out;
   out << "geoanchor adjust: " << net.source_name << "\n";
+  if (r.preanalysis) {
+    out << "  PRE-ANALYSIS: the design at the a-priori coordinates and the a-priori errors alone; no measured value is "
+           "used: no residuals, no sigma0, no global test, no w-tests\n";
+  }
   out << "  network: " << (net.space == NetworkSpace::ellipsoidal ? "on the ellipsoid " + net.ellipsoid.name() + ", frame " +
                                                                          (net.frame ? net.frame->to_string() : std::string("?"))
                                                                    : "local, axes " + net.axes.name())
       << "; " << net.stations.size() << " stations, " << net.measurements.size() << " measurements\n";
   for (const auto& n : prepared.notes) out << "  " << n << "\n";
   out << "  datum: " << r.datum << "\n";
-  out << "  solve: " << r.iterations << " iterations, last correction " << format_fixed(r.largest_correction_m, 6) << " m; "
+  if (r.preanalysis) {
+    out << "  design: " << r.unknowns << " unknowns, " << r.observations << " observations, dof " << r.dof << ", factor "
+        << r.factor_nonzeros << " nonzeros (one factorization)\n";
+  } else out << "  solve: " << r.iterations << " iterations, last correction " << format_fixed(r.largest_correction_m, 6) << " m; "
       << r.unknowns << " unknowns, " << r.observations << " observations, factor " << r.factor_nonzeros << " nonzeros\n";
   if (!r.removed_per_pass.empty()) {
     std::string steps;
@@ -39,6 +126,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
     out << "\n";
   }
   out << "\n";
+  if (!r.preanalysis) {
   out << "Statistics\n";
   out << "  vtpv = " << format_shortest(r.vtpv) << ", dof = " << r.dof;
   if (r.variance_factor) out << ", variance factor = " << format_fixed(*r.variance_factor, 4) << ", sigma0 = " << format_fixed(*r.sigma0, 4);
@@ -50,6 +138,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
         << (g.passed ? "PASSED" : g.failed_high() ? "FAILED (high)" : "FAILED (low)") << "\n";
   }
   out << "  w-tests: critical |w| = " << format_fixed(r.w_critical, 2) << " (alpha " << format_shortest(o.alpha_point) << ")\n\n";
+  }
   if (prepared.helmert && r.helmert) {
     const HelmertInFileUnits u = helmert_in_file_units(prepared, r);
     out << "Helmert of group " << prepared.helmert->name << ": " << prepared.helmert_frame->to_string() << " -> "
@@ -64,6 +153,23 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
     }
     out << "\n";
   }
+  if (r.preanalysis) {
+    out << "Stations (predicted from the a-priori weights, at the a-priori coordinates; ellipse 1 sigma and at "
+        << format_shortest(100.0 * o.confidence) << " %)\n";
+    out << "  id            " << (net.space == NetworkSpace::ellipsoidal ? "sigma_e  sigma_n  sigma_u" : "sigma_x  sigma_y  sigma_z")
+        << "  (mm)   ellipse a/b (mm) az (deg)   a/b at confidence (mm)  constraint\n";
+    for (const auto& s : r.stations) {
+      if (!s.used) continue;
+      const Eigen::Matrix3d& c = s.covariance_local_m2;
+      char line[240];
+      std::snprintf(line, sizeof line, "  %-12s %8.2f %8.2f %8.2f        %7.2f/%-7.2f %7.2f    %8.2f/%-8.2f      %s\n", s.id.c_str(),
+                    1e3 * std::sqrt(std::max(0.0, c(0, 0))), 1e3 * std::sqrt(std::max(0.0, c(1, 1))),
+                    1e3 * std::sqrt(std::max(0.0, c(2, 2))), 1e3 * s.ellipse.semi_major_m, 1e3 * s.ellipse.semi_minor_m,
+                    s.ellipse.azimuth_rad * kRadToDeg, 1e3 * s.ellipse_confidence.semi_major_m,
+                    1e3 * s.ellipse_confidence.semi_minor_m, s.constraint.c_str());
+      out << line;
+    }
+  } else {
   out << "Stations (sigmas from the a-priori weights; ellipse 1 sigma)\n";
   const bool ellipsoidal = net.space == NetworkSpace::ellipsoidal;
   out << "  id            " << (ellipsoidal ? "sigma_e  sigma_n  sigma_u" : "sigma_x  sigma_y  sigma_z") << "  (mm)   ellipse a/b (mm) az (deg)  constraint\n";
@@ -76,6 +182,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
                   1e3 * std::sqrt(std::max(0.0, c(2, 2))), 1e3 * s.ellipse.semi_major_m, 1e3 * s.ellipse.semi_minor_m,
                   s.ellipse.azimuth_rad * kRadToDeg, s.constraint.c_str());
     out << line;
+  }
   }
   // The flagged measurements first, in the order data snooping removes them.
   const auto p_text = [](double p) {
@@ -142,7 +249,7 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
     if (std::isfinite(am.w_max)) by_w.push_back(&am);
   }
   std::stable_sort(by_w.begin(), by_w.end(), [](auto* a, auto* b) { return a->w_max > b->w_max; });
-  out << "\nMeasurements with the largest |w| (of " << r.measurements.size() << ")\n";
+  if (!r.preanalysis) out << "\nMeasurements with the largest |w| (of " << r.measurements.size() << ")\n";
   for (std::size_t k = 0; k < by_w.size() && k < 20; ++k) {
     const auto& am = *by_w[k];
     const auto& m = net.measurements[am.index];
@@ -156,6 +263,8 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
       if (am.outlier) out << "  " << net.measurements[am.index].source << ": " << am.removed_because << "\n";
     }
   }
+  out << external_reliability_text(net, r);
+  if (r.preanalysis) out << least_redundant_text(net, r);
   if (!r.warnings.empty()) {
     out << "\nWarnings\n";
     for (const auto& w : r.warnings) out << "  " << w << "\n";
@@ -171,6 +280,7 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
   auto num = [](double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); };
   ordered_json j;
   j["schema"] = "geoanchor.adjust-report/1";
+  j["preanalysis"] = r.preanalysis;
   j["inputs"] = net.source_name;
   j["space"] = net.space == NetworkSpace::ellipsoidal ? "ellipsoidal" : "local";
   if (net.frame) j["frame"] = net.frame->to_string();
@@ -298,7 +408,23 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
     x["redundancy"] = vec(am.redundancy);
     x["w"] = vec(am.w);
     x["mdb"] = vec(am.mdb);
-    x["test"] = {{"statistic", am.statistic}, {"dof", am.test_dof}, {"p_value", am.p_value}};
+    x["test"] = {{"statistic", num(am.statistic)}, {"dof", am.test_dof}, {"p_value", num(am.p_value)}};
+    ordered_json external = ordered_json::array();  // per component: null without an MDB
+    for (const auto& e : am.external) {
+      if (!std::isfinite(e.effect_m)) {
+        external.push_back(nullptr);
+        continue;
+      }
+      ordered_json c = {{"effect_m", e.effect_m},
+                        {"station", r.stations[e.station].id},
+                        {"horizontal_m", e.horizontal_m},
+                        {"horizontal_station", r.stations[e.horizontal_station].id},
+                        {"vertical_m", e.vertical_m},
+                        {"vertical_station", r.stations[e.vertical_station].id}};
+      if (e.helmert.size() > 0) c["helmert"] = vec(e.helmert);
+      external.push_back(std::move(c));
+    }
+    x["external"] = std::move(external);
     x["status"] = solver::to_string(am.status(r.alpha_point));
     x["snooping_rank"] = am.snooping_rank > 0 ? ordered_json(am.snooping_rank) : ordered_json(nullptr);
     if (!m.frame_step.empty()) x["frame_step"] = m.frame_step;

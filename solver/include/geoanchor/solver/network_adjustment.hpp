@@ -37,6 +37,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -113,6 +114,38 @@ struct AdjustOptions {
   std::uint64_t memory_budget_bytes = 0;
   // A Helmert transformation estimated with the stations (above).
   std::optional<HelmertGroup> helmert;
+  // Pre-analysis (adjust --preanalysis): the design at the a-priori
+  // coordinates, factored once, no iteration; the measured values are not
+  // read (each is replaced by its value computed at the a-priori
+  // coordinates, so the misclosures are zero). Results: station
+  // covariances and ellipses, redundancy numbers, MDB and external
+  // reliability; no residuals, w-tests, σ0 or global test (NaN there, and
+  // AdjustmentResult::preanalysis set). Every station needs a-priori
+  // coordinates (E_PREANALYSIS_POSITION names one that has none).
+  bool preanalysis = false;
+  // External reliability (AdjustedMeasurement::external): per measurement
+  // component, the effect on the unknowns of an undetected blunder of MDB
+  // size, ∇x = N⁻¹ Aᵢᵀ Pᵢ ∇lᵢ. One solve with the factor per component
+  // (batched): O(components · nnz(L)) (docs/commands/adjust.md).
+  bool external_reliability = true;
+};
+
+// The effect on the coordinates of an undetected blunder of one
+// component's MDB (JAG3D's "influence on point position", EP): the
+// largest over the stations, its length in 3-D and, separately, its
+// horizontal and vertical parts (in the local east, north, up; a local
+// network: x, y and z), each with its station. NaN (and station 0) where
+// the component has no MDB (no redundancy).
+struct ExternalReliability {
+  double effect_m = std::numeric_limits<double>::quiet_NaN();
+  std::size_t station = 0;  // index into AdjustmentResult::stations
+  double horizontal_m = std::numeric_limits<double>::quiet_NaN();
+  std::size_t horizontal_station = 0;
+  double vertical_m = std::numeric_limits<double>::quiet_NaN();
+  std::size_t vertical_station = 0;
+  // With --estimate-helmert: the effect on each Helmert parameter
+  // (EstimatedHelmert's order and units, SI); empty without.
+  Eigen::VectorXd helmert;
 };
 
 // The estimated Helmert of AdjustOptions::helmert: p0 then the rates, in
@@ -168,6 +201,8 @@ struct AdjustedMeasurement {
   int test_dof = 0;        // 0: uncontrolled (no direction with redundancy ≥ kMinRedundancy)
   double p_value = 1.0;
   double log_p = 0.0;      // ln p_value without underflow: the evidence data snooping ranks by
+  // Per component (AdjustOptions::external_reliability; empty without).
+  std::vector<ExternalReliability> external;
   // In the adjustment, controlled, and its measurement test's p-value below
   // alpha_point: what the reports flag and data snooping removes.
   bool fails_test(double alpha_point) const { return used && test_dof > 0 && p_value < alpha_point; }
@@ -200,6 +235,7 @@ struct AdjustmentTimings {
   double datum = 0.0;           // the datum's undefined and weak combinations (first pass)
   double snooping = 0.0;        // data snooping's order: the failing measurements' cofactors and the sequence
   double stations = 0.0;        // covariances, ellipses, relative precision
+  double external = 0.0;        // external reliability: a solve per measurement component
 };
 
 struct AdjustmentResult {
@@ -245,6 +281,8 @@ struct AdjustmentResult {
   std::int64_t factor_nonzeros = 0;
   AdjustmentTimings seconds;
   std::optional<EstimatedHelmert> helmert;
+  // AdjustOptions::preanalysis: no residuals (NaN), no σ0 or global test.
+  bool preanalysis = false;
 };
 
 // The measurements that fail their test (flagged, or removed by data
