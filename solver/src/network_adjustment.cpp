@@ -23,6 +23,7 @@
 #include "network_approximate.hpp"
 #include "network_canonical_order.hpp"
 #include "network_data_snooping.hpp"
+#include "network_candidates.hpp"
 #include "network_datum.hpp"
 #include "network_external_reliability.hpp"
 #include "network_free_datum.hpp"
@@ -80,8 +81,8 @@ void refuse_malformed_sets(const geodesy::Network& network) {
 // A measurement with no measured value (network JSON "value": null) is a
 // planned one: only a pre-analysis takes it. A pre-analysis needs every
 // station's a-priori coordinates (the design is taken there).
-void refuse_for_mode(const geodesy::Network& network, bool preanalysis) {
-  if (preanalysis) {
+void refuse_for_mode(const geodesy::Network& network, const AdjustOptions& o) {
+  if (o.preanalysis) {
     for (const auto& s : network.stations) {
       if (!s.position_known) {
         throw Error(ErrorKind::input, "E_PREANALYSIS_POSITION",
@@ -90,6 +91,9 @@ void refuse_for_mode(const geodesy::Network& network, bool preanalysis) {
       }
     }
     return;
+  }
+  if (!o.candidates.empty()) {
+    throw Error(ErrorKind::usage, "E_OPTION", "candidate measurements (--candidates) are ranked by a pre-analysis only: give --preanalysis");
   }
   for (const auto& m : network.measurements) {
     if (!m.value_known && !m.ignore) {
@@ -558,6 +562,7 @@ bool adjust_pass(Passes& s) {
   t0 = Clock::now();
   station_statistics(p, f, inner, result, s.jobs);
   result.seconds.stations += since(t0);
+  if (planned && !p.o.candidates.empty()) rank_candidates(p, f, inner, result);
   conclude(p, s.datum_warnings, result);
   return true;
 }
@@ -580,7 +585,7 @@ AdjustmentResult adjust_placed(const geodesy::Network& network, const AdjustOpti
 AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOptions& o) {
   refuse_empty(network);
   refuse_malformed_sets(network);
-  refuse_for_mode(network, o.preanalysis);
+  refuse_for_mode(network, o);
   if (o.preanalysis) return adjust_values_known(planned_values(network, o), o);
   return adjust_values_known(network, o);
 }

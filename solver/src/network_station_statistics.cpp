@@ -35,11 +35,11 @@ ErrorEllipse ellipse_of(const Eigen::Matrix2d& en) {
   return e;
 }
 
-// The horizontal ellipse of a station's covariance in its local components:
-// east, north (ellipsoidal: azimuth from north towards east) or x, y (local:
-// from +x towards +y, a bearing when x is north and y east, as GNU Gama
-// orients its ellipses). ellipse_of measures from its second axis towards
-// its first, so a local network's x, y go in swapped.
+
+}  // namespace
+
+// ellipse_of measures from its second axis towards its first, so a local
+// network's x, y go in swapped.
 ErrorEllipse horizontal_ellipse(const Eigen::Matrix2d& c, geodesy::NetworkSpace space) {
   if (space == geodesy::NetworkSpace::ellipsoidal) return ellipse_of(c);
   Eigen::Matrix2d yx;
@@ -47,12 +47,14 @@ ErrorEllipse horizontal_ellipse(const Eigen::Matrix2d& c, geodesy::NetworkSpace 
   return ellipse_of(yx);
 }
 
+namespace {
+
 // Per station its position, covariance (in the position's axes and the
 // local ones) and error ellipses.
 void adjusted_stations(const NetworkProblem& p, const DatumCofactors& cofactors, AdjustmentResult& result, int jobs) {
   const auto& net = p.net;
   const auto& o = p.o;
-  const double confidence_scale = std::sqrt(-2.0 * std::log(1.0 - o.confidence));  // √χ²₂(p)
+  const double confidence_scale = confidence_scale_2d(o.confidence);
   // Each station its own (on threads).
   result.stations.assign(net.stations.size(), AdjustedStation{});
   for_chunks(net.stations.size(), kMeasurementChunk, jobs, [&](std::size_t begin, std::size_t end) {

@@ -37,6 +37,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <string>
@@ -67,6 +68,43 @@ struct HelmertGroup {
   std::vector<double> epochs;             // rates: each member's epoch (decimal year), as `measurements`
   std::string name;                       // for messages
 };
+
+struct AdjustmentResult;
+
+// Pre-analysis candidates (AdjustOptions::candidates): a candidate added
+// to the design changes the covariance by a low-rank term, from the
+// factor (no refactorization): with B its whitened rows over the unknowns
+// (a new direction set's orientation projected out), U = S N⁻¹ Bᵀ (S the
+// free network's S-transformation, else I) and M = I + B U,
+//   Q'(s1, s2) = Q(s1, s2) − U(s1) M⁻¹ U(s2)ᵀ
+// for the 3 × 3 blocks of stations s1, s2 along their local axes (east,
+// north, up; a local network's x, y, z; zero rows for held components).
+struct CovarianceUpdate {
+  std::vector<Eigen::MatrixXd> station;  // per station: U's 3 × k rows (empty: the station has no unknown)
+  Eigen::MatrixXd m_inverse;             // k × k
+  // Q'(s, s) from the design's block q (the station's covariance_local_m2).
+  Eigen::Matrix3d updated(std::size_t s, const Eigen::Matrix3d& q) const {
+    if (station[s].size() == 0) return q;
+    return q - station[s] * m_inverse * station[s].transpose();
+  }
+};
+
+// A ranking criterion: the design's worst value (larger is worse) and
+// where (a station, or for a pair criterion the first of the pair), from
+// the pre-analysis result and, for a candidate, the update its
+// measurement makes (nullptr: the design as it is). The hook for ranking
+// against an accuracy standard's worst pair: such a criterion reads the
+// pairs' covariances from the result and subtracts the update's terms.
+struct CriterionValue {
+  double value = 0.0;
+  std::size_t station = 0;
+  std::size_t other = 0;  // a pair criterion's second station (else = station)
+};
+using CandidateCriterion = std::function<CriterionValue(const AdjustmentResult& design, const CovarianceUpdate* update)>;
+
+// The built-in criteria: the largest horizontal semi-major axis at
+// AdjustOptions::confidence (2-D), or the largest σ of the up (z) component.
+enum class CandidateRanking { semi_major, sigma_up };
 
 struct AdjustOptions {
   double alpha = 0.05;          // the global test
@@ -128,6 +166,14 @@ struct AdjustOptions {
   // size, ∇x = N⁻¹ Aᵢᵀ Pᵢ ∇lᵢ. One solve with the factor per component
   // (batched): O(components · nnz(L)) (docs/commands/adjust.md).
   bool external_reliability = true;
+  // Pre-analysis: candidate measurements (stations of the network; values
+  // not read), each ranked by how much it improves the worst station when
+  // added alone to the design (AdjustmentResult::candidates). The
+  // directions of a direction set that no design measurement has are one
+  // candidate together (their orientation is a new unknown).
+  std::vector<geodesy::NetworkMeasurement> candidates;
+  CandidateRanking candidate_ranking = CandidateRanking::semi_major;
+  CandidateCriterion candidate_criterion;  // set: used instead of candidate_ranking
 };
 
 // The effect on the coordinates of an undetected blunder of one
@@ -215,6 +261,13 @@ struct AdjustedMeasurement {
   }
 };
 
+// A candidate measurement of a pre-analysis (AdjustOptions::candidates).
+struct RankedCandidate {
+  std::vector<std::size_t> measurements;  // indices into AdjustOptions::candidates (a direction set: its directions)
+  CriterionValue worst;                   // the criterion with it added
+  double improvement = 0.0;               // the design's worst value less `worst.value`
+};
+
 struct RelativePrecision {
   std::size_t from = 0, to = 0;  // indices into AdjustmentResult::stations
   double distance_m = 0.0;
@@ -283,6 +336,11 @@ struct AdjustmentResult {
   std::optional<EstimatedHelmert> helmert;
   // AdjustOptions::preanalysis: no residuals (NaN), no σ0 or global test.
   bool preanalysis = false;
+  // AdjustOptions::candidates ranked, best first (the lowest worst value
+  // after it is added; ties in the input's order), and the design's own
+  // worst value.
+  std::vector<RankedCandidate> candidates;
+  CriterionValue design_worst;
 };
 
 // The measurements that fail their test (flagged, or removed by data
