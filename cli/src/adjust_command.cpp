@@ -36,6 +36,11 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_flag("--preanalysis", o.preanalysis,
                 "Pre-analysis: from the design at the a-priori coordinates and the a-priori errors alone (measured values "
                 "optional, not used): predicted ellipses, redundancy, MDB and external reliability; no residuals");
+  cmd->add_option("--candidates", o.candidates,
+                  "--preanalysis: candidate measurements (any network input format; values not used), each ranked by how much "
+                  "it improves the worst station when added alone");
+  cmd->add_option("--candidates-output", o.candidates_output, "--candidates: write the ranked candidates as CSV");
+  cmd->add_option("--rank-by", o.rank_by, "--candidates: semi-major (the largest semi-major axis at --confidence, the default) or sigma-up");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
   cmd->add_option("--jobs", o.jobs, "Threads for the assembly and the statistics (default: the machine's cores); the results do not depend on it")
@@ -96,6 +101,16 @@ void check_options(const AdjustCommandOptions& o) {
   if (o.json && o.output == "-") {
     throw Error(ErrorKind::usage, "E_OPTION", "--json and -o -: both would go to standard output; give -o STATIONS.csv");
   }
+  if (!o.preanalysis && (o.candidates || o.candidates_output || o.rank_by)) {
+    throw Error(ErrorKind::usage, "E_OPTION", std::string(o.candidates ? "--candidates" : o.candidates_output ? "--candidates-output" : "--rank-by") +
+                                                  ": only with --preanalysis (candidates are ranked by a pre-analysis of the design)");
+  }
+  if (!o.candidates && (o.candidates_output || o.rank_by)) {
+    throw Error(ErrorKind::usage, "E_OPTION", std::string(o.candidates_output ? "--candidates-output" : "--rank-by") + ": only with --candidates FILE");
+  }
+  if (o.rank_by && *o.rank_by != "semi-major" && *o.rank_by != "sigma-up") {
+    throw Error(ErrorKind::usage, "E_OPTION", "--rank-by " + *o.rank_by + ": expected semi-major or sigma-up");
+  }
   if (!o.network.estimate_helmert && (o.convention || o.helmert_output)) {
     throw Error(ErrorKind::usage, "E_OPTION", std::string(o.convention ? "--convention" : "--helmert-output") + ": only with --estimate-helmert");
   }
@@ -124,6 +139,7 @@ void refuse_shared_paths(const AdjustCommandOptions& o, const std::optional<std:
   if (o.measurements) outputs.push_back({"--measurements", *o.measurements});
   if (o.report) outputs.push_back({"--report", *o.report});
   if (o.sinex) outputs.push_back({"--sinex", *o.sinex});
+  if (o.candidates_output) outputs.push_back({"--candidates-output", *o.candidates_output});
   if (helmert_path) outputs.push_back({"--estimate-helmert's transform file", *helmert_path});
   for (std::size_t a = 0; a < outputs.size(); ++a) {
     for (std::size_t b = a + 1; b < outputs.size(); ++b) {
@@ -153,11 +169,12 @@ struct AdjustOutputs {
     if (o.report) report = std::make_unique<io::AtomicOutputFile>(*o.report, overwrite);
     if (o.sinex) sinex = std::make_unique<io::AtomicOutputFile>(*o.sinex, overwrite);
     if (helmert_path) helmert = std::make_unique<io::AtomicOutputFile>(*helmert_path, overwrite);
+    if (o.candidates_output) candidates = std::make_unique<io::AtomicOutputFile>(*o.candidates_output, overwrite);
   }
   const io::Overwrite overwrite;
   io::DataOutput stations;
   std::unique_ptr<io::AtomicOutputFile> measurements, report;
-  std::unique_ptr<io::AtomicOutputFile> sinex, helmert;
+  std::unique_ptr<io::AtomicOutputFile> sinex, helmert, candidates;
 };
 
 // The report, shown whether or not the results are written, with the
@@ -270,6 +287,10 @@ void write_outputs(const AdjustCommandOptions& o, AdjustOutputs& outputs, const 
     outputs.helmert->stream() << helmert_text;
     group.push_back(outputs.helmert.get());
   }
+  if (outputs.candidates) {
+    outputs.candidates->stream() << workflow::candidates_csv(prepared, r, so);
+    group.push_back(outputs.candidates.get());
+  }
   if (outputs.measurements) {
     outputs.measurements->stream() << measurements_text;
     group.push_back(outputs.measurements.get());
@@ -294,6 +315,8 @@ int run_adjust(const AdjustCommandOptions& o) {
   so.joint_covariance = o.sinex.has_value();
   so.preanalysis = o.preanalysis;
   if (o.preanalysis) so.data_snooping = false;  // nothing to snoop: no residuals
+  request.candidates = o.candidates;
+  if (o.rank_by == "sigma-up") so.candidate_ranking = solver::CandidateRanking::sigma_up;
   so.jobs = o.jobs;
   if (o.max_memory_gb) so.memory_budget_bytes = static_cast<std::uint64_t>(std::max(1.0, *o.max_memory_gb * 1e9));
   refuse_shared_paths(o, helmert_path);
@@ -302,6 +325,7 @@ int run_adjust(const AdjustCommandOptions& o) {
   const workflow::PreparedNetwork prepared = workflow::prepare_network(request);
   so.helmert = prepared.helmert;
   so.refraction_k = prepared.refraction_k;
+  so.candidates = prepared.candidates;
   const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
   const std::string text = workflow::report_text(prepared, r, so);
   show_report(o, outputs, prepared, r, so, text);

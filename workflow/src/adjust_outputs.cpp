@@ -356,6 +356,35 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
   return out;
 }
 
+std::string candidate_criterion_name(const solver::AdjustOptions& o) {
+  if (o.candidate_criterion) return "custom";
+  if (o.candidate_ranking == solver::CandidateRanking::sigma_up) return "sigma_up";
+  return "semi_major_" + format_shortest(100.0 * o.confidence);
+}
+
+std::string candidates_csv(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
+  const auto& net = prepared.network;
+  const std::string criterion = candidate_criterion_name(o);
+  std::string out = "rank,source,kind,stations,measurements,criterion,worst_m,worst_station,improvement_m\n";
+  const auto number = [&out](double v) {
+    if (std::isfinite(v)) out += format_shortest(v);  // else empty
+  };
+  for (std::size_t k = 0; k < r.candidates.size(); ++k) {
+    const auto& c = r.candidates[k];
+    const auto& first = prepared.candidates[c.measurements.front()];
+    out += std::to_string(k + 1) + ',' + csv_field(first.source) + ',' +
+           (first.set && c.measurements.size() > 1 ? std::string("direction_set") : std::string(kind_key(first.kind))) + ',';
+    std::string stations;
+    for (std::size_t mi : c.measurements) stations += (stations.empty() ? "" : " ") + stations_of(net, prepared.candidates[mi]);
+    out += csv_field(stations) + ',' + std::to_string(c.measurements.size()) + ',' + criterion + ',';
+    number(c.worst.value);
+    out += ',' + csv_field(r.stations[c.worst.station].id) + ',';
+    number(c.improvement);
+    out += '\n';
+  }
+  return out;
+}
+
 std::string stations_sidecar_text(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o,
                                   const std::vector<std::string>& argv, const std::vector<std::string>& inputs,
                                   const std::string& version) {

@@ -265,6 +265,25 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
   }
   out << external_reliability_text(net, r);
   if (r.preanalysis) out << least_redundant_text(net, r);
+  if (!r.candidates.empty()) {
+    const bool up = o.candidate_ranking == solver::CandidateRanking::sigma_up && !o.candidate_criterion;
+    out << "\nCandidates ranked by the worst station's " << (o.candidate_criterion ? std::string("criterion (custom)")
+                                                           : up ? std::string("sigma up")
+                                                                : "semi-major axis at " + format_shortest(100.0 * o.confidence) + " %")
+        << " with each added alone (design: " << format_fixed(r.design_worst.value * 1e3, 2) << " mm at "
+        << r.stations[r.design_worst.station].id << ")\n";
+    for (std::size_t k = 0; k < r.candidates.size() && k < kReportRows; ++k) {
+      const auto& c = r.candidates[k];
+      const auto& first = prepared.candidates[c.measurements.front()];
+      std::string stations;
+      for (std::size_t mi : c.measurements) stations += (stations.empty() ? "" : " ") + stations_of(net, prepared.candidates[mi]);
+      out << "  " << (k + 1) << ". " << first.source << "  " << geodesy::to_string(first.kind)
+          << (c.measurements.size() > 1 ? " (" + std::to_string(c.measurements.size()) + " of a new set)" : std::string()) << " "
+          << stations << ": worst " << format_fixed(c.worst.value * 1e3, 2) << " mm at " << r.stations[c.worst.station].id
+          << " (improves by " << format_fixed(c.improvement * 1e3, 2) << " mm)\n";
+    }
+    if (r.candidates.size() > kReportRows) out << "  (" << r.candidates.size() << " in all: --candidates-output lists every one)\n";
+  }
   if (!r.warnings.empty()) {
     out << "\nWarnings\n";
     for (const auto& w : r.warnings) out << "  " << w << "\n";
@@ -433,6 +452,21 @@ nlohmann::ordered_json report_document(const PreparedNetwork& prepared, const so
   if (full) j["measurements"] = std::move(measurements);
   j["flagged"] = std::move(flagged);
   j["removed"] = std::move(removed);
+  if (!r.candidates.empty()) {
+    ordered_json ranked = ordered_json::array();
+    for (const auto& c : r.candidates) {
+      ordered_json sources = ordered_json::array();
+      for (std::size_t mi : c.measurements) sources.push_back(prepared.candidates[mi].source);
+      ranked.push_back({{"sources", sources},
+                        {"worst_m", num(c.worst.value)},
+                        {"worst_station", r.stations[c.worst.station].id},
+                        {"improvement_m", num(c.improvement)}});
+    }
+    j["candidates"] = {{"criterion", candidate_criterion_name(o)},
+                       {"design_worst_m", num(r.design_worst.value)},
+                       {"design_worst_station", r.stations[r.design_worst.station].id},
+                       {"ranked", ranked}};
+  }
   j["warnings"] = r.warnings;
   if (!r.refused_because.empty()) j["refused_because"] = r.refused_because;
   return j;

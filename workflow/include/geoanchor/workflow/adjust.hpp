@@ -40,6 +40,10 @@ struct AdjustRequest {
   // adjust --geoid FILE.geo: DynAdjust's per-station N, ξ, η (the grid, if
   // any, is options.geoid).
   std::shared_ptr<const io::StationGeoidTable> station_geoid;
+  // adjust --candidates FILE (with --preanalysis): candidate measurements,
+  // read as one more input (any network format); prepare_network takes
+  // them out of the network into PreparedNetwork::candidates.
+  std::optional<std::string> candidates;
 };
 
 struct PreparedNetwork {
@@ -57,6 +61,10 @@ struct PreparedNetwork {
   // The coefficient of refraction to adjust with: the inputs' own
   // (STAR*NET .REFRACTION), else the request's options.refraction_k.
   double refraction_k = 0.0;
+  // AdjustRequest::candidates: the file's measurements (their stations and
+  // direction sets indices into `network`'s), for AdjustOptions::candidates;
+  // as read (no frame step, no variance scale: their values are not used).
+  std::vector<geodesy::NetworkMeasurement> candidates;
 };
 
 // Per GNSS solution type, the measurements that state it, those adjusted
@@ -94,6 +102,18 @@ std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentRe
 // adjustment run with AdjustOptions::joint_covariance). Throws
 // geoanchor::Error (usage) for a local network or a frame without epoch.
 std::string stations_sinex(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const std::string& software);
+
+// A pre-analysis's ranked candidates (AdjustmentResult::candidates), one
+// row each, best first:
+//   rank,source,kind,stations,measurements,criterion,worst_m,worst_station,improvement_m
+// (criterion: semi_major_95 (the confidence in %) or sigma_up; worst_m
+// the criterion's worst value with the candidate added; the first row's
+// rank 1). Throws nothing.
+std::string candidates_csv(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
+
+// The criterion's name in the outputs: "semi_major_95", "sigma_up", or
+// "custom" (AdjustOptions::candidate_criterion).
+std::string candidate_criterion_name(const solver::AdjustOptions& o);
 
 // One row per measurement component with its statistics, formatted on
 // `jobs` threads (0: the machine's cores); the text does not depend on how
