@@ -19,6 +19,8 @@
 //    the errors are correlated, so it wanders by a few %) and eᵀNe / dim
 //    (e the errors against the truth, N the normal matrix of the kept
 //    baselines: 1 ± a few ‰ when the covariances are right);
+//  - pre-analysis (--preanalysis) with and without the external
+//    reliability, against the bare factor-and-solve;
 //  - the whole `geoanchor adjust` command on the DynaML files (read, adjust,
 //    every statistic, write stations, measurements and report), as given
 //    (the default: every failing measurement flagged and ranked in data
@@ -145,6 +147,11 @@ double bare_cholmod_seconds(const GeneratedNetwork& g, bool metis) {
   return seconds;
 }
 
+struct PreanalysisRun {
+  double seconds = -1.0;
+  solver::AdjustmentTimings parts;
+};
+
 struct KernelRun {
   double seconds = -1.0, sigma0 = 0.0, coverage = 0.0, chi2_ratio = 0.0;
   int passes = 0, downdated = 0;
@@ -153,6 +160,8 @@ struct KernelRun {
   std::int64_t factor_nonzeros = 0;
   double dense_difference = -1.0;  // worst station block against a dense inverse, relative (-1: not checked)
   double one_thread_seconds = 0.0, two_thread_seconds = 0.0;  // filled by main
+  double bare_seconds = 0.0;                                   // filled by main
+  PreanalysisRun preanalysis, preanalysis_no_external;          // filled by main
 };
 
 // The stations' covariance blocks against the dense inverse of the normal
@@ -257,6 +266,38 @@ std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t
   run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
   run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return {k, run};
+}
+
+// Pre-analysis (adjust --preanalysis) in a child process: its wall
+// seconds and parts, with the external reliability (a solve per
+// measurement component) or without.
+PreanalysisRun preanalysis_in_child(const GeneratedNetwork& g, bool external) {
+  int fds[2];
+  if (pipe(fds) != 0) std::exit(1);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    PreanalysisRun k;
+    const auto t0 = Clock::now();
+    solver::AdjustOptions options;
+    options.jobs = 2;
+    options.preanalysis = true;
+    options.data_snooping = false;
+    options.external_reliability = external;
+    const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
+    k.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    k.parts = r.seconds;
+    if (write(fds[1], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) _exit(1);
+    _exit(0);
+  }
+  close(fds[1]);
+  PreanalysisRun k;
+  if (read(fds[0], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) k.seconds = -1.0;
+  close(fds[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) k.seconds = -1.0;
+  return k;
 }
 
 // The command line (the usage line at the top of this file).
@@ -419,6 +460,12 @@ bool measure_size(std::size_t n, const BenchOptions& b, const fs::path& folder,
   std::fflush(stdout);
   k.one_thread_seconds = one_thread;
   k.two_thread_seconds = a;
+  k.bare_seconds = bare;
+  if (n <= b.kernel_max) {
+    k.preanalysis = preanalysis_in_child(g, true);
+    k.preanalysis_no_external = preanalysis_in_child(g, false);
+    if (k.preanalysis.seconds < 0.0 || k.preanalysis_no_external.seconds < 0.0) return false;
+  }
   kernels.push_back({n, k});
   return true;
 }
@@ -427,25 +474,34 @@ bool measure_size(std::size_t n, const BenchOptions& b, const fs::path& folder,
 // speed-up of two threads; then the legend.
 void print_parts(const std::vector<std::pair<std::size_t, KernelRun>>& kernels) {
   std::printf("\nthe adjustment's parts (seconds over every pass; solver::AdjustmentTimings; passes: all, and those downdated)\n"
-              "%-8s %10s %7s %9s %9s %9s %9s %9s %9s %9s %9s %9s %12s\n",
+              "%-8s %10s %7s %9s %9s %9s %9s %9s %9s %9s %9s %9s %9s %12s\n",
               "stations", "nnz(L)", "passes", "assemble", "factor", "solve", "sel.inv", "downdate", "per-meas", "datum", "snooping",
-              "stations", "vs dense");
+              "stations", "external", "vs dense");
   // (then, per size, the adjustment on one thread and the speed-up of two)
   for (const auto& [n, k] : kernels) {
     char dense[32] = "-";
     if (k.dense_difference >= 0.0 || std::isnan(k.dense_difference)) std::snprintf(dense, sizeof dense, "%.1e", k.dense_difference);
     char passes[16];
     std::snprintf(passes, sizeof passes, "%d/%d", k.passes, k.downdated);
-    std::printf("%-8zu %10.3g %7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %12s\n", n,
+    std::printf("%-8zu %10.3g %7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %12s\n", n,
                 static_cast<double>(k.factor_nonzeros), passes, k.parts.assemble, k.parts.factor, k.parts.solve,
                 k.parts.select_inverse, k.parts.downdate, k.parts.measurements, k.parts.datum, k.parts.snooping, k.parts.stations,
-                dense);
+                k.parts.external, dense);
   }
   std::printf("\n%-8s %12s %12s %9s\n", "stations", "1 thread s", "2 threads s", "speed-up");
   for (const auto& [n, k] : kernels) {
     if (k.one_thread_seconds > 0.0) {
       std::printf("%-8zu %12.2f %12.2f %9.2f\n", n, k.one_thread_seconds, k.two_thread_seconds, k.one_thread_seconds / k.two_thread_seconds);
     }
+  }
+  std::printf("\npre-analysis (--preanalysis, 2 threads): seconds, and against the bare factor-and-solve; the external "
+              "reliability's share (a solve per measurement component)\n%-8s %10s %8s %12s %8s %10s %8s\n",
+              "stations", "no ext. s", "x bare", "with ext. s", "x bare", "external s", "factor s");
+  for (const auto& [n, k] : kernels) {
+    if (k.preanalysis.seconds < 0.0) continue;
+    std::printf("%-8zu %10.2f %8.2f %12.2f %8.2f %10.2f %8.2f\n", n, k.preanalysis_no_external.seconds,
+                k.preanalysis_no_external.seconds / k.bare_seconds, k.preanalysis.seconds, k.preanalysis.seconds / k.bare_seconds,
+                k.preanalysis.parts.external, k.preanalysis.parts.factor);
   }
   std::printf("\nblunders: planted found / planted + other measurements removed (alpha 0.001 removes about 0.1 %% of good ones)\n"
               "cover: station components within 1.96 sigma of the truth; eNe/n: e'Ne / n over the free stations' components\n");

@@ -27,18 +27,20 @@ ExternalReliability largest_effect(const NetworkProblem& p, const Eigen::VectorX
   e.effect_m = e.horizontal_m = e.vertical_m = 0.0;
   for (std::size_t s = 0; s < p.layout.station.size(); ++s) {
     const auto& u = p.layout.station[s];
-    double c[3] = {0.0, 0.0, 0.0};
+    Eigen::Vector3d along = Eigen::Vector3d::Zero();  // along the unknowns' axes
     bool any = false;
     for (int k = 0; k < 3; ++k) {
       const Index at = u[static_cast<std::size_t>(k)];
       if (at >= 0) {
-        c[k] = dx(at);
+        along(k) = dx(at);
         any = true;
       }
     }
     if (!any) continue;
-    const double horizontal = std::hypot(c[0], c[1]);
-    const double vertical = std::abs(c[2]);
+    // In the local axes (AdjustedStation::covariance_local_m2's).
+    const Eigen::Vector3d c = p.states[s].local_from_xyz * (p.states[s].axes.transpose() * along);
+    const double horizontal = std::hypot(c(0), c(1));
+    const double vertical = std::abs(c(2));
     const double length = std::hypot(horizontal, vertical);
     // NaN-propagating: a NaN length is taken (never silently dropped).
     if (!(length <= e.effect_m)) {
