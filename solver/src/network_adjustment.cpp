@@ -405,6 +405,15 @@ void gauss_newton(Passes& s, bool same_unknowns, bool downdated) {
   }
 }
 
+// The factor's size, the unknowns, observations and degrees of freedom.
+void record_factor(const NetworkProblem& p, const NormalFactor& f, std::size_t rows, AdjustmentResult& result) {
+  result.factor_nonzeros = f.factor_nonzeros();
+  result.unknowns = static_cast<std::size_t>(p.layout.count);
+  result.observations = rows;
+  const int defect = p.free ? static_cast<int>(p.defect.cols()) : 0;
+  result.dof = static_cast<int>(rows) - static_cast<int>(p.layout.count) + defect;
+}
+
 // The statistics at the solution (with the last iteration's factor
 // when the matrix is the same): the factor with its selected inverse, and
 // the unknowns, observations and degrees of freedom.
@@ -433,11 +442,7 @@ NormalFactor factor_at_solution(Passes& s, bool downdated) {
   t0 = Clock::now();
   if (!downdated) f.select_inverse(s.jobs);  // (a downdate updated it)
   result.seconds.select_inverse += since(t0);
-  result.factor_nonzeros = f.factor_nonzeros();
-  result.unknowns = static_cast<std::size_t>(p.layout.count);
-  result.observations = n.rows;
-  const int defect = p.free ? static_cast<int>(p.defect.cols()) : 0;
-  result.dof = static_cast<int>(n.rows) - static_cast<int>(p.layout.count) + defect;
+  record_factor(p, f, n.rows, result);
   return f;
 }
 
@@ -461,11 +466,7 @@ NormalFactor preanalysis_factor(Passes& s) {
   t0 = Clock::now();
   f.select_inverse(s.jobs);
   result.seconds.select_inverse += since(t0);
-  result.factor_nonzeros = f.factor_nonzeros();
-  result.unknowns = static_cast<std::size_t>(p.layout.count);
-  result.observations = n.rows;
-  const int defect = p.free ? static_cast<int>(p.defect.cols()) : 0;
-  result.dof = static_cast<int>(n.rows) - static_cast<int>(p.layout.count) + defect;
+  record_factor(p, f, n.rows, result);
   result.iterations = 0;
   result.converged = true;
   return f;

@@ -32,6 +32,12 @@ std::string component_text(const geodesy::Network& net, const geodesy::NetworkMe
   return " [" + whose + "." + kAxis[k % 3] + "]";
 }
 
+// A measurement's component, for the tables of components.
+struct Row {
+  const solver::AdjustedMeasurement* am;
+  Eigen::Index k;
+};
+
 // The MDB of component k in its unit (mm or arc seconds).
 std::string mdb_component_text(const geodesy::NetworkMeasurement& m, double mdb, Eigen::Index k) {
   if (!std::isfinite(mdb)) return "-";
@@ -41,10 +47,6 @@ std::string mdb_component_text(const geodesy::NetworkMeasurement& m, double mdb,
 // The measurement components whose blunder of MDB size moves a station
 // most (external reliability), largest first.
 std::string external_reliability_text(const geodesy::Network& net, const solver::AdjustmentResult& r) {
-  struct Row {
-    const solver::AdjustedMeasurement* am;
-    Eigen::Index k;
-  };
   std::vector<Row> rows;
   for (const auto& am : r.measurements) {
     for (std::size_t k = 0; k < am.external.size(); ++k) {
@@ -72,10 +74,6 @@ std::string external_reliability_text(const geodesy::Network& net, const solver:
 
 // Pre-analysis: the measurement components least controlled by the others.
 std::string least_redundant_text(const geodesy::Network& net, const solver::AdjustmentResult& r) {
-  struct Row {
-    const solver::AdjustedMeasurement* am;
-    Eigen::Index k;
-  };
   std::vector<Row> rows;
   for (const auto& am : r.measurements) {
     if (!am.used) continue;
