@@ -151,36 +151,27 @@ std::string report_text(const PreparedNetwork& prepared, const solver::Adjustmen
     }
     out << "\n";
   }
-  if (r.preanalysis) {
+  // A pre-analysis adds the ellipse at --confidence (the prediction a plan is judged by).
+  const bool planned = r.preanalysis;
+  if (planned) {
     out << "Stations (predicted from the a-priori weights, at the a-priori coordinates; ellipse 1 sigma and at "
         << format_shortest(100.0 * o.confidence) << " %)\n";
-    out << "  id            " << (net.space == NetworkSpace::ellipsoidal ? "sigma_e  sigma_n  sigma_u" : "sigma_x  sigma_y  sigma_z")
-        << "  (mm)   ellipse a/b (mm) az (deg)   a/b at confidence (mm)  constraint\n";
-    for (const auto& s : r.stations) {
-      if (!s.used) continue;
-      const Eigen::Matrix3d& c = s.covariance_local_m2;
-      char line[240];
-      std::snprintf(line, sizeof line, "  %-12s %8.2f %8.2f %8.2f        %7.2f/%-7.2f %7.2f    %8.2f/%-8.2f      %s\n", s.id.c_str(),
-                    1e3 * std::sqrt(std::max(0.0, c(0, 0))), 1e3 * std::sqrt(std::max(0.0, c(1, 1))),
-                    1e3 * std::sqrt(std::max(0.0, c(2, 2))), 1e3 * s.ellipse.semi_major_m, 1e3 * s.ellipse.semi_minor_m,
-                    s.ellipse.azimuth_rad * kRadToDeg, 1e3 * s.ellipse_confidence.semi_major_m,
-                    1e3 * s.ellipse_confidence.semi_minor_m, s.constraint.c_str());
-      out << line;
-    }
   } else {
-  out << "Stations (sigmas from the a-priori weights; ellipse 1 sigma)\n";
+    out << "Stations (sigmas from the a-priori weights; ellipse 1 sigma)\n";
+  }
   const bool ellipsoidal = net.space == NetworkSpace::ellipsoidal;
-  out << "  id            " << (ellipsoidal ? "sigma_e  sigma_n  sigma_u" : "sigma_x  sigma_y  sigma_z") << "  (mm)   ellipse a/b (mm) az (deg)  constraint\n";
+  out << "  id            " << (ellipsoidal ? "sigma_e  sigma_n  sigma_u" : "sigma_x  sigma_y  sigma_z") << "  (mm)   ellipse a/b (mm) az (deg)  "
+      << (planned ? " a/b at confidence (mm)  " : "") << "constraint\n";
   for (const auto& s : r.stations) {
     if (!s.used) continue;
     const Eigen::Matrix3d& c = s.covariance_local_m2;
-    char line[200];
-    std::snprintf(line, sizeof line, "  %-12s %8.2f %8.2f %8.2f        %7.2f/%-7.2f %7.2f    %s\n", s.id.c_str(),
+    char line[200], conf[64] = "";
+    if (planned) std::snprintf(conf, sizeof conf, " %8.2f/%-8.2f      ", 1e3 * s.ellipse_confidence.semi_major_m, 1e3 * s.ellipse_confidence.semi_minor_m);
+    std::snprintf(line, sizeof line, "  %-12s %8.2f %8.2f %8.2f        %7.2f/%-7.2f %7.2f    %s%s\n", s.id.c_str(),
                   1e3 * std::sqrt(std::max(0.0, c(0, 0))), 1e3 * std::sqrt(std::max(0.0, c(1, 1))),
                   1e3 * std::sqrt(std::max(0.0, c(2, 2))), 1e3 * s.ellipse.semi_major_m, 1e3 * s.ellipse.semi_minor_m,
-                  s.ellipse.azimuth_rad * kRadToDeg, s.constraint.c_str());
+                  s.ellipse.azimuth_rad * kRadToDeg, conf, s.constraint.c_str());
     out << line;
-  }
   }
   // The flagged measurements first, in the order data snooping removes them.
   const auto p_text = [](double p) {
