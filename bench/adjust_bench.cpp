@@ -233,38 +233,49 @@ void check_against_truth(const GeneratedNetwork& g, const solver::AdjustmentResu
   k.factor_nonzeros = r.factor_nonzeros;
 }
 
-// The adjustment in a child process: its numbers through a pipe, its peak
-// resident set from wait4.
-std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t dense_max, int jobs = 0) {
+// `work` (returning a trivially copyable T) in a child process: its result
+// through a pipe, its exit status and peak resident set from wait4.
+template <class T, class F>
+std::pair<T, Run> in_child(F work) {
   int fds[2];
   if (pipe(fds) != 0) std::exit(1);
   const pid_t pid = fork();
   if (pid == 0) {
     close(fds[0]);
-    KernelRun k;
-    const auto t0 = Clock::now();
-    solver::AdjustOptions options;
-    options.jobs = jobs;
-    options.remove_outliers = true;
-    const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
-    k.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (!r.converged) k.seconds = -1.0;
-    check_against_truth(g, r, k);
-    if (g.network.stations.size() <= dense_max) k.dense_difference = dense_check(g, r);
+    const T k = work();
     if (write(fds[1], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) _exit(1);
     _exit(0);
   }
   close(fds[1]);
-  KernelRun k;
-  if (read(fds[0], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) k.seconds = -1.0;
+  T k;
+  const bool read_all = read(fds[0], &k, sizeof k) == static_cast<ssize_t>(sizeof k);
   close(fds[0]);
   struct rusage usage {};
   int status = 0;
   wait4(pid, &status, 0, &usage);
   Run run;
-  run.seconds = k.seconds;
   run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  run.status = !read_all ? 1 : WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return {k, run};
+}
+
+// The adjustment in a child process.
+std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t dense_max, int jobs = 0) {
+  auto [k, run] = in_child<KernelRun>([&] {
+    KernelRun kr;
+    const auto t0 = Clock::now();
+    solver::AdjustOptions options;
+    options.jobs = jobs;
+    options.remove_outliers = true;
+    const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
+    kr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (!r.converged) kr.seconds = -1.0;
+    check_against_truth(g, r, kr);
+    if (g.network.stations.size() <= dense_max) kr.dense_difference = dense_check(g, r);
+    return kr;
+  });
+  if (run.status != 0) k.seconds = -1.0;
+  run.seconds = k.seconds;
   return {k, run};
 }
 
@@ -272,12 +283,8 @@ std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t
 // seconds and parts, with the external reliability (a solve per
 // measurement component) or without.
 PreanalysisRun preanalysis_in_child(const GeneratedNetwork& g, bool external) {
-  int fds[2];
-  if (pipe(fds) != 0) std::exit(1);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fds[0]);
-    PreanalysisRun k;
+  auto [k, run] = in_child<PreanalysisRun>([&] {
+    PreanalysisRun pr;
     const auto t0 = Clock::now();
     solver::AdjustOptions options;
     options.jobs = 2;
@@ -285,18 +292,11 @@ PreanalysisRun preanalysis_in_child(const GeneratedNetwork& g, bool external) {
     options.data_snooping = false;
     options.external_reliability = external;
     const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
-    k.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    k.parts = r.seconds;
-    if (write(fds[1], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) _exit(1);
-    _exit(0);
-  }
-  close(fds[1]);
-  PreanalysisRun k;
-  if (read(fds[0], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) k.seconds = -1.0;
-  close(fds[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) k.seconds = -1.0;
+    pr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    pr.parts = r.seconds;
+    return pr;
+  });
+  if (run.status != 0) k.seconds = -1.0;
   return k;
 }
 
@@ -351,28 +351,14 @@ struct BareRuns {
 bool time_bare(const GeneratedNetwork& g, int repetitions, BareRuns& bare) {
   for (int rep = 0; rep < repetitions; ++rep) {
     for (const bool metis : {false, true}) {
-      int fds[2];
-      if (pipe(fds) != 0) return false;
-      const pid_t pid = fork();
-      if (pid == 0) {
-        close(fds[0]);
-        const double sec = bare_cholmod_seconds(g, metis);
-        if (write(fds[1], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) _exit(1);
-        _exit(0);
-      }
-      close(fds[1]);
-      double sec = -1.0;
-      if (read(fds[0], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) sec = -1.0;
-      close(fds[0]);
-      struct rusage usage {};
-      int status = 0;
-      wait4(pid, &status, 0, &usage);
+      const auto [sec, usage] = in_child<double>([&] { return bare_cholmod_seconds(g, metis); });
+      if (usage.status != 0) return false;
       if (sec < 0.0) return false;
       if (metis) {
         bare.nd_seconds.push_back(sec);
       } else {
         bare.seconds.push_back(sec);
-        bare.peak_mb = std::max(bare.peak_mb, static_cast<double>(usage.ru_maxrss) / 1024.0);
+        bare.peak_mb = std::max(bare.peak_mb, usage.peak_mb);
       }
     }
   }
