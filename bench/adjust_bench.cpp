@@ -267,6 +267,7 @@ std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t
     solver::AdjustOptions options;
     options.jobs = jobs;
     options.remove_outliers = true;
+    options.external_reliability = false;  // its solves: the pre-analysis table
     const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
     kr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     if (!r.converged) kr.seconds = -1.0;

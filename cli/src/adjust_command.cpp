@@ -36,6 +36,8 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   cmd->add_flag("--preanalysis", o.preanalysis,
                 "Pre-analysis: from the design at the a-priori coordinates and the a-priori errors alone (measured values "
                 "optional, not used): predicted ellipses, redundancy, MDB and external reliability; no residuals");
+  cmd->add_flag("--no-external-reliability", o.no_external_reliability,
+                "Leave out the external reliability (a solve per measurement component: minutes at 10^5 stations)");
   cmd->add_option("--candidates", o.candidates,
                   "--preanalysis: candidate measurements (any network input format; values not used), each ranked by how much "
                   "it improves the worst station when added alone");
@@ -314,6 +316,7 @@ int run_adjust(const AdjustCommandOptions& o) {
   auto& so = request.options;
   so.joint_covariance = o.sinex.has_value();
   so.preanalysis = o.preanalysis;
+  so.external_reliability = !o.no_external_reliability;
   if (o.preanalysis) so.data_snooping = false;  // nothing to snoop: no residuals
   request.candidates = o.candidates;
   if (o.rank_by == "sigma-up") so.candidate_ranking = solver::CandidateRanking::sigma_up;
