@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "network_helmert.hpp"
@@ -84,6 +85,13 @@ void external_reliability(const NetworkProblem& p, const NormalFactor& f, const 
     for (Eigen::Index k = 0; k < am.mdb.size(); ++k) {
       if (std::isfinite(am.mdb(k))) columns.push_back({slot, k});
     }
+  }
+  if (columns.size() > kExternalReliabilityMaxComponents) {
+    for (auto& am : result.measurements) am.external.clear();
+    result.warnings.push_back("external reliability left out: " + std::to_string(columns.size()) +
+                              " measurement components, past " + std::to_string(kExternalReliabilityMaxComponents) +
+                              " (one solve with the factor each; docs/commands/adjust.md#external-reliability)");
+    return;
   }
   const Eigen::Index batch = batch_columns(n);
   Eigen::MatrixXd rhs;
