@@ -554,10 +554,10 @@ TEST_F(AdjustCli, Issue39_TheMeasurementsCsvSaysWhatBecameOfEachMeasurement) {
   const std::string csv = testing::slurp(path("m.csv"));
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
             "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,mdb,"
-            "status,snooping_rank,set,external_m,external_station,external_horizontal_m,external_horizontal_station,external_vertical_m,"
-            "external_vertical_station,metadata");  // set: empty but for an observation set's observations
-  EXPECT_NE(csv.find(",ignored,,,,,,,,,\n"), std::string::npos);
-  EXPECT_NE(csv.find(",flagged,1,,"), std::string::npos);
+            "external_m,external_station,external_horizontal_m,external_horizontal_station,external_vertical_m,external_vertical_station,"
+            "status,snooping_rank,set,metadata");  // set: empty but for an observation set's observations
+  EXPECT_NE(csv.find(",ignored,,,\n"), std::string::npos);
+  EXPECT_NE(csv.find(",flagged,1,,\n"), std::string::npos);
   EXPECT_EQ(csv.find(",removed,"), std::string::npos);
   const auto report = nlohmann::json::parse(flagged.out);
   ASSERT_FALSE(report.at("flagged").empty());
@@ -567,7 +567,7 @@ TEST_F(AdjustCli, Issue39_TheMeasurementsCsvSaysWhatBecameOfEachMeasurement) {
                                 path("m2.csv").string() + "' --remove-outliers --json");
   ASSERT_EQ(removed.exit_code, 0) << removed.err;
   const std::string csv2 = testing::slurp(path("m2.csv"));
-  EXPECT_NE(csv2.find(",removed,1,,,,,,,,\n"), std::string::npos);
+  EXPECT_NE(csv2.find(",removed,1,,\n"), std::string::npos);
   const auto report2 = nlohmann::json::parse(removed.out);
   ASSERT_FALSE(report2.at("removed").empty());
   EXPECT_EQ(report2.at("removed").front().at("snooping_rank"), 1);

@@ -315,12 +315,6 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
         out += ',';
         number(out, at(am ? &am->mdb : nullptr, k) * small_scale);
         out += ',';
-        out += status;
-        out += ',';
-        out += rank;
-        out += ',';
-        if (set) out += source;
-        out += ',';
         // External reliability: the largest effect of a blunder of its MDB
         // on any station (3-D, horizontal, vertical; metres) and where.
         const solver::ExternalReliability* e =
@@ -338,14 +332,20 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
         out += ',';
         if (has_e) out += csv_field(r.stations[e->vertical_station].id);
         out += ',';
+        out += status;
+        out += ',';
+        out += rank;
+        out += ',';
+        if (set) out += source;
+        out += ',';
         out += metadata;
         out += '\n';
       }
     }
   });
   std::string out = "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,"
-                    "mdb,status,snooping_rank,set,external_m,external_station,external_horizontal_m,external_horizontal_station,"
-                    "external_vertical_m,external_vertical_station,metadata\n";
+                    "mdb,external_m,external_station,external_horizontal_m,external_horizontal_station,external_vertical_m,"
+                    "external_vertical_station,status,snooping_rank,set,metadata\n";
   std::size_t size = out.size();
   for (const auto& part : parts) size += part.size();
   out.reserve(size);
