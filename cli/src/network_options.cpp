@@ -95,7 +95,6 @@ NetworkSession open_network(const std::vector<std::string>& inputs, const Networ
   NetworkSession s{workflow::prepare_network(request), request.options, nullptr};
   s.options.helmert = s.prepared.helmert;
   s.options.refraction_k = s.prepared.refraction_k;
-  s.options.external_reliability = false;  // not shown there; a solve per measurement component
   s.model = std::make_unique<gui::NetworkModel>(s.prepared.network, s.options);
   s.model->wait();
   return s;
