@@ -19,6 +19,8 @@
 //    the errors are correlated, so it wanders by a few %) and eᵀNe / dim
 //    (e the errors against the truth, N the normal matrix of the kept
 //    baselines: 1 ± a few ‰ when the covariances are right);
+//  - pre-analysis (--preanalysis) with and without the external
+//    reliability, against the bare factor-and-solve;
 //  - the whole `geoanchor adjust` command on the DynaML files (read, adjust,
 //    every statistic, write stations, measurements and report), as given
 //    (the default: every failing measurement flagged and ranked in data
@@ -155,6 +157,11 @@ double bare_cholmod_seconds(const GeneratedNetwork& g, bool metis) {
   return seconds;
 }
 
+struct PreanalysisRun {
+  double seconds = -1.0;
+  solver::AdjustmentTimings parts;
+};
+
 struct KernelRun {
   double seconds = -1.0, sigma0 = 0.0, coverage = 0.0, chi2_ratio = 0.0;
   int passes = 0, downdated = 0;
@@ -163,6 +170,8 @@ struct KernelRun {
   std::int64_t factor_nonzeros = 0;
   double dense_difference = -1.0;  // worst station block against a dense inverse, relative (-1: not checked)
   double one_thread_seconds = 0.0, two_thread_seconds = 0.0;  // filled by main
+  double bare_seconds = 0.0;                                   // filled by main
+  PreanalysisRun preanalysis, preanalysis_no_external;          // filled by main
 };
 
 // The stations' covariance blocks against the dense inverse of the normal
@@ -234,53 +243,72 @@ void check_against_truth(const GeneratedNetwork& g, const solver::AdjustmentResu
   k.factor_nonzeros = r.factor_nonzeros;
 }
 
-// `work` in a forked child: its result (trivially copyable) through a
-// pipe, the child's peak resident set (wait4) and exit status in `run`; a
-// default Result when the child did not answer (its seconds are -1).
-template <class Result, class Work>
-Result in_child(const Work& work, Run& run) {
+// `work` (returning a trivially copyable T) in a child process: its result
+// through a pipe, its exit status and peak resident set from wait4.
+template <class T, class F>
+std::pair<T, Run> in_child(F work) {
   int fds[2];
   if (pipe(fds) != 0) std::exit(1);
   const pid_t pid = fork();
   if (pid == 0) {
     close(fds[0]);
-    const Result r = work();
-    if (write(fds[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) _exit(1);
+    const T k = work();
+    if (write(fds[1], &k, sizeof k) != static_cast<ssize_t>(sizeof k)) _exit(1);
     _exit(0);
   }
   close(fds[1]);
-  Result r;
-  if (read(fds[0], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) r = Result{};
+  T k;
+  const bool read_all = read(fds[0], &k, sizeof k) == static_cast<ssize_t>(sizeof k);
   close(fds[0]);
   struct rusage usage {};
   int status = 0;
   wait4(pid, &status, 0, &usage);
+  Run run;
   run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return r;
+  run.status = !read_all ? 1 : WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return {k, run};
 }
 
-// The adjustment in a child process: its numbers through a pipe, its peak
-// resident set from wait4.
+// The adjustment in a child process.
 std::pair<KernelRun, Run> adjust_in_child(const GeneratedNetwork& g, std::size_t dense_max, int jobs = 0) {
-  Run run;
-  const KernelRun k = in_child<KernelRun>(
-      [&] {
-        KernelRun kr;
-        const auto t0 = Clock::now();
-        solver::AdjustOptions options;
-        options.jobs = jobs;
-        options.remove_outliers = true;
-        const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
-        kr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-        if (!r.converged) kr.seconds = -1.0;
-        check_against_truth(g, r, kr);
-        if (g.network.stations.size() <= dense_max) kr.dense_difference = dense_check(g, r);
-        return kr;
-      },
-      run);
+  auto [k, run] = in_child<KernelRun>([&] {
+    KernelRun kr;
+    const auto t0 = Clock::now();
+    solver::AdjustOptions options;
+    options.jobs = jobs;
+    options.remove_outliers = true;
+    options.external_reliability = false;  // its solves: the pre-analysis table
+    const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
+    kr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (!r.converged) kr.seconds = -1.0;
+    check_against_truth(g, r, kr);
+    if (g.network.stations.size() <= dense_max) kr.dense_difference = dense_check(g, r);
+    return kr;
+  });
+  if (run.status != 0) k.seconds = -1.0;
   run.seconds = k.seconds;
   return {k, run};
+}
+
+// Pre-analysis (adjust --preanalysis) in a child process: its wall
+// seconds and parts, with the external reliability (a solve per
+// measurement component) or without.
+PreanalysisRun preanalysis_in_child(const GeneratedNetwork& g, bool external) {
+  auto [k, run] = in_child<PreanalysisRun>([&] {
+    PreanalysisRun pr;
+    const auto t0 = Clock::now();
+    solver::AdjustOptions options;
+    options.jobs = 2;
+    options.preanalysis = true;
+    options.data_snooping = false;
+    options.external_reliability = external;
+    const solver::AdjustmentResult r = solver::adjust_network(g.network, options);
+    pr.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    pr.parts = r.seconds;
+    return pr;
+  });
+  if (run.status != 0) k.seconds = -1.0;
+  return k;
 }
 
 // The command line (the usage line at the top of this file).
@@ -298,8 +326,7 @@ struct RelativeRun {
   std::size_t pairs = 0;
 };
 RelativeRun relative_in_child(const GeneratedNetwork& g, solver::RelativePairs pairs, double radius_m) {
-  Run run;
-  RelativeRun k = in_child<RelativeRun>(
+  auto [k, run] = in_child<RelativeRun>(
       [&] {
         RelativeRun kr;
         solver::AdjustOptions options;
@@ -313,8 +340,7 @@ RelativeRun relative_in_child(const GeneratedNetwork& g, solver::RelativePairs p
         kr.stations_seconds = r.seconds.stations;
         kr.pairs = r.relative.size();
         return kr;
-      },
-      run);
+      });
   if (run.status != 0) k.seconds = -1.0;
   return k;
 }
@@ -372,28 +398,14 @@ struct BareRuns {
 bool time_bare(const GeneratedNetwork& g, int repetitions, BareRuns& bare) {
   for (int rep = 0; rep < repetitions; ++rep) {
     for (const bool metis : {false, true}) {
-      int fds[2];
-      if (pipe(fds) != 0) return false;
-      const pid_t pid = fork();
-      if (pid == 0) {
-        close(fds[0]);
-        const double sec = bare_cholmod_seconds(g, metis);
-        if (write(fds[1], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) _exit(1);
-        _exit(0);
-      }
-      close(fds[1]);
-      double sec = -1.0;
-      if (read(fds[0], &sec, sizeof sec) != static_cast<ssize_t>(sizeof sec)) sec = -1.0;
-      close(fds[0]);
-      struct rusage usage {};
-      int status = 0;
-      wait4(pid, &status, 0, &usage);
+      const auto [sec, usage] = in_child<double>([&] { return bare_cholmod_seconds(g, metis); });
+      if (usage.status != 0) return false;
       if (sec < 0.0) return false;
       if (metis) {
         bare.nd_seconds.push_back(sec);
       } else {
         bare.seconds.push_back(sec);
-        bare.peak_mb = std::max(bare.peak_mb, static_cast<double>(usage.ru_maxrss) / 1024.0);
+        bare.peak_mb = std::max(bare.peak_mb, usage.peak_mb);
       }
     }
   }
@@ -481,6 +493,12 @@ bool measure_size(std::size_t n, const BenchOptions& b, const fs::path& folder,
   std::fflush(stdout);
   k.one_thread_seconds = one_thread;
   k.two_thread_seconds = a;
+  k.bare_seconds = bare;
+  if (n <= b.kernel_max) {
+    k.preanalysis = preanalysis_in_child(g, true);
+    k.preanalysis_no_external = preanalysis_in_child(g, false);
+    if (k.preanalysis.seconds < 0.0 || k.preanalysis_no_external.seconds < 0.0) return false;
+  }
   kernels.push_back({n, k});
   return true;
 }
@@ -489,25 +507,34 @@ bool measure_size(std::size_t n, const BenchOptions& b, const fs::path& folder,
 // speed-up of two threads; then the legend.
 void print_parts(const std::vector<std::pair<std::size_t, KernelRun>>& kernels) {
   std::printf("\nthe adjustment's parts (seconds over every pass; solver::AdjustmentTimings; passes: all, and those downdated)\n"
-              "%-8s %10s %7s %9s %9s %9s %9s %9s %9s %9s %9s %9s %12s\n",
+              "%-8s %10s %7s %9s %9s %9s %9s %9s %9s %9s %9s %9s %9s %12s\n",
               "stations", "nnz(L)", "passes", "assemble", "factor", "solve", "sel.inv", "downdate", "per-meas", "datum", "snooping",
-              "stations", "vs dense");
+              "stations", "external", "vs dense");
   // (then, per size, the adjustment on one thread and the speed-up of two)
   for (const auto& [n, k] : kernels) {
     char dense[32] = "-";
     if (k.dense_difference >= 0.0 || std::isnan(k.dense_difference)) std::snprintf(dense, sizeof dense, "%.1e", k.dense_difference);
     char passes[16];
     std::snprintf(passes, sizeof passes, "%d/%d", k.passes, k.downdated);
-    std::printf("%-8zu %10.3g %7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %12s\n", n,
+    std::printf("%-8zu %10.3g %7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %12s\n", n,
                 static_cast<double>(k.factor_nonzeros), passes, k.parts.assemble, k.parts.factor, k.parts.solve,
                 k.parts.select_inverse, k.parts.downdate, k.parts.measurements, k.parts.datum, k.parts.snooping, k.parts.stations,
-                dense);
+                k.parts.external, dense);
   }
   std::printf("\n%-8s %12s %12s %9s\n", "stations", "1 thread s", "2 threads s", "speed-up");
   for (const auto& [n, k] : kernels) {
     if (k.one_thread_seconds > 0.0) {
       std::printf("%-8zu %12.2f %12.2f %9.2f\n", n, k.one_thread_seconds, k.two_thread_seconds, k.one_thread_seconds / k.two_thread_seconds);
     }
+  }
+  std::printf("\npre-analysis (--preanalysis, 2 threads): seconds, and against the bare factor-and-solve; the external "
+              "reliability's share (a solve per measurement component)\n%-8s %10s %8s %12s %8s %10s %8s\n",
+              "stations", "no ext. s", "x bare", "with ext. s", "x bare", "external s", "factor s");
+  for (const auto& [n, k] : kernels) {
+    if (k.preanalysis.seconds < 0.0) continue;
+    std::printf("%-8zu %10.2f %8.2f %12.2f %8.2f %10.2f %8.2f\n", n, k.preanalysis_no_external.seconds,
+                k.preanalysis_no_external.seconds / k.bare_seconds, k.preanalysis.seconds, k.preanalysis.seconds / k.bare_seconds,
+                k.preanalysis.parts.external, k.preanalysis.parts.factor);
   }
   std::printf("\nblunders: planted found / planted + other measurements removed (alpha 0.001 removes about 0.1 %% of good ones)\n"
               "cover: station components within 1.96 sigma of the truth; eNe/n: e'Ne / n over the free stations' components\n");

@@ -40,6 +40,16 @@ CLI::App* add_adjust_command(CLI::App& app, AdjustCommandOptions& o) {
   add_network_options(cmd, o.network);
   cmd->add_option("--convention", o.convention, "--estimate-helmert: position_vector|coordinate_frame, the convention of the written transform (required)");
   cmd->add_option("--helmert-output", o.helmert_output, "--estimate-helmert: the transform file (default: STATIONS less .csv, plus .helmert.json)");
+  cmd->add_flag("--preanalysis", o.preanalysis,
+                "Pre-analysis: from the design at the a-priori coordinates and the a-priori errors alone (measured values "
+                "optional, not used): predicted ellipses, redundancy, MDB and external reliability; no residuals");
+  cmd->add_flag("--no-external-reliability", o.no_external_reliability,
+                "Leave out the external reliability (a solve per measurement component: minutes at 10^5 stations)");
+  cmd->add_option("--candidates", o.candidates,
+                  "--preanalysis: candidate measurements (any network input format; values not used), each ranked by how much "
+                  "it improves the worst station when added alone");
+  cmd->add_option("--candidates-output", o.candidates_output, "--candidates: write the ranked candidates as CSV");
+  cmd->add_option("--rank-by", o.rank_by, "--candidates: semi-major (the largest semi-major axis at --confidence, the default) or sigma-up");
   cmd->add_flag("--accept-failed-global-test", o.accept_failed_global_test, "Write the results even if the global test fails high");
   cmd->add_flag("--overwrite", o.overwrite, "Replace existing outputs");
   cmd->add_option("--jobs", o.jobs, "Threads for the assembly and the statistics (default: the machine's cores); the results do not depend on it")
@@ -102,6 +112,16 @@ void check_options(const AdjustCommandOptions& o) {
   if (o.json && o.output == "-") {
     throw Error(ErrorKind::usage, "E_OPTION", "--json and -o -: both would go to standard output; give -o STATIONS.csv");
   }
+  if (!o.preanalysis && (o.candidates || o.candidates_output || o.rank_by)) {
+    throw Error(ErrorKind::usage, "E_OPTION", std::string(o.candidates ? "--candidates" : o.candidates_output ? "--candidates-output" : "--rank-by") +
+                                                  ": only with --preanalysis (candidates are ranked by a pre-analysis of the design)");
+  }
+  if (!o.candidates && (o.candidates_output || o.rank_by)) {
+    throw Error(ErrorKind::usage, "E_OPTION", std::string(o.candidates_output ? "--candidates-output" : "--rank-by") + ": only with --candidates FILE");
+  }
+  if (o.rank_by && *o.rank_by != "semi-major" && *o.rank_by != "sigma-up") {
+    throw Error(ErrorKind::usage, "E_OPTION", "--rank-by " + *o.rank_by + ": expected semi-major or sigma-up");
+  }
   if (!o.network.estimate_helmert && (o.convention || o.helmert_output)) {
     throw Error(ErrorKind::usage, "E_OPTION", std::string(o.convention ? "--convention" : "--helmert-output") + ": only with --estimate-helmert");
   }
@@ -131,6 +151,7 @@ void refuse_shared_paths(const AdjustCommandOptions& o, const std::optional<std:
   if (o.report) outputs.push_back({"--report", *o.report});
   if (o.sinex) outputs.push_back({"--sinex", *o.sinex});
   if (o.relative_output) outputs.push_back({"--relative-output", *o.relative_output});
+  if (o.candidates_output) outputs.push_back({"--candidates-output", *o.candidates_output});
   if (helmert_path) outputs.push_back({"--estimate-helmert's transform file", *helmert_path});
   for (std::size_t a = 0; a < outputs.size(); ++a) {
     for (std::size_t b = a + 1; b < outputs.size(); ++b) {
@@ -161,11 +182,12 @@ struct AdjustOutputs {
     if (o.sinex) sinex = std::make_unique<io::AtomicOutputFile>(*o.sinex, overwrite);
     if (o.relative_output) relative = std::make_unique<io::AtomicOutputFile>(*o.relative_output, overwrite);
     if (helmert_path) helmert = std::make_unique<io::AtomicOutputFile>(*helmert_path, overwrite);
+    if (o.candidates_output) candidates = std::make_unique<io::AtomicOutputFile>(*o.candidates_output, overwrite);
   }
   const io::Overwrite overwrite;
   io::DataOutput stations;
   std::unique_ptr<io::AtomicOutputFile> measurements, report;
-  std::unique_ptr<io::AtomicOutputFile> sinex, helmert, relative;
+  std::unique_ptr<io::AtomicOutputFile> sinex, helmert, relative, candidates;
 };
 
 // The report, shown whether or not the results are written, with the
@@ -279,6 +301,10 @@ void write_outputs(const AdjustCommandOptions& o, AdjustOutputs& outputs, const 
     outputs.helmert->stream() << helmert_text;
     group.push_back(outputs.helmert.get());
   }
+  if (outputs.candidates) {
+    outputs.candidates->stream() << workflow::candidates_csv(prepared, r, so);
+    group.push_back(outputs.candidates.get());
+  }
   if (outputs.measurements) {
     outputs.measurements->stream() << measurements_text;
     group.push_back(outputs.measurements.get());
@@ -305,6 +331,11 @@ int run_adjust(const AdjustCommandOptions& o) {
   workflow::AdjustRequest request = network_request(o.inputs, o.network, o.convention);
   auto& so = request.options;
   so.joint_covariance = o.sinex.has_value();
+  so.preanalysis = o.preanalysis;
+  so.external_reliability = !o.no_external_reliability;
+  if (o.preanalysis) so.data_snooping = false;  // nothing to snoop: no residuals
+  request.candidates = o.candidates;
+  if (o.rank_by == "sigma-up") so.candidate_ranking = solver::CandidateRanking::sigma_up;
   so.jobs = o.jobs;
   request.relative = o.relative;
   request.standard = o.standard;
@@ -316,6 +347,7 @@ int run_adjust(const AdjustCommandOptions& o) {
   so.helmert = prepared.helmert;
   so.refraction_k = prepared.refraction_k;
   so.relative = prepared.relative;
+  so.candidates = prepared.candidates;
   const solver::AdjustmentResult r = solver::adjust_network(prepared.network, so);
   const std::string text = workflow::report_text(prepared, r, so);
   show_report(o, outputs, prepared, r, so, text);

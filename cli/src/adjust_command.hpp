@@ -28,6 +28,9 @@ struct AdjustCommandOptions {
   bool json = false;
   NetworkOptions network;
   bool accept_failed_global_test = false;
+  bool preanalysis = false;  // --preanalysis
+  bool no_external_reliability = false;  // --no-external-reliability
+  std::optional<std::string> candidates, candidates_output, rank_by;  // --preanalysis --candidates FILE
   bool overwrite = false;
   int jobs = 0;  // threads; 0: the machine's cores
   std::optional<double> max_memory_gb;

@@ -23,7 +23,9 @@
 #include "network_approximate.hpp"
 #include "network_canonical_order.hpp"
 #include "network_data_snooping.hpp"
+#include "network_candidates.hpp"
 #include "network_datum.hpp"
+#include "network_external_reliability.hpp"
 #include "network_free_datum.hpp"
 #include "network_helmert.hpp"
 #include "network_measurement_statistics.hpp"
@@ -75,6 +77,58 @@ void refuse_malformed_sets(const geodesy::Network& network) {
                   "value, stations and covariance theirs in order");
     }
   }
+}
+
+// A measurement with no measured value (network JSON "value": null) is a
+// planned one: only a pre-analysis takes it. A pre-analysis needs every
+// station's a-priori coordinates (the design is taken there).
+void refuse_for_mode(const geodesy::Network& network, const AdjustOptions& o) {
+  if (o.preanalysis) {
+    for (const auto& s : network.stations) {
+      if (!s.position_known) {
+        throw Error(ErrorKind::input, "E_PREANALYSIS_POSITION",
+                    s.source + ": station " + s.id + " has no a-priori coordinates: a pre-analysis takes the design at "
+                    "the a-priori coordinates; give them");
+      }
+    }
+    return;
+  }
+  if (!o.candidates.empty()) {
+    throw Error(ErrorKind::usage, "E_OPTION", "candidate measurements (--candidates) are ranked by a pre-analysis only: give --preanalysis");
+  }
+  for (const auto& m : network.measurements) {
+    if (!m.value_known && !m.ignore) {
+      throw Error(ErrorKind::input, "E_VALUE_MISSING",
+                  m.source + ": " + geodesy::to_string(m.kind) + ": no measured value: only a pre-analysis "
+                  "(--preanalysis) takes a planned measurement; give its value");
+    }
+  }
+}
+
+// Pre-analysis: each measurement's value replaced by its value computed at
+// the a-priori coordinates (orientations and Helmert parameters zero), so
+// that the misclosures are zero and the measured values, if any, are never
+// read.
+geodesy::Network planned_values(const geodesy::Network& network, const AdjustOptions& o) {
+  geodesy::Network planned = network;
+  const geodesy::GeocentricConverter geocentric(network.ellipsoid);
+  std::vector<StationState> states;
+  states.reserve(network.stations.size());
+  for (std::size_t s = 0; s < network.stations.size(); ++s) {
+    states.push_back(station_state(network, geocentric, network.stations[s].position, s, o.geoid));
+  }
+  const std::vector<double> orientations(network.direction_sets.size(), 0.0);
+  const ModelContext ctx{network, o, states, orientations};
+  for (auto& m : planned.measurements) {
+    if (m.ignore) continue;
+    m.value = evaluate(m, ctx).computed;
+    m.value_known = true;
+    for (std::size_t k = 0; k < m.parts.size(); ++k) {
+      m.parts[k].value = m.value.segment(static_cast<Eigen::Index>(k), 1);
+      m.parts[k].value_known = true;
+    }
+  }
+  return planned;
 }
 
 // Whitening of each measurement's covariance, on threads (each its own;
@@ -352,6 +406,15 @@ void gauss_newton(Passes& s, bool same_unknowns, bool downdated) {
   }
 }
 
+// The factor's size, the unknowns, observations and degrees of freedom.
+void record_factor(const NetworkProblem& p, const NormalFactor& f, std::size_t rows, AdjustmentResult& result) {
+  result.factor_nonzeros = f.factor_nonzeros();
+  result.unknowns = static_cast<std::size_t>(p.layout.count);
+  result.observations = rows;
+  const int defect = p.free ? static_cast<int>(p.defect.cols()) : 0;
+  result.dof = static_cast<int>(rows) - static_cast<int>(p.layout.count) + defect;
+}
+
 // The statistics at the solution (with the last iteration's factor
 // when the matrix is the same): the factor with its selected inverse, and
 // the unknowns, observations and degrees of freedom.
@@ -380,12 +443,50 @@ NormalFactor factor_at_solution(Passes& s, bool downdated) {
   t0 = Clock::now();
   if (!downdated) f.select_inverse(s.jobs);  // (a downdate updated it)
   result.seconds.select_inverse += since(t0);
-  result.factor_nonzeros = f.factor_nonzeros();
-  result.unknowns = static_cast<std::size_t>(p.layout.count);
-  result.observations = n.rows;
-  const int defect = p.free ? static_cast<int>(p.defect.cols()) : 0;
-  result.dof = static_cast<int>(n.rows) - static_cast<int>(p.layout.count) + defect;
+  record_factor(p, f, n.rows, result);
   return f;
+}
+
+// Pre-analysis: the design at the a-priori coordinates (the misclosures
+// zero, planned_values), the datum defined, one factorization and its
+// selected inverse; no iteration.
+NormalFactor preanalysis_factor(Passes& s) {
+  NetworkProblem& p = s.p;
+  AdjustmentResult& result = s.result;
+  auto t0 = Clock::now();
+  NormalEquations n = assemble(p, true, s.jobs);
+  result.seconds.assemble += since(t0);
+  const auto datum_t0 = Clock::now();
+  define_datum(p, s.datum_warnings, s.jobs);
+  result.seconds.datum += since(datum_t0);
+  check_station_blocks(p, n);
+  hold_defect(p, n);
+  t0 = Clock::now();
+  NormalFactor f = factor_or_explain(p, n, std::nullopt);
+  result.seconds.factor += since(t0);
+  t0 = Clock::now();
+  f.select_inverse(s.jobs);
+  result.seconds.select_inverse += since(t0);
+  record_factor(p, f, n.rows, result);
+  result.iterations = 0;
+  result.converged = true;
+  return f;
+}
+
+// Pre-analysis: what needs measured values is not stated (NaN: the
+// outputs leave it empty); no σ0, no global test.
+void blank_measured(AdjustmentResult& result) {
+  for (auto& am : result.measurements) {
+    const Eigen::Index k = am.observed.size();
+    am.observed = am.adjusted = am.residual = am.w = Eigen::VectorXd::Constant(k, kNaN);
+    am.w_max = am.statistic = am.p_value = am.log_p = kNaN;
+  }
+  result.vtpv = 0.0;
+  result.variance_factor.reset();
+  result.sigma0.reset();
+  result.global_test = GlobalTest{};
+  result.global_test.applicable = false;
+  result.preanalysis = true;
 }
 
 // The datum in words, and the warnings every result ends with: stations
@@ -441,22 +542,34 @@ bool adjust_pass(Passes& s) {
   s.snooping.removed_last_pass.clear();
   s.last_layout = p.layout;
   begin_inner_constraints(p);
-  gauss_newton(s, same_unknowns, downdated);
+  const bool planned = p.o.preanalysis;
+  if (!planned) gauss_newton(s, same_unknowns, downdated);
+  std::optional<NormalFactor> first;
+  if (planned) first = preanalysis_factor(s);
   const InnerConstraints inner = to_minimum_norm(p);
-  NormalFactor f = factor_at_solution(s, downdated);
+  NormalFactor f = planned ? std::move(*first) : factor_at_solution(s, downdated);
   auto t0 = Clock::now();
   measurement_statistics(p, f, MeasurementRecord{s.snooping.outlier_why, s.snooping.rank_of, s.lambda0}, result, s.jobs);
+  if (planned) blank_measured(result);
   result.seconds.measurements += since(t0);
-  if (p.o.data_snooping && result.dof > 0 && snoop_network(p, f, s.snooping, result, s.jobs)) {
+  if (!planned && p.o.data_snooping && result.dof > 0 && snoop_network(p, f, s.snooping, result, s.jobs)) {
     s.last_factor = std::move(f);  // its analysis serves the next pass (the same pattern)
     return false;                  // adjust again without them
+  }
+  if (p.o.external_reliability) {
+    t0 = Clock::now();
+    external_reliability(p, f, inner, result);
+    result.seconds.external += since(t0);
   }
   t0 = Clock::now();
   station_statistics(p, f, inner, result, s.jobs);
   result.seconds.stations += since(t0);
+  if (planned && !p.o.candidates.empty()) rank_candidates(p, f, inner, result);
   conclude(p, s.datum_warnings, result);
   return true;
 }
+
+AdjustmentResult adjust_values_known(const geodesy::Network& network, const AdjustOptions& o);
 
 // Stations with no a-priori coordinates: placed from the measurements
 // (network_approximate.hpp), then the network adjusted; the result says so.
@@ -464,8 +577,12 @@ AdjustmentResult adjust_placed(const geodesy::Network& network, const AdjustOpti
   geodesy::Network placed = network;
   approximate_positions(placed);
   AdjustmentResult r = adjust_network(placed, o);
-  r.warnings.insert(r.warnings.begin(), std::to_string(unplaced) + " station(s) had no a-priori coordinates: their "
-                                        "approximate positions were computed from the measurements");
+  // (Built anew rather than inserted at the front: GCC 12 at -O3 sees a
+  // null dereference in the insertion once this is inlined.)
+  std::vector<std::string> warnings{std::to_string(unplaced) + " station(s) had no a-priori coordinates: their "
+                                    "approximate positions were computed from the measurements"};
+  warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
+  r.warnings = std::move(warnings);
   return r;
 }
 
@@ -479,6 +596,14 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   }
   refuse_empty(network);
   refuse_malformed_sets(network);
+  refuse_for_mode(network, o);
+  if (o.preanalysis) return adjust_values_known(planned_values(network, o), o);
+  return adjust_values_known(network, o);
+}
+
+namespace {
+
+AdjustmentResult adjust_values_known(const geodesy::Network& network, const AdjustOptions& o) {
   std::size_t unplaced = 0;
   for (const auto& s : network.stations) unplaced += s.position_known ? 0u : 1u;
   if (unplaced > 0) return adjust_placed(network, o, unplaced);
@@ -511,5 +636,7 @@ AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOpt
   }
   return result;
 }
+
+}  // namespace
 
 }  // namespace geoanchor::solver

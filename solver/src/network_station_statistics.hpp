@@ -8,6 +8,10 @@
 //
 // Private to solver.
 
+#include <Eigen/Core>
+
+#include <cmath>
+
 #include "geoanchor/solver/network_adjustment.hpp"
 #include "network_free_datum.hpp"
 #include "network_problem.hpp"

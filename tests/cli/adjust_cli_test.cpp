@@ -554,6 +554,7 @@ TEST_F(AdjustCli, Issue39_TheMeasurementsCsvSaysWhatBecameOfEachMeasurement) {
   const std::string csv = testing::slurp(path("m.csv"));
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
             "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,mdb,"
+            "external_m,external_station,external_horizontal_m,external_horizontal_station,external_vertical_m,external_vertical_station,"
             "status,snooping_rank,set,metadata");  // set: empty but for an observation set's observations
   EXPECT_NE(csv.find(",ignored,,,\n"), std::string::npos);
   EXPECT_NE(csv.find(",flagged,1,,\n"), std::string::npos);

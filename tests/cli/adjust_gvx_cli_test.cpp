@@ -51,6 +51,7 @@ TEST_F(AdjustGvxCli, MetadataIsTheMeasurementsLastColumn) {
   const std::string csv = testing::slurp(path("m.csv"));
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
             "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,mdb,"
+            "external_m,external_station,external_horizontal_m,external_horizontal_station,external_vertical_m,external_vertical_station,"
             "status,snooping_rank,set,metadata");
   // The first baseline's rows carry its metadata, ';'-separated, with '='
   // inside a value escaped.

@@ -152,16 +152,6 @@ double constant_variance(const geodesy::NetworkMeasurement& m, const geodesy::Er
   }
 }
 
-// GeographicLib's east/north/up → ECEF rotation at station i.
-Eigen::Matrix3d local_to_ecef(const Site& s, std::size_t i) {
-  double x = 0, y = 0, z = 0;
-  std::vector<double> r(9);
-  grs80().Forward(s.geodetic[i][0], s.geodetic[i][1], s.geodetic[i][2], x, y, z, r);
-  Eigen::Matrix3d m;
-  m << r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8];
-  return m;
-}
-
 // The network of mixed_network with every measurement but the heights
 // under the model, and the same network with the model's covariances built
 // here.

@@ -61,8 +61,10 @@ Reference reference(const AdjustmentResult& joint, std::size_t s1, std::size_t s
   const Eigen::Matrix3d local = r * diff * r.transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(local.topLeftCorner<2, 2>());
   Reference ref;
-  ref.a = std::sqrt(std::max(0.0, eig.eigenvalues()(1)));
-  ref.b = std::sqrt(std::max(0.0, eig.eigenvalues()(0)));
+  // Rounding's negative zero clamped; a NaN stays NaN (std::max would drop it).
+  const auto root = [](double v) { return std::sqrt(v < 0.0 ? 0.0 : v); };
+  ref.a = root(eig.eigenvalues()(1));
+  ref.b = root(eig.eigenvalues()(0));
   ref.up = std::sqrt(local(2, 2));
   const Eigen::Vector3d u = (x2 - x1).normalized();
   ref.sigma_distance = std::sqrt(u.dot(diff * u));

@@ -72,14 +72,21 @@ inline Network network_of(const Site& s) {
   return net;
 }
 
-// A baseline's covariance: 3 mm horizontal, 6 mm vertical at the first
-// station, rotated into ECEF with GeographicLib's east/north/up matrix.
-inline Eigen::Matrix3d baseline_covariance(const Site& s, std::size_t at) {
+// GeographicLib's east/north/up → ECEF rotation at station `at` of the
+// truth (independent of the code's axes).
+inline Eigen::Matrix3d local_to_ecef(const Site& s, std::size_t at) {
   double x = 0, y = 0, z = 0;
   std::vector<double> m(9);
   grs80().Forward(s.geodetic[at][0], s.geodetic[at][1], s.geodetic[at][2], x, y, z, m);
   Eigen::Matrix3d r;
-  r << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];  // local -> geocentric
+  r << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
+  return r;
+}
+
+// A baseline's covariance: 3 mm horizontal, 6 mm vertical at the first
+// station, rotated into ECEF with GeographicLib's east/north/up matrix.
+inline Eigen::Matrix3d baseline_covariance(const Site& s, std::size_t at) {
+  const Eigen::Matrix3d r = local_to_ecef(s, at);
   const Eigen::Matrix3d local = Eigen::Vector3d(0.003 * 0.003, 0.003 * 0.003, 0.006 * 0.006).asDiagonal();
   return r * local * r.transpose();
 }

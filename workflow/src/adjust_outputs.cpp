@@ -299,7 +299,7 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
           out += kAxis[k % 3];
         }
         out += ',';
-        number(out, m.value(k) * value_scale);
+        if (m.value_known) number(out, m.value(k) * value_scale);  // a planned measurement (pre-analysis): empty
         out += ',';
         number(out, at(am ? &am->adjusted : nullptr, k) * value_scale);
         out += ang ? ",deg," : ",m,";
@@ -315,6 +315,23 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
         out += ',';
         number(out, at(am ? &am->mdb : nullptr, k) * small_scale);
         out += ',';
+        // External reliability: the largest effect of a blunder of its MDB
+        // on any station (3-D, horizontal, vertical; metres) and where.
+        const solver::ExternalReliability* e =
+            am && static_cast<std::size_t>(k) < am->external.size() ? &am->external[static_cast<std::size_t>(k)] : nullptr;
+        const bool has_e = e && std::isfinite(e->effect_m);
+        number(out, has_e ? e->effect_m : std::numeric_limits<double>::quiet_NaN());
+        out += ',';
+        if (has_e) out += csv_field(r.stations[e->station].id);
+        out += ',';
+        number(out, has_e ? e->horizontal_m : std::numeric_limits<double>::quiet_NaN());
+        out += ',';
+        if (has_e) out += csv_field(r.stations[e->horizontal_station].id);
+        out += ',';
+        number(out, has_e ? e->vertical_m : std::numeric_limits<double>::quiet_NaN());
+        out += ',';
+        if (has_e) out += csv_field(r.stations[e->vertical_station].id);
+        out += ',';
         out += status;
         out += ',';
         out += rank;
@@ -327,13 +344,43 @@ std::string measurements_csv(const geodesy::Network& net, const solver::Adjustme
     }
   });
   std::string out = "source,kind,stations,component,observed,adjusted,value_unit,residual,sigma,residual_sigma,residual_unit,redundancy,w,"
-                    "mdb,status,snooping_rank,set,metadata\n";
+                    "mdb,external_m,external_station,external_horizontal_m,external_horizontal_station,external_vertical_m,"
+                    "external_vertical_station,status,snooping_rank,set,metadata\n";
   std::size_t size = out.size();
   for (const auto& part : parts) size += part.size();
   out.reserve(size);
   for (auto& part : parts) {
     out += part;
     std::string().swap(part);
+  }
+  return out;
+}
+
+std::string candidate_criterion_name(const solver::AdjustOptions& o) {
+  if (o.candidate_criterion) return "custom";
+  if (o.candidate_ranking == solver::CandidateRanking::sigma_up) return "sigma_up";
+  return "semi_major_" + format_shortest(100.0 * o.confidence);
+}
+
+std::string candidates_csv(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o) {
+  const auto& net = prepared.network;
+  const std::string criterion = candidate_criterion_name(o);
+  std::string out = "rank,source,kind,stations,measurements,criterion,worst_m,worst_station,improvement_m\n";
+  const auto number = [&out](double v) {
+    if (std::isfinite(v)) out += format_shortest(v);  // else empty
+  };
+  for (std::size_t k = 0; k < r.candidates.size(); ++k) {
+    const auto& c = r.candidates[k];
+    const auto& first = prepared.candidates[c.measurements.front()];
+    out += std::to_string(k + 1) + ',' + csv_field(first.source) + ',' +
+           (first.set && c.measurements.size() > 1 ? std::string("direction_set") : std::string(kind_key(first.kind))) + ',';
+    std::string stations;
+    for (std::size_t mi : c.measurements) stations += (stations.empty() ? "" : " ") + stations_of(net, prepared.candidates[mi]);
+    out += csv_field(stations) + ',' + std::to_string(c.measurements.size()) + ',' + criterion + ',';
+    number(c.worst.value);
+    out += ',' + csv_field(r.stations[c.worst.station].id) + ',';
+    number(c.improvement);
+    out += '\n';
   }
   return out;
 }

@@ -407,11 +407,51 @@ void apply_constraints(const AdjustRequest& request, PreparedNetwork& p) {
 
 }  // namespace
 
+// --candidates FILE: its measurements (those whose source is the file's)
+// taken out of the network; each station of a candidate must be one the
+// design's measurements reach.
+void take_candidates(const AdjustRequest& request, PreparedNetwork& p) {
+  if (!request.candidates) return;
+  geodesy::Network& net = p.network;
+  const std::string prefix = *request.candidates + ":";
+  std::vector<geodesy::NetworkMeasurement> design;
+  for (auto& m : net.measurements) {
+    (m.source.rfind(prefix, 0) == 0 ? p.candidates : design).push_back(std::move(m));
+  }
+  net.measurements = std::move(design);
+  if (p.candidates.empty()) {
+    throw Error(ErrorKind::input, "E_CANDIDATES", "--candidates " + *request.candidates + ": no measurement read from it");
+  }
+  std::vector<bool> reached(net.stations.size(), false);
+  for (const auto& m : net.measurements) {
+    if (m.ignore) continue;
+    for (std::size_t s : m.stations) reached[s] = true;
+  }
+  for (const auto& m : p.candidates) {
+    for (std::size_t s : m.stations) {
+      if (!reached[s]) {
+        throw Error(ErrorKind::input, "E_CANDIDATE_STATION",
+                    m.source + ": candidate " + geodesy::to_string(m.kind) + " at station " + net.stations[s].id +
+                        ", which no measurement of the network reaches (" + (net.stations[s].position_known ? "not in the design" : "an unknown station") +
+                        "): a candidate joins stations of the design");
+      }
+    }
+  }
+}
+
 PreparedNetwork prepare_network(const AdjustRequest& request) {
   PreparedNetwork p;
   // The standard first: a name that is not shipped fails before the inputs are read.
   if (request.standard) p.standard = std::make_shared<const AccuracyStandard>(load_standard(*request.standard));
-  p.network = read_inputs(request);
+  if (request.candidates) {
+    AdjustRequest with = request;
+    with.inputs.push_back(*request.candidates);
+    with.candidates.reset();
+    p.network = read_inputs(with);
+  } else {
+    p.network = read_inputs(request);
+  }
+  take_candidates(request, p);
   geodesy::Network& net = p.network;
   for (const auto& w : net.warnings) p.notes.push_back("warning: " + w);
   // Which geoid, and what it gives (N, the deflections): the report says so.

@@ -46,6 +46,16 @@ double number(const json& obj, const std::string& key, const std::string& where)
   return finite_json_number(obj, key, where, "E_NETWORK");
 }
 
+// A measured value that may be null: a planned measurement (its value is
+// not known yet; only a pre-analysis takes it). Sets `planned` and returns 0.
+double value_or_planned(const json& obj, const std::string& key, const std::string& where, bool& planned) {
+  if (obj.contains(key) && obj.at(key).is_null()) {
+    planned = true;
+    return 0.0;
+  }
+  return number(obj, key, where);
+}
+
 std::string text(const json& obj, const std::string& key, const std::string& where) {
   if (!obj.contains(key)) fail(where + "." + key, "missing");
   if (!obj.at(key).is_string()) fail(where + "." + key, "value " + obj.at(key).dump() + " is not a string");
@@ -60,7 +70,8 @@ double positive(double v, const std::string& where) {
 // An angle of `kind`: exactly one of value_deg, value_gon, value_rad,
 // value_dms, within the kind's range (check_angle_range); a value_dms with
 // seconds of 60 adds a warning to `warnings`.
-double angle_value(const json& m, MeasurementKind kind, const std::string& where, std::vector<std::string>& warnings) {
+double angle_value(const json& m, MeasurementKind kind, const std::string& where, std::vector<std::string>& warnings,
+                   bool& planned) {
   constexpr std::array<std::pair<const char*, AngleUnit>, 4> kKeys{{{"value_deg", AngleUnit::degrees},
                                                                     {"value_gon", AngleUnit::gon},
                                                                     {"value_rad", AngleUnit::radians},
@@ -72,6 +83,10 @@ double angle_value(const json& m, MeasurementKind kind, const std::string& where
     if (m.contains(k)) key = k, unit = u, ++given;
   }
   if (given != 1) fail(where, "expected one of value_deg, value_gon, value_rad, value_dms (\"ddd-mm-ss.s\")");
+  if (m.at(key).is_null()) {  // a planned measurement
+    planned = true;
+    return 0.0;
+  }
   double v = 0.0;
   switch (unit) {
     case AngleUnit::degrees: v = number(m, key, where) * std::numbers::pi / 180.0; break;
@@ -394,8 +409,17 @@ void read_gnss(const MeasurementInput& in, const std::string& kind, geodesy::Net
   }
   x.kind = points ? MeasurementKind::gnss_points : MeasurementKind::gnss_baselines;
   std::vector<Eigen::Vector3d> values;
+  // A planned vector (pre-analysis): its three components null; a
+  // measurement's vectors all planned or none.
+  std::size_t planned = 0;
   auto read_vector = [&](const json& v, const std::string& w, const char* a, const char* bb, const char* c) {
-    values.emplace_back(number(v, a, w), number(v, bb, w), number(v, c, w));
+    bool nulls[3] = {false, false, false};
+    const double va = value_or_planned(v, a, w, nulls[0]), vb = value_or_planned(v, bb, w, nulls[1]), vc = value_or_planned(v, c, w, nulls[2]);
+    if (nulls[0] != nulls[1] || nulls[1] != nulls[2]) {
+      fail(w, std::string("some of ") + a + ", " + bb + ", " + c + " are null: a planned vector has all three null, a measured one none");
+    }
+    planned += nulls[0] ? 1u : 0u;
+    values.emplace_back(va, vb, vc);
   };
   std::vector<Eigen::Matrix3d> blocks;  // per-item 3×3 when the joint covariance is not given
   if (single) {
@@ -427,6 +451,8 @@ void read_gnss(const MeasurementInput& in, const std::string& kind, geodesy::Net
     if (!blocks.empty() && blocks.size() != values.size()) fail(at, "some items have a covariance and some not");
     if (!blocks.empty() && m.contains("cov_m2")) fail(at, "a joint cov_m2 and per-item covariances; give one");
   }
+  if (planned > 0 && planned != values.size()) fail(at, "some vectors are planned (null) and some measured: give all or none");
+  x.value_known = planned == 0;
   const Eigen::Index n = static_cast<Eigen::Index>(3 * values.size());
   x.value.resize(n);
   for (std::size_t k = 0; k < values.size(); ++k) x.value.segment<3>(static_cast<Eigen::Index>(3 * k)) = values[k];
@@ -468,12 +494,14 @@ void read_direction_set(const MeasurementInput& in, geodesy::Network& net) {
     keys.insert({"to", "target_height_m", "ignore"});
     only_keys(d, w, keys);
     geodesy::NetworkMeasurement dir;
+    bool planned = false;
     in.common(dir);
     dir.source = w;
     if (d.contains("ignore")) dir.ignore = d.at("ignore").is_boolean() && d.at("ignore").get<bool>();
     dir.kind = MeasurementKind::direction;
     dir.stations = {from, b.reference(text(d, "to", w), w + ".to")};
-    dir.value = Eigen::VectorXd::Constant(1, angle_value(d, MeasurementKind::direction, w, net.warnings));
+    dir.value = Eigen::VectorXd::Constant(1, angle_value(d, MeasurementKind::direction, w, net.warnings, planned));
+    dir.value_known = !planned;
     const double sg = angle_sigma(d, w, in.modelled());
     dir.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
     dir.set = set;
@@ -548,6 +576,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
     const std::string kind = text(m, "kind", at);
     const MeasurementInput in{m, at, b, net};
     geodesy::NetworkMeasurement x;
+    bool planned = false;  // "value_m": null, … (pre-analysis)
     in.common(x);
     if (kind == "gnss_baseline" || kind == "gnss_baseline_cluster" || kind == "gnss_point_cluster") {
       read_gnss(in, kind, x);
@@ -557,7 +586,8 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
                : kind == "horizontal_distance" ? MeasurementKind::horizontal_distance
                                                : MeasurementKind::ellipsoid_arc;
       x.stations = {in.station("from"), in.station("to")};
-      x.value = Eigen::VectorXd::Constant(1, positive(number(m, "value_m", at), at + ".value_m"));
+      const double value = value_or_planned(m, "value_m", at, planned);
+      x.value = Eigen::VectorXd::Constant(1, planned ? value : positive(value, at + ".value_m"));
       const double sg = in.sigma_m();
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
       if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
@@ -574,7 +604,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
       only_keys(m, at, keys);
       x.kind = MeasurementKind::horizontal_angle;
       x.stations = {in.station("at"), in.station("from"), in.station("to")};
-      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
+      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings, planned));
       const double sg = angle_sigma(m, at, in.modelled());
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
       if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
@@ -586,7 +616,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
                : kind == "vertical_angle" ? MeasurementKind::vertical_angle
                                           : MeasurementKind::azimuth;
       x.stations = {in.station("from"), in.station("to")};
-      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings));
+      x.value = Eigen::VectorXd::Constant(1, angle_value(m, x.kind, at, net.warnings, planned));
       const double sg = angle_sigma(m, at, in.modelled());
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
       if (m.contains("instrument_height_m")) x.instrument_height_m = number(m, "instrument_height_m", at);
@@ -595,7 +625,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
       only_keys(m, at, in.with({"from", "to", "value_m", "sigma_m", "sigma_mm_per_sqrt_km", "length_km"}));
       x.kind = MeasurementKind::height_difference;
       x.stations = {in.station("from"), in.station("to")};
-      x.value = Eigen::VectorXd::Constant(1, number(m, "value_m", at));
+      x.value = Eigen::VectorXd::Constant(1, value_or_planned(m, "value_m", at, planned));
       double sg = 0.0;
       if (m.contains("sigma_m") == m.contains("sigma_mm_per_sqrt_km")) {
         fail(at, "expected sigma_m, or sigma_mm_per_sqrt_km with length_km");
@@ -612,7 +642,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
       only_keys(m, at, in.with({"at", "value_m", "sigma_m"}));
       x.kind = kind == "ellipsoidal_height" ? MeasurementKind::ellipsoidal_height : MeasurementKind::orthometric_height;
       x.stations = {in.station("at")};
-      x.value = Eigen::VectorXd::Constant(1, number(m, "value_m", at));
+      x.value = Eigen::VectorXd::Constant(1, value_or_planned(m, "value_m", at, planned));
       const double sg = positive(number(m, "sigma_m", at), at + ".sigma_m");
       x.covariance = Eigen::MatrixXd::Constant(1, 1, sg * sg);
     } else {
@@ -620,6 +650,7 @@ void read_measurements(const json& doc, const std::string& source, geodesy::Netw
                                       "horizontal_distance, ellipsoid_arc, direction_set, horizontal_angle, zenith_angle, "
                                       "vertical_angle, azimuth, height_difference, ellipsoidal_height or orthometric_height");
     }
+    if (planned) x.value_known = false;
     // A local network's azimuth is a bearing from +x turning as its angles
     // do (GNU Gama's and STAR*NET's grid bearing); an ellipsoid arc has no
     // meaning there.

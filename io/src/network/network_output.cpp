@@ -103,6 +103,7 @@ void check_writable_network(const geodesy::Network& net) {
     }
     if (!m.group.empty()) refuse(m.source + ": its group '" + m.group + "' has no place in DynaML");
     if (m.local_variance_scale != Eigen::Vector3d::Ones()) refuse(m.source + ": local variance scales are not written");
+    if (!m.value_known) refuse(m.source + ": a planned measurement (no value): these writers hold measured ones");
     if (!m.value.allFinite() || !m.covariance.allFinite()) refuse(m.source + ": its value or covariance is not finite");
     if (m.covariance != m.covariance.transpose()) refuse(m.source + ": its covariance is not symmetric (only one triangle is written)");
     const auto& f = measurement_frame(net, m);

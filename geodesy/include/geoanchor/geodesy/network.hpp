@@ -147,6 +147,10 @@ struct NetworkMeasurement {
   std::vector<std::size_t> stations;  // indices into Network::stations, as the kind says
   Eigen::VectorXd value;              // SI
   Eigen::MatrixXd covariance;         // SI², value.size() square, positive definite
+  // False: the input gives no measured value (a planned measurement, network
+  // JSON "value": null); `value` is zeros of its size. Only a pre-analysis
+  // (adjust --preanalysis) takes it; an adjustment refuses it by name.
+  bool value_known = true;
   double instrument_height_m = 0.0;
   double target_height_m = 0.0;
   std::optional<std::size_t> set;     // direction: its set (one orientation unknown each)

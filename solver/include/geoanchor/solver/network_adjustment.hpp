@@ -37,6 +37,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -86,6 +88,43 @@ struct RelativeOptions {
   // is not required; a station with itself is refused by the reader).
   std::vector<std::pair<std::size_t, std::size_t>> listed;
 };
+
+struct AdjustmentResult;
+
+// Pre-analysis candidates (AdjustOptions::candidates): a candidate added
+// to the design changes the covariance by a low-rank term, from the
+// factor (no refactorization): with B its whitened rows over the unknowns
+// (a new direction set's orientation projected out), U = S N⁻¹ Bᵀ (S the
+// free network's S-transformation, else I) and M = I + B U,
+//   Q'(s1, s2) = Q(s1, s2) − U(s1) M⁻¹ U(s2)ᵀ
+// for the 3 × 3 blocks of stations s1, s2 along their local axes (east,
+// north, up; a local network's x, y, z; zero rows for held components).
+struct CovarianceUpdate {
+  std::vector<Eigen::MatrixXd> station;  // per station: U's 3 × k rows (empty: the station has no unknown)
+  Eigen::MatrixXd m_inverse;             // k × k
+  // Q'(s, s) from the design's block q (the station's covariance_local_m2).
+  Eigen::Matrix3d updated(std::size_t s, const Eigen::Matrix3d& q) const {
+    if (station[s].size() == 0) return q;
+    return q - station[s] * m_inverse * station[s].transpose();
+  }
+};
+
+// A ranking criterion: the design's worst value (larger is worse) and
+// where (a station, or for a pair criterion the first of the pair), from
+// the pre-analysis result and, for a candidate, the update its
+// measurement makes (nullptr: the design as it is). The hook for ranking
+// against an accuracy standard's worst pair: such a criterion reads the
+// pairs' covariances from the result and subtracts the update's terms.
+struct CriterionValue {
+  double value = 0.0;
+  std::size_t station = 0;
+  std::size_t other = 0;  // a pair criterion's second station (else = station)
+};
+using CandidateCriterion = std::function<CriterionValue(const AdjustmentResult& design, const CovarianceUpdate* update)>;
+
+// The built-in criteria: the largest horizontal semi-major axis at
+// AdjustOptions::confidence (2-D), or the largest σ of the up (z) component.
+enum class CandidateRanking { semi_major, sigma_up };
 
 struct AdjustOptions {
   double alpha = 0.05;          // the global test
@@ -144,6 +183,46 @@ struct AdjustOptions {
   // final adjustment with these options on the scaled covariances.
   enum class VarianceGroups { none, kind, group, model };
   VarianceGroups variance_components = VarianceGroups::none;
+  // Pre-analysis (adjust --preanalysis): the design at the a-priori
+  // coordinates, factored once, no iteration; the measured values are not
+  // read (each is replaced by its value computed at the a-priori
+  // coordinates, so the misclosures are zero). Results: station
+  // covariances and ellipses, redundancy numbers, MDB and external
+  // reliability; no residuals, w-tests, σ0 or global test (NaN there, and
+  // AdjustmentResult::preanalysis set). Every station needs a-priori
+  // coordinates (E_PREANALYSIS_POSITION names one that has none).
+  bool preanalysis = false;
+  // External reliability (AdjustedMeasurement::external): per measurement
+  // component, the effect on the unknowns of an undetected blunder of MDB
+  // size, ∇x = N⁻¹ Aᵢᵀ Pᵢ ∇lᵢ. One solve with the factor per component
+  // (batched): O(components · nnz(L)) (docs/commands/adjust.md).
+  bool external_reliability = true;
+  // Pre-analysis: candidate measurements (stations of the network; values
+  // not read), each ranked by how much it improves the worst station when
+  // added alone to the design (AdjustmentResult::candidates). The
+  // directions of a direction set that no design measurement has are one
+  // candidate together (their orientation is a new unknown).
+  std::vector<geodesy::NetworkMeasurement> candidates;
+  CandidateRanking candidate_ranking = CandidateRanking::semi_major;
+  CandidateCriterion candidate_criterion;  // set: used instead of candidate_ranking
+};
+
+// The effect on the coordinates of an undetected blunder of one
+// component's MDB (JAG3D's "influence on point position", EP): the
+// largest over the stations, its length in 3-D and, separately, its
+// horizontal and vertical parts (in the local east, north, up; a local
+// network: x, y and z), each with its station. NaN (and station 0) where
+// the component has no MDB (no redundancy).
+struct ExternalReliability {
+  double effect_m = std::numeric_limits<double>::quiet_NaN();
+  std::size_t station = 0;  // index into AdjustmentResult::stations
+  double horizontal_m = std::numeric_limits<double>::quiet_NaN();
+  std::size_t horizontal_station = 0;
+  double vertical_m = std::numeric_limits<double>::quiet_NaN();
+  std::size_t vertical_station = 0;
+  // With --estimate-helmert: the effect on each Helmert parameter
+  // (EstimatedHelmert's order and units, SI); empty without.
+  Eigen::VectorXd helmert;
 };
 
 // A group with less redundancy than this keeps its factor of 1 (reported
@@ -222,6 +301,8 @@ struct AdjustedMeasurement {
   int test_dof = 0;        // 0: uncontrolled (no direction with redundancy ≥ kMinRedundancy)
   double p_value = 1.0;
   double log_p = 0.0;      // ln p_value without underflow: the evidence data snooping ranks by
+  // Per component (AdjustOptions::external_reliability; empty without).
+  std::vector<ExternalReliability> external;
   // In the adjustment, controlled, and its measurement test's p-value below
   // alpha_point: what the reports flag and data snooping removes.
   bool fails_test(double alpha_point) const { return used && test_dof > 0 && p_value < alpha_point; }
@@ -237,6 +318,13 @@ struct AdjustedMeasurement {
 // The precision of the difference `to` − `from` of two adjusted stations,
 // in the local horizon of `from` (east, north, up; a local network's x, y,
 // z), from their joint cofactor (S-transformed for a free network; σ0 = 1).
+// A candidate measurement of a pre-analysis (AdjustOptions::candidates).
+struct RankedCandidate {
+  std::vector<std::size_t> measurements;  // indices into AdjustOptions::candidates (a direction set: its directions)
+  CriterionValue worst;                   // the criterion with it added
+  double improvement = 0.0;               // the design's worst value less `worst.value`
+};
+
 struct RelativePrecision {
   std::size_t from = 0, to = 0;  // indices into AdjustmentResult::stations
   double distance_m = 0.0;        // spatial (3-D)
@@ -262,6 +350,7 @@ struct AdjustmentTimings {
   double datum = 0.0;           // the datum's undefined and weak combinations (first pass)
   double snooping = 0.0;        // data snooping's order: the failing measurements' cofactors and the sequence
   double stations = 0.0;        // covariances, ellipses, relative precision
+  double external = 0.0;        // external reliability: a solve per measurement component
 };
 
 struct AdjustmentResult {
@@ -311,6 +400,13 @@ struct AdjustmentResult {
   // the estimation's iterations (adjustments).
   std::vector<VarianceComponent> variance_components;
   int vce_iterations = 0;
+  // AdjustOptions::preanalysis: no residuals (NaN), no σ0 or global test.
+  bool preanalysis = false;
+  // AdjustOptions::candidates ranked, best first (the lowest worst value
+  // after it is added; ties in the input's order), and the design's own
+  // worst value.
+  std::vector<RankedCandidate> candidates;
+  CriterionValue design_worst;
 };
 
 // The measurements that fail their test (flagged, or removed by data

@@ -45,6 +45,10 @@ struct AdjustRequest {
   // --standard NAME|FILE (accuracy_standard.hpp).
   std::string relative = "connected";
   std::optional<std::string> standard;
+  // adjust --candidates FILE (with --preanalysis): candidate measurements,
+  // read as one more input (any network format); prepare_network takes
+  // them out of the network into PreparedNetwork::candidates.
+  std::optional<std::string> candidates;
 };
 
 struct PreparedNetwork {
@@ -67,6 +71,10 @@ struct PreparedNetwork {
   solver::RelativeOptions relative;
   std::string relative_spec = "connected";
   std::shared_ptr<const AccuracyStandard> standard;
+  // AdjustRequest::candidates: the file's measurements (their stations and
+  // direction sets indices into `network`'s), for AdjustOptions::candidates;
+  // as read (no frame step, no variance scale: their values are not used).
+  std::vector<geodesy::NetworkMeasurement> candidates;
 };
 
 // Per GNSS solution type, the measurements that state it, those adjusted
@@ -120,6 +128,18 @@ std::string stations_csv(const geodesy::Network& net, const solver::AdjustmentRe
 // adjustment run with AdjustOptions::joint_covariance). Throws
 // geoanchor::Error (usage) for a local network or a frame without epoch.
 std::string stations_sinex(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const std::string& software);
+
+// A pre-analysis's ranked candidates (AdjustmentResult::candidates), one
+// row each, best first:
+//   rank,source,kind,stations,measurements,criterion,worst_m,worst_station,improvement_m
+// (criterion: semi_major_95 (the confidence in %) or sigma_up; worst_m
+// the criterion's worst value with the candidate added; the first row's
+// rank 1). Throws nothing.
+std::string candidates_csv(const PreparedNetwork& prepared, const solver::AdjustmentResult& r, const solver::AdjustOptions& o);
+
+// The criterion's name in the outputs: "semi_major_95", "sigma_up", or
+// "custom" (AdjustOptions::candidate_criterion).
+std::string candidate_criterion_name(const solver::AdjustOptions& o);
 
 // One row per measurement component with its statistics, formatted on
 // `jobs` threads (0: the machine's cores); the text does not depend on how
