@@ -126,6 +126,20 @@ double sight_setup(const ErrorModel& e, const Sight& s, const Eigen::Vector3d& g
          setup_variance(g, s.target_axes, e.target_centring_m, e.target_height_m);
 }
 
+// An angle of one sight (a direction, an azimuth, a zenith or vertical
+// angle): one pointing and one reading, and the set-up through the sight's
+// gradient.
+double one_sight(const NetworkMeasurement& m, const ErrorModel& e, const Geometry& g, double pointing_rad, double reading_rad,
+                 Eigen::Vector3d (*gradient)(const Sight&), bool& applies) {
+  applies = pointing_rad > 0.0 || reading_rad > 0.0 || has_setup(e);
+  double v = sq(pointing_rad) + sq(reading_rad);
+  if (has_setup(e)) {
+    const Sight s = g.sight(m, m.stations[0], m.stations[1]);
+    v += sight_setup(e, s, gradient(s));
+  }
+  return v;
+}
+
 // The variance one terrestrial observation gains; `applies` says whether
 // any of the model's terms is for its kind.
 double terrestrial_variance(const NetworkMeasurement& m, const ErrorModel& e, const Geometry& g, bool& applies) {
@@ -148,15 +162,8 @@ double terrestrial_variance(const NetworkMeasurement& m, const ErrorModel& e, co
     }
     case MeasurementKind::direction:
     case MeasurementKind::azimuth:
-    case MeasurementKind::astronomic_azimuth: {
-      applies = e.direction_pointing_rad > 0.0 || e.direction_reading_rad > 0.0 || has_setup(e);
-      double v = sq(e.direction_pointing_rad) + sq(e.direction_reading_rad);
-      if (has_setup(e)) {
-        const Sight s = g.sight(m, st[0], st[1]);
-        v += sight_setup(e, s, direction_gradient(s));
-      }
-      return v;
-    }
+    case MeasurementKind::astronomic_azimuth:
+      return one_sight(m, e, g, e.direction_pointing_rad, e.direction_reading_rad, direction_gradient, applies);
     case MeasurementKind::horizontal_angle: {
       applies = e.direction_pointing_rad > 0.0 || e.direction_reading_rad > 0.0 || has_setup(e);
       double v = 2.0 * (sq(e.direction_pointing_rad) + sq(e.direction_reading_rad));
@@ -171,15 +178,8 @@ double terrestrial_variance(const NetworkMeasurement& m, const ErrorModel& e, co
       return v;
     }
     case MeasurementKind::zenith_angle:
-    case MeasurementKind::vertical_angle: {
-      applies = e.zenith_pointing_rad > 0.0 || e.zenith_reading_rad > 0.0 || has_setup(e);
-      double v = sq(e.zenith_pointing_rad) + sq(e.zenith_reading_rad);
-      if (has_setup(e)) {
-        const Sight s = g.sight(m, st[0], st[1]);
-        v += sight_setup(e, s, zenith_gradient(s));
-      }
-      return v;
-    }
+    case MeasurementKind::vertical_angle:
+      return one_sight(m, e, g, e.zenith_pointing_rad, e.zenith_reading_rad, zenith_gradient, applies);
     default:
       applies = false;
       return 0.0;
