@@ -590,6 +590,10 @@ AdjustmentResult adjust_placed(const geodesy::Network& network, const AdjustOpti
 
 AdjustmentResult adjust_network(const geodesy::Network& network, const AdjustOptions& o) {
   if (o.variance_components != AdjustOptions::VarianceGroups::none) {
+    if (o.preanalysis) {
+      throw Error(ErrorKind::usage, "E_OPTION", "--vce with --preanalysis: variance components are estimated from residuals, and a "
+                                                "pre-analysis has none");
+    }
     return adjust_with_variance_components(network, o, [](const geodesy::Network& n, const AdjustOptions& once) {
       return adjust_network(n, once);
     });

@@ -112,6 +112,10 @@ TEST_F(AdjustReportCli, Issue43_ErrorModelsWidenTheirMeasurementsAndVceReportsEa
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
   EXPECT_NE(bad.err.find("--vce instrument: expected kind, group or model"), std::string::npos) << bad.err;
   EXPECT_FALSE(std::filesystem::exists(path("d.csv")));
+  const RunResult planned = run("adjust '" + path("net.json").string() + "' -o '" + path("e.csv").string() + "' --vce kind --preanalysis");
+  EXPECT_EQ(planned.exit_code, 2) << planned.err;
+  EXPECT_NE(planned.err.find("--vce with --preanalysis"), std::string::npos) << planned.err;
+  EXPECT_FALSE(std::filesystem::exists(path("e.csv")));
 }
 
 }  // namespace
