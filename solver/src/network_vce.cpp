@@ -84,6 +84,11 @@ AdjustmentResult adjust_with_variance_components(const geodesy::Network& network
   estimation.variance_components = Groups::none;
   estimation.data_snooping = false;
   estimation.remove_outliers = false;
+  // What the estimation does not read is left to the final adjustment:
+  // external reliability (a solve per component) and the relative
+  // precision of the pairs asked for.
+  estimation.external_reliability = false;
+  estimation.relative = RelativeOptions{};
   geodesy::Network scaled = network;
   int iterations = 0;
   bool converged = false;

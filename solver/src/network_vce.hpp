@@ -5,7 +5,8 @@
 // θ_k ← θ_k · Ω_k / r_k (Ω_k = Σ vᵢᵀ Σᵢ⁻¹ vᵢ and r_k = Σ redundancy over the
 // group's measurements: for disjoint groups the trace form fit --vce uses,
 // vᵀP Q_k P v / tr(P Q_k P Q_vv)) until none changes by kVceTolerance; σ(θ_k)
-// = θ_k √(2 / r_k). The estimation adjusts without data snooping; the
+// = θ_k √(2 / r_k). The estimation adjusts without data snooping (nor
+// external reliability or the relative precision asked for); the
 // result is the adjustment with the caller's options on the scaled
 // covariances, with the components.
 //
